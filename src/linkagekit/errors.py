@@ -1,0 +1,37 @@
+"""One exception family for everything linkagekit reports to a user.
+
+Every message names what is wrong and where (file, key, joint, link), so that the
+command line can print it as one line and exit with the status the error carries.
+"""
+
+from __future__ import annotations
+
+
+class LinkageError(Exception):
+    """Base class of every error linkagekit raises on purpose.
+
+    Attributes
+    ----------
+    exit_code : int
+        The command line's exit status for this error (2: bad input, 1: anything else).
+    """
+
+    exit_code = 1
+
+
+class MechanismFileError(LinkageError):
+    """A mechanism file (or dictionary) is malformed or inconsistent."""
+
+    exit_code = 2
+
+
+class InputError(LinkageError):
+    """A bad argument: input values, driver names, options."""
+
+    exit_code = 2
+
+
+class NotSolvableError(LinkageError):
+    """A valid mechanism that the closed-form solver cannot handle."""
+
+    exit_code = 1
