@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -177,6 +178,18 @@ class Mechanism:
 
 
 # ---------------------------------------------------------------------- loading
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader with YAML 1.2 booleans: only true/false, so `on:` stays a key."""
+
+
+_Loader.yaml_implicit_resolvers = {
+    ch: [(tag, rx) for tag, rx in resolvers if tag != "tag:yaml.org,2002:bool"]
+    for ch, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
+
+
 def load(path: str | Path) -> Mechanism:
     """Read a mechanism file (YAML or JSON).  Reading never executes anything.
 
@@ -195,7 +208,7 @@ def load(path: str | Path) -> Mechanism:
     except (OSError, UnicodeDecodeError) as exc:
         raise MechanismFileError(f"{p}: cannot read: {exc}") from None
     try:
-        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
+        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.load(text, Loader=_Loader)  # noqa: S506 - a safe loader
     except json.JSONDecodeError as exc:
         raise MechanismFileError(f"{p}: JSON syntax error at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
     except yaml.YAMLError as exc:
@@ -399,6 +412,11 @@ def _shape(lname: str, ls: schema.LinkSpec, pose: dict[str, complex], fail: Any,
     base = dist(a, b)
     shape = {a: pose[a], b: pose[a] + base * u}
     for k in js[2:]:
+        if not given.keys() & {frozenset((a, b)), frozenset((a, k)), frozenset((b, k))}:
+            # all three lengths come from the pose: take its shape as it is (no square root,
+            # which would turn the rounding of a flat triangle into an error of ~1e-8)
+            shape[k] = shape[a] + (pose[k] - pose[a]) / (pose[b] - pose[a]) * (shape[b] - shape[a])
+            continue
         d1, d2 = dist(a, k), dist(b, k)
         along = (d1 * d1 + base * base - d2 * d2) / (2 * base)
         h2 = d1 * d1 - along * along

@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from .model import Mechanism
 
 #: relative tolerance of the assembly test (see the module docstring)
-ASSEMBLY_RTOL = 1e-9
+ASSEMBLY_RTOL = 1e-12
 _TINY = 1e-300
 
 
@@ -203,7 +203,8 @@ def pose_signs(mech: Mechanism, plan: Plan) -> tuple[int, ...]:
         best = float(np.min(err)) if err.size else 0.0
         if not np.isfinite(best):
             raise MechanismFileError(f"{mech.source}: the mechanism does not assemble at its reference pose's input "
-                                     f"with the given lengths")
+                                     f"(given lengths that do not close, or a degenerate pose where two joints "
+                                     f"a joint is found from coincide)")
         tol = 1e-18 * mech.length_scale**2 + best * 1e-9
         choice = int(np.flatnonzero(err <= best + tol)[0])
         return tuple(int(v) for v in combos[:, choice])

@@ -1,0 +1,95 @@
+"""Independent reference computations for the tests (law of cosines and rotations).
+
+Nothing here calls linkagekit's solver: these are the "other formulation" that the
+library's natural-coordinate triangulation is checked against.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def by_cosines(k1, k2, r1, r2, t):
+    """Joint at distance r1 from k1 and r2 from k2, on side t (+1 left of k1->k2), by the law of cosines.
+
+    Returns NaN where the triangle does not close.
+    """
+    k1, k2 = np.asarray(k1, complex), np.asarray(k2, complex)
+    s = np.abs(k2 - k1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = (r1**2 + s**2 - r2**2) / (2 * r1 * s)
+        gamma = np.arccos(np.clip(c, -1, 1))
+        z = k1 + r1 * np.exp(1j * (np.angle(k2 - k1) + t * gamma))
+    return np.where(np.abs(c) <= 1 + 1e-12, z, np.nan)
+
+
+def rigid(k1, k2, p_ref, k1_ref, k2_ref):
+    """Point of a rigid body through k1, k2, at the same distance and angle as in the reference."""
+    d = abs(p_ref - k1_ref)
+    delta = np.angle((p_ref - k1_ref) / (k2_ref - k1_ref))
+    return k1 + d * np.exp(1j * (np.angle(k2 - k1) + delta))
+
+
+def side(k1, k2, j):
+    """+1 if j is left of the directed line k1->k2, -1 if right."""
+    return 1.0 if ((np.conj(k2 - k1) * (j - k1)).imag >= 0) else -1.0
+
+
+def fourbar_dict(A, B, C, D, P, unit="m"):
+    pts = dict(A=A, B=B, C=C, D=D, P=P)
+    return {
+        "format": "linkagekit/1",
+        "units": {"length": unit, "angle": "deg"},
+        "joints": {k: [v.real, v.imag] for k, v in pts.items()},
+        "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D", "P"], "rocker": ["B", "D"]},
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+    }
+
+
+def fourbar_reference(pose, phi):
+    """Independent four-bar solve (angles phi in rad) in the pose's mode."""
+    A, B, C0, D0, P0 = (pose[k] for k in "ABCDP")
+    a, b, c = abs(C0 - A), abs(D0 - C0), abs(D0 - B)
+    C = A + a * np.exp(1j * phi)
+    D = by_cosines(C, B, b, c, side(C0, B, D0))
+    P = rigid(C, D, P0, C0, D0)
+    return {"A": A + 0 * phi, "B": B + 0 * phi, "C": C, "D": D, "P": P}
+
+
+def watt2_dict(p):
+    return {
+        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "links": {"ground": ["A", "B", "E"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D", "F"],
+                  "coupler2": ["F", "G", "P"], "output": ["E", "G"]},
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+    }
+
+
+def watt2_reference(p, phi):
+    A, B, E = p["A"], p["B"], p["E"]
+    C = A + abs(p["C"] - A) * np.exp(1j * phi)
+    D = by_cosines(C, B, abs(p["D"] - p["C"]), abs(p["D"] - B), side(p["C"], B, p["D"]))
+    F = rigid(B, D, p["F"], B, p["D"])
+    G = by_cosines(F, E, abs(p["G"] - p["F"]), abs(p["G"] - E), side(p["F"], E, p["G"]))
+    P = rigid(F, G, p["P"], p["F"], p["G"])
+    return {"A": A + 0 * phi, "B": B + 0 * phi, "E": E + 0 * phi, "C": C, "D": D, "F": F, "G": G, "P": P}
+
+
+def stephenson_dict(p):
+    return {
+        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "links": {"ground": ["A", "B"], "input": ["A", "C", "D"], "link_ce": ["C", "E"], "ternary": ["B", "E", "F"],
+                  "coupler": ["D", "G", "P"], "link_fg": ["F", "G"]},
+        "drivers": [{"link": "input", "pivot": "A", "toward": "C"}],
+    }
+
+
+def stephenson_reference(p, phi):
+    A, B = p["A"], p["B"]
+    C = A + abs(p["C"] - A) * np.exp(1j * phi)
+    D = rigid(A, C, p["D"], A, p["C"])
+    E = by_cosines(C, B, abs(p["E"] - p["C"]), abs(p["E"] - B), side(p["C"], B, p["E"]))
+    F = rigid(B, E, p["F"], B, p["E"])
+    G = by_cosines(D, F, abs(p["G"] - p["D"]), abs(p["G"] - p["F"]), side(p["D"], p["F"], p["G"]))
+    P = rigid(D, G, p["P"], p["D"], p["G"])
+    return {"A": A + 0 * phi, "B": B + 0 * phi, "C": C, "D": D, "E": E, "F": F, "G": G, "P": P}
