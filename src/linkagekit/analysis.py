@@ -150,7 +150,8 @@ def transmission_angle(mech: Mechanism, fb: FourBar, ranges: list[list[float]], 
         z = solve(mech.plan, q).z
         a = z[fb.crank_tip] - z[fb.rocker_tip]
         b = z[fb.rocker_pivot] - z[fb.rocker_tip]
-        return np.degrees(np.abs(np.angle(b / a)))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.degrees(np.abs(np.angle(b / a)))
 
     m = mu(x)
     out = {}

@@ -1,0 +1,189 @@
+"""The command line: outputs per the spec, and one clear line with exit status 2 on bad input."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from linkagekit.cli import main
+
+GOOD = """\
+format: linkagekit/1
+name: four-bar
+units: {length: cm, angle: deg}
+joints:
+  A: [0, 0]
+  B: [4, 1]
+  C: [2, 0]
+  D: [0.8206, 4.8589]
+  P: [5.6182, 3.4509]
+links:
+  ground: [A, B]
+  crank: [A, C]
+  coupler: [C, D, P]
+  rocker: [B, D]
+drivers:
+  - {link: crank, pivot: A, toward: C, angles: {start: 0, stop: 360, step: 10}, speed: 5}
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "m.yaml") -> str:
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+def run(args, capsys):
+    code = main(args)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+BAD_FILES = {
+    "yaml syntax": (GOOD.replace("A: [0, 0]", "A: [0, 0"), "YAML syntax error"),
+    "unknown joint": (GOOD.replace("rocker: [B, D]", "rocker: [B, X]"), "links.rocker: unknown joint 'X'"),
+    "one-joint link": (GOOD.replace("rocker: [B, D]", "rocker: [B, D]\n  lonely: [P]"), "links.lonely"),
+    "wrong drivers": (GOOD.replace("drivers:", "drivers:\n  - {link: rocker, pivot: B, toward: D}"), "drivers"),
+    "non-numeric": (GOOD.replace("C: [2, 0]", "C: [two, 0]"), "joints.C[0]"),
+    "unknown unit": (GOOD.replace("length: cm", "length: furlong"), "units.length"),
+    "unknown key": (GOOD.replace("links:", "lynks: {}\nlinks:"), "lynks: unknown key"),
+    "no ground": (GOOD.replace("ground: [A, B]", "frame: [A, B]"), "no link named 'ground'"),
+    "pivot not on link": (GOOD.replace("pivot: A", "pivot: B"), "drivers[0].pivot"),
+    "coincident joints": (GOOD.replace("P: [5.6182, 3.4509]", "P: [2, 0]"), "at one spot"),
+    "bad lengths": (GOOD.replace("coupler: [C, D, P]", "coupler: {joints: [C, D, P], lengths: {C-D: 1, C-P: 1, D-P: 5}}"),
+                    "cannot form a triangle"),
+    "not a mapping": ("- just\n- a list\n", "mapping"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_files_exit_2_with_one_located_line(tmp_path, capsys, case):
+    text, needle = BAD_FILES[case]
+    path = write(tmp_path, text)
+    for cmd in ("analyze", "check"):
+        code, out, err = run([cmd, path], capsys)
+        assert code == 2, (case, err)
+        assert err.count("\n") == 1 and "Traceback" not in err
+        assert needle in err and path in err, err
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--at", "0,abc"], "'abc' is not a number"),
+    (["--angles", "0:360"], "START:STOP:STEP"),
+    (["--angles", "0:360:0"], "STEP"),
+    (["--angles", "0:x:1"], "'x' is not a number"),
+    (["--at", "rocker=5"], "no driver named 'rocker'"),
+    (["--at", "1", "--angles", "0:1:1"], "not both"),
+    (["--format", "xml"], "xml"),
+    (["--speed", "fast"], "'fast' is not a number"),
+    (["--bogus"], "--bogus"),
+])
+def test_bad_arguments_exit_2(tmp_path, capsys, args, needle):
+    code, out, err = run(["analyze", write(tmp_path, GOOD), *args], capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and needle in err, err
+
+
+def test_missing_file(capsys, tmp_path):
+    code, _, err = run(["analyze", str(tmp_path / "nope.yaml")], capsys)
+    assert code == 2 and "no such file" in err and "nope.yaml" in err
+
+
+def test_json_result_follows_spec(tmp_path, capsys):
+    code, out, _ = run(["analyze", write(tmp_path, GOOD), "--at", "0,90,400", "--format", "json"], capsys)
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["format"] == "linkagekit-result/1"
+    assert doc["units"] == {"length": "cm", "angle": "deg", "time": "s", "force": "N", "torque": "N*m"}
+    assert doc["inputs"] == {"crank": [0.0, 90.0, 400.0]}
+    assert set(doc["joints"]) == set("ABCDP")
+    for j in doc["joints"].values():
+        assert set(j) >= {"x", "y", "vx", "vy", "ax", "ay"} and all(len(v) == 3 for v in j.values())
+    assert doc["joints"]["C"]["x"][1] == pytest.approx(0.0, abs=1e-12)
+    assert doc["joints"]["C"]["vx"][0] == pytest.approx(0.0, abs=1e-12)
+    assert doc["joints"]["C"]["vy"][0] == pytest.approx(10.0)  # 2 cm * 5 rad/s
+    assert doc["links"]["crank"]["angle"] == pytest.approx([0.0, 90.0, 40.0])
+    assert "reactions" not in doc  # no masses, gravity or loads: no force output
+
+
+def test_not_assembled_is_null_in_json(tmp_path, capsys, examples):
+    code, out, _ = run(["analyze", str(examples / "seed003_ex21.yaml"), "--at", "0,180", "--format", "json"], capsys)
+    doc = json.loads(out)
+    assert doc["assembled"] == [False, True]
+    assert doc["joints"]["B"]["x"][0] is None and doc["joints"]["B"]["x"][1] is not None
+    assert doc["links"]["coupler"]["omega"][0] is None
+
+
+def test_csv_and_table_and_output_file(tmp_path, capsys):
+    path = write(tmp_path, GOOD)
+    code, out, _ = run(["analyze", path, "--angles", "0:20:10", "--format", "csv"], capsys)
+    rows = out.strip().splitlines()
+    assert code == 0 and len(rows) == 4 and rows[0].startswith("input:crank,assembled,singular,A.x")
+    code, out, _ = run(["analyze", path, "--angles", "0:20:10"], capsys)
+    assert code == 0 and "joint positions" in out and "D.x" in out
+    target = tmp_path / "r.json"
+    code, out, _ = run(["analyze", path, "--format", "json", "-o", str(target)], capsys)
+    assert code == 0 and out == "" and len(json.loads(target.read_text())["inputs"]["crank"]) == 37
+
+
+def test_modes_json(capsys, examples):
+    code, out, _ = run(["modes", str(examples / "seed000_fourbar.yaml"), "--at", "0", "--mirrors", "--format", "json"],
+                       capsys)
+    doc = json.loads(out)
+    assert code == 0 and doc["format"] == "linkagekit-modes/1" and doc["input"] == {"crank": 0.0}
+    assert len(doc["modes"]) == 4 and all(m["assembled"] for m in doc["modes"])
+    assert {tuple(m["signs"].items()) for m in doc["modes"]} == {(("D", 1),), (("D", -1),)}
+
+
+def test_check_json(capsys, examples):
+    code, out, _ = run(["check", str(examples / "seed000_fourbar.yaml"), "--format", "json"], capsys)
+    doc = json.loads(out)
+    assert code == 0 and doc["dof"] == 1 and doc["input_range"] == [[0.0, 360.0]]
+    assert doc["grashof"] == "crank-rocker" and 0 < doc["transmission_angle"]["min"] < doc["transmission_angle"]["max"]
+
+
+def test_several_drivers(capsys, examples):
+    path = str(examples / "fivebar_two_drivers.yaml")
+    code, out, err = run(["analyze", path, "--at", "crank1=100,120", "--at", "crank2=50,60", "--format", "json"],
+                         capsys)
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["inputs"] == {"crank1": [100.0, 120.0], "crank2": [50.0, 60.0]}
+    code, _, err = run(["analyze", path, "--at", "100"], capsys)
+    assert code == 2 and "NAME=" in err
+
+
+def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):
+    # a class-3 Assur group (triad) on a crank: no triangulation order
+    text = """
+joints: {A: [0,0], B: [6,0], G: [3,-3], C: [1,1], D: [2,4], E: [5,4], F: [3.5,6]}
+links:
+  ground: [A, B, G]
+  crank: [A, C]
+  l1: [C, D]
+  l2: [B, E]
+  l3: [G, F]
+  tri: [D, E, F]
+drivers: [{link: crank, pivot: A, toward: C}]
+"""
+    code, _, err = run(["check", write(tmp_path, text)], capsys)
+    assert code == 1 and "no triangulation order" in err and err.count("\n") == 1
+
+
+def test_real_executable_prints_no_traceback(tmp_path):
+    bad = write(tmp_path, GOOD.replace("A: [0, 0]", "A: [0, 0"))
+    proc = subprocess.run([sys.executable, "-m", "linkagekit.cli", "analyze", bad], capture_output=True, text=True)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and proc.stderr.count("\n") == 1
+
+
+def test_json_and_yaml_files_are_equivalent(tmp_path, capsys):
+    import yaml
+
+    data = yaml.safe_load(GOOD)
+    a = run(["analyze", write(tmp_path, GOOD), "--format", "json"], capsys)[1]
+    b = run(["analyze", write(tmp_path, json.dumps(data), "m.json"), "--format", "json"], capsys)[1]
+    assert json.loads(a)["joints"] == json.loads(b)["joints"]
+    assert np.isfinite(json.loads(a)["joints"]["D"]["x"][0])
