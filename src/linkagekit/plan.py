@@ -150,6 +150,13 @@ class Plan:
     mirror_links: tuple[str, ...] = ()
     sign_labels: tuple[str, ...] = field(default=())
 
+    @property
+    def rotation_links(self) -> frozenset[str]:
+        """Links whose rotation later steps use (guides of sliders, links others turn with)."""
+        out = {st.on for st in self.steps if isinstance(st, CircleLine | SliderDrive | Pivot)}
+        out |= {st.rot_of for st in self.steps if isinstance(st, Carry)}
+        return frozenset(out)
+
     def sign_steps(self) -> list[Dyad | CircleLine | Pivot]:
         return [s for s in self.steps if isinstance(s, Dyad | CircleLine | Pivot)]
 

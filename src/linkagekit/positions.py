@@ -75,12 +75,20 @@ def circle_circle(z1: np.ndarray, z2: np.ndarray, r1: float, r2: float, sign: np
     s2 = d.real * d.real + d.imag * d.imag
     s = np.sqrt(s2)
     total = r1 + r2
-    margin = np.minimum(total * (1 + eps) - s, s - abs(r1 - r2) + eps * total) / total
+    margin = np.minimum(total * (1 + eps) - s, s - abs(r1 - r2) + eps * total)
+    margin /= total
     with np.errstate(divide="ignore", invalid="ignore"):
         along = (r1 * r1 - r2 * r2 + s2) / (2 * s)
-        h = np.sqrt(np.maximum(r1 * r1 - along * along, 0.0)) * sign
-        z = z1 + (along + 1j * h) * (d / s)
-    ok = (margin >= 0) & (s > eps * total)
+        h2 = r1 * r1 - along * along
+        np.maximum(h2, 0.0, out=h2)
+        h = np.sqrt(h2)
+        h *= sign
+        u = d / s
+        z = z1 + along * u + 1j * (h * u)
+    ok = margin >= 0
+    ok &= s > eps * total
+    if ok.all():
+        return z, margin
     return np.where(ok, z, np.nan), np.where(ok, margin, np.minimum(margin, -_TINY))
 
 
@@ -112,13 +120,15 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
     sg = np.asarray(plan.signs if signs is None else signs, dtype=float).reshape(plan.n_signs, -1)
     mr = np.zeros((plan.n_mirrors, 1), bool) if mirrors is None else np.asarray(mirrors, bool).reshape(
         plan.n_mirrors, -1)
-    z = np.full((len(plan.joint_names), n), np.nan + 0j)
+    z = np.empty((len(plan.joint_names), n), complex)  # every joint is written by exactly one step
     rot: dict[str, np.ndarray] = {"ground": np.ones(n, complex)}
     margin = np.zeros((plan.n_signs, n))
+    needs_rot = plan.rotation_links
     for st in plan.steps:
         if isinstance(st, Place):
             base = z[st.k2] - z[st.k1]
-            rot[st.link] = base / st.scale
+            if st.link in needs_rot:
+                rot[st.link] = base / st.scale
             for j, rho in zip(st.joints, st.ratios, strict=True):
                 if st.mirror is None:
                     z[j] = z[st.k1] + rho * base
@@ -127,7 +137,11 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
         elif isinstance(st, Dyad):
             z[st.joint], margin[st.sign] = circle_circle(z[st.k1], z[st.k2], st.r1, st.r2, sg[st.sign], eps)
         elif isinstance(st, Crank):
-            z[st.toward] = z[st.pivot] + st.radius * np.exp(1j * q[st.driver])
+            zt = z[st.toward]
+            zt.real = np.cos(q[st.driver])
+            zt.imag = np.sin(q[st.driver])
+            zt *= st.radius
+            zt += z[st.pivot]
         elif isinstance(st, Ground):
             for j, zj in zip(st.joints, st.z, strict=True):
                 z[j] = zj
@@ -162,7 +176,8 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
             rot[st.block] = np.broadcast_to(turn, (n,)) * np.ones(n)
             for j, p in zip(st.joints, st.points, strict=True):
                 z[j] = origin + turn * (p + q[st.driver] * st.direction)
-    assembled = np.all(np.isfinite(z), axis=0)
+    # every failure shows in a step's margin (NaN downstream of it compares False too)
+    assembled = np.all(margin >= 0, axis=0) if plan.n_signs else np.ones(n, bool)
     return Positions(z, rot, margin, assembled, q, sg, mr)
 
 

@@ -47,14 +47,21 @@ class Rates:
     singular: np.ndarray  # (n,) bool
 
 
+def abs2(a: np.ndarray) -> np.ndarray:
+    """Squared magnitude of planar vectors written as complex numbers."""
+    return a.real * a.real + a.imag * a.imag
+
+
 def dot(a: np.ndarray | complex, b: np.ndarray | complex) -> np.ndarray:
     """Dot product of planar vectors written as complex numbers."""
-    return np.real(np.conj(a) * b)
+    a, b = np.asarray(a), np.asarray(b)
+    return a.real * b.real + a.imag * b.imag
 
 
 def cross(a: np.ndarray | complex, b: np.ndarray | complex) -> np.ndarray:
     """z-component of the cross product of planar vectors written as complex numbers."""
-    return np.imag(np.conj(a) * b)
+    a, b = np.asarray(a), np.asarray(b)
+    return a.real * b.imag - a.imag * b.real
 
 
 def link_rates(base: np.ndarray, vbase: np.ndarray, abase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -63,8 +70,9 @@ def link_rates(base: np.ndarray, vbase: np.ndarray, abase: np.ndarray) -> tuple[
     ``base = |b| e^{i theta}`` with constant length, so ``vbase = i w base`` and
     ``abase = (i alpha - w^2) base``.
     """
+    n2 = abs2(base)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.imag(vbase / base), np.imag(abase / base)
+        return cross(base, vbase) / n2, cross(base, abase) / n2
 
 
 def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray,
@@ -98,8 +106,8 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
                 c1 = dot(p, v[st.k1])
                 c2 = dot(q, v[st.k2])
                 v[st.joint] = 1j * (c2 * p - c1 * q) / det
-                c1 = dot(p, a[st.k1]) - np.abs(v[st.joint] - v[st.k1]) ** 2
-                c2 = dot(q, a[st.k2]) - np.abs(v[st.joint] - v[st.k2]) ** 2
+                c1 = dot(p, a[st.k1]) - abs2(v[st.joint] - v[st.k1])
+                c2 = dot(q, a[st.k2]) - abs2(v[st.joint] - v[st.k2])
                 a[st.joint] = 1j * (c2 * p - c1 * q) / det
             elif isinstance(st, Crank):
                 e = z[st.toward] - z[st.pivot]
@@ -160,11 +168,12 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
                     a[j] = aa + (1j * alpha - w * w) * r + 2j * w * du * E + ddu * E
     singular = np.any(np.abs(cond) < tol, axis=0) & pos.assembled
     bad = singular | ~pos.assembled
-    v[:, bad] = np.nan
-    a[:, bad] = np.nan
-    for d in (om, al):
-        for k in d:
-            d[k] = np.where(bad, np.nan, d[k])
+    if bad.any():
+        v[:, bad] = np.nan
+        a[:, bad] = np.nan
+        for d in (om, al):
+            for k in d:
+                d[k] = np.where(bad, np.nan, d[k])
     return Rates(v, a, om, al, cond, singular)
 
 

@@ -231,7 +231,15 @@ def _link_motion(mech: Mechanism, pos: Positions, rates: Rates) -> tuple[dict[st
     n = pos.z.shape[1]
     angle, omega, alpha = {}, {}, {}
     bad = rates.singular | ~pos.assembled
+    any_bad = bool(bad.any())
     for ln in mech.links:
+        if ln.name == "ground":  # fixed: its angle is that of its shape, its rates zero
+            js = ln.joints
+            th0 = np.angle(ln.shape[js[1]] - ln.shape[js[0]]) if len(js) >= 2 else 0.0
+            angle[ln.name] = np.where(pos.assembled, th0 / mech.angle_to_rad, np.nan)
+            omega[ln.name] = np.where(bad, np.nan, 0.0)
+            alpha[ln.name] = omega[ln.name].copy()
+            continue
         if len(ln.joints) >= 2:
             i, k = names.index(ln.joints[0]), names.index(ln.joints[1])
             base = pos.z[k] - pos.z[i]
@@ -244,10 +252,10 @@ def _link_motion(mech: Mechanism, pos: Positions, rates: Rates) -> tuple[dict[st
             th = np.angle(turn * d)
             w = rates.omega.get(ln.name, np.zeros(n))
             al = rates.alpha.get(ln.name, np.zeros(n))
-        if ln.name == "ground":
-            w, al = np.zeros(n), np.zeros(n)
-        th = np.where(pos.assembled, th, np.nan)
-        angle[ln.name] = th / mech.angle_to_rad
-        omega[ln.name] = np.where(bad, np.nan, w)
-        alpha[ln.name] = np.where(bad, np.nan, al)
+        if any_bad:
+            th = np.where(pos.assembled, th, np.nan)
+            w, al = np.where(bad, np.nan, w), np.where(bad, np.nan, al)
+        angle[ln.name] = th / mech.angle_to_rad if mech.angle_to_rad != 1.0 else th
+        omega[ln.name] = w
+        alpha[ln.name] = al
     return angle, omega, alpha
