@@ -59,7 +59,7 @@ def test_check_full_turn_and_grashof_types(examples):
 
 
 def _fourbar(ground, crank, coupler, rocker, pose_angle=1.0):
-    A, B = 0j, complex(ground, 0)
+    B = complex(ground, 0)
     C = crank * np.exp(1j * pose_angle)
     s = abs(B - C)
     along = (coupler**2 + s**2 - rocker**2) / (2 * s)

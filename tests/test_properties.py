@@ -7,6 +7,7 @@ judged by an independent law-of-cosines construction (tests/helpers.py).
 """
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -81,24 +82,22 @@ def test_random_fourbars(pts):
     check_mechanism(data, pose, fourbar_reference, [("C", "B", "D")])
 
 
-@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
-@given(st.lists(point, min_size=8, max_size=8))
-def test_random_watt2(pts):
-    pose = dict(zip("ABECDFGP", pts, strict=True))
-    data = watt2_dict(pose)
-    assume(well_spread(pose, data["links"]))
-    assume(not_flat(pose["C"], pose["B"], pose["D"]) and not_flat(pose["F"], pose["E"], pose["G"]))
-    check_mechanism(data, pose, watt2_reference, [("C", "B", "D"), ("F", "E", "G")])
+SIXBARS = {
+    "watt2": ("ABECDFGP", watt2_dict, watt2_reference, [("C", "B", "D"), ("F", "E", "G")]),
+    "stephenson": ("ABCDEFGP", stephenson_dict, stephenson_reference, [("C", "B", "E"), ("D", "F", "G")]),
+}
 
 
+@pytest.mark.parametrize("kind", sorted(SIXBARS))
 @settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
-@given(st.lists(point, min_size=8, max_size=8))
-def test_random_stephenson(pts):
-    pose = dict(zip("ABCDEFGP", pts, strict=True))
-    data = stephenson_dict(pose)
+@given(pts=st.lists(point, min_size=8, max_size=8))
+def test_random_sixbars(kind, pts):
+    names, make, reference, dyads = SIXBARS[kind]
+    pose = dict(zip(names, pts, strict=True))
+    data = make(pose)
     assume(well_spread(pose, data["links"]))
-    assume(not_flat(pose["C"], pose["B"], pose["E"]) and not_flat(pose["D"], pose["F"], pose["G"]))
-    check_mechanism(data, pose, stephenson_reference, [("C", "B", "E"), ("D", "F", "G")])
+    assume(all(not_flat(pose[k1], pose[k2], pose[j]) for k1, k2, j in dyads))
+    check_mechanism(data, pose, reference, dyads)
 
 
 @settings(max_examples=40, deadline=None)

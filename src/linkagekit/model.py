@@ -286,7 +286,6 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
         sliders.append(Slider(s.link, s.on, s.through, d / abs(d)))
 
     drivers: list[Driver] = []
-    angle_factor = ANGLE_UNITS[spec.units.angle]
     for i, d in enumerate(spec.drivers):
         key = f"drivers[{i}]"
         if d.slider is not None:
@@ -327,7 +326,6 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
     for n in names:
         if names.count(n) > 1:
             raise fail("drivers", f"link '{n}' is driven twice")
-    del angle_factor
 
     loads: list[Load] = []
     for i, ld in enumerate(spec.loads):

@@ -18,7 +18,6 @@ import numpy as np
 
 from .errors import InputError
 from .model import Mechanism
-from .plan import Carry, CircleLine, SliderDrive
 from .positions import Positions, solve
 from .rates import Rates, link_rates, solve_rates
 
@@ -203,10 +202,8 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
     accels = {d.name: _rate(ac.get(d.name, d.acceleration), n, f"acceleration[{d.name}]") for d in mech.drivers}
 
     pos = solve(plan, q, signs, mirrors)
-    rate_links = frozenset({s.on for s in mech.sliders} | {st.rot_of for st in plan.steps if isinstance(st, Carry)}
-                           | {st.on for st in plan.steps if isinstance(st, CircleLine | SliderDrive)})
     rates = solve_rates(plan, pos, np.array([speeds[d.name] for d in mech.drivers]),
-                        np.array([accels[d.name] for d in mech.drivers]), rate_links)
+                        np.array([accels[d.name] for d in mech.drivers]), plan.rotation_links)
     angle, omega, alpha = _link_motion(mech, pos, rates)
     res = Result(mech, values, speeds, accels, pos, rates, angle, omega, alpha)
     if dynamics and mech.has_dynamics:
