@@ -77,7 +77,6 @@ KINDS = {
 
 
 def finite_difference_check(mech, signs, rng):
-    plan = mech.plan
     nd = len(mech.drivers)
     factor = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
     from linkagekit.positions import pose_inputs
