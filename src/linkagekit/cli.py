@@ -33,6 +33,11 @@ app = typer.Typer(
 )
 
 
+class Method(str, Enum):
+    natural = "natural"
+    vector_loop = "vector-loop"
+
+
 class Fmt(str, Enum):
     table = "table"
     csv = "csv"
@@ -212,11 +217,14 @@ def analyze_cmd(
     acceleration: Annotated[list[str] | None, typer.Option("--acceleration", help="Input acceleration, or NAME=A.")] = None,
     fmt: Annotated[Fmt, typer.Option("--format", help="Output format.")] = Fmt.table,
     output: OutOpt = None,
+    method: Annotated[Method, typer.Option("--method", help="natural: triangulation in joint coordinates (any "
+                                           "mechanism); vector-loop: link angles by iteration (four-bars, "
+                                           "Stephenson six-bars).")] = Method.natural,
 ) -> None:
     """Positions, velocities and accelerations (and forces) over the input sweep."""
     mech = load(file)
     res = analyze(mech, _inputs(mech, at, angles), speed=_rates(mech, speed, "--speed"),
-                  acceleration=_rates(mech, acceleration, "--acceleration"))
+                  acceleration=_rates(mech, acceleration, "--acceleration"), method=method.value)
     if fmt is Fmt.json:
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", output)
     elif fmt is Fmt.csv:

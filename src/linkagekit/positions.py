@@ -30,6 +30,8 @@ if TYPE_CHECKING:
 #: relative tolerance of the assembly test (see the module docstring)
 ASSEMBLY_RTOL = 1e-12
 _TINY = 1e-300
+#: "not a point": NaN in both coordinates (``nan + 0j`` would print a y of 0)
+NAN_POINT = complex(np.nan, np.nan)
 
 
 @dataclass(frozen=True)
@@ -89,7 +91,7 @@ def circle_circle(z1: np.ndarray, z2: np.ndarray, r1: float, r2: float, sign: np
     ok &= s > eps * total
     if ok.all():
         return z, margin
-    return np.where(ok, z, np.nan), np.where(ok, margin, np.minimum(margin, -_TINY))
+    return np.where(ok, z, NAN_POINT), np.where(ok, margin, np.minimum(margin, -_TINY))
 
 
 def _line_frame(step: CircleLine | SliderDrive, z: np.ndarray, rot: dict[str, np.ndarray]) -> tuple[
@@ -158,7 +160,7 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
             disc = st.radius**2 - w.imag**2
             m = (st.radius * (1 + eps) - np.abs(w.imag)) / st.radius
             u = w.real + sg[st.sign] * np.sqrt(np.maximum(disc, 0.0))
-            z[st.joint] = np.where(m >= 0, a + u * e, np.nan)
+            z[st.joint] = np.where(m >= 0, a + u * e, NAN_POINT)
             margin[st.sign] = m
         elif isinstance(st, Pivot):
             w = z[st.joint] - z[st.center]
@@ -169,7 +171,7 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
             u = -along + sg[st.sign] * np.sqrt(np.maximum(aw * aw - off * off, 0.0))
             with np.errstate(divide="ignore", invalid="ignore"):
                 turn = w / (st.offset + u * st.direction)
-            rot[st.on] = np.where(m >= 0, turn, np.nan)
+            rot[st.on] = np.where(m >= 0, turn, NAN_POINT)
             margin[st.sign] = m
         elif isinstance(st, SliderDrive):
             origin, turn = _line_frame(st, z, rot)
@@ -178,6 +180,8 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
                 z[j] = origin + turn * (p + q[st.driver] * st.direction)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
     assembled = np.all(margin >= 0, axis=0) if plan.n_signs else np.ones(n, bool)
+    if not assembled.all():  # a mechanism that does not assemble has no joint positions at all
+        z[:, ~assembled] = NAN_POINT
     return Positions(z, rot, margin, assembled, q, sg, mr)
 
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .plan import Carry, CircleLine, Crank, Dyad, Ground, Pivot, Place, Plan, SliderDrive
-from .positions import Positions
+from .positions import NAN_POINT, Positions
 
 #: |sin| of a step's angle below which its rates are undefined (see the module docstring)
 SINGULAR_TOL = 1e-6
@@ -169,8 +169,8 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
     singular = np.any(np.abs(cond) < tol, axis=0) & pos.assembled
     bad = singular | ~pos.assembled
     if bad.any():
-        v[:, bad] = np.nan
-        a[:, bad] = np.nan
+        v[:, bad] = NAN_POINT
+        a[:, bad] = NAN_POINT
         for d in (om, al):
             for k in d:
                 d[k] = np.where(bad, np.nan, d[k])

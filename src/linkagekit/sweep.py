@@ -151,7 +151,7 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
             speed: Mapping[str, ArrayLike] | ArrayLike | None = None,
             acceleration: Mapping[str, ArrayLike] | ArrayLike | None = None,
             signs: ArrayLike | None = None, mirrors: ArrayLike | None = None,
-            dynamics: bool = True) -> Result:
+            dynamics: bool = True, method: str = "natural") -> Result:
     """Positions, velocities and accelerations (and forces, when the file has masses or loads).
 
     Parameters
@@ -166,6 +166,11 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
         Input speed (rad/s, or length/s for a slider) and acceleration; default: the file's.
     signs, mirrors : array_like, optional
         Assembly mode (see :func:`linkagekit.positions.solve`); default: the pose's.
+    method : {"natural", "vector-loop"}
+        ``"natural"`` (default): successive triangulation in natural coordinates, any
+        mechanism the plan can solve.  ``"vector-loop"``: the independent link-angle
+        formulation of seeds 003/001 (:mod:`linkagekit.vectorloop`), for four-bars and
+        Stephenson six-bars, in the pose's assembly mode.
 
     Returns
     -------
@@ -201,9 +206,17 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
     speeds = {d.name: _rate(sp.get(d.name, d.speed), n, f"speed[{d.name}]") for d in mech.drivers}
     accels = {d.name: _rate(ac.get(d.name, d.acceleration), n, f"acceleration[{d.name}]") for d in mech.drivers}
 
-    pos = solve(plan, q, signs, mirrors)
-    rates = solve_rates(plan, pos, np.array([speeds[d.name] for d in mech.drivers]),
-                        np.array([accels[d.name] for d in mech.drivers]), plan.rotation_links)
+    w_in = np.array([speeds[d.name] for d in mech.drivers])
+    a_in = np.array([accels[d.name] for d in mech.drivers])
+    if method == "natural":
+        pos = solve(plan, q, signs, mirrors)
+        rates = solve_rates(plan, pos, w_in, a_in, plan.rotation_links)
+    elif method == "vector-loop":
+        if signs is not None or mirrors is not None:
+            raise InputError("method 'vector-loop' follows the pose's assembly mode: signs/mirrors are not taken")
+        pos, rates = _vector_loop(mech, q, w_in, a_in)
+    else:
+        raise InputError(f"method: expected 'natural' or 'vector-loop', got {method!r}")
     angle, omega, alpha = _link_motion(mech, pos, rates)
     res = Result(mech, values, speeds, accels, pos, rates, angle, omega, alpha)
     if dynamics and mech.has_dynamics:
@@ -213,6 +226,24 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
             return res
         res = Result(mech, values, speeds, accels, pos, rates, angle, omega, alpha, solve_forces(res))
     return res
+
+
+def _vector_loop(mech: Mechanism, q: np.ndarray, w_in: np.ndarray, a_in: np.ndarray) -> tuple[Positions, Rates]:
+    """Positions and rates by :mod:`linkagekit.vectorloop`, packed like the main solver's."""
+    from .positions import pose_signs
+    from .vectorloop import from_mechanism
+
+    model, offset = from_mechanism(mech)
+    sol = model.solve(q[0] + offset, w_in[0], a_in[0])
+    names = mech.joint_names
+    z = np.array([sol.z[j] for j in names])
+    v = np.array([sol.v[j] for j in names])
+    a = np.array([sol.a[j] for j in names])
+    margin = np.where(sol.assembled, 1.0, -1.0)[None, :]
+    plan = mech.plan
+    pos = Positions(z, {}, margin, sol.assembled, q, np.array(pose_signs(mech, plan), float).reshape(-1, 1),
+                    np.zeros((plan.n_mirrors, 1), bool))
+    return pos, Rates(v, a, sol.omega, sol.alpha, sol.condition[None, :], sol.singular)
 
 
 def _rate(value: ArrayLike, n: int, what: str) -> np.ndarray:
