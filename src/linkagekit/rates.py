@@ -82,8 +82,8 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
     n = z.shape[1]
     w_in = np.broadcast_to(np.asarray(speed, float).reshape(len(plan.drivers), -1), (len(plan.drivers), n))
     a_in = np.broadcast_to(np.asarray(accel, float).reshape(len(plan.drivers), -1), (len(plan.drivers), n))
-    v = np.zeros_like(z)
-    a = np.zeros_like(z)
+    v = np.full_like(z, NAN_POINT)  # every row is written by one step; NaN shows one that is not
+    a = np.full_like(z, NAN_POINT)
     om: dict[str, np.ndarray] = {"ground": np.zeros(n)}
     al: dict[str, np.ndarray] = {"ground": np.zeros(n)}
     cond = np.ones((plan.n_signs, n))
@@ -95,29 +95,40 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
                         rho = np.where(pos.mirrors[st.mirror], np.conj(rho), rho)
                     v[j] = v[st.k1] + rho * (v[st.k2] - v[st.k1])
                     a[j] = a[st.k1] + rho * (a[st.k2] - a[st.k1])
-                if st.link in rate_links:
+                if st.link in rate_links and st.link not in om:
                     om[st.link], al[st.link] = link_rates(z[st.k2] - z[st.k1], v[st.k2] - v[st.k1],
                                                           a[st.k2] - a[st.k1])
             elif isinstance(st, Dyad):
+                # conj(p) x = dot(p, x) + i cross(p, x): one complex product gives both
                 p = z[st.joint] - z[st.k1]
                 q = z[st.joint] - z[st.k2]
-                det = cross(p, q)
-                cond[st.sign] = det / (st.r1 * st.r2)
-                c1 = dot(p, v[st.k1])
-                c2 = dot(q, v[st.k2])
-                v[st.joint] = 1j * (c2 * p - c1 * q) / det
-                c1 = dot(p, a[st.k1]) - abs2(v[st.joint] - v[st.k1])
-                c2 = dot(q, a[st.k2]) - abs2(v[st.joint] - v[st.k2])
-                a[st.joint] = 1j * (c2 * p - c1 * q) / det
+                pc, qc = np.conj(p), np.conj(q)
+                det = (pc * q).imag
+                inv = 1.0 / det
+                cond[st.sign] = det * (1.0 / (st.r1 * st.r2))
+                c1 = (pc * v[st.k1]).real
+                c2 = (qc * v[st.k2]).real
+                vj = (c2 * p - c1 * q) * (1j * inv)
+                # the two links turn at w1 = cross(p, vj - v_k1) / r1^2, w2 likewise; and
+                # |vj - v_k1|^2 = (w1 r1)^2, the centripetal term of the acceleration
+                w1 = (pc * (vj - v[st.k1])).imag * (1.0 / st.r1**2)
+                w2 = (qc * (vj - v[st.k2])).imag * (1.0 / st.r2**2)
+                c1 = (pc * a[st.k1]).real - (w1 * st.r1) ** 2
+                c2 = (qc * a[st.k2]).real - (w2 * st.r2) ** 2
+                aj = (c2 * p - c1 * q) * (1j * inv)
+                v[st.joint], a[st.joint] = vj, aj
+                for link, w, r, k, rc in ((st.links[0], w1, st.r1, st.k1, pc), (st.links[1], w2, st.r2, st.k2, qc)):
+                    if link not in om:
+                        om[link], al[link] = w, (rc * (aj - a[k])).imag * (1.0 / r**2)
             elif isinstance(st, Crank):
                 e = z[st.toward] - z[st.pivot]
                 w, al_in = w_in[st.driver], a_in[st.driver]
                 v[st.toward] = v[st.pivot] + 1j * w * e
                 a[st.toward] = a[st.pivot] + (1j * al_in - w * w) * e
-                if st.link in rate_links:
-                    om[st.link], al[st.link] = w, al_in
+                om[st.link], al[st.link] = w, al_in
             elif isinstance(st, Ground):
-                pass
+                v[list(st.joints)] = 0.0
+                a[list(st.joints)] = 0.0
             elif isinstance(st, Carry):
                 # rigid motion with the rotation of another link: v = v_0 + i w (z - z_0)
                 w, alpha = om[st.rot_of], al[st.rot_of]

@@ -272,7 +272,10 @@ def _link_motion(mech: Mechanism, pos: Positions, rates: Rates) -> tuple[dict[st
             i, k = names.index(ln.joints[0]), names.index(ln.joints[1])
             base = pos.z[k] - pos.z[i]
             th = np.angle(base)
-            w, al = link_rates(base, rates.v[k] - rates.v[i], rates.a[k] - rates.a[i])
+            if ln.name in rates.omega:  # the step that placed the link knew its rates
+                w, al = rates.omega[ln.name], rates.alpha[ln.name]
+            else:
+                w, al = link_rates(base, rates.v[k] - rates.v[i], rates.a[k] - rates.a[i])
         else:  # a block of one joint: it turns with the link it slides on; its angle is the slide's
             sl = next((s for s in mech.sliders if s.link == ln.name), None)
             turn = pos.rot.get(ln.name, np.ones(n, complex))
