@@ -18,6 +18,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from .errors import InputError, LinkageError
@@ -175,7 +176,7 @@ def result_table(res: Result, console: Console) -> None:
                          justify="right")
         t.add_column("state")
         for h in heads:
-            t.add_column(h, justify="right")
+            t.add_column(escape(h), justify="right")  # "T[crank]" is not rich markup
         for i in range(res.n):
             state = "ok" if res.assembled[i] and not res.singular[i] else (
                 "singular" if res.assembled[i] else "not assembled")
@@ -192,8 +193,9 @@ def result_table(res: Result, console: Console) -> None:
     table(f"links: angle [{au}], ω [rad/s], α [rad/s²]", [f"{ln}.{c}" for ln in links for c in ("angle", "ω", "α")],
           [d[ln] for ln in links for d in (res.link_angle, res.link_omega, res.link_alpha)])
     if res.forces is not None:
-        heads, vals = zip(*res.forces.columns(), strict=True)
-        table("forces [N] and driver torques [N·m]", list(heads), list(vals))
+        heads, vals = zip(*res.forces.columns(compact=True), strict=True)
+        table("bearing loads |F| [N] (joint:by>on), driver torques T [N·m], forces F [N], input power [W]",
+              list(heads), list(vals))
 
 
 def _console(out: Path | None) -> tuple[Console, io.StringIO | None]:
@@ -220,11 +222,15 @@ def analyze_cmd(
     method: Annotated[Method, typer.Option("--method", help="natural: triangulation in joint coordinates (any "
                                            "mechanism); vector-loop: link angles by iteration (four-bars, "
                                            "Stephenson six-bars).")] = Method.natural,
+    static: Annotated[bool, typer.Option("--static", help="Zero input speed and acceleration: the driver "
+                                         "torque that balances gravity and the loads.")] = False,
 ) -> None:
     """Positions, velocities and accelerations (and forces) over the input sweep."""
     mech = load(file)
+    if static and (speed or acceleration):
+        raise InputError("--static: do not give --speed or --acceleration with it")
     res = analyze(mech, _inputs(mech, at, angles), speed=_rates(mech, speed, "--speed"),
-                  acceleration=_rates(mech, acceleration, "--acceleration"), method=method.value)
+                  acceleration=_rates(mech, acceleration, "--acceleration"), method=method.value, static=static)
     if fmt is Fmt.json:
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", output)
     elif fmt is Fmt.csv:

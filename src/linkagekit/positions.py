@@ -119,9 +119,9 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
     """
     q = np.atleast_2d(np.asarray(inputs, dtype=float))
     n = q.shape[1]
-    sg = np.asarray(plan.signs if signs is None else signs, dtype=float).reshape(plan.n_signs, -1)
+    sg = np.asarray(plan.signs if signs is None else signs, dtype=float).reshape(plan.n_signs, -1 if plan.n_signs else 1)
     mr = np.zeros((plan.n_mirrors, 1), bool) if mirrors is None else np.asarray(mirrors, bool).reshape(
-        plan.n_mirrors, -1)
+        plan.n_mirrors, -1 if plan.n_mirrors else 1)
     z = np.empty((len(plan.joint_names), n), complex)  # every joint is written by exactly one step
     rot: dict[str, np.ndarray] = {"ground": np.ones(n, complex)}
     margin = np.zeros((plan.n_signs, n))
@@ -200,6 +200,8 @@ def pose_inputs(mech: Mechanism) -> np.ndarray:
 
 def all_sign_combinations(k: int) -> np.ndarray:
     """Every +1/-1 vector of length k, shape (k, 2**k), starting with all +1."""
+    if k == 0:
+        return np.ones((0, 1))
     return np.array(list(itertools.product((1.0, -1.0), repeat=k)), dtype=float).T.reshape(k, -1)
 
 

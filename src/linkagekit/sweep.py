@@ -151,7 +151,7 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
             speed: Mapping[str, ArrayLike] | ArrayLike | None = None,
             acceleration: Mapping[str, ArrayLike] | ArrayLike | None = None,
             signs: ArrayLike | None = None, mirrors: ArrayLike | None = None,
-            dynamics: bool = True, method: str = "natural") -> Result:
+            dynamics: bool = True, method: str = "natural", static: bool = False) -> Result:
     """Positions, velocities and accelerations (and forces, when the file has masses or loads).
 
     Parameters
@@ -166,6 +166,9 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
         Input speed (rad/s, or length/s for a slider) and acceleration; default: the file's.
     signs, mirrors : array_like, optional
         Assembly mode (see :func:`linkagekit.positions.solve`); default: the pose's.
+    static : bool
+        Zero speed and acceleration for every driver: the forces are then the static ones
+        that balance gravity and the loads (not to be combined with ``speed``/``acceleration``).
     method : {"natural", "vector-loop"}
         ``"natural"`` (default): successive triangulation in natural coordinates, any
         mechanism the plan can solve.  ``"vector-loop"``: the independent link-angle
@@ -201,6 +204,11 @@ def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None 
                 values[d.name] = np.full(n, q0[i] / factor)
     q = np.array([values[d.name] * (mech.angle_to_rad if d.kind == "angle" else 1.0) for d in mech.drivers])
 
+    if static:
+        if speed is not None or acceleration is not None:
+            raise InputError("static: the input speed and acceleration are zero; do not give them too")
+        speed = {d.name: 0.0 for d in mech.drivers}
+        acceleration = {d.name: 0.0 for d in mech.drivers}
     sp = _per_driver(mech, speed, "speed")
     ac = _per_driver(mech, acceleration, "acceleration")
     speeds = {d.name: _rate(sp.get(d.name, d.speed), n, f"speed[{d.name}]") for d in mech.drivers}

@@ -1,0 +1,327 @@
+"""Kinetostatics: joint reactions and driver torques by the Newton-Euler equations of every link.
+
+For every moving link ``b`` (mass ``m``, centre of gravity ``G``, inertia ``I_G``) and every
+sample, with ``Q`` the link's reference point (``G`` when the link has a ``cg``, else its
+first joint)::
+
+    sum F_on_b + m g + sum F_ext          = m a_G
+    sum (r - Q) x F_on_b + sum tau + (G - Q) x m g + sum (r_ext - Q) x F_ext + tau_ext
+                                          = I_G alpha + (G - Q) x m a_G
+
+The unknowns, written once each and entering two links with opposite signs:
+
+* a revolute joint shared by links ``c`` (the first of them in the file) and ``o``: the
+  force ``F`` by ``c`` on ``o`` at the joint (2 unknowns).  A joint of k links gives k - 1
+  such pairs, all with the first link: the pin is part of that link.
+* a slider (block on a guide): the normal force ``N`` (along ``i E``, ``E`` the slide
+  direction now) at its ``through`` joint and the moment ``M`` of the guide on the block
+  (2 unknowns; frictionless, so nothing along ``E``).
+* a revolute driver: the torque ``T`` on its link, the frame taking ``-T`` (1 unknown); a
+  slider driver: the force along ``E`` on the block, the guide taking its opposite.
+
+With as many drivers as degrees of freedom this gives a square system of ``3 (n_links - 1)``
+equations: seed 001's 15x15 system for a Stephenson six-bar is the special case (see
+``docs/seed-errata.md`` for its corrections).  All samples are solved at once with
+:func:`numpy.linalg.solve` on stacked matrices (in chunks, to bound memory).  Lengths are
+converted to metres here, once; forces are in N, torques in N*m, inertia in kg*m^2.
+Samples that do not assemble or sit at a singular position have NaN forces.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .model import Link, Mechanism
+    from .sweep import Result
+
+#: samples per batched solve (bounds the memory of the stacked matrices)
+CHUNK = 16384
+
+
+@dataclass(frozen=True)
+class Reaction:
+    """The force (N, complex ``fx + i fy``, ground frame) by link ``by`` on link ``on`` at ``joint``.
+
+    For a slider, ``moment`` is the moment (N*m) of the guide ``by`` on the block ``on``, and
+    the force acts at the slider's ``through`` joint.
+    """
+
+    joint: str
+    on: str
+    by: str
+    force: np.ndarray
+    moment: np.ndarray | None = None
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        """The bearing load ``|F|`` (N)."""
+        return np.abs(self.force)
+
+
+@dataclass(frozen=True)
+class Forces:
+    """Kinetostatic result over the samples of a sweep (NaN where undefined)."""
+
+    reactions: tuple[Reaction, ...]
+    driver_torque: dict[str, np.ndarray]  # N*m, counter-clockwise positive, on the driver's link
+    driver_force: dict[str, np.ndarray]  # N, along the slide direction, on the block
+    input_power: np.ndarray  # W: sum of torque * omega and force * slide speed
+    shaking_force: np.ndarray  # N, complex: resultant force of the mechanism on the frame
+    shaking_moment: np.ndarray  # N*m: its moment about the origin of the file's frame
+    residual: np.ndarray  # per sample: max |A x - b| over (max |b| + size * max |x|), size = mechanism size in m
+
+    def reaction(self, joint: str, on: str, by: str | None = None) -> np.ndarray:
+        """Force on link ``on`` at ``joint`` (by ``by``, or by the one other link there)."""
+        for r in self.reactions:
+            if r.joint == joint and ((r.on, r.by) == (on, by) or (by is None and r.on == on)):
+                return r.force
+            if r.joint == joint and ((r.by, r.on) == (on, by) or (by is None and r.by == on)):
+                return -r.force
+        raise KeyError(f"no reaction at '{joint}' on '{on}'" + (f" by '{by}'" if by else ""))
+
+    def to_dict(self) -> dict[str, Any]:
+        from .sweep import _list
+
+        out: dict[str, Any] = {"reactions": []}
+        for r in self.reactions:
+            entry: dict[str, Any] = {"joint": r.joint, "on": r.on, "by": r.by, "fx": _list(r.force.real),
+                                     "fy": _list(r.force.imag), "magnitude": _list(r.magnitude)}
+            if r.moment is not None:
+                entry["kind"] = "slider"
+                entry["moment"] = _list(r.moment)
+            out["reactions"].append(entry)
+        out["driver_torque"] = {k: _list(v) for k, v in self.driver_torque.items()}
+        if self.driver_force:
+            out["driver_force"] = {k: _list(v) for k, v in self.driver_force.items()}
+        out["input_power"] = _list(self.input_power)
+        out["shaking_force"] = {"fx": _list(self.shaking_force.real), "fy": _list(self.shaking_force.imag)}
+        out["shaking_moment"] = _list(self.shaking_moment)
+        return out
+
+    def columns(self, compact: bool = False) -> list[tuple[str, np.ndarray]]:
+        """Named columns for CSV (``compact``: bearing magnitudes only, for tables)."""
+        cols: list[tuple[str, np.ndarray]] = []
+        for r in self.reactions:
+            tag = f"{r.joint}:{r.by}>{r.on}"
+            if compact:
+                cols.append((f"|F| {tag}", r.magnitude))
+                continue
+            cols += [(f"F[{tag}].fx", r.force.real), (f"F[{tag}].fy", r.force.imag)]
+            if r.moment is not None:
+                cols.append((f"F[{tag}].moment", r.moment))
+        cols += [(f"T[{k}]", v) for k, v in self.driver_torque.items()]
+        cols += [(f"F[{k}]", v) for k, v in self.driver_force.items()]
+        cols.append(("input_power", self.input_power))
+        if not compact:
+            cols += [("shaking.fx", self.shaking_force.real), ("shaking.fy", self.shaking_force.imag),
+                     ("shaking.moment", self.shaking_moment)]
+        return cols
+
+
+# ------------------------------------------------------------------------------- kinematics
+def link_frames(res: Result) -> dict[str, tuple[np.ndarray, complex, np.ndarray]]:
+    """For each link: (current position of its first joint, that joint in the shape frame,
+    rotation ``e^{i theta}`` from the shape frame to now), all in file length units."""
+    mech = res.mechanism
+    out = {}
+    for ln in mech.links:
+        j0 = ln.joints[0]
+        if ln.name == "ground":
+            out[ln.name] = (res.point(j0), ln.shape[j0], np.ones(res.n, complex))
+            continue
+        if len(ln.joints) >= 2:
+            ref = np.angle(ln.shape[ln.joints[1]] - ln.shape[j0])
+        else:  # a block: its reported angle is that of its slide direction
+            sl = next((s for s in mech.sliders if s.link == ln.name), None)
+            ref = np.angle(sl.direction) if sl is not None else 0.0
+        theta = res.link_angle[ln.name] * mech.angle_to_rad
+        out[ln.name] = (res.point(j0), ln.shape[j0], np.exp(1j * (theta - ref)))
+    return out
+
+
+def point_motion(res: Result, link: Link, local: complex,
+                 frames: dict[str, tuple[np.ndarray, complex, np.ndarray]]) -> tuple[np.ndarray, ...]:
+    """Position, velocity and acceleration (file units) of a point given in a link's shape frame."""
+    z0, s0, rot = frames[link.name]
+    j0 = link.joints[0]
+    r = rot * (local - s0)
+    w, al = res.link_omega[link.name], res.link_alpha[link.name]
+    return z0 + r, res.velocity(j0) + 1j * w * r, res.acceleration(j0) + (1j * al - w * w) * r
+
+
+# ------------------------------------------------------------------------------- the system
+def _cross(a: Any, b: Any) -> Any:
+    return np.real(a) * np.imag(b) - np.imag(a) * np.real(b)
+
+
+def solve_forces(res: Result) -> Forces:
+    """Joint reactions, driver torques/forces and derived quantities for every sample of ``res``."""
+    mech = res.mechanism
+    n = res.n
+    si = mech.length_to_si
+    moving = [ln for ln in mech.links if ln.name != "ground"]
+    row = {ln.name: 3 * i for i, ln in enumerate(moving)}  # first of the link's three rows
+    m = 3 * len(moving)
+    frames = link_frames(res)
+    names = mech.joint_names
+
+    # reference point Q of every link (m): the centre of gravity, or the first joint
+    Q: dict[str, np.ndarray] = {}
+    rhs = np.zeros((n, m))
+    g = mech.gravity if mech.gravity is not None else 0j
+    for ln in moving:
+        r0 = row[ln.name]
+        al = res.link_alpha[ln.name]
+        if ln.cg is not None:
+            zg, _vg, ag = point_motion(res, ln, ln.cg, frames)
+            Q[ln.name] = zg * si
+            inertial = ln.mass * (ag * si - g)  # m (a_G - g), N
+        else:
+            Q[ln.name] = res.point(ln.joints[0]) * si
+            inertial = np.zeros(n, complex)
+        rhs[:, r0] += inertial.real
+        rhs[:, r0 + 1] += inertial.imag
+        rhs[:, r0 + 2] += ln.inertia * al
+    for ld in mech.loads:
+        if ld.link == "ground":
+            continue
+        r0 = row[ld.link]
+        ln = mech.link(ld.link)
+        rhs[:, r0 + 2] -= ld.torque
+        if ld.force != 0:
+            zp = point_motion(res, ln, ld.at, frames)[0] * si if ld.at is not None else Q[ld.link]
+            rhs[:, r0] -= ld.force.real
+            rhs[:, r0 + 1] -= ld.force.imag
+            rhs[:, r0 + 2] -= _cross(zp - Q[ld.link], ld.force)
+
+    # columns: unknowns and where they enter, as (row, column, coefficient per sample);
+    # the matrices are filled chunk by chunk into one reused buffer below
+    entries: list[tuple[int, int, Any]] = []
+    labels: list[tuple[str, ...]] = []
+    col = 0
+
+    def put_force(link: str, c: int, at: np.ndarray, direction: Any, sign: float) -> None:
+        """Unit-force column c: ``sign * direction`` at point ``at`` (m) on ``link``."""
+        if link == "ground":
+            return
+        r0 = row[link]
+        d = sign * np.broadcast_to(direction, (n,))
+        entries.extend(((r0, c, np.real(d)), (r0 + 1, c, np.imag(d)), (r0 + 2, c, _cross(at - Q[link], d))))
+
+    for j in names:
+        holders = mech.links_of(j)
+        if len(holders) < 2:
+            continue
+        zj = res.point(j) * si
+        carrier = holders[0]
+        for other in holders[1:]:
+            for c, e in ((col, 1.0), (col + 1, 1j)):
+                put_force(other, c, zj, e, +1.0)
+                put_force(carrier, c, zj, e, -1.0)
+            labels.append(("pin", j, other, carrier))
+            col += 2
+    slide_dir: dict[int, np.ndarray] = {}
+    for k, sl in enumerate(mech.sliders):
+        zt = res.point(sl.through) * si
+        E = frames[sl.on][2] * sl.direction  # the slide direction turns with the guide
+        slide_dir[k] = E
+        put_force(sl.link, col, zt, 1j * E, +1.0)
+        put_force(sl.on, col, zt, 1j * E, -1.0)
+        for link, sign in ((sl.link, 1.0), (sl.on, -1.0)):
+            if link != "ground":
+                entries.append((row[link] + 2, col + 1, sign))
+        labels.append(("slider", sl.through, sl.link, sl.on, str(k)))
+        col += 2
+    for d in mech.drivers:
+        if d.kind == "angle":
+            if d.link != "ground":
+                entries.append((row[d.link] + 2, col, 1.0))
+            labels.append(("torque", d.name))
+        else:
+            assert d.slider is not None
+            sl = mech.sliders[d.slider]
+            zt = res.point(sl.through) * si
+            put_force(sl.link, col, zt, slide_dir[d.slider], +1.0)
+            put_force(sl.on, col, zt, slide_dir[d.slider], -1.0)
+            labels.append(("push", d.name))
+        col += 1
+    if col != m:  # pragma: no cover - the plan already checked the degrees of freedom
+        raise AssertionError(f"kinetostatics: {col} unknowns for {m} equations")
+
+    good = res.assembled & ~res.singular
+    rhs[~good] = 0.0
+    x = np.empty((n, m))
+    residual = np.empty(n)
+    size = max(1.0, mech.length_scale * si)  # lever arms are at most about this (m)
+    buf = np.empty((min(n, CHUNK), m, m))
+    eye = np.eye(m)
+    for start in range(0, n, CHUNK):  # one reused buffer: no 3-D array over all samples
+        sl = slice(start, min(start + CHUNK, n))
+        Ak, bk = buf[: sl.stop - sl.start], rhs[sl]
+        Ak.fill(0.0)
+        for r, c, coef in entries:
+            Ak[:, r, c] += coef[sl] if isinstance(coef, np.ndarray) else coef
+        Ak[~good[sl]] = eye  # placeholders, answered NaN below
+        xk = np.linalg.solve(Ak, bk[..., None])[..., 0]
+        x[sl] = xk
+        err = np.max(np.abs(np.matmul(Ak, xk[..., None])[..., 0] - bk), axis=1)
+        residual[sl] = err / np.maximum(np.max(np.abs(bk), axis=1) + size * np.max(np.abs(xk), axis=1), 1e-300)
+    x[~good] = np.nan
+    residual[~good] = np.nan
+
+    # unpack
+    reactions: list[Reaction] = []
+    torque: dict[str, np.ndarray] = {}
+    push: dict[str, np.ndarray] = {}
+    shaking = np.zeros(n, complex)
+    shaking_m = np.zeros(n)
+    col = 0
+    for lab in labels:
+        if lab[0] == "pin":
+            _, j, other, carrier = lab
+            f = x[:, col] + 1j * x[:, col + 1]
+            reactions.append(Reaction(j, other, carrier, f))
+            if "ground" in (carrier, other):  # the frame feels -f if it exerts f, +f if it receives it
+                on_frame = -f if carrier == "ground" else f
+                shaking += on_frame
+                shaking_m += _cross(res.point(j) * si, on_frame)
+            col += 2
+        elif lab[0] == "slider":
+            _, j, block, guide, k = lab
+            f = x[:, col] * (1j * slide_dir[int(k)])
+            moment = x[:, col + 1]
+            reactions.append(Reaction(j, block, guide, f, moment))
+            if guide == "ground":
+                shaking -= f
+                shaking_m -= _cross(res.point(j) * si, f) + moment
+            col += 2
+        elif lab[0] == "torque":
+            torque[lab[1]] = x[:, col]
+            shaking_m -= x[:, col]
+            col += 1
+        else:
+            d = next(dd for dd in mech.drivers if dd.name == lab[1])
+            assert d.slider is not None
+            sl = mech.sliders[d.slider]
+            push[lab[1]] = x[:, col]
+            if sl.on == "ground":
+                fe = x[:, col] * slide_dir[d.slider]
+                shaking -= fe
+                shaking_m -= _cross(res.point(sl.through) * si, fe)
+            col += 1
+    power = np.zeros(n)
+    for d in mech.drivers:
+        if d.kind == "angle":
+            power += torque[d.name] * res.speeds[d.name]
+        else:
+            power += push[d.name] * res.speeds[d.name] * si
+    bad = ~good
+    if bad.any():
+        shaking[bad] = complex(np.nan, np.nan)
+        shaking_m[bad] = np.nan
+        power[bad] = np.nan
+    return Forces(tuple(reactions), torque, push, power, shaking, shaking_m, residual)
