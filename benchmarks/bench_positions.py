@@ -58,11 +58,16 @@ def hand_kernel(phi, w, al, with_rates=True):
     apy = acy + k1 * (ady - acy) + k2 * (adx - acx)
     # link angles and rates, as lk.analyze reports them (coupler C->D, rocker B->D)
     links = []
-    for (x0, y0, vx0, vy0, ax0, ay0) in ((cx, cy, vcx, vcy, acx, acy), (bx, by, 0.0, 0.0, 0.0, 0.0)):
+    for x0, y0, vx0, vy0, ax0, ay0 in ((cx, cy, vcx, vcy, acx, acy), (bx, by, 0.0, 0.0, 0.0, 0.0)):
         ex, ey = dx - x0, dy - y0
         n2 = ex * ex + ey * ey
-        links.append((np.degrees(np.arctan2(ey, ex)), (ex * (vdy - vy0) - ey * (vdx - vx0)) / n2,
-                      (ex * (ady - ay0) - ey * (adx - ax0)) / n2))
+        links.append(
+            (
+                np.degrees(np.arctan2(ey, ex)),
+                (ex * (vdy - vy0) - ey * (vdx - vx0)) / n2,
+                (ex * (ady - ay0) - ey * (adx - ax0)) / n2,
+            )
+        )
     return dx, dy, px, py, vdx, vdy, vpx, vpy, adx, ady, apx, apy, links
 
 
@@ -100,12 +105,18 @@ def main(n=1_000_000):
 
     ns = 1e9 / n
     print(f"four-bar with coupler point (seed 000), N = {n:,} samples")
-    print(f"positions            linkagekit {t_pos_lk * ns:8.1f} ns/sample   hand NumPy {t_pos_hand * ns:8.1f} ns/sample"
-          f"   ratio {t_pos_lk / t_pos_hand:5.2f}  (goal <= 1.5)")
-    print(f"positions+vel+acc    lk.analyze {t_all_lk * ns:8.1f} ns/sample   hand NumPy {t_all_hand * ns:8.1f} ns/sample"
-          f"   ratio {t_all_lk / t_all_hand:5.2f}  (goal <= 2)")
-    print(f"360-sample sweep     positions solve {t_360 * 1e3:.3f} ms (goal < 1 ms);"
-          f" whole lk.analyze {t_360_all * 1e3:.3f} ms")
+    print(
+        f"positions            linkagekit {t_pos_lk * ns:8.1f} ns/sample   hand NumPy {t_pos_hand * ns:8.1f} ns/sample"
+        f"   ratio {t_pos_lk / t_pos_hand:5.2f}  (goal <= 1.5)"
+    )
+    print(
+        f"positions+vel+acc    lk.analyze {t_all_lk * ns:8.1f} ns/sample   hand NumPy {t_all_hand * ns:8.1f} ns/sample"
+        f"   ratio {t_all_lk / t_all_hand:5.2f}  (goal <= 2)"
+    )
+    print(
+        f"360-sample sweep     positions solve {t_360 * 1e3:.3f} ms (goal < 1 ms);"
+        f" whole lk.analyze {t_360_all * 1e3:.3f} ms"
+    )
 
 
 if __name__ == "__main__":

@@ -59,8 +59,14 @@ def fourbar_reference(pose, phi):
 def watt2_dict(p):
     return {
         "joints": {k: [v.real, v.imag] for k, v in p.items()},
-        "links": {"ground": ["A", "B", "E"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D", "F"],
-                  "coupler2": ["F", "G", "P"], "output": ["E", "G"]},
+        "links": {
+            "ground": ["A", "B", "E"],
+            "crank": ["A", "C"],
+            "coupler": ["C", "D"],
+            "rocker": ["B", "D", "F"],
+            "coupler2": ["F", "G", "P"],
+            "output": ["E", "G"],
+        },
         "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
     }
 
@@ -78,8 +84,14 @@ def watt2_reference(p, phi):
 def stephenson_dict(p):
     return {
         "joints": {k: [v.real, v.imag] for k, v in p.items()},
-        "links": {"ground": ["A", "B"], "input": ["A", "C", "D"], "link_ce": ["C", "E"], "ternary": ["B", "E", "F"],
-                  "coupler": ["D", "G", "P"], "link_fg": ["F", "G"]},
+        "links": {
+            "ground": ["A", "B"],
+            "input": ["A", "C", "D"],
+            "link_ce": ["C", "E"],
+            "ternary": ["B", "E", "F"],
+            "coupler": ["D", "G", "P"],
+            "link_fg": ["F", "G"],
+        },
         "drivers": [{"link": "input", "pivot": "A", "toward": "C"}],
     }
 

@@ -39,15 +39,16 @@ def test_table_of_example_21_is_reproduced(examples):
     np.testing.assert_allclose(res.x("P")[0], 64.9, atol=0.05)
     np.testing.assert_allclose(res.y("P")[0], 510.8, atol=0.05)
     P = res.point("P")[1:]
-    np.testing.assert_allclose(P, [-150.696617 + 589.539613j, -506.209156 + 523.200100j, -829.322174 + 152.564004j],
-                               atol=1e-5)
+    np.testing.assert_allclose(
+        P, [-150.696617 + 589.539613j, -506.209156 + 523.200100j, -829.322174 + 152.564004j], atol=1e-5
+    )
 
 
 def test_check_reports_range_to_1e6(examples):
     rep = check(lk.load(examples / "seed003_ex21.yaml"))
     assert rep["dof"] == 1
     assert rep["grashof"] == "non-grashof"
-    (lo, hi), = rep["input_range"]
+    ((lo, hi),) = rep["input_range"]
     assert abs(lo - LIMIT) < 1e-6 and abs(hi - (360 - LIMIT)) < 1e-6
 
 
@@ -64,19 +65,25 @@ def _fourbar(ground, crank, coupler, rocker, pose_angle=1.0):
     s = abs(B - C)
     along = (coupler**2 + s**2 - rocker**2) / (2 * s)
     D = C + (along + 1j * np.sqrt(coupler**2 - along**2)) * (B - C) / s
-    return lk.Mechanism.from_dict({
-        "joints": {"A": [0, 0], "B": [B.real, 0], "C": [C.real, C.imag], "D": [D.real, D.imag]},
-        "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D"]},
-        "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}]})
+    return lk.Mechanism.from_dict(
+        {
+            "joints": {"A": [0, 0], "B": [B.real, 0], "C": [C.real, C.imag], "D": [D.real, D.imag]},
+            "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D"]},
+            "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+        }
+    )
 
 
-@pytest.mark.parametrize(("dims", "kind"), [
-    ((4.0, 1.0, 3.5, 3.0), "crank-rocker"),
-    ((1.0, 3.0, 3.5, 3.2), "double-crank"),
-    ((3.0, 3.5, 1.0, 3.2), "double-rocker"),
-    ((3.0, 2.5, 3.5, 1.0), "crank-rocker"),  # rocker-crank: the output turns
-    ((2.0, 3.0, 2.5, 4.0), "non-grashof"),
-])
+@pytest.mark.parametrize(
+    ("dims", "kind"),
+    [
+        ((4.0, 1.0, 3.5, 3.0), "crank-rocker"),
+        ((1.0, 3.0, 3.5, 3.2), "double-crank"),
+        ((3.0, 3.5, 1.0, 3.2), "double-rocker"),
+        ((3.0, 2.5, 3.5, 1.0), "crank-rocker"),  # rocker-crank: the output turns
+        ((2.0, 3.0, 2.5, 4.0), "non-grashof"),
+    ],
+)
 def test_grashof_classes(dims, kind):
     mech = _fourbar(*dims)
     rep = check(mech)

@@ -53,8 +53,10 @@ BAD_FILES = {
     "no ground": (GOOD.replace("ground: [A, B]", "frame: [A, B]"), "no link named 'ground'"),
     "pivot not on link": (GOOD.replace("pivot: A", "pivot: B"), "drivers[0].pivot"),
     "coincident joints": (GOOD.replace("P: [5.6182, 3.4509]", "P: [2, 0]"), "at one spot"),
-    "bad lengths": (GOOD.replace("coupler: [C, D, P]", "coupler: {joints: [C, D, P], lengths: {C-D: 1, C-P: 1, D-P: 5}}"),
-                    "cannot form a triangle"),
+    "bad lengths": (
+        GOOD.replace("coupler: [C, D, P]", "coupler: {joints: [C, D, P], lengths: {C-D: 1, C-P: 1, D-P: 5}}"),
+        "cannot form a triangle",
+    ),
     "not a mapping": ("- just\n- a list\n", "mapping"),
 }
 
@@ -70,17 +72,20 @@ def test_bad_files_exit_2_with_one_located_line(tmp_path, capsys, case):
         assert needle in err and path in err, err
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["--at", "0,abc"], "'abc' is not a number"),
-    (["--angles", "0:360"], "START:STOP:STEP"),
-    (["--angles", "0:360:0"], "STEP"),
-    (["--angles", "0:x:1"], "'x' is not a number"),
-    (["--at", "rocker=5"], "no driver named 'rocker'"),
-    (["--at", "1", "--angles", "0:1:1"], "not both"),
-    (["--format", "xml"], "xml"),
-    (["--speed", "fast"], "'fast' is not a number"),
-    (["--bogus"], "--bogus"),
-])
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["--at", "0,abc"], "'abc' is not a number"),
+        (["--angles", "0:360"], "START:STOP:STEP"),
+        (["--angles", "0:360:0"], "STEP"),
+        (["--angles", "0:x:1"], "'x' is not a number"),
+        (["--at", "rocker=5"], "no driver named 'rocker'"),
+        (["--at", "1", "--angles", "0:1:1"], "not both"),
+        (["--format", "xml"], "xml"),
+        (["--speed", "fast"], "'fast' is not a number"),
+        (["--bogus"], "--bogus"),
+    ],
+)
 def test_bad_arguments_exit_2(tmp_path, capsys, args, needle):
     code, out, err = run(["analyze", write(tmp_path, GOOD), *args], capsys)
     assert code == 2
@@ -130,8 +135,9 @@ def test_csv_and_table_and_output_file(tmp_path, capsys):
 
 
 def test_modes_json(capsys, examples):
-    code, out, _ = run(["modes", str(examples / "seed000_fourbar.yaml"), "--at", "0", "--mirrors", "--format", "json"],
-                       capsys)
+    code, out, _ = run(
+        ["modes", str(examples / "seed000_fourbar.yaml"), "--at", "0", "--mirrors", "--format", "json"], capsys
+    )
     doc = json.loads(out)
     assert code == 0 and doc["format"] == "linkagekit-modes/1" and doc["input"] == {"crank": 0.0}
     assert len(doc["modes"]) == 4 and all(m["assembled"] for m in doc["modes"])
@@ -147,8 +153,9 @@ def test_check_json(capsys, examples):
 
 def test_several_drivers(capsys, examples):
     path = str(examples / "fivebar_two_drivers.yaml")
-    code, out, err = run(["analyze", path, "--at", "crank1=100,120", "--at", "crank2=50,60", "--format", "json"],
-                         capsys)
+    code, out, err = run(
+        ["analyze", path, "--at", "crank1=100,120", "--at", "crank2=50,60", "--format", "json"], capsys
+    )
     assert code == 0, err
     doc = json.loads(out)
     assert doc["inputs"] == {"crank1": [100.0, 120.0], "crank2": [50.0, 60.0]}

@@ -31,10 +31,18 @@ RTOL = 1e-9
 def compound_hinge(rng):
     """A four-bar with a dyad hung on its coupler-rocker joint D: three links meet at D."""
     p = {n: complex(*rng.uniform(-10, 10, 2)) for n in "ABECDF"}
-    return {"joints": {k: [v.real, v.imag] for k, v in p.items()},
-            "links": {"ground": ["A", "B", "E"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D"],
-                      "link5": ["D", "F"], "link6": ["E", "F"]},
-            "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}]}
+    return {
+        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "links": {
+            "ground": ["A", "B", "E"],
+            "crank": ["A", "C"],
+            "coupler": ["C", "D"],
+            "rocker": ["B", "D"],
+            "link5": ["D", "F"],
+            "link6": ["E", "F"],
+        },
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+    }
 
 
 KINDS = dict(KINEMATIC_KINDS, compound_hinge=compound_hinge)
@@ -51,8 +59,12 @@ def with_dynamics(d, rng, massless_share=0.25):
             links[name] = spec
             continue
         centre = np.mean([joints[j] for j in js]) + complex(*rng.normal(0, 1, 2))
-        links[name] = {"joints": js, "mass": float(rng.uniform(0.1, 3)), "cg": [centre.real, centre.imag],
-                       "inertia": float(rng.uniform(0, 0.5))}
+        links[name] = {
+            "joints": js,
+            "mass": float(rng.uniform(0.1, 3)),
+            "cg": [centre.real, centre.imag],
+            "inertia": float(rng.uniform(0, 0.5)),
+        }
     d["links"] = links
     d["gravity"] = list(rng.normal(0, 5, 2))
     moving = [n for n in links if n != "ground"]
@@ -86,8 +98,11 @@ def point_of(res, link, local):
     rot = np.exp(1j * (res.link_angle[link] * mech.angle_to_rad - np.angle(sl.direction)))
     r = rot * (local - ln.shape[j0]) * si
     w, al = res.link_omega[link], res.link_alpha[link]
-    return (res.point(j0) * si + r, res.velocity(j0) * si + 1j * w * r,
-            res.acceleration(j0) * si + (1j * al - w * w) * r)
+    return (
+        res.point(j0) * si + r,
+        res.velocity(j0) * si + 1j * w * r,
+        res.acceleration(j0) * si + (1j * al - w * w) * r,
+    )
 
 
 def dot(a, b):
@@ -159,7 +174,7 @@ def test_driver_power_equals_energy_balance(kind):
         total = terms.sum(axis=0)
         scale = np.abs(terms).sum(axis=0)
         assert np.all(np.abs(total) <= RTOL * scale), (kind, np.max(np.abs(total) / scale))
-        np.testing.assert_allclose(res.forces.input_power[ok], terms[-len(mech.drivers):].sum(axis=0), rtol=1e-12)
+        np.testing.assert_allclose(res.forces.input_power[ok], terms[-len(mech.drivers) :].sum(axis=0), rtol=1e-12)
 
 
 def guide_rotation(res, link):
@@ -168,7 +183,9 @@ def guide_rotation(res, link):
         return 1.0
     mech = res.mechanism
     ln = mech.link(link)
-    return np.exp(1j * (res.link_angle[link] * mech.angle_to_rad - np.angle(ln.shape[ln.joints[1]] - ln.shape[ln.joints[0]])))
+    return np.exp(
+        1j * (res.link_angle[link] * mech.angle_to_rad - np.angle(ln.shape[ln.joints[1]] - ln.shape[ln.joints[0]]))
+    )
 
 
 def link_loads(res):
@@ -297,10 +314,15 @@ def test_static_torque_is_the_derivative_of_the_potential(kind):
 def test_two_link_pendulum_by_hand():
     """Crank OA of length L, mass m at L/2, inertia I_G, gravity -9.81 y: T = I_O alpha + m g (L/2) cos(theta)."""
     L, m, ig, g = 0.8, 2.5, 0.07, 9.81
-    mech = lk.Mechanism.from_dict({
-        "units": {"length": "m", "angle": "deg"}, "joints": {"O": [0, 0], "A": [L, 0]},
-        "links": {"ground": ["O"], "arm": {"joints": ["O", "A"], "mass": m, "cg": [L / 2, 0], "inertia": ig}},
-        "drivers": [{"link": "arm", "pivot": "O", "toward": "A"}], "gravity": [0, -g]})
+    mech = lk.Mechanism.from_dict(
+        {
+            "units": {"length": "m", "angle": "deg"},
+            "joints": {"O": [0, 0], "A": [L, 0]},
+            "links": {"ground": ["O"], "arm": {"joints": ["O", "A"], "mass": m, "cg": [L / 2, 0], "inertia": ig}},
+            "drivers": [{"link": "arm", "pivot": "O", "toward": "A"}],
+            "gravity": [0, -g],
+        }
+    )
     th = np.linspace(0, 350, 36)
     w, al = 3.0, -1.5
     res = lk.analyze(mech, th, speed=w, acceleration=al)
@@ -327,13 +349,15 @@ def test_seed001_stephenson_example():
     res = lk.analyze(mech, [50.0], speed=3.0, acceleration=-2.0)
     f = res.forces
     # our corrected 15x15 system (docs/seed-errata.md), F_ij = force by link i on link j
-    expected = {("OA", "input", "ground"): -100.226883 - 270.432258j,  # F12
-                ("Q", "input", "link3"): -4.324012 + 153.462519j,  # F32
-                ("S", "input", "link4"): 90.364256 + 102.530657j,  # F42
-                ("X", "link3", "link6"): -34.426893 + 107.233839j,  # F63
-                ("W", "link4", "output"): 57.507551 + 93.526780j,  # F54
-                ("OB", "output", "ground"): -65.699995 + 124.332518j,  # F15
-                ("Y", "link6", "output"): -85.432063 + 54.314349j}  # F56
+    expected = {
+        ("OA", "input", "ground"): -100.226883 - 270.432258j,  # F12
+        ("Q", "input", "link3"): -4.324012 + 153.462519j,  # F32
+        ("S", "input", "link4"): 90.364256 + 102.530657j,  # F42
+        ("X", "link3", "link6"): -34.426893 + 107.233839j,  # F63
+        ("W", "link4", "output"): 57.507551 + 93.526780j,  # F54
+        ("OB", "output", "ground"): -65.699995 + 124.332518j,  # F15
+        ("Y", "link6", "output"): -85.432063 + 54.314349j,
+    }  # F56
     for (joint, on, by), value in expected.items():
         assert f.reaction(joint, on, by)[0] == pytest.approx(value, abs=2e-6)
     assert f.driver_torque["input"][0] == pytest.approx(-336.755041, abs=1e-6)
@@ -345,12 +369,18 @@ def test_seed001_stephenson_example():
 
 
 def test_singular_position_gives_flagged_nan_forces():
-    d = {"units": {"length": "mm", "angle": "deg"},
-         "joints": {"O1": [0, 0], "O2": [1000, 0], "A": [433.012701892219, 250], "B": [1433.01270189222, 250]},
-         "links": {"ground": ["O1", "O2"], "crank": ["O1", "A"],
-                   "coupler": {"joints": ["A", "B"], "mass": 3.0, "cg": [933.0127, 250], "inertia": 0.2},
-                   "rocker": ["O2", "B"]},
-         "drivers": [{"link": "crank", "pivot": "O1", "toward": "A"}], "gravity": [0, -9.81]}
+    d = {
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O1": [0, 0], "O2": [1000, 0], "A": [433.012701892219, 250], "B": [1433.01270189222, 250]},
+        "links": {
+            "ground": ["O1", "O2"],
+            "crank": ["O1", "A"],
+            "coupler": {"joints": ["A", "B"], "mass": 3.0, "cg": [933.0127, 250], "inertia": 0.2},
+            "rocker": ["O2", "B"],
+        },
+        "drivers": [{"link": "crank", "pivot": "O1", "toward": "A"}],
+        "gravity": [0, -9.81],
+    }
     mech = lk.Mechanism.from_dict(d)
     res = lk.analyze(mech, [0.0, 30.0, 180.0], speed=5.0)
     assert res.singular.tolist() == [True, False, True]

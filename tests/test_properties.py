@@ -12,8 +12,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import linkagekit as lk
-from helpers import (fourbar_dict, fourbar_reference, stephenson_dict, stephenson_reference, watt2_dict,
-                     watt2_reference)
+from helpers import fourbar_dict, fourbar_reference, stephenson_dict, stephenson_reference, watt2_dict, watt2_reference
 
 coord = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 point = st.builds(complex, coord, coord)

@@ -29,39 +29,58 @@ def xy(p):
 def slider_crank(rng):
     p = pts(rng, "OABP")
     d = rng.normal(size=2)
-    return {"joints": xy(p), "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B", "P"], "block": ["B"]},
-            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": list(d)}],
-            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]}
+    return {
+        "joints": xy(p),
+        "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B", "P"], "block": ["B"]},
+        "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": list(d)}],
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }
 
 
 def inverted_slider_crank(rng):
     p = pts(rng, "OQAR")
-    return {"joints": xy(p), "links": {"ground": ["O", "Q"], "crank": ["O", "A"], "block": ["A"], "rocker": ["Q", "R"]},
-            "sliders": [{"link": "block", "on": "rocker", "through": "A", "direction": list(rng.normal(size=2))}],
-            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]}
+    return {
+        "joints": xy(p),
+        "links": {"ground": ["O", "Q"], "crank": ["O", "A"], "block": ["A"], "rocker": ["Q", "R"]},
+        "sliders": [{"link": "block", "on": "rocker", "through": "A", "direction": list(rng.normal(size=2))}],
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }
 
 
 def guide_on_rocker(rng):
     p = pts(rng, "OQSACRK")
-    return {"joints": xy(p),
-            "links": {"ground": ["O", "Q", "S"], "crank": ["O", "A"], "coupler": ["A", "C"], "rocker": ["Q", "C", "R"],
-                      "arm": ["S", "K"], "block": ["K"]},
-            "sliders": [{"link": "block", "on": "rocker", "through": "K", "direction": list(rng.normal(size=2))}],
-            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]}
+    return {
+        "joints": xy(p),
+        "links": {
+            "ground": ["O", "Q", "S"],
+            "crank": ["O", "A"],
+            "coupler": ["A", "C"],
+            "rocker": ["Q", "C", "R"],
+            "arm": ["S", "K"],
+            "block": ["K"],
+        },
+        "sliders": [{"link": "block", "on": "rocker", "through": "K", "direction": list(rng.normal(size=2))}],
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }
 
 
 def slider_driven(rng):
     p = pts(rng, "OAB")
-    return {"joints": xy(p), "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B"]},
-            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": list(rng.normal(size=2))}],
-            "drivers": [{"slider": 0}]}
+    return {
+        "joints": xy(p),
+        "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B"]},
+        "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": list(rng.normal(size=2))}],
+        "drivers": [{"slider": 0}],
+    }
 
 
 def fivebar(rng):
     p = pts(rng, "ABCDEP")
-    return {"joints": xy(p), "links": {"ground": ["A", "B"], "c1": ["A", "C"], "c2": ["B", "D"], "l1": ["C", "E", "P"],
-                                       "l2": ["D", "E"]},
-            "drivers": [{"link": "c1", "pivot": "A", "toward": "C"}, {"link": "c2", "pivot": "B", "toward": "D"}]}
+    return {
+        "joints": xy(p),
+        "links": {"ground": ["A", "B"], "c1": ["A", "C"], "c2": ["B", "D"], "l1": ["C", "E", "P"], "l2": ["D", "E"]},
+        "drivers": [{"link": "c1", "pivot": "A", "toward": "C"}, {"link": "c2", "pivot": "B", "toward": "D"}],
+    }
 
 
 KINDS = {
@@ -89,8 +108,13 @@ def finite_difference_check(mech, signs, rng):
         q = q0 + (w * t + 0.5 * al * t * t) / factor
         return {d.name: [q[i]] for i, d in enumerate(mech.drivers)}
 
-    res = lk.analyze(mech, inputs(0.0), speed={d.name: w[i] for i, d in enumerate(mech.drivers)},
-                     acceleration={d.name: al[i] for i, d in enumerate(mech.drivers)}, signs=signs)
+    res = lk.analyze(
+        mech,
+        inputs(0.0),
+        speed={d.name: w[i] for i, d in enumerate(mech.drivers)},
+        acceleration={d.name: al[i] for i, d in enumerate(mech.drivers)},
+        signs=signs,
+    )
     if not res.assembled[0] or np.min(np.abs(res.rates.condition)) < 0.1:
         return False  # not here, or too close to a singular position for finite differences
     z = [lk.analyze(mech, inputs(k * H_V), signs=signs).positions.z[:, 0] for k in (-2, -1, 0, 1, 2)]

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from linkagekit.analysis import modes
 from helpers import by_cosines
+from linkagekit.analysis import modes
 
 
 def paper_configuration(phi, t1, t2):

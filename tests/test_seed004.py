@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from linkagekit.analysis import modes
 from helpers import by_cosines
+from linkagekit.analysis import modes
 
 a, b, c, d, e, f, g, h, i, j, k = 2, 5, 3, 8, 6, 8, 3, 9, 8, 7, 6
 A, B = 0j, 8 + 2j
@@ -50,8 +50,10 @@ def test_sixteen_distinct_configurations(examples):
     mech = lk.load(examples / "seed004_stephenson1.yaml")
     out = modes(mech, np.array([np.radians(60.0)]), mirrors=True)
     assert out["distinct"] == 16
-    ref = {tuple(np.round([paper_configuration(np.radians(60), t)[n] for n in "DEFGP"], 9))
-           for t in itertools.product((1, -1), repeat=5)}
+    ref = {
+        tuple(np.round([paper_configuration(np.radians(60), t)[n] for n in "DEFGP"], 9))
+        for t in itertools.product((1, -1), repeat=5)
+    }
     assert len(ref) == 16
 
 

@@ -75,8 +75,9 @@ def test_double_rocker_limit_positions(method):
     mech, dims = double_rocker()
     lo, hi = limit_angles(*dims)
     inside = 1e-4  # deg: close to the limits but clearly assembled
-    res = lk.analyze(mech, [lo, hi, lo + inside, hi - inside, 0.5 * (lo + hi)], speed=2.0, acceleration=1.0,
-                     method=method)
+    res = lk.analyze(
+        mech, [lo, hi, lo + inside, hi - inside, 0.5 * (lo + hi)], speed=2.0, acceleration=1.0, method=method
+    )
     for k in (0, 1):
         # at the limit: the exact angle rounds to either side of it; if it assembles, it is singular
         if res.assembled[k]:

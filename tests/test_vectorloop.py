@@ -47,11 +47,18 @@ def compare(mech, signs, model, w, al):
     assert np.array_equal(res.singular, sol.singular)
     worst = 0.0
     for j in mech.joint_names:
-        worst = max(worst, relative_error(res.point(j), sol.z[j], ok), relative_error(res.velocity(j), sol.v[j], ok),
-                    relative_error(res.acceleration(j), sol.a[j], ok))
+        worst = max(
+            worst,
+            relative_error(res.point(j), sol.z[j], ok),
+            relative_error(res.velocity(j), sol.v[j], ok),
+            relative_error(res.acceleration(j), sol.a[j], ok),
+        )
     for link in sol.omega:
-        worst = max(worst, relative_error(res.link_omega[link], sol.omega[link], ok),
-                    relative_error(res.link_alpha[link], sol.alpha[link], ok))
+        worst = max(
+            worst,
+            relative_error(res.link_omega[link], sol.omega[link], ok),
+            relative_error(res.link_alpha[link], sol.alpha[link], ok),
+        )
     return worst
 
 
@@ -116,8 +123,18 @@ def test_vector_loop_method_from_the_command_line(capsys):
 
     out = {}
     for method in ("natural", "vector-loop"):
-        code = main(["analyze", "examples/seed004_stephenson1.yaml", "--angles", "0:360:15", "--format", "json",
-                     "--method", method])
+        code = main(
+            [
+                "analyze",
+                "examples/seed004_stephenson1.yaml",
+                "--angles",
+                "0:360:15",
+                "--format",
+                "json",
+                "--method",
+                method,
+            ]
+        )
         assert code == 0
         out[method] = json.loads(capsys.readouterr().out)
     for j, d in out["natural"]["joints"].items():
@@ -143,24 +160,34 @@ EX31 = {  # theta2 = 120 deg, omega2 = 5 rad/s, alpha2 = 0; velocities in m/s, a
     "v": {"A": (-3.031089, -1.750000), "B": (-1.303000, 0.737923), "P": (-2.862684, 0.262432)},
     "a": {"A": (8.750000, -15.155445), "B": (-15.462131, 3.602688), "P": (-11.481591, -12.396142)},
 }
-PRINTED31 = {"omega": {"coupler": 10.10, "rocker": 2.99}, "alpha": {"coupler": 5.31, "rocker": 30.46},
-             "v": {"A": (-3.03, -1.75), "B": (-1.30, 0.74), "P": (-2.86, 0.26)},
-             "a": {"A": (8.8, -15.2), "B": (-15.5, 3.6), "P": (-11.5, -12.4)}}
+PRINTED31 = {
+    "omega": {"coupler": 10.10, "rocker": 2.99},
+    "alpha": {"coupler": 5.31, "rocker": 30.46},
+    "v": {"A": (-3.03, -1.75), "B": (-1.30, 0.74), "P": (-2.86, 0.26)},
+    "a": {"A": (8.8, -15.2), "B": (-15.5, 3.6), "P": (-11.5, -12.4)},
+}
 EX32 = {  # theta2 = 60 deg on the parallelogram branch: the coupler translates
     "omega": {"coupler": 0.0, "rocker": 5.0},
     "alpha": {"coupler": 0.0, "rocker": 0.0},
     "v": {k: (-2.165064, 1.25) for k in "ABP"},
     "a": {k: (-6.25, -10.825318) for k in "ABP"},
 }
-PRINTED32 = {"omega": {"coupler": 0.00, "rocker": 5.00}, "alpha": {"coupler": 0.00, "rocker": 0.00},
-             "v": {k: (-2.17, 1.25) for k in "ABP"}, "a": {k: (-6.3, -10.8) for k in "ABP"}}
+PRINTED32 = {
+    "omega": {"coupler": 0.00, "rocker": 5.00},
+    "alpha": {"coupler": 0.00, "rocker": 0.00},
+    "v": {k: (-2.17, 1.25) for k in "ABP"},
+    "a": {k: (-6.3, -10.8) for k in "ABP"},
+}
 
 
 @pytest.mark.parametrize("method", ["natural", "vector-loop"])
-@pytest.mark.parametrize(("example", "theta2", "exact", "printed"), [
-    ("seed003_ex21", 120.0, EX31, PRINTED31),
-    ("seed003_ex22", 60.0, EX32, PRINTED32),
-])
+@pytest.mark.parametrize(
+    ("example", "theta2", "exact", "printed"),
+    [
+        ("seed003_ex21", 120.0, EX31, PRINTED31),
+        ("seed003_ex22", 60.0, EX32, PRINTED32),
+    ],
+)
 def test_seed003_examples_3_and_4(method, example, theta2, exact, printed):
     mech = lk.load(f"examples/{example}.yaml")  # lengths in mm
     res = lk.analyze(mech, [theta2], speed=5.0, acceleration=0.0, method=method)

@@ -10,5 +10,13 @@ from .model import Mechanism, load
 from .sweep import Result, analyze
 
 __version__ = "0.1.0"
-__all__ = ["InputError", "LinkageError", "Mechanism", "MechanismFileError", "NotSolvableError", "Result", "analyze",
-           "load"]
+__all__ = [
+    "InputError",
+    "LinkageError",
+    "Mechanism",
+    "MechanismFileError",
+    "NotSolvableError",
+    "Result",
+    "analyze",
+    "load",
+]

@@ -190,9 +190,13 @@ def check(mech: Mechanism) -> dict[str, Any]:
         "drivers": [d.name for d in mech.drivers],
         "solvable": "closed-form",
         "plan": plan.describe().splitlines(),
-        "signs": {names[st.joint] if hasattr(st, "joint") else str(i): {"sign": int(plan.signs[i]),
-                                                                        "rule": plan.sign_labels[i]}
-                  for i, st in enumerate(plan.sign_steps())},
+        "signs": {
+            names[st.joint] if hasattr(st, "joint") else str(i): {
+                "sign": int(plan.signs[i]),
+                "rule": plan.sign_labels[i],
+            }
+            for i, st in enumerate(plan.sign_steps())
+        },
         "mirror_links": list(plan.mirror_links),
         "input_range": ranges[mech.drivers[0].name],
         "input_ranges": ranges,
@@ -203,10 +207,10 @@ def check(mech: Mechanism) -> dict[str, Any]:
         kind, detail = grashof(fb)
         out["grashof"] = kind
         out["grashof_detail"] = detail
-        out["fourbar"] = {"joints": [names[fb.crank_pivot], names[fb.crank_tip], names[fb.rocker_tip],
-                                     names[fb.rocker_pivot]],
-                          "lengths": {"ground": fb.ground, "crank": fb.crank, "coupler": fb.coupler,
-                                      "rocker": fb.rocker}}
+        out["fourbar"] = {
+            "joints": [names[fb.crank_pivot], names[fb.crank_tip], names[fb.rocker_tip], names[fb.rocker_pivot]],
+            "lengths": {"ground": fb.ground, "crank": fb.crank, "coupler": fb.coupler, "rocker": fb.rocker},
+        }
         ta = transmission_angle(mech, fb, ranges[mech.drivers[0].name])
         if ta:
             out["transmission_angle"] = ta
@@ -233,8 +237,9 @@ def modes(mech: Mechanism, at: np.ndarray, mirrors: bool = False) -> dict[str, A
             entry["mirrors"] = {ln: int(combos[k + i, c]) for i, ln in enumerate(plan.mirror_links)}
         entry["assembled"] = bool(sol.assembled[c])
         zc = sol.z[:, c]
-        entry["joints"] = {j: ([float(zc[i].real), float(zc[i].imag)] if np.isfinite(zc[i]) else None)
-                           for i, j in enumerate(names)}
+        entry["joints"] = {
+            j: ([float(zc[i].real), float(zc[i].imag)] if np.isfinite(zc[i]) else None) for i, j in enumerate(names)
+        }
         entry["reference"] = bool(all(signs[:, c] == np.asarray(plan.signs)) and not (mm and mirror_flags[:, c].any()))
         if sol.assembled[c]:
             dup = next((i for i, zs in seen if np.all(np.abs(zs - zc) <= 1e-9 * scale)), None)

@@ -11,7 +11,7 @@ import io
 import json
 import math
 import sys
-from enum import Enum
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -34,18 +34,18 @@ app = typer.Typer(
 )
 
 
-class Method(str, Enum):
+class Method(StrEnum):
     natural = "natural"
     vector_loop = "vector-loop"
 
 
-class Fmt(str, Enum):
+class Fmt(StrEnum):
     table = "table"
     csv = "csv"
     json = "json"
 
 
-class ModeFmt(str, Enum):
+class ModeFmt(StrEnum):
     table = "table"
     json = "json"
 
@@ -111,8 +111,7 @@ def _inputs(mech: Mechanism, at: list[str] | None, angles: list[str] | None) -> 
 def _rates(mech: Mechanism, items: list[str] | None, option: str) -> dict[str, float] | None:
     if not items:
         return None
-    return {k: v[0] if len(v) == 1 else _too_many(option)
-            for k, v in _by_driver(mech, items, option, _numbers).items()}
+    return {k: v[0] if len(v) == 1 else _too_many(option) for k, v in _by_driver(mech, items, option, _numbers).items()}
 
 
 def _too_many(option: str) -> float:
@@ -141,11 +140,20 @@ def result_csv(res: Result) -> str:
     cols += [("assembled", res.assembled.astype(float)), ("singular", res.singular.astype(float))]
     for j in m.joint_names:
         z, v, a = res.point(j), res.velocity(j), res.acceleration(j)
-        cols += [(f"{j}.x", z.real), (f"{j}.y", z.imag), (f"{j}.vx", v.real), (f"{j}.vy", v.imag),
-                 (f"{j}.ax", a.real), (f"{j}.ay", a.imag)]
+        cols += [
+            (f"{j}.x", z.real),
+            (f"{j}.y", z.imag),
+            (f"{j}.vx", v.real),
+            (f"{j}.vy", v.imag),
+            (f"{j}.ax", a.real),
+            (f"{j}.ay", a.imag),
+        ]
     for ln in m.links:
-        cols += [(f"{ln.name}.angle", res.link_angle[ln.name]), (f"{ln.name}.omega", res.link_omega[ln.name]),
-                 (f"{ln.name}.alpha", res.link_alpha[ln.name])]
+        cols += [
+            (f"{ln.name}.angle", res.link_angle[ln.name]),
+            (f"{ln.name}.omega", res.link_omega[ln.name]),
+            (f"{ln.name}.alpha", res.link_alpha[ln.name]),
+        ]
     if res.forces is not None:
         cols += res.forces.columns()
     buf = io.StringIO()
@@ -172,30 +180,50 @@ def result_table(res: Result, console: Console) -> None:
     def table(title: str, heads: list[str], values: list[np.ndarray]) -> None:
         t = Table(title=title, title_justify="left", header_style="bold")
         for name, _ in inputs:
-            t.add_column(f"{name} [{au if m.drivers[[d.name for d in m.drivers].index(name)].kind == 'angle' else lu}]",
-                         justify="right")
+            t.add_column(
+                f"{name} [{au if m.drivers[[d.name for d in m.drivers].index(name)].kind == 'angle' else lu}]",
+                justify="right",
+            )
         t.add_column("state")
         for h in heads:
             t.add_column(escape(h), justify="right")  # "T[crank]" is not rich markup
         for i in range(res.n):
-            state = "ok" if res.assembled[i] and not res.singular[i] else (
-                "singular" if res.assembled[i] else "not assembled")
+            state = (
+                "ok"
+                if res.assembled[i] and not res.singular[i]
+                else ("singular" if res.assembled[i] else "not assembled")
+            )
             t.add_row(*[_fmt(v[i]) for _, v in inputs], state, *[_fmt(v[i]) for v in values])
         console.print(t)
 
-    table(f"{m.name or 'mechanism'}: joint positions [{lu}]", [f"{j}.{c}" for j in moving for c in "xy"],
-          [f(res.point(j)) for j in moving for f in (np.real, np.imag)])
-    table(f"joint velocities [{lu}/s]", [f"{j}.v{c}" for j in moving for c in "xy"],
-          [f(res.velocity(j)) for j in moving for f in (np.real, np.imag)])
-    table(f"joint accelerations [{lu}/s²]", [f"{j}.a{c}" for j in moving for c in "xy"],
-          [f(res.acceleration(j)) for j in moving for f in (np.real, np.imag)])
+    table(
+        f"{m.name or 'mechanism'}: joint positions [{lu}]",
+        [f"{j}.{c}" for j in moving for c in "xy"],
+        [f(res.point(j)) for j in moving for f in (np.real, np.imag)],
+    )
+    table(
+        f"joint velocities [{lu}/s]",
+        [f"{j}.v{c}" for j in moving for c in "xy"],
+        [f(res.velocity(j)) for j in moving for f in (np.real, np.imag)],
+    )
+    table(
+        f"joint accelerations [{lu}/s²]",
+        [f"{j}.a{c}" for j in moving for c in "xy"],
+        [f(res.acceleration(j)) for j in moving for f in (np.real, np.imag)],
+    )
     links = [ln.name for ln in m.links if ln.name != "ground"]
-    table(f"links: angle [{au}], ω [rad/s], α [rad/s²]", [f"{ln}.{c}" for ln in links for c in ("angle", "ω", "α")],
-          [d[ln] for ln in links for d in (res.link_angle, res.link_omega, res.link_alpha)])
+    table(
+        f"links: angle [{au}], ω [rad/s], α [rad/s²]",
+        [f"{ln}.{c}" for ln in links for c in ("angle", "ω", "α")],
+        [d[ln] for ln in links for d in (res.link_angle, res.link_omega, res.link_alpha)],
+    )
     if res.forces is not None:
         heads, vals = zip(*res.forces.columns(compact=True), strict=True)
-        table("bearing loads |F| [N] (joint:by>on), driver torques T [N·m], forces F [N], input power [W]",
-              list(heads), list(vals))
+        table(
+            "bearing loads |F| [N] (joint:by>on), driver torques T [N·m], forces F [N], input power [W]",
+            list(heads),
+            list(vals),
+        )
 
 
 def _console(out: Path | None) -> tuple[Console, io.StringIO | None]:
@@ -213,24 +241,46 @@ OutOpt = Annotated[Path | None, typer.Option("-o", "--output", help="Write to th
 @app.command("analyze")
 def analyze_cmd(
     file: FileArg,
-    angles: Annotated[list[str] | None, typer.Option("--angles", help="START:STOP:STEP, or NAME=START:STOP:STEP per driver.")] = None,
+    angles: Annotated[
+        list[str] | None, typer.Option("--angles", help="START:STOP:STEP, or NAME=START:STOP:STEP per driver.")
+    ] = None,
     at: Annotated[list[str] | None, typer.Option("--at", help="V1,V2,..., or NAME=V1,V2,... per driver.")] = None,
-    speed: Annotated[list[str] | None, typer.Option("--speed", help="Input speed (rad/s; length/s for a slider), or NAME=W.")] = None,
-    acceleration: Annotated[list[str] | None, typer.Option("--acceleration", help="Input acceleration, or NAME=A.")] = None,
+    speed: Annotated[
+        list[str] | None, typer.Option("--speed", help="Input speed (rad/s; length/s for a slider), or NAME=W.")
+    ] = None,
+    acceleration: Annotated[
+        list[str] | None, typer.Option("--acceleration", help="Input acceleration, or NAME=A.")
+    ] = None,
     fmt: Annotated[Fmt, typer.Option("--format", help="Output format.")] = Fmt.table,
     output: OutOpt = None,
-    method: Annotated[Method, typer.Option("--method", help="natural: triangulation in joint coordinates (any "
-                                           "mechanism); vector-loop: link angles by iteration (four-bars, "
-                                           "Stephenson six-bars).")] = Method.natural,
-    static: Annotated[bool, typer.Option("--static", help="Zero input speed and acceleration: the driver "
-                                         "torque that balances gravity and the loads.")] = False,
+    method: Annotated[
+        Method,
+        typer.Option(
+            "--method",
+            help="natural: triangulation in joint coordinates (any "
+            "mechanism); vector-loop: link angles by iteration (four-bars, "
+            "Stephenson six-bars).",
+        ),
+    ] = Method.natural,
+    static: Annotated[
+        bool,
+        typer.Option(
+            "--static", help="Zero input speed and acceleration: the driver torque that balances gravity and the loads."
+        ),
+    ] = False,
 ) -> None:
     """Positions, velocities and accelerations (and forces) over the input sweep."""
     mech = load(file)
     if static and (speed or acceleration):
         raise InputError("--static: do not give --speed or --acceleration with it")
-    res = analyze(mech, _inputs(mech, at, angles), speed=_rates(mech, speed, "--speed"),
-                  acceleration=_rates(mech, acceleration, "--acceleration"), method=method.value, static=static)
+    res = analyze(
+        mech,
+        _inputs(mech, at, angles),
+        speed=_rates(mech, speed, "--speed"),
+        acceleration=_rates(mech, acceleration, "--acceleration"),
+        method=method.value,
+        static=static,
+    )
     if fmt is Fmt.json:
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", output)
     elif fmt is Fmt.csv:
@@ -273,8 +323,11 @@ def modes_cmd(
         _emit(json.dumps(doc, allow_nan=False) + "\n", output)
         return
     console, buf = _console(output)
-    t = Table(title=f"{mech.name or 'mechanism'}: assembly modes at " + ", ".join(f"{k} = {v:g}" for k, v in inp.items()),
-              title_justify="left", header_style="bold")
+    t = Table(
+        title=f"{mech.name or 'mechanism'}: assembly modes at " + ", ".join(f"{k} = {v:g}" for k, v in inp.items()),
+        title_justify="left",
+        header_style="bold",
+    )
     t.add_column("#", justify="right")
     t.add_column("signs")
     if mirrors:
@@ -293,8 +346,9 @@ def modes_cmd(
         if "same_as" in mo:
             state += f" = #{mo['same_as']}"
         row.append(state)
-        row += ["—" if mo["joints"][j] is None else f"({mo['joints'][j][0]:.6g}, {mo['joints'][j][1]:.6g})"
-                for j in moving]
+        row += [
+            "—" if mo["joints"][j] is None else f"({mo['joints'][j][0]:.6g}, {mo['joints'][j][1]:.6g})" for j in moving
+        ]
         t.add_row(*row)
     console.print(t)
     console.print(f"{data['distinct']} distinct assembled configuration(s) of {len(doc['modes'])}.")
@@ -318,14 +372,18 @@ def check_cmd(
         return
     console, buf = _console(output)
     au = mech.angle_unit
-    console.print(f"[bold]{mech.name or file}[/bold]: valid; {rep['dof']} degree(s) of freedom, "
-                  f"driven by {', '.join(rep['drivers'])}; solved in closed form.")
+    console.print(
+        f"[bold]{mech.name or file}[/bold]: valid; {rep['dof']} degree(s) of freedom, "
+        f"driven by {', '.join(rep['drivers'])}; solved in closed form."
+    )
     console.print("[bold]Solve plan[/bold]")
     for line in rep["plan"]:
         console.print("  " + line)
     if rep["signs"]:
-        console.print("[bold]Assembly mode of the reference pose[/bold]: " +
-                      ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items()))
+        console.print(
+            "[bold]Assembly mode of the reference pose[/bold]: "
+            + ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items())
+        )
     for name, rng in rep["input_ranges"].items():
         d = mech.drivers[[x.name for x in mech.drivers].index(name)]
         unit = au if d.kind == "angle" else mech.length_unit

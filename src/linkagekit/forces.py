@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from .model import Link, Mechanism
+    from .model import Link
     from .sweep import Result
 
 #: samples per batched solve (bounds the memory of the stacked matrices)
@@ -88,8 +88,14 @@ class Forces:
 
         out: dict[str, Any] = {"reactions": []}
         for r in self.reactions:
-            entry: dict[str, Any] = {"joint": r.joint, "on": r.on, "by": r.by, "fx": _list(r.force.real),
-                                     "fy": _list(r.force.imag), "magnitude": _list(r.magnitude)}
+            entry: dict[str, Any] = {
+                "joint": r.joint,
+                "on": r.on,
+                "by": r.by,
+                "fx": _list(r.force.real),
+                "fy": _list(r.force.imag),
+                "magnitude": _list(r.magnitude),
+            }
             if r.moment is not None:
                 entry["kind"] = "slider"
                 entry["moment"] = _list(r.moment)
@@ -117,8 +123,11 @@ class Forces:
         cols += [(f"F[{k}]", v) for k, v in self.driver_force.items()]
         cols.append(("input_power", self.input_power))
         if not compact:
-            cols += [("shaking.fx", self.shaking_force.real), ("shaking.fy", self.shaking_force.imag),
-                     ("shaking.moment", self.shaking_moment)]
+            cols += [
+                ("shaking.fx", self.shaking_force.real),
+                ("shaking.fy", self.shaking_force.imag),
+                ("shaking.moment", self.shaking_moment),
+            ]
         return cols
 
 
@@ -134,17 +143,18 @@ def link_frames(res: Result) -> dict[str, tuple[np.ndarray, complex, np.ndarray]
             out[ln.name] = (res.point(j0), ln.shape[j0], np.ones(res.n, complex))
             continue
         if len(ln.joints) >= 2:
-            ref = np.angle(ln.shape[ln.joints[1]] - ln.shape[j0])
+            ref = float(np.angle(ln.shape[ln.joints[1]] - ln.shape[j0]))
         else:  # a block: its reported angle is that of its slide direction
-            sl = next((s for s in mech.sliders if s.link == ln.name), None)
-            ref = np.angle(sl.direction) if sl is not None else 0.0
+            slider = next((s for s in mech.sliders if s.link == ln.name), None)
+            ref = float(np.angle(slider.direction)) if slider is not None else 0.0
         theta = res.link_angle[ln.name] * mech.angle_to_rad
         out[ln.name] = (res.point(j0), ln.shape[j0], np.exp(1j * (theta - ref)))
     return out
 
 
-def point_motion(res: Result, link: Link, local: complex,
-                 frames: dict[str, tuple[np.ndarray, complex, np.ndarray]]) -> tuple[np.ndarray, ...]:
+def point_motion(
+    res: Result, link: Link, local: complex, frames: dict[str, tuple[np.ndarray, complex, np.ndarray]]
+) -> tuple[np.ndarray, ...]:
     """Position, velocity and acceleration (file units) of a point given in a link's shape frame."""
     z0, s0, rot = frames[link.name]
     j0 = link.joints[0]
@@ -260,16 +270,16 @@ def solve_forces(res: Result) -> Forces:
     buf = np.empty((min(n, CHUNK), m, m))
     eye = np.eye(m)
     for start in range(0, n, CHUNK):  # one reused buffer: no 3-D array over all samples
-        sl = slice(start, min(start + CHUNK, n))
-        Ak, bk = buf[: sl.stop - sl.start], rhs[sl]
+        stop = min(start + CHUNK, n)
+        Ak, bk = buf[: stop - start], rhs[start:stop]
         Ak.fill(0.0)
         for r, c, coef in entries:
-            Ak[:, r, c] += coef[sl] if isinstance(coef, np.ndarray) else coef
-        Ak[~good[sl]] = eye  # placeholders, answered NaN below
+            Ak[:, r, c] += coef[start:stop] if isinstance(coef, np.ndarray) else coef
+        Ak[~good[start:stop]] = eye  # placeholders, answered NaN below
         xk = np.linalg.solve(Ak, bk[..., None])[..., 0]
-        x[sl] = xk
+        x[start:stop] = xk
         err = np.max(np.abs(np.matmul(Ak, xk[..., None])[..., 0] - bk), axis=1)
-        residual[sl] = err / np.maximum(np.max(np.abs(bk), axis=1) + size * np.max(np.abs(xk), axis=1), 1e-300)
+        residual[start:stop] = err / np.maximum(np.max(np.abs(bk), axis=1) + size * np.max(np.abs(xk), axis=1), 1e-300)
     x[~good] = np.nan
     residual[~good] = np.nan
 
@@ -291,8 +301,8 @@ def solve_forces(res: Result) -> Forces:
                 shaking_m += _cross(res.point(j) * si, on_frame)
             col += 2
         elif lab[0] == "slider":
-            _, j, block, guide, k = lab
-            f = x[:, col] * (1j * slide_dir[int(k)])
+            _, j, block, guide, index = lab
+            f = x[:, col] * (1j * slide_dir[int(index)])
             moment = x[:, col + 1]
             reactions.append(Reaction(j, block, guide, f, moment))
             if guide == "ground":

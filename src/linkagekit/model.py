@@ -187,7 +187,8 @@ _Loader.yaml_implicit_resolvers = {
     for ch, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
 }
 _Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF"))
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
 
 
 def load(path: str | Path) -> Mechanism:
@@ -210,7 +211,9 @@ def load(path: str | Path) -> Mechanism:
     try:
         data = json.loads(text) if p.suffix.lower() == ".json" else yaml.load(text, Loader=_Loader)  # noqa: S506 - a safe loader
     except json.JSONDecodeError as exc:
-        raise MechanismFileError(f"{p}: JSON syntax error at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
+        raise MechanismFileError(
+            f"{p}: JSON syntax error at line {exc.lineno}, column {exc.colno}: {exc.msg}"
+        ) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
@@ -254,7 +257,7 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
         shape = _shape(lname, ls, joints, fail, scale)
         cg = None
         if ls.cg is not None:
-            cg = _register(complex(*ls.cg), ls.joints, joints, shape)
+            cg = _register(complex(*ls.cg), tuple(ls.joints), joints, shape)
         if ls.mass is not None and ls.mass < 0:
             raise fail(f"{key}.mass", "must not be negative")
         if ls.inertia is not None and ls.inertia < 0:
@@ -280,10 +283,10 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
             raise fail(f"{key}.link", "the ground cannot be the sliding block (swap `link` and `on`)")
         if s.through not in joints:
             raise fail(f"{key}.through", f"unknown joint '{s.through}'")
-        d = complex(*s.direction)
-        if abs(d) == 0:
+        direction = complex(*s.direction)
+        if abs(direction) == 0:
             raise fail(f"{key}.direction", "must not be the zero vector")
-        sliders.append(Slider(s.link, s.on, s.through, d / abs(d)))
+        sliders.append(Slider(s.link, s.on, s.through, direction / abs(direction)))
 
     drivers: list[Driver] = []
     for i, d in enumerate(spec.drivers):
@@ -297,8 +300,17 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
             if d.link is not None and d.link != sl.link:
                 raise fail(f"{key}.link", f"slider {d.slider} moves link '{sl.link}', not '{d.link}'")
             sw = d.displacements or schema.SweepSpec(start=0.0, stop=0.0, step=1.0)
-            drivers.append(Driver(sl.link, "slider", sl.link, _sweep(sw, f"{key}.displacements", fail),
-                                  d.speed, d.acceleration, slider=d.slider))
+            drivers.append(
+                Driver(
+                    sl.link,
+                    "slider",
+                    sl.link,
+                    _sweep(sw, f"{key}.displacements", fail),
+                    d.speed,
+                    d.acceleration,
+                    slider=d.slider,
+                )
+            )
             continue
         if d.link is None:
             raise fail(f"{key}.link", "required key is missing (or give `slider:`)")
@@ -317,11 +329,24 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
                 raise fail(f"{key}.{attr}", f"joint '{j}' is not on link '{d.link}'")
         if d.pivot == d.toward:
             raise fail(key, "`pivot` and `toward` must be different joints")
-        sw = d.angles or schema.SweepSpec(start=0.0, stop=360.0 if spec.units.angle == "deg" else 2 * math.pi,
-                                         step=1.0 if spec.units.angle == "deg" else math.pi / 180)
+        sw = d.angles or schema.SweepSpec(
+            start=0.0,
+            stop=360.0 if spec.units.angle == "deg" else 2 * math.pi,
+            step=1.0 if spec.units.angle == "deg" else math.pi / 180,
+        )
         # speed and acceleration are rad/s and rad/s^2 whatever the angle unit (spec section 1)
-        drivers.append(Driver(d.link, "angle", d.link, _sweep(sw, f"{key}.angles", fail), d.speed,
-                              d.acceleration, pivot=d.pivot, toward=d.toward))
+        drivers.append(
+            Driver(
+                d.link,
+                "angle",
+                d.link,
+                _sweep(sw, f"{key}.angles", fail),
+                d.speed,
+                d.acceleration,
+                pivot=d.pivot,
+                toward=d.toward,
+            )
+        )
     names = [d.name for d in drivers]
     for n in names:
         if names.count(n) > 1:
@@ -422,15 +447,19 @@ def _shape(lname: str, ls: schema.LinkSpec, pose: dict[str, complex], fail: Any,
             raise fail(f"links.{lname}.lengths", f"the lengths {a}-{b}, {a}-{k}, {b}-{k} cannot form a triangle")
         side = 1.0 if ((pose[b] - pose[a]).conjugate() * (pose[k] - pose[a])).imag >= 0 else -1.0
         shape[k] = shape[a] + complex(along, side * math.sqrt(max(h2, 0.0))) * u
-    for pair, v in given.items():
-        p, q = tuple(pair)
+    for pair_set, v in given.items():
+        p, q = tuple(pair_set)
         if abs(abs(shape[q] - shape[p]) - v) > 1e-7 * max(v, scale * 1e-3):
-            raise fail(f"links.{lname}.lengths.{p}-{q}",
-                       f"{v:g} contradicts the other lengths of the link (they give {abs(shape[q] - shape[p]):.9g})")
+            raise fail(
+                f"links.{lname}.lengths.{p}-{q}",
+                f"{v:g} contradicts the other lengths of the link (they give {abs(shape[q] - shape[p]):.9g})",
+            )
     return shape
 
 
-def _register(point: complex, link_joints: tuple[str, ...], pose: dict[str, complex], shape: dict[str, complex]) -> complex:
+def _register(
+    point: complex, link_joints: tuple[str, ...], pose: dict[str, complex], shape: dict[str, complex]
+) -> complex:
     """Express a pose point of a link in the link's shape frame (ratio to its two anchors)."""
     if len(link_joints) < 2:
         return point - pose[link_joints[0]] + shape[link_joints[0]]

@@ -38,7 +38,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Union
+from typing import TYPE_CHECKING
 
 from .errors import MechanismFileError, NotSolvableError
 
@@ -133,7 +133,7 @@ class Carry:
     offsets: tuple[complex, ...]  # s_j - s_anchor
 
 
-Step = Union[Ground, Crank, Place, Dyad, CircleLine, Pivot, SliderDrive, Carry]
+Step = Ground | Crank | Place | Dyad | CircleLine | Pivot | SliderDrive | Carry
 
 
 @dataclass(frozen=True)
@@ -164,7 +164,7 @@ class Plan:
         """A human-readable listing of the steps."""
         n = self.joint_names
         out = []
-        for i, st in enumerate(self.steps, 1):
+        for st in self.steps:
             if isinstance(st, Ground):
                 text = "fixed joints " + ", ".join(n[j] for j in st.joints)
             elif isinstance(st, Crank):
@@ -173,22 +173,30 @@ class Plan:
                 if not st.joints:
                     continue
                 m = " (mirror image selectable)" if st.mirror is not None else ""
-                text = f"link '{st.link}': {', '.join(n[j] for j in st.joints)} placed rigidly on {n[st.k1]}, {n[st.k2]}{m}"
+                placed = ", ".join(n[j] for j in st.joints)
+                text = f"link '{st.link}': {placed} placed rigidly on {n[st.k1]}, {n[st.k2]}{m}"
             elif isinstance(st, Dyad):
-                text = (f"{n[st.joint]} = circle({n[st.k1]}, {st.r1:.6g}) x circle({n[st.k2]}, {st.r2:.6g}); "
-                        f"sign +1: left of {n[st.k1]}->{n[st.k2]}")
+                text = (
+                    f"{n[st.joint]} = circle({n[st.k1]}, {st.r1:.6g}) x circle({n[st.k2]}, {st.r2:.6g}); "
+                    f"sign +1: left of {n[st.k1]}->{n[st.k2]}"
+                )
             elif isinstance(st, CircleLine):
-                text = (f"{n[st.joint]} = circle({n[st.center]}, {st.radius:.6g}) x line of slider {st.slider} "
-                        f"('{st.block}' on '{st.on}'); sign +1: {n[st.joint]} ahead of {n[st.center]} along the slider")
+                text = (
+                    f"{n[st.joint]} = circle({n[st.center]}, {st.radius:.6g}) x line of slider {st.slider} "
+                    f"('{st.block}' on '{st.on}'); sign +1: {n[st.joint]} ahead of {n[st.center]} along the slider"
+                )
             elif isinstance(st, Pivot):
-                text = (f"link '{st.on}' turns about {n[st.center]} until slider {st.slider}'s line passes "
-                        f"{n[st.joint]}; sign +1: {n[st.joint]} ahead of {n[st.center]} along the slider")
+                text = (
+                    f"link '{st.on}' turns about {n[st.center]} until slider {st.slider}'s line passes "
+                    f"{n[st.joint]}; sign +1: {n[st.joint]} ahead of {n[st.center]} along the slider"
+                )
             elif isinstance(st, SliderDrive):
                 text = f"driver '{st.block}': slider {st.slider} displaced along its line"
             else:
                 if not st.joints:
                     continue
-                text = f"link '{st.link}': {', '.join(n[j] for j in st.joints)} carried with '{st.rot_of}' from {n[st.anchor]}"
+                moved = ", ".join(n[j] for j in st.joints)
+                text = f"link '{st.link}': {moved} carried with '{st.rot_of}' from {n[st.anchor]}"
             out.append(text)
         return "\n".join(f"{i}. {t}" for i, t in enumerate(out, 1))
 
@@ -220,8 +228,9 @@ def make_plan(mech: Mechanism) -> Plan:
     links = {ln.name: ln for ln in mech.links}
     known: set[str] = set(links[GROUND].joints)
     placed: set[str] = {GROUND}
-    steps: list[Step] = [Ground(tuple(idx[j] for j in links[GROUND].joints),
-                                tuple(links[GROUND].shape[j] for j in links[GROUND].joints))]
+    steps: list[Step] = [
+        Ground(tuple(idx[j] for j in links[GROUND].joints), tuple(links[GROUND].shape[j] for j in links[GROUND].joints))
+    ]
     rot_known: set[str] = {GROUND}
     pending = list(range(len(mech.drivers)))
     n_signs = 0
@@ -268,8 +277,15 @@ def make_plan(mech: Mechanism) -> Plan:
                 if rot_from is None:
                     continue
                 rest = [j for j in ln.joints if j not in known]
-                steps.append(Carry(ln.name, rot_from, idx[kn[0]], tuple(idx[j] for j in rest),
-                                   tuple(ln.shape[j] - ln.shape[kn[0]] for j in rest)))
+                steps.append(
+                    Carry(
+                        ln.name,
+                        rot_from,
+                        idx[kn[0]],
+                        tuple(idx[j] for j in rest),
+                        tuple(ln.shape[j] - ln.shape[kn[0]] for j in rest),
+                    )
+                )
                 known.update(rest)
                 placed.add(ln.name)
                 rot_known.add(ln.name)
@@ -288,7 +304,8 @@ def make_plan(mech: Mechanism) -> Plan:
                 if d.link in placed or d.toward in known:
                     raise MechanismFileError(
                         f"{mech.source}: drivers[{di}]: link '{d.link}' is already fixed by the rest of the "
-                        f"mechanism; the drivers do not match its freedom")
+                        f"mechanism; the drivers do not match its freedom"
+                    )
                 if d.pivot in known:
                     r = links[d.link].length(d.pivot, d.toward)
                     steps.append(Crank(di, d.link, idx[d.pivot], idx[d.toward], r))
@@ -301,13 +318,17 @@ def make_plan(mech: Mechanism) -> Plan:
                 if d.link in placed:
                     raise MechanismFileError(
                         f"{mech.source}: drivers[{di}]: block '{d.link}' is already fixed by the rest of the "
-                        f"mechanism; the drivers do not match its freedom")
+                        f"mechanism; the drivers do not match its freedom"
+                    )
                 if s.on in rot_known and s.on in placed:
                     a, a_s = anchor_of(s.on)
                     blk = links[s.link]
                     pts = tuple(mech.joints[j] for j in blk.joints)
-                    steps.append(SliderDrive(di, d.slider, s.link, s.on, a, a_s, s.direction,
-                                             tuple(idx[j] for j in blk.joints), pts))
+                    steps.append(
+                        SliderDrive(
+                            di, d.slider, s.link, s.on, a, a_s, s.direction, tuple(idx[j] for j in blk.joints), pts
+                        )
+                    )
                     known.update(blk.joints)
                     placed.add(s.link)
                     rot_known.add(s.link)
@@ -331,9 +352,18 @@ def make_plan(mech: Mechanism) -> Plan:
         raise NotSolvableError(
             f"{mech.source}: no triangulation order places {what}: this mechanism needs the numerical solver "
             f"(an Assur group of class 3 or more, or a slider arrangement not handled in closed form), "
-            f"which linkagekit does not have yet")
-    plan = Plan(names, tuple(steps), n_signs, len(mirror_links), dof, tuple(d.name for d in mech.drivers),
-                mirror_links=tuple(mirror_links), sign_labels=tuple(labels))
+            f"which linkagekit does not have yet"
+        )
+    plan = Plan(
+        names,
+        tuple(steps),
+        n_signs,
+        len(mirror_links),
+        dof,
+        tuple(d.name for d in mech.drivers),
+        mirror_links=tuple(mirror_links),
+        sign_labels=tuple(labels),
+    )
     from .positions import pose_signs
 
     return _with_signs(plan, pose_signs(mech, plan))
@@ -352,8 +382,9 @@ def _next_sign_step(mech, names, idx, known, placed, rot_known, slider_of, steps
         if j in known:
             continue
         owners = [ln for ln in mech.links if j in ln.joints and ln.name not in placed]
-        anchored = [(ln, next(k for k in ln.joints if k in known)) for ln in owners
-                    if any(k in known for k in ln.joints)]
+        anchored = [
+            (ln, next(k for k in ln.joints if k in known)) for ln in owners if any(k in known for k in ln.joints)
+        ]
         # two circles
         for a in range(len(anchored)):
             for b in range(a + 1, len(anchored)):
@@ -372,8 +403,19 @@ def _next_sign_step(mech, names, idx, known, placed, rot_known, slider_of, steps
                     if l2.name == ln.name:
                         continue
                     a, a_s = anchor_of(s.on)
-                    st = CircleLine(idx[j], idx[k2], l2.length(k2, j), si, s.link, s.on,
-                                    mech.joints[j], s.direction, a, a_s, n_signs)
+                    st = CircleLine(
+                        idx[j],
+                        idx[k2],
+                        l2.length(k2, j),
+                        si,
+                        s.link,
+                        s.on,
+                        mech.joints[j],
+                        s.direction,
+                        a,
+                        a_s,
+                        n_signs,
+                    )
                     return st, {j}, set(), f"{j}: ahead of {k2} along slider {si}"
     # pivot: a block with a known joint slides on a link with exactly one known joint
     for si, s in enumerate(mech.sliders):
@@ -387,5 +429,3 @@ def _next_sign_step(mech, names, idx, known, placed, rot_known, slider_of, steps
             st = Pivot(si, s.on, idx[oj[0]], idx[bj[0]], mech.joints[bj[0]] - on.shape[oj[0]], s.direction, n_signs)
             return st, set(), {s.on}, f"{bj[0]}: ahead of {oj[0]} along slider {si}"
     return None
-
-

@@ -60,8 +60,9 @@ class Positions:
     mirrors: np.ndarray  # shape (n_mirrors, 1 or n), bool
 
 
-def circle_circle(z1: np.ndarray, z2: np.ndarray, r1: float, r2: float, sign: np.ndarray | float,
-                  eps: float = ASSEMBLY_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def circle_circle(
+    z1: np.ndarray, z2: np.ndarray, r1: float, r2: float, sign: np.ndarray | float, eps: float = ASSEMBLY_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
     """Intersection of the circles ``|z - z1| = r1`` and ``|z - z2| = r2``.
 
     ``sign=+1`` picks the point to the left of the directed line ``z1 -> z2``.
@@ -94,8 +95,9 @@ def circle_circle(z1: np.ndarray, z2: np.ndarray, r1: float, r2: float, sign: np
     return np.where(ok, z, NAN_POINT), np.where(ok, margin, np.minimum(margin, -_TINY))
 
 
-def _line_frame(step: CircleLine | SliderDrive, z: np.ndarray, rot: dict[str, np.ndarray]) -> tuple[
-        np.ndarray | complex, np.ndarray | complex]:
+def _line_frame(
+    step: CircleLine | SliderDrive, z: np.ndarray, rot: dict[str, np.ndarray]
+) -> tuple[np.ndarray | complex, np.ndarray | complex]:
     """Map from the `on` link's frame to the world: ``p -> origin + turn * p``."""
     if step.anchor is None:
         return 0j, 1 + 0j
@@ -103,8 +105,13 @@ def _line_frame(step: CircleLine | SliderDrive, z: np.ndarray, rot: dict[str, np
     return z[step.anchor] - turn * step.anchor_s, turn
 
 
-def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
-          mirrors: np.ndarray | None = None, eps: float = ASSEMBLY_RTOL) -> Positions:
+def solve(
+    plan: Plan,
+    inputs: np.ndarray,
+    signs: np.ndarray | None = None,
+    mirrors: np.ndarray | None = None,
+    eps: float = ASSEMBLY_RTOL,
+) -> Positions:
     """Positions of every joint for every input sample.
 
     Parameters
@@ -119,9 +126,14 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
     """
     q = np.atleast_2d(np.asarray(inputs, dtype=float))
     n = q.shape[1]
-    sg = np.asarray(plan.signs if signs is None else signs, dtype=float).reshape(plan.n_signs, -1 if plan.n_signs else 1)
-    mr = np.zeros((plan.n_mirrors, 1), bool) if mirrors is None else np.asarray(mirrors, bool).reshape(
-        plan.n_mirrors, -1 if plan.n_mirrors else 1)
+    sg = np.asarray(plan.signs if signs is None else signs, dtype=float).reshape(
+        plan.n_signs, -1 if plan.n_signs else 1
+    )
+    mr = (
+        np.zeros((plan.n_mirrors, 1), bool)
+        if mirrors is None
+        else np.asarray(mirrors, bool).reshape(plan.n_mirrors, -1 if plan.n_mirrors else 1)
+    )
     z = np.empty((len(plan.joint_names), n), complex)  # every joint is written by exactly one step
     rot: dict[str, np.ndarray] = {"ground": np.ones(n, complex)}
     margin = np.zeros((plan.n_signs, n))
@@ -153,9 +165,9 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
             for j, off in zip(st.joints, st.offsets, strict=True):
                 z[j] = z[st.anchor] + turn * off
         elif isinstance(st, CircleLine):
-            origin, turn = _line_frame(st, z, rot)
-            a = origin + turn * st.point
-            e = turn * st.direction
+            origin, frame_turn = _line_frame(st, z, rot)
+            a = origin + frame_turn * st.point
+            e = frame_turn * st.direction
             w = (z[st.center] - a) * np.conj(e)  # centre in line coordinates: (along, offset)
             disc = st.radius**2 - w.imag**2
             m = (st.radius * (1 + eps) - np.abs(w.imag)) / st.radius
@@ -174,10 +186,10 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
             rot[st.on] = np.where(m >= 0, turn, NAN_POINT)
             margin[st.sign] = m
         elif isinstance(st, SliderDrive):
-            origin, turn = _line_frame(st, z, rot)
-            rot[st.block] = np.broadcast_to(turn, (n,)) * np.ones(n)
+            origin, frame_turn = _line_frame(st, z, rot)
+            rot[st.block] = np.broadcast_to(frame_turn, (n,)) * np.ones(n)
             for j, p in zip(st.joints, st.points, strict=True):
-                z[j] = origin + turn * (p + q[st.driver] * st.direction)
+                z[j] = origin + frame_turn * (p + q[st.driver] * st.direction)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
     assembled = np.all(margin >= 0, axis=0) if plan.n_signs else np.ones(n, bool)
     if not assembled.all():  # a mechanism that does not assemble has no joint positions at all
@@ -188,11 +200,11 @@ def solve(plan: Plan, inputs: np.ndarray, signs: np.ndarray | None = None,
 # ---------------------------------------------------------------------- the pose's mode
 def pose_inputs(mech: Mechanism) -> np.ndarray:
     """The driver values (radians / length) at which the reference pose stands."""
-    vals = []
+    vals: list[float] = []
     for d in mech.drivers:
         if d.kind == "angle":
             assert d.pivot is not None and d.toward is not None
-            vals.append(np.angle(mech.joints[d.toward] - mech.joints[d.pivot]))
+            vals.append(float(np.angle(mech.joints[d.toward] - mech.joints[d.pivot])))
         else:
             vals.append(0.0)
     return np.array(vals, dtype=float).reshape(-1, 1)
@@ -223,9 +235,11 @@ def pose_signs(mech: Mechanism, plan: Plan) -> tuple[int, ...]:
         err = np.where(np.isfinite(err), err, np.inf)
         best = float(np.min(err)) if err.size else 0.0
         if not np.isfinite(best):
-            raise MechanismFileError(f"{mech.source}: the mechanism does not assemble at its reference pose's input "
-                                     f"(given lengths that do not close, or a degenerate pose where two joints "
-                                     f"a joint is found from coincide)")
+            raise MechanismFileError(
+                f"{mech.source}: the mechanism does not assemble at its reference pose's input "
+                f"(given lengths that do not close, or a degenerate pose where two joints "
+                f"a joint is found from coincide)"
+            )
         tol = 1e-18 * mech.length_scale**2 + best * 1e-9
         choice = int(np.flatnonzero(err <= best + tol)[0])
         return tuple(int(v) for v in combos[:, choice])

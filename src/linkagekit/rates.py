@@ -75,8 +75,14 @@ def link_rates(base: np.ndarray, vbase: np.ndarray, abase: np.ndarray) -> tuple[
         return cross(base, vbase) / n2, cross(base, abase) / n2
 
 
-def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray,
-                rate_links: frozenset[str] = frozenset(), tol: float = SINGULAR_TOL) -> Rates:
+def solve_rates(
+    plan: Plan,
+    pos: Positions,
+    speed: np.ndarray,
+    accel: np.ndarray,
+    rate_links: frozenset[str] = frozenset(),
+    tol: float = SINGULAR_TOL,
+) -> Rates:
     """Velocities and accelerations for driver speeds and accelerations (arrays (n_drivers, n))."""
     z = pos.z
     n = z.shape[1]
@@ -90,14 +96,14 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
     with np.errstate(divide="ignore", invalid="ignore"):
         for st in plan.steps:
             if isinstance(st, Place):
-                for j, rho in zip(st.joints, st.ratios, strict=True):
+                for j, ratio in zip(st.joints, st.ratios, strict=True):
+                    rho: complex | np.ndarray = ratio
                     if st.mirror is not None:
-                        rho = np.where(pos.mirrors[st.mirror], np.conj(rho), rho)
+                        rho = np.where(pos.mirrors[st.mirror], np.conj(ratio), ratio)
                     v[j] = v[st.k1] + rho * (v[st.k2] - v[st.k1])
                     a[j] = a[st.k1] + rho * (a[st.k2] - a[st.k1])
                 if st.link in rate_links and st.link not in om:
-                    om[st.link], al[st.link] = link_rates(z[st.k2] - z[st.k1], v[st.k2] - v[st.k1],
-                                                          a[st.k2] - a[st.k1])
+                    om[st.link], al[st.link] = link_rates(z[st.k2] - z[st.k1], v[st.k2] - v[st.k1], a[st.k2] - a[st.k1])
             elif isinstance(st, Dyad):
                 # conj(p) x = dot(p, x) + i cross(p, x): one complex product gives both
                 p = z[st.joint] - z[st.k1]
@@ -182,14 +188,22 @@ def solve_rates(plan: Plan, pos: Positions, speed: np.ndarray, accel: np.ndarray
     if bad.any():
         v[:, bad] = NAN_POINT
         a[:, bad] = NAN_POINT
-        for d in (om, al):
-            for k in d:
-                d[k] = np.where(bad, np.nan, d[k])
+        for rates_of in (om, al):
+            for link in rates_of:
+                rates_of[link] = np.where(bad, np.nan, rates_of[link])
     return Rates(v, a, om, al, cond, singular)
 
 
-def _frame_rates(on: str, anchor: int | None, z: np.ndarray, v: np.ndarray, a: np.ndarray,
-                 om: dict[str, np.ndarray], al: dict[str, np.ndarray], n: int):  # type: ignore[no-untyped-def]
+def _frame_rates(
+    on: str,
+    anchor: int | None,
+    z: np.ndarray,
+    v: np.ndarray,
+    a: np.ndarray,
+    om: dict[str, np.ndarray],
+    al: dict[str, np.ndarray],
+    n: int,
+):  # type: ignore[no-untyped-def]
     """Angular rates of link `on` and the motion of its anchor joint (all zero for the ground)."""
     if anchor is None:
         zero = np.zeros(n)

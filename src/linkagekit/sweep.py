@@ -93,17 +93,27 @@ class Result:
             "assembled": [bool(b) for b in self.assembled],
             "singular": [bool(b) for b in self.singular],
             "signs": dict(zip(_sign_joints(self), [int(s) for s in self.positions.signs[:, 0]], strict=True))
-            if self.positions.signs.shape[1] == 1 else None,
+            if self.positions.signs.shape[1] == 1
+            else None,
             "joints": {},
             "links": {},
         }
         for i, j in enumerate(m.joint_names):
             z, v, a = self.positions.z[i], self.rates.v[i], self.rates.a[i]
-            out["joints"][j] = {"x": _list(z.real), "y": _list(z.imag), "vx": _list(v.real), "vy": _list(v.imag),
-                                "ax": _list(a.real), "ay": _list(a.imag)}
+            out["joints"][j] = {
+                "x": _list(z.real),
+                "y": _list(z.imag),
+                "vx": _list(v.real),
+                "vy": _list(v.imag),
+                "ax": _list(a.real),
+                "ay": _list(a.imag),
+            }
         for ln in m.links:
-            out["links"][ln.name] = {"angle": _list(self.link_angle[ln.name]), "omega": _list(self.link_omega[ln.name]),
-                                     "alpha": _list(self.link_alpha[ln.name])}
+            out["links"][ln.name] = {
+                "angle": _list(self.link_angle[ln.name]),
+                "omega": _list(self.link_omega[ln.name]),
+                "alpha": _list(self.link_alpha[ln.name]),
+            }
         if self.forces is not None:
             out.update(self.forces.to_dict())
         return out
@@ -139,7 +149,9 @@ def _per_driver(mech: Mechanism, given: Mapping[str, ArrayLike] | ArrayLike | No
         return {}
     if not isinstance(given, Mapping):
         if len(names) != 1:
-            raise InputError(f"{what}: this mechanism has drivers {', '.join(names)}: give one value per driver by name")
+            raise InputError(
+                f"{what}: this mechanism has drivers {', '.join(names)}: give one value per driver by name"
+            )
         return {names[0]: given}
     for k in given:
         if k not in names:
@@ -147,11 +159,18 @@ def _per_driver(mech: Mechanism, given: Mapping[str, ArrayLike] | ArrayLike | No
     return dict(given)
 
 
-def analyze(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None = None, *,
-            speed: Mapping[str, ArrayLike] | ArrayLike | None = None,
-            acceleration: Mapping[str, ArrayLike] | ArrayLike | None = None,
-            signs: ArrayLike | None = None, mirrors: ArrayLike | None = None,
-            dynamics: bool = True, method: str = "natural", static: bool = False) -> Result:
+def analyze(
+    mech: Mechanism,
+    inputs: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    *,
+    speed: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    acceleration: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    signs: ArrayLike | None = None,
+    mirrors: ArrayLike | None = None,
+    dynamics: bool = True,
+    method: str = "natural",
+    static: bool = False,
+) -> Result:
     """Positions, velocities and accelerations (and forces, when the file has masses or loads).
 
     Parameters
@@ -249,8 +268,15 @@ def _vector_loop(mech: Mechanism, q: np.ndarray, w_in: np.ndarray, a_in: np.ndar
     a = np.array([sol.a[j] for j in names])
     margin = np.where(sol.assembled, 1.0, -1.0)[None, :]
     plan = mech.plan
-    pos = Positions(z, {}, margin, sol.assembled, q, np.array(pose_signs(mech, plan), float).reshape(-1, 1),
-                    np.zeros((plan.n_mirrors, 1), bool))
+    pos = Positions(
+        z,
+        {},
+        margin,
+        sol.assembled,
+        q,
+        np.array(pose_signs(mech, plan), float).reshape(-1, 1),
+        np.zeros((plan.n_mirrors, 1), bool),
+    )
     return pos, Rates(v, a, sol.omega, sol.alpha, sol.condition[None, :], sol.singular)
 
 

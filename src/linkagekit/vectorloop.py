@@ -62,8 +62,9 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a.real * b.imag - a.imag * b.real
 
 
-def fixed_point_loop(p: np.ndarray, q: np.ndarray, la: float, lb: float, branch: float, *,
-                     tol: float = 1e-13, max_iter: int = 500) -> tuple[np.ndarray, np.ndarray]:
+def fixed_point_loop(
+    p: np.ndarray, q: np.ndarray, la: float, lb: float, branch: float, *, tol: float = 1e-13, max_iter: int = 500
+) -> tuple[np.ndarray, np.ndarray]:
     """Close ``p + la e^{i ta} = q + lb e^{i tb}`` by seed 003's fixed-point iteration (its eqs. 4-5).
 
     ``tb = atan2(p + la e^{i ta} - q)`` then ``ta = atan2(q + lb e^{i tb} - p)``, repeated.
@@ -88,8 +89,9 @@ def fixed_point_loop(p: np.ndarray, q: np.ndarray, la: float, lb: float, branch:
     return ta + nan, tb + nan
 
 
-def newton_loop(p: np.ndarray, q: np.ndarray, la: float, lb: float, ta: np.ndarray, tb: np.ndarray,
-                iterations: int = 60) -> tuple[np.ndarray, np.ndarray]:
+def newton_loop(
+    p: np.ndarray, q: np.ndarray, la: float, lb: float, ta: np.ndarray, tb: np.ndarray, iterations: int = 60
+) -> tuple[np.ndarray, np.ndarray]:
     """Newton-Raphson on ``phi = p + la e^{i ta} - q - lb e^{i tb} = 0``, 2x2 by Cramer's rule.
 
     Quadratic convergence from the fixed-point answer; only at a double root (a limit or
@@ -129,8 +131,9 @@ class LoopSolution:
     condition: np.ndarray
 
 
-def _point(z0: np.ndarray, v0: np.ndarray, a0: np.ndarray, r: np.ndarray, w: np.ndarray,
-           al: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _point(
+    z0: np.ndarray, v0: np.ndarray, a0: np.ndarray, r: np.ndarray, w: np.ndarray, al: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Point ``z0 + r`` of a link turning at ``w``, ``al``: seed 003's eqs. (15), (24) as complex numbers."""
     return z0 + r, v0 + 1j * w * r, a0 + (1j * al - w * w) * r
 
@@ -167,14 +170,15 @@ class FourBar:
     points: tuple[tuple[str, str, complex], ...] = ()  # (joint, link, Z1 e^{i beta} from the link's base)
     names: tuple[str, str, str, str, str, str, str] = ("O1", "O2", "A", "B", "crank", "coupler", "rocker")
 
-    def solve(self, theta2: np.ndarray, omega2: np.ndarray | float = 0.0,
-              alpha2: np.ndarray | float = 0.0) -> LoopSolution:
+    def solve(
+        self, theta2: np.ndarray, omega2: np.ndarray | float = 0.0, alpha2: np.ndarray | float = 0.0
+    ) -> LoopSolution:
         """Positions and rates at crank angles ``theta2`` (rad, from the x axis)."""
         o1, o2, jA, jB, crank, coupler, rocker = self.names
         th2 = np.asarray(theta2, float)
         w2 = np.broadcast_to(np.asarray(omega2, float), th2.shape)
         al2 = np.broadcast_to(np.asarray(alpha2, float), th2.shape)
-        L2, L3, L4, O2 = self.crank, self.coupler, self.rocker, self.ground
+        L2, L3, L4, O2 = self.crank, self.coupler, self.rocker, np.asarray(self.ground)
         r2 = L2 * cis(th2)
         th3, th4 = fixed_point_loop(r2, O2, L3, L4, self.branch)
         th3, th4 = newton_loop(r2, O2, L3, L4, th3, th4)
@@ -268,8 +272,13 @@ class Stephenson:
         J[:, 5, 2], J[:, 5, 5] = 1.0, -1.0
         return J
 
-    def solve(self, theta2: np.ndarray, omega2: np.ndarray | float = 0.0, alpha2: np.ndarray | float = 0.0,
-              newton_iterations: int = 60) -> LoopSolution:
+    def solve(
+        self,
+        theta2: np.ndarray,
+        omega2: np.ndarray | float = 0.0,
+        alpha2: np.ndarray | float = 0.0,
+        newton_iterations: int = 60,
+    ) -> LoopSolution:
         """Positions (Newton-Raphson) and rates (the 6x6 linear systems) at input angles ``theta2``."""
         th2 = np.asarray(theta2, float).ravel()
         n = th2.size
@@ -309,8 +318,7 @@ class Stephenson:
         qd = np.linalg.solve(J, rhs_v[..., None])[..., 0].T
         d3, d4, d5, d6, d7, d8 = qd
         # second derivative of loop k: sum s L (i th'' - th'^2) e^{i th} = 0
-        cent1 = (self.b * w2**2 * e2 + self.c * d3**2 * cis(t3) - self.d * d4**2 * cis(t4)
-                 - self.e * d5**2 * cis(t5))
+        cent1 = self.b * w2**2 * e2 + self.c * d3**2 * cis(t3) - self.d * d4**2 * cis(t4) - self.e * d5**2 * cis(t5)
         cent2 = self.f * d6**2 * cis(t6) + self.g * d7**2 * cis(t7) - self.h * d8**2 * cis(t8)
         r1 = cent1 - 1j * self.b * al2 * e2
         rhs_a = np.zeros((n, 6))
@@ -331,8 +339,15 @@ class Stephenson:
         zy, vy, ay = arm(self.e, t5, d5, dd5)
         zg, vg, ag = arm(self.g, t7, d7, dd7)
         zc, vc, ac = arm(self.c, t3, d3, dd3)
-        z = {oa: org, ob: org + ground, jq: org + zq, js: org + zs, jw: org + zs + zg, jy: org + ground + zy,
-             jx: org + zq + zc}
+        z = {
+            oa: org,
+            ob: org + ground,
+            jq: org + zq,
+            js: org + zs,
+            jw: org + zs + zg,
+            jy: org + ground + zy,
+            jx: org + zq + zc,
+        }
         v = {oa: zero + 0j, ob: zero + 0j, jq: vq, js: vs, jw: vs + vg, jy: vy, jx: vq + vc}
         a = {oa: zero + 0j, ob: zero + 0j, jq: aq, js: as_, jw: as_ + ag, jy: ay, jx: aq + ac}
         theta = {inp: th2, l3: t3, l4: t7, out: t5, l6: t4}
@@ -344,8 +359,7 @@ class Stephenson:
                 z[joint], v[joint], a[joint] = org + off, zero + 0j, zero + 0j
                 continue
             bj = base[link]
-            z[joint], v[joint], a[joint] = _point(z[bj], v[bj], a[bj], off * cis(theta[link]), omega[link],
-                                                  alpha[link])
+            z[joint], v[joint], a[joint] = _point(z[bj], v[bj], a[bj], off * cis(theta[link]), omega[link], alpha[link])
         return _finish(theta, omega, alpha, z, v, a, assembled, cond)
 
 
@@ -355,8 +369,10 @@ def _side(k1: complex, k2: complex, j: complex) -> float:
 
 
 def _unsupported(mech: Mechanism, why: str) -> NotSolvableError:
-    return NotSolvableError(f"{mech.name}: the vector-loop method handles four-bars and Stephenson six-bars "
-                            f"with a ternary input link and a ternary output link pivoted on the ground; {why}")
+    return NotSolvableError(
+        f"{mech.name}: the vector-loop method handles four-bars and Stephenson six-bars "
+        f"with a ternary input link and a ternary output link pivoted on the ground; {why}"
+    )
 
 
 def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
@@ -404,11 +420,22 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
         if ob not in links[rocker].joints:
             raise _unsupported(mech, "its four links do not form one loop")
         refs = {"ground": (oa, ob), crank.name: (oa, ja), coupler: (ja, jb), rocker: (ob, jb)}
-        pts = tuple((j, ln, off(ln, *refs[ln], j)) if ln != "ground" else (j, ln, complex(sg[j] - sg[oa]))
-                    for ln in refs for j in links[ln].joints if j not in (oa, ob, ja, jb))
-        fb = FourBar(gvec, crank.length(oa, ja), links[coupler].length(ja, jb), links[rocker].length(ob, jb),
-                     _side(pose[ja], pose[ob], pose[jb]), complex(sg[oa]), pts,
-                     (oa, ob, ja, jb, crank.name, coupler, rocker))
+        pts = tuple(
+            (j, ln, off(ln, *refs[ln], j)) if ln != "ground" else (j, ln, complex(sg[j] - sg[oa]))
+            for ln in refs
+            for j in links[ln].joints
+            if j not in (oa, ob, ja, jb)
+        )
+        fb = FourBar(
+            gvec,
+            crank.length(oa, ja),
+            links[coupler].length(ja, jb),
+            links[rocker].length(ob, jb),
+            _side(pose[ja], pose[ob], pose[jb]),
+            complex(sg[oa]),
+            pts,
+            (oa, ob, ja, jb, crank.name, coupler, rocker),
+        )
         return fb, float(np.angle(crank.shape[ja] - crank.shape[oa]) - theta_in)
     if len(mech.links) == 6 and len(hinges[crank.name]) == 3:
         rocker = other_link(ob, "ground")
@@ -416,8 +443,12 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
             raise _unsupported(mech, "the link pivoted at the second ground pivot is not ternary")
         c_free = [j for j in hinges[crank.name] if j != oa]
         r_free = [j for j in hinges[rocker] if j != ob]
-        direct = [(s, w) for s in c_free for w in r_free if set(mech.links_of(s)) & set(mech.links_of(w))
-                  - {crank.name, rocker}]
+        direct = [
+            (s, w)
+            for s in c_free
+            for w in r_free
+            if set(mech.links_of(s)) & set(mech.links_of(w)) - {crank.name, rocker}
+        ]
         if len(direct) != 1:
             raise _unsupported(mech, "no single binary link joins the input and output links")
         js, jw = direct[0]
@@ -430,18 +461,36 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
         if jx is None or jx not in links[dlink].joints:
             raise _unsupported(mech, "the remaining two links do not form a dyad")
         sc, sr = crank.shape, links[rocker].shape
-        refs = {"ground": (oa, ob), crank.name: (oa, jq), clink: (jq, jx), glink: (js, jw), rocker: (ob, jy),
-                dlink: (jy, jx)}
-        pts = tuple((j, ln, off(ln, *refs[ln], j)) if ln != "ground" else (j, ln, complex(sg[j] - sg[oa]))
-                    for ln in refs for j in links[ln].joints if j not in (oa, ob, jq, js, jw, jy, jx))
+        refs = {
+            "ground": (oa, ob),
+            crank.name: (oa, jq),
+            clink: (jq, jx),
+            glink: (js, jw),
+            rocker: (ob, jy),
+            dlink: (jy, jx),
+        }
+        pts = tuple(
+            (j, ln, off(ln, *refs[ln], j)) if ln != "ground" else (j, ln, complex(sg[j] - sg[oa]))
+            for ln in refs
+            for j in links[ln].joints
+            if j not in (oa, ob, jq, js, jw, jy, jx)
+        )
         st = Stephenson(
-            a=abs(gvec), theta1=float(np.angle(gvec)), b=crank.length(oa, jq), c=links[clink].length(jq, jx),
-            d=links[dlink].length(jy, jx), e=links[rocker].length(ob, jy), f=crank.length(oa, js),
-            g=links[glink].length(js, jw), h=links[rocker].length(ob, jw),
+            a=abs(gvec),
+            theta1=float(np.angle(gvec)),
+            b=crank.length(oa, jq),
+            c=links[clink].length(jq, jx),
+            d=links[dlink].length(jy, jx),
+            e=links[rocker].length(ob, jy),
+            f=crank.length(oa, js),
+            g=links[glink].length(js, jw),
+            h=links[rocker].length(ob, jw),
             alpha_=float(np.angle((sc[jq] - sc[oa]) / (sc[js] - sc[oa]))),
             beta=float(np.angle((sr[jw] - sr[ob]) / (sr[jy] - sr[ob]))),
             branches=(_side(pose[js], pose[ob], pose[jw]), _side(pose[jq], pose[jy], pose[jx])),
-            origin=complex(sg[oa]), points=pts,
-            names=(oa, ob, jq, js, jw, jy, jx, crank.name, clink, glink, rocker, dlink))
+            origin=complex(sg[oa]),
+            points=pts,
+            names=(oa, ob, jq, js, jw, jy, jx, crank.name, clink, glink, rocker, dlink),
+        )
         return st, float(np.angle(sc[jq] - sc[oa]) - theta_in)
     raise _unsupported(mech, f"'{mech.name}' is neither")
