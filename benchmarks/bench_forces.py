@@ -10,10 +10,10 @@ measured in one run, plus the kinetostatics/kinematics ratio.
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import best_of
 
 import linkagekit as lk
 from linkagekit.forces import solve_forces
@@ -21,23 +21,14 @@ from linkagekit.forces import solve_forces
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def best_of(f, repeat=3):
-    t = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        t.append(time.perf_counter() - t0)
-    return min(t)
-
-
 def main(n=100_000):
     mech = lk.load(ROOT / "examples" / "seed001_stephenson.yaml")
     deg = np.linspace(0, 360, n)
     kin = lk.analyze(mech, deg, dynamics=False)
     assert kin.assembled.all()
-    t_kin = best_of(lambda: lk.analyze(mech, deg, dynamics=False))
-    t_forces = best_of(lambda: solve_forces(kin))
-    t_all = best_of(lambda: lk.analyze(mech, deg))
+    t_kin = best_of(lambda: lk.analyze(mech, deg, dynamics=False), 3)
+    t_forces = best_of(lambda: solve_forces(kin), 3)
+    t_all = best_of(lambda: lk.analyze(mech, deg), 3)
     f = solve_forces(kin)
     ns = 1e9 / n
     print(f"Stephenson six-bar of seed 001 (15 x 15 Newton-Euler per sample), N = {n:,} samples")

@@ -10,10 +10,10 @@ and the solve time of a 360-sample sweep (goal: < 1 ms).
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import best_of
 
 import linkagekit as lk
 from linkagekit.positions import solve
@@ -69,15 +69,6 @@ def hand_kernel(phi, w, al, with_rates=True):
             )
         )
     return dx, dy, px, py, vdx, vdy, vpx, vpy, adx, ady, apx, apy, links
-
-
-def best_of(f, repeat=5):
-    t = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        t.append(time.perf_counter() - t0)
-    return min(t)
 
 
 def main(n=1_000_000):

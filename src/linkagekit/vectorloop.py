@@ -138,6 +138,17 @@ def _point(
     return z0 + r, v0 + 1j * w * r, a0 + (1j * al - w * w) * r
 
 
+def _carry_points(points, base, origin, theta, omega, alpha, z, v, a) -> None:  # type: ignore[no-untyped-def]
+    """Joints off the loops, each ``Z1 e^{i beta}`` from its link's base joint (seed 003's P), in place."""
+    zero = np.zeros_like(origin)
+    for joint, link, off in points:
+        if link == "ground":
+            z[joint], v[joint], a[joint] = origin + off, zero, zero
+            continue
+        b = base[link]
+        z[joint], v[joint], a[joint] = _point(z[b], v[b], a[b], off * cis(theta[link]), omega[link], alpha[link])
+
+
 def _finish(theta, omega, alpha, z, v, a, assembled, condition) -> LoopSolution:  # type: ignore[no-untyped-def]
     singular = assembled & (np.abs(condition) < SINGULAR_TOL)
     bad = singular | ~assembled
@@ -205,13 +216,7 @@ class FourBar:
         theta = {crank: th2, coupler: th3, rocker: th4}
         omega = {crank: w2 + zero, coupler: w3, rocker: w4}
         alpha = {crank: al2 + zero, coupler: al3, rocker: al4}
-        base = {crank: o1, coupler: jA, rocker: o2}
-        for joint, link, off in self.points:  # (15), (24): r_AP = Z1 e^{i(theta3 + beta)}
-            if link == "ground":
-                z[joint], v[joint], a[joint] = origin + off, zero + 0j, zero + 0j
-                continue
-            b = base[link]
-            z[joint], v[joint], a[joint] = _point(z[b], v[b], a[b], off * cis(theta[link]), omega[link], alpha[link])
+        _carry_points(self.points, {crank: o1, coupler: jA, rocker: o2}, origin, theta, omega, alpha, z, v, a)
         return _finish(theta, omega, alpha, z, v, a, assembled, s34)
 
 
@@ -353,13 +358,7 @@ class Stephenson:
         theta = {inp: th2, l3: t3, l4: t7, out: t5, l6: t4}
         omega = {inp: w2 + zero, l3: d3, l4: d7, out: d5, l6: d4}
         alpha = {inp: al2 + zero, l3: dd3, l4: dd7, out: dd5, l6: dd4}
-        base = {inp: oa, l3: jq, l4: js, out: ob, l6: jy}
-        for joint, link, off in self.points:
-            if link == "ground":
-                z[joint], v[joint], a[joint] = org + off, zero + 0j, zero + 0j
-                continue
-            bj = base[link]
-            z[joint], v[joint], a[joint] = _point(z[bj], v[bj], a[bj], off * cis(theta[link]), omega[link], alpha[link])
+        _carry_points(self.points, {inp: oa, l3: jq, l4: js, out: ob, l6: jy}, org, theta, omega, alpha, z, v, a)
         return _finish(theta, omega, alpha, z, v, a, assembled, cond)
 
 
