@@ -3,7 +3,7 @@
 * Power balance: the driver power equals the rate of change of kinetic energy minus the
   power of gravity and of the external loads, to 1e-9 relative, for random mechanisms of
   every kind (four-bar, Watt II, Stephenson, slider-cranks, slider driver, five-bar with two
-  drivers, a compound hinge of three links) with random masses, centres of gravity,
+  drivers, a compound hinge of three links, a slider driver on a turning arm) with random masses, centres of gravity,
   inertias, gravity and loads.  The centre-of-gravity motion here is computed from the two
   first joints of each link by a fixed complex ratio, not by the library's rotation.
 * Equilibrium residual: every link, loaded with the reported reactions (each one acting on
@@ -45,7 +45,18 @@ def compound_hinge(rng):
     }
 
 
-KINDS = dict(KINEMATIC_KINDS, compound_hinge=compound_hinge)
+def slider_on_arm(rng):
+    """A turning arm with a block pushed along it: one crank driver and one slider driver on a moving guide."""
+    p = {n: complex(*rng.uniform(-10, 10, 2)) for n in "OAB"}
+    return {
+        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "links": {"ground": ["O"], "arm": ["O", "A"], "block": ["B"]},
+        "sliders": [{"link": "block", "on": "arm", "through": "B", "direction": list(rng.normal(size=2))}],
+        "drivers": [{"link": "arm", "pivot": "O", "toward": "A"}, {"slider": 0}],
+    }
+
+
+KINDS = dict(KINEMATIC_KINDS, compound_hinge=compound_hinge, slider_on_arm=slider_on_arm)
 
 
 def with_dynamics(d, rng, massless_share=0.25):
@@ -439,3 +450,35 @@ def test_two_drivers_and_a_slider_driver_report_their_efforts():
     mech, res, ok = random_case("slider_driven", rng)
     assert set(res.forces.driver_force) == {mech.drivers[0].name} and res.forces.driver_torque == {}
     assert "driver_force" in res.to_dict()
+
+
+def test_forces_do_not_depend_on_the_length_unit():
+    """The same slider-crank written in m and in mm: forces in N and torques in N*m agree."""
+    import yaml
+
+    from linkagekit.model import _Loader  # YAML 1.2 booleans: `on:` is a key, not True
+
+    d = yaml.load(open("examples/slider_crank.yaml"), Loader=_Loader)
+    mm = yaml.load(open("examples/slider_crank.yaml"), Loader=_Loader)
+    mm["units"]["length"] = "mm"
+    mm["joints"] = {k: [1000 * c for c in v] for k, v in d["joints"].items()}
+    for name, ln in mm["links"].items():
+        if isinstance(ln, dict):
+            ln["lengths"] = {k: 1000 * v for k, v in ln.get("lengths", {}).items()}
+            if "cg" in ln:
+                ln["cg"] = [1000 * c for c in ln["cg"]]
+    th = np.linspace(0, 350, 36)
+    a = lk.analyze(lk.Mechanism.from_dict(d), th, speed=7.0, acceleration=-3.0).forces
+    b = lk.analyze(lk.Mechanism.from_dict(mm), th, speed=7.0, acceleration=-3.0).forces
+    np.testing.assert_allclose(b.driver_torque["crank"], a.driver_torque["crank"], rtol=1e-9, atol=1e-12)
+    for ra, rb in zip(a.reactions, b.reactions, strict=True):
+        np.testing.assert_allclose(rb.force, ra.force, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(b.shaking_moment, a.shaking_moment, rtol=1e-9, atol=1e-9)
+
+
+def test_reaction_lookup_names_the_ambiguity():
+    res = lk.analyze(lk.load("examples/slider_crank.yaml"), [30.0])
+    f = res.forces
+    np.testing.assert_allclose(f.reaction("B", "rod"), -f.reaction("B", "block", "rod"))
+    with pytest.raises(KeyError, match="several reactions at 'B' on 'block'"):
+        f.reaction("B", "block")

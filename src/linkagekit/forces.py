@@ -75,13 +75,19 @@ class Forces:
     residual: np.ndarray  # per sample: max |A x - b| over (max |b| + size * max |x|), size = mechanism size in m
 
     def reaction(self, joint: str, on: str, by: str | None = None) -> np.ndarray:
-        """Force on link ``on`` at ``joint`` (by ``by``, or by the one other link there)."""
+        """Force on link ``on`` at ``joint`` by link ``by`` (may be left out when only one link acts there)."""
+        found = []
         for r in self.reactions:
-            if r.joint == joint and ((r.on, r.by) == (on, by) or (by is None and r.on == on)):
-                return r.force
-            if r.joint == joint and ((r.by, r.on) == (on, by) or (by is None and r.by == on)):
-                return -r.force
-        raise KeyError(f"no reaction at '{joint}' on '{on}'" + (f" by '{by}'" if by else ""))
+            if r.joint == joint and r.on == on and by in (None, r.by):
+                found.append((r.by, r.force))
+            elif r.joint == joint and r.by == on and by in (None, r.on):
+                found.append((r.on, -r.force))
+        if len(found) == 1:
+            return found[0][1]
+        what = f"at '{joint}' on '{on}'" + (f" by '{by}'" if by else "")
+        if not found:
+            raise KeyError(f"no reaction {what}")
+        raise KeyError(f"several reactions {what} (by {', '.join(b for b, _ in found)}): name `by`")
 
     def to_dict(self) -> dict[str, Any]:
         from .sweep import _list
