@@ -18,6 +18,7 @@
 
 import json
 import zlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -458,11 +459,12 @@ def test_forces_do_not_depend_on_the_length_unit():
 
     from linkagekit.model import _Loader  # YAML 1.2 booleans: `on:` is a key, not True
 
-    d = yaml.load(open("examples/slider_crank.yaml"), Loader=_Loader)
-    mm = yaml.load(open("examples/slider_crank.yaml"), Loader=_Loader)
+    text = Path("examples/slider_crank.yaml").read_text()
+    d = yaml.load(text, Loader=_Loader)
+    mm = yaml.load(text, Loader=_Loader)
     mm["units"]["length"] = "mm"
     mm["joints"] = {k: [1000 * c for c in v] for k, v in d["joints"].items()}
-    for name, ln in mm["links"].items():
+    for ln in mm["links"].values():
         if isinstance(ln, dict):
             ln["lengths"] = {k: 1000 * v for k, v in ln.get("lengths", {}).items()}
             if "cg" in ln:
