@@ -154,3 +154,21 @@ def test_rates_match_finite_differences(kind):
         if min(checked.values()) >= 12:
             break
     assert checked["pose"] >= 12 and checked["other"] >= 12, checked
+
+
+def test_speed_and_acceleration_per_sample():
+    """One speed and acceleration per sample (Python API) equals one call per sample with scalars."""
+    mech = lk.load("examples/seed001_stephenson.yaml")
+    th = np.array([10.0, 50.0, 130.0, 250.0])
+    w = np.array([1.0, -2.0, 3.5, 0.0])
+    al = np.array([0.0, 4.0, -1.0, 2.5])
+    res = lk.analyze(mech, th, speed=w, acceleration=al)
+    for k in range(len(th)):
+        one = lk.analyze(mech, [th[k]], speed=w[k], acceleration=al[k])
+        np.testing.assert_allclose(res.rates.v[:, k], one.rates.v[:, 0], rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(res.rates.a[:, k], one.rates.a[:, 0], rtol=1e-13, atol=1e-13)
+        assert res.forces.driver_torque["input"][k] == pytest.approx(one.forces.driver_torque["input"][0], rel=1e-12)
+    # velocities are linear in the speed: zero speed, zero velocity
+    assert np.all(res.rates.v[:, 3] == 0)
+    with pytest.raises(lk.InputError, match="speed"):
+        lk.analyze(mech, th, speed=[1.0, 2.0])
