@@ -9,6 +9,16 @@ from __future__ import annotations
 import numpy as np
 
 
+def random_points(rng, names):
+    """Points named by the letters of `names`, uniform in [-10, 10]^2, as complex numbers."""
+    return {n: complex(*rng.uniform(-10, 10, 2)) for n in names}
+
+
+def xy(points):
+    """Complex points as the ``joints:`` mapping of a mechanism file."""
+    return {k: [v.real, v.imag] for k, v in points.items()}
+
+
 def by_cosines(k1, k2, r1, r2, t):
     """Joint at distance r1 from k1 and r2 from k2, on side t (+1 left of k1->k2), by the law of cosines.
 
@@ -40,7 +50,7 @@ def fourbar_dict(A, B, C, D, P, unit="m"):
     return {
         "format": "linkagekit/1",
         "units": {"length": unit, "angle": "deg"},
-        "joints": {k: [v.real, v.imag] for k, v in pts.items()},
+        "joints": xy(pts),
         "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D", "P"], "rocker": ["B", "D"]},
         "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
     }
@@ -58,7 +68,7 @@ def fourbar_reference(pose, phi):
 
 def watt2_dict(p):
     return {
-        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "joints": xy(p),
         "links": {
             "ground": ["A", "B", "E"],
             "crank": ["A", "C"],
@@ -83,7 +93,7 @@ def watt2_reference(p, phi):
 
 def stephenson_dict(p):
     return {
-        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "joints": xy(p),
         "links": {
             "ground": ["A", "B"],
             "input": ["A", "C", "D"],

@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
+from helpers import random_points, xy
 from test_rates import KINDS as KINEMATIC_KINDS
 
 RTOL = 1e-9
@@ -31,9 +32,9 @@ RTOL = 1e-9
 
 def compound_hinge(rng):
     """A four-bar with a dyad hung on its coupler-rocker joint D: three links meet at D."""
-    p = {n: complex(*rng.uniform(-10, 10, 2)) for n in "ABECDF"}
+    p = random_points(rng, "ABECDF")
     return {
-        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "joints": xy(p),
         "links": {
             "ground": ["A", "B", "E"],
             "crank": ["A", "C"],
@@ -48,9 +49,9 @@ def compound_hinge(rng):
 
 def slider_on_arm(rng):
     """A turning arm with a block pushed along it: one crank driver and one slider driver on a moving guide."""
-    p = {n: complex(*rng.uniform(-10, 10, 2)) for n in "OAB"}
+    p = random_points(rng, "OAB")
     return {
-        "joints": {k: [v.real, v.imag] for k, v in p.items()},
+        "joints": xy(p),
         "links": {"ground": ["O"], "arm": ["O", "A"], "block": ["B"]},
         "sliders": [{"link": "block", "on": "arm", "through": "B", "direction": list(rng.normal(size=2))}],
         "drivers": [{"link": "arm", "pivot": "O", "toward": "A"}, {"slider": 0}],

@@ -12,18 +12,11 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from helpers import fourbar_dict, stephenson_dict, watt2_dict
+from helpers import fourbar_dict, stephenson_dict, watt2_dict, xy
+from helpers import random_points as pts
 
 H_V = 1e-5  # velocity step: truncation ~ h^4, rounding ~ eps |z| / h
 H_A = 1e-4  # acceleration step: rounding ~ eps |z| / h^2
-
-
-def pts(rng, names):
-    return {n: complex(*rng.uniform(-10, 10, 2)) for n in names}
-
-
-def xy(p):
-    return {k: [v.real, v.imag] for k, v in p.items()}
 
 
 def slider_crank(rng):

@@ -15,16 +15,12 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from helpers import fourbar_dict, stephenson_dict, watt2_dict
+from helpers import fourbar_dict, random_points, stephenson_dict, watt2_dict
 from linkagekit.positions import all_sign_combinations
 from linkagekit.vectorloop import FourBar, Stephenson, from_mechanism
 
 RTOL = 1e-9
 SWEEP = np.arange(0.0, 360.0, 0.5)
-
-
-def random_points(rng, names):
-    return {n: complex(*rng.uniform(-10, 10, 2)) for n in names}
 
 
 def relative_error(x, y, assembled):

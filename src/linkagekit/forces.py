@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .rates import cross
+
 if TYPE_CHECKING:
     from .model import Link
     from .sweep import Result
@@ -170,10 +172,6 @@ def point_motion(
 
 
 # ------------------------------------------------------------------------------- the system
-def _cross(a: Any, b: Any) -> Any:
-    return np.real(a) * np.imag(b) - np.imag(a) * np.real(b)
-
-
 def solve_forces(res: Result) -> Forces:
     """Joint reactions, driver torques/forces and derived quantities for every sample of ``res``."""
     mech = res.mechanism
@@ -184,6 +182,7 @@ def solve_forces(res: Result) -> Forces:
     m = 3 * len(moving)
     frames = link_frames(res)
     names = mech.joint_names
+    z_si = {j: res.point(j) * si for j in names}  # joint positions in metres, once
 
     # reference point Q of every link (m): the centre of gravity, or the first joint
     Q: dict[str, np.ndarray] = {}
@@ -197,7 +196,7 @@ def solve_forces(res: Result) -> Forces:
             Q[ln.name] = zg * si
             inertial = ln.mass * (ag * si - g)  # m (a_G - g), N
         else:
-            Q[ln.name] = res.point(ln.joints[0]) * si
+            Q[ln.name] = z_si[ln.joints[0]]
             inertial = np.zeros(n, complex)
         rhs[:, r0] += inertial.real
         rhs[:, r0 + 1] += inertial.imag
@@ -212,7 +211,7 @@ def solve_forces(res: Result) -> Forces:
             zp = point_motion(res, ln, ld.at, frames)[0] * si if ld.at is not None else Q[ld.link]
             rhs[:, r0] -= ld.force.real
             rhs[:, r0 + 1] -= ld.force.imag
-            rhs[:, r0 + 2] -= _cross(zp - Q[ld.link], ld.force)
+            rhs[:, r0 + 2] -= cross(zp - Q[ld.link], ld.force)
 
     # columns: unknowns and where they enter, as (row, column, coefficient per sample);
     # the matrices are filled chunk by chunk into one reused buffer below
@@ -226,13 +225,13 @@ def solve_forces(res: Result) -> Forces:
             return
         r0 = row[link]
         d = sign * np.broadcast_to(direction, (n,))
-        entries.extend(((r0, c, np.real(d)), (r0 + 1, c, np.imag(d)), (r0 + 2, c, _cross(at - Q[link], d))))
+        entries.extend(((r0, c, np.real(d)), (r0 + 1, c, np.imag(d)), (r0 + 2, c, cross(at - Q[link], d))))
 
     for j in names:
         holders = mech.links_of(j)
         if len(holders) < 2:
             continue
-        zj = res.point(j) * si
+        zj = z_si[j]
         carrier = holders[0]
         for other in holders[1:]:
             for c, e in ((col, 1.0), (col + 1, 1j)):
@@ -242,7 +241,7 @@ def solve_forces(res: Result) -> Forces:
             col += 2
     slide_dir: dict[int, np.ndarray] = {}
     for k, sl in enumerate(mech.sliders):
-        zt = res.point(sl.through) * si
+        zt = z_si[sl.through]
         E = frames[sl.on][2] * sl.direction  # the slide direction turns with the guide
         slide_dir[k] = E
         put_force(sl.link, col, zt, 1j * E, +1.0)
@@ -260,7 +259,7 @@ def solve_forces(res: Result) -> Forces:
         else:
             assert d.slider is not None
             sl = mech.sliders[d.slider]
-            zt = res.point(sl.through) * si
+            zt = z_si[sl.through]
             put_force(sl.link, col, zt, slide_dir[d.slider], +1.0)
             put_force(sl.on, col, zt, slide_dir[d.slider], -1.0)
             labels.append(("push", d.name))
@@ -304,7 +303,7 @@ def solve_forces(res: Result) -> Forces:
             if "ground" in (carrier, other):  # the frame feels -f if it exerts f, +f if it receives it
                 on_frame = -f if carrier == "ground" else f
                 shaking += on_frame
-                shaking_m += _cross(res.point(j) * si, on_frame)
+                shaking_m += cross(z_si[j], on_frame)
             col += 2
         elif lab[0] == "slider":
             _, j, block, guide, index = lab
@@ -313,7 +312,7 @@ def solve_forces(res: Result) -> Forces:
             reactions.append(Reaction(j, block, guide, f, moment))
             if guide == "ground":
                 shaking -= f
-                shaking_m -= _cross(res.point(j) * si, f) + moment
+                shaking_m -= cross(z_si[j], f) + moment
             col += 2
         elif lab[0] == "torque":
             torque[lab[1]] = x[:, col]
@@ -327,7 +326,7 @@ def solve_forces(res: Result) -> Forces:
             if sl.on == "ground":
                 fe = x[:, col] * slide_dir[d.slider]
                 shaking -= fe
-                shaking_m -= _cross(res.point(sl.through) * si, fe)
+                shaking_m -= cross(z_si[sl.through], fe)
             col += 1
     power = np.zeros(n)
     for d in mech.drivers:

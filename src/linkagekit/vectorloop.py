@@ -43,6 +43,7 @@ import numpy as np
 
 from .errors import NotSolvableError
 from .positions import NAN_POINT
+from .rates import cross
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -56,10 +57,6 @@ ASSEMBLY_RTOL = 1e-12
 def cis(theta: np.ndarray) -> np.ndarray:
     """``e^{i theta}``, the unit vector at angle ``theta``."""
     return np.cos(theta) + 1j * np.sin(theta)
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a.real * b.imag - a.imag * b.real
 
 
 def fixed_point_loop(
@@ -101,8 +98,8 @@ def newton_loop(
         ca, cb = 1j * la * cis(ta), -1j * lb * cis(tb)  # d phi / d ta, d phi / d tb
         phi = p + la * cis(ta) - q - lb * cis(tb)
         with np.errstate(divide="ignore", invalid="ignore"):
-            det = _cross(ca, cb)
-            dta, dtb = _cross(-phi, cb) / det, _cross(ca, -phi) / det
+            det = cross(ca, cb)
+            dta, dtb = cross(-phi, cb) / det, cross(ca, -phi) / det
         ok = np.isfinite(dta) & np.isfinite(dtb)
         ta, tb = np.where(ok, ta + dta, ta), np.where(ok, tb + dtb, tb)
         if not np.any(ok & (np.abs(dta) + np.abs(dtb) > 1e-15)):
@@ -364,7 +361,7 @@ class Stephenson:
 
 # --------------------------------------------------------------------------- from a mechanism file
 def _side(k1: complex, k2: complex, j: complex) -> float:
-    return 1.0 if _cross(np.asarray(k2 - k1), np.asarray(j - k1)) >= 0 else -1.0
+    return 1.0 if cross(np.asarray(k2 - k1), np.asarray(j - k1)) >= 0 else -1.0
 
 
 def _unsupported(mech: Mechanism, why: str) -> NotSolvableError:
