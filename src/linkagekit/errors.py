@@ -2,6 +2,9 @@
 
 Every message names what is wrong and where (file, key, joint, link), so that the
 command line can print it as one line and exit with the status the error carries.
+
+>>> issubclass(InputError, ValueError) and issubclass(UnknownNameError, LookupError)
+True
 """
 
 from __future__ import annotations
@@ -19,16 +22,28 @@ class LinkageError(Exception):
     exit_code = 1
 
 
-class MechanismFileError(LinkageError):
+class InputError(LinkageError, ValueError):
+    """A bad argument: input values, driver names, options."""
+
+    exit_code = 2
+
+
+class MechanismFileError(InputError):
     """A mechanism file (or dictionary) is malformed or inconsistent."""
 
     exit_code = 2
 
 
-class InputError(LinkageError):
-    """A bad argument: input values, driver names, options."""
+class UnknownNameError(LinkageError, KeyError):
+    """A joint, link, driver or column name that the mechanism or result does not have.
+
+    A :class:`KeyError` (so a :class:`LookupError`) whose text is the plain message.
+    """
 
     exit_code = 2
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
 
 
 class NotSolvableError(LinkageError):
