@@ -115,3 +115,27 @@ def stephenson_reference(p, phi):
     G = by_cosines(D, F, abs(p["G"] - p["D"]), abs(p["G"] - p["F"]), side(p["D"], p["F"], p["G"]))
     P = rigid(D, G, p["P"], p["D"], p["G"])
     return {"A": A + 0 * phi, "B": B + 0 * phi, "C": C, "D": D, "E": E, "F": F, "G": G, "P": P}
+
+
+def points(res):
+    """Every joint's complex positions, stacked (n_joints, *res.shape), from the public Result."""
+    return np.array([res.point(j) for j in res.mechanism.joint_names])
+
+
+def velocities(res):
+    return np.array([res.velocity(j) for j in res.mechanism.joint_names])
+
+
+def accelerations(res):
+    return np.array([res.acceleration(j) for j in res.mechanism.joint_names])
+
+
+def pose_inputs(mech):
+    """Driver values at the reference pose (radians or length), (n_drivers, 1), read off the pose here."""
+    vals = []
+    for d in mech.drivers:
+        if d.kind == "angle":
+            vals.append(np.angle(mech.joints[d.toward] - mech.joints[d.pivot]))
+        else:
+            vals.append(0.0)
+    return np.array(vals, float).reshape(-1, 1)

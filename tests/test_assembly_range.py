@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from linkagekit.analysis import check
+
+check = lk.check
 
 # Example 2.1: ground 350 (O2 = (-350, 0)), crank 700, coupler 300, rocker 500 (mm).
 # It assembles while |A - O2| <= 300 + 500: 700^2 + 350^2 + 2*700*350 cos(t) <= 800^2.

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from helpers import fourbar_dict, stephenson_dict, watt2_dict, xy
+from helpers import accelerations, fourbar_dict, points, pose_inputs, stephenson_dict, velocities, watt2_dict, xy
 from helpers import random_points as pts
 
 H_V = 1e-5  # velocity step: truncation ~ h^4, rounding ~ eps |z| / h
@@ -91,7 +91,6 @@ KINDS = {
 def finite_difference_check(mech, signs, rng):
     nd = len(mech.drivers)
     factor = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
-    from linkagekit.positions import pose_inputs
 
     q0 = pose_inputs(mech)[:, 0] / factor + rng.uniform(-2, 2, nd) * np.where(factor < 1, 1.0, 0.05)
     w = rng.uniform(-3, 3, nd)
@@ -108,15 +107,15 @@ def finite_difference_check(mech, signs, rng):
         acceleration={d.name: al[i] for i, d in enumerate(mech.drivers)},
         signs=signs,
     )
-    if not res.assembled[0] or np.min(np.abs(res.rates.condition)) < 0.1:
+    if not res.assembled[0] or np.min(np.abs(res.condition)) < 0.1:
         return False  # not here, or too close to a singular position for finite differences
-    z = [lk.analyze(mech, inputs(k * H_V), signs=signs).positions.z[:, 0] for k in (-2, -1, 0, 1, 2)]
-    za = [lk.analyze(mech, inputs(k * H_A), signs=signs).positions.z[:, 0] for k in (-2, -1, 0, 1, 2)]
+    z = [points(lk.analyze(mech, inputs(k * H_V), signs=signs))[:, 0] for k in (-2, -1, 0, 1, 2)]
+    za = [points(lk.analyze(mech, inputs(k * H_A), signs=signs))[:, 0] for k in (-2, -1, 0, 1, 2)]
     if not all(np.all(np.isfinite(zz)) for zz in z + za):
         return False
     vfd = (-z[4] + 8 * z[3] - 8 * z[1] + z[0]) / (12 * H_V)
     afd = (-za[4] + 16 * za[3] - 30 * za[2] + 16 * za[1] - za[0]) / (12 * H_A * H_A)
-    v, a = res.rates.v[:, 0], res.rates.a[:, 0]
+    v, a = velocities(res)[:, 0], accelerations(res)[:, 0]
     assert np.max(np.abs(v - vfd)) <= 1e-7 * max(np.max(np.abs(v)), 1e-3)
     assert np.max(np.abs(a - afd)) <= 1e-5 * max(np.max(np.abs(a)), 1.0)  # floor: rounding of z / h^2
     # link rates: omega and alpha by finite differences of the link angles
@@ -141,7 +140,7 @@ def test_rates_match_finite_differences(kind):
             mech = lk.Mechanism.from_dict(KINDS[kind](rng))
         except lk.LinkageError:
             continue
-        for mode, signs in (("pose", None), ("other", [-s for s in mech.plan.signs])):
+        for mode, signs in (("pose", None), ("other", [-s for s in lk.reference_signs(mech).values()])):
             if checked[mode] < 12 and finite_difference_check(mech, signs, rng):
                 checked[mode] += 1
         if min(checked.values()) >= 12:
@@ -158,10 +157,10 @@ def test_speed_and_acceleration_per_sample():
     res = lk.analyze(mech, th, speed=w, acceleration=al)
     for k in range(len(th)):
         one = lk.analyze(mech, [th[k]], speed=w[k], acceleration=al[k])
-        np.testing.assert_allclose(res.rates.v[:, k], one.rates.v[:, 0], rtol=1e-13, atol=1e-13)
-        np.testing.assert_allclose(res.rates.a[:, k], one.rates.a[:, 0], rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(velocities(res)[:, k], velocities(one)[:, 0], rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(accelerations(res)[:, k], accelerations(one)[:, 0], rtol=1e-13, atol=1e-13)
         assert res.forces.driver_torque["input"][k] == pytest.approx(one.forces.driver_torque["input"][0], rel=1e-12)
     # velocities are linear in the speed: zero speed, zero velocity
-    assert np.all(res.rates.v[:, 3] == 0)
+    assert np.all(velocities(res)[:, 3] == 0)
     with pytest.raises(lk.InputError, match="speed"):
         lk.analyze(mech, th, speed=[1.0, 2.0])

@@ -9,7 +9,10 @@ import pytest
 
 import linkagekit as lk
 from helpers import by_cosines
-from linkagekit.analysis import modes
+
+
+def modes(mech, at, mirrors=False):
+    return lk.modes(mech, at, mirrors).to_dict()
 
 
 def paper_configuration(phi, t1, t2):
@@ -23,7 +26,7 @@ def paper_configuration(phi, t1, t2):
 @pytest.mark.parametrize("phi_deg", [0.0, 37.0, 90.0, 155.5, 200.0, 271.0, 333.3])
 def test_all_four_configurations(examples, phi_deg):
     mech = lk.load(examples / "seed000_fourbar.yaml")
-    got = modes(mech, np.array([np.radians(phi_deg)]), mirrors=True)["modes"]
+    got = modes(mech, phi_deg, mirrors=True)["modes"]
     assert len(got) == 4
     expected = [paper_configuration(np.radians(phi_deg), t1, t2) for t1 in (1, -1) for t2 in (1, -1)]
     unmatched = list(range(4))
@@ -40,7 +43,7 @@ def test_all_four_configurations(examples, phi_deg):
 
 def test_sign_convention_is_left_of_directed_line(examples):
     mech = lk.load(examples / "seed000_fourbar.yaml")
-    out = modes(mech, np.array([0.3]))["modes"]
+    out = modes(mech, np.degrees(0.3))["modes"]
     for mo in out:
         C, D, B = (complex(*mo["joints"][k]) for k in "CDB")
         left = (np.conj(B - C) * (D - C)).imag > 0

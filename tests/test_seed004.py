@@ -11,7 +11,11 @@ import pytest
 
 import linkagekit as lk
 from helpers import by_cosines
-from linkagekit.analysis import modes
+
+
+def modes(mech, at, mirrors=False):
+    return lk.modes(mech, at, mirrors).to_dict()
+
 
 a, b, c, d, e, f, g, h, i, j, k = 2, 5, 3, 8, 6, 8, 3, 9, 8, 7, 6
 A, B = 0j, 8 + 2j
@@ -32,7 +36,7 @@ def paper_configuration(phi, t):
 def test_all_32_configurations(examples, phi_deg):
     mech = lk.load(examples / "seed004_stephenson1.yaml")
     phi = np.radians(phi_deg)
-    got = modes(mech, np.array([phi]), mirrors=True)["modes"]
+    got = modes(mech, phi_deg, mirrors=True)["modes"]
     assert len(got) == 32
     got_pts = [np.array([complex(*m["joints"][n]) if m["joints"][n] else np.nan for n in "CDEFGP"]) for m in got]
     expected = [paper_configuration(phi, t) for t in itertools.product((1, -1), repeat=5)]
@@ -48,7 +52,7 @@ def test_all_32_configurations(examples, phi_deg):
 def test_sixteen_distinct_configurations(examples):
     """t1 has no effect (flat triangle ACD), so the 32 configurations are 16 distinct ones."""
     mech = lk.load(examples / "seed004_stephenson1.yaml")
-    out = modes(mech, np.array([np.radians(60.0)]), mirrors=True)
+    out = modes(mech, 60.0, mirrors=True)
     assert out["distinct"] == 16
     ref = {
         tuple(np.round([paper_configuration(np.radians(60), t)[n] for n in "DEFGP"], 9))

@@ -1,15 +1,34 @@
 """linkagekit: analysis and design of planar linkages.
 
+The public names load lazily, so ``import linkagekit`` is light (NumPy comes with the
+first solve, pydantic with the first file read).
+
 >>> import linkagekit as lk
->>> sorted(n for n in lk.__all__ if not n.endswith("Error"))[:4]
-['Mechanism', 'Result', 'analyze', 'load']
+>>> sorted(n for n in lk.__all__ if not n.endswith("Error"))[:6]
+['Mechanism', 'Result', 'analyze', 'analyze_chunks', 'check', 'load']
 """
 
-from .errors import InputError, LinkageError, MechanismFileError, NotSolvableError
-from .model import Mechanism, load
-from .sweep import Result, analyze
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+from .errors import InputError, LinkageError, MechanismFileError, NotSolvableError, UnknownNameError
 
 __version__ = "0.1.0"
+
+_LAZY = {
+    "Mechanism": "model",
+    "load": "files",
+    "save": "files",
+    "analyze": "api",
+    "analyze_chunks": "api",
+    "reference_signs": "api",
+    "Result": "result",
+    "check": "checks",
+    "modes": "checks",
+}
+
 __all__ = [
     "InputError",
     "LinkageError",
@@ -17,6 +36,32 @@ __all__ = [
     "MechanismFileError",
     "NotSolvableError",
     "Result",
+    "UnknownNameError",
     "analyze",
+    "analyze_chunks",
+    "check",
     "load",
+    "modes",
+    "reference_signs",
+    "save",
 ]
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .api import analyze, analyze_chunks, reference_signs
+    from .checks import check, modes
+    from .files import load, save
+    from .model import Mechanism
+    from .result import Result
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'linkagekit' has no attribute {name!r}")
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -34,11 +34,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .rates import cross
+from .errors import UnknownNameError
+from .geometry import cross
+from .rates import LinkMotion
 
 if TYPE_CHECKING:
-    from .model import Link
-    from .sweep import Result
+    from .model import Link, Mechanism
 
 #: samples per batched solve (bounds the memory of the stacked matrices)
 CHUNK = 16384
@@ -88,101 +89,124 @@ class Forces:
             return found[0][1]
         what = f"at '{joint}' on '{on}'" + (f" by '{by}'" if by else "")
         if not found:
-            raise KeyError(f"no reaction {what}")
-        raise KeyError(f"several reactions {what} (by {', '.join(b for b, _ in found)}): name `by`")
+            raise UnknownNameError(f"no reaction {what}")
+        raise UnknownNameError(f"several reactions {what} (by {', '.join(b for b, _ in found)}): name `by`")
 
     def to_dict(self) -> dict[str, Any]:
-        from .sweep import _list
-
+        """The force part of the JSON result (spec section 3), one design: NaN becomes ``None``."""
         out: dict[str, Any] = {"reactions": []}
         for r in self.reactions:
             entry: dict[str, Any] = {
                 "joint": r.joint,
                 "on": r.on,
                 "by": r.by,
-                "fx": _list(r.force.real),
-                "fy": _list(r.force.imag),
-                "magnitude": _list(r.magnitude),
+                "fx": json_list(r.force.real),
+                "fy": json_list(r.force.imag),
+                "magnitude": json_list(r.magnitude),
             }
             if r.moment is not None:
                 entry["kind"] = "slider"
-                entry["moment"] = _list(r.moment)
+                entry["moment"] = json_list(r.moment)
             out["reactions"].append(entry)
-        out["driver_torque"] = {k: _list(v) for k, v in self.driver_torque.items()}
+        out["driver_torque"] = {k: json_list(v) for k, v in self.driver_torque.items()}
         if self.driver_force:
-            out["driver_force"] = {k: _list(v) for k, v in self.driver_force.items()}
-        out["input_power"] = _list(self.input_power)
-        out["shaking_force"] = {"fx": _list(self.shaking_force.real), "fy": _list(self.shaking_force.imag)}
-        out["shaking_moment"] = _list(self.shaking_moment)
+            out["driver_force"] = {k: json_list(v) for k, v in self.driver_force.items()}
+        out["input_power"] = json_list(self.input_power)
+        out["shaking_force"] = {"fx": json_list(self.shaking_force.real), "fy": json_list(self.shaking_force.imag)}
+        out["shaking_moment"] = json_list(self.shaking_moment)
         return out
 
-    def columns(self, compact: bool = False) -> list[tuple[str, np.ndarray]]:
-        """Named columns for CSV (``compact``: bearing magnitudes only, for tables)."""
-        cols: list[tuple[str, np.ndarray]] = []
+    def columns(self) -> dict[str, np.ndarray]:
+        """Named columns (CSV, tables, pandas): components, bearing loads, driver efforts, power, shaking."""
+        cols: dict[str, np.ndarray] = {}
         for r in self.reactions:
             tag = f"{r.joint}:{r.by}>{r.on}"
-            if compact:
-                cols.append((f"|F| {tag}", r.magnitude))
-                continue
-            cols += [(f"F[{tag}].fx", r.force.real), (f"F[{tag}].fy", r.force.imag)]
+            cols[f"F[{tag}].fx"] = r.force.real
+            cols[f"F[{tag}].fy"] = r.force.imag
             if r.moment is not None:
-                cols.append((f"F[{tag}].moment", r.moment))
-        cols += [(f"T[{k}]", v) for k, v in self.driver_torque.items()]
-        cols += [(f"F[{k}]", v) for k, v in self.driver_force.items()]
-        cols.append(("input_power", self.input_power))
-        if not compact:
-            cols += [
-                ("shaking.fx", self.shaking_force.real),
-                ("shaking.fy", self.shaking_force.imag),
-                ("shaking.moment", self.shaking_moment),
-            ]
+                cols[f"F[{tag}].moment"] = r.moment
+            cols[f"|F|[{tag}]"] = r.magnitude
+        cols.update({f"T[{k}]": v for k, v in self.driver_torque.items()})
+        cols.update({f"F[{k}]": v for k, v in self.driver_force.items()})
+        cols["input_power"] = self.input_power
+        cols["shaking.fx"] = self.shaking_force.real
+        cols["shaking.fy"] = self.shaking_force.imag
+        cols["shaking.moment"] = self.shaking_moment
         return cols
+
+    def column_units(self) -> dict[str, str]:
+        """The unit of each of :meth:`columns`."""
+        return {k: ("N·m" if k.startswith("T[") or k.endswith("moment") else "W" if k == "input_power" else "N")
+                for k in self.columns()}
+
+    def take(self, index: Any) -> Forces:
+        """The same forces with every array indexed by ``index`` (one design of a batch)."""
+        return Forces(
+            tuple(Reaction(r.joint, r.on, r.by, r.force[index], None if r.moment is None else r.moment[index])
+                  for r in self.reactions),
+            {k: v[index] for k, v in self.driver_torque.items()},
+            {k: v[index] for k, v in self.driver_force.items()},
+            self.input_power[index],
+            self.shaking_force[index],
+            self.shaking_moment[index],
+            self.residual[index],
+        )
+
+
+def json_list(a: Any) -> list[Any]:
+    """A 1-D array as a JSON list; NaN becomes ``None`` (``null``); nested for more dimensions."""
+    arr = np.asarray(a, float)
+    if arr.ndim > 1:
+        return [json_list(x) for x in arr]
+    return [None if not np.isfinite(x) else float(x) for x in arr]
 
 
 # ------------------------------------------------------------------------------- kinematics
-def link_frames(res: Result) -> dict[str, tuple[np.ndarray, complex, np.ndarray]]:
-    """For each link: (current position of its first joint, that joint in the shape frame,
-    rotation ``e^{i theta}`` from the shape frame to now), all in file length units."""
-    mech = res.mechanism
-    out = {}
-    for ln in mech.links:
-        j0 = ln.joints[0]
-        if ln.name == "ground":
-            out[ln.name] = (res.point(j0), ln.shape[j0], np.ones(res.n, complex))
-            continue
-        if len(ln.joints) >= 2:
-            ref = float(np.angle(ln.shape[ln.joints[1]] - ln.shape[j0]))
-        else:  # a block: its reported angle is that of its slide direction
-            slider = next((s for s in mech.sliders if s.link == ln.name), None)
-            ref = float(np.angle(slider.direction)) if slider is not None else 0.0
-        theta = res.link_angle[ln.name] * mech.angle_to_rad
-        out[ln.name] = (res.point(j0), ln.shape[j0], np.exp(1j * (theta - ref)))
-    return out
-
-
 def point_motion(
-    res: Result, link: Link, local: complex, frames: dict[str, tuple[np.ndarray, complex, np.ndarray]]
-) -> tuple[np.ndarray, ...]:
-    """Position, velocity and acceleration (file units) of a point given in a link's shape frame."""
-    z0, s0, rot = frames[link.name]
-    j0 = link.joints[0]
-    r = rot * (local - s0)
-    w, al = res.link_omega[link.name], res.link_alpha[link.name]
-    return z0 + r, res.velocity(j0) + 1j * w * r, res.acceleration(j0) + (1j * al - w * w) * r
+    mech: Mechanism, link: Link, local: complex, km: Kinematics
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position, velocity and acceleration (file units) of a point given in a link's shape frame.
+
+    A link of two or more joints carries the point by its constant complex ratio to its
+    first two joints, ``rho = (local - s_a) / (s_b - s_a)``, so ``z = z_a + rho (z_b - z_a)`` and
+    likewise ``v`` and ``a``; a one-joint block carries it on an arm turning with the block.
+    For a batch of designs the ratio (or the block's arm) is the mechanism's: masses and load
+    points keep their place on each link as its dimensions change.
+    """
+    names = mech.joint_names
+    a = names.index(link.joints[0])
+    if len(link.joints) >= 2:
+        b = names.index(link.joints[1])
+        sa, sb = link.shape[link.joints[0]], link.shape[link.joints[1]]
+        rho = (local - sa) / (sb - sa)
+        return tuple(f[a] + rho * (f[b] - f[a]) for f in (km.z, km.v, km.a))  # type: ignore[return-value]
+    rot, w, al = km.motion[link.name]
+    r = rot * (local - link.shape[link.joints[0]])
+    return km.z[a] + r, km.v[a] + 1j * w * r, km.a[a] + (1j * al - w * w) * r
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Flat kinematics the force solve reads: joints (n_joints, N) complex, per-link motion, flags, speeds."""
+
+    z: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    motion: dict[str, LinkMotion]
+    good: np.ndarray  # (N,) assembled and not singular
+    speeds: np.ndarray  # (n_drivers, N)
 
 
 # ------------------------------------------------------------------------------- the system
-def solve_forces(res: Result) -> Forces:
-    """Joint reactions, driver torques/forces and derived quantities for every sample of ``res``."""
-    mech = res.mechanism
-    n = res.n
+def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
+    """Joint reactions, driver torques/forces and derived quantities for every sample of ``km``."""
+    n = km.z.shape[1]
     si = mech.length_to_si
     moving = [ln for ln in mech.links if ln.name != "ground"]
     row = {ln.name: 3 * i for i, ln in enumerate(moving)}  # first of the link's three rows
     m = 3 * len(moving)
-    frames = link_frames(res)
     names = mech.joint_names
-    z_si = {j: res.point(j) * si for j in names}  # joint positions in metres, once
+    z_si = {j: km.z[i] * si for i, j in enumerate(names)}  # joint positions in metres, once
 
     # reference point Q of every link (m): the centre of gravity, or the first joint
     Q: dict[str, np.ndarray] = {}
@@ -190,9 +214,9 @@ def solve_forces(res: Result) -> Forces:
     g = mech.gravity if mech.gravity is not None else 0j
     for ln in moving:
         r0 = row[ln.name]
-        al = res.link_alpha[ln.name]
+        al = np.broadcast_to(km.motion[ln.name][2], (n,))
         if ln.cg is not None:
-            zg, _vg, ag = point_motion(res, ln, ln.cg, frames)
+            zg, _vg, ag = point_motion(mech, ln, ln.cg, km)
             Q[ln.name] = zg * si
             inertial = ln.mass * (ag * si - g)  # m (a_G - g), N
         else:
@@ -208,7 +232,7 @@ def solve_forces(res: Result) -> Forces:
         ln = mech.link(ld.link)
         rhs[:, r0 + 2] -= ld.torque
         if ld.force != 0:
-            zp = point_motion(res, ln, ld.at, frames)[0] * si if ld.at is not None else Q[ld.link]
+            zp = point_motion(mech, ln, ld.at, km)[0] * si if ld.at is not None else Q[ld.link]
             rhs[:, r0] -= ld.force.real
             rhs[:, r0 + 1] -= ld.force.imag
             rhs[:, r0 + 2] -= cross(zp - Q[ld.link], ld.force)
@@ -242,10 +266,10 @@ def solve_forces(res: Result) -> Forces:
     slide_dir: dict[int, np.ndarray] = {}
     for k, sl in enumerate(mech.sliders):
         zt = z_si[sl.through]
-        E = frames[sl.on][2] * sl.direction  # the slide direction turns with the guide
-        slide_dir[k] = E
-        put_force(sl.link, col, zt, 1j * E, +1.0)
-        put_force(sl.on, col, zt, 1j * E, -1.0)
+        e_now = km.motion[sl.on][0] * sl.direction  # the slide direction turns with the guide
+        slide_dir[k] = np.broadcast_to(e_now, (n,))
+        put_force(sl.link, col, zt, 1j * slide_dir[k], +1.0)
+        put_force(sl.on, col, zt, 1j * slide_dir[k], -1.0)
         for link, sign in ((sl.link, 1.0), (sl.on, -1.0)):
             if link != "ground":
                 entries.append((row[link] + 2, col + 1, sign))
@@ -264,10 +288,10 @@ def solve_forces(res: Result) -> Forces:
             put_force(sl.on, col, zt, slide_dir[d.slider], -1.0)
             labels.append(("push", d.name))
         col += 1
-    if col != m:  # pragma: no cover - the plan already checked the degrees of freedom
+    if col != m:  # pragma: no cover - the model already checked the degrees of freedom
         raise AssertionError(f"kinetostatics: {col} unknowns for {m} equations")
 
-    good = res.assembled & ~res.singular
+    good = km.good
     rhs[~good] = 0.0
     x = np.empty((n, m))
     residual = np.empty(n)
@@ -329,11 +353,9 @@ def solve_forces(res: Result) -> Forces:
                 shaking_m -= cross(z_si[sl.through], fe)
             col += 1
     power = np.zeros(n)
-    for d in mech.drivers:
-        if d.kind == "angle":
-            power += torque[d.name] * res.speeds[d.name]
-        else:
-            power += push[d.name] * res.speeds[d.name] * si
+    for i, d in enumerate(mech.drivers):
+        speed = np.broadcast_to(km.speeds[i], (n,))
+        power += torque[d.name] * speed if d.kind == "angle" else push[d.name] * speed * si
     bad = ~good
     if bad.any():
         shaking[bad] = complex(np.nan, np.nan)

@@ -1,15 +1,25 @@
 """The immutable, validated model of a mechanism.
 
-A :class:`Mechanism` is built once from a file or a dictionary and never changes.
+A :class:`Mechanism` is built once from a file or a dictionary and never changes: its
+mappings are read-only (:class:`FrozenMap`), every other container is a tuple, and it is
+hashable and compares by value.  Building one checks the file's consistency (names,
+dimensions, degrees of freedom) but runs no solver.
+
 Points are complex numbers ``x + 1j*y`` in the file's length unit; angles are stored in
 radians (converted once, here, at the boundary).  Each link carries its *shape*: the
 local coordinates of its joints, registered on the reference pose, computed from the
-``lengths`` the file gives (or, where it gives none, read off the pose).
+``lengths`` the file gives (or, where it gives none, read off the pose).  The model also
+keeps what the file said (given lengths, points in the pose frame, description), so that
+:meth:`Mechanism.to_dict` writes it back: ``Mechanism.from_dict(m.to_dict()) == m``.
+
+This module imports only the standard library, NumPy and the package's ``errors`` and
+``units``; the file schema (pydantic) is imported when a mechanism is first built, and
+reading and writing files lives in :mod:`linkagekit.files`.
 
 Examples
 --------
->>> import linkagekit as lk
->>> mech = lk.Mechanism.from_dict({
+>>> from linkagekit.model import Mechanism
+>>> mech = Mechanism.from_dict({
 ...     "joints": {"A": [0, 0], "B": [4, 1], "C": [2, 0], "D": [0.8206, 4.8589]},
 ...     "links": {"ground": ["A", "B"], "crank": ["A", "C"],
 ...               "coupler": ["C", "D"], "rocker": ["B", "D"]},
@@ -17,44 +27,132 @@ Examples
 ... })
 >>> round(mech.link("coupler").length("C", "D"), 4)  # read off the (rounded) pose
 5.0
+>>> mech.dof, mech.has_given_lengths
+(1, False)
+>>> Mechanism.from_dict(mech.to_dict()) == mech
+True
 """
 
 from __future__ import annotations
 
-import json
 import math
-import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
-import yaml
 
-from . import schema
-from .errors import MechanismFileError
+from .errors import MechanismFileError, UnknownNameError
 from .units import ANGLE_UNITS, LENGTH_UNITS
 
 if TYPE_CHECKING:
-    from .plan import Plan
+    from .schema import FileSpec, LinkSpec, SweepSpec
 
 GROUND = "ground"
 #: Relative tolerance on lengths: two joints of a link closer than this (relative to the
 #: mechanism's size) are "at one spot"; given lengths may disagree by this much.
 LENGTH_RTOL = 1e-9
+FORMAT = "linkagekit/1"
+
+K = TypeVar("K")
+V = TypeVar("V")
+
+
+class FrozenMap(Mapping[K, V]):
+    """A read-only, hashable mapping (insertion order kept, as a ``dict``).
+
+    Equal to any mapping with the same items (order aside, as for ``dict``).
+
+    Examples
+    --------
+    >>> m = FrozenMap({"A": 1.0, "B": 2.0})
+    >>> m["A"], len(m), m == {"B": 2.0, "A": 1.0}, hash(m) == hash(FrozenMap({"B": 2.0, "A": 1.0}))
+    (1.0, 2, True, True)
+    >>> m["A"] = 3.0
+    Traceback (most recent call last):
+    ...
+    TypeError: 'FrozenMap' object does not support item assignment
+    """
+
+    __slots__ = ("_d", "_hash")
+
+    def __init__(self, items: Mapping[K, V] | Any = ()) -> None:
+        self._d: dict[K, V] = dict(items)
+        self._hash: int | None = None
+
+    def __getitem__(self, key: K) -> V:
+        return self._d[key]
+
+    def __iter__(self) -> Iterator[K]:
+        return iter(self._d)
+
+    def __len__(self) -> int:
+        return len(self._d)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._d
+
+    def __hash__(self) -> int:
+        # from the items, order aside (equal mappings compare equal whatever their order)
+        if self._hash is None:
+            self._hash = hash(frozenset(self._d.items()))
+        return self._hash
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, FrozenMap):
+            return self._d == other._d
+        if isinstance(other, Mapping):
+            return self._d == dict(other.items())
+        return NotImplemented
+
+    def __repr__(self) -> str:
+        return f"FrozenMap({self._d!r})"
+
+    def __reduce__(self) -> tuple[type[FrozenMap[K, V]], tuple[dict[K, V]]]:
+        return (type(self), (self._d,))
 
 
 @dataclass(frozen=True)
 class Link:
-    """A rigid body: its joints and their local coordinates (``shape``)."""
+    """A rigid body: its joints and their local coordinates (``shape``).
+
+    Attributes
+    ----------
+    name : str
+        The link's name (``ground`` is the fixed frame).
+    joints : tuple of str
+        Its joints, in the file's order (the first two anchor its frame).
+    shape : FrozenMap of str to complex
+        Local coordinates of its joints, registered on the reference pose.
+    mass, inertia : float
+        kg and kg*m^2 (about the centre of gravity); 0 when not given.
+    cg : complex or None
+        Centre of gravity in the shape frame (same frame as ``shape``).
+    lengths : FrozenMap of str to float
+        The ``lengths`` the file gave (``"X-Y"`` -> length), exactly as given; empty if none.
+    cg_pose : complex or None
+        The centre of gravity as the file gave it, in the reference pose frame.
+    written_as_mapping : bool
+        Whether the file wrote the link as a mapping (``{joints: [...]}``); formatting only,
+        not compared.
+    """
 
     name: str
     joints: tuple[str, ...]
-    shape: dict[str, complex]
+    shape: FrozenMap[str, complex]
     mass: float = 0.0
     cg: complex | None = None  # centre of gravity, local coordinates (same frame as shape)
     inertia: float = 0.0
+    lengths: FrozenMap[str, float] = field(default_factory=FrozenMap)
+    cg_pose: complex | None = None
+    written_as_mapping: bool = field(default=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "joints", tuple(self.joints))
+        if not isinstance(self.shape, FrozenMap):
+            object.__setattr__(self, "shape", FrozenMap(self.shape))
+        if not isinstance(self.lengths, FrozenMap):
+            object.__setattr__(self, "lengths", FrozenMap(self.lengths))
 
     def length(self, a: str, b: str) -> float:
         """Distance between two joints of this link."""
@@ -62,7 +160,23 @@ class Link:
 
     @property
     def has_mass_properties(self) -> bool:
+        """True when the link has a positive mass or inertia."""
         return self.mass > 0.0 or self.inertia > 0.0
+
+    def to_dict(self) -> list[str] | dict[str, Any]:
+        """The link as the file writes it: a plain list of joints, or a mapping."""
+        out: dict[str, Any] = {"joints": list(self.joints)}
+        if self.lengths:
+            out["lengths"] = {k: float(v) for k, v in self.lengths.items()}
+        if self.mass != 0.0:
+            out["mass"] = float(self.mass)
+        if self.cg_pose is not None:
+            out["cg"] = _xy(self.cg_pose)
+        if self.inertia != 0.0:
+            out["inertia"] = float(self.inertia)
+        if len(out) == 1 and not self.written_as_mapping:
+            return list(self.joints)
+        return out
 
 
 @dataclass(frozen=True)
@@ -74,13 +188,22 @@ class Sweep:
     step: float
 
     def values(self) -> np.ndarray:
+        """The sweep's input values (file units)."""
         n = math.floor((self.stop - self.start) / self.step * (1 + 1e-12) + 1e-9) + 1
         return self.start + self.step * np.arange(max(n, 1))
+
+    def to_dict(self) -> dict[str, float]:
+        """``{start, stop, step}`` as the file writes it."""
+        return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}
 
 
 @dataclass(frozen=True)
 class Driver:
-    """One input: a link turned about a pivot (``kind='angle'``) or a slider pushed."""
+    """One input: a link turned about a pivot (``kind='angle'``) or a slider pushed.
+
+    ``speed`` and ``acceleration`` are rad/s and rad/s^2 for an angle driver (whatever the
+    angle unit), length-unit/s and length-unit/s^2 for a slider driver.
+    """
 
     name: str
     kind: Literal["angle", "slider"]
@@ -92,58 +215,237 @@ class Driver:
     toward: str | None = None
     slider: int | None = None
 
+    def to_dict(self) -> dict[str, Any]:
+        """The driver as the file writes it."""
+        out: dict[str, Any]
+        if self.kind == "slider":
+            out = {"slider": self.slider, "displacements": self.sweep.to_dict()}
+        else:
+            out = {"link": self.link, "pivot": self.pivot, "toward": self.toward, "angles": self.sweep.to_dict()}
+        if self.speed != 1.0:
+            out["speed"] = float(self.speed)
+        if self.acceleration != 0.0:
+            out["acceleration"] = float(self.acceleration)
+        return out
+
 
 @dataclass(frozen=True)
 class Slider:
-    """A prismatic joint: ``link`` translates relative to ``on`` along ``direction``."""
+    """A prismatic joint: ``link`` translates relative to ``on`` along ``direction``.
+
+    ``direction`` is the unit vector (reference pose); ``direction_given`` the vector as the
+    file gave it (formatting only, not compared).
+    """
 
     link: str
     on: str
     through: str
     direction: complex  # unit vector, reference pose
+    direction_given: complex | None = field(default=None, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The slider as the file writes it."""
+        d = self.direction if self.direction_given is None else self.direction_given
+        return {"link": self.link, "on": self.on, "through": self.through, "direction": _xy(d)}
 
 
 @dataclass(frozen=True)
 class Load:
-    """An external force (N) at a point, and/or a torque (N*m), on one link."""
+    """An external force (N) at a point, and/or a torque (N*m), on one link.
+
+    ``at`` is the point of application in the link's shape frame (None without a force
+    point); ``at_joint`` the joint name when the file named one; ``at_pose`` the point as
+    the file gave it in the reference pose frame when it gave a point.
+    """
 
     link: str
     at: complex | None
     at_joint: str | None
     force: complex
     torque: float
+    at_pose: complex | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The load as the file writes it."""
+        out: dict[str, Any] = {"link": self.link}
+        if self.at_joint is not None:
+            out["at"] = self.at_joint
+        elif self.at_pose is not None:
+            out["at"] = _xy(self.at_pose)
+        if "at" in out:
+            out["force"] = _xy(self.force)
+        if self.torque != 0.0 or "force" not in out:
+            out["torque"] = float(self.torque)
+        return out
 
 
 @dataclass(frozen=True)
 class Mechanism:
-    """A validated planar mechanism.  Build it with :func:`load` or :meth:`from_dict`."""
+    """A validated planar mechanism.  Build it with :func:`linkagekit.files.load` or :meth:`from_dict`.
+
+    Immutable and hashable; two mechanisms are equal when they say the same (``source``,
+    the file they came from, is not compared; the order of the joints is).
+    """
 
     name: str
     length_unit: str
     angle_unit: str
-    joints: dict[str, complex]
+    joints: FrozenMap[str, complex]
     links: tuple[Link, ...]
     drivers: tuple[Driver, ...]
     sliders: tuple[Slider, ...] = ()
     gravity: complex | None = None
     loads: tuple[Load, ...] = ()
-    source: str = "<dict>"
-    _by_name: dict[str, Link] = field(default_factory=dict, repr=False, compare=False)
+    source: str = field(default="<dict>", compare=False)
+    description: str | None = None
+    #: The joint names in the file's order (the order of a pose array).
+    joint_names: tuple[str, ...] = field(init=False, repr=False)
+    _by_name: FrozenMap[str, Link] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.joints, FrozenMap):
+            object.__setattr__(self, "joints", FrozenMap(self.joints))
+        for attr in ("links", "drivers", "sliders", "loads"):
+            object.__setattr__(self, attr, tuple(getattr(self, attr)))
+        object.__setattr__(self, "joint_names", tuple(self.joints))
+        object.__setattr__(self, "_by_name", FrozenMap({ln.name: ln for ln in self.links}))
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_dict(cls, data: Any, source: str = "<dict>") -> Mechanism:
-        """Validate a mechanism given as nested dictionaries (the file's structure)."""
+        """Validate a mechanism given as nested dictionaries (the file's structure).
+
+        Raises
+        ------
+        MechanismFileError
+            With a message naming ``source`` and the offending key.
+        """
+        from . import schema  # pydantic is heavy: import it only when a mechanism is built
+
         spec = schema.parse(data, source)
         return _build(spec, source)
 
+    def to_dict(self) -> dict[str, Any]:
+        """The file's structure (plain dict, list, float, str), such that ``from_dict`` of it is equal.
+
+        Floats are Python floats (which ``repr``, JSON and YAML write back exactly); points
+        (joints, ``cg``, a load's ``at``) are in the reference pose frame, as the file gave them.
+        """
+        out: dict[str, Any] = {"format": FORMAT, "name": self.name}
+        if self.description is not None:
+            out["description"] = self.description
+        out["units"] = {"length": self.length_unit, "angle": self.angle_unit}
+        out["joints"] = {name: _xy(z) for name, z in self.joints.items()}
+        out["links"] = {ln.name: ln.to_dict() for ln in self.links}
+        out["drivers"] = [d.to_dict() for d in self.drivers]
+        if self.sliders:
+            out["sliders"] = [s.to_dict() for s in self.sliders]
+        if self.gravity is not None:
+            out["gravity"] = _xy(self.gravity)
+        if self.loads:
+            out["loads"] = [ld.to_dict() for ld in self.loads]
+        return out
+
+    def with_pose(self, pose: Any) -> Mechanism:
+        """The same mechanism with another reference pose, all dimensions read off that pose.
+
+        Parameters
+        ----------
+        pose : array_like of shape (n_joints, 2), or mapping of name to (x, y)
+            The new joint positions, in :attr:`joint_names` order, file length unit.
+
+        Returns
+        -------
+        Mechanism
+            Joints at ``pose``, with NO given ``lengths`` (every dimension, and every shape,
+            is read off the new pose, which also picks the assembly mode).  Links keep
+            their joints, masses and inertias; sliders keep their ``direction``; drivers
+            (sweeps, speeds), gravity, name, description and units are unchanged.  Each
+            link's ``cg``, and each load's ``at`` given as a point (not a joint name), moves
+            with its link: it keeps its complex ratio ``rho = (p - s_a) / (s_b - s_a)`` to the
+            link's first two joints ``a``, ``b``, i.e. ``p' = s'_a + rho (s'_b - s'_a)``
+            (similar triangles, mirror image kept); on a one-joint link it is translated
+            with that joint.
+
+        Raises
+        ------
+        MechanismFileError
+            A pose of the wrong shape or missing a joint, or one that fails the normal
+            validation (e.g. two joints of a link at one spot).
+        UnknownNameError
+            A mapping naming a joint the mechanism does not have.
+
+        Examples
+        --------
+        >>> from linkagekit.files import load
+        >>> m = load("examples/seed000_fourbar.yaml")
+        >>> pose = [[2 * z.real, 2 * z.imag] for z in m.joints.values()]
+        >>> round(m.with_pose(pose).link("crank").length("A", "C"), 12)
+        4.0
+        """
+        new = self._pose_points(pose)
+        d = self.to_dict()
+        d["joints"] = {name: _xy(z) for name, z in new.items()}
+        old = self.joints
+
+        def moved(p: complex, joints: tuple[str, ...]) -> complex:
+            a = joints[0]
+            if len(joints) < 2:
+                return p - old[a] + new[a]
+            b = joints[1]
+            rho = (p - old[a]) / (old[b] - old[a])
+            return new[a] + rho * (new[b] - new[a])
+
+        for ln in self.links:
+            entry = d["links"][ln.name]
+            if isinstance(entry, dict):
+                entry.pop("lengths", None)
+                if ln.cg_pose is not None:
+                    entry["cg"] = _xy(moved(ln.cg_pose, ln.joints))
+                if list(entry) == ["joints"] and not ln.written_as_mapping:
+                    d["links"][ln.name] = entry["joints"]
+        for entry, ld in zip(d.get("loads", []), self.loads, strict=True):
+            if ld.at_pose is not None and ld.at_joint is None:
+                entry["at"] = _xy(moved(ld.at_pose, self.link(ld.link).joints))
+        return Mechanism.from_dict(d, source=self.source)
+
+    def _pose_points(self, pose: Any) -> dict[str, complex]:
+        names = self.joint_names
+        if isinstance(pose, Mapping):
+            for k in pose:
+                if k not in self.joints:
+                    raise UnknownNameError(f"{self.source}: pose: no joint named '{k}' (joints: {', '.join(names)})")
+            missing = [n for n in names if n not in pose]
+            if missing:
+                raise MechanismFileError(f"{self.source}: pose: no position for joint(s) {', '.join(missing)}")
+            rows = [pose[n] for n in names]
+        else:
+            rows = pose
+        try:
+            arr = np.asarray(rows, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise MechanismFileError(f"{self.source}: pose: expected numbers (n_joints, 2): {exc}") from None
+        if arr.shape != (len(names), 2):
+            raise MechanismFileError(
+                f"{self.source}: pose: expected shape ({len(names)}, 2) (joints {', '.join(names)}), got {arr.shape}"
+            )
+        return {n: complex(float(x), float(y)) for n, (x, y) in zip(names, arr.tolist(), strict=True)}
+
     # ------------------------------------------------------------------ queries
     def link(self, name: str) -> Link:
-        return self._by_name[name]
+        """The link named ``name``.
 
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        return tuple(self.joints)
+        Raises
+        ------
+        UnknownNameError
+            When there is no such link.
+        """
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise UnknownNameError(
+                f"no link named '{name}' (links: {', '.join(ln.name for ln in self.links)})"
+            ) from None
 
     @property
     def length_scale(self) -> float:
@@ -155,10 +457,12 @@ class Mechanism:
 
     @property
     def length_to_si(self) -> float:
+        """Metres per file length unit."""
         return LENGTH_UNITS[self.length_unit]
 
     @property
     def angle_to_rad(self) -> float:
+        """Radians per file angle unit."""
         return ANGLE_UNITS[self.angle_unit]
 
     @property
@@ -166,66 +470,53 @@ class Mechanism:
         """True when the file gives mass properties, gravity or loads."""
         return bool(self.loads) or self.gravity is not None or any(ln.has_mass_properties for ln in self.links)
 
+    @property
+    def has_given_lengths(self) -> bool:
+        """True when any link gave ``lengths`` (dimensions not all read off the pose)."""
+        return any(ln.lengths for ln in self.links)
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom by the Gruebler-Kutzbach count for planar lower pairs.
+
+        ``F = 3 (n - 1) - 2 (pins + sliders)``: ``n`` links (ground included); a pin shared
+        by ``m`` links counts as ``m - 1`` pins, a slider as one pair.
+        """
+        return _gruebler(self.links, len(self.sliders))[0]
+
     def links_of(self, joint: str) -> tuple[str, ...]:
+        """Names of the links that carry ``joint``."""
         return tuple(ln.name for ln in self.links if joint in ln.joints)
 
-    @cached_property
-    def plan(self) -> Plan:
-        """The solve plan (triangulation order); see :mod:`linkagekit.plan`."""
-        from .plan import make_plan
 
-        return make_plan(self)
+def _xy(z: complex) -> list[float]:
+    return [float(z.real), float(z.imag)]
 
 
-# ---------------------------------------------------------------------- loading
-class _Loader(yaml.SafeLoader):
-    """PyYAML's safe loader with YAML 1.2 booleans: only true/false, so `on:` stays a key."""
+def _gruebler(links: tuple[Link, ...] | list[Link], n_sliders: int) -> tuple[int, int, int]:
+    """``(F, n, pins)`` of the Gruebler-Kutzbach count."""
+    count: dict[str, int] = {}
+    for ln in links:
+        for j in ln.joints:
+            count[j] = count.get(j, 0) + 1
+    pins = sum(max(c - 1, 0) for c in count.values())
+    n = len(links)
+    return 3 * (n - 1) - 2 * (pins + n_sliders), n, pins
 
 
-_Loader.yaml_implicit_resolvers = {
-    ch: [(tag, rx) for tag, rx in resolvers if tag != "tag:yaml.org,2002:bool"]
-    for ch, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
-}
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
-)
+def __getattr__(name: str) -> Any:
+    # Kept for compatibility, without importing PyYAML when this module is imported.
+    if name in {"load", "_Loader"}:
+        from . import files
 
-
-def load(path: str | Path) -> Mechanism:
-    """Read a mechanism file (YAML or JSON).  Reading never executes anything.
-
-    Raises
-    ------
-    MechanismFileError
-        With a message naming the file and the offending key.
-    """
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MechanismFileError(f"{p}: no such file") from None
-    except IsADirectoryError:
-        raise MechanismFileError(f"{p}: is a directory, not a mechanism file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MechanismFileError(f"{p}: cannot read: {exc}") from None
-    try:
-        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.load(text, Loader=_Loader)  # noqa: S506 - a safe loader
-    except json.JSONDecodeError as exc:
-        raise MechanismFileError(
-            f"{p}: JSON syntax error at line {exc.lineno}, column {exc.colno}: {exc.msg}"
-        ) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise MechanismFileError(f"{p}: YAML syntax error{where}: {problem}") from None
-    mech = Mechanism.from_dict(data, source=str(p))
-    mech.plan  # noqa: B018  (build the plan now: a file whose drivers do not fit is a file error)
-    return mech
+        return getattr(files, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 # ---------------------------------------------------------------------- building
-def _build(spec: schema.FileSpec, src: str) -> Mechanism:
+def _build(spec: FileSpec, src: str) -> Mechanism:
+    from .schema import LinkSpec, SweepSpec
+
     joints = {name: complex(x, y) for name, (x, y) in spec.joints.items()}
 
     def fail(key: str, msg: str) -> MechanismFileError:
@@ -239,7 +530,8 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
     links: list[Link] = []
     used: set[str] = set()
     for lname, lspec in spec.links.items():
-        ls = lspec if isinstance(lspec, schema.LinkSpec) else schema.LinkSpec(joints=lspec)
+        as_mapping = isinstance(lspec, LinkSpec)
+        ls = lspec if isinstance(lspec, LinkSpec) else LinkSpec(joints=lspec)
         key = f"links.{lname}"
         for j in ls.joints:
             if j not in joints:
@@ -255,16 +547,29 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
                     raise fail(key, f"joints '{a}' and '{b}' are at one spot on one link")
         used.update(ls.joints)
         shape = _shape(lname, ls, joints, fail, scale)
-        cg = None
+        cg = cg_pose = None
         if ls.cg is not None:
-            cg = _register(complex(*ls.cg), tuple(ls.joints), joints, shape)
+            cg_pose = complex(*ls.cg)
+            cg = _register(cg_pose, tuple(ls.joints), joints, shape)
         if ls.mass is not None and ls.mass < 0:
             raise fail(f"{key}.mass", "must not be negative")
         if ls.inertia is not None and ls.inertia < 0:
             raise fail(f"{key}.inertia", "must not be negative")
         if (ls.mass or 0.0) > 0 and cg is None:
             raise fail(f"{key}.cg", "a link with mass needs its centre of gravity `cg`")
-        links.append(Link(lname, tuple(ls.joints), shape, ls.mass or 0.0, cg, ls.inertia or 0.0))
+        links.append(
+            Link(
+                lname,
+                tuple(ls.joints),
+                FrozenMap(shape),
+                ls.mass or 0.0,
+                cg,
+                ls.inertia or 0.0,
+                lengths=FrozenMap(ls.lengths or {}),
+                cg_pose=cg_pose,
+                written_as_mapping=as_mapping,
+            )
+        )
 
     for j in joints:
         if j not in used:
@@ -286,7 +591,7 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
         direction = complex(*s.direction)
         if abs(direction) == 0:
             raise fail(f"{key}.direction", "must not be the zero vector")
-        sliders.append(Slider(s.link, s.on, s.through, direction / abs(direction)))
+        sliders.append(Slider(s.link, s.on, s.through, direction / abs(direction), direction))
 
     drivers: list[Driver] = []
     for i, d in enumerate(spec.drivers):
@@ -299,7 +604,7 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
             sl = sliders[d.slider]
             if d.link is not None and d.link != sl.link:
                 raise fail(f"{key}.link", f"slider {d.slider} moves link '{sl.link}', not '{d.link}'")
-            sw = d.displacements or schema.SweepSpec(start=0.0, stop=0.0, step=1.0)
+            sw = d.displacements or SweepSpec(start=0.0, stop=0.0, step=1.0)
             drivers.append(
                 Driver(
                     sl.link,
@@ -329,7 +634,7 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
                 raise fail(f"{key}.{attr}", f"joint '{j}' is not on link '{d.link}'")
         if d.pivot == d.toward:
             raise fail(key, "`pivot` and `toward` must be different joints")
-        sw = d.angles or schema.SweepSpec(
+        sw = d.angles or SweepSpec(
             start=0.0,
             stop=360.0 if spec.units.angle == "deg" else 2 * math.pi,
             step=1.0 if spec.units.angle == "deg" else math.pi / 180,
@@ -361,33 +666,43 @@ def _build(spec: schema.FileSpec, src: str) -> Mechanism:
             raise fail(key, "give a `force`, a `torque`, or both")
         at_joint = None
         at: complex | None = None
+        at_pose: complex | None = None
         if isinstance(ld.at, str):
             if ld.at not in by_name[ld.link].joints:
                 raise fail(f"{key}.at", f"joint '{ld.at}' is not on link '{ld.link}'")
             at_joint = ld.at
             at = by_name[ld.link].shape[ld.at]
         elif ld.at is not None:
-            at = _register(complex(*ld.at), by_name[ld.link].joints, joints, by_name[ld.link].shape)
+            at_pose = complex(*ld.at)
+            at = _register(at_pose, by_name[ld.link].joints, joints, by_name[ld.link].shape)
         if ld.force is not None and at is None:
             raise fail(f"{key}.at", "a force needs its point of application `at`")
-        loads.append(Load(ld.link, at, at_joint, complex(*(ld.force or (0.0, 0.0))), ld.torque or 0.0))
+        loads.append(Load(ld.link, at, at_joint, complex(*(ld.force or (0.0, 0.0))), ld.torque or 0.0, at_pose=at_pose))
+
+    dof, n_links, pins = _gruebler(links, len(sliders))
+    if dof != len(drivers):
+        raise fail(
+            "drivers",
+            f"{len(drivers)} driver(s) given, but the mechanism has {dof} degree(s) "
+            f"of freedom (Gruebler: 3*({n_links}-1) - 2*({pins} pins + {len(sliders)} sliders) = {dof})",
+        )
 
     return Mechanism(
         name=spec.name,
         length_unit=spec.units.length,
         angle_unit=spec.units.angle,
-        joints=joints,
+        joints=FrozenMap(joints),
         links=tuple(links),
         drivers=tuple(drivers),
         sliders=tuple(sliders),
         gravity=complex(*spec.gravity) if spec.gravity is not None else None,
         loads=tuple(loads),
         source=src,
-        _by_name=by_name,
+        description=spec.description,
     )
 
 
-def _sweep(sw: schema.SweepSpec, key: str, fail: Any) -> Sweep:
+def _sweep(sw: SweepSpec, key: str, fail: Any) -> Sweep:
     if sw.step == 0:
         raise fail(f"{key}.step", "must not be zero")
     if (sw.stop - sw.start) * sw.step < 0:
@@ -408,7 +723,7 @@ def _parse_pair(key: str, link: tuple[str, ...]) -> tuple[str, str] | None:
     return None
 
 
-def _shape(lname: str, ls: schema.LinkSpec, pose: dict[str, complex], fail: Any, scale: float) -> dict[str, complex]:
+def _shape(lname: str, ls: LinkSpec, pose: dict[str, complex], fail: Any, scale: float) -> dict[str, complex]:
     """Local coordinates of a link's joints, registered on the pose, honouring given lengths.
 
     The first two joints anchor the frame (the first at its pose position, the second on
@@ -458,7 +773,7 @@ def _shape(lname: str, ls: schema.LinkSpec, pose: dict[str, complex], fail: Any,
 
 
 def _register(
-    point: complex, link_joints: tuple[str, ...], pose: dict[str, complex], shape: dict[str, complex]
+    point: complex, link_joints: tuple[str, ...], pose: Mapping[str, complex], shape: Mapping[str, complex]
 ) -> complex:
     """Express a pose point of a link in the link's shape frame (ratio to its two anchors)."""
     if len(link_joints) < 2:

@@ -1,46 +1,42 @@
-"""Solve plan: topology, degrees of freedom and the order of triangulation steps.
+"""Solve plan: the topology of a mechanism as an ordered list of steps.
 
-The plan is a list of steps, each of which places joints from joints already placed:
+The plan says which joint each step places, from which joints, and which sign or mirror
+slot it reads; it holds no dimension at all (those are in :mod:`linkagekit.params`), so one
+plan serves every design of a topology.  It is hashable and picklable and is computed
+without solving anything: a greedy search for a triangulation order,
 
-``Ground``
-    the joints of the frame, fixed.
-``Crank``
-    a driven link: ``toward = pivot + r * exp(i*phi)``.
-``Place``
-    a link with two known joints ``k1, k2``: every other joint ``j`` of it is
-    ``z_j = z_k1 + rho_j * (z_k2 - z_k1)`` with the constant complex ratio
-    ``rho_j = (s_j - s_k1) / (s_k2 - s_k1)`` of its shape (seed 000, eq. 18, in complex
-    form).  Its mirror image uses ``conj(rho_j)``.
-``Dyad``
-    a joint of two links that each have one known joint: intersection of two circles
-    (seed 000, eqs. 11-15).  One sign per step picks the side of the directed line
-    ``k1 -> k2``.
-``CircleLine``
-    a joint of a slider block (on a line carried by a placed link) and of a link with
-    one known joint: intersection of a circle and a line.  The sign picks the side of
-    the foot of the perpendicular along the slider direction.
-``Pivot``
-    the link a block slides on, turning about its one known joint so that its line
-    passes through the block's known joint (inverted slider-crank).  Same sign rule.
-``SliderDrive``
-    a driven slider block, displaced along its line.
-``Carry``
-    a link with one known joint whose rotation is known (a block turns with the link
-    it slides on; the link a block slides on after a ``Pivot`` step).
+1. start from the ground joints;
+2. repeatedly place every link with two known joints (``Place``), carry every link with
+   one known joint whose rotation is known (``Carry``), apply every driver whose pivot or
+   guide is known (``Crank``, ``SliderDrive``);
+3. otherwise find one joint of two links that each have one known joint (``Dyad``: two
+   circles), of a slider block and a link (``CircleLine``), or turn a guide about its one
+   known joint through a known block joint (``Pivot``); each of these reads one sign.
+
+A mechanism for which this stops before every joint is known has no triangulation order
+(an Assur group of class 3 or more).
 
 Examples
 --------
 >>> import linkagekit as lk
->>> mech = lk.load("examples/seed000_fourbar.yaml")  # doctest: +SKIP
->>> print(mech.plan.describe())  # doctest: +SKIP
+>>> plan = make_plan(lk.load("examples/seed000_fourbar.yaml"))
+>>> print(plan.describe())
+1. fixed joints A, B
+2. driver 'crank': C from A at the input angle
+3. D = circle(C) x circle(B); sign +1: left of C->B
+4. link 'coupler': P placed rigidly on C, D (mirror image selectable)
+>>> plan.n_signs, plan.sign_joints, plan.mirror_links
+(1, ('D',), ('coupler',))
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 from .errors import MechanismFileError, NotSolvableError
+from .steps import Carry, CircleLine, Crank, Dyad, Ground, Pivot, Place, SliderDrive, Step, is_sign_step
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -49,96 +45,23 @@ GROUND = "ground"
 
 
 @dataclass(frozen=True)
-class Ground:
-    joints: tuple[int, ...]
-    z: tuple[complex, ...]
-
-
-@dataclass(frozen=True)
-class Crank:
-    driver: int
-    link: str
-    pivot: int
-    toward: int
-    radius: float
-
-
-@dataclass(frozen=True)
-class Place:
-    link: str
-    k1: int
-    k2: int
-    scale: complex  # s_k2 - s_k1: rotation of the link is (z_k2 - z_k1) / scale
-    joints: tuple[int, ...]
-    ratios: tuple[complex, ...]
-    mirror: int | None = None  # index into the mirror flags, for links of 3+ joints
-
-
-@dataclass(frozen=True)
-class Dyad:
-    joint: int
-    k1: int
-    k2: int
-    r1: float
-    r2: float
-    links: tuple[str, str]
-    sign: int  # index into the sign vector
-
-
-@dataclass(frozen=True)
-class CircleLine:
-    joint: int
-    center: int
-    radius: float
-    slider: int
-    block: str
-    on: str
-    point: complex  # the joint's line in `on`'s frame: point + u * direction
-    direction: complex
-    anchor: int | None  # a known joint of `on` and its shape position (None: on is ground)
-    anchor_s: complex
-    sign: int
-
-
-@dataclass(frozen=True)
-class Pivot:
-    slider: int
-    on: str
-    center: int  # the known joint of `on` it turns about
-    joint: int  # the known joint of the block
-    offset: complex  # pose(joint) - shape_on(center), in `on`'s frame
-    direction: complex
-    sign: int
-
-
-@dataclass(frozen=True)
-class SliderDrive:
-    driver: int
-    slider: int
-    block: str
-    on: str
-    anchor: int | None
-    anchor_s: complex
-    direction: complex
-    joints: tuple[int, ...]
-    points: tuple[complex, ...]  # reference positions in `on`'s frame
-
-
-@dataclass(frozen=True)
-class Carry:
-    link: str
-    rot_of: str  # the link whose rotation this link shares
-    anchor: int
-    joints: tuple[int, ...]
-    offsets: tuple[complex, ...]  # s_j - s_anchor
-
-
-Step = Ground | Crank | Place | Dyad | CircleLine | Pivot | SliderDrive | Carry
-
-
-@dataclass(frozen=True)
 class Plan:
-    """The triangulation order of a mechanism, with its default signs."""
+    """The triangulation order of a topology (no dimensions, no assembly mode).
+
+    Attributes
+    ----------
+    joint_names : tuple of str
+        Every joint, in the file's order (the rows of every positions array).
+    steps : tuple of Step
+    n_signs, n_mirrors : int
+        Sizes of the sign vector (one per sign step) and of the mirror flags (one per link
+        of three or more joints placed rigidly).
+    dof : int
+    drivers : tuple of str
+    mirror_links : tuple of str
+    sign_labels : tuple of str
+        For each sign, which side ``+1`` means.
+    """
 
     joint_names: tuple[str, ...]
     steps: tuple[Step, ...]
@@ -146,107 +69,50 @@ class Plan:
     n_mirrors: int
     dof: int
     drivers: tuple[str, ...]
-    signs: tuple[int, ...] = ()  # the assembly mode of the reference pose
     mirror_links: tuple[str, ...] = ()
-    sign_labels: tuple[str, ...] = field(default=())
+    sign_labels: tuple[str, ...] = ()
 
     @property
-    def rotation_links(self) -> frozenset[str]:
-        """Links whose rotation later steps use (guides of sliders, links others turn with)."""
-        out = {st.on for st in self.steps if isinstance(st, CircleLine | SliderDrive | Pivot)}
-        out |= {st.rot_of for st in self.steps if isinstance(st, Carry)}
-        return frozenset(out)
+    def sign_steps(self) -> tuple[Any, ...]:
+        """The steps that read a sign, in sign order."""
+        return tuple(s for s in self.steps if is_sign_step(s))
 
-    def sign_steps(self) -> list[Dyad | CircleLine | Pivot]:
-        return [s for s in self.steps if isinstance(s, Dyad | CircleLine | Pivot)]
+    @property
+    def sign_joints(self) -> tuple[str, ...]:
+        """For each sign, the joint it places (for a pivot step, the block joint its guide passes)."""
+        return tuple(self.joint_names[s.joint] for s in self.sign_steps)
 
-    def describe(self) -> str:
-        """A human-readable listing of the steps."""
-        n = self.joint_names
-        out = []
-        for st in self.steps:
-            if isinstance(st, Ground):
-                text = "fixed joints " + ", ".join(n[j] for j in st.joints)
-            elif isinstance(st, Crank):
-                text = f"driver '{st.link}': {n[st.toward]} from {n[st.pivot]} at the input angle (r = {st.radius:.6g})"
-            elif isinstance(st, Place):
-                if not st.joints:
-                    continue
-                m = " (mirror image selectable)" if st.mirror is not None else ""
-                placed = ", ".join(n[j] for j in st.joints)
-                text = f"link '{st.link}': {placed} placed rigidly on {n[st.k1]}, {n[st.k2]}{m}"
-            elif isinstance(st, Dyad):
-                text = (
-                    f"{n[st.joint]} = circle({n[st.k1]}, {st.r1:.6g}) x circle({n[st.k2]}, {st.r2:.6g}); "
-                    f"sign +1: left of {n[st.k1]}->{n[st.k2]}"
-                )
-            elif isinstance(st, CircleLine):
-                text = (
-                    f"{n[st.joint]} = circle({n[st.center]}, {st.radius:.6g}) x line of slider {st.slider} "
-                    f"('{st.block}' on '{st.on}'); sign +1: {n[st.joint]} ahead of {n[st.center]} along the slider"
-                )
-            elif isinstance(st, Pivot):
-                text = (
-                    f"link '{st.on}' turns about {n[st.center]} until slider {st.slider}'s line passes "
-                    f"{n[st.joint]}; sign +1: {n[st.joint]} ahead of {n[st.center]} along the slider"
-                )
-            elif isinstance(st, SliderDrive):
-                text = f"driver '{st.block}': slider {st.slider} displaced along its line"
-            else:
-                if not st.joints:
-                    continue
-                moved = ", ".join(n[j] for j in st.joints)
-                text = f"link '{st.link}': {moved} carried with '{st.rot_of}' from {n[st.anchor]}"
-            out.append(text)
-        return "\n".join(f"{i}. {t}" for i, t in enumerate(out, 1))
+    def describe(self, nums: tuple[Any, ...] | None = None) -> str:
+        """A numbered listing of the steps (with the step numbers of one design, when given)."""
+        lines = []
+        for i, st in enumerate(self.steps):
+            text = st.describe(self.joint_names, nums[i] if nums is not None else None)
+            if text is not None:
+                lines.append(text)
+        return "\n".join(f"{i}. {t}" for i, t in enumerate(lines, 1))
 
 
-def grubler(mech: Mechanism) -> int:
-    """Degrees of freedom by the Gruebler-Kutzbach count for planar lower pairs.
-
-    ``F = 3 (n - 1) - 2 p``: ``n`` links (ground included), ``p`` one-freedom pairs; a pin
-    shared by ``m`` links counts as ``m - 1`` pins, a slider as one pair.
-    """
-    n = len(mech.links)
-    pins = sum(max(len(mech.links_of(j)) - 1, 0) for j in mech.joints)
-    return 3 * (n - 1) - 2 * (pins + len(mech.sliders))
-
-
+@lru_cache(maxsize=256)
 def make_plan(mech: Mechanism) -> Plan:
-    """Find a triangulation order; raise a located error when there is none."""
+    """Find a triangulation order; raise a located error when there is none.
+
+    Cached per mechanism (mechanisms are immutable and hashable).
+    """
     names = tuple(mech.joints)
     idx = {n: i for i, n in enumerate(names)}
-    dof = grubler(mech)
-    if dof != len(mech.drivers):
-        n = len(mech.links)
-        pins = sum(max(len(mech.links_of(j)) - 1, 0) for j in mech.joints)
-        raise MechanismFileError(
-            f"{mech.source}: drivers: {len(mech.drivers)} driver(s) given, but the mechanism has {dof} degree(s) "
-            f"of freedom (Gruebler: 3*({n}-1) - 2*({pins} pins + {len(mech.sliders)} sliders) = {dof})"
-        )
+    if mech.dof != len(mech.drivers):  # pragma: no cover - the model already refuses it
+        raise MechanismFileError(f"{mech.source}: drivers: {len(mech.drivers)} driver(s) for {mech.dof} freedom(s)")
 
     links = {ln.name: ln for ln in mech.links}
     known: set[str] = set(links[GROUND].joints)
     placed: set[str] = {GROUND}
-    steps: list[Step] = [
-        Ground(tuple(idx[j] for j in links[GROUND].joints), tuple(links[GROUND].shape[j] for j in links[GROUND].joints))
-    ]
+    steps: list[Step] = [Ground(tuple(idx[j] for j in links[GROUND].joints))]
     rot_known: set[str] = {GROUND}
     pending = list(range(len(mech.drivers)))
-    n_signs = 0
     mirror_links: list[str] = []
     slider_of = {s.link: (i, s) for i, s in enumerate(mech.sliders)}
     labels: list[str] = []
-
-    def anchor_of(link: str) -> tuple[int | None, complex]:
-        if link == GROUND:
-            return None, 0j
-        for st in steps:
-            if isinstance(st, Place) and st.link == link:
-                return st.k1, links[link].shape[names[st.k1]]
-            if isinstance(st, Carry) and st.link == link:
-                return st.anchor, links[link].shape[names[st.anchor]]
-        raise AssertionError(link)
+    anchors: dict[str, int] = {}  # a known joint of each placed link, where its frame is anchored
 
     def place_all() -> bool:
         progress = False
@@ -257,17 +123,12 @@ def make_plan(mech: Mechanism) -> Plan:
             if len(kn) >= 2:
                 k1, k2 = kn[0], kn[1]
                 rest = [j for j in ln.joints if j not in known]
-                base = ln.shape[k2] - ln.shape[k1]
-                ratios = tuple((ln.shape[j] - ln.shape[k1]) / base for j in rest)
                 mirror = None
                 if rest and len(ln.joints) >= 3:
                     mirror = len(mirror_links)
                     mirror_links.append(ln.name)
-                steps.append(Place(ln.name, idx[k1], idx[k2], base, tuple(idx[j] for j in rest), ratios, mirror))
-                known.update(rest)
-                placed.add(ln.name)
-                rot_known.add(ln.name)
-                progress = True
+                steps.append(Place(ln.name, idx[k1], idx[k2], tuple(idx[j] for j in rest), mirror))
+                anchors[ln.name] = idx[k1]
             elif len(kn) == 1:
                 rot_from = None
                 if ln.name in rot_known:
@@ -277,27 +138,21 @@ def make_plan(mech: Mechanism) -> Plan:
                 if rot_from is None:
                     continue
                 rest = [j for j in ln.joints if j not in known]
-                steps.append(
-                    Carry(
-                        ln.name,
-                        rot_from,
-                        idx[kn[0]],
-                        tuple(idx[j] for j in rest),
-                        tuple(ln.shape[j] - ln.shape[kn[0]] for j in rest),
-                    )
-                )
-                known.update(rest)
-                placed.add(ln.name)
-                rot_known.add(ln.name)
-                progress = True
+                steps.append(Carry(ln.name, rot_from, idx[kn[0]], tuple(idx[j] for j in rest)))
+                anchors[ln.name] = idx[kn[0]]
+            else:
+                continue
+            known.update(ln.joints)
+            placed.add(ln.name)
+            rot_known.add(ln.name)
+            progress = True
         return progress
 
     while True:
         if place_all():
             continue
-        # drivers, as soon as they can act
         acted = False
-        for di in list(pending):
+        for di in list(pending):  # drivers, as soon as they can act
             d = mech.drivers[di]
             if d.kind == "angle":
                 assert d.pivot is not None and d.toward is not None
@@ -307,8 +162,7 @@ def make_plan(mech: Mechanism) -> Plan:
                         f"mechanism; the drivers do not match its freedom"
                     )
                 if d.pivot in known:
-                    r = links[d.link].length(d.pivot, d.toward)
-                    steps.append(Crank(di, d.link, idx[d.pivot], idx[d.toward], r))
+                    steps.append(Crank(di, d.link, idx[d.pivot], idx[d.toward]))
                     known.add(d.toward)
                     pending.remove(di)
                     acted = True
@@ -321,14 +175,10 @@ def make_plan(mech: Mechanism) -> Plan:
                         f"mechanism; the drivers do not match its freedom"
                     )
                 if s.on in rot_known and s.on in placed:
-                    a, a_s = anchor_of(s.on)
                     blk = links[s.link]
-                    pts = tuple(mech.joints[j] for j in blk.joints)
-                    steps.append(
-                        SliderDrive(
-                            di, d.slider, s.link, s.on, a, a_s, s.direction, tuple(idx[j] for j in blk.joints), pts
-                        )
-                    )
+                    anchor = anchors.get(s.on)
+                    steps.append(SliderDrive(di, d.slider, s.link, s.on, anchor, tuple(idx[j] for j in blk.joints)))
+                    anchors[s.link] = idx[blk.joints[0]]
                     known.update(blk.joints)
                     placed.add(s.link)
                     rot_known.add(s.link)
@@ -336,7 +186,7 @@ def make_plan(mech: Mechanism) -> Plan:
                     acted = True
         if acted:
             continue
-        found = _next_sign_step(mech, names, idx, known, placed, rot_known, slider_of, steps, n_signs, anchor_of)
+        found = _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, len(labels))
         if found is None:
             break
         step, newly_known, newly_rot, label = found
@@ -344,7 +194,6 @@ def make_plan(mech: Mechanism) -> Plan:
         known.update(newly_known)
         rot_known.update(newly_rot)
         labels.append(label)
-        n_signs += 1
 
     missing = [j for j in names if j not in known]
     if missing or pending:
@@ -354,44 +203,36 @@ def make_plan(mech: Mechanism) -> Plan:
             f"(an Assur group of class 3 or more, or a slider arrangement not handled in closed form), "
             f"which linkagekit does not have yet"
         )
-    plan = Plan(
+    needs = {link for st in steps for link in st.rotation_needs()}
+    steps = [replace(st, keep_rotation=True) if isinstance(st, Place) and st.link in needs else st for st in steps]
+    return Plan(
         names,
         tuple(steps),
-        n_signs,
+        len(labels),
         len(mirror_links),
-        dof,
+        mech.dof,
         tuple(d.name for d in mech.drivers),
         mirror_links=tuple(mirror_links),
         sign_labels=tuple(labels),
     )
-    from .positions import pose_signs
-
-    return _with_signs(plan, pose_signs(mech, plan))
 
 
-def _with_signs(plan: Plan, signs: tuple[int, ...]) -> Plan:
-    from dataclasses import replace
-
-    return replace(plan, signs=signs)
-
-
-def _next_sign_step(mech, names, idx, known, placed, rot_known, slider_of, steps, n_signs, anchor_of):  # type: ignore[no-untyped-def]
+def _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, n_signs):  # type: ignore[no-untyped-def]
     """The next circle-circle, circle-line or pivot step, or None when there is none."""
     links = {ln.name: ln for ln in mech.links}
-    for j in names:
+    for j in mech.joints:
         if j in known:
             continue
         owners = [ln for ln in mech.links if j in ln.joints and ln.name not in placed]
         anchored = [
             (ln, next(k for k in ln.joints if k in known)) for ln in owners if any(k in known for k in ln.joints)
         ]
-        # two circles
-        for a in range(len(anchored)):
+        for a in range(len(anchored)):  # two circles
             for b in range(a + 1, len(anchored)):
                 (l1, k1), (l2, k2) = anchored[a], anchored[b]
                 if k1 == k2:
                     continue
-                st = Dyad(idx[j], idx[k1], idx[k2], l1.length(k1, j), l2.length(k2, j), (l1.name, l2.name), n_signs)
+                st = Dyad(idx[j], idx[k1], idx[k2], (l1.name, l2.name), n_signs)
                 return st, {j}, set(), f"{j}: left of {k1}->{k2}"
         # circle and line: j on a block whose guide is placed, and on a link with one known joint
         for ln in owners:
@@ -402,30 +243,15 @@ def _next_sign_step(mech, names, idx, known, placed, rot_known, slider_of, steps
                 for l2, k2 in anchored:
                     if l2.name == ln.name:
                         continue
-                    a, a_s = anchor_of(s.on)
-                    st = CircleLine(
-                        idx[j],
-                        idx[k2],
-                        l2.length(k2, j),
-                        si,
-                        s.link,
-                        s.on,
-                        mech.joints[j],
-                        s.direction,
-                        a,
-                        a_s,
-                        n_signs,
-                    )
+                    st = CircleLine(idx[j], idx[k2], l2.name, si, s.link, s.on, anchors.get(s.on), n_signs)
                     return st, {j}, set(), f"{j}: ahead of {k2} along slider {si}"
     # pivot: a block with a known joint slides on a link with exactly one known joint
     for si, s in enumerate(mech.sliders):
         if s.on in placed or s.on in rot_known:
             continue
-        blk = links[s.link]
-        on = links[s.on]
-        bj = [k for k in blk.joints if k in known]
-        oj = [k for k in on.joints if k in known]
+        bj = [k for k in links[s.link].joints if k in known]
+        oj = [k for k in links[s.on].joints if k in known]
         if bj and len(oj) == 1:
-            st = Pivot(si, s.on, idx[oj[0]], idx[bj[0]], mech.joints[bj[0]] - on.shape[oj[0]], s.direction, n_signs)
+            st = Pivot(si, s.on, idx[oj[0]], idx[bj[0]], n_signs)
             return st, set(), {s.on}, f"{bj[0]}: ahead of {oj[0]} along slider {si}"
     return None

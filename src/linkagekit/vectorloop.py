@@ -42,8 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import NotSolvableError
-from .positions import NAN_POINT
-from .rates import cross
+from .geometry import NAN_POINT, cross
 
 if TYPE_CHECKING:
     from .model import Mechanism

@@ -1,0 +1,103 @@
+"""Planar geometry on complex numbers: the kernels every solve step is built from.
+
+A point or a vector of the plane is a complex number ``x + iy``; a rotation by ``theta`` is
+the product with ``cis(theta) = e^{i theta}``; with ``conj(a) b = a . b + i cross(a, b)`` one
+complex product gives both the dot and the cross product.  Every function here works
+elementwise on arrays of any shape (samples, designs x samples, ...).
+
+Examples
+--------
+>>> import numpy as np
+>>> float(cross(1 + 0j, 1j)), float(dot(3 + 4j, 3 + 4j))
+(1.0, 25.0)
+>>> z, m = circle_circle(np.array([0j]), np.array([4 + 0j]), 5.0, 3.0, 1.0)
+>>> complex(z[0])
+(4+3j)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+#: relative tolerance of the assembly tests (see docs/method.md, "Tolerances")
+ASSEMBLY_RTOL = 1e-12
+#: "not a point": NaN in both coordinates (``nan + 0j`` would print a y of 0)
+NAN_POINT = complex(np.nan, np.nan)
+_TINY = 1e-300
+
+ArrayLike = Any
+
+
+def abs2(a: np.ndarray) -> np.ndarray:
+    """Squared magnitude of planar vectors written as complex numbers."""
+    return a.real * a.real + a.imag * a.imag
+
+
+def dot(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """Dot product of planar vectors written as complex numbers."""
+    a, b = np.asarray(a), np.asarray(b)
+    return a.real * b.real + a.imag * b.imag
+
+
+def cross(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """z-component of the cross product of planar vectors written as complex numbers."""
+    a, b = np.asarray(a), np.asarray(b)
+    return a.real * b.imag - a.imag * b.real
+
+
+def cis(theta: ArrayLike) -> np.ndarray:
+    """``e^{i theta}``, the unit vector at angle ``theta`` (radians)."""
+    theta = np.asarray(theta, float)
+    out = np.empty(theta.shape, complex)
+    out.real = np.cos(theta)
+    out.imag = np.sin(theta)
+    return out
+
+
+def side(k1: ArrayLike, k2: ArrayLike, j: ArrayLike) -> np.ndarray:
+    """+1 where ``j`` lies left of (or on) the directed line ``k1 -> k2``, else -1."""
+    return np.where(cross(np.asarray(k2) - k1, np.asarray(j) - k1) >= 0, 1.0, -1.0)
+
+
+def circle_circle(
+    z1: np.ndarray, z2: np.ndarray, r1: ArrayLike, r2: ArrayLike, sign: ArrayLike, eps: float = ASSEMBLY_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
+    """Intersection of the circles ``|z - z1| = r1`` and ``|z - z2| = r2`` (seed 000, eqs. 11-15).
+
+    ``sign=+1`` picks the point to the left of the directed line ``z1 -> z2``.  The radii
+    broadcast against the centres (one radius per design, one centre per design and sample).
+    Returns ``(z, margin)``: ``margin`` is the relative distance from the nearest assembly
+    limit, negative where the circles do not meet, and there ``z`` is NaN.
+    """
+    d = z2 - z1
+    s2 = d.real * d.real + d.imag * d.imag
+    s = np.sqrt(s2)
+    total = r1 + r2
+    margin = np.minimum(total * (1 + eps) - s, s - np.abs(r1 - r2) + eps * total)
+    margin /= total
+    with np.errstate(divide="ignore", invalid="ignore"):
+        along = (r1 * r1 - r2 * r2 + s2) / (2 * s)
+        h2 = r1 * r1 - along * along
+        np.maximum(h2, 0.0, out=h2)
+        h = np.sqrt(h2)
+        h *= sign
+        u = d / s
+        z = z1 + along * u + 1j * (h * u)
+    ok = margin >= 0
+    ok &= s > eps * total
+    if ok.all():
+        return z, margin
+    return np.where(ok, z, NAN_POINT), np.where(ok, margin, np.minimum(margin, -_TINY))
+
+
+def link_rates(base: np.ndarray, vbase: np.ndarray, abase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Angular velocity and acceleration of the line ``base`` from its first two derivatives.
+
+    ``base = |b| e^{i theta}`` with constant length, so ``vbase = i w base`` and
+    ``abase = (i alpha - w^2) base``: ``w = cross(base, vbase) / |base|^2``, likewise alpha.
+    """
+    n2 = abs2(base)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return cross(base, vbase) / n2, cross(base, abase) / n2

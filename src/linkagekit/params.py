@@ -1,0 +1,198 @@
+"""Parameters: every number a plan's steps use, for one design or a batch of designs.
+
+:func:`compile` turns a mechanism (one design) or a mechanism plus an array of reference
+poses (many designs of its topology) into :class:`Params`: per step, the step's numbers
+with a leading design axis (``(D, 1)`` arrays that broadcast against ``(D, samples)``),
+the driver values at which each design's pose stands, each design's reference assembly
+mode (signs), and a per-design validity flag.
+
+Where the numbers come from
+---------------------------
+* A mechanism: the link shapes of the model (read off the pose, or built from the
+  ``lengths`` the file gives).  The reference signs are read off the pose's geometry,
+  exact when every length comes from the pose (the pose is then a solution); when the
+  file gives lengths, the solver layer replaces them by the mode nearest the pose
+  (:func:`linkagekit.positions.reference_mode`, spec section 1).
+* Poses ``(D, n_joints, 2)``: each design's shapes are its pose (every link's joints as
+  they stand), exactly as a file without ``lengths``; its signs are read off its pose.
+  Slider directions, masses and loads are the mechanism's (see :mod:`linkagekit.forces`).
+  A design with two joints of one link at one spot is invalid: it never assembles.
+
+Examples
+--------
+>>> import numpy as np, linkagekit as lk
+>>> mech = lk.load("examples/seed003_ex21.yaml")
+>>> p = compile(mech)
+>>> p.n_designs, p.signs.tolist()
+(1, [[1.0]])
+>>> poses = np.stack([mech.pose_array(), -mech.pose_array()])  # the pose and its point mirror
+>>> compile(mech, poses).signs.tolist()
+[[1.0, 1.0]]
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import InputError
+from .plan import Plan, make_plan
+from .steps import Nums, is_sign_step
+
+if TYPE_CHECKING:
+    from .model import Mechanism
+
+@dataclass(frozen=True)
+class Params:
+    """The numbers of a plan's steps for ``n_designs`` designs.
+
+    Attributes
+    ----------
+    plan : Plan
+    steps : tuple
+        ``steps[i]`` is the numbers tuple of ``plan.steps[i]`` (see each step's ``numbers``).
+    pose_inputs : ndarray, shape (n_drivers, D)
+        Driver values at each design's pose (radians, or length units for a slider).
+    signs : ndarray, shape (n_signs, D)
+        Each design's reference assembly mode (+1/-1 per sign step).
+    valid : ndarray of bool, shape (D,)
+        False for a degenerate design (two joints of a link at one spot).
+    pose : ndarray, complex, shape (n_joints, D)
+        Each design's reference pose.
+    bases : dict
+        Link name -> (s_a, s_b), the shape positions of its first two joints, each (D, 1).
+    """
+
+    plan: Plan
+    steps: tuple[Nums, ...]
+    pose_inputs: np.ndarray
+    signs: np.ndarray
+    valid: np.ndarray
+    pose: np.ndarray
+    bases: dict[str, tuple[np.ndarray, np.ndarray]]
+
+    @property
+    def n_designs(self) -> int:
+        return int(self.valid.shape[0])
+
+    def take(self, sl: slice) -> Params:
+        """The designs ``sl`` of this batch (for chunked solves)."""
+        if sl == slice(0, self.n_designs):
+            return self
+
+        def cut(x: Any) -> Any:
+            if isinstance(x, tuple):
+                return tuple(cut(y) for y in x)
+            if isinstance(x, np.ndarray) and x.ndim == 2:  # (D, 1)
+                return x[sl]
+            if isinstance(x, np.ndarray) and x.ndim == 3:  # (m, D, 1)
+                return x[:, sl]
+            return x
+
+        return Params(
+            self.plan,
+            tuple(cut(n) for n in self.steps),
+            self.pose_inputs[:, sl],
+            self.signs[:, sl],
+            self.valid[sl],
+            self.pose[:, sl],
+            {k: (a[sl], b[sl]) for k, (a, b) in self.bases.items()},
+        )
+
+
+class _Shapes:
+    """The :class:`~linkagekit.steps.Source` of step numbers: shapes and pose per design."""
+
+    def __init__(self, mech: Mechanism, plan: Plan, poses: np.ndarray | None) -> None:
+        self.names = plan.joint_names
+        self.mech = mech
+        if poses is None:
+            self.z = np.array([mech.joints[j] for j in self.names], complex)[:, None, None]
+            self.batch = False
+        else:
+            self.z = (poses[..., 0] + 1j * poses[..., 1]).T[:, :, None]  # (n_joints, D, 1)
+            self.batch = True
+        self.D = self.z.shape[1]
+        self.directions = [np.full((self.D, 1), s.direction) for s in mech.sliders]
+
+    def shape(self, link: str, joint: int) -> np.ndarray:
+        if self.batch:
+            return self.z[joint]
+        return np.full((1, 1), self.mech.link(link).shape[self.names[joint]])
+
+    def pose(self, joint: int) -> np.ndarray:
+        return self.z[joint]
+
+    def direction(self, slider: int) -> np.ndarray:
+        return self.directions[slider]
+
+
+def _pose_inputs(mech: Mechanism, plan: Plan, zpose: np.ndarray) -> np.ndarray:
+    """Driver values at the pose, (n_drivers, D): angle of pivot -> toward; slider displacement 0."""
+    idx = {n: i for i, n in enumerate(plan.joint_names)}
+    rows = []
+    for d in mech.drivers:
+        if d.kind == "angle":
+            assert d.pivot is not None and d.toward is not None
+            rows.append(np.angle(zpose[idx[d.toward]] - zpose[idx[d.pivot]]))
+        else:
+            rows.append(np.zeros(zpose.shape[1]))
+    return np.array(rows, float).reshape(len(mech.drivers), zpose.shape[1])
+
+
+def as_poses(mech: Mechanism, poses: Any) -> np.ndarray:
+    """Check and convert a user's poses to a float array (D, n_joints, 2)."""
+    try:
+        arr = np.asarray(poses, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError("poses: expected an array of numbers (n_designs, n_joints, 2)") from None
+    nj = len(mech.joints)
+    if arr.ndim == 2:
+        arr = arr[None]
+    if arr.ndim != 3 or arr.shape[1:] != (nj, 2):
+        raise InputError(
+            f"poses: expected shape (n_designs, {nj}, 2) (joints in the order {', '.join(mech.joints)}), "
+            f"got {arr.shape}"
+        )
+    if arr.shape[0] == 0:
+        raise InputError("poses: no design given")
+    if not np.all(np.isfinite(arr)):
+        raise InputError("poses: every coordinate must be a finite number")
+    return arr
+
+
+def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None = None) -> Params:  # noqa: A001
+    """The numbers of every step for the mechanism, or for each of ``poses`` (D, n_joints, 2)."""
+    plan = make_plan(mech) if plan is None else plan
+    src = _Shapes(mech, plan, None if poses is None else as_poses(mech, poses))
+    nums = tuple(st.numbers(src) for st in plan.steps)
+    zpose = src.z
+    if poses is None:
+        valid = np.ones(1, bool)
+    else:
+        scale = np.max(np.abs(zpose - zpose.mean(axis=0)), axis=0)[:, 0]  # (D,)
+        valid = np.ones(src.D, bool)
+        for ln in mech.links:
+            ids = [plan.joint_names.index(j) for j in ln.joints]
+            for i, a in enumerate(ids):
+                for b in ids[i + 1 :]:
+                    valid &= np.abs(zpose[a, :, 0] - zpose[b, :, 0]) > 1e-9 * scale
+    bases = {}
+    for ln in mech.links:
+        if len(ln.joints) >= 2:
+            a, b = (plan.joint_names.index(j) for j in ln.joints[:2])
+            bases[ln.name] = (src.shape(ln.name, a), src.shape(ln.name, b))
+    q0 = _pose_inputs(mech, plan, zpose[:, :, 0])
+    sign_rows = [st.pose_sign(zpose, n)[:, 0] for st, n in zip(plan.steps, nums, strict=True) if is_sign_step(st)]
+    signs = np.array(sign_rows, float).reshape(plan.n_signs, src.D)
+    return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases)
+
+    
+def all_sign_combinations(k: int) -> np.ndarray:
+    """Every +1/-1 vector of length k, shape (k, 2**k), starting with all +1."""
+    if k == 0:
+        return np.ones((0, 1))
+    return np.array(list(itertools.product((1.0, -1.0), repeat=k)), dtype=float).T.reshape(k, -1)

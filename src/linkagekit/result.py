@@ -1,0 +1,385 @@
+"""The result of an analysis: user-level arrays, one design or a batch, read-only.
+
+Every array has the shape ``(*batch, n_samples)`` (points ``(*batch, n_samples, 2)`` as
+floats, or complex with :meth:`Result.point`), where ``batch`` is ``()`` for one mechanism
+and ``(n_designs,)`` for ``analyze(..., poses=...)``.  NaN marks a sample that does not
+assemble (positions and rates) or sits at a singular position (rates and forces).
+
+Units: positions in the file's length unit, velocities per second, accelerations per
+second squared, link angles in the file's angle unit, ``omega`` in rad/s, ``alpha`` in
+rad/s^2, forces in N, torques in N*m, power in W.
+
+Examples
+--------
+>>> import numpy as np, linkagekit as lk
+>>> res = lk.analyze(lk.load("examples/seed000_fourbar.yaml"), np.arange(0.0, 360.0, 90.0))
+>>> res
+<Result 'Romero-Nunez 2016 four-bar (t1 = +1, t2 = -1)': 4 samples, 4 assembled, 0 singular; joints A, B, C, D, P>
+>>> res.xy("C").round(12).tolist()
+[[2.0, 0.0], [0.0, 2.0], [-2.0, 0.0], [-0.0, -2.0]]
+>>> list(res.columns())[:5]
+['input:crank', 'assembled', 'singular', 'A.x', 'A.y']
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import InputError, UnknownNameError
+from .forces import Forces, json_list
+
+if TYPE_CHECKING:
+    from .model import Mechanism
+
+
+def frozen(a: Any) -> np.ndarray:
+    """A read-only view of an array (the result owns its data; nobody writes through it)."""
+    arr = np.asarray(a)
+    view = arr.view()
+    view.flags.writeable = False
+    return view
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class Result:
+    """Everything computed over one sweep, for one design or a batch of designs.
+
+    Build it with :func:`linkagekit.analyze`; never by hand.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+        The analysed mechanism (for a batch: the topology, masses and loads; each design's
+        own dimensions are ``mechanism_of(i)``).
+    inputs, speeds, accelerations : mapping of driver name to ndarray
+        Input values (file units), speeds and accelerations, broadcastable to ``shape``.
+    assembled, singular : ndarray of bool, shape ``shape``
+    condition : ndarray, shape ``shape``
+        The smallest dimensionless determinant of the sign steps (1 well conditioned, 0
+        singular); NaN where it does not assemble or without rates.
+    signs : mapping of joint name to int or ndarray
+        The assembly mode used (one entry per joint found by a sign step; per design for a batch).
+    forces : Forces or None
+        Joint reactions and driver efforts, when the mechanism has masses, gravity or loads.
+    poses : ndarray or None
+        ``(n_designs, n_joints, 2)`` for a batch.
+    """
+
+    mechanism: Mechanism
+    inputs: Mapping[str, np.ndarray]
+    speeds: Mapping[str, np.ndarray]
+    accelerations: Mapping[str, np.ndarray]
+    assembled: np.ndarray
+    singular: np.ndarray
+    condition: np.ndarray
+    signs: Mapping[str, Any]
+    forces: Forces | None
+    poses: np.ndarray | None
+    _z: np.ndarray = field(repr=False)
+    _v: np.ndarray | None = field(repr=False)
+    _a: np.ndarray | None = field(repr=False)
+    _omega: Mapping[str, np.ndarray] | None = field(repr=False)
+    _alpha: Mapping[str, np.ndarray] | None = field(repr=False)
+    _block_rot: Mapping[str, np.ndarray] = field(repr=False)
+    _ground_angle: Any = field(repr=False)
+
+    # ---------------------------------------------------------------- shape
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """``(*batch, n_samples)``."""
+        return tuple(self.assembled.shape)
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.assembled.shape[-1])
+
+    @property
+    def n(self) -> int:
+        """Number of samples (same as :attr:`n_samples`)."""
+        return self.n_samples
+
+    @property
+    def n_designs(self) -> int | None:
+        """Number of designs of a batch, None for one mechanism."""
+        return None if self.poses is None else int(self.poses.shape[0])
+
+    @property
+    def has_rates(self) -> bool:
+        return self._v is not None
+
+    # ---------------------------------------------------------------- points
+    def _j(self, name: str) -> int:
+        names = self.mechanism.joint_names
+        if name not in names:
+            raise UnknownNameError(f"unknown joint '{name}' (joints: {', '.join(names)})")
+        return names.index(name)
+
+    def _rates(self, which: str) -> np.ndarray:
+        arr = self._v if which == "v" else self._a
+        if arr is None:
+            raise InputError("this result has positions only: analyze(..., rates=True) for velocities")
+        return arr
+
+    def point(self, joint: str) -> np.ndarray:
+        """Complex positions ``x + iy`` of a joint, shape ``shape``."""
+        return self._z[self._j(joint)]
+
+    def velocity(self, joint: str) -> np.ndarray:
+        """Complex velocity ``vx + i vy`` of a joint (length unit / s)."""
+        return self._rates("v")[self._j(joint)]
+
+    def acceleration(self, joint: str) -> np.ndarray:
+        """Complex acceleration ``ax + i ay`` of a joint (length unit / s^2)."""
+        return self._rates("a")[self._j(joint)]
+
+    @staticmethod
+    def _as_xy(z: np.ndarray) -> np.ndarray:
+        return frozen(np.ascontiguousarray(z).view(float).reshape(*z.shape, 2))
+
+    def xy(self, joint: str) -> np.ndarray:
+        """Float positions ``(*shape, 2)``: x and y of a joint."""
+        return self._as_xy(self.point(joint))
+
+    def vxy(self, joint: str) -> np.ndarray:
+        """Float velocities ``(*shape, 2)``: vx and vy of a joint."""
+        return self._as_xy(self.velocity(joint))
+
+    def axy(self, joint: str) -> np.ndarray:
+        """Float accelerations ``(*shape, 2)``: ax and ay of a joint."""
+        return self._as_xy(self.acceleration(joint))
+
+    def x(self, joint: str) -> np.ndarray:
+        return self.point(joint).real
+
+    def y(self, joint: str) -> np.ndarray:
+        return self.point(joint).imag
+
+    # ---------------------------------------------------------------- links
+    def _link(self, name: str) -> Any:
+        for ln in self.mechanism.links:
+            if ln.name == name:
+                return ln
+        raise UnknownNameError(
+            f"unknown link '{name}' (links: {', '.join(ln.name for ln in self.mechanism.links)})"
+        )
+
+    @cached_property
+    def link_angle(self) -> Mapping[str, np.ndarray]:
+        """Angle of every link (file's angle unit): the direction of its first joint -> its second.
+
+        The ground's is that of its shape; a one-joint block's is its slide direction, turned
+        with its guide.  NaN where the mechanism does not assemble.
+        """
+        mech = self.mechanism
+        unit = mech.angle_to_rad
+        out = {}
+        for ln in mech.links:
+            if ln.name == "ground":
+                th = np.where(self.assembled, self._ground_angle, np.nan)
+            elif len(ln.joints) >= 2:
+                th = np.angle(self.point(ln.joints[1]) - self.point(ln.joints[0]))
+            else:
+                sl = next((s for s in mech.sliders if s.link == ln.name), None)
+                d = sl.direction if sl is not None else 1.0 + 0j
+                th = np.angle(self._block_rot[ln.name] * d)
+                th = np.where(self.assembled, th, np.nan)
+            out[ln.name] = frozen(th / unit if unit != 1.0 else th)
+        return MappingProxyType(out)
+
+    @property
+    def link_omega(self) -> Mapping[str, np.ndarray]:
+        """Angular velocity of every link (rad/s), NaN where undefined."""
+        if self._omega is None:
+            raise InputError("this result has positions only: analyze(..., rates=True) for link rates")
+        return self._omega
+
+    @property
+    def link_alpha(self) -> Mapping[str, np.ndarray]:
+        """Angular acceleration of every link (rad/s^2), NaN where undefined."""
+        if self._alpha is None:
+            raise InputError("this result has positions only: analyze(..., rates=True) for link rates")
+        return self._alpha
+
+    def angle(self, link: str) -> np.ndarray:
+        """Angle of a link in the file's angle unit (see :attr:`link_angle`)."""
+        return self.link_angle[self._link(link).name]
+
+    def omega(self, link: str) -> np.ndarray:
+        """Angular velocity of a link (rad/s)."""
+        return self.link_omega[self._link(link).name]
+
+    def alpha(self, link: str) -> np.ndarray:
+        """Angular acceleration of a link (rad/s^2)."""
+        return self.link_alpha[self._link(link).name]
+
+    # ---------------------------------------------------------------- designs
+    def design(self, i: int) -> Result:
+        """One design of a batch, as the result of analysing it on its own (no design axis)."""
+        if self.poses is None:
+            raise InputError("design(): this result has no design axis (analyze(..., poses=...) makes one)")
+        n = self.poses.shape[0]
+        if not -n <= i < n:
+            raise UnknownNameError(f"design {i}: the batch has {n} designs")
+
+        def one(a: Any) -> Any:
+            a = np.asarray(a)
+            return frozen(a[i]) if a.ndim >= 2 else a
+
+        def per(m: Mapping[str, Any] | None) -> Mapping[str, Any] | None:
+            return None if m is None else MappingProxyType({k: one(v) for k, v in m.items()})
+
+        return Result(
+            self.mechanism_of(i),
+            per(self.inputs),  # type: ignore[arg-type]
+            per(self.speeds),  # type: ignore[arg-type]
+            per(self.accelerations),  # type: ignore[arg-type]
+            one(self.assembled),
+            one(self.singular),
+            one(self.condition),
+            MappingProxyType({k: int(np.asarray(v)[i]) for k, v in self.signs.items()}),
+            None if self.forces is None else self.forces.take(i),
+            None,
+            frozen(self._z[:, i]),
+            None if self._v is None else frozen(self._v[:, i]),
+            None if self._a is None else frozen(self._a[:, i]),
+            per(self._omega),
+            per(self._alpha),
+            per(self._block_rot),  # type: ignore[arg-type]
+            np.asarray(self._ground_angle)[i] if np.ndim(self._ground_angle) else self._ground_angle,
+        )
+
+    def mechanism_of(self, i: int) -> Mechanism:
+        """Design ``i`` of a batch as a :class:`Mechanism` (its pose, no given lengths), e.g. to save it."""
+        if self.poses is None:
+            return self.mechanism
+        return self.mechanism.with_pose(self.poses[i])
+
+    # ---------------------------------------------------------------- tables
+    def columns(self) -> dict[str, np.ndarray]:
+        """Every quantity as a named column, each of shape ``shape``, in a fixed order.
+
+        ``input:<driver>``, ``assembled``, ``singular``, per joint ``<j>.x``, ``.y`` (and
+        ``.vx``, ``.vy``, ``.ax``, ``.ay`` with rates), per link ``<l>.angle`` (and ``.omega``,
+        ``.alpha``), then the force columns (:meth:`Forces.columns`).  CSV, tables, JSON and
+        :meth:`to_pandas` are all made from this.
+        """
+        shape = self.shape
+        cols: dict[str, np.ndarray] = {f"input:{k}": np.broadcast_to(v, shape) for k, v in self.inputs.items()}
+        cols["assembled"] = self.assembled
+        cols["singular"] = self.singular
+        for j in self.mechanism.joint_names:
+            z = self.point(j)
+            cols[f"{j}.x"], cols[f"{j}.y"] = z.real, z.imag
+            if self.has_rates:
+                v, a = self.velocity(j), self.acceleration(j)
+                cols[f"{j}.vx"], cols[f"{j}.vy"] = v.real, v.imag
+                cols[f"{j}.ax"], cols[f"{j}.ay"] = a.real, a.imag
+        for ln in self.mechanism.links:
+            cols[f"{ln.name}.angle"] = self.link_angle[ln.name]
+            if self.has_rates:
+                cols[f"{ln.name}.omega"] = self.link_omega[ln.name]
+                cols[f"{ln.name}.alpha"] = self.link_alpha[ln.name]
+        if self.forces is not None:
+            cols.update(self.forces.columns())
+        return cols
+
+    def column_units(self) -> dict[str, str]:
+        """The unit of each of :meth:`columns` (``""`` for the flags)."""
+        m = self.mechanism
+        lu, au = m.length_unit, m.angle_unit
+        kinds = {d.name: d.kind for d in m.drivers}
+        out: dict[str, str] = {}
+        force_units = self.forces.column_units() if self.forces is not None else {}
+        for name in self.columns():
+            if name.startswith("input:"):
+                out[name] = au if kinds[name[6:]] == "angle" else lu
+            elif name in ("assembled", "singular"):
+                out[name] = ""
+            elif name in force_units:
+                out[name] = force_units[name]
+            else:
+                tail = name.rsplit(".", 1)[1]
+                out[name] = {
+                    "x": lu,
+                    "y": lu,
+                    "vx": f"{lu}/s",
+                    "vy": f"{lu}/s",
+                    "ax": f"{lu}/s²",
+                    "ay": f"{lu}/s²",
+                    "angle": au,
+                    "omega": "rad/s",
+                    "alpha": "rad/s²",
+                }[tail]
+        return out
+
+    def to_pandas(self) -> Any:
+        """A :class:`pandas.DataFrame` of :meth:`columns` (pandas is optional: ``pip install pandas``).
+
+        One row per sample; a batch has a ``(design, sample)`` MultiIndex.
+        """
+        try:
+            import pandas as pd
+        except ImportError:  # pragma: no cover - depends on the environment
+            raise InputError("to_pandas needs pandas: pip install pandas") from None
+        cols = {k: np.asarray(v).reshape(-1) for k, v in self.columns().items()}
+        if self.poses is None:
+            index = pd.RangeIndex(self.n_samples, name="sample")
+        else:
+            index = pd.MultiIndex.from_product(
+                [range(self.poses.shape[0]), range(self.n_samples)], names=["design", "sample"]
+            )
+        return pd.DataFrame(cols, index=index)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON result of the spec (section 3); NaN becomes ``None``.
+
+        For a batch every array is a list per design.  Without rates the velocity,
+        acceleration and link-rate keys are absent.
+        """
+        m = self.mechanism
+        out: dict[str, Any] = {
+            "format": "linkagekit-result/1",
+            "name": m.name,
+            "units": {"length": m.length_unit, "angle": m.angle_unit, "time": "s", "force": "N", "torque": "N*m"},
+            "inputs": {k: json_list(v) for k, v in self.inputs.items()},
+            "speeds": {k: json_list(v) for k, v in self.speeds.items()},
+            "input_accelerations": {k: json_list(v) for k, v in self.accelerations.items()},
+            "assembled": np.asarray(self.assembled).tolist(),
+            "singular": np.asarray(self.singular).tolist(),
+            "signs": {k: np.asarray(v).tolist() for k, v in self.signs.items()},
+            "joints": {},
+            "links": {},
+        }
+        for j in m.joint_names:
+            z = self.point(j)
+            entry = {"x": json_list(z.real), "y": json_list(z.imag)}
+            if self.has_rates:
+                v, a = self.velocity(j), self.acceleration(j)
+                entry.update(vx=json_list(v.real), vy=json_list(v.imag), ax=json_list(a.real), ay=json_list(a.imag))
+            out["joints"][j] = entry
+        for ln in m.links:
+            entry = {"angle": json_list(self.link_angle[ln.name])}
+            if self.has_rates:
+                entry.update(omega=json_list(self.link_omega[ln.name]), alpha=json_list(self.link_alpha[ln.name]))
+            out["links"][ln.name] = entry
+        if self.forces is not None:
+            out.update(self.forces.to_dict())
+        return out
+
+    def __repr__(self) -> str:
+        m = self.mechanism
+        names = ", ".join(m.joint_names[:8]) + (", ..." if len(m.joint_names) > 8 else "")
+        what = f"{self.n_samples} samples"
+        if self.poses is not None:
+            what = f"{self.poses.shape[0]} designs x {what}"
+        extra = "" if self.forces is None else "; forces"
+        return (
+            f"<Result {m.name!r}: {what}, {int(np.sum(self.assembled))} assembled, "
+            f"{int(np.sum(self.singular))} singular; joints {names}{extra}>"
+        )

@@ -1,0 +1,542 @@
+"""The solve steps: one small class per kind, with its numbers, placement, rates and description.
+
+A step places joints (and link rotations) from joints already placed.  The step object is
+topology only (joint indices, link names, which sign or mirror slot it reads): it is
+hashable and picklable, and the same for every design of a topology.  Its numbers (radii,
+shape ratios, slider lines) come from :meth:`Step.numbers`, one entry per design, and are
+kept by :mod:`linkagekit.params`.
+
+Every step implements
+
+``numbers(src)``
+    the step's constants read off the link shapes and the reference pose of every
+    design (arrays with a leading design axis and a trailing axis of length 1, so they
+    broadcast against ``(designs, samples)``);
+``place(k, nums)``
+    positions, on a :class:`Kin` holding ``z`` (joints x designs x samples, complex);
+``rates(r, nums)``
+    velocities and accelerations of the same joints, on a :class:`Rate`;
+``pose_sign(zpose, nums)`` (sign steps only)
+    the sign of the reference pose, read off its geometry (exact when the lengths come
+    from the pose);
+``describe(names, nums)``
+    one line for ``linkagekit check``.
+
+Notation: points are complex (:mod:`linkagekit.geometry`); ``a . b = Re(conj(a) b)``,
+``cross(a, b) = Im(conj(a) b)``.  The derivations are in ``docs/method.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+
+from .geometry import NAN_POINT, _TINY, circle_circle, cross, dot, link_rates, side
+
+Nums = tuple[Any, ...]
+
+
+class Source(Protocol):
+    """Where steps read their numbers: link shapes and the pose, one row per design."""
+
+    def shape(self, link: str, joint: int) -> np.ndarray:
+        """Shape-frame position of ``joint`` on ``link``, shape (designs, 1), complex."""
+        ...
+
+    def pose(self, joint: int) -> np.ndarray:
+        """Reference-pose position of ``joint``, shape (designs, 1), complex."""
+        ...
+
+    def direction(self, slider: int) -> np.ndarray:
+        """Unit direction of ``slider`` in the reference pose, shape (designs, 1), complex."""
+        ...
+
+
+@dataclass
+class Kin:
+    """Working state of a positions solve over (designs, samples).
+
+    ``z`` (n_joints, D, n) complex, NaN until a step writes a joint; ``rot`` link ->
+    rotation from the shape frame; ``margin`` (n_signs, D, n); ``q`` driver values
+    (n_drivers, D or 1, n) in radians or length units; ``signs`` (n_signs, D or 1, n or 1);
+    ``mirrors`` (n_mirrors, D or 1, n or 1) bool; ``eps`` the assembly tolerance.
+    """
+
+    z: np.ndarray
+    rot: dict[str, Any]
+    margin: np.ndarray
+    q: np.ndarray
+    signs: np.ndarray
+    mirrors: np.ndarray
+    eps: float
+
+
+@dataclass
+class Rate:
+    """Working state of a rates solve: positions in, velocities/accelerations out."""
+
+    z: np.ndarray
+    rot: dict[str, Any]
+    mirrors: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    w_in: np.ndarray  # (n_drivers, D or 1, n): input speeds
+    a_in: np.ndarray  # input accelerations
+    cond: np.ndarray  # (n_signs, D, n): dimensionless conditioning of each sign step
+    om: dict[str, Any] = field(default_factory=dict)
+    al: dict[str, Any] = field(default_factory=dict)
+
+    def frame(self, on: str, anchor: int | None) -> tuple[Any, Any, Any, Any, Any]:
+        """Angular rates of link ``on`` and the motion of its anchor joint (zero for the ground)."""
+        if anchor is None:
+            return 0.0, 0.0, 0.0, 0.0, 0.0
+        return self.om[on], self.al[on], self.v[anchor], self.a[anchor], self.z[anchor]
+
+
+class Step:
+    """Base of the step kinds (see the module docstring)."""
+
+    #: index into the sign vector, for the steps that choose between two solutions
+    sign: int | None = None
+    #: does this step's link rotation have to be kept for later steps
+    kind: ClassVar[str] = "step"
+
+    def numbers(self, src: Source) -> Nums:
+        return ()
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        raise NotImplementedError
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        raise NotImplementedError
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        raise NotImplementedError
+
+    def rotation_needs(self) -> tuple[str, ...]:
+        """Links whose rotation this step reads."""
+        return ()
+
+
+def _num(value: Any) -> str:
+    """A design's number for a description (the first design of a batch)."""
+    return f"{float(np.ravel(value)[0]):.6g}"
+
+
+@dataclass(frozen=True)
+class Ground(Step):
+    """The joints of the frame: fixed at their ground-shape positions."""
+
+    joints: tuple[int, ...]
+    kind: ClassVar[str] = "ground"
+
+    def numbers(self, src: Source) -> Nums:
+        return (np.stack([src.shape("ground", j) for j in self.joints]),)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        k.z[list(self.joints)] = nums[0]
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        r.v[list(self.joints)] = 0.0
+        r.a[list(self.joints)] = 0.0
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        return "fixed joints " + ", ".join(names[j] for j in self.joints)
+
+
+@dataclass(frozen=True)
+class Crank(Step):
+    """A driven link: ``z_t = z_p + r e^{i phi}``; ``v_t = v_p + i w e``, ``a_t = a_p + (i alpha - w^2) e``."""
+
+    driver: int
+    link: str
+    pivot: int
+    toward: int
+    kind: ClassVar[str] = "crank"
+
+    def numbers(self, src: Source) -> Nums:
+        return (np.abs(src.shape(self.link, self.toward) - src.shape(self.link, self.pivot)),)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        zt = k.z[self.toward]
+        q = k.q[self.driver]
+        zt.real = np.cos(q)  # broadcast: the cosine once per sample, not per design
+        zt.imag = np.sin(q)
+        zt *= nums[0]
+        zt += k.z[self.pivot]
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        e = r.z[self.toward] - r.z[self.pivot]
+        w, al = r.w_in[self.driver], r.a_in[self.driver]
+        r.v[self.toward] = r.v[self.pivot] + 1j * w * e
+        r.a[self.toward] = r.a[self.pivot] + (1j * al - w * w) * e
+        r.om[self.link], r.al[self.link] = w, al
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        radius = f" (r = {_num(nums[0])})" if nums else ""
+        return f"driver '{self.link}': {names[self.toward]} from {names[self.pivot]} at the input angle{radius}"
+
+
+@dataclass(frozen=True)
+class Place(Step):
+    """A link with two known joints: ``z_j = z_k1 + rho_j (z_k2 - z_k1)`` (seed 000, eq. 18, complex).
+
+    ``rho_j = (s_j - s_k1) / (s_k2 - s_k1)`` from the shape; the mirror image uses
+    ``conj(rho_j)``.  Linear in the positions, so velocities and accelerations obey it too.
+    """
+
+    link: str
+    k1: int
+    k2: int
+    joints: tuple[int, ...]
+    mirror: int | None = None  # index into the mirror flags, for links of 3+ joints
+    keep_rotation: bool = False  # a later step needs this link's rotation (and rates)
+    kind: ClassVar[str] = "place"
+
+    def numbers(self, src: Source) -> Nums:
+        s1 = src.shape(self.link, self.k1)
+        base = src.shape(self.link, self.k2) - s1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratios = tuple((src.shape(self.link, j) - s1) / base for j in self.joints)
+        return base, ratios
+
+    def _rho(self, mirrors: np.ndarray, ratio: Any) -> Any:
+        if self.mirror is None:
+            return ratio
+        return np.where(mirrors[self.mirror], np.conj(ratio), ratio)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        scale, ratios = nums
+        base = k.z[self.k2] - k.z[self.k1]
+        if self.keep_rotation:
+            k.rot[self.link] = base / scale
+        for j, ratio in zip(self.joints, ratios, strict=True):
+            k.z[j] = k.z[self.k1] + self._rho(k.mirrors, ratio) * base
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        v, a = r.v, r.a
+        for j, ratio in zip(self.joints, nums[1], strict=True):
+            rho = self._rho(r.mirrors, ratio)
+            v[j] = v[self.k1] + rho * (v[self.k2] - v[self.k1])
+            a[j] = a[self.k1] + rho * (a[self.k2] - a[self.k1])
+        if self.keep_rotation and self.link not in r.om:
+            r.om[self.link], r.al[self.link] = link_rates(
+                r.z[self.k2] - r.z[self.k1], v[self.k2] - v[self.k1], a[self.k2] - a[self.k1]
+            )
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        if not self.joints:
+            return None
+        m = " (mirror image selectable)" if self.mirror is not None else ""
+        placed = ", ".join(names[j] for j in self.joints)
+        return f"link '{self.link}': {placed} placed rigidly on {names[self.k1]}, {names[self.k2]}{m}"
+
+
+@dataclass(frozen=True)
+class Dyad(Step):
+    """A joint of two links that each have one known joint: two circles (seed 000, eqs. 11-15).
+
+    Rates: ``p . (v_j - v_k1) = 0`` and ``q . (v_j - v_k2) = 0`` with ``p = z_j - z_k1``,
+    ``q = z_j - z_k2``, by Cramer's rule ``v_j = i (c2 p - c1 q) / cross(p, q)``; the
+    accelerations solve the same system with the centripetal terms ``(w r)^2`` moved over.
+    """
+
+    joint: int
+    k1: int
+    k2: int
+    links: tuple[str, str]
+    sign: int  # type: ignore[assignment]
+    kind: ClassVar[str] = "dyad"
+
+    def numbers(self, src: Source) -> Nums:
+        l1, l2 = self.links
+        r1 = np.abs(src.shape(l1, self.joint) - src.shape(l1, self.k1))
+        r2 = np.abs(src.shape(l2, self.joint) - src.shape(l2, self.k2))
+        return r1, r2
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        k.z[self.joint], k.margin[self.sign] = circle_circle(
+            k.z[self.k1], k.z[self.k2], nums[0], nums[1], k.signs[self.sign], k.eps
+        )
+
+    def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
+        return side(zpose[self.k1], zpose[self.k2], zpose[self.joint])
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        r1, r2 = nums
+        z, v, a = r.z, r.v, r.a
+        p = z[self.joint] - z[self.k1]
+        q = z[self.joint] - z[self.k2]
+        pc, qc = np.conj(p), np.conj(q)
+        det = (pc * q).imag
+        inv = 1.0 / det
+        r.cond[self.sign] = det / (r1 * r2)
+        c1 = (pc * v[self.k1]).real
+        c2 = (qc * v[self.k2]).real
+        vj = (c2 * p - c1 * q) * (1j * inv)
+        # the two links turn at w1 = cross(p, vj - v_k1) / r1^2 (w2 likewise), and
+        # |vj - v_k1|^2 = (w1 r1)^2 is the centripetal term of the acceleration
+        w1 = (pc * (vj - v[self.k1])).imag / (r1 * r1)
+        w2 = (qc * (vj - v[self.k2])).imag / (r2 * r2)
+        c1 = (pc * a[self.k1]).real - (w1 * r1) ** 2
+        c2 = (qc * a[self.k2]).real - (w2 * r2) ** 2
+        aj = (c2 * p - c1 * q) * (1j * inv)
+        v[self.joint], a[self.joint] = vj, aj
+        for link, w, rr, kk, rc in ((self.links[0], w1, r1, self.k1, pc), (self.links[1], w2, r2, self.k2, qc)):
+            if link not in r.om:
+                r.om[link], r.al[link] = w, (rc * (aj - a[kk])).imag / (rr * rr)
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        r1, r2 = (f", {_num(x)}" for x in nums) if nums else ("", "")
+        n = names
+        return (
+            f"{n[self.joint]} = circle({n[self.k1]}{r1}) x circle({n[self.k2]}{r2}); "
+            f"sign +1: left of {n[self.k1]}->{n[self.k2]}"
+        )
+
+
+def _line_frame(on_anchor: int | None, k_z: np.ndarray, rot: dict[str, Any], on: str, anchor_s: Any) -> tuple[Any, Any]:
+    """Map from the guide link's shape frame to the world: ``p -> origin + turn * p``."""
+    if on_anchor is None:
+        return 0j, 1.0 + 0j
+    turn = rot[on]
+    return k_z[on_anchor] - turn * anchor_s, turn
+
+
+@dataclass(frozen=True)
+class CircleLine(Step):
+    """A joint on a slider block's line and on a link with one known joint: circle and line.
+
+    The line is ``z = A + u E`` (``A``, ``E`` carried by the guide ``on``); with
+    ``w = conj(E)(z_c - A)``, ``u = Re w + t sqrt(r^2 - (Im w)^2)``: ``t = +1`` puts the joint
+    ahead of the circle's centre along the slider direction.
+    """
+
+    joint: int
+    center: int
+    link: str  # the link through `center` and `joint`
+    slider: int
+    block: str
+    on: str
+    anchor: int | None  # a known joint of `on` (None: `on` is the ground)
+    sign: int  # type: ignore[assignment]
+    kind: ClassVar[str] = "circle-line"
+
+    def numbers(self, src: Source) -> Nums:
+        radius = np.abs(src.shape(self.link, self.joint) - src.shape(self.link, self.center))
+        anchor_s = src.shape(self.on, self.anchor) if self.anchor is not None else 0j
+        return radius, src.pose(self.joint), src.direction(self.slider), anchor_s
+
+    def rotation_needs(self) -> tuple[str, ...]:
+        return (self.on,)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        radius, point, direction, anchor_s = nums
+        origin, turn = _line_frame(self.anchor, k.z, k.rot, self.on, anchor_s)
+        a = origin + turn * point
+        e = turn * direction
+        w = (k.z[self.center] - a) * np.conj(e)  # the centre in line coordinates: (along, offset)
+        disc = radius**2 - w.imag**2
+        m = (radius * (1 + k.eps) - np.abs(w.imag)) / radius
+        u = w.real + k.signs[self.sign] * np.sqrt(np.maximum(disc, 0.0))
+        k.z[self.joint] = np.where(m >= 0, a + u * e, NAN_POINT)
+        k.margin[self.sign] = m
+
+    def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
+        return np.where(dot(nums[2], zpose[self.joint] - zpose[self.center]) >= 0, 1.0, -1.0)
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        # z_j = A + u E with A, E carried by `on`; the circle gives p . (v_j - v_c) = 0:
+        # du (p . E) = p . (v_c - v_A - u v_E), d2u (p . E) = p . (a_c - a_A - u a_E - 2 du v_E) - |v_j - v_c|^2
+        radius, point, direction, anchor_s = nums
+        z, v, a = r.z, r.v, r.a
+        w, alpha, va, aa, za = r.frame(self.on, self.anchor)
+        turn = r.rot[self.on] if self.anchor is not None else 1.0
+        z_a = (z[self.anchor] - turn * anchor_s if self.anchor is not None else 0.0) + turn * point
+        e = turn * direction
+        u = dot(e, z[self.joint] - z_a)
+        v_a = va + 1j * w * (z_a - za)
+        a_a = aa + (1j * alpha - w * w) * (z_a - za)
+        v_e, a_e = 1j * w * e, (1j * alpha - w * w) * e
+        p = z[self.joint] - z[self.center]
+        pe = dot(p, e)
+        r.cond[self.sign] = pe / radius
+        du = dot(p, v[self.center] - v_a - u * v_e) / pe
+        v[self.joint] = v_a + u * v_e + du * e
+        dv = v[self.joint] - v[self.center]
+        ddu = (dot(p, a[self.center] - a_a - u * a_e - 2 * du * v_e) - np.abs(dv) ** 2) / pe
+        a[self.joint] = a_a + u * a_e + 2 * du * v_e + ddu * e
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        n = names
+        radius = f", {_num(nums[0])}" if nums else ""
+        return (
+            f"{n[self.joint]} = circle({n[self.center]}{radius}) x line of slider {self.slider} "
+            f"('{self.block}' on '{self.on}'); sign +1: {n[self.joint]} ahead of {n[self.center]} along the slider"
+        )
+
+
+@dataclass(frozen=True)
+class Pivot(Step):
+    """The guide a block slides on turns about its one known joint until its line passes the block's joint.
+
+    With the line offset ``o = pose(J) - s_Q`` and direction ``d``:
+    ``u = -Re(conj(d) o) + t sqrt(|J - Q|^2 - Im(conj(d) o)^2)``, rotation ``(J - Q)/(o + u d)``.
+    """
+
+    slider: int
+    on: str
+    center: int  # the known joint of `on` it turns about
+    joint: int  # the known joint of the block
+    sign: int  # type: ignore[assignment]
+    kind: ClassVar[str] = "pivot"
+
+    def numbers(self, src: Source) -> Nums:
+        return src.pose(self.joint) - src.shape(self.on, self.center), src.direction(self.slider)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        offset, direction = nums
+        w = k.z[self.joint] - k.z[self.center]
+        od = offset * np.conj(direction)
+        along, off = od.real, od.imag
+        aw = np.abs(w)
+        m = (aw - np.abs(off) * (1 - k.eps)) / np.maximum(np.maximum(aw, np.abs(off)), _TINY)
+        u = -along + k.signs[self.sign] * np.sqrt(np.maximum(aw * aw - off * off, 0.0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            turn = w / (offset + u * direction)
+        k.rot[self.on] = np.where(m >= 0, turn, NAN_POINT)
+        k.margin[self.sign] = m
+
+    def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
+        # at the pose the rotation is 1, so u = 0 and t = sign(Re(conj(d) (J - Q)))
+        return np.where(dot(nums[1], zpose[self.joint] - zpose[self.center]) >= 0, 1.0, -1.0)
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        # z_J - z_Q = g = rot (offset + u d): v_J - v_Q = i w g + du E with E = rot d
+        g = r.z[self.joint] - r.z[self.center]
+        e = r.rot[self.on] * nums[1]
+        wg = np.conj(e) * g
+        r.cond[self.sign] = np.real(wg) / np.abs(g)
+        dv = np.conj(e) * (r.v[self.joint] - r.v[self.center])
+        w = np.imag(dv) / np.real(wg)
+        du = np.real(dv) + w * np.imag(wg)
+        da = np.conj(e) * (r.a[self.joint] - r.a[self.center] + w * w * g - 2j * w * du * e)
+        r.om[self.on], r.al[self.on] = w, np.imag(da) / np.real(wg)
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        n = names
+        return (
+            f"link '{self.on}' turns about {n[self.center]} until slider {self.slider}'s line passes "
+            f"{n[self.joint]}; sign +1: {n[self.joint]} ahead of {n[self.center]} along the slider"
+        )
+
+
+@dataclass(frozen=True)
+class SliderDrive(Step):
+    """A driven slider block, displaced by the input along its line (carried by the guide ``on``)."""
+
+    driver: int
+    slider: int
+    block: str
+    on: str
+    anchor: int | None
+    joints: tuple[int, ...]
+    kind: ClassVar[str] = "slider-drive"
+
+    def numbers(self, src: Source) -> Nums:
+        anchor_s = src.shape(self.on, self.anchor) if self.anchor is not None else 0j
+        return anchor_s, src.direction(self.slider), tuple(src.pose(j) for j in self.joints)
+
+    def rotation_needs(self) -> tuple[str, ...]:
+        return (self.on,)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        anchor_s, direction, points = nums
+        origin, turn = _line_frame(self.anchor, k.z, k.rot, self.on, anchor_s)
+        k.rot[self.block] = np.broadcast_to(turn, k.z.shape[1:]) * np.ones(k.z.shape[1:])
+        for j, p in zip(self.joints, points, strict=True):
+            k.z[j] = origin + turn * (p + k.q[self.driver] * direction)
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        anchor_s, direction, _ = nums
+        w, alpha, va, aa, za = r.frame(self.on, self.anchor)
+        turn = r.rot[self.on] if self.anchor is not None else 1.0
+        e = turn * direction
+        du, ddu = r.w_in[self.driver], r.a_in[self.driver]
+        r.om[self.block], r.al[self.block] = w, alpha
+        for j in self.joints:
+            rr = r.z[j] - za
+            r.v[j] = va + 1j * w * rr + du * e
+            r.a[j] = aa + (1j * alpha - w * w) * rr + 2j * w * du * e + ddu * e
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        return f"driver '{self.block}': slider {self.slider} displaced along its line"
+
+
+@dataclass(frozen=True)
+class Carry(Step):
+    """A link with one known joint whose rotation is known (a block turns with its guide).
+
+    Rigid motion with another link's rotation: ``v = v_0 + i w (z - z_0)``, ``a = a_0 + (i alpha - w^2)(z - z_0)``.
+    """
+
+    link: str
+    rot_of: str  # the link whose rotation this link shares
+    anchor: int
+    joints: tuple[int, ...]
+    kind: ClassVar[str] = "carry"
+
+    def numbers(self, src: Source) -> Nums:
+        s0 = src.shape(self.link, self.anchor)
+        return (tuple(src.shape(self.link, j) - s0 for j in self.joints),)
+
+    def rotation_needs(self) -> tuple[str, ...]:
+        return (self.rot_of,)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        turn = k.rot[self.rot_of]
+        k.rot[self.link] = turn
+        for j, off in zip(self.joints, nums[0], strict=True):
+            k.z[j] = k.z[self.anchor] + turn * off
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        w, alpha = r.om[self.rot_of], r.al[self.rot_of]
+        r.om[self.link], r.al[self.link] = w, alpha
+        for j in self.joints:
+            rr = r.z[j] - r.z[self.anchor]
+            r.v[j] = r.v[self.anchor] + 1j * w * rr
+            r.a[j] = r.a[self.anchor] + (1j * alpha - w * w) * rr
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        if not self.joints:
+            return None
+        moved = ", ".join(names[j] for j in self.joints)
+        return f"link '{self.link}': {moved} carried with '{self.rot_of}' from {names[self.anchor]}"
+
+
+SIGN_STEPS = (Dyad, CircleLine, Pivot)
+
+
+def is_sign_step(step: Step) -> bool:
+    """Does this step choose between two solutions (a circle-circle, circle-line or pivot step)?"""
+    return isinstance(step, SIGN_STEPS)
+
+
+__all__ = [
+    "Carry",
+    "CircleLine",
+    "Crank",
+    "Dyad",
+    "Ground",
+    "Kin",
+    "Pivot",
+    "Place",
+    "Rate",
+    "SliderDrive",
+    "Source",
+    "Step",
+    "cross",
+    "is_sign_step",
+]
