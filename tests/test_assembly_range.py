@@ -100,3 +100,81 @@ def test_transmission_angle_extremes_of_a_crank_rocker():
     mu = lambda diag: np.degrees(np.arccos((b * b + c * c - diag * diag) / (2 * b * c)))  # noqa: E731
     assert abs(rep["transmission_angle"]["min"] - mu(g - a)) < 1e-6
     assert abs(rep["transmission_angle"]["max"] - mu(g + a)) < 1e-6
+
+
+# ----------------------------------------------------------------------------- ranges through 0 deg
+def expected_ranges(a, g, phi, c, r):
+    """Crank angles (deg) where |A - O2| (crank a from O1, O2 at distance g, direction phi) is in [|c-r|, c+r].
+
+    Law of cosines: |A - O2|^2 = a^2 + g^2 - 2 a g cos(theta - phi); so cos(theta - phi) must
+    lie in [cmin, cmax].  Arcs are normalised as `check` reports them: starts in [0, 360),
+    an arc running through 0 starts below 0.
+    """
+    cmin = (a * a + g * g - (c + r) ** 2) / (2 * a * g)
+    cmax = (a * a + g * g - (c - r) ** 2) / (2 * a * g)
+    if cmin >= 1 or cmax <= -1:
+        return []
+    t1 = np.pi if cmin <= -1 else np.arccos(cmin)
+    t2 = 0.0 if cmax >= 1 else np.arccos(cmax)
+    if t1 == np.pi and t2 == 0.0:
+        return [[0.0, 360.0]]
+    if t2 == 0.0:
+        arcs = [(-t1, t1)]
+    elif t1 == np.pi:
+        arcs = [(t2, 2 * np.pi - t2)]
+    else:
+        arcs = [(t2, t1), (-t1, -t2)]
+    out = []
+    for lo, hi in arcs:
+        lo_n = np.mod(lo + phi, 2 * np.pi)
+        hi_n = lo_n + (hi - lo)
+        if hi_n >= 2 * np.pi:
+            lo_n, hi_n = lo_n - 2 * np.pi, hi_n - 2 * np.pi
+        out.append([np.degrees(lo_n), np.degrees(hi_n)])
+    return sorted(out)
+
+
+def fourbar_at(a, g, phi, c, r):
+    """A four-bar in a pose that assembles (crank at the middle of its first range)."""
+    lo, hi = expected_ranges(a, g, phi, c, r)[0]
+    th = np.radians(0.5 * (lo + hi))
+    O2 = g * np.exp(1j * phi)
+    C = a * np.exp(1j * th)
+    s = abs(O2 - C)
+    along = (c * c + s * s - r * r) / (2 * s)
+    D = C + (along + 1j * np.sqrt(max(c * c - along * along, 0.0))) * (O2 - C) / s
+    pts = {"O1": 0j, "O2": O2, "C": C, "D": D}
+    return lk.Mechanism.from_dict(
+        {
+            "joints": {k: [v.real, v.imag] for k, v in pts.items()},
+            "links": {"ground": ["O1", "O2"], "crank": ["O1", "C"], "coupler": ["C", "D"], "rocker": ["O2", "D"]},
+            "drivers": [{"link": "crank", "pivot": "O1", "toward": "C"}],
+        }
+    )
+
+
+def test_range_through_zero_of_the_issue_example():
+    """O1 = (0, 0), O2 = (350, 0), crank 700, coupler 300, rocker 500: [-93.2173, 93.2173], not [-93.2, 453.2]."""
+    rep = check(fourbar_at(700.0, 350.0, 0.0, 300.0, 500.0))
+    ((lo, hi),) = rep["input_range"]
+    t = np.degrees(np.arccos((700**2 + 350**2 - 800**2) / (2 * 700 * 350)))
+    assert lo == pytest.approx(-t, abs=1e-6) and hi == pytest.approx(t, abs=1e-6)
+    assert t == pytest.approx(93.2173, abs=1e-4)
+
+
+def test_ranges_match_the_law_of_cosines_on_many_fourbars():
+    rng = np.random.default_rng(12)
+    kinds = {"through 0": 0, "two arcs": 0, "one arc": 0}
+    while min(kinds.values()) < 4:
+        a, g, c, r = rng.uniform(1, 10, 4)
+        phi = rng.uniform(0, 2 * np.pi)
+        exp = expected_ranges(a, g, phi, c, r)
+        if exp in ([], [[0.0, 360.0]]) or any(hi - lo < 1.0 for lo, hi in exp):
+            continue
+        kind = "two arcs" if len(exp) == 2 else "through 0" if exp[0][0] < 0 else "one arc"
+        if kinds[kind] >= 4:
+            continue
+        kinds[kind] += 1
+        got = check(fourbar_at(a, g, phi, c, r))["input_range"]
+        assert len(got) == len(exp), (got, exp)
+        np.testing.assert_allclose(got, exp, atol=1e-6)

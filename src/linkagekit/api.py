@@ -23,7 +23,6 @@ True
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import replace
 from types import MappingProxyType
 from typing import Any
 
@@ -92,9 +91,7 @@ def _rate(value: ArrayLike, n: int, what: str) -> np.ndarray:
     return np.broadcast_to(arr, (n,)).astype(float)
 
 
-def _choice(
-    value: ArrayLike, names: tuple[str, ...], n: int, what: str, kind: str
-) -> np.ndarray:
+def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, kind: str) -> np.ndarray:
     """Signs (+1/-1) or mirror flags per slot, as (k, 1, 1 or n), from an array or a mapping."""
     k = len(names)
     if isinstance(value, Mapping):
@@ -209,9 +206,9 @@ def analyze(
     mr = None
     if mirrors is not None:
         m = _choice(mirrors, plan.mirror_links, n, "mirrors", "mirror link")
-        if not np.all((m == 0) | (m == 1) | (m == -1)):
-            raise InputError("mirrors: expected true/false (or 1/0) per link")
-        mr = m == 1 if not np.any(m == -1) else m < 0  # bools, or signs where -1 flips
+        if not np.all((m == 0) | (m == 1)):
+            raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
+        mr = m == 1
 
     if method == "vector-loop":
         if poses is not None or signs is not None or mirrors is not None:
@@ -223,20 +220,23 @@ def analyze(
 
     chunk = max(1, CHUNK_SAMPLES // max(n, 1))
     z_out = np.empty((len(plan.joint_names), D, n), complex)
-    parts = []
+    parts: list[tuple[slice, Positions, Rates | None]] = []
     for start in range(0, D, chunk):
         sl = slice(start, min(start + chunk, D))
         p = params.take(sl)
         qq = q[:, sl]
         pos = solve(p, qq, None if sg is None else sg, mr, out=z_out[:, sl])
-        rt = solve_rates(p, pos, w_in, a_in) if rates else None
-        parts.append((sl, pos, rt))
+        parts.append((sl, pos, solve_rates(p, pos, w_in, a_in) if rates else None))
     return _build(mech, params, poses, values, speeds, accels, parts, rates, dynamics, sg, z_out)
 
 
 def analyze_chunks(
-    mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None = None, *, poses: ArrayLike,
-    designs: int | None = None, **options: Any
+    mech: Mechanism,
+    inputs: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    *,
+    poses: ArrayLike,
+    designs: int | None = None,
+    **options: Any,
 ) -> Iterator[tuple[slice, Result]]:
     """:func:`analyze` over a large batch of poses, one chunk of designs at a time.
 
@@ -247,9 +247,9 @@ def analyze_chunks(
     arr = as_poses(mech, poses)
     if designs is None:
         n = len(mech.drivers[0].sweep.values())
-        first = next(iter(inputs.values())) if isinstance(inputs, Mapping) and inputs else inputs
+        first: Any = next(iter(inputs.values())) if isinstance(inputs, Mapping) and inputs else inputs
         if first is not None:
-            n = np.size(first)
+            n = int(np.size(first))
         budget = CHUNK_SAMPLES * (8 if options.get("rates") is False else 1)
         designs = max(1, budget // max(n, 1))
     if designs < 1:
@@ -294,7 +294,6 @@ def _build(
     block_rot = {ln.name: squeeze(_cat([m[ln.name][0] for m in motion_parts], 0)) for ln in blocks}
     omega = alpha = None
     v = a = None
-    n = z.shape[-1]
     if rates:
         v = _cat([rt.v for _, _, rt in parts], 1)  # type: ignore[union-attr]
         a = _cat([rt.a for _, _, rt in parts], 1)  # type: ignore[union-attr]
@@ -304,16 +303,9 @@ def _build(
             c = np.min(np.abs(rt.condition), axis=0) if plan.n_signs else np.ones(pos.assembled.shape)  # type: ignore[union-attr]
             cond_parts.append(np.where(pos.assembled, c, np.nan))
         condition = _cat(cond_parts, 0)
-        omega = {
-            ln.name: squeeze(np.broadcast_to(_cat([np.broadcast_to(m[ln.name][1], m_shape(p)) for m, (_, p, _) in
-                                                   zip(motion_parts, parts, strict=True)], 0), assembled.shape))
-            for ln in mech.links
-        }
-        alpha = {
-            ln.name: squeeze(np.broadcast_to(_cat([np.broadcast_to(m[ln.name][2], m_shape(p)) for m, (_, p, _) in
-                                                   zip(motion_parts, parts, strict=True)], 0), assembled.shape))
-            for ln in mech.links
-        }
+        omega, alpha = (
+            {ln.name: squeeze(_stitch(motion_parts, parts, ln.name, k)) for ln in mech.links} for k in (1, 2)
+        )
     else:
         singular = np.zeros(assembled.shape, bool)
         condition = np.full(assembled.shape, np.nan)
@@ -362,8 +354,11 @@ def _build(
     )
 
 
-def m_shape(pos: Positions) -> tuple[int, ...]:
-    return tuple(pos.assembled.shape)
+def _stitch(motion_parts: list[dict[str, Any]], parts: list[Any], link: str, k: int) -> np.ndarray:
+    """Item ``k`` (1: omega, 2: alpha) of a link's motion over all chunks, shape (D, n)."""
+    return _cat(
+        [np.broadcast_to(m[link][k], p.assembled.shape) for m, (_, p, _) in zip(motion_parts, parts, strict=True)], 0
+    )
 
 
 def _forces(
@@ -382,7 +377,7 @@ def _forces(
         assert rt is not None
         cshape = pos.assembled.shape
         N = int(np.prod(cshape))
-        flat = {k: tuple(np.broadcast_to(x, cshape).reshape(N) for x in m) for k, m in motion.items()}
+        flat: dict[str, Any] = {k: tuple(np.broadcast_to(x, cshape).reshape(N) for x in m) for k, m in motion.items()}
         sp = np.array([np.broadcast_to(speeds[d.name], cshape).reshape(N) for d in mech.drivers])
         km = Kinematics(
             pos.z.reshape(pos.z.shape[0], N),
@@ -446,4 +441,4 @@ def reference_signs(mech: Mechanism) -> dict[str, int]:
     return {j: int(p.signs[i, 0]) for i, j in enumerate(p.plan.sign_joints)}
 
 
-__all__ = ["LinkageError", "analyze", "analyze_chunks", "prepare", "reference_signs", "replace"]
+__all__ = ["LinkageError", "analyze", "analyze_chunks", "prepare", "reference_signs"]

@@ -1,57 +1,101 @@
-"""The ``linkagekit`` command line.
+"""The ``linkagekit`` command line: parse the arguments, call the library, format its answer.
 
-Exit status: 0 on success, 2 on a bad file or bad arguments (one line on stderr), 1 on
-anything else.  Commands: ``analyze``, ``modes``, ``check``.
+Commands: ``analyze``, ``modes``, ``check`` (spec, section 2).  Exit status: 0 on success,
+2 on a bad file or bad arguments, 1 on anything else; every failure is one line on stderr,
+``linkagekit: error: <message>`` (``linkagekit: internal error: <Class>: <message>`` for
+an unexpected exception), never a traceback.
+
+Start-up is kept short: this module imports only the standard library and
+:mod:`linkagekit.errors`; NumPy and the library are imported by the command that needs them,
+so ``linkagekit --help`` never loads them.
+
+Tables (``--format table``, the default) are plain text: every header carries its unit,
+round-off prints as ``0``, NaN as ``—``, and the columns are split into as many tables as
+the terminal width needs, each repeating the input and state columns.  Long sweeps show an
+evenly spaced subset of the samples; ``--format csv`` gives them all.
+
+Examples
+--------
+>>> print(format_csv({"input:crank": [0.0, 90.0], "assembled": [True, False], "C.x": [2.0, float("nan")]}), end="")
+input:crank,assembled,C.x
+0.0,true,2.0
+90.0,false,
+>>> format_cells([2.0, 1.2246467991473532e-16, float("nan"), 123456789.0])
+['2', '0', '—', '1.23457e+08']
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
 import io
 import json
 import math
+import re
+import shutil
 import sys
-from enum import StrEnum
-from pathlib import Path
-from typing import Annotated, Any
-
-import numpy as np
-import typer
-from rich.console import Console
-from rich.markup import escape
-from rich.table import Table
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from .errors import InputError, LinkageError
-from .model import Mechanism, load
-from .sweep import Result, analyze
 
-app = typer.Typer(
-    name="linkagekit",
-    help="Analyse planar linkages described in YAML/JSON mechanism files.",
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    no_args_is_help=True,
-)
+if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
+    import numpy as np
 
+    from linkagekit import Mechanism
 
-class Method(StrEnum):
-    natural = "natural"
-    vector_loop = "vector-loop"
+PROG = "linkagekit"
+MAX_ROWS = 37
+"""Most rows a table shows; a longer sweep shows an evenly spaced subset (first and last included)."""
+ROUNDOFF = 1e-12
+"""A value below this fraction of the largest magnitude in its column prints as ``0``."""
+DIGITS = 6
+"""Significant digits in tables."""
+NAN = "—"
+"""How a table shows a value that does not exist (not assembled, or singular)."""
+SEP = "  "
+"""Between two table columns."""
 
-
-class Fmt(StrEnum):
-    table = "table"
-    csv = "csv"
-    json = "json"
-
-
-class ModeFmt(StrEnum):
-    table = "table"
-    json = "json"
+_RATE_OPTIONS = ("--angles", "--at", "--speed", "--acceleration")
+_NEGATIVE_VALUE = re.compile(r"-\.?\d")
 
 
 # ---------------------------------------------------------------------- argument parsing
+class _ParserExit(Exception):
+    """The parser is done (after ``--help`` or ``--version``): leave with this status."""
+
+    def __init__(self, status: int) -> None:
+        super().__init__(status)
+        self.status = status
+
+
+class _Parser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` that raises instead of printing and exiting.
+
+    A usage error becomes an :class:`~linkagekit.errors.InputError` (exit status 2, one line
+    on stderr, printed by :func:`main`); ``--help`` and ``--version`` print as usual and then
+    raise :class:`_ParserExit`.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        """Raise the usage error *message* (with a pointer to the command's help) as an InputError."""
+        raise InputError(f"{message} (see '{self.prog} --help')")
+
+    def exit(self, status: int = 0, message: str | None = None) -> NoReturn:
+        """Raise :class:`_ParserExit` (or an InputError, for a message with a non-zero status)."""
+        if message and status:
+            raise InputError(message.strip())
+        if message:
+            sys.stderr.write(message)
+        raise _ParserExit(status)
+
+
 def _numbers(text: str, what: str) -> list[float]:
+    """Comma-separated finite numbers.
+
+    >>> _numbers("0, 90,1e2", "--at")
+    [0.0, 90.0, 100.0]
+    """
     out = []
     for part in text.split(","):
         part = part.strip()
@@ -66,6 +110,13 @@ def _numbers(text: str, what: str) -> list[float]:
 
 
 def _range(text: str, what: str) -> np.ndarray:
+    """``START:STOP:STEP`` as an array, STOP included when the steps land on it.
+
+    >>> _range("0:360:90", "--angles").tolist()
+    [0.0, 90.0, 180.0, 270.0, 360.0]
+    """
+    import numpy as np
+
     parts = text.split(":")
     if len(parts) != 3:
         raise InputError(f"{what}: expected START:STOP:STEP, got '{text}'")
@@ -78,7 +129,7 @@ def _range(text: str, what: str) -> np.ndarray:
     return start + step * np.arange(n)
 
 
-def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Any) -> dict[str, Any]:
+def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[str, str], Any]) -> dict[str, Any]:
     """Split ``NAME=VALUE`` items (or a bare VALUE for a single driver) by driver."""
     names = [d.name for d in mech.drivers]
     out: dict[str, Any] = {}
@@ -99,6 +150,9 @@ def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Any) -> di
 
 
 def _inputs(mech: Mechanism, at: list[str] | None, angles: list[str] | None) -> dict[str, np.ndarray] | None:
+    """The input values of ``--at`` or ``--angles`` by driver (None: the file's sweep)."""
+    import numpy as np
+
     if at and angles:
         raise InputError("give --at or --angles, not both")
     if at:
@@ -109,6 +163,7 @@ def _inputs(mech: Mechanism, at: list[str] | None, angles: list[str] | None) -> 
 
 
 def _rates(mech: Mechanism, items: list[str] | None, option: str) -> dict[str, float] | None:
+    """One ``--speed`` or ``--acceleration`` value per driver (None: the file's)."""
     if not items:
         return None
     return {k: v[0] if len(v) == 1 else _too_many(option) for k, v in _by_driver(mech, items, option, _numbers).items()}
@@ -118,312 +173,628 @@ def _too_many(option: str) -> float:
     raise InputError(f"{option}: one value per driver")
 
 
-def _emit(text: str, out: Path | None) -> None:
+def _attach_negative_values(argv: Sequence[str]) -> list[str]:
+    """Write ``--at -30,0`` as ``--at=-30,0``, so that the parser takes a negative value as a value.
+
+    >>> _attach_negative_values(["analyze", "f", "--angles", "-90:90:1", "--speed", "-2e3"])
+    ['analyze', 'f', '--angles=-90:90:1', '--speed=-2e3']
+    """
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        arg = argv[i]
+        if arg in _RATE_OPTIONS and i + 1 < len(argv) and _NEGATIVE_VALUE.match(argv[i + 1]):
+            out.append(f"{arg}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(arg)
+        i += 1
+    return out
+
+
+def _version() -> str:
+    from . import __version__
+
+    return f"{PROG} {__version__}"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the command line (it raises instead of exiting; see :func:`main`)."""
+    common: dict[str, Any] = {"allow_abbrev": False}
+    parser = _Parser(
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        prog=PROG,
+        description="Analyse planar linkages described in YAML or JSON mechanism files.",
+        epilog="Exit status: 0 on success, 2 on a bad file or bad arguments, 1 on anything else.\n"
+        f"'{PROG} COMMAND --help' describes a command.",
+        **common,
+    )
+    parser.add_argument("--version", action="version", version=_version(), help="print the version and exit")
+    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
+
+    def output_option(p: argparse.ArgumentParser) -> None:
+        p.add_argument("-o", "--output", metavar="OUT", help="write to this file instead of stdout")
+
+    def file_argument(p: argparse.ArgumentParser) -> None:
+        p.add_argument("file", metavar="FILE", help="mechanism file (YAML or JSON)")
+
+    p = commands.add_parser(
+        "analyze",
+        help="positions, velocities, accelerations (and forces) over a sweep of the inputs",
+        description="Positions, velocities and accelerations (and forces, when the file gives masses, "
+        "gravity or loads) over a sweep of the inputs. Input values are in the file's angle unit "
+        "(length unit for a slider driver); with several drivers give NAME=... per driver.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument(
+        "--angles",
+        action="append",
+        metavar="START:STOP:STEP",
+        help="sweep from START to STOP by STEP (NAME=START:STOP:STEP per driver; repeatable); "
+        "default: the file's sweep",
+    )
+    p.add_argument(
+        "--at", action="append", metavar="V1,V2,...", help="these input values (NAME=V1,V2,... per driver; repeatable)"
+    )
+    p.add_argument(
+        "--speed",
+        action="append",
+        metavar="W",
+        help="input speed, rad/s (length unit/s for a slider); NAME=W per driver; default: the file's",
+    )
+    p.add_argument(
+        "--acceleration",
+        action="append",
+        metavar="A",
+        help="input acceleration, rad/s² (length unit/s² for a slider); NAME=A per driver; default: the file's",
+    )
+    p.add_argument(
+        "--format", choices=("table", "csv", "json"), default="table", help="output format (default: %(default)s)"
+    )
+    output_option(p)
+    p.add_argument(
+        "--method",
+        choices=("natural", "vector-loop"),
+        default="natural",
+        help="natural: triangulation in joint coordinates (any mechanism); vector-loop: link angles "
+        "by iteration (four-bars, Stephenson six-bars) (default: %(default)s)",
+    )
+    p.add_argument(
+        "--static",
+        action="store_true",
+        help="zero input speed and acceleration: the driver torques that balance gravity and the loads",
+    )
+    p.set_defaults(run=_analyze)
+
+    p = commands.add_parser(
+        "modes",
+        help="every assembly mode at one input value",
+        description="Every assembly mode at one input value, with its joint positions.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument(
+        "--at", action="append", required=True, metavar="V", help="the input value (NAME=V per driver; repeatable)"
+    )
+    p.add_argument("--mirrors", action="store_true", help="also flip each link of three or more joints")
+    p.add_argument("--format", choices=("table", "json"), default="table", help="output format (default: %(default)s)")
+    output_option(p)
+    p.set_defaults(run=_modes)
+
+    p = commands.add_parser(
+        "check",
+        help="validate a file: degrees of freedom, solve plan, where it assembles",
+        description="Validate a mechanism file; print its degrees of freedom, solve plan, the input "
+        "range where it assembles and, for a four-bar loop, its Grashof type and transmission angle.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument("--format", choices=("table", "json"), default="table", help="output format (default: %(default)s)")
+    output_option(p)
+    p.set_defaults(run=_check)
+    return parser
+
+
+# ---------------------------------------------------------------------- output
+def terminal_width() -> int:
+    """Columns of the terminal (``COLUMNS`` when set; 80 when stdout is not a terminal)."""
+    return shutil.get_terminal_size((80, 24)).columns
+
+
+def _emit(text: str, out: str | None) -> None:
+    """Write *text* to the file *out*, or to stdout."""
     if out is None:
-        sys.stdout.write(text)
+        try:
+            sys.stdout.write(text)
+        except UnicodeEncodeError:  # a terminal that cannot show '—' or '²'
+            enc = sys.stdout.encoding or "ascii"
+            sys.stdout.write(text.encode(enc, "replace").decode(enc))
+        sys.stdout.flush()
         return
     try:
-        out.write_text(text, encoding="utf-8")
+        with open(out, "w", encoding="utf-8") as fh:
+            fh.write(text)
     except OSError as exc:
         raise InputError(f"-o {out}: cannot write: {exc.strerror or exc}") from None
 
 
-# ---------------------------------------------------------------------- formatting
-def _fmt(v: float, digits: int = 6) -> str:
-    return "—" if not np.isfinite(v) else f"{v:.{digits}g}"
+def format_csv(columns: Mapping[str, Any]) -> str:
+    """CSV of named columns: a header of the names, then one row per sample.
 
+    Boolean columns print as ``true``/``false``, other values as Python's ``repr`` of the
+    float, and NaN (or an infinity) as an empty field.
+    """
+    import numpy as np
 
-def result_csv(res: Result) -> str:
-    """One row per sample: inputs, flags, every joint's x, y, vx, vy, ax, ay, every link's motion, forces."""
-    m = res.mechanism
-    cols: list[tuple[str, np.ndarray]] = [(f"input:{k}", v) for k, v in res.inputs.items()]
-    cols += [("assembled", res.assembled.astype(float)), ("singular", res.singular.astype(float))]
-    for j in m.joint_names:
-        z, v, a = res.point(j), res.velocity(j), res.acceleration(j)
-        cols += [
-            (f"{j}.x", z.real),
-            (f"{j}.y", z.imag),
-            (f"{j}.vx", v.real),
-            (f"{j}.vy", v.imag),
-            (f"{j}.ax", a.real),
-            (f"{j}.ay", a.imag),
-        ]
-    for ln in m.links:
-        cols += [
-            (f"{ln.name}.angle", res.link_angle[ln.name]),
-            (f"{ln.name}.omega", res.link_omega[ln.name]),
-            (f"{ln.name}.alpha", res.link_alpha[ln.name]),
-        ]
-    if res.forces is not None:
-        cols += res.forces.columns()
+    cells: list[list[str]] = []
+    for values in columns.values():
+        a = np.asarray(values)
+        if a.dtype == bool:
+            cells.append(["true" if v else "false" for v in a.tolist()])
+        else:
+            cells.append([repr(v) if math.isfinite(v) else "" for v in a.astype(float).tolist()])
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow([c for c, _ in cols])
-    for i in range(res.n):
-        row = []
-        for name, arr in cols:
-            x = float(arr[i])
-            if name in ("assembled", "singular"):
-                row.append("true" if x else "false")
-            else:
-                row.append("" if not np.isfinite(x) else repr(x))
-        w.writerow(row)
+    w.writerow(list(columns))
+    w.writerows(zip(*cells, strict=True))
     return buf.getvalue()
 
 
-def result_table(res: Result, console: Console) -> None:
-    m = res.mechanism
-    lu, au = m.length_unit, m.angle_unit
-    moving = [j for j in m.joint_names if j not in m.link("ground").joints]
-    inputs = list(res.inputs.items())
+def _number(v: float, scale: float) -> str:
+    """One value for a table: ``—`` for NaN, ``0`` for round-off below ``ROUNDOFF * scale``."""
+    if v != v:
+        return NAN
+    if v == 0 or abs(v) < ROUNDOFF * scale:
+        return "0"
+    return f"{v:.{DIGITS}g}"
 
-    def table(title: str, heads: list[str], values: list[np.ndarray]) -> None:
-        t = Table(title=title, title_justify="left", header_style="bold")
-        for name, _ in inputs:
-            t.add_column(
-                f"{name} [{au if m.drivers[[d.name for d in m.drivers].index(name)].kind == 'angle' else lu}]",
-                justify="right",
-            )
-        t.add_column("state")
-        for h in heads:
-            t.add_column(escape(h), justify="right")  # "T[crank]" is not rich markup
-        for i in range(res.n):
-            state = (
-                "ok"
-                if res.assembled[i] and not res.singular[i]
-                else ("singular" if res.assembled[i] else "not assembled")
-            )
-            t.add_row(*[_fmt(v[i]) for _, v in inputs], state, *[_fmt(v[i]) for v in values])
-        console.print(t)
 
-    table(
-        f"{m.name or 'mechanism'}: joint positions [{lu}]",
-        [f"{j}.{c}" for j in moving for c in "xy"],
-        [f(res.point(j)) for j in moving for f in (np.real, np.imag)],
-    )
-    table(
-        f"joint velocities [{lu}/s]",
-        [f"{j}.v{c}" for j in moving for c in "xy"],
-        [f(res.velocity(j)) for j in moving for f in (np.real, np.imag)],
-    )
-    table(
-        f"joint accelerations [{lu}/s²]",
-        [f"{j}.a{c}" for j in moving for c in "xy"],
-        [f(res.acceleration(j)) for j in moving for f in (np.real, np.imag)],
-    )
-    links = [ln.name for ln in m.links if ln.name != "ground"]
-    table(
-        f"links: angle [{au}], ω [rad/s], α [rad/s²]",
-        [f"{ln}.{c}" for ln in links for c in ("angle", "ω", "α")],
-        [d[ln] for ln in links for d in (res.link_angle, res.link_omega, res.link_alpha)],
-    )
-    if res.forces is not None:
-        heads, vals = zip(*res.forces.columns(compact=True), strict=True)
-        table(
-            "bearing loads |F| [N] (joint:by>on), driver torques T [N·m], forces F [N], input power [W]",
-            list(heads),
-            list(vals),
+def format_cells(values: Any, rows: Sequence[int] | None = None) -> list[str]:
+    """Table cells of one column (at *rows*, default all): 6 significant digits, round-off as 0, NaN as ``—``.
+
+    The round-off threshold is relative to the largest finite magnitude in the whole column.
+
+    >>> format_cells([1e-20, 5e-9, -0.0])
+    ['1e-20', '5e-09', '0']
+    >>> format_cells([1.0, 1e-13, 3.0], rows=[1, 2])
+    ['0', '3']
+    """
+    import numpy as np
+
+    a = np.asarray(values, dtype=float)
+    scale = float(np.max(np.abs(a), initial=0.0, where=np.isfinite(a)))
+    picked = a if rows is None else a[np.asarray(rows, dtype=int)]
+    return [_number(v, scale) for v in picked.tolist()]
+
+
+def sample_rows(n: int, max_rows: int = MAX_ROWS) -> list[int]:
+    """Indices of the rows a table shows: all of them, or about *max_rows* evenly spaced, first and last included.
+
+    >>> sample_rows(361)[:3], len(sample_rows(361)), sample_rows(361)[-1]
+    ([0, 10, 20], 37, 360)
+    >>> sample_rows(3)
+    [0, 1, 2]
+    """
+    if n <= max_rows:
+        return list(range(n))
+    return sorted({round(i * (n - 1) / (max_rows - 1)) for i in range(max_rows)})
+
+
+class Column:
+    """One column of a text table: a header and its cells, right-aligned unless *left*."""
+
+    __slots__ = ("cells", "header", "left")
+
+    def __init__(self, header: str, cells: list[str], left: bool = False) -> None:
+        self.header = header
+        self.cells = cells
+        self.left = left
+
+    @property
+    def width(self) -> int:
+        """Characters the column needs."""
+        return max([len(self.header), *map(len, self.cells)])
+
+    def shortened(self, width: int) -> Column:
+        """This column with its header cut (ending in ``…``) to at most *width* characters, if it can be."""
+        if len(self.header) <= width or width < 2:
+            return self
+        return Column(self.header[: width - 1] + "…", self.cells, self.left)
+
+
+def _wrap(text: str, width: int) -> list[str]:
+    """*text* as lines of at most *width* characters (broken at spaces when it can)."""
+    if len(text) <= width:
+        return [text]
+    import textwrap
+
+    return textwrap.wrap(text, width, break_on_hyphens=False) or [text]
+
+
+def split_columns(fixed: Sequence[Column], groups: Sequence[Sequence[Column]], width: int) -> list[list[Column]]:
+    """Share the data columns among tables that fit *width*, each also showing the *fixed* columns.
+
+    A group (the x and y of a joint, say) stays in one table when it fits in one.
+    """
+    room = width - (sum(c.width for c in fixed) + len(SEP) * (len(fixed) - 1))
+    tables: list[list[Column]] = []
+    cur: list[Column] = []
+    used = 0
+    for group in groups:
+        group = [c.shortened(room - len(SEP)) for c in group]
+        need = sum(len(SEP) + c.width for c in group)
+        if cur and used + need > room and need <= room:
+            tables.append(cur)
+            cur, used = [], 0
+        for c in group:
+            if cur and used + len(SEP) + c.width > room:
+                tables.append(cur)
+                cur, used = [], 0
+            cur.append(c)
+            used += len(SEP) + c.width
+    if cur:
+        tables.append(cur)
+    return tables
+
+
+def render_table(columns: Sequence[Column]) -> list[str]:
+    """The lines of one table: header, a rule of dashes, then the rows."""
+    widths = [c.width for c in columns]
+
+    def line(cells: Iterable[str]) -> str:
+        parts = (s.ljust(w) if c.left else s.rjust(w) for s, w, c in zip(cells, widths, columns, strict=True))
+        return SEP.join(parts).rstrip()
+
+    n = len(columns[0].cells) if columns else 0
+    out = [line(c.header for c in columns), SEP.join("-" * w for w in widths)]
+    out += [line(c.cells[i] for c in columns) for i in range(n)]
+    return out
+
+
+def render_tables(title: str, fixed: Sequence[Column], groups: Sequence[Sequence[Column]], width: int) -> list[str]:
+    """One titled table, split into as many as *width* needs (titled ``(1/3)``, ``(2/3)``, ...)."""
+    if not any(groups):
+        return []
+    parts = split_columns(fixed, groups, width)
+    out: list[str] = []
+    for k, part in enumerate(parts):
+        head = title if len(parts) == 1 else f"{title} ({k + 1}/{len(parts)})"
+        if out:
+            out.append("")
+        out += _wrap(head, width)
+        out += render_table([*fixed, *part])
+    return out
+
+
+def _header(key: str, units: Mapping[str, str]) -> str:
+    unit = units.get(key, "")
+    return f"{key} [{unit}]" if unit else key
+
+
+def _state_cells(columns: Mapping[str, Any], rows: Sequence[int]) -> list[str]:
+    import numpy as np
+
+    n = len(rows)
+    assembled = np.asarray(columns["assembled"], bool)[rows] if "assembled" in columns else np.ones(n, bool)
+    singular = np.asarray(columns["singular"], bool)[rows] if "singular" in columns else np.zeros(n, bool)
+    return [
+        ("singular" if s else "ok") if a else "not assembled"
+        for a, s in zip(assembled.tolist(), singular.tolist(), strict=True)
+    ]
+
+
+def analysis_tables(
+    columns: Mapping[str, Any],
+    units: Mapping[str, str],
+    sections: Sequence[tuple[str, Sequence[Sequence[str]]]],
+    *,
+    width: int = 80,
+    max_rows: int = MAX_ROWS,
+) -> str:
+    """The ``analyze`` tables: each section's columns beside the inputs and the state of every sample.
+
+    Parameters
+    ----------
+    columns : mapping of str to array
+        As :meth:`linkagekit.Result.columns`: ``input:<driver>`` columns, the ``assembled``
+        and ``singular`` flags, then the values.
+    units : mapping of str to str
+        The unit of each column (``""``: none).
+    sections : sequence of (title, groups)
+        Each section's title and its column names, in groups kept together when they fit.
+    width : int
+        Most characters on a line.
+    max_rows : int
+        Most rows per table; a longer sweep shows an evenly spaced subset, said under the tables.
+
+    Returns
+    -------
+    str
+        The text, ending in a newline.
+    """
+    n = len(next(iter(columns.values()))) if columns else 0
+    rows = sample_rows(n, max_rows)
+    fixed = [
+        Column(_header(k[len("input:") :], {k[len("input:") :]: units.get(k, "")}), format_cells(v, rows))
+        for k, v in columns.items()
+        if k.startswith("input:")
+    ]
+    fixed.append(Column("state", _state_cells(columns, rows), left=True))
+    out: list[str] = []
+    for title, keys in sections:
+        groups = [[Column(_header(k, units), format_cells(columns[k], rows)) for k in g if k in columns] for g in keys]
+        lines = render_tables(title, fixed, [g for g in groups if g], width)
+        if lines:
+            if out:
+                out.append("")
+            out += lines
+    if len(rows) < n:
+        out += ["", *_wrap(f"{len(rows)} of {n} samples shown, evenly spaced; --format csv gives all of them.", width)]
+    return "\n".join(out) + "\n"
+
+
+def analysis_sections(
+    columns: Iterable[str], joint_names: Sequence[str], ground_joints: Iterable[str], name: str = ""
+) -> list[tuple[str, list[list[str]]]]:
+    """Titles and column groups of the ``analyze`` tables, from the names of the result's columns.
+
+    Joint positions, velocities and accelerations of the moving joints; the angle and rates of
+    every link but the ground; and, when there are forces, the bearing loads ``|F|``, driver
+    torques and forces and the input power.
+
+    >>> keys = ["input:crank", "assembled", "A.x", "A.y", "C.x", "C.y", "crank.angle", "crank.omega", "T[crank]"]
+    >>> for title, groups in analysis_sections(keys, ["A", "C"], ["A"], "four-bar"):
+    ...     print(title, groups)
+    four-bar: joint positions [['C.x', 'C.y']]
+    joint velocities []
+    joint accelerations []
+    link angles and rates [['crank.angle', 'crank.omega']]
+    forces (|F| at joint:by>on, driver torques and forces, input power) [['T[crank]']]
+    """
+    keys = list(columns)
+    ground = set(ground_joints)
+    moving = [j for j in joint_names if j not in ground]
+    joint_keys = {f"{j}.{c}" for j in joint_names for c in ("x", "y", "vx", "vy", "ax", "ay")}
+    links = [k[: -len(".angle")] for k in keys if k.endswith(".angle") and k not in joint_keys]
+    link_keys = {f"{ln}.{c}" for ln in links for c in ("angle", "omega", "alpha")}
+
+    def present(group: list[str]) -> list[str]:
+        return [k for k in group if k in keys]
+
+    def per_joint(a: str, b: str) -> list[list[str]]:
+        return [g for g in (present([f"{j}.{a}", f"{j}.{b}"]) for j in moving) if g]
+
+    lead = f"{name}: " if name else ""
+    sections = [
+        (f"{lead}joint positions", per_joint("x", "y")),
+        ("joint velocities", per_joint("vx", "vy")),
+        ("joint accelerations", per_joint("ax", "ay")),
+        (
+            "link angles and rates",
+            [
+                g
+                for g in (present([f"{ln}.angle", f"{ln}.omega", f"{ln}.alpha"]) for ln in links if ln != "ground")
+                if g
+            ],
+        ),
+    ]
+    forces = [
+        [k]
+        for k in keys
+        if not (k.startswith("input:") or k in ("assembled", "singular") or k in joint_keys or k in link_keys)
+        and not k.endswith((".fx", ".fy", ".moment"))
+    ]
+    if forces:
+        sections.append(("forces (|F| at joint:by>on, driver torques and forces, input power)", forces))
+    return sections
+
+
+def modes_table(
+    doc: Mapping[str, Any], moving: Sequence[str], length_unit: str, *, mirrors: bool, width: int, title: str = ""
+) -> str:
+    """The ``modes`` table of a :meth:`Modes.to_dict` document: one row per mode.
+
+    Columns ``#``, ``signs`` (``D+ E-``), ``mirrors`` when asked for (``-`` when the
+    mechanism has no link to mirror), ``assembled`` (``yes (pose)`` for the reference
+    pose's mode, ``yes (same as #i)`` for a repeated configuration), then ``x`` and ``y``
+    of every moving joint.
+    """
+    modes = list(doc["modes"])
+
+    def signs(d: Mapping[str, int] | None) -> str:
+        return " ".join(f"{k}{'+' if v > 0 else '-'}" for k, v in d.items()) if d else "-"
+
+    def state(mo: Mapping[str, Any]) -> str:
+        if not mo["assembled"]:
+            return "no"
+        if "same_as" in mo:
+            return f"yes (same as #{mo['same_as']})"
+        return "yes (pose)" if mo.get("reference") else "yes"
+
+    fixed = [
+        Column("#", [str(i) for i in range(len(modes))]),
+        Column("signs", [signs(m["signs"]) for m in modes], True),
+    ]
+    if mirrors:
+        fixed.append(Column("mirrors", [signs(m.get("mirrors")) for m in modes], True))
+    fixed.append(Column("assembled", [state(m) for m in modes], True))
+    coords = [xy for m in modes for xy in m["joints"].values() if xy is not None]
+    scale = max((abs(v) for xy in coords for v in xy if math.isfinite(v)), default=0.0)
+    groups = []
+    for j in moving:
+        pts = [m["joints"].get(j) for m in modes]
+        groups.append(
+            [
+                Column(f"{j}.{c} [{length_unit}]", [NAN if p is None else _number(float(p[i]), scale) for p in pts])
+                for i, c in enumerate("xy")
+            ]
         )
+    title = title or "assembly modes at " + ", ".join(f"{k} = {v:g}" for k, v in doc.get("input", {}).items())
+    lines = render_tables(title, fixed, groups, width) if groups else [*_wrap(title, width), *render_table(fixed)]
+    distinct = doc.get("distinct", sum(1 for m in modes if m["assembled"] and "same_as" not in m))
+    lines += ["", f"{distinct} distinct assembled configuration(s) of {len(modes)}."]
+    return "\n".join(lines) + "\n"
 
 
-def _console(out: Path | None) -> tuple[Console, io.StringIO | None]:
-    if out is None:
-        return Console(width=max(Console().width, 200) if not sys.stdout.isatty() else None), None
-    buf = io.StringIO()
-    return Console(file=buf, width=400, no_color=True, force_terminal=False), buf
+def check_text(rep: Mapping[str, Any], units: Mapping[str, str], name: str) -> str:
+    """The plain-text report of ``check`` from its :meth:`CheckReport.to_dict` document.
+
+    *units* maps each driver to the unit of its input values.
+    """
+    drivers = ", ".join(rep.get("drivers", []))
+    lines = [
+        f"{name}: valid; {rep['dof']} degree(s) of freedom, driven by {drivers}; "
+        f"solved {'in closed form' if rep.get('solvable') == 'closed-form' else rep.get('solvable', '')}.".rstrip(),
+        "Solve plan:",
+        *("  " + line for line in rep.get("plan", [])),
+    ]
+    if rep.get("signs"):
+        lines.append(
+            "Assembly mode of the reference pose: "
+            + ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items())
+        )
+    if rep.get("mirror_links"):
+        lines.append("Links that can be mirrored: " + ", ".join(rep["mirror_links"]))
+    ranges = rep.get("input_ranges") or {}
+    for driver, rng in ranges.items():
+        text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
+        unit = units.get(driver, "")
+        lines.append(f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else ""))
+    if "grashof" in rep:
+        loop = "-".join(rep.get("fourbar", {}).get("joints", []))
+        lines.append(f"Four-bar loop {loop}: {rep.get('grashof_detail', rep['grashof'])}")
+    if "transmission_angle" in rep:
+        ta = rep["transmission_angle"]
+        lines.append(f"Transmission angle: min {ta['min']:.4f}°, max {ta['max']:.4f}°")
+    return "\n".join(lines) + "\n"
 
 
 # ---------------------------------------------------------------------- commands
-FileArg = Annotated[Path, typer.Argument(help="Mechanism file (YAML or JSON).", show_default=False)]
-OutOpt = Annotated[Path | None, typer.Option("-o", "--output", help="Write to this file instead of stdout.")]
+def _input_units(mech: Mechanism) -> dict[str, str]:
+    return {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
 
 
-@app.command("analyze")
-def analyze_cmd(
-    file: FileArg,
-    angles: Annotated[
-        list[str] | None, typer.Option("--angles", help="START:STOP:STEP, or NAME=START:STOP:STEP per driver.")
-    ] = None,
-    at: Annotated[list[str] | None, typer.Option("--at", help="V1,V2,..., or NAME=V1,V2,... per driver.")] = None,
-    speed: Annotated[
-        list[str] | None, typer.Option("--speed", help="Input speed (rad/s; length/s for a slider), or NAME=W.")
-    ] = None,
-    acceleration: Annotated[
-        list[str] | None, typer.Option("--acceleration", help="Input acceleration, or NAME=A.")
-    ] = None,
-    fmt: Annotated[Fmt, typer.Option("--format", help="Output format.")] = Fmt.table,
-    output: OutOpt = None,
-    method: Annotated[
-        Method,
-        typer.Option(
-            "--method",
-            help="natural: triangulation in joint coordinates (any "
-            "mechanism); vector-loop: link angles by iteration (four-bars, "
-            "Stephenson six-bars).",
-        ),
-    ] = Method.natural,
-    static: Annotated[
-        bool,
-        typer.Option(
-            "--static", help="Zero input speed and acceleration: the driver torque that balances gravity and the loads."
-        ),
-    ] = False,
-) -> None:
-    """Positions, velocities and accelerations (and forces) over the input sweep."""
-    mech = load(file)
-    if static and (speed or acceleration):
+def _moving_joints(mech: Mechanism) -> list[str]:
+    ground = set(mech.link("ground").joints)
+    return [j for j in mech.joint_names if j not in ground]
+
+
+def _analyze(args: argparse.Namespace) -> int:
+    """``linkagekit analyze``."""
+    import linkagekit as lk
+
+    mech = lk.load(args.file)
+    if args.static and (args.speed or args.acceleration):
         raise InputError("--static: do not give --speed or --acceleration with it")
-    res = analyze(
+    res = lk.analyze(
         mech,
-        _inputs(mech, at, angles),
-        speed=_rates(mech, speed, "--speed"),
-        acceleration=_rates(mech, acceleration, "--acceleration"),
-        method=method.value,
-        static=static,
+        _inputs(mech, args.at, args.angles),
+        speed=_rates(mech, args.speed, "--speed"),
+        acceleration=_rates(mech, args.acceleration, "--acceleration"),
+        method=args.method,
+        static=args.static,
     )
-    if fmt is Fmt.json:
-        _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", output)
-    elif fmt is Fmt.csv:
-        _emit(result_csv(res), output)
+    if args.format == "json":
+        _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
+        return 0
+    columns = res.columns()
+    if args.format == "csv":
+        _emit(format_csv(columns), args.output)
+        return 0
+    sections = analysis_sections(columns, mech.joint_names, mech.link("ground").joints, mech.name or "")
+    _emit(analysis_tables(columns, res.column_units(), sections, width=terminal_width()), args.output)
+    return 0
+
+
+def _modes(args: argparse.Namespace) -> int:
+    """``linkagekit modes``."""
+    import linkagekit as lk
+
+    mech = lk.load(args.file)
+    given = _by_driver(mech, args.at, "--at", _numbers)
+    missing = [d.name for d in mech.drivers if d.name not in given]
+    if missing:
+        raise InputError(f"--at: give a value for every driver ({', '.join(d.name for d in mech.drivers)})")
+    for name, values in given.items():
+        if len(values) != 1:
+            raise InputError(f"--at: one value per driver for modes, got {len(values)} for '{name}'")
+    doc = lk.modes(mech, {k: v[0] for k, v in given.items()}, mirrors=args.mirrors).to_dict()
+    if args.format == "json":
+        _emit(json.dumps(doc, allow_nan=False) + "\n", args.output)
+        return 0
+    units = _input_units(mech)
+    at = ", ".join(f"{k} = {v:g} {units[k]}" for k, v in doc.get("input", {}).items())
+    title = f"{mech.name or args.file}: assembly modes at {at}"
+    width = terminal_width()
+    _emit(
+        modes_table(doc, _moving_joints(mech), mech.length_unit, mirrors=args.mirrors, width=width, title=title),
+        args.output,
+    )
+    return 0
+
+
+def _check(args: argparse.Namespace) -> int:
+    """``linkagekit check``."""
+    import linkagekit as lk
+
+    mech = lk.load(args.file)
+    rep = lk.check(mech).to_dict()
+    if args.format == "json":
+        _emit(json.dumps(rep, allow_nan=False) + "\n", args.output)
     else:
-        console, buf = _console(output)
-        result_table(res, console)
-        if buf is not None:
-            _emit(buf.getvalue(), output)
-
-
-@app.command("modes")
-def modes_cmd(
-    file: FileArg,
-    at: Annotated[list[str], typer.Option("--at", help="The input value, or NAME=V per driver.")],
-    mirrors: Annotated[bool, typer.Option("--mirrors", help="Also flip each link of three or more joints.")] = False,
-    fmt: Annotated[ModeFmt, typer.Option("--format", help="Output format.")] = ModeFmt.table,
-    output: OutOpt = None,
-) -> None:
-    """Every assembly mode at one input value, with its joint positions."""
-    from .analysis import modes
-    from .positions import pose_inputs
-
-    mech = load(file)
-    given = _by_driver(mech, at, "--at", _numbers)
-    q = pose_inputs(mech)[:, 0].copy()
-    inp = {}
-    for i, d in enumerate(mech.drivers):
-        if d.name not in given:
-            if len(mech.drivers) > 1:
-                raise InputError(f"--at: give a value for every driver ({', '.join(x.name for x in mech.drivers)})")
-            continue
-        if len(given[d.name]) != 1:
-            raise InputError(f"--at: one value per driver for modes, got {len(given[d.name])} for '{d.name}'")
-        inp[d.name] = given[d.name][0]
-        q[i] = given[d.name][0] * (mech.angle_to_rad if d.kind == "angle" else 1.0)
-    data = modes(mech, q, mirrors)
-    doc = {"format": "linkagekit-modes/1", "input": inp, "distinct": data["distinct"], "modes": data["modes"]}
-    if fmt is ModeFmt.json:
-        _emit(json.dumps(doc, allow_nan=False) + "\n", output)
-        return
-    console, buf = _console(output)
-    t = Table(
-        title=f"{mech.name or 'mechanism'}: assembly modes at " + ", ".join(f"{k} = {v:g}" for k, v in inp.items()),
-        title_justify="left",
-        header_style="bold",
-    )
-    t.add_column("#", justify="right")
-    t.add_column("signs")
-    if mirrors:
-        t.add_column("mirrors")
-    t.add_column("assembled")
-    moving = [j for j in mech.joint_names if j not in mech.link("ground").joints]
-    for j in moving:
-        t.add_column(f"{j} [{mech.length_unit}]", justify="right")
-    for i, mo in enumerate(doc["modes"]):
-        row = [str(i), " ".join(f"{k}{'+' if v > 0 else '-'}" for k, v in mo["signs"].items())]
-        if mirrors:
-            row.append(" ".join(f"{k}{'+' if v > 0 else '-'}" for k, v in mo["mirrors"].items()))
-        state = "yes" if mo["assembled"] else "no"
-        if mo.get("reference"):
-            state += " (pose)"
-        if "same_as" in mo:
-            state += f" = #{mo['same_as']}"
-        row.append(state)
-        row += [
-            "—" if mo["joints"][j] is None else f"({mo['joints'][j][0]:.6g}, {mo['joints'][j][1]:.6g})" for j in moving
-        ]
-        t.add_row(*row)
-    console.print(t)
-    console.print(f"{data['distinct']} distinct assembled configuration(s) of {len(doc['modes'])}.")
-    if buf is not None:
-        _emit(buf.getvalue(), output)
-
-
-@app.command("check")
-def check_cmd(
-    file: FileArg,
-    fmt: Annotated[ModeFmt, typer.Option("--format", help="Output format.")] = ModeFmt.table,
-    output: OutOpt = None,
-) -> None:
-    """Validate a file; print degrees of freedom, the solve plan and where it assembles."""
-    from .analysis import check
-
-    mech = load(file)
-    rep = check(mech)
-    if fmt is ModeFmt.json:
-        _emit(json.dumps(rep, allow_nan=False) + "\n", output)
-        return
-    console, buf = _console(output)
-    au = mech.angle_unit
-    console.print(
-        f"[bold]{mech.name or file}[/bold]: valid; {rep['dof']} degree(s) of freedom, "
-        f"driven by {', '.join(rep['drivers'])}; solved in closed form."
-    )
-    console.print("[bold]Solve plan[/bold]")
-    for line in rep["plan"]:
-        console.print("  " + line)
-    if rep["signs"]:
-        console.print(
-            "[bold]Assembly mode of the reference pose[/bold]: "
-            + ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items())
-        )
-    for name, rng in rep["input_ranges"].items():
-        d = mech.drivers[[x.name for x in mech.drivers].index(name)]
-        unit = au if d.kind == "angle" else mech.length_unit
-        text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
-        console.print(f"[bold]Assembles[/bold] for {name} in {text} {unit}")
-    if "grashof" in rep:
-        console.print(f"[bold]Four-bar loop[/bold] {'-'.join(rep['fourbar']['joints'])}: {rep['grashof_detail']}")
-    if "transmission_angle" in rep:
-        ta = rep["transmission_angle"]
-        console.print(f"[bold]Transmission angle[/bold]: min {ta['min']:.4f}°, max {ta['max']:.4f}°")
-    if buf is not None:
-        _emit(buf.getvalue(), output)
+        _emit(check_text(rep, _input_units(mech), mech.name or args.file), args.output)
+    return 0
 
 
 # ---------------------------------------------------------------------- entry point
-def main(argv: list[str] | None = None) -> int:
-    """Run the command line; return (and exit with) its status."""
-    args = sys.argv[1:] if argv is None else argv
+def _one_line(text: str) -> str:
+    return " ".join(text.split()) if "\n" in text else text
+
+
+def _run(argv: list[str]) -> int:
+    parser = build_parser()
+    if not argv:
+        parser.print_help()
+        return 0
     try:
-        rv = app(args=args, prog_name="linkagekit", standalone_mode=False)
-        code = rv if isinstance(rv, int) else 0
+        args = parser.parse_args(_attach_negative_values(argv))
+    except _ParserExit as done:
+        return done.status
+    if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
+        raise InputError(f"give a command: analyze, modes or check (see '{PROG} --help')")
+    code: int = args.run(args)
+    return code
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line on *argv* (default: ``sys.argv[1:]``) and return its exit status.
+
+    0 on success, 2 on a bad file or bad arguments, 1 on anything else; a failure prints one
+    line on stderr.  Called without *argv* (as the ``linkagekit`` script), it exits with
+    that status.
+    """
+    args = sys.argv[1:] if argv is None else list(argv)
+    try:
+        code = _run(args)
     except LinkageError as exc:
-        print(f"linkagekit: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: error: {_one_line(str(exc)) or type(exc).__name__}", file=sys.stderr)
         code = exc.exit_code
-    except (typer.Abort, KeyboardInterrupt):
-        print("linkagekit: aborted", file=sys.stderr)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
         code = 1
-    except Exception as exc:  # noqa: BLE001 - the promise is: never a traceback
-        exit_code = getattr(exc, "exit_code", None)
-        if hasattr(exc, "format_message") and isinstance(exit_code, int):
-            # a usage error of the command-line parser: bad option, missing argument, bad choice
-            msg = " ".join(exc.format_message().split())
-            if not msg:  # `linkagekit` alone: the parser has printed the help
+    except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
+        code = 1
+        if argv is None:  # the script: no second error when Python flushes stdout at exit
+            try:
+                import os
+
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            except (OSError, ValueError, AttributeError):
                 pass
-            else:
-                print(f"linkagekit: error: {msg}", file=sys.stderr)
-            code = exit_code
-        else:
-            print(f"linkagekit: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
-            code = 1
+    except Exception as exc:  # noqa: BLE001 - the promise is: never a traceback
+        print(f"{PROG}: internal error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
+        code = 1
     if argv is None:
         sys.exit(code)
     return code

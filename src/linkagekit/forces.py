@@ -136,14 +136,18 @@ class Forces:
 
     def column_units(self) -> dict[str, str]:
         """The unit of each of :meth:`columns`."""
-        return {k: ("N·m" if k.startswith("T[") or k.endswith("moment") else "W" if k == "input_power" else "N")
-                for k in self.columns()}
+        return {
+            k: ("N·m" if k.startswith("T[") or k.endswith("moment") else "W" if k == "input_power" else "N")
+            for k in self.columns()
+        }
 
     def take(self, index: Any) -> Forces:
         """The same forces with every array indexed by ``index`` (one design of a batch)."""
         return Forces(
-            tuple(Reaction(r.joint, r.on, r.by, r.force[index], None if r.moment is None else r.moment[index])
-                  for r in self.reactions),
+            tuple(
+                Reaction(r.joint, r.on, r.by, r.force[index], None if r.moment is None else r.moment[index])
+                for r in self.reactions
+            ),
             {k: v[index] for k, v in self.driver_torque.items()},
             {k: v[index] for k, v in self.driver_force.items()},
             self.input_power[index],

@@ -346,6 +346,13 @@ class Mechanism:
             out["loads"] = [ld.to_dict() for ld in self.loads]
         return out
 
+    def pose_array(self) -> np.ndarray:
+        """The reference pose as floats ``(n_joints, 2)``, joints in :attr:`joint_names` order.
+
+        This is one row of the ``poses`` that :func:`linkagekit.analyze` takes for a batch of designs.
+        """
+        return np.array([[self.joints[j].real, self.joints[j].imag] for j in self.joint_names])
+
     def with_pose(self, pose: Any) -> Mechanism:
         """The same mechanism with another reference pose, all dimensions read off that pose.
 
@@ -502,15 +509,6 @@ def _gruebler(links: tuple[Link, ...] | list[Link], n_sliders: int) -> tuple[int
     pins = sum(max(c - 1, 0) for c in count.values())
     n = len(links)
     return 3 * (n - 1) - 2 * (pins + n_sliders), n, pins
-
-
-def __getattr__(name: str) -> Any:
-    # Kept for compatibility, without importing PyYAML when this module is imported.
-    if name in {"load", "_Loader"}:
-        from . import files
-
-        return getattr(files, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 # ---------------------------------------------------------------------- building

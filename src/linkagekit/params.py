@@ -25,9 +25,10 @@ Examples
 >>> p = compile(mech)
 >>> p.n_designs, p.signs.tolist()
 (1, [[1.0]])
->>> poses = np.stack([mech.pose_array(), -mech.pose_array()])  # the pose and its point mirror
+>>> pose = mech.pose_array()
+>>> poses = np.stack([pose, pose * [1, -1]])  # the pose and its mirror image about the x axis
 >>> compile(mech, poses).signs.tolist()
-[[1.0, 1.0]]
+[[1.0, -1.0]]
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from .steps import Nums, is_sign_step
 
 if TYPE_CHECKING:
     from .model import Mechanism
+
 
 @dataclass(frozen=True)
 class Params:
@@ -186,11 +188,11 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
             a, b = (plan.joint_names.index(j) for j in ln.joints[:2])
             bases[ln.name] = (src.shape(ln.name, a), src.shape(ln.name, b))
     q0 = _pose_inputs(mech, plan, zpose[:, :, 0])
-    sign_rows = [st.pose_sign(zpose, n)[:, 0] for st, n in zip(plan.steps, nums, strict=True) if is_sign_step(st)]
+    sign_rows = [st.pose_sign(zpose, n)[:, 0] for st, n in zip(plan.steps, nums, strict=True) if is_sign_step(st)]  # type: ignore[attr-defined]
     signs = np.array(sign_rows, float).reshape(plan.n_signs, src.D)
     return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases)
 
-    
+
 def all_sign_combinations(k: int) -> np.ndarray:
     """Every +1/-1 vector of length k, shape (k, 2**k), starting with all +1."""
     if k == 0:

@@ -107,8 +107,9 @@ def solve(
         z = out
         z.fill(NAN_POINT)
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps)
-    for st, nums in zip(plan.steps, params.steps, strict=True):
-        st.place(k, nums)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
+        for st, nums in zip(plan.steps, params.steps, strict=True):
+            st.place(k, nums)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
     assembled = np.all(k.margin >= 0, axis=0) if plan.n_signs else np.ones((D, n), bool)
     if not params.valid.all():

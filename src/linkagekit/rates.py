@@ -66,7 +66,7 @@ def solve_rates(
         {"ground": 0.0},
         {"ground": 0.0},
     )
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.rates(r, nums)
     singular = np.any(np.abs(r.cond) < tol, axis=0) & pos.assembled
@@ -120,7 +120,7 @@ def link_motion(params: Params, pos: Positions, rates: Rates | None, links: Any)
             else:
                 w = np.where(bad, np.nan, rates.omega.get(ln.name, 0.0))
                 al = np.where(bad, np.nan, rates.alpha.get(ln.name, 0.0))
-        if rates is not None and bad.any():
+        if w is not None and al is not None and bad.any():
             w, al = np.where(bad, np.nan, w), np.where(bad, np.nan, al)
         out[ln.name] = (rot, w, al)
     return out

@@ -165,9 +165,7 @@ class Result:
         for ln in self.mechanism.links:
             if ln.name == name:
                 return ln
-        raise UnknownNameError(
-            f"unknown link '{name}' (links: {', '.join(ln.name for ln in self.mechanism.links)})"
-        )
+        raise UnknownNameError(f"unknown link '{name}' (links: {', '.join(ln.name for ln in self.mechanism.links)})")
 
     @cached_property
     def link_angle(self) -> Mapping[str, np.ndarray]:

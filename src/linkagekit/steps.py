@@ -33,7 +33,7 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from .geometry import NAN_POINT, _TINY, circle_circle, cross, dot, link_rates, side
+from .geometry import _TINY, NAN_POINT, circle_circle, cross, dot, link_rates, side
 
 Nums = tuple[Any, ...]
 

@@ -1,0 +1,105 @@
+"""The import layers of the package, and what ``import linkagekit`` costs.
+
+Each module may import only modules of its own layer or below (docs/design.md), and no two
+modules import each other (directly or through others).  Function-level imports count too:
+every ``import`` statement in the file is read with :mod:`ast`, nothing is executed.
+"""
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "linkagekit"
+
+#: lower layers first; a module may import its own layer and the layers before it
+LAYERS = [
+    {"errors", "units", "geometry"},
+    {"schema", "model", "files"},
+    {"steps", "plan", "params"},
+    {"positions", "rates", "forces", "vectorloop"},
+    {"result", "api", "checks"},
+    {"cli"},
+]
+RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}
+
+
+def imports_of(path: Path) -> set[str]:
+    """The linkagekit modules a source file imports, anywhere in it."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            if node.level == 1:  # from .x import y / from . import x
+                if node.module:
+                    out.add(node.module.split(".")[0])
+                else:  # from . import x: a module, or a name of the package itself (__version__)
+                    out.update(a.name for a in node.names if a.name in RANK)
+            elif node.module and node.module.startswith("linkagekit."):
+                out.add(node.module.split(".")[1])
+            elif node.module == "linkagekit":
+                out.update(a.name for a in node.names if a.name in RANK)
+        elif isinstance(node, ast.Import):
+            out.update(a.name.split(".")[1] for a in node.names if a.name.startswith("linkagekit."))
+    return out
+
+
+MODULES = sorted(p.stem for p in SRC.glob("*.py") if p.stem != "__init__")
+
+
+def test_every_module_has_a_layer():
+    assert set(MODULES) == set(RANK), set(MODULES) ^ set(RANK)
+
+
+@pytest.mark.parametrize("module", MODULES)
+def test_imports_point_down(module):
+    for target in imports_of(SRC / f"{module}.py"):
+        assert RANK[target] <= RANK[module], f"{module} (layer {RANK[module]}) imports {target} (layer {RANK[target]})"
+
+
+def test_no_import_cycles():
+    graph = {m: imports_of(SRC / f"{m}.py") - {m} for m in MODULES}
+
+    def reach(start):
+        seen, todo = set(), list(graph[start])
+        while todo:
+            m = todo.pop()
+            if m not in seen:
+                seen.add(m)
+                todo.extend(graph[m])
+        return seen
+
+    for m in MODULES:
+        assert m not in reach(m), (
+            f"{m} imports itself through {sorted(reach(m) & {x for x in MODULES if m in graph[x]})}"
+        )
+
+
+def test_the_layer_test_can_fail(tmp_path):
+    bad = tmp_path / "positions.py"
+    bad.write_text("def f():\n    from .api import analyze\n")
+    assert "api" in imports_of(bad) and RANK["api"] > RANK["positions"]
+
+
+HEAVY = ("matplotlib", "scipy", "pandas", "dask", "typer", "rich", "pydantic", "yaml")
+
+
+def loaded_after(code):
+    probe = f"import sys\n{code}\nprint(' '.join(m for m in {HEAVY + ('numpy',)!r} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True, cwd=SRC.parents[1])
+    return set(out.stdout.split())
+
+
+def test_import_linkagekit_is_light():
+    assert loaded_after("import linkagekit") == set()
+
+
+def test_reading_and_solving_loads_only_what_it_needs():
+    mech = "lk.load('examples/seed000_fourbar.yaml')"
+    loaded = loaded_after(f"import linkagekit as lk\nlk.analyze({mech})\nlk.check({mech})")
+    assert loaded == {"numpy", "yaml", "pydantic"}, loaded
+
+
+def test_the_command_line_module_imports_nothing_heavy():
+    assert loaded_after("import linkagekit.cli") == set()
