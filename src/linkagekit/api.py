@@ -23,16 +23,17 @@ True
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
+from dataclasses import replace
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
 from .errors import InputError, LinkageError
-from .forces import Kinematics, solve_forces
+from .forces import Forces, Kinematics, Reaction, solve_forces
 from .model import Mechanism
 from .params import Params, as_poses, compile
-from .plan import make_plan
+from .plan import Plan, make_plan
 from .positions import Positions, reference_mode, solve
 from .rates import Rates, link_motion, solve_rates
 from .result import Result, frozen
@@ -210,24 +211,31 @@ def analyze(
             raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
         mr = m == 1
 
+    with_forces = rates and dynamics and mech.has_dynamics
     if method == "vector-loop":
         if poses is not None or signs is not None or mirrors is not None:
             raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
-        pos, rt = _vector_loop(mech, params, q, w_in, a_in)
-        return _build(mech, params, None, values, speeds, accels, [(slice(0, 1), pos, rt)], rates, dynamics, sg)
-    if method != "natural":
+        out = _Outputs(mech, plan, D, n, rates)
+        pos, loop_rates = _vector_loop(mech, params, q, w_in, a_in)
+        out.write(slice(0, 1), params, pos, loop_rates)
+    elif method == "natural":
+        out = _Outputs(mech, plan, D, n, rates)
+        chunk = max(1, CHUNK_SAMPLES // max(n, 1))
+        for start in range(0, D, chunk):  # bounded working memory; every chunk writes its slice
+            sl = slice(start, min(start + chunk, D))
+            p = params.take(sl)
+            pos = solve(p, q[:, sl], sg, mr, out=out.z[:, sl])
+            rt = None
+            if out.v is not None and out.a is not None:
+                rt = solve_rates(p, pos, w_in, a_in, out=(out.v[:, sl], out.a[:, sl]))
+            out.write(sl, p, pos, rt)
+            if with_forces:
+                out.write_forces(sl, _forces(mech, out, sl, speeds))
+    else:
         raise InputError(f"method: expected 'natural' or 'vector-loop', got {method!r}")
-
-    chunk = max(1, CHUNK_SAMPLES // max(n, 1))
-    z_out = np.empty((len(plan.joint_names), D, n), complex)
-    parts: list[tuple[slice, Positions, Rates | None]] = []
-    for start in range(0, D, chunk):
-        sl = slice(start, min(start + chunk, D))
-        p = params.take(sl)
-        qq = q[:, sl]
-        pos = solve(p, qq, None if sg is None else sg, mr, out=z_out[:, sl])
-        parts.append((sl, pos, solve_rates(p, pos, w_in, a_in) if rates else None))
-    return _build(mech, params, poses, values, speeds, accels, parts, rates, dynamics, sg, z_out)
+    if with_forces and method == "vector-loop":
+        out.write_forces(slice(0, 1), _forces(mech, out, slice(0, 1), speeds))
+    return _result(mech, params, poses, values, speeds, accels, out, sg)
 
 
 def analyze_chunks(
@@ -260,22 +268,84 @@ def analyze_chunks(
 
 
 # ---------------------------------------------------------------------- assembling the Result
-def _cat(parts: list[Any], axis: int) -> np.ndarray:
-    return parts[0] if len(parts) == 1 else np.concatenate(parts, axis=axis)
+class _Outputs:
+    """The arrays of a Result over (designs, samples), allocated once and filled chunk by chunk."""
+
+    def __init__(self, mech: Mechanism, plan: Plan, D: int, n: int, rates: bool) -> None:
+        J = len(plan.joint_names)
+        self.mech = mech
+        self.z = np.empty((J, D, n), complex)
+        self.v = np.empty((J, D, n), complex) if rates else None
+        self.a = np.empty((J, D, n), complex) if rates else None
+        self.assembled = np.empty((D, n), bool)
+        self.singular = np.zeros((D, n), bool)
+        self.condition = np.full((D, n), np.nan)
+        self.blocks = [ln.name for ln in mech.links if len(ln.joints) < 2 and ln.name != "ground"]
+        self.block_rot = {b: np.empty((D, n), complex) for b in self.blocks}
+        self.omega = {ln.name: np.empty((D, n)) for ln in mech.links} if rates else None
+        self.alpha = {ln.name: np.empty((D, n)) for ln in mech.links} if rates else None
+        self.rot = {ln.name: np.empty((D, n), complex) for ln in mech.links} if rates and mech.has_dynamics else None
+        self.forces: Forces | None = None
+
+    def write_forces(self, sl: slice, f: Forces) -> None:
+        """Store the forces of one chunk (the arrays are made on the first chunk)."""
+        shape = self.assembled.shape
+        if self.forces is None:
+
+            def new(a: np.ndarray | None) -> np.ndarray | None:
+                return None if a is None else np.empty(shape, a.dtype)
+
+            self.forces = Forces(
+                tuple(Reaction(r.joint, r.on, r.by, new(r.force), new(r.moment)) for r in f.reactions),  # type: ignore[arg-type]
+                {k: new(v) for k, v in f.driver_torque.items()},  # type: ignore[misc]
+                {k: new(v) for k, v in f.driver_force.items()},  # type: ignore[misc]
+                *(new(a) for a in (f.input_power, f.shaking_force, f.shaking_moment, f.residual)),  # type: ignore[arg-type]
+            )
+        g = self.forces
+        for rg, rf in zip(g.reactions, f.reactions, strict=True):
+            rg.force[sl] = rf.force
+            if rg.moment is not None:
+                rg.moment[sl] = rf.moment
+        for k in f.driver_torque:
+            g.driver_torque[k][sl] = f.driver_torque[k]
+        for k in f.driver_force:
+            g.driver_force[k][sl] = f.driver_force[k]
+        for name in ("input_power", "shaking_force", "shaking_moment", "residual"):
+            getattr(g, name)[sl] = getattr(f, name)
+
+    def write(self, sl: slice, params: Params, pos: Positions, rt: Rates | None) -> None:
+        """Store one chunk of designs (positions are already in place when solved with ``out=``)."""
+        if pos.z is not self.z[:, sl].base and not np.shares_memory(pos.z, self.z[:, sl]):
+            self.z[:, sl] = pos.z
+        self.assembled[sl] = pos.assembled
+        links = self.mech.links if rt is not None else [ln for ln in self.mech.links if ln.name in self.block_rot]
+        motion = link_motion(params, pos, rt, links)
+        for b in self.blocks:
+            self.block_rot[b][sl] = motion[b][0]
+        if rt is None or self.v is None or self.a is None or self.omega is None or self.alpha is None:
+            return
+        if not np.shares_memory(rt.v, self.v):
+            self.v[:, sl], self.a[:, sl] = rt.v, rt.a
+        self.singular[sl] = rt.singular
+        if params.plan.n_signs:
+            self.condition[sl] = np.where(pos.assembled, np.min(np.abs(rt.condition), axis=0), np.nan)
+        else:
+            self.condition[sl] = np.where(pos.assembled, 1.0, np.nan)
+        for name, (rot, w, al) in motion.items():
+            self.omega[name][sl], self.alpha[name][sl] = w, al
+            if self.rot is not None:
+                self.rot[name][sl] = rot
 
 
-def _build(
+def _result(
     mech: Mechanism,
     params: Params,
     poses: ArrayLike | None,
     values: dict[str, np.ndarray],
     speeds: dict[str, np.ndarray],
     accels: dict[str, np.ndarray],
-    parts: list[tuple[slice, Positions, Rates | None]],
-    rates: bool,
-    dynamics: bool,
+    out: _Outputs,
     sg: np.ndarray | None,
-    z_out: np.ndarray | None = None,
 ) -> Result:
     plan = params.plan
     batch = poses is not None
@@ -284,134 +354,76 @@ def _build(
         """Drop the design axis (axis -2) of a single mechanism's arrays."""
         return frozen(a if batch else a[..., 0, :])
 
-    z = z_out if z_out is not None else _cat([p.z for _, p, _ in parts], 1)
-    assembled = _cat([p.assembled for _, p, _ in parts], 0)
-    blocks = [ln for ln in mech.links if len(ln.joints) < 2 and ln.name != "ground"]
-    motion_parts = []
-    for sl, pos, rt in parts:
-        links = mech.links if rates else blocks
-        motion_parts.append(link_motion(params.take(sl), pos, rt, links))
-    block_rot = {ln.name: squeeze(_cat([m[ln.name][0] for m in motion_parts], 0)) for ln in blocks}
-    omega = alpha = None
-    v = a = None
-    if rates:
-        v = _cat([rt.v for _, _, rt in parts], 1)  # type: ignore[union-attr]
-        a = _cat([rt.a for _, _, rt in parts], 1)  # type: ignore[union-attr]
-        singular = _cat([rt.singular for _, _, rt in parts], 0)  # type: ignore[union-attr]
-        cond_parts = []
-        for _, pos, rt in parts:
-            c = np.min(np.abs(rt.condition), axis=0) if plan.n_signs else np.ones(pos.assembled.shape)  # type: ignore[union-attr]
-            cond_parts.append(np.where(pos.assembled, c, np.nan))
-        condition = _cat(cond_parts, 0)
-        omega, alpha = (
-            {ln.name: squeeze(_stitch(motion_parts, parts, ln.name, k)) for ln in mech.links} for k in (1, 2)
-        )
-    else:
-        singular = np.zeros(assembled.shape, bool)
-        condition = np.full(assembled.shape, np.nan)
-
-    forces = None
-    if rates and dynamics and mech.has_dynamics:
-        forces = _forces(mech, parts, motion_parts, speeds, assembled.shape, batch)
+    def ro(d: dict[str, np.ndarray] | None) -> MappingProxyType[str, np.ndarray] | None:
+        return None if d is None else MappingProxyType({k: squeeze(val) for k, val in d.items()})
 
     ground = next(ln for ln in mech.links if ln.name == "ground")
+    ground_angle: Any = 0.0
     if len(ground.joints) >= 2:
         sa, sb = params.bases["ground"]
-        ground_angle = np.angle(sb - sa)[:, 0] / mech.angle_to_rad  # per design
-        ground_angle = ground_angle[:, None] if batch else float(ground_angle[0])
-    else:
-        ground_angle = 0.0
+        per_design = np.angle(sb - sa)[:, 0] / mech.angle_to_rad
+        ground_angle = per_design[:, None] if batch else float(per_design[0])
 
     signs_used = params.signs[:, :, None] if sg is None else sg
-    sign_map = {}
+    sign_map: dict[str, Any] = {}
     for i, j in enumerate(plan.sign_joints):
-        s = np.asarray(signs_used[i])
+        s = np.asarray(signs_used[i]).astype(int)
         if s.shape[-1] == 1:
             s = s[..., 0]
-        sign_map[j] = (s.astype(int) if batch else int(s[0])) if s.ndim == 1 else s.astype(int)
-
-    def ro(d: dict[str, np.ndarray]) -> MappingProxyType[str, np.ndarray]:
-        return MappingProxyType({k: frozen(val) for k, val in d.items()})
-
+        sign_map[j] = (s if batch else int(s[0])) if s.ndim == 1 else s
     return Result(
         mech,
-        ro(values),
-        ro(speeds),
-        ro(accels),
-        squeeze(assembled),
-        squeeze(singular),
-        squeeze(condition),
+        MappingProxyType({k: frozen(v) for k, v in values.items()}),
+        MappingProxyType({k: frozen(v) for k, v in speeds.items()}),
+        MappingProxyType({k: frozen(v) for k, v in accels.items()}),
+        squeeze(out.assembled),
+        squeeze(out.singular),
+        squeeze(out.condition),
         MappingProxyType(sign_map),
-        forces,
+        None if out.forces is None else _frozen_forces(out.forces, squeeze),
         None if poses is None else frozen(np.asarray(as_poses(mech, poses))),
-        squeeze(z),
-        None if v is None else squeeze(v),
-        None if a is None else squeeze(a),
-        None if omega is None else MappingProxyType(omega),
-        None if alpha is None else MappingProxyType(alpha),
-        MappingProxyType(block_rot),
+        squeeze(out.z),
+        None if out.v is None else squeeze(out.v),
+        None if out.a is None else squeeze(out.a),
+        ro(out.omega),
+        ro(out.alpha),
+        ro(out.block_rot),  # type: ignore[arg-type]
         ground_angle,
     )
 
 
-def _stitch(motion_parts: list[dict[str, Any]], parts: list[Any], link: str, k: int) -> np.ndarray:
-    """Item ``k`` (1: omega, 2: alpha) of a link's motion over all chunks, shape (D, n)."""
-    return _cat(
-        [np.broadcast_to(m[link][k], p.assembled.shape) for m, (_, p, _) in zip(motion_parts, parts, strict=True)], 0
+def _forces(mech: Mechanism, out: _Outputs, sl: slice, speeds: dict[str, np.ndarray]) -> Forces:
+    """The kinetostatics of one chunk of designs (flattened: one linear system per design-sample), (C, n) arrays."""
+    assert out.v is not None and out.a is not None and out.omega is not None and out.alpha is not None
+    assert out.rot is not None
+    shape = out.assembled[sl].shape
+    N = int(np.prod(shape))
+
+    def flat(a: np.ndarray) -> np.ndarray:
+        return a[sl].reshape(N)
+
+    def joints(a: np.ndarray) -> np.ndarray:
+        return a[:, sl].reshape(a.shape[0], N)
+
+    km = Kinematics(
+        joints(out.z),
+        joints(out.v),
+        joints(out.a),
+        {k: (flat(out.rot[k]), flat(out.omega[k]), flat(out.alpha[k])) for k in out.omega},
+        flat(out.assembled & ~out.singular),
+        np.array([np.broadcast_to(speeds[d.name], out.assembled.shape)[sl].reshape(N) for d in mech.drivers]),
     )
+    f = solve_forces(mech, km)
+    return f.reshape(shape)
 
 
-def _forces(
-    mech: Mechanism,
-    parts: list[tuple[slice, Positions, Rates | None]],
-    motion_parts: list[dict[str, Any]],
-    speeds: dict[str, np.ndarray],
-    shape: tuple[int, ...],
-    batch: bool,
-) -> Any:
-    """The kinetostatics of every chunk, flattened to samples, stitched back to ``shape``."""
-    from .forces import Forces, Reaction
-
-    chunks = []
-    for (_, pos, rt), motion in zip(parts, motion_parts, strict=True):
-        assert rt is not None
-        cshape = pos.assembled.shape
-        N = int(np.prod(cshape))
-        flat: dict[str, Any] = {k: tuple(np.broadcast_to(x, cshape).reshape(N) for x in m) for k, m in motion.items()}
-        sp = np.array([np.broadcast_to(speeds[d.name], cshape).reshape(N) for d in mech.drivers])
-        km = Kinematics(
-            pos.z.reshape(pos.z.shape[0], N),
-            rt.v.reshape(rt.v.shape[0], N),
-            rt.a.reshape(rt.a.shape[0], N),
-            flat,
-            (pos.assembled & ~rt.singular).reshape(N),
-            sp,
-        )
-        chunks.append((cshape, solve_forces(mech, km)))
-
-    def stitch(get: Any) -> np.ndarray:
-        arr = _cat([get(f).reshape(cs) for cs, f in chunks], 0)
-        return frozen(arr if batch else arr[0])
-
-    first = chunks[0][1]
-    reactions = tuple(
-        Reaction(
-            r.joint,
-            r.on,
-            r.by,
-            stitch(lambda f, i=i: f.reactions[i].force),
-            None if r.moment is None else stitch(lambda f, i=i: f.reactions[i].moment),
-        )
-        for i, r in enumerate(first.reactions)
-    )
-    return Forces(
-        reactions,
-        MappingProxyType({k: stitch(lambda f, k=k: f.driver_torque[k]) for k in first.driver_torque}),  # type: ignore[arg-type]
-        MappingProxyType({k: stitch(lambda f, k=k: f.driver_force[k]) for k in first.driver_force}),  # type: ignore[arg-type]
-        stitch(lambda f: f.input_power),
-        stitch(lambda f: f.shaking_force),
-        stitch(lambda f: f.shaking_moment),
-        stitch(lambda f: f.residual),
+def _frozen_forces(f: Forces, squeeze: Any) -> Forces:
+    """Read-only forces, the design axis dropped for a single mechanism."""
+    g = f.map(squeeze)
+    return replace(
+        g,
+        driver_torque=MappingProxyType(g.driver_torque),  # type: ignore[arg-type]
+        driver_force=MappingProxyType(g.driver_force),  # type: ignore[arg-type]
     )
 
 

@@ -141,20 +141,28 @@ class Forces:
             for k in self.columns()
         }
 
-    def take(self, index: Any) -> Forces:
-        """The same forces with every array indexed by ``index`` (one design of a batch)."""
+    def reshape(self, shape: tuple[int, ...]) -> Forces:
+        """The same forces with every array reshaped (flat samples back to (designs, samples))."""
+        return self.map(lambda a: a.reshape(shape))
+
+    def map(self, f: Any) -> Forces:
+        """The same forces with ``f`` applied to every array."""
         return Forces(
             tuple(
-                Reaction(r.joint, r.on, r.by, r.force[index], None if r.moment is None else r.moment[index])
+                Reaction(r.joint, r.on, r.by, f(r.force), None if r.moment is None else f(r.moment))
                 for r in self.reactions
             ),
-            {k: v[index] for k, v in self.driver_torque.items()},
-            {k: v[index] for k, v in self.driver_force.items()},
-            self.input_power[index],
-            self.shaking_force[index],
-            self.shaking_moment[index],
-            self.residual[index],
+            {k: f(v) for k, v in self.driver_torque.items()},
+            {k: f(v) for k, v in self.driver_force.items()},
+            f(self.input_power),
+            f(self.shaking_force),
+            f(self.shaking_moment),
+            f(self.residual),
         )
+
+    def take(self, index: Any) -> Forces:
+        """The same forces with every array indexed by ``index`` (one design of a batch)."""
+        return self.map(lambda a: a[index])
 
 
 def json_list(a: Any) -> list[Any]:

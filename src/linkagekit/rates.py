@@ -48,18 +48,32 @@ class Rates:
 
 
 def solve_rates(
-    params: Params, pos: Positions, speed: np.ndarray, accel: np.ndarray, tol: float = SINGULAR_TOL
+    params: Params,
+    pos: Positions,
+    speed: np.ndarray,
+    accel: np.ndarray,
+    tol: float = SINGULAR_TOL,
+    out: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Rates:
-    """Velocities and accelerations for driver speeds and accelerations, arrays (n_drivers, D or 1, n or 1)."""
+    """Velocities and accelerations for driver speeds and accelerations, arrays (n_drivers, D or 1, n or 1).
+
+    ``out``: two complex arrays shaped like ``pos.z`` to write the velocities and accelerations into.
+    """
     plan = params.plan
     z = pos.z
     shape = z.shape[1:]
+    if out is None:
+        v, a = np.empty_like(z), np.empty_like(z)
+    else:
+        v, a = out
+    v.fill(NAN_POINT)  # a joint no step writes stays NaN
+    a.fill(NAN_POINT)
     r = Rate(
         z,
         pos.rot,
         pos.mirrors,
-        np.full_like(z, NAN_POINT),  # a joint no step writes stays NaN
-        np.full_like(z, NAN_POINT),
+        v,
+        a,
         np.asarray(speed, float),
         np.asarray(accel, float),
         np.ones((plan.n_signs, *shape)),
