@@ -178,7 +178,8 @@ def analyze(
         n = len(mech.drivers[0].sweep.values())
     factors = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
     values: dict[str, np.ndarray] = {}
-    q = np.empty((len(mech.drivers), D, n))
+    per_design = [d.name not in given and len(d.sweep.values()) != n for d in mech.drivers]
+    q = np.empty((len(mech.drivers), D if any(per_design) else 1, n))  # shared inputs: no design axis
     for i, d in enumerate(mech.drivers):
         if d.name in given:
             values[d.name] = np.broadcast_to(given[d.name], (n,)).astype(float)
@@ -224,7 +225,7 @@ def analyze(
         for start in range(0, D, chunk):  # bounded working memory; every chunk writes its slice
             sl = slice(start, min(start + chunk, D))
             p = params.take(sl)
-            pos = solve(p, q[:, sl], sg, mr, out=out.z[:, sl])
+            pos = solve(p, q[:, sl] if q.shape[1] > 1 else q, sg, mr, out=out.z[:, sl])
             rt = None
             if out.v is not None and out.a is not None:
                 rt = solve_rates(p, pos, w_in, a_in, out=(out.v[:, sl], out.a[:, sl]))

@@ -73,6 +73,12 @@ class Plan:
     sign_labels: tuple[str, ...] = ()
 
     @property
+    def unwritten(self) -> tuple[int, ...]:
+        """Joints no step places (none for a complete plan): the solver leaves them NaN."""
+        written = {j for st in self.steps for j in st.writes()}
+        return tuple(i for i in range(len(self.joint_names)) if i not in written)
+
+    @property
     def sign_steps(self) -> tuple[Any, ...]:
         """The steps that read a sign, in sign order."""
         return tuple(s for s in self.steps if is_sign_step(s))

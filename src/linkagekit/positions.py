@@ -101,11 +101,10 @@ def solve(
     D = params.n_designs
     n = int(np.broadcast_shapes(q.shape[-1:], sg.shape[-1:] if plan.n_signs else (1,), mr.shape[-1:])[0])
     shape = (len(plan.joint_names), D, n)
-    if out is None:
-        z = np.full(shape, NAN_POINT)  # a joint no step writes stays NaN
-    else:
-        z = out
-        z.fill(NAN_POINT)
+    z = np.empty(shape, complex) if out is None else out
+    missing = plan.unwritten
+    if missing:  # a joint no step writes is NaN, never uninitialised memory
+        z[list(missing)] = NAN_POINT
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):

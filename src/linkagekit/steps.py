@@ -33,7 +33,7 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from .geometry import _TINY, NAN_POINT, circle_circle, cross, dot, link_rates, side
+from .geometry import _TINY, NAN_POINT, circle_circle, cis, cross, dot, link_rates, side
 
 Nums = tuple[Any, ...]
 
@@ -119,6 +119,13 @@ class Step:
         """Links whose rotation this step reads."""
         return ()
 
+    def writes(self) -> tuple[int, ...]:
+        """The joints this step places."""
+        joint = getattr(self, "joint", None)
+        if isinstance(self, Pivot) or joint is None:
+            return tuple(getattr(self, "joints", ()))
+        return (joint,)
+
 
 def _num(value: Any) -> str:
     """A design's number for a description (the first design of a batch)."""
@@ -136,7 +143,8 @@ class Ground(Step):
         return (np.stack([src.shape("ground", j) for j in self.joints]),)
 
     def place(self, k: Kin, nums: Nums) -> None:
-        k.z[list(self.joints)] = nums[0]
+        for j, zj in zip(self.joints, nums[0], strict=True):
+            k.z[j] = zj
 
     def rates(self, r: Rate, nums: Nums) -> None:
         r.v[list(self.joints)] = 0.0
@@ -156,15 +164,17 @@ class Crank(Step):
     toward: int
     kind: ClassVar[str] = "crank"
 
+    def writes(self) -> tuple[int, ...]:
+        return (self.toward,)
+
     def numbers(self, src: Source) -> Nums:
         return (np.abs(src.shape(self.link, self.toward) - src.shape(self.link, self.pivot)),)
 
     def place(self, k: Kin, nums: Nums) -> None:
         zt = k.z[self.toward]
-        q = k.q[self.driver]
-        zt.real = np.cos(q)  # broadcast: the cosine once per sample, not per design
-        zt.imag = np.sin(q)
-        zt *= nums[0]
+        e = cis(k.q[self.driver])  # e^{i phi} once per sample, not per design
+        np.multiply(e.real, nums[0], out=zt.real)  # real products: NumPy casts float to complex slowly
+        np.multiply(e.imag, nums[0], out=zt.imag)
         zt += k.z[self.pivot]
 
     def rates(self, r: Rate, nums: Nums) -> None:
@@ -257,8 +267,8 @@ class Dyad(Step):
         return r1, r2
 
     def place(self, k: Kin, nums: Nums) -> None:
-        k.z[self.joint], k.margin[self.sign] = circle_circle(
-            k.z[self.k1], k.z[self.k2], nums[0], nums[1], k.signs[self.sign], k.eps
+        _, k.margin[self.sign] = circle_circle(
+            k.z[self.k1], k.z[self.k2], nums[0], nums[1], k.signs[self.sign], k.eps, out=k.z[self.joint]
         )
 
     def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
