@@ -154,14 +154,15 @@ def main(sizes=(10_000, 100_000)):
         ns = 1e9 / (n * N_SAMPLES)
         rows = []
         for label, rates, loop in (("positions", False, t_loop_pos), ("with rates", True, t_loop_all)):
-            t_lk = best_of(lambda rates=rates: lk.analyze(mech, {"crank": deg}, poses=poses, rates=rates), repeat)
-            t_hand = best_of(lambda rates=rates: hand_kernel(poses, phi, with_rates=rates), repeat)
+            t_lk = best_of(lambda r=rates, p=poses: lk.analyze(mech, {"crank": deg}, poses=p, rates=r), repeat)
+            t_hand = best_of(lambda r=rates, p=poses: hand_kernel(p, phi, with_rates=r), repeat)
             rows.append((label, t_lk * ns, t_hand * ns, loop * 1e9))
         print(f"{n:,} designs")
         for label, lk_ns, hand_ns, loop_ns in rows:
             goal = "  (goal <= 1.5)" if label == "positions" else ""
             print(
-                f"  {label:11s} lk.analyze(poses=) {lk_ns:7.1f}   hand NumPy {hand_ns:7.1f}   ratio {lk_ns / hand_ns:5.2f}{goal}"
+                f"  {label:11s} lk.analyze(poses=) {lk_ns:7.1f}   hand NumPy {hand_ns:7.1f}"
+                f"   ratio {lk_ns / hand_ns:5.2f}{goal}"
                 f"   per-design loop {loop_ns:8.1f} ({loop_ns / lk_ns:5.1f}x slower)"
             )
     startup()

@@ -16,6 +16,7 @@ import numpy as np
 from timing import best_of
 
 import linkagekit as lk
+from linkagekit.api import prepare
 from linkagekit.positions import solve
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,14 +85,14 @@ def main(n=1_000_000):
     assert np.allclose(res.velocity("P"), ref[6] + 1j * ref[7], atol=1e-9)
     assert np.allclose(res.acceleration("P"), ref[10] + 1j * ref[11], atol=1e-8)
 
-    plan = mech.plan
-    q = phi[None, :]
-    t_pos_lk = best_of(lambda: solve(plan, q))
+    params = prepare(mech)
+    q = phi[None, None, :]
+    t_pos_lk = best_of(lambda: solve(params, q))
     t_pos_hand = best_of(lambda: hand_kernel(phi, w, al, with_rates=False))
     t_all_lk = best_of(lambda: lk.analyze(mech, {"crank": deg}, speed=w, acceleration=al, dynamics=False))
     t_all_hand = best_of(lambda: hand_kernel(phi, w, al))
     deg360 = np.arange(360.0)
-    t_360 = best_of(lambda: solve(plan, np.radians(deg360)[None, :]), repeat=50)
+    t_360 = best_of(lambda: solve(params, np.radians(deg360)[None, None, :]), repeat=50)
     t_360_all = best_of(lambda: lk.analyze(mech, {"crank": deg360}, dynamics=False), repeat=50)
 
     ns = 1e9 / n

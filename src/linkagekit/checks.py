@@ -365,7 +365,9 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
             if not math.isfinite(value):
                 raise InputError(f"at: '{d.name}' must be a finite number")
             q0[i] = value * factors[i]
-        inp[d.name] = float(q0[i] / factors[i])
+            inp[d.name] = value  # as given, not through radians and back
+        else:
+            inp[d.name] = float(q0[i] / factors[i])
     if given:
         raise InputError(f"at: no driver named '{next(iter(given))}' (drivers: {', '.join(plan.drivers)})")
     k, mm = plan.n_signs, plan.n_mirrors if mirrors else 0

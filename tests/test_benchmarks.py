@@ -1,0 +1,41 @@
+"""The benchmark scripts run (at a small size) and their correctness checks hold: they must not rot."""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+@pytest.fixture(autouse=True)
+def bench_path(monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCH))
+
+
+def test_bench_positions(capsys):
+    import bench_positions
+
+    bench_positions.main(2000)
+    assert "ratio" in capsys.readouterr().out
+
+
+def test_bench_forces(capsys):
+    import bench_forces
+
+    bench_forces.main(500)
+    assert "residual" in capsys.readouterr().out
+
+
+def test_bench_designs(capsys, monkeypatch):
+    import bench_designs
+
+    monkeypatch.setattr(bench_designs, "LOOP_DESIGNS", 5)
+    bench_designs.main((50,))
+    out = capsys.readouterr().out
+    assert "50 designs" in out and "linkagekit --help" in out
+
+
+def test_benchmarks_leave_no_module_cache():
+    for name in ("bench_positions", "bench_forces", "bench_designs", "timing"):
+        sys.modules.pop(name, None)
