@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import replace
+from functools import lru_cache
 from types import MappingProxyType
 from typing import Any
 
@@ -48,10 +49,15 @@ def prepare(mech: Mechanism, poses: ArrayLike | None = None) -> Params:
     """The plan and numbers of the mechanism (or of each of ``poses``), in their reference modes."""
     if not isinstance(mech, Mechanism):
         raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
-    plan = make_plan(mech)
     if poses is None:
-        return reference_mode(mech, compile(mech, None, plan))
-    return compile(mech, as_poses(mech, poses), plan)
+        return _prepared(mech)
+    return compile(mech, as_poses(mech, poses), make_plan(mech))
+
+
+@lru_cache(maxsize=64)
+def _prepared(mech: Mechanism) -> Params:
+    """One mechanism's parameters in its reference mode, cached (mechanisms are immutable; the arrays read-only)."""
+    return reference_mode(mech, compile(mech, None, make_plan(mech))).read_only()
 
 
 # ---------------------------------------------------------------------- argument checks

@@ -80,6 +80,22 @@ class Params:
     def n_designs(self) -> int:
         return int(self.valid.shape[0])
 
+    def read_only(self) -> Params:
+        """This object with every array made read-only (safe to cache and share)."""
+
+        def lock(x: Any) -> Any:
+            if isinstance(x, tuple):
+                return tuple(lock(y) for y in x)
+            if isinstance(x, np.ndarray):
+                x.flags.writeable = False
+            return x
+
+        for field in (self.steps, self.pose_inputs, self.signs, self.valid, self.pose):
+            lock(field)
+        for a, b in self.bases.values():
+            lock((a, b))
+        return self
+
     def take(self, sl: slice) -> Params:
         """The designs ``sl`` of this batch (for chunked solves)."""
         if sl == slice(0, self.n_designs):

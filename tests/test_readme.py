@@ -1,0 +1,21 @@
+"""The README's Python example runs as written (in a scratch directory with the examples beside it)."""
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_readme_python_example_runs(tmp_path, monkeypatch):
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert blocks, "the README has a Python example"
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), scope)  # noqa: S102 - our own documentation
+    batch, lk = scope["batch"], scope["lk"]
+    assert batch.xy("P").shape == (10_000, 360, 2)
+    assert lk.load("copy.yaml") == scope["mech"]
+    assert lk.load("design7.yaml") == batch.mechanism_of(7)
