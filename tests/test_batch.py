@@ -211,3 +211,31 @@ def test_bad_poses_get_one_clear_error():
             lk.analyze(mech, [0.0], poses=bad)
     with pytest.raises(lk.InputError, match="vector-loop"):
         lk.analyze(mech, [0.0], poses=mech.pose_array()[None], method="vector-loop")
+
+
+def test_every_number_carries_the_design_axis():
+    """Steps' numbers, masses, inertias, centres of gravity and loads: one row per design; the plan holds none."""
+    import pickle
+
+    from linkagekit.params import compile
+    from linkagekit.plan import make_plan
+
+    mech = lk.load("examples/slider_crank.yaml")
+    plan = make_plan(mech)
+    assert hash(plan) == hash(pickle.loads(pickle.dumps(plan))) and pickle.loads(pickle.dumps(plan)) == plan
+    for st in plan.steps:  # topology only: indices, names, slots
+        for value in vars(st).values():
+            assert isinstance(value, int | str | bool | tuple | type(None)), (st, value)
+    poses = np.stack([mech.pose_array() * s for s in (1.0, 1.1, 1.2)])
+    p = compile(mech, poses)
+
+    def rows(x):
+        if isinstance(x, tuple):
+            return [r for y in x for r in rows(y)]
+        return [np.shape(x)[-2]] if np.ndim(x) >= 2 else []
+
+    assert set(rows(p.steps)) == {3}
+    assert all(b.mass.shape == (3, 1) and b.inertia.shape == (3, 1) for b in p.bodies)
+    assert all(b.cg is None or b.cg.shape == (3, 1) for b in p.bodies)
+    assert p.loads and all(ld.force.shape == (3, 1) for ld in p.loads)
+    assert p.signs.shape == (plan.n_signs, 3) and p.pose_inputs.shape == (1, 3)

@@ -33,7 +33,7 @@ import numpy as np
 from .errors import InputError, LinkageError
 from .forces import Forces, Kinematics, Reaction, solve_forces
 from .model import Mechanism
-from .params import Params, as_poses, compile
+from .params import Body, LoadParams, Params, as_poses, compile
 from .plan import Plan, make_plan
 from .positions import Positions, reference_mode, solve
 from .rates import Rates, link_motion, solve_rates
@@ -237,11 +237,11 @@ def analyze(
                 rt = solve_rates(p, pos, w_in, a_in, out=(out.v[:, sl], out.a[:, sl]))
             out.write(sl, p, pos, rt)
             if with_forces:
-                out.write_forces(sl, _forces(mech, out, sl, speeds))
+                out.write_forces(sl, _forces(mech, p, out, sl, speeds))
     else:
         raise InputError(f"method: expected 'natural' or 'vector-loop', got {method!r}")
     if with_forces and method == "vector-loop":
-        out.write_forces(slice(0, 1), _forces(mech, out, slice(0, 1), speeds))
+        out.write_forces(slice(0, 1), _forces(mech, params, out, slice(0, 1), speeds))
     return _result(mech, params, poses, values, speeds, accels, out, sg)
 
 
@@ -399,7 +399,7 @@ def _result(
     )
 
 
-def _forces(mech: Mechanism, out: _Outputs, sl: slice, speeds: dict[str, np.ndarray]) -> Forces:
+def _forces(mech: Mechanism, params: Params, out: _Outputs, sl: slice, speeds: dict[str, np.ndarray]) -> Forces:
     """The kinetostatics of one chunk of designs (flattened: one linear system per design-sample), (C, n) arrays."""
     assert out.v is not None and out.a is not None and out.omega is not None and out.alpha is not None
     assert out.rot is not None
@@ -412,6 +412,13 @@ def _forces(mech: Mechanism, out: _Outputs, sl: slice, speeds: dict[str, np.ndar
     def joints(a: np.ndarray) -> np.ndarray:
         return a[:, sl].reshape(a.shape[0], N)
 
+    def spread(a: np.ndarray) -> np.ndarray:
+        """A chunk's per-design column (C, 1) spread over its samples, flat (N,)."""
+        return np.broadcast_to(a, shape).reshape(N)
+
+    def per_sample(a: np.ndarray | None) -> np.ndarray | None:
+        return None if a is None else spread(a)
+
     km = Kinematics(
         joints(out.z),
         joints(out.v),
@@ -419,6 +426,8 @@ def _forces(mech: Mechanism, out: _Outputs, sl: slice, speeds: dict[str, np.ndar
         {k: (flat(out.rot[k]), flat(out.omega[k]), flat(out.alpha[k])) for k in out.omega},
         flat(out.assembled & ~out.singular),
         np.array([np.broadcast_to(speeds[d.name], out.assembled.shape)[sl].reshape(N) for d in mech.drivers]),
+        tuple(Body(b.link, spread(b.mass), spread(b.inertia), per_sample(b.cg)) for b in params.bodies),
+        tuple(LoadParams(ld.link, spread(ld.force), spread(ld.torque), per_sample(ld.at)) for ld in params.loads),
     )
     f = solve_forces(mech, km)
     return f.reshape(shape)

@@ -36,10 +36,11 @@ import numpy as np
 
 from .errors import UnknownNameError
 from .geometry import cross
+from .params import Body, LoadParams
 from .rates import LinkMotion
 
 if TYPE_CHECKING:
-    from .model import Link, Mechanism
+    from .model import Mechanism
 
 #: samples per batched solve (bounds the memory of the stacked matrices)
 CHUNK = 16384
@@ -174,27 +175,23 @@ def json_list(a: Any) -> list[Any]:
 
 
 # ------------------------------------------------------------------------------- kinematics
-def point_motion(
-    mech: Mechanism, link: Link, local: complex, km: Kinematics
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Position, velocity and acceleration (file units) of a point given in a link's shape frame.
+def point_motion(mech: Mechanism, link: str, local: np.ndarray, km: Kinematics) -> tuple[np.ndarray, ...]:
+    """Position, velocity and acceleration (file units) of a point carried by a link.
 
-    A link of two or more joints carries the point by its constant complex ratio to its
-    first two joints, ``rho = (local - s_a) / (s_b - s_a)``, so ``z = z_a + rho (z_b - z_a)`` and
-    likewise ``v`` and ``a``; a one-joint block carries it on an arm turning with the block.
-    For a batch of designs the ratio (or the block's arm) is the mechanism's: masses and load
-    points keep their place on each link as its dimensions change.
+    ``local`` is the point's complex ratio to the link's first two joints a, b (a link of
+    two or more joints: ``z = z_a + rho (z_b - z_a)``, and likewise ``v``, ``a``, since the
+    relation is linear), or, for a one-joint block, its offset from the joint, turned with
+    the block: ``r = rot * local``, ``v = v_j + i w r``, ``a = a_j + (i alpha - w^2) r``.
     """
     names = mech.joint_names
-    a = names.index(link.joints[0])
-    if len(link.joints) >= 2:
-        b = names.index(link.joints[1])
-        sa, sb = link.shape[link.joints[0]], link.shape[link.joints[1]]
-        rho = (local - sa) / (sb - sa)
-        return tuple(f[a] + rho * (f[b] - f[a]) for f in (km.z, km.v, km.a))  # type: ignore[return-value]
-    rot, w, al = km.motion[link.name]
-    r = rot * (local - link.shape[link.joints[0]])
-    return km.z[a] + r, km.v[a] + 1j * w * r, km.a[a] + (1j * al - w * w) * r
+    ln = mech.link(link)
+    i = names.index(ln.joints[0])
+    if len(ln.joints) >= 2:
+        k = names.index(ln.joints[1])
+        return tuple(f[i] + local * (f[k] - f[i]) for f in (km.z, km.v, km.a))
+    rot, w, al = km.motion[link]
+    r = rot * local
+    return km.z[i] + r, km.v[i] + 1j * w * r, km.a[i] + (1j * al - w * w) * r
 
 
 @dataclass(frozen=True)
@@ -207,6 +204,8 @@ class Kinematics:
     motion: dict[str, LinkMotion]
     good: np.ndarray  # (N,) assembled and not singular
     speeds: np.ndarray  # (n_drivers, N)
+    bodies: tuple[Body, ...]  # mass properties, arrays (N,)
+    loads: tuple[LoadParams, ...]  # external loads, arrays (N,)
 
 
 # ------------------------------------------------------------------------------- the system
@@ -224,30 +223,25 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
     Q: dict[str, np.ndarray] = {}
     rhs = np.zeros((n, m))
     g = mech.gravity if mech.gravity is not None else 0j
-    for ln in moving:
-        r0 = row[ln.name]
-        al = np.broadcast_to(km.motion[ln.name][2], (n,))
-        if ln.cg is not None:
-            zg, _vg, ag = point_motion(mech, ln, ln.cg, km)
-            Q[ln.name] = zg * si
-            inertial = ln.mass * (ag * si - g)  # m (a_G - g), N
+    for body in km.bodies:
+        r0 = row[body.link]
+        al = np.broadcast_to(km.motion[body.link][2], (n,))
+        if body.cg is not None:
+            zg, _vg, ag = point_motion(mech, body.link, body.cg, km)
+            Q[body.link] = zg * si
+            inertial = body.mass * (ag * si - g)  # m (a_G - g), N
+            rhs[:, r0] += inertial.real
+            rhs[:, r0 + 1] += inertial.imag
         else:
-            Q[ln.name] = z_si[ln.joints[0]]
-            inertial = np.zeros(n, complex)
-        rhs[:, r0] += inertial.real
-        rhs[:, r0 + 1] += inertial.imag
-        rhs[:, r0 + 2] += ln.inertia * al
-    for ld in mech.loads:
-        if ld.link == "ground":
-            continue
+            Q[body.link] = z_si[mech.link(body.link).joints[0]]
+        rhs[:, r0 + 2] += body.inertia * al
+    for ld in km.loads:
         r0 = row[ld.link]
-        ln = mech.link(ld.link)
         rhs[:, r0 + 2] -= ld.torque
-        if ld.force != 0:
-            zp = point_motion(mech, ln, ld.at, km)[0] * si if ld.at is not None else Q[ld.link]
-            rhs[:, r0] -= ld.force.real
-            rhs[:, r0 + 1] -= ld.force.imag
-            rhs[:, r0 + 2] -= cross(zp - Q[ld.link], ld.force)
+        zp = point_motion(mech, ld.link, ld.at, km)[0] * si if ld.at is not None else Q[ld.link]
+        rhs[:, r0] -= ld.force.real
+        rhs[:, r0 + 1] -= ld.force.imag
+        rhs[:, r0 + 2] -= cross(zp - Q[ld.link], ld.force)
 
     # columns: unknowns and where they enter, as (row, column, coefficient per sample);
     # the matrices are filled chunk by chunk into one reused buffer below

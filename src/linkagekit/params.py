@@ -48,6 +48,33 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
+class Body:
+    """Mass properties of one moving link, per design (arrays (D, 1)).
+
+    ``cg`` is where the centre of gravity sits on the link: for a link of two or more joints
+    the complex ratio ``rho = (G - s_a) / (s_b - s_a)`` to its first two joints, so
+    ``z_G = z_a + rho (z_b - z_a)``; for a one-joint block, the offset ``G - s_j`` turned with
+    the block.  None: a massless link (its moment reference is its first joint).
+    """
+
+    link: str
+    mass: np.ndarray
+    inertia: np.ndarray
+    cg: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class LoadParams:
+    """An external load on one link, per design (arrays (D, 1)): force (N, complex), torque (N*m),
+    and its point ``at`` in the same ratio/offset form as :attr:`Body.cg` (None: at the reference point)."""
+
+    link: str
+    force: np.ndarray
+    torque: np.ndarray
+    at: np.ndarray | None
+
+
+@dataclass(frozen=True)
 class Params:
     """The numbers of a plan's steps for ``n_designs`` designs.
 
@@ -66,6 +93,10 @@ class Params:
         Each design's reference pose.
     bases : dict
         Link name -> (s_a, s_b), the shape positions of its first two joints, each (D, 1).
+    bodies, loads : tuple
+        Mass properties of every moving link and the external loads, per design
+        (:class:`Body`, :class:`LoadParams`).  For a batch of poses they are the mechanism's:
+        a centre of gravity or load point keeps its ratio to its link's first two joints.
     """
 
     plan: Plan
@@ -75,6 +106,8 @@ class Params:
     valid: np.ndarray
     pose: np.ndarray
     bases: dict[str, tuple[np.ndarray, np.ndarray]]
+    bodies: tuple[Body, ...] = ()
+    loads: tuple[LoadParams, ...] = ()
 
     @property
     def n_designs(self) -> int:
@@ -92,8 +125,12 @@ class Params:
 
         for field in (self.steps, self.pose_inputs, self.signs, self.valid, self.pose):
             lock(field)
-        for a, b in self.bases.values():
-            lock((a, b))
+        for body in self.bodies:
+            lock((body.mass, body.inertia, body.cg))
+        for ld in self.loads:
+            lock((ld.force, ld.torque, ld.at))
+        for pair in self.bases.values():
+            lock(pair)
         return self
 
     def take(self, sl: slice) -> Params:
@@ -118,6 +155,11 @@ class Params:
             self.valid[sl],
             self.pose[:, sl],
             {k: (a[sl], b[sl]) for k, (a, b) in self.bases.items()},
+            tuple(Body(b.link, b.mass[sl], b.inertia[sl], None if b.cg is None else b.cg[sl]) for b in self.bodies),
+            tuple(
+                LoadParams(ld.link, ld.force[sl], ld.torque[sl], None if ld.at is None else ld.at[sl])
+                for ld in self.loads
+            ),
         )
 
 
@@ -206,7 +248,41 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
     q0 = _pose_inputs(mech, plan, zpose[:, :, 0])
     sign_rows = [st.pose_sign(zpose, n)[:, 0] for st, n in zip(plan.steps, nums, strict=True) if is_sign_step(st)]  # type: ignore[attr-defined]
     signs = np.array(sign_rows, float).reshape(plan.n_signs, src.D)
-    return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases)
+    bodies, loads = _dynamics(mech, src.D)
+    return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases, bodies, loads)
+
+
+def _on_link(mech: Mechanism, link: str, local: complex) -> complex:
+    """A shape-frame point of a link as its ratio to the first two joints (offset from the joint for a block)."""
+    ln = mech.link(link)
+    s0 = ln.shape[ln.joints[0]]
+    if len(ln.joints) >= 2:
+        return complex((local - s0) / (ln.shape[ln.joints[1]] - s0))
+    return complex(local - s0)
+
+
+def _dynamics(mech: Mechanism, D: int) -> tuple[tuple[Body, ...], tuple[LoadParams, ...]]:
+    """The mechanism's mass properties and loads, one row per design."""
+
+    def col(value: complex | float) -> np.ndarray:
+        return np.full((D, 1), value)
+
+    bodies = tuple(
+        Body(ln.name, col(ln.mass), col(ln.inertia), None if ln.cg is None else col(_on_link(mech, ln.name, ln.cg)))
+        for ln in mech.links
+        if ln.name != "ground"
+    )
+    loads = tuple(
+        LoadParams(
+            ld.link,
+            col(ld.force),
+            col(ld.torque),
+            None if ld.at is None else col(_on_link(mech, ld.link, ld.at)),
+        )
+        for ld in mech.loads
+        if ld.link != "ground"
+    )
+    return bodies, loads
 
 
 def all_sign_combinations(k: int) -> np.ndarray:
