@@ -223,9 +223,9 @@ def test_every_number_carries_the_design_axis():
     mech = lk.load("examples/slider_crank.yaml")
     plan = make_plan(mech)
     assert hash(plan) == hash(pickle.loads(pickle.dumps(plan))) and pickle.loads(pickle.dumps(plan)) == plan
-    for st in plan.steps:  # topology only: indices, names, slots
-        for value in vars(st).values():
-            assert isinstance(value, int | str | bool | tuple | type(None)), (st, value)
+    for step in plan.steps:  # topology only: indices, names, slots
+        for value in vars(step).values():
+            assert isinstance(value, int | str | bool | tuple | type(None)), (step, value)
     poses = np.stack([mech.pose_array() * s for s in (1.0, 1.1, 1.2)])
     p = compile(mech, poses)
 
