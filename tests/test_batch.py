@@ -97,16 +97,24 @@ def test_batch_equals_each_design_alone(kind):
     assert (per_design == len(ANGLES)).any() and (per_design < len(ANGLES)).any()
 
 
-@pytest.mark.parametrize("kind", ["fourbar", "slider_crank", "stephenson"])
-def test_batch_with_masses_gravity_and_loads(kind):
-    rng = np.random.default_rng(zlib.crc32(kind.encode()) + 1)
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("kind", ["fourbar", "slider_crank", "stephenson", "watt2"])
+def test_batch_with_masses_gravity_and_loads(kind, seed):
+    rng = np.random.default_rng(zlib.crc32(kind.encode()) + seed)
     while True:
         try:
-            mech = lk.Mechanism.from_dict(with_dynamics(KINDS[kind](rng), rng, massless_share=0.0))
+            d = with_dynamics(KINDS[kind](rng), rng, massless_share=0.0)
+            # and always a load at a joint beyond a link's first two (it must follow that joint)
+            name, spec = max(
+                d["links"].items(), key=lambda kv: len(kv[1]["joints"] if isinstance(kv[1], dict) else kv[1])
+            )
+            joints = spec["joints"] if isinstance(spec, dict) else spec
+            d["loads"] = [*d["loads"], {"link": name, "at": joints[-1], "force": [3.0, -40.0]}]
+            mech = lk.Mechanism.from_dict(d)
             break
         except lk.LinkageError:
             continue
-    poses = random_poses(mech, rng, 12)
+    poses = random_poses(mech, rng, 6)
     batch = compare(mech, poses, {mech.drivers[0].name: ANGLES})
     assert batch.forces is not None and batch.forces.driver_torque[mech.drivers[0].name].shape == batch.shape
 
@@ -239,3 +247,27 @@ def test_every_number_carries_the_design_axis():
     assert all(b.cg is None or b.cg.shape == (3, 1) for b in p.bodies)
     assert p.loads and all(ld.force.shape == (3, 1) for ld in p.loads)
     assert p.signs.shape == (plan.n_signs, 3) and p.pose_inputs.shape == (1, 3)
+
+
+def test_a_load_at_a_joint_follows_that_joint_in_every_design():
+    """A load written `at: P` (third joint of the coupler) acts at each design's own P.
+
+    Reference: virtual work, T = -F . dP/dphi, with dP/dphi from the per-design velocities.
+    """
+    d = {
+        "joints": {"A": [0, 0], "B": [4, 1], "C": [2, 0], "D": [0.820550528229663, 4.85889894354067], "P": [5.6, 3.4]},
+        "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D", "P"], "rocker": ["B", "D"]},
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+        "loads": [{"link": "coupler", "at": "P", "force": [0, -100]}],
+    }
+    mech = lk.Mechanism.from_dict(d)
+    other = mech.pose_array().copy()
+    other[mech.joint_names.index("P")] = [1.0, 2.0]
+    poses = np.stack([mech.pose_array(), other])
+    batch = lk.analyze(mech, [0.0, 90.0], poses=poses, speed=1.0, acceleration=0.0)
+    for i in range(2):
+        one = lk.analyze(mech.with_pose(poses[i]), [0.0, 90.0], speed=1.0, acceleration=0.0)
+        vp = one.velocity("P")  # dP/dphi at unit speed
+        work = -(0 * vp.real + (-100) * vp.imag)  # T w = -F . v_P, w = 1
+        np.testing.assert_allclose(batch.forces.driver_torque["crank"][i], work, rtol=1e-9)
+        np.testing.assert_allclose(one.forces.driver_torque["crank"], work, rtol=1e-9)

@@ -130,3 +130,62 @@ def test_signs_by_name_and_opposite_mode():
     for bad in ({"Q": 1}, [0.5], [1, 1]):
         with pytest.raises(lk.InputError):
             lk.analyze(mech, [30.0], signs=bad)
+
+
+def test_per_sample_signs_and_partial_mappings():
+    rng_pose = lk.load("examples/watt2_sixbar.yaml")
+    mech = lk.Mechanism.from_dict(
+        rng_pose.to_dict()
+        | {"links": {k: (v["joints"] if isinstance(v, dict) else v) for k, v in rng_pose.to_dict()["links"].items()}}
+    )
+    assert not mech.has_given_lengths
+    ref = lk.reference_signs(mech)
+    ang = np.array([10.0, 20.0, 30.0])
+    # a mapping with one sign: the other keeps the pose's
+    flip = next(iter(ref))
+    other = [j for j in ref if j != flip]
+    res = lk.analyze(mech, ang, signs={flip: -ref[flip]})
+    assert res.signs[flip] == -ref[flip] and all(res.signs[j] == ref[j] for j in other)
+    full = lk.analyze(mech, ang, signs=[(-ref[j] if j == flip else ref[j]) for j in ref])
+    np.testing.assert_array_equal(res.xy("P"), full.xy("P"))
+    # one sign per sample: reported per sample, equal to solving each sample in its mode
+    per = np.array([[ref[j]] * 3 for j in ref], float)
+    per[list(ref).index(flip), 1] = -ref[flip]
+    res = lk.analyze(mech, ang, signs=per)
+    assert res.signs[flip].shape == (3,) and res.signs[flip].tolist() == [ref[flip], -ref[flip], ref[flip]]
+    np.testing.assert_array_equal(res.xy("P")[1], full.xy("P")[1])
+    batch = lk.analyze(mech, ang, signs=per, poses=np.stack([mech.pose_array()] * 2))
+    assert batch.signs[flip].shape == (2, 3) and batch.design(1).signs[flip].tolist() == res.signs[flip].tolist()
+    with pytest.raises(ValueError):
+        batch.signs[flip][0, 0] = 5
+    # mirrors by name; bad values are input errors
+    mirrored = lk.analyze(mech, ang, mirrors={"rocker": True})
+    assert not np.allclose(mirrored.xy("F"), lk.analyze(mech, ang).xy("F"))
+    for bad in ({flip: "x"}, {flip: 0.5}):
+        with pytest.raises(lk.InputError):
+            lk.analyze(mech, ang, signs=bad)
+    with pytest.raises(lk.InputError):
+        lk.analyze(mech, ang, mirrors={"rocker": "yes"})
+
+
+def test_bad_arguments_to_the_api_are_linkage_errors(tmp_path):
+    mech = lk.load("examples/seed000_fourbar.yaml")
+    batch = lk.analyze(mech, [0.0], poses=mech.pose_array()[None])
+    one = lk.analyze(mech, [0.0])
+    calls = [
+        lambda: lk.save(None, tmp_path / "x.yaml"),
+        lambda: lk.save(mech, None),
+        lambda: lk.save(mech, tmp_path / "x.txt"),
+        lambda: lk.load(None),
+        lambda: lk.analyze("not a mechanism", [0.0]),
+        lambda: lk.analyze(mech, []),
+        lambda: batch.design(1.0),
+        lambda: batch.design("a"),
+        lambda: batch.design(5),
+        lambda: batch.mechanism_of(7),
+        lambda: one.design(0),
+        lambda: list(lk.analyze_chunks(mech, [0.0], poses=mech.pose_array()[None], designs="2")),
+    ]
+    for call in calls:
+        with pytest.raises(lk.LinkageError):
+            call()

@@ -98,19 +98,28 @@ def _rate(value: ArrayLike, n: int, what: str) -> np.ndarray:
     return np.broadcast_to(arr, (n,)).astype(float)
 
 
-def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, kind: str) -> np.ndarray:
-    """Signs (+1/-1) or mirror flags per slot, as (k, 1, 1 or n), from an array or a mapping."""
+def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, default: np.ndarray) -> np.ndarray:
+    """Signs (+1/-1) or mirror flags (1/0) per slot from an array or a mapping, as (k, D or 1, 1 or n).
+
+    An array gives every slot (one value, or one per sample); a mapping gives some slots by
+    name and the others keep ``default`` (k, D): each design's reference mode, or no mirror.
+    """
     k = len(names)
     if isinstance(value, Mapping):
         unknown = [key for key in value if key not in names]
         if unknown:
-            raise InputError(f"{what}: no {kind} '{unknown[0]}' (there are: {', '.join(names) or 'none'})")
-        arr = np.array([value.get(nm, np.nan) for nm in names], float)
-    else:
-        try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"{what}: expected +1/-1 values, got {value!r}") from None
+            raise InputError(f"{what}: no entry named '{unknown[0]}' (there are: {', '.join(names) or 'none'})")
+        arr = np.array(default, float)[:, :, None]
+        for key, v in value.items():
+            try:
+                arr[names.index(key)] = float(v)
+            except (TypeError, ValueError):
+                raise InputError(f"{what}: '{key}' needs a number, got {v!r}") from None
+        return arr
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{what}: expected numbers, got {value!r}") from None
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim != 2 or arr.shape[0] != k or arr.shape[1] not in (1, n):
@@ -208,12 +217,12 @@ def analyze(
     w_in = np.array([speeds[d.name] for d in mech.drivers])[:, None, :]
     a_in = np.array([accels[d.name] for d in mech.drivers])[:, None, :]
 
-    sg = None if signs is None else _choice(signs, plan.sign_joints, n, "signs", "sign joint")
+    sg = None if signs is None else _choice(signs, plan.sign_joints, n, "signs", params.signs)
     if sg is not None and not np.all(np.abs(sg) == 1):
         raise InputError("signs: every sign must be +1 or -1")
     mr = None
     if mirrors is not None:
-        m = _choice(mirrors, plan.mirror_links, n, "mirrors", "mirror link")
+        m = _choice(mirrors, plan.mirror_links, n, "mirrors", np.zeros((plan.n_mirrors, 1)))
         if not np.all((m == 0) | (m == 1)):
             raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
         mr = m == 1
@@ -267,8 +276,8 @@ def analyze_chunks(
             n = int(np.size(first))
         budget = CHUNK_SAMPLES * (8 if options.get("rates") is False else 1)
         designs = max(1, budget // max(n, 1))
-    if designs < 1:
-        raise InputError("designs: at least one design per chunk")
+    if isinstance(designs, bool) or not isinstance(designs, int | np.integer) or designs < 1:
+        raise InputError(f"designs: a whole number of designs per chunk, at least 1, got {designs!r}")
     for start in range(0, arr.shape[0], designs):
         sl = slice(start, min(start + designs, arr.shape[0]))
         yield sl, analyze(mech, inputs, poses=arr[sl], **options)
@@ -322,7 +331,7 @@ class _Outputs:
 
     def write(self, sl: slice, params: Params, pos: Positions, rt: Rates | None) -> None:
         """Store one chunk of designs (positions are already in place when solved with ``out=``)."""
-        if pos.z is not self.z[:, sl].base and not np.shares_memory(pos.z, self.z[:, sl]):
+        if not np.shares_memory(pos.z, self.z[:, sl]):  # solved elsewhere (the vector-loop method)
             self.z[:, sl] = pos.z
         self.assembled[sl] = pos.assembled
         links = self.mech.links if rt is not None else [ln for ln in self.mech.links if ln.name in self.block_rot]
@@ -371,13 +380,18 @@ def _result(
         per_design = np.angle(sb - sa)[:, 0] / mech.angle_to_rad
         ground_angle = per_design[:, None] if batch else float(per_design[0])
 
-    signs_used = params.signs[:, :, None] if sg is None else sg
+    # the mode used, per sign joint: an int (one design), or an array (per design and/or per sample)
+    signs_used = params.signs[:, :, None] if sg is None else np.broadcast_to(sg, (plan.n_signs, *sg.shape[1:]))
     sign_map: dict[str, Any] = {}
     for i, j in enumerate(plan.sign_joints):
-        s = np.asarray(signs_used[i]).astype(int)
+        s = np.asarray(signs_used[i]).astype(int)  # (D or 1, n or 1)
+        if not batch:
+            s = s[0]
+        elif s.shape[0] == 1 and params.n_designs > 1:
+            s = np.broadcast_to(s, (params.n_designs, s.shape[1]))
         if s.shape[-1] == 1:
             s = s[..., 0]
-        sign_map[j] = (s if batch else int(s[0])) if s.ndim == 1 else s
+        sign_map[j] = int(s) if s.ndim == 0 else frozen(s)
     return Result(
         mech,
         MappingProxyType({k: frozen(v) for k, v in values.items()}),

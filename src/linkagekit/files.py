@@ -33,7 +33,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any, Literal
 
-from .errors import MechanismFileError
+from .errors import InputError, MechanismFileError
 from .model import Mechanism
 
 __all__ = ["dumps", "load", "save"]
@@ -71,6 +71,13 @@ def __getattr__(name: str) -> Any:
 
 
 # ---------------------------------------------------------------------- reading
+def _path(path: Any, what: str) -> Path:
+    """A file path argument, or one clear error."""
+    if not isinstance(path, str | os.PathLike):
+        raise InputError(f"{what}: expected a file path, got {type(path).__name__}")
+    return Path(path)
+
+
 def load(path: str | Path) -> Mechanism:
     """Read a mechanism file (YAML, or JSON when the suffix is ``.json``).  Reading never executes anything.
 
@@ -89,7 +96,7 @@ def load(path: str | Path) -> Mechanism:
     MechanismFileError
         With a message naming the file and the offending key.
     """
-    p = Path(path)
+    p = _path(path, "load")
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -143,7 +150,9 @@ def save(mech: Mechanism, path: str | Path) -> Path:
     MechanismFileError
         For another suffix, or when the file cannot be written.
     """
-    p = Path(path)
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"save: expected a Mechanism, got {type(mech).__name__}")
+    p = _path(path, "save")
     suffix = p.suffix.lower()
     if suffix in {".yaml", ".yml"}:
         text = dumps(mech, "yaml")

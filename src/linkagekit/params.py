@@ -248,7 +248,7 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
     q0 = _pose_inputs(mech, plan, zpose[:, :, 0])
     sign_rows = [st.pose_sign(zpose, n)[:, 0] for st, n in zip(plan.steps, nums, strict=True) if is_sign_step(st)]  # type: ignore[attr-defined]
     signs = np.array(sign_rows, float).reshape(plan.n_signs, src.D)
-    bodies, loads = _dynamics(mech, src.D)
+    bodies, loads = _dynamics(mech, src)
     return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases, bodies, loads)
 
 
@@ -261,11 +261,31 @@ def _on_link(mech: Mechanism, link: str, local: complex) -> complex:
     return complex(local - s0)
 
 
-def _dynamics(mech: Mechanism, D: int) -> tuple[tuple[Body, ...], tuple[LoadParams, ...]]:
-    """The mechanism's mass properties and loads, one row per design."""
+def _dynamics(mech: Mechanism, src: _Shapes) -> tuple[tuple[Body, ...], tuple[LoadParams, ...]]:
+    """The mechanism's mass properties and loads, one row per design.
+
+    A centre of gravity or a load point given as a point keeps the mechanism's ratio to its
+    link's first two joints; a load at a named joint follows that joint in every design.
+    """
+    D = src.D
+    names = src.names
 
     def col(value: complex | float) -> np.ndarray:
         return np.full((D, 1), value)
+
+    def at_joint(link: str, joint: str) -> np.ndarray:
+        """A joint of a link as its ratio to the link's first two joints, per design (offset 0 on a block)."""
+        js = mech.link(link).joints
+        if len(js) < 2:
+            return col(0j)
+        a, b, j = (names.index(x) for x in (js[0], js[1], joint))
+        sa = src.shape(link, a)
+        return np.asarray((src.shape(link, j) - sa) / (src.shape(link, b) - sa), complex) * np.ones((D, 1))
+
+    def load_point(ld: Any) -> np.ndarray | None:
+        if ld.at_joint is not None:
+            return at_joint(ld.link, ld.at_joint)
+        return None if ld.at is None else col(_on_link(mech, ld.link, ld.at))
 
     bodies = tuple(
         Body(ln.name, col(ln.mass), col(ln.inertia), None if ln.cg is None else col(_on_link(mech, ln.name, ln.cg)))
@@ -277,7 +297,7 @@ def _dynamics(mech: Mechanism, D: int) -> tuple[tuple[Body, ...], tuple[LoadPara
             ld.link,
             col(ld.force),
             col(ld.torque),
-            None if ld.at is None else col(_on_link(mech, ld.link, ld.at)),
+            load_point(ld),
         )
         for ld in mech.loads
         if ld.link != "ground"

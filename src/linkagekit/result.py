@@ -219,11 +219,7 @@ class Result:
     # ---------------------------------------------------------------- designs
     def design(self, i: int) -> Result:
         """One design of a batch, as the result of analysing it on its own (no design axis)."""
-        if self.poses is None:
-            raise InputError("design(): this result has no design axis (analyze(..., poses=...) makes one)")
-        n = self.poses.shape[0]
-        if not -n <= i < n:
-            raise UnknownNameError(f"design {i}: the batch has {n} designs")
+        i = self._design_index(i)
 
         def one(a: Any) -> Any:
             a = np.asarray(a)
@@ -240,7 +236,7 @@ class Result:
             one(self.assembled),
             one(self.singular),
             one(self.condition),
-            MappingProxyType({k: int(np.asarray(v)[i]) for k, v in self.signs.items()}),
+            MappingProxyType({k: _one_sign(v, i) for k, v in self.signs.items()}),
             None if self.forces is None else self.forces.take(i),
             None,
             frozen(self._z[:, i]),
@@ -256,7 +252,17 @@ class Result:
         """Design ``i`` of a batch as a :class:`Mechanism` (its pose, no given lengths), e.g. to save it."""
         if self.poses is None:
             return self.mechanism
-        return self.mechanism.with_pose(self.poses[i])
+        return self.mechanism.with_pose(self.poses[self._design_index(i)])
+
+    def _design_index(self, i: Any) -> int:
+        if self.poses is None:
+            raise InputError("design(): this result has no design axis (analyze(..., poses=...) makes one)")
+        n = self.poses.shape[0]
+        if isinstance(i, bool) or not isinstance(i, int | np.integer):
+            raise InputError(f"design: expected a whole number from 0 to {n - 1}, got {i!r}")
+        if not -n <= i < n:
+            raise UnknownNameError(f"design {i}: the batch has {n} designs (0 to {n - 1})")
+        return int(i) % n
 
     # ---------------------------------------------------------------- tables
     def columns(self) -> dict[str, np.ndarray]:
@@ -381,3 +387,12 @@ class Result:
             f"<Result {m.name!r}: {what}, {int(np.sum(self.assembled))} assembled, "
             f"{int(np.sum(self.singular))} singular; joints {names}{extra}>"
         )
+
+
+def _one_sign(value: Any, i: int) -> Any:
+    """Design ``i``'s entry of a sign: an int, or its per-sample array."""
+    arr = np.asarray(value)
+    if arr.ndim == 0:
+        return int(arr)
+    one = arr[i]
+    return int(one) if np.ndim(one) == 0 else frozen(one)

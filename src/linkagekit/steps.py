@@ -120,11 +120,9 @@ class Step:
         return ()
 
     def writes(self) -> tuple[int, ...]:
-        """The joints this step places."""
+        """The joints this step places (its ``joints``, or its one ``joint``)."""
         joint = getattr(self, "joint", None)
-        if isinstance(self, Pivot) or joint is None:
-            return tuple(getattr(self, "joints", ()))
-        return (joint,)
+        return (joint,) if joint is not None else tuple(getattr(self, "joints", ()))
 
 
 def _num(value: Any) -> str:
@@ -419,6 +417,9 @@ class Pivot(Step):
         k.rot[self.on] = np.where(m >= 0, turn, NAN_POINT)
         k.margin[self.sign] = m
 
+    def writes(self) -> tuple[int, ...]:
+        return ()  # it turns a guide; its `joint` is the block joint it passes through, already placed
+
     def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
         # at the pose the rotation is 1, so u = 0 and t = sign(Re(conj(d) (J - Q)))
         return np.where(dot(nums[1], zpose[self.joint] - zpose[self.center]) >= 0, 1.0, -1.0)
@@ -465,7 +466,7 @@ class SliderDrive(Step):
     def place(self, k: Kin, nums: Nums) -> None:
         anchor_s, direction, points = nums
         origin, turn = _line_frame(self.anchor, k.z, k.rot, self.on, anchor_s)
-        k.rot[self.block] = np.broadcast_to(turn, k.z.shape[1:]) * np.ones(k.z.shape[1:])
+        k.rot[self.block] = np.broadcast_to(turn, k.z.shape[1:])
         for j, p in zip(self.joints, points, strict=True):
             k.z[j] = origin + turn * (p + k.q[self.driver] * direction)
 
