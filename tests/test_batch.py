@@ -271,3 +271,21 @@ def test_a_load_at_a_joint_follows_that_joint_in_every_design():
         work = -(0 * vp.real + (-100) * vp.imag)  # T w = -F . v_P, w = 1
         np.testing.assert_allclose(batch.forces.driver_torque["crank"][i], work, rtol=1e-9)
         np.testing.assert_allclose(one.forces.driver_torque["crank"], work, rtol=1e-9)
+
+
+def test_signs_by_name_in_a_batch_over_several_chunks(monkeypatch):
+    """A mapping of signs keeps each design's own mode for the others, chunk by chunk."""
+    import linkagekit.api as api
+
+    rng = np.random.default_rng(21)
+    mech = lk.Mechanism.from_dict(KINDS["watt2"](rng))
+    poses = random_poses(mech, rng, 9)
+    flip = next(iter(lk.reference_signs(mech)))
+    whole = lk.analyze(mech, ANGLES, poses=poses, signs={flip: -1})
+    monkeypatch.setattr(api, "CHUNK_SAMPLES", 2 * len(ANGLES))  # 2 designs per chunk
+    cut = lk.analyze(mech, ANGLES, poses=poses, signs={flip: -1})
+    np.testing.assert_array_equal(points(cut), points(whole))
+    for i, pose in enumerate(poses):
+        one = lk.analyze(mech.with_pose(pose), ANGLES, signs={flip: -1})
+        np.testing.assert_allclose(points(cut.design(i)), points(one), rtol=0, atol=1e-12 * (1 + np.abs(pose).max()))
+        assert dict(cut.design(i).signs) == dict(one.signs)

@@ -227,30 +227,31 @@ def analyze(
             raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
         mr = m == 1
 
+    if method not in ("natural", "vector-loop"):
+        raise InputError(f"method: expected 'natural' or 'vector-loop', got {method!r}")
+    if method == "vector-loop" and (poses is not None or signs is not None or mirrors is not None):
+        raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
     with_forces = rates and dynamics and mech.has_dynamics
-    if method == "vector-loop":
-        if poses is not None or signs is not None or mirrors is not None:
-            raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
-        out = _Outputs(mech, plan, D, n, rates)
-        pos, loop_rates = _vector_loop(mech, params, q, w_in, a_in)
-        out.write(slice(0, 1), params, pos, loop_rates)
-    elif method == "natural":
-        out = _Outputs(mech, plan, D, n, rates)
-        chunk = max(1, CHUNK_SAMPLES // max(n, 1))
-        for start in range(0, D, chunk):  # bounded working memory; every chunk writes its slice
-            sl = slice(start, min(start + chunk, D))
-            p = params.take(sl)
-            pos = solve(p, q[:, sl] if q.shape[1] > 1 else q, sg, mr, out=out.z[:, sl])
-            rt = None
+    out = _Outputs(mech, plan, D, n, rates)
+    chunk = max(1, CHUNK_SAMPLES // max(n, 1))
+    for start in range(0, D, chunk):  # bounded working memory; every chunk writes its slice
+        sl = slice(start, min(start + chunk, D))
+        p = params.take(sl)
+
+        def cut(a: np.ndarray | None, sl: slice = sl) -> np.ndarray | None:
+            """A chunk's designs of an array with a design axis (axis 1), or the array itself when it has none."""
+            return a[:, sl] if a is not None and a.shape[1] > 1 else a
+
+        rt: Rates | None = None
+        if method == "vector-loop":
+            pos, rt = _vector_loop(mech, params, q, w_in, a_in)
+        else:
+            pos = solve(p, cut(q), cut(sg), cut(mr), out=out.z[:, sl])  # type: ignore[arg-type]
             if out.v is not None and out.a is not None:
                 rt = solve_rates(p, pos, w_in, a_in, out=(out.v[:, sl], out.a[:, sl]))
-            out.write(sl, p, pos, rt)
-            if with_forces:
-                out.write_forces(sl, _forces(mech, p, out, sl, speeds))
-    else:
-        raise InputError(f"method: expected 'natural' or 'vector-loop', got {method!r}")
-    if with_forces and method == "vector-loop":
-        out.write_forces(slice(0, 1), _forces(mech, params, out, slice(0, 1), speeds))
+        out.write(sl, p, pos, rt)
+        if with_forces:
+            out.write_forces(sl, _forces(mech, p, out, sl, speeds))
     return _result(mech, params, poses, values, speeds, accels, out, sg)
 
 
