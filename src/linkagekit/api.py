@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, LinkageError
-from .forces import Forces, Kinematics, Reaction, solve_forces
+from .forces import Forces, Kinematics, solve_forces
 from .model import Mechanism
 from .params import Body, LoadParams, Params, as_poses, compile
 from .plan import Plan, make_plan
@@ -306,29 +306,11 @@ class _Outputs:
 
     def write_forces(self, sl: slice, f: Forces) -> None:
         """Store the forces of one chunk (the arrays are made on the first chunk)."""
-        shape = self.assembled.shape
         if self.forces is None:
-
-            def new(a: np.ndarray | None) -> np.ndarray | None:
-                return None if a is None else np.empty(shape, a.dtype)
-
-            self.forces = Forces(
-                tuple(Reaction(r.joint, r.on, r.by, new(r.force), new(r.moment)) for r in f.reactions),  # type: ignore[arg-type]
-                {k: new(v) for k, v in f.driver_torque.items()},  # type: ignore[misc]
-                {k: new(v) for k, v in f.driver_force.items()},  # type: ignore[misc]
-                *(new(a) for a in (f.input_power, f.shaking_force, f.shaking_moment, f.residual)),  # type: ignore[arg-type]
-            )
-        g = self.forces
-        for rg, rf in zip(g.reactions, f.reactions, strict=True):
-            rg.force[sl] = rf.force
-            if rg.moment is not None:
-                rg.moment[sl] = rf.moment
-        for k in f.driver_torque:
-            g.driver_torque[k][sl] = f.driver_torque[k]
-        for k in f.driver_force:
-            g.driver_force[k][sl] = f.driver_force[k]
-        for name in ("input_power", "shaking_force", "shaking_moment", "residual"):
-            getattr(g, name)[sl] = getattr(f, name)
+            shape = self.assembled.shape
+            self.forces = f.map(lambda a: np.empty(shape, a.dtype))
+        for dst, src in zip(self.forces.arrays(), f.arrays(), strict=True):
+            dst[sl] = src
 
     def write(self, sl: slice, params: Params, pos: Positions, rt: Rates | None) -> None:
         """Store one chunk of designs (positions are already in place when solved with ``out=``)."""

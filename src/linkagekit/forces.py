@@ -161,6 +161,14 @@ class Forces:
             f(self.residual),
         )
 
+    def arrays(self) -> list[np.ndarray]:
+        """Every array, in a fixed order (the same for two Forces of one mechanism)."""
+        out: list[np.ndarray] = []
+        for r in self.reactions:
+            out += [r.force] if r.moment is None else [r.force, r.moment]
+        out += list(self.driver_torque.values()) + list(self.driver_force.values())
+        return [*out, self.input_power, self.shaking_force, self.shaking_moment, self.residual]
+
     def take(self, index: Any) -> Forces:
         """The same forces with every array indexed by ``index`` (one design of a batch)."""
         return self.map(lambda a: a[index])
