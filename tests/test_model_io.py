@@ -147,12 +147,13 @@ def test_yaml_is_readable() -> None:
 
 
 @pytest.mark.parametrize("loader", ["_Loader", "_PyLoader"])
-def test_loaders_use_yaml_12_booleans_and_the_safe_number_rules(loader: str) -> None:
+def test_loaders_use_yaml_12_booleans_and_numbers(loader: str) -> None:
+    """YAML 1.2 core schema: only true/false are booleans, 1e-3 is a number (issue 9)."""
     import linkagekit.files as files
 
     cls = getattr(files, loader)
     d = yaml.load("on: yes\noff: true\nn: 1e-3\nf: 1.5e+3\ni: 7\nno: null\nt: False", Loader=cls)  # noqa: S506
-    assert d == {"on": "yes", "off": True, "n": "1e-3", "f": 1500.0, "i": 7, "no": None, "t": False}
+    assert d == {"on": "yes", "off": True, "n": 0.001, "f": 1500.0, "i": 7, "no": None, "t": False}
 
 
 def test_loader_importable_from_model_without_yaml_at_import() -> None:

@@ -43,6 +43,10 @@ ArrayLike = Any
 
 #: design-samples per chunk of a batch: bounds the solver's working memory (~100 MB with rates)
 CHUNK_SAMPLES = 1 << 17
+#: the largest result one call may hold (bytes); beyond it analyze refuses and points to analyze_chunks
+MAX_RESULT_BYTES = 4 << 30
+#: the largest magnitude of an input value, speed or acceleration
+MAX_ABS = 1e12
 
 
 def prepare(mech: Mechanism, poses: ArrayLike | None = None) -> Params:
@@ -70,8 +74,8 @@ def _as_array(value: ArrayLike, what: str) -> np.ndarray:
         raise InputError(f"{what}: expected a 1-D array of values")
     if arr.size == 0:
         raise InputError(f"{what}: no values given")
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"{what}: values must be finite numbers")
+    if not np.all(np.isfinite(arr)) or np.any(np.abs(arr) > MAX_ABS):
+        raise InputError(f"{what}: values must be finite numbers of at most {MAX_ABS:g} in magnitude")
     return arr
 
 
@@ -190,7 +194,15 @@ def analyze(
         if len(v) not in (1, n):
             raise InputError(f"inputs: driver '{k}' has {len(v)} values but another has {n}; give equal lengths")
     if n == 0:
-        n = len(mech.drivers[0].sweep.values())
+        n = mech.drivers[0].sweep.count()
+    J, L = len(plan.joint_names), len(mech.links)
+    nbytes = D * n * (16 * J * (3 if rates else 1) + (2 * 8 * L if rates else 0) + 32)
+    if nbytes > MAX_RESULT_BYTES:
+        raise InputError(
+            f"this call would hold about {nbytes / 2**30:.1f} GB of results ({D} design(s) x {n} samples), "
+            f"more than linkagekit.api.MAX_RESULT_BYTES ({MAX_RESULT_BYTES / 2**30:.0f} GB): use fewer samples, "
+            "rates=False, or lk.analyze_chunks for many designs (or raise the limit)"
+        )
     factors = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
     values: dict[str, np.ndarray] = {}
     per_design = [d.name not in given and len(d.sweep.values()) != n for d in mech.drivers]

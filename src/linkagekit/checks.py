@@ -31,6 +31,8 @@ from .positions import solve
 from .steps import Crank, Dyad, Ground
 
 N_COARSE = 7200
+#: modes lists at most 2^MAX_MODE_SLOTS sign (and mirror) combinations
+MAX_MODE_SLOTS = 12
 N_BISECT = 60
 
 
@@ -371,6 +373,12 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     if given:
         raise InputError(f"at: no driver named '{next(iter(given))}' (drivers: {', '.join(plan.drivers)})")
     k, mm = plan.n_signs, plan.n_mirrors if mirrors else 0
+    if k + mm > MAX_MODE_SLOTS:
+        what = "sign steps and mirror links" if mm else "sign steps"
+        raise InputError(
+            f"modes: {k + mm} {what} give 2^{k + mm} combinations, more than modes lists "
+            f"(2^{MAX_MODE_SLOTS}); fix some with analyze(..., signs={{joint: +1 or -1}})"
+        )
     combos = all_sign_combinations(k + mm)
     signs, mirror_flags = combos[:k], combos[k:] < 0
     n = combos.shape[1]
@@ -382,15 +390,22 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     if mm:
         reference &= ~mirror_flags.any(axis=0)
     out: list[Mode] = []
-    seen: list[tuple[int, np.ndarray]] = []
-    scale = mech.length_scale
+    tol = 1e-9 * mech.length_scale
+    # distinct configurations: bucket by positions rounded to 1e-6 of the size, then confirm
+    # within the bucket to `tol` (two configurations within tol round alike but for a 1e-3 chance
+    # at a rounding boundary, which only splits a duplicate, never merges two modes)
+    keys = np.round(np.concatenate([z.real, z.imag]) / (1e3 * tol)).T
+    buckets: dict[bytes, list[int]] = {}
+    firsts: list[int] = []  # the first combination of each distinct assembled configuration
     for c in range(n):
         zc = z[:, c]
         same = None
         if assembled[c]:
-            same = next((i for i, zs in seen if np.all(np.abs(zs - zc) <= 1e-9 * scale)), None)
+            bucket = buckets.setdefault(keys[c].tobytes(), [])
+            same = next((f for f in bucket if np.all(np.abs(z[:, f] - zc) <= tol)), None)
             if same is None:
-                seen.append((c, zc))
+                bucket.append(c)
+                firsts.append(c)
         out.append(
             Mode(
                 signs={j: int(signs[i, c]) for i, j in enumerate(plan.sign_joints)},
@@ -404,4 +419,4 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
                 same_as=same,
             )
         )
-    return Modes(inp, tuple(out), len(seen))
+    return Modes(inp, tuple(out), len(firsts))

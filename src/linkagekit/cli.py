@@ -37,7 +37,7 @@ import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from .errors import InputError, LinkageError
+from .errors import InputError, LinkageError, one_line, shorten
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
     import numpy as np
@@ -46,6 +46,10 @@ if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy
 
 PROG = "linkagekit"
 MAX_ROWS = 37
+#: samples one command computes and prints at most (a file's sweep and --angles/--at)
+MAX_SAMPLES = 200_000
+#: the largest magnitude of an input value, speed or acceleration
+MAX_ABS = 1e12
 """Most rows a table shows; a longer sweep shows an evenly spaced subset (first and last included)."""
 ROUNDOFF = 1e-12
 """A value below this fraction of the largest magnitude in its column prints as ``0``."""
@@ -97,16 +101,26 @@ def _numbers(text: str, what: str) -> list[float]:
     [0.0, 90.0, 100.0]
     """
     out = []
-    for part in text.split(","):
+    parts = text.split(",")
+    if len(parts) > MAX_SAMPLES:
+        raise InputError(f"{what}: more than {MAX_SAMPLES} values")
+    for part in parts:
         part = part.strip()
         try:
             v = float(part)
         except ValueError:
-            raise InputError(f"{what}: '{part}' is not a number") from None
-        if not math.isfinite(v):
-            raise InputError(f"{what}: '{part}' is not a finite number")
+            raise InputError(f"{what}: {shorten(repr(part))} is not a number") from None
+        if not math.isfinite(v) or abs(v) > MAX_ABS:
+            raise InputError(f"{what}: {shorten(part)} is not a finite number of at most {MAX_ABS:g} in magnitude")
         out.append(v)
     return out
+
+
+def _one_number(text: str, what: str) -> float:
+    values = _numbers(text, what)
+    if len(values) != 1:
+        raise InputError(f"{what}: expected one number, got {shorten(repr(text))}")
+    return values[0]
 
 
 def _range(text: str, what: str) -> np.ndarray:
@@ -119,13 +133,17 @@ def _range(text: str, what: str) -> np.ndarray:
 
     parts = text.split(":")
     if len(parts) != 3:
-        raise InputError(f"{what}: expected START:STOP:STEP, got '{text}'")
-    start, stop, step = (_numbers(p, what)[0] for p in parts)
+        raise InputError(f"{what}: expected START:STOP:STEP, got {shorten(repr(text))}")
+    start, stop, step = (_one_number(p, what) for p in parts)
     if step == 0 or (stop - start) * step < 0:
-        raise InputError(f"{what}: STEP must be non-zero and go from START toward STOP, got '{text}'")
-    n = math.floor((stop - start) / step * (1 + 1e-12) + 1e-9) + 1
-    if n > 10**8:
-        raise InputError(f"{what}: more than 10^8 samples")
+        raise InputError(f"{what}: STEP must be non-zero and go from START toward STOP, got {shorten(repr(text))}")
+    count = (stop - start) / step
+    if count > MAX_SAMPLES:
+        raise InputError(
+            f"{what}: {count:.3g} samples, more than the command line takes ({MAX_SAMPLES}); "
+            "use a coarser STEP, or the Python API (lk.analyze_chunks) for more"
+        )
+    n = math.floor(count * (1 + 1e-12) + 1e-9) + 1
     return start + step * np.arange(n)
 
 
@@ -687,9 +705,15 @@ def _analyze(args: argparse.Namespace) -> int:
     mech = lk.load(args.file)
     if args.static and (args.speed or args.acceleration):
         raise InputError("--static: do not give --speed or --acceleration with it")
+    inputs = _inputs(mech, args.at, args.angles)
+    if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
+        raise InputError(
+            f"{args.file}: the file's sweep has {mech.drivers[0].sweep.count():.3g} samples, more than the "
+            f"command line takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
+        )
     res = lk.analyze(
         mech,
-        _inputs(mech, args.at, args.angles),
+        inputs,
         speed=_rates(mech, args.speed, "--speed"),
         acceleration=_rates(mech, args.acceleration, "--acceleration"),
         method=args.method,
@@ -748,10 +772,6 @@ def _check(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------- entry point
-def _one_line(text: str) -> str:
-    return " ".join(text.split()) if "\n" in text else text
-
-
 def _run(argv: list[str]) -> int:
     parser = build_parser()
     if not argv:
@@ -774,11 +794,16 @@ def main(argv: list[str] | None = None) -> int:
     line on stderr.  Called without *argv* (as the ``linkagekit`` script), it exits with
     that status.
     """
+    import warnings
+
     args = sys.argv[1:] if argv is None else list(argv)
     try:
-        code = _run(args)
+        with warnings.catch_warnings():
+            # a value that overflows is NaN/null in the output, not a warning on stderr
+            warnings.simplefilter("ignore", RuntimeWarning)
+            code = _run(args)
     except LinkageError as exc:
-        print(f"{PROG}: error: {_one_line(str(exc)) or type(exc).__name__}", file=sys.stderr)
+        print(f"{PROG}: error: {one_line(str(exc)) or type(exc).__name__}", file=sys.stderr)
         code = exc.exit_code
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
@@ -793,7 +818,7 @@ def main(argv: list[str] | None = None) -> int:
             except (OSError, ValueError, AttributeError):
                 pass
     except Exception as exc:  # noqa: BLE001 - the promise is: never a traceback
-        print(f"{PROG}: internal error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
+        print(f"{PROG}: internal error: {type(exc).__name__}: {one_line(str(exc))}", file=sys.stderr)
         code = 1
     if argv is None:
         sys.exit(code)

@@ -9,6 +9,25 @@ True
 
 from __future__ import annotations
 
+#: the longest quoted value in a message; the longest message line the CLI prints
+MAX_QUOTE = 60
+MAX_MESSAGE = 300
+
+
+def shorten(text: str, limit: int = MAX_QUOTE) -> str:
+    r"""A value for a message: control characters escaped, cut to ``limit`` characters with an ellipsis.
+
+    >>> shorten("a\nb" + "x" * 100, 10)
+    'a\\nbxxxxx…'
+    """
+    clean = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
+    return clean if len(clean) <= limit else clean[: limit - 1] + "…"
+
+
+def one_line(message: str, limit: int = MAX_MESSAGE) -> str:
+    """A message as one printable line of at most ``limit`` characters."""
+    return shorten(" ".join(str(message).split("\n")), limit)
+
 
 class LinkageError(Exception):
     """Base class of every error linkagekit raises on purpose.

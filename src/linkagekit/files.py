@@ -33,7 +33,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any, Literal
 
-from .errors import InputError, MechanismFileError
+from .errors import InputError, MechanismFileError, shorten
 from .model import Mechanism
 
 __all__ = ["dumps", "load", "save"]
@@ -41,22 +41,44 @@ __all__ = ["dumps", "load", "save"]
 #: YAML 1.2 core schema booleans (PyYAML's YAML 1.1 also takes yes/no/on/off).
 _BOOL = re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$")
 _BOOL_TAG = "tag:yaml.org,2002:bool"
+# YAML 1.2 core schema scalars (https://yaml.org/spec/1.2.2/#1032-tag-resolution)
+_NULL = re.compile(r"^(?:~|null|Null|NULL|)$")
+_INT = re.compile(r"^[-+]?[0-9]+$")
+_INT8 = re.compile(r"^0o[0-7]+$")
+_INT16 = re.compile(r"^0x[0-9a-fA-F]+$")
+_FLOAT = re.compile(r"^[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?$")
+_INF = re.compile(r"^[-+]?\.(?:inf|Inf|INF)$")
+_NAN = re.compile(r"^\.(?:nan|NaN|NAN)$")
 
 
 @cache
 def _loader_class(pure: bool = False) -> type[Any]:
-    """A safe YAML loader with YAML 1.2 booleans: libyaml's C parser unless ``pure``, or unavailable."""
+    """A safe YAML loader with the YAML 1.2 core schema: libyaml's C parser unless ``pure``, or unavailable.
+
+    Only true/false are booleans (so ``on:`` stays a key), ``1e-4`` is a number, and there are
+    no YAML 1.1 timestamps, sexagesimals or yes/no.  ``<<`` is still recognised, so that a
+    merge key can be refused by name.
+    """
     import yaml
 
     base: type[Any] = yaml.CSafeLoader if (yaml.__with_libyaml__ and not pure) else yaml.SafeLoader
-    doc = "PyYAML's safe loader with YAML 1.2 booleans: only true/false, so `on:` stays a key."
-    cls: type[Any] = type("_PyLoader" if base is yaml.SafeLoader else "_Loader", (base,), {"__doc__": doc})
-    # the number, null, ... rules of the safe loader; booleans narrowed to true/false
-    cls.yaml_implicit_resolvers = {
-        ch: [(tag, rx) for tag, rx in resolvers if tag != _BOOL_TAG]
-        for ch, resolvers in base.yaml_implicit_resolvers.items()
-    }
-    cls.add_implicit_resolver(_BOOL_TAG, _BOOL, list("tTfF"))
+    cls: type[Any] = type(
+        "_PyLoader" if base is yaml.SafeLoader else "_Loader", (base,), {"__doc__": _loader_class.__doc__}
+    )
+    cls.yaml_implicit_resolvers = {}
+    digits = list("-+0123456789.")
+    for tag, rx, first in (
+        ("bool", _BOOL, list("tTfF")),
+        ("null", _NULL, ["~", "n", "N", ""]),
+        ("int", _INT, digits),
+        ("int", _INT8, ["0"]),
+        ("int", _INT16, ["0"]),
+        ("float", _FLOAT, digits),
+        ("float", _INF, ["-", "+", "."]),
+        ("float", _NAN, ["."]),
+        ("merge", re.compile(r"^<<$"), ["<"]),
+    ):
+        cls.add_implicit_resolver(f"tag:yaml.org,2002:{tag}", rx, first)
     return cls
 
 
@@ -71,6 +93,136 @@ def __getattr__(name: str) -> Any:
 
 
 # ---------------------------------------------------------------------- reading
+#: limits that protect the machine from a hostile or broken file (docs/mechanism-files.md)
+MAX_FILE_BYTES = 4 << 20
+MAX_DEPTH = 32
+MAX_VALUES = 200_000  # values after expanding aliases
+MAX_NUMBER_CHARS = 64
+
+_STANDARD = {f"tag:yaml.org,2002:{t}" for t in ("str", "int", "float", "bool", "null", "seq", "map")}
+
+
+def _scalar(text: str, tag: str) -> Any:
+    """A scalar by its (resolved or explicit) standard tag: null, bool, int, float or str."""
+    kind = tag.rsplit(":", 1)[1]
+    if kind == "str":
+        return text
+    if kind == "null":
+        return None
+    if kind == "bool":
+        if not _BOOL.match(text):
+            raise ValueError(f"!!bool needs true or false, got {shorten(repr(text))}")
+        return text.lower() == "true"
+    if len(text) > MAX_NUMBER_CHARS:
+        raise ValueError(f"a number of {len(text)} characters (at most {MAX_NUMBER_CHARS})")
+    try:
+        if kind == "int":
+            return int(text, 8 if text.startswith("0o") else 16 if text.startswith("0x") else 10)
+        if _INF.match(text):
+            return float("-inf") if text.startswith("-") else float("inf")
+        return float("nan") if _NAN.match(text) else float(text)
+    except ValueError:
+        raise ValueError(f"!!{kind} needs a number, got {shorten(repr(text))}") from None
+
+
+def _yaml_data(text: str, source: str) -> Any:
+    """Parse YAML into plain data with YAML 1.2 rules, refusing what a mechanism file has no use for.
+
+    PyYAML only composes the node graph (aliases stay shared nodes, nothing is constructed
+    or executed); the nodes are then converted here: YAML 1.2 core scalars (``1e-4`` is a
+    number, only true/false are booleans), string keys only, no duplicate keys, no merge
+    keys, no tags beyond the standard ones, bounded depth and size.
+    """
+    import yaml
+
+    def fail(node: Any, msg: str) -> MechanismFileError:
+        mark = getattr(node, "start_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        return MechanismFileError(f"{source}{where}: {msg}")
+
+    try:
+        nodes = list(yaml.compose_all(text, Loader=_loader_class()))
+    except RecursionError:
+        raise MechanismFileError(f"{source}: nested too deep (at most {MAX_DEPTH} levels)") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise MechanismFileError(f"{source}: YAML syntax error{where}: {shorten(problem)}") from None
+    if len(nodes) != 1:
+        raise MechanismFileError(f"{source}: expected one YAML document, found {len(nodes)}")
+    count = 0
+
+    def convert(node: Any, depth: int) -> Any:
+        nonlocal count
+        count += 1
+        if count > MAX_VALUES:
+            raise fail(node, f"more than {MAX_VALUES} values (after expanding aliases): not a mechanism file")
+        if depth > MAX_DEPTH:
+            raise fail(node, f"nested too deep (at most {MAX_DEPTH} levels)")
+        if node.tag == "tag:yaml.org,2002:merge":
+            raise fail(node, "merge keys (<<) are not allowed: write the keys out")
+        if node.tag not in _STANDARD:
+            tag = node.tag.replace("tag:yaml.org,2002:", "!!")
+            raise fail(node, f"the tag {shorten(tag)} is not allowed in a mechanism file (plain data only)")
+        if isinstance(node, yaml.ScalarNode):
+            try:
+                return _scalar(node.value, node.tag)
+            except ValueError as exc:
+                raise fail(node, str(exc)) from None
+        if isinstance(node, yaml.SequenceNode):
+            return [convert(item, depth + 1) for item in node.value]
+        out: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            key = convert(key_node, depth + 1)
+            if not isinstance(key, str):
+                raise fail(key_node, f"a key must be a name, got {shorten(repr(key))} (quote it)")
+            if key in out:
+                raise fail(key_node, f"duplicate key '{shorten(key)}'")
+            out[key] = convert(value_node, depth + 1)
+        return out
+
+    return convert(nodes[0], 0)
+
+
+def _json_data(text: str, source: str) -> Any:
+    """Parse JSON with the same refusals as YAML: duplicate keys, depth, oversized numbers."""
+
+    def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for k, v in items:
+            if k in out:
+                raise MechanismFileError(f"{source}: duplicate key '{shorten(k)}'")
+            out[k] = v
+        return out
+
+    def number(text: str) -> Any:
+        if len(text) > MAX_NUMBER_CHARS:
+            raise MechanismFileError(f"{source}: a number of {len(text)} characters (at most {MAX_NUMBER_CHARS})")
+        return float(text) if any(c in text for c in ".eE") else int(text)
+
+    try:
+        data = json.loads(text, object_pairs_hook=pairs, parse_int=number, parse_float=number)
+    except json.JSONDecodeError as exc:
+        raise MechanismFileError(
+            f"{source}: JSON syntax error at line {exc.lineno}, column {exc.colno}: {exc.msg}"
+        ) from None
+    except RecursionError:
+        raise MechanismFileError(f"{source}: nested too deep (at most {MAX_DEPTH} levels)") from None
+
+    def depth(x: Any, d: int = 0) -> int:
+        if d > MAX_DEPTH:
+            raise MechanismFileError(f"{source}: nested too deep (at most {MAX_DEPTH} levels)")
+        if isinstance(x, dict):
+            return max((depth(v, d + 1) for v in x.values()), default=d)
+        if isinstance(x, list):
+            return max((depth(v, d + 1) for v in x), default=d)
+        return d
+
+    depth(data)
+    return data
+
+
 def _path(path: Any, what: str) -> Path:
     """A file path argument, or one clear error."""
     if not isinstance(path, str | os.PathLike):
@@ -98,30 +250,19 @@ def load(path: str | Path) -> Mechanism:
     """
     p = _path(path, "load")
     try:
-        text = p.read_text(encoding="utf-8")
+        size = p.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise MechanismFileError(f"{p}: {size} bytes, more than a mechanism file may have ({MAX_FILE_BYTES})")
+        text = p.read_text(encoding="utf-8-sig")  # a byte-order mark is dropped, in JSON as in YAML
     except FileNotFoundError:
         raise MechanismFileError(f"{p}: no such file") from None
     except IsADirectoryError:
         raise MechanismFileError(f"{p}: is a directory, not a mechanism file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MechanismFileError(f"{p}: cannot read: {exc}") from None
-    if p.suffix.lower() == ".json":
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise MechanismFileError(
-                f"{p}: JSON syntax error at line {exc.lineno}, column {exc.colno}: {exc.msg}"
-            ) from None
-    else:
-        import yaml
-
-        try:
-            data = yaml.load(text, Loader=_loader_class())  # noqa: S506 - a safe loader
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-            problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-            raise MechanismFileError(f"{p}: YAML syntax error{where}: {problem}") from None
+    except UnicodeDecodeError as exc:
+        raise MechanismFileError(f"{p}: not UTF-8 text (byte {exc.start})") from None
+    except OSError as exc:
+        raise MechanismFileError(f"{p}: cannot read: {exc.strerror or exc}") from None
+    data = _json_data(text, str(p)) if p.suffix.lower() == ".json" else _yaml_data(text, str(p))
     return Mechanism.from_dict(data, source=str(p))
 
 

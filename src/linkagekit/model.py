@@ -187,10 +187,13 @@ class Sweep:
     stop: float
     step: float
 
+    def count(self) -> int:
+        """How many values :meth:`values` has."""
+        return max(math.floor((self.stop - self.start) / self.step * (1 + 1e-12) + 1e-9) + 1, 1)
+
     def values(self) -> np.ndarray:
         """The sweep's input values (file units)."""
-        n = math.floor((self.stop - self.start) / self.step * (1 + 1e-12) + 1e-9) + 1
-        return self.start + self.step * np.arange(max(n, 1))
+        return self.start + self.step * np.arange(self.count())
 
     def to_dict(self) -> dict[str, float]:
         """``{start, stop, step}`` as the file writes it."""
@@ -569,6 +572,15 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
             )
         )
 
+    for i, la in enumerate(links):  # two links through the same two joints would be one rigid body
+        for lb in links[i + 1 :]:
+            shared = [j for j in la.joints if j in lb.joints]
+            if len(shared) >= 2:
+                raise fail(
+                    f"links.{lb.name}",
+                    f"shares joints '{shared[0]}' and '{shared[1]}' with link '{la.name}': two links through "
+                    f"the same two joints are one rigid body (merge them into one link)",
+                )
     for j in joints:
         if j not in used:
             raise fail(f"joints.{j}", "not carried by any link")

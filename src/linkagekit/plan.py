@@ -202,8 +202,18 @@ def make_plan(mech: Mechanism) -> Plan:
         labels.append(label)
 
     missing = [j for j in names if j not in known]
-    if missing or pending:
-        what = ", ".join(missing) if missing else ", ".join(mech.drivers[d].name for d in pending)
+    for di in pending:  # a driver whose pivot (or guide) nothing fixed: the file asks for the impossible
+        d = mech.drivers[di]
+        if d.kind == "angle":
+            raise MechanismFileError(
+                f"{mech.source}: drivers[{di}]: link '{d.link}' turns about '{d.pivot}', which nothing fixes "
+                f"before it: a driver turns a link about a pivot on the ground (or on a link placed before it)"
+            )
+        raise MechanismFileError(
+            f"{mech.source}: drivers[{di}]: slider {d.slider} slides on a link that nothing fixes before it"
+        )
+    if missing:
+        what = ", ".join(missing)
         raise NotSolvableError(
             f"{mech.source}: no triangulation order places {what}: this mechanism needs the numerical solver "
             f"(an Assur group of class 3 or more, or a slider arrangement not handled in closed form), "

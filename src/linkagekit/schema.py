@@ -12,20 +12,53 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 
-from .errors import MechanismFileError
+from .errors import MechanismFileError, shorten
+
+#: limits on what a file may hold (docs/mechanism-files.md, "Limits")
+MAX_ABS = 1e12  # any number: coordinates, lengths, masses, forces, speeds
+MAX_NAME = 64  # characters in a joint, link or mechanism-part name
+MAX_JOINTS = 200
+MAX_LINKS = 200
 
 
 def _number(value: Any) -> float:
     # YAML gives bool for `yes`/`no` and str for quoted text: neither is a number here.
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"expected a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ValueError(f"expected a finite number, got {value!r}")
-    return float(value)
+        raise ValueError(f"expected a number, got {shorten(repr(value))}")
+    try:
+        x = float(value)
+    except OverflowError:
+        raise ValueError(f"a number too large (at most {MAX_ABS:g} in magnitude)") from None
+    if not math.isfinite(x):
+        raise ValueError(f"expected a finite number, got {shorten(repr(value))}")
+    if abs(x) > MAX_ABS:
+        raise ValueError(f"{x:g} is too large (at most {MAX_ABS:g} in magnitude)")
+    return x
+
+
+def _name(value: Any) -> str:
+    if not isinstance(value, str):
+        raise ValueError(f"expected a name, got {shorten(repr(value))}")
+    if not value:
+        raise ValueError("a name must not be empty")
+    if len(value) > MAX_NAME:
+        raise ValueError(f"a name of {len(value)} characters (at most {MAX_NAME}): {shorten(value, 20)!r}")
+    if not value.isprintable():
+        raise ValueError(f"a name with control characters: {shorten(repr(value))}")
+    return value
+
+
+def _index(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"expected a whole number (an index), got {shorten(repr(value))}")
+    return value
 
 
 Number = Annotated[float, BeforeValidator(_number)]
 Point = tuple[Number, Number]
+Name = Annotated[str, BeforeValidator(_name)]
+Index = Annotated[int, BeforeValidator(_index)]
+JointList = Annotated[list[Name], Field(min_length=1)]
 
 
 class _Strict(BaseModel):
@@ -44,7 +77,7 @@ class SweepSpec(_Strict):
 
 
 class LinkSpec(_Strict):
-    joints: list[str] = Field(min_length=1)
+    joints: JointList
     lengths: dict[str, Number] | None = None
     mass: Number | None = None
     cg: Point | None = None
@@ -52,26 +85,26 @@ class LinkSpec(_Strict):
 
 
 class DriverSpec(_Strict):
-    link: str | None = None
-    pivot: str | None = None
-    toward: str | None = None
+    link: Name | None = None
+    pivot: Name | None = None
+    toward: Name | None = None
     angles: SweepSpec | None = None
-    slider: int | None = None
+    slider: Index | None = None
     displacements: SweepSpec | None = None
     speed: Number = 1.0
     acceleration: Number = 0.0
 
 
 class SliderSpec(_Strict):
-    link: str
-    on: str
-    through: str
+    link: Name
+    on: Name
+    through: Name
     direction: Point
 
 
 class LoadSpec(_Strict):
-    link: str
-    at: str | Point | None = None
+    link: Name
+    at: Name | Point | None = None
     force: Point | None = None
     torque: Number | None = None
 
@@ -81,12 +114,15 @@ class FileSpec(_Strict):
     name: str = ""
     description: str | None = None
     units: UnitsSpec = UnitsSpec()
-    joints: dict[str, Point] = Field(min_length=1)
-    links: dict[str, list[str] | LinkSpec] = Field(min_length=1)
+    joints: dict[Name, Point] = Field(min_length=1, max_length=MAX_JOINTS)
+    links: dict[Name, JointList | LinkSpec] = Field(min_length=1, max_length=MAX_LINKS)
     drivers: list[DriverSpec] = Field(min_length=1)
     sliders: list[SliderSpec] = []
     gravity: Point | None = None
     loads: list[LoadSpec] = []
+
+
+_UNION_TAGS = {"LinkSpec", "str", "float", "int"}
 
 
 def _location(loc: tuple[int | str, ...]) -> str:
@@ -95,7 +131,7 @@ def _location(loc: tuple[int | str, ...]) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
-        elif part in {"list[str]", "LinkSpec", "str", "tuple[float, float]"} or "[" in part:
+        elif part in _UNION_TAGS or part.startswith(("function-", "tuple[", "list[", "dict[")):
             continue  # the branch names of a union, not keys of the file
         else:
             out += ("." if out else "") + part
@@ -121,7 +157,11 @@ def parse(data: Any, source: str) -> FileSpec:
             msg = "unknown key"
         elif first["type"] == "missing":
             msg = "required key is missing"
-        raise MechanismFileError(f"{source}: {_location(first['loc'])}: {msg}") from None
+        elif first["type"] == "too_long":
+            limit = MAX_JOINTS if first["loc"][:1] == ("joints",) else MAX_LINKS
+            msg = f"too many entries (at most {limit})"
+        where = shorten(_location(first["loc"]), 120)
+        raise MechanismFileError(f"{source}: {where}: {shorten(msg, 200)}") from None
 
 
 def _get(data: Any, loc: tuple[int | str, ...]) -> Any:
