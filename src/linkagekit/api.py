@@ -185,9 +185,8 @@ def analyze(
     -------
     Result
     """
-    params = prepare(mech, poses)
-    plan = params.plan
-    D = params.n_designs
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
     given = {k: _as_array(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
     n = max((len(v) for v in given.values()), default=0)
     for k, v in given.items():
@@ -195,7 +194,12 @@ def analyze(
             raise InputError(f"inputs: driver '{k}' has {len(v)} values but another has {n}; give equal lengths")
     if n == 0:
         n = mech.drivers[0].sweep.count()
-    J, L = len(plan.joint_names), len(mech.links)
+    try:
+        shape = np.shape(poses) if poses is not None else ()
+    except (TypeError, ValueError):
+        shape = ()
+    D = int(shape[0]) if len(shape) == 3 else 1  # the size is checked before anything is built for it
+    J, L = len(mech.joints), len(mech.links)
     nbytes = D * n * (16 * J * (3 if rates else 1) + (2 * 8 * L if rates else 0) + 32)
     if nbytes > MAX_RESULT_BYTES:
         raise InputError(
@@ -203,6 +207,8 @@ def analyze(
             f"more than linkagekit.api.MAX_RESULT_BYTES ({MAX_RESULT_BYTES / 2**30:.0f} GB): use fewer samples, "
             "rates=False, or lk.analyze_chunks for many designs (or raise the limit)"
         )
+    params = prepare(mech, poses)
+    plan = params.plan
     factors = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
     values: dict[str, np.ndarray] = {}
     per_design = [d.name not in given and len(d.sweep.values()) != n for d in mech.drivers]

@@ -158,8 +158,10 @@ def parse(data: Any, source: str) -> FileSpec:
         elif first["type"] == "missing":
             msg = "required key is missing"
         elif first["type"] == "too_short":
-            msg = "must not be empty (a link needs at least one joint)" if first["loc"][:1] == ("links",) else (
-                "must not be empty"
+            msg = (
+                "must not be empty (a link needs at least one joint)"
+                if first["loc"][:1] == ("links",)
+                else ("must not be empty")
             )
         elif first["type"] == "too_long":
             limit = MAX_JOINTS if first["loc"][:1] == ("joints",) else MAX_LINKS
