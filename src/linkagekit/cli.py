@@ -37,7 +37,7 @@ import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from .errors import InputError, LinkageError, one_line, shorten
+from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
     import numpy as np
@@ -163,7 +163,7 @@ def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[
             name, text = names[0], item
         if name in out:
             raise InputError(f"{option}: driver '{name}' given twice")
-        out[name] = parse(text, f"{option} {item}")
+        out[name] = parse(text, f"{option} {shorten(item, 40)}")
     return out
 
 
@@ -803,7 +803,8 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore", RuntimeWarning)
             code = _run(args)
     except LinkageError as exc:
-        print(f"{PROG}: error: {one_line(str(exc)) or type(exc).__name__}", file=sys.stderr)
+        prefix = f"{PROG}: error: "
+        print(prefix + (one_line(str(exc), MAX_MESSAGE - len(prefix)) or type(exc).__name__), file=sys.stderr)
         code = exc.exit_code
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
@@ -818,7 +819,8 @@ def main(argv: list[str] | None = None) -> int:
             except (OSError, ValueError, AttributeError):
                 pass
     except Exception as exc:  # noqa: BLE001 - the promise is: never a traceback
-        print(f"{PROG}: internal error: {type(exc).__name__}: {one_line(str(exc))}", file=sys.stderr)
+        prefix = f"{PROG}: internal error: {type(exc).__name__}: "
+        print(prefix + one_line(str(exc), max(MAX_MESSAGE - len(prefix), 40)), file=sys.stderr)
         code = 1
     if argv is None:
         sys.exit(code)

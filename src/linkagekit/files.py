@@ -227,6 +227,8 @@ def _path(path: Any, what: str) -> Path:
     """A file path argument, or one clear error."""
     if not isinstance(path, str | os.PathLike):
         raise InputError(f"{what}: expected a file path, got {type(path).__name__}")
+    if "\x00" in os.fsdecode(path):
+        raise InputError(f"{what}: a file path with a NUL byte: {shorten(repr(os.fsdecode(path)))}")
     return Path(path)
 
 
@@ -262,6 +264,8 @@ def load(path: str | Path) -> Mechanism:
         raise MechanismFileError(f"{p}: not UTF-8 text (byte {exc.start})") from None
     except OSError as exc:
         raise MechanismFileError(f"{p}: cannot read: {exc.strerror or exc}") from None
+    except ValueError as exc:  # e.g. a NUL byte in the path
+        raise MechanismFileError(f"{shorten(str(p))}: not a usable path: {exc}") from None
     data = _json_data(text, str(p)) if p.suffix.lower() == ".json" else _yaml_data(text, str(p))
     return Mechanism.from_dict(data, source=str(p))
 

@@ -251,6 +251,8 @@ class Result:
     def mechanism_of(self, i: int) -> Mechanism:
         """Design ``i`` of a batch as a :class:`Mechanism` (its pose, no given lengths), e.g. to save it."""
         if self.poses is None:
+            if isinstance(i, bool) or not isinstance(i, int | np.integer) or i not in (0, -1):
+                raise InputError(f"mechanism_of: this result has one design (0), got {i!r}")
             return self.mechanism
         return self.mechanism.with_pose(self.poses[self._design_index(i)])
 
