@@ -13,7 +13,14 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-from .errors import InputError, LinkageError, MechanismFileError, NotSolvableError, UnknownNameError
+from .errors import (
+    InputError,
+    LinkageError,
+    MechanismFileError,
+    MethodNotApplicableError,
+    NotSolvableError,
+    UnknownNameError,
+)
 
 __version__ = "0.1.0"
 
@@ -34,6 +41,7 @@ __all__ = [
     "LinkageError",
     "Mechanism",
     "MechanismFileError",
+    "MethodNotApplicableError",
     "NotSolvableError",
     "Result",
     "UnknownNameError",

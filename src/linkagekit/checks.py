@@ -362,10 +362,10 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
         if d.name in given:
             try:
                 value = float(given.pop(d.name))
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):
                 raise InputError(f"at: '{d.name}' needs one number") from None
-            if not math.isfinite(value):
-                raise InputError(f"at: '{d.name}' must be a finite number")
+            if not math.isfinite(value) or abs(value) > 1e12:
+                raise InputError(f"at: '{d.name}' must be a finite number of at most 1e12 in magnitude")
             q0[i] = value * factors[i]
             inp[d.name] = value  # as given, not through radians and back
         else:

@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy
 PROG = "linkagekit"
 MAX_ROWS = 37
 #: samples one command computes and prints at most (a file's sweep and --angles/--at)
-MAX_SAMPLES = 200_000
+MAX_SAMPLES = 100_000
 #: the largest magnitude of an input value, speed or acceleration
 MAX_ABS = 1e12
 """Most rows a table shows; a longer sweep shows an evenly spaced subset (first and last included)."""

@@ -69,3 +69,9 @@ class NotSolvableError(LinkageError):
     """A valid mechanism that the closed-form solver cannot handle."""
 
     exit_code = 1
+
+
+class MethodNotApplicableError(NotSolvableError, InputError):
+    """A method asked for (``method="vector-loop"``) that does not cover this mechanism: a bad argument."""
+
+    exit_code = 2

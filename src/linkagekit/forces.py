@@ -177,9 +177,19 @@ class Forces:
 def json_list(a: Any) -> list[Any]:
     """A 1-D array as a JSON list; NaN becomes ``None`` (``null``); nested for more dimensions."""
     arr = np.asarray(a, float)
-    if arr.ndim > 1:
-        return [json_list(x) for x in arr]
-    return [None if not np.isfinite(x) else float(x) for x in arr]
+    out = arr.tolist()  # Python floats, nested for more dimensions
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        if arr.ndim == 1:
+            for i in np.flatnonzero(bad):
+                out[i] = None
+        else:
+            for index in zip(*np.nonzero(bad), strict=True):
+                row = out
+                for i in index[:-1]:
+                    row = row[i]
+                row[index[-1]] = None
+    return out
 
 
 # ------------------------------------------------------------------------------- kinematics

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
 
-from .errors import MechanismFileError, UnknownNameError
+from .errors import MechanismFileError, UnknownNameError, shorten
 from .units import ANGLE_UNITS, LENGTH_UNITS
 
 if TYPE_CHECKING:
@@ -433,8 +433,10 @@ class Mechanism:
             rows = pose
         try:
             arr = np.asarray(rows, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise MechanismFileError(f"{self.source}: pose: expected numbers (n_joints, 2): {exc}") from None
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise MechanismFileError(
+                f"{self.source}: pose: expected numbers (n_joints, 2): {shorten(str(exc))}"
+            ) from None
         if arr.shape != (len(names), 2):
             raise MechanismFileError(
                 f"{self.source}: pose: expected shape ({len(names)}, 2) (joints {', '.join(names)}), got {arr.shape}"
@@ -452,9 +454,9 @@ class Mechanism:
         """
         try:
             return self._by_name[name]
-        except KeyError:
+        except (KeyError, TypeError):  # TypeError: an unhashable "name"
             raise UnknownNameError(
-                f"no link named '{name}' (links: {', '.join(ln.name for ln in self.links)})"
+                f"no link named {shorten(repr(name))} (links: {', '.join(ln.name for ln in self.links)})"
             ) from None
 
     @property

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import InputError, UnknownNameError
+from .errors import InputError, UnknownNameError, shorten
 from .forces import Forces, json_list
 
 if TYPE_CHECKING:
@@ -116,8 +116,8 @@ class Result:
     # ---------------------------------------------------------------- points
     def _j(self, name: str) -> int:
         names = self.mechanism.joint_names
-        if name not in names:
-            raise UnknownNameError(f"unknown joint '{name}' (joints: {', '.join(names)})")
+        if not isinstance(name, str) or name not in names:
+            raise UnknownNameError(f"unknown joint {shorten(repr(name))} (joints: {', '.join(names)})")
         return names.index(name)
 
     def _rates(self, which: str) -> np.ndarray:
@@ -163,9 +163,10 @@ class Result:
     # ---------------------------------------------------------------- links
     def _link(self, name: str) -> Any:
         for ln in self.mechanism.links:
-            if ln.name == name:
+            if isinstance(name, str) and ln.name == name:
                 return ln
-        raise UnknownNameError(f"unknown link '{name}' (links: {', '.join(ln.name for ln in self.mechanism.links)})")
+        links = ", ".join(ln.name for ln in self.mechanism.links)
+        raise UnknownNameError(f"unknown link {shorten(repr(name))} (links: {links})")
 
     @cached_property
     def link_angle(self) -> Mapping[str, np.ndarray]:

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import NotSolvableError
+from .errors import MethodNotApplicableError
 from .geometry import NAN_POINT, cross
 
 if TYPE_CHECKING:
@@ -363,8 +363,8 @@ def _side(k1: complex, k2: complex, j: complex) -> float:
     return 1.0 if cross(np.asarray(k2 - k1), np.asarray(j - k1)) >= 0 else -1.0
 
 
-def _unsupported(mech: Mechanism, why: str) -> NotSolvableError:
-    return NotSolvableError(
+def _unsupported(mech: Mechanism, why: str) -> MethodNotApplicableError:
+    return MethodNotApplicableError(
         f"{mech.name}: the vector-loop method handles four-bars and Stephenson six-bars "
         f"with a ternary input link and a ternary output link pivoted on the ground; {why}"
     )
