@@ -750,6 +750,11 @@ def _shape(lname: str, ls: LinkSpec, pose: dict[str, complex], fail: Any, scale:
             raise fail(f"links.{lname}.lengths.{k}", f"expected 'X-Y' with X and Y two joints of link '{lname}'")
         if v <= 0:
             raise fail(f"links.{lname}.lengths.{k}", "a length must be positive")
+        if v <= LENGTH_RTOL * scale:
+            raise fail(
+                f"links.{lname}.lengths.{k}",
+                f"{v:g} puts the two joints at one spot (the mechanism is {scale:g} across)",
+            )
         given[frozenset(pair)] = v
 
     def dist(a: str, b: str) -> float:
