@@ -68,7 +68,7 @@ def _prepared(mech: Mechanism) -> Params:
 def _as_array(value: ArrayLike, what: str) -> np.ndarray:
     try:
         arr = np.atleast_1d(np.asarray(value, dtype=float))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InputError(f"{what}: expected numbers, got {value!r}") from None
     if arr.ndim != 1:
         raise InputError(f"{what}: expected a 1-D array of values")
@@ -117,12 +117,12 @@ def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, default
         for key, v in value.items():
             try:
                 arr[names.index(key)] = float(v)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):
                 raise InputError(f"{what}: '{key}' needs a number, got {v!r}") from None
         return arr
     try:
         arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InputError(f"{what}: expected numbers, got {value!r}") from None
     if arr.ndim == 1:
         arr = arr[:, None]
@@ -187,6 +187,11 @@ def analyze(
     """
     if not isinstance(mech, Mechanism):
         raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    for flag, value in (("rates", rates), ("dynamics", dynamics), ("static", static)):
+        if not isinstance(value, bool | np.bool_):
+            raise InputError(f"{flag}: expected True or False, got {type(value).__name__}")
+    if not isinstance(method, str):
+        raise InputError(f"method: expected 'natural' or 'vector-loop', got {type(method).__name__}")
     given = {k: _as_array(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
     n = max((len(v) for v in given.values()), default=0)
     for k, v in given.items():
@@ -196,7 +201,7 @@ def analyze(
         n = mech.drivers[0].sweep.count()
     try:
         shape = np.shape(poses) if poses is not None else ()
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         shape = ()
     D = int(shape[0]) if len(shape) == 3 else 1  # the size is checked before anything is built for it
     J, L = len(mech.joints), len(mech.links)

@@ -345,6 +345,8 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
         natural-coordinate papers).
     """
     params = prepare(mech)
+    if not isinstance(mirrors, bool | np.bool_):
+        raise InputError(f"mirrors: expected True or False, got {type(mirrors).__name__}")
     plan = params.plan
     names = plan.joint_names
     q0 = params.pose_inputs[:, 0].copy()

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import UnknownNameError
+from .errors import UnknownNameError, shorten
 from .geometry import cross
 from .params import Body, LoadParams
 from .rates import LinkMotion
@@ -80,6 +80,9 @@ class Forces:
 
     def reaction(self, joint: str, on: str, by: str | None = None) -> np.ndarray:
         """Force on link ``on`` at ``joint`` by link ``by`` (may be left out when only one link acts there)."""
+        for what, value in (("joint", joint), ("on", on), ("by", by)):
+            if not isinstance(value, str) and not (what == "by" and value is None):
+                raise UnknownNameError(f"reaction: {what} must be a name, got {shorten(repr(value))}")
         found = []
         for r in self.reactions:
             if r.joint == joint and r.on == on and by in (None, r.by):

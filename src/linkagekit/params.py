@@ -207,7 +207,7 @@ def as_poses(mech: Mechanism, poses: Any) -> np.ndarray:
     """Check and convert a user's poses to a float array (D, n_joints, 2)."""
     try:
         arr = np.asarray(poses, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InputError("poses: expected an array of numbers (n_designs, n_joints, 2)") from None
     nj = len(mech.joints)
     if arr.ndim == 2:
