@@ -85,3 +85,27 @@ def test_error_types_are_also_the_builtin_ones():
         lk.analyze(MECH, [])
     with pytest.raises(LookupError):
         RES.xy("Z")
+
+
+BASE = MECH.to_dict()
+FILE_MESSAGES = {
+    "units as a list": ({**BASE, "units": [1]}, "units: expected a mapping of keys"),
+    "point of one number": ({**BASE, "joints": {**BASE["joints"], "B": [1]}}, "joints.B[1]: expected a point [x, y]"),
+    "point of three numbers": ({**BASE, "joints": {**BASE["joints"], "B": [1, 2, 3]}}, "joints.B: expected a point"),
+    "point as text": ({**BASE, "joints": {**BASE["joints"], "B": "here"}}, "joints.B: expected a point [x, y]"),
+    "links as a list": ({**BASE, "links": ["ground"]}, "links: expected a mapping of keys"),
+    "drivers as a mapping": ({**BASE, "drivers": {"link": "crank"}}, "drivers: expected a list"),
+    "name as a number": ({**BASE, "name": 5}, "name: expected text"),
+    "unknown unit": ({**BASE, "units": {"length": "furlong"}}, "units.length: expected 'mm', 'cm', 'm' or 'in'"),
+    "empty link": ({**BASE, "links": {**BASE["links"], "ground": []}}, "links.ground: must not be empty"),
+    "201 joints": ({**BASE, "joints": {f"J{i}": [i, 0] for i in range(201)}}, "joints: too many entries (at most 200)"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(FILE_MESSAGES))
+def test_file_errors_speak_the_file_format(case):
+    """Located messages in the file format's words, not the validation library's."""
+    data, expected = FILE_MESSAGES[case]
+    with pytest.raises(lk.MechanismFileError) as info:
+        lk.Mechanism.from_dict(data)
+    assert expected in str(info.value) and "Input should" not in str(info.value)

@@ -124,6 +124,36 @@ class FileSpec(_Strict):
 
 _UNION_TAGS = {"LinkSpec", "str", "float", "int"}
 
+#: our words for pydantic's error types
+_MESSAGES = {
+    "extra_forbidden": "unknown key",
+    "missing": "required key is missing",
+    "dict_type": "expected a mapping of keys",
+    "model_type": "expected a mapping of keys",
+    "model_attributes_type": "expected a mapping of keys",
+    "list_type": "expected a list",
+    "string_type": "expected text",
+    "tuple_type": "expected a point [x, y]",
+}
+
+
+def _message(err: Any) -> str:
+    """One pydantic error in the words of the file format."""
+    kind, loc = err["type"], tuple(err["loc"])
+    point = bool(loc) and isinstance(loc[-1], int) and kind in ("missing", "too_long", "too_short")
+    if point or (kind in ("too_long", "too_short") and "tuple" in str(err.get("msg", "")).lower()):
+        return "expected a point [x, y]: two numbers"
+    if kind == "too_long" and loc in (("joints",), ("links",)):
+        return f"too many entries (at most {MAX_JOINTS if loc == ('joints',) else MAX_LINKS})"
+    if kind == "too_short":
+        return "must not be empty (a link needs at least one joint)" if loc[:1] == ("links",) else "must not be empty"
+    if kind in _MESSAGES:
+        return _MESSAGES[kind]
+    msg = str(err["msg"]).removeprefix("Value error, ")
+    if msg.startswith("Input should be "):  # e.g. a literal: "expected 'mm', 'cm', 'm' or 'in'"
+        msg = "expected " + msg.removeprefix("Input should be ").split(" or instance of ")[0]
+    return msg
+
 
 def _location(loc: tuple[int | str, ...]) -> str:
     """Render a pydantic location as a key path, dropping pydantic's union tags."""
@@ -152,20 +182,7 @@ def parse(data: Any, source: str) -> FileSpec:
             if "LinkSpec" in err["loc"] and isinstance(_get(data, err["loc"][:2]), dict):
                 first = err
                 break
-        msg = first["msg"].removeprefix("Value error, ")
-        if first["type"] == "extra_forbidden":
-            msg = "unknown key"
-        elif first["type"] == "missing":
-            msg = "required key is missing"
-        elif first["type"] == "too_short":
-            msg = (
-                "must not be empty (a link needs at least one joint)"
-                if first["loc"][:1] == ("links",)
-                else ("must not be empty")
-            )
-        elif first["type"] == "too_long":
-            limit = MAX_JOINTS if first["loc"][:1] == ("joints",) else MAX_LINKS
-            msg = f"too many entries (at most {limit})"
+        msg = _message(first)
         where = shorten(_location(first["loc"]), 120)
         raise MechanismFileError(f"{source}: {where}: {shorten(msg, 200)}") from None
 
