@@ -216,14 +216,16 @@ def analyze(
     plan = params.plan
     factors = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
     values: dict[str, np.ndarray] = {}
-    per_design = [d.name not in given and len(d.sweep.values()) != n for d in mech.drivers]
+    per_design = [d.name not in given and d.sweep.count() != n for d in mech.drivers]
     q = np.empty((len(mech.drivers), D if any(per_design) else 1, n))  # shared inputs: no design axis
     for i, d in enumerate(mech.drivers):
         if d.name in given:
             values[d.name] = np.broadcast_to(given[d.name], (n,)).astype(float)
         else:
-            sw = d.sweep.values()
-            values[d.name] = sw if len(sw) == n else np.repeat(params.pose_inputs[i][:, None] / factors[i], n, axis=1)
+            own = d.sweep.count() == n
+            values[d.name] = (
+                d.sweep.values() if own else np.repeat(params.pose_inputs[i][:, None] / factors[i], n, axis=1)
+            )
         q[i] = values[d.name] * factors[i]
         if poses is None:
             values[d.name] = np.reshape(values[d.name], (-1, n))[0]
@@ -294,7 +296,7 @@ def analyze_chunks(
     """
     arr = as_poses(mech, poses)
     if designs is None:
-        n = len(mech.drivers[0].sweep.values())
+        n = mech.drivers[0].sweep.count()
         first: Any = next(iter(inputs.values())) if isinstance(inputs, Mapping) and inputs else inputs
         if first is not None:
             n = int(np.size(first))

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .geometry import NAN_POINT, abs2, cross, dot, link_rates
+from .geometry import NAN_POINT, link_rates
 from .params import Params
 from .positions import Positions
 from .steps import Rate
@@ -28,7 +28,7 @@ from .steps import Rate
 #: |sin| of a step's angle below which its rates are undefined (see the module docstring)
 SINGULAR_TOL = 1e-6
 
-__all__ = ["SINGULAR_TOL", "Rates", "abs2", "cross", "dot", "link_rates", "solve_rates"]
+__all__ = ["SINGULAR_TOL", "LinkMotion", "Rates", "link_motion", "solve_rates"]
 
 
 @dataclass(frozen=True)

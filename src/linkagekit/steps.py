@@ -29,11 +29,11 @@ Notation: points are complex (:mod:`linkagekit.geometry`); ``a . b = Re(conj(a) 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
-from .geometry import _TINY, NAN_POINT, circle_circle, cis, cross, dot, link_rates, side
+from .geometry import _TINY, NAN_POINT, circle_circle, cis, dot, link_rates, side
 
 Nums = tuple[Any, ...]
 
@@ -98,11 +98,6 @@ class Rate:
 class Step:
     """Base of the step kinds (see the module docstring)."""
 
-    #: index into the sign vector, for the steps that choose between two solutions
-    sign: int | None = None
-    #: does this step's link rotation have to be kept for later steps
-    kind: ClassVar[str] = "step"
-
     def numbers(self, src: Source) -> Nums:
         return ()
 
@@ -135,7 +130,6 @@ class Ground(Step):
     """The joints of the frame: fixed at their ground-shape positions."""
 
     joints: tuple[int, ...]
-    kind: ClassVar[str] = "ground"
 
     def numbers(self, src: Source) -> Nums:
         return (np.stack([src.shape("ground", j) for j in self.joints]),)
@@ -160,7 +154,6 @@ class Crank(Step):
     link: str
     pivot: int
     toward: int
-    kind: ClassVar[str] = "crank"
 
     def writes(self) -> tuple[int, ...]:
         return (self.toward,)
@@ -201,7 +194,6 @@ class Place(Step):
     joints: tuple[int, ...]
     mirror: int | None = None  # index into the mirror flags, for links of 3+ joints
     keep_rotation: bool = False  # a later step needs this link's rotation (and rates)
-    kind: ClassVar[str] = "place"
 
     def numbers(self, src: Source) -> Nums:
         s1 = src.shape(self.link, self.k1)
@@ -255,8 +247,7 @@ class Dyad(Step):
     k1: int
     k2: int
     links: tuple[str, str]
-    sign: int  # type: ignore[assignment]
-    kind: ClassVar[str] = "dyad"
+    sign: int  # index into the sign vector
 
     def numbers(self, src: Source) -> Nums:
         l1, l2 = self.links
@@ -329,8 +320,7 @@ class CircleLine(Step):
     block: str
     on: str
     anchor: int | None  # a known joint of `on` (None: `on` is the ground)
-    sign: int  # type: ignore[assignment]
-    kind: ClassVar[str] = "circle-line"
+    sign: int  # index into the sign vector
 
     def numbers(self, src: Source) -> Nums:
         radius = np.abs(src.shape(self.link, self.joint) - src.shape(self.link, self.center))
@@ -398,8 +388,7 @@ class Pivot(Step):
     on: str
     center: int  # the known joint of `on` it turns about
     joint: int  # the known joint of the block
-    sign: int  # type: ignore[assignment]
-    kind: ClassVar[str] = "pivot"
+    sign: int  # index into the sign vector
 
     def numbers(self, src: Source) -> Nums:
         return src.pose(self.joint) - src.shape(self.on, self.center), src.direction(self.slider)
@@ -454,7 +443,6 @@ class SliderDrive(Step):
     on: str
     anchor: int | None
     joints: tuple[int, ...]
-    kind: ClassVar[str] = "slider-drive"
 
     def numbers(self, src: Source) -> Nums:
         anchor_s = src.shape(self.on, self.anchor) if self.anchor is not None else 0j
@@ -497,7 +485,6 @@ class Carry(Step):
     rot_of: str  # the link whose rotation this link shares
     anchor: int
     joints: tuple[int, ...]
-    kind: ClassVar[str] = "carry"
 
     def numbers(self, src: Source) -> Nums:
         s0 = src.shape(self.link, self.anchor)
@@ -548,6 +535,5 @@ __all__ = [
     "SliderDrive",
     "Source",
     "Step",
-    "cross",
     "is_sign_step",
 ]
