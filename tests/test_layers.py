@@ -21,31 +21,54 @@ LAYERS = [
     {"steps", "plan", "params"},
     {"positions", "rates", "forces", "vectorloop"},
     {"result", "api", "checks"},
+    {"viz.scene"},
+    {"viz.draw", "viz.animate", "web.report"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}
 
 
-def imports_of(path: Path) -> set[str]:
-    """The linkagekit modules a source file imports, anywhere in it."""
+def module_name(path: Path) -> str:
+    """``viz.scene`` for src/linkagekit/viz/scene.py."""
+    return ".".join(path.relative_to(SRC).with_suffix("").parts)
+
+
+def _resolve(package: list[str], level: int, module: str | None, names: list[str]) -> set[str]:
+    """The linkagekit modules named by ``from <level dots><module> import <names>`` in ``package``."""
+    base = package[: len(package) - (level - 1)] if level else []
+    parts = base + (module.split(".") if module else [])
     out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom):
-            if node.level == 1:  # from .x import y / from . import x
-                if node.module:
-                    out.add(node.module.split(".")[0])
-                else:  # from . import x: a module, or a name of the package itself (__version__)
-                    out.update(a.name for a in node.names if a.name in RANK)
-            elif node.module and node.module.startswith("linkagekit."):
-                out.add(node.module.split(".")[1])
-            elif node.module == "linkagekit":
-                out.update(a.name for a in node.names if a.name in RANK)
-        elif isinstance(node, ast.Import):
-            out.update(a.name.split(".")[1] for a in node.names if a.name.startswith("linkagekit."))
+    dotted = ".".join(parts)
+    for name in names:  # from .viz import draw: a submodule
+        if f"{dotted}.{name}".strip(".") in RANK:
+            out.add(f"{dotted}.{name}".strip("."))
+    if dotted in RANK:
+        out.add(dotted)
+    elif parts and parts[0] in RANK:
+        out.add(parts[0])
     return out
 
 
-MODULES = sorted(p.stem for p in SRC.glob("*.py") if p.stem != "__init__")
+def imports_of(path: Path) -> set[str]:
+    """The linkagekit modules a source file imports, anywhere in it."""
+    package = list(path.relative_to(SRC).parts[:-1]) if path.is_relative_to(SRC) else []
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            names = [a.name for a in node.names]
+            if node.level >= 1:
+                out |= _resolve(package, node.level, node.module, names)
+            elif node.module and (node.module == "linkagekit" or node.module.startswith("linkagekit.")):
+                out |= _resolve([], 0, node.module.partition(".")[2] or None, names)
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("linkagekit."):
+                    out |= _resolve([], 0, a.name.partition(".")[2], [])
+    return out
+
+
+FILES = {module_name(p): p for p in SRC.rglob("*.py") if p.name != "__init__.py"}
+MODULES = sorted(FILES)
 
 
 def test_every_module_has_a_layer():
@@ -54,12 +77,12 @@ def test_every_module_has_a_layer():
 
 @pytest.mark.parametrize("module", MODULES)
 def test_imports_point_down(module):
-    for target in imports_of(SRC / f"{module}.py"):
+    for target in imports_of(FILES[module]):
         assert RANK[target] <= RANK[module], f"{module} (layer {RANK[module]}) imports {target} (layer {RANK[target]})"
 
 
 def test_no_import_cycles():
-    graph = {m: imports_of(SRC / f"{m}.py") - {m} for m in MODULES}
+    graph = {m: imports_of(FILES[m]) - {m} for m in MODULES}
 
     def reach(start):
         seen, todo = set(), list(graph[start])
@@ -99,6 +122,12 @@ def test_reading_and_solving_loads_only_what_it_needs():
     mech = "lk.load('examples/seed000_fourbar.yaml')"
     loaded = loaded_after(f"import linkagekit as lk\nlk.analyze({mech})\nlk.check({mech})")
     assert loaded == {"numpy", "yaml", "pydantic"}, loaded
+
+
+def test_subpackage_imports_are_resolved():
+    assert imports_of(FILES["web.report"]) >= {"viz.scene", "result"}
+    assert imports_of(FILES["viz.draw"]) >= {"viz.scene", "result"}
+    assert {"viz.draw", "viz.animate", "web.report"} <= imports_of(FILES["cli"])
 
 
 def test_the_command_line_module_imports_nothing_heavy():

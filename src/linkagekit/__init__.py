@@ -5,7 +5,7 @@ first solve, pydantic with the first file read).
 
 >>> import linkagekit as lk
 >>> sorted(n for n in lk.__all__ if not n.endswith("Error"))[:6]
-['Mechanism', 'Result', 'analyze', 'analyze_chunks', 'check', 'load']
+['Mechanism', 'Result', 'analyze', 'analyze_chunks', 'animate', 'build_scene']
 """
 
 from __future__ import annotations
@@ -34,6 +34,11 @@ _LAZY = {
     "Result": "result",
     "check": "checks",
     "modes": "checks",
+    "build_scene": "viz.scene",
+    "draw_mechanism": "viz.draw",
+    "plot_quantity": "viz.draw",
+    "animate": "viz.animate",
+    "write_report": "web.report",
 }
 
 __all__ = [
@@ -47,11 +52,16 @@ __all__ = [
     "UnknownNameError",
     "analyze",
     "analyze_chunks",
+    "animate",
+    "build_scene",
     "check",
+    "draw_mechanism",
     "load",
     "modes",
+    "plot_quantity",
     "reference_signs",
     "save",
+    "write_report",
 ]
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -60,6 +70,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from .files import load, save
     from .model import Mechanism
     from .result import Result
+    from .viz.animate import animate
+    from .viz.draw import draw_mechanism, plot_quantity
+    from .viz.scene import build_scene
+    from .web.report import write_report
 
 
 def __getattr__(name: str) -> Any:

@@ -29,11 +29,12 @@ import os
 import re
 import secrets
 import stat
+from collections.abc import Iterator
 from functools import cache
 from pathlib import Path
 from typing import Any, Literal
 
-from .errors import InputError, MechanismFileError, shorten
+from .errors import InputError, LinkageError, MechanismFileError, shorten
 from .model import Mechanism
 
 __all__ = ["dumps", "load", "save"]
@@ -422,7 +423,21 @@ def _dumper_class() -> type[Any]:
 
 def _write_atomic(p: Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``p`` through a temporary file in the same directory and :func:`os.replace`."""
-    data = text.encode("utf-8")
+    with atomic_output(p, MechanismFileError) as tmp, open(tmp, "wb") as f:
+        f.write(text.encode("utf-8"))
+        f.flush()
+        os.fsync(f.fileno())
+
+
+@contextlib.contextmanager
+def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iterator[Path]:
+    """A temporary path beside ``p`` to write; on success it replaces ``p`` in one step.
+
+    The old file stays whole until the new one is complete; the new file keeps the old
+    one's permissions (or the umask's).  On failure the temporary file is removed; an
+    ``OSError`` becomes ``error`` naming ``p``.
+    """
+    p = Path(p)
     tmp = p.with_name(f".{p.name}.{secrets.token_hex(6)}.tmp")
     done = False
     try:
@@ -430,17 +445,14 @@ def _write_atomic(p: Path, text: str) -> None:
             mode = stat.S_IMODE(os.stat(p).st_mode)
         except FileNotFoundError:
             mode = None
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies, as for open()
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))  # the umask applies, as for open()
+        yield tmp
         if mode is not None:
             os.chmod(tmp, mode)  # keep the permissions of the file it replaces
         os.replace(tmp, p)
         done = True
     except OSError as exc:
-        raise MechanismFileError(f"{p}: cannot write: {exc.strerror or exc}") from None
+        raise error(f"{p}: cannot write: {exc.strerror or exc}") from None
     finally:
         if not done:
             with contextlib.suppress(OSError):

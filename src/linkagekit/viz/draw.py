@@ -1,0 +1,457 @@
+"""matplotlib drawings of a scene: the mechanism as in a textbook, its curves, and plots of any quantity.
+
+The drawing functions take and return a matplotlib ``Axes`` so they compose in notebooks:
+
+>>> import matplotlib
+>>> matplotlib.use("Agg")
+>>> import matplotlib.pyplot as plt
+>>> import linkagekit as lk
+>>> from linkagekit.viz import draw
+>>> res = lk.analyze(lk.load("examples/seed000_fourbar.yaml"))
+>>> fig, (a, b) = plt.subplots(1, 2)
+>>> draw.draw_mechanism(a, res, at=30.0) is a, draw.plot_quantity(b, res, "coupler.omega") is b
+(True, True)
+>>> plt.close(fig)
+
+The drawing of a pose is a :class:`Drawing`: static parts (ground, guides on the ground,
+curves) drawn once, moving parts as artists updated per sample, which is what the
+animation redraws (and only that).  Every position drawn comes from the scene, so from the
+solver; a sample that does not assemble draws no mechanism, and curves break there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Polygon
+from matplotlib.text import Text
+
+from ..errors import InputError
+from ..files import atomic_output
+from ..result import Result
+from .scene import Scene, broken_at_wraps, build_scene
+
+#: colours of the links, in order (the ground is drawn in black)
+PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
+#: coupler curves
+CURVE_COLOR = "#e6007e"
+#: other joint paths
+PATH_COLOR = "#9a9a9a"
+BACKGROUND = "#ffffff"
+#: PNG metadata key holding the map from file units to pixels (see :func:`save_figure`)
+TRANSFORM_KEY = "linkagekit:transform"
+
+
+def _scene(obj: Result | Scene) -> Scene:
+    if isinstance(obj, Scene):
+        return obj
+    return build_scene(obj)
+
+
+def _sample(sc: Scene, at: float | int | None) -> int:
+    """The sample index nearest to input ``at`` of the first driver (None: the first assembled sample)."""
+    if at is None:
+        ok = np.flatnonzero(sc.assembled)
+        return int(ok[0]) if ok.size else 0
+    x = sc.inputs[sc.drivers[0]]
+    return int(np.argmin(np.abs(x - float(at))))
+
+
+class Drawing:
+    """The mechanism of a scene on an Axes: :meth:`update` moves it to a sample.
+
+    Parameters
+    ----------
+    ax : Axes
+    scene : Scene
+    labels : bool
+        Write the joints' names.
+    curves : bool
+        Draw the joint paths (coupler curves in colour, the other paths thin and grey).
+    animated : bool
+        Mark the moving artists as animated (drawn only on request, for blitting).
+    """
+
+    def __init__(self, ax: Axes, scene: Scene, labels: bool = True, curves: bool = True, animated: bool = False):
+        self.ax, self.scene = ax, scene
+        sc = scene
+        s = sc.size
+        self.pin = 0.012 * s
+        self.static: list[Any] = []
+        ax.set_aspect("equal")
+        ax.set_xlim(sc.bounds[0], sc.bounds[2])
+        ax.set_ylim(sc.bounds[1], sc.bounds[3])
+        ax.set_axis_off()
+        ax.set_facecolor(BACKGROUND)
+        if curves:
+            self._curves()
+        self._ground()
+        # moving artists
+        self.links: list[tuple[Any, Any, tuple[int, ...]]] = []
+        k = 0
+        for ln in sc.links:
+            if ln.kind == "ground":
+                continue
+            color = PALETTE[k % len(PALETTE)]
+            k += 1
+            idx = tuple(sc.index(j) for j in ln.outline)
+            if ln.kind == "plate":
+                art: Any = Polygon(np.zeros((len(idx), 2)), closed=True, facecolor=color, alpha=0.35, edgecolor=color,
+                                   linewidth=2.5, joinstyle="round", zorder=3, animated=animated)
+                ax.add_patch(art)
+            elif ln.kind == "block":
+                art = Polygon(np.zeros((4, 2)), closed=True, facecolor=color, alpha=0.8, edgecolor="black",
+                              linewidth=1.0, zorder=4, animated=animated)
+                ax.add_patch(art)
+            else:
+                art = Line2D([], [], color=color, linewidth=5, solid_capstyle="round", zorder=3, animated=animated)
+                ax.add_line(art)
+            self.links.append((ln, art, idx))
+        self.moving_guides: list[tuple[Any, Line2D]] = []
+        for sl in sc.sliders:
+            if sl.on != "ground":
+                line = Line2D([], [], color="#444444", linewidth=1.5, zorder=2.5, animated=animated)
+                ax.add_line(line)
+                self.moving_guides.append((sl, line))
+        moving = [i for i, j in enumerate(sc.joints) if j not in sc.ground_joints]
+        self.moving = moving
+        self.pins = Line2D([], [], linestyle="none", marker="o", markersize=6, markerfacecolor="white",
+                           markeredgecolor="black", markeredgewidth=1.3, zorder=6, animated=animated)
+        ax.add_line(self.pins)
+        self.labels: list[tuple[int, Text]] = []
+        if labels:
+            for i in moving:
+                t = ax.text(0, 0, sc.joints[i], fontsize=8, zorder=7, animated=animated,
+                            ha="left", va="bottom", visible=False)
+                self.labels.append((i, t))
+        self.note = ax.text(0.5, 0.02, "", transform=ax.transAxes, ha="center", va="bottom", fontsize=9,
+                            color="#b00000", zorder=8, animated=animated)
+
+    # ---------------------------------------------------------------- static parts
+    def _curves(self) -> None:
+        sc, ax = self.scene, self.ax
+        for j in sc.other_paths:
+            p = sc.xy[:, sc.index(j)]
+            (line,) = ax.plot(p[:, 0], p[:, 1], color=PATH_COLOR, linewidth=0.8, linestyle=(0, (4, 3)), zorder=1)
+            self.static.append(line)
+        for j in sc.coupler_curves:
+            p = sc.xy[:, sc.index(j)]
+            (line,) = ax.plot(p[:, 0], p[:, 1], color=CURVE_COLOR, linewidth=1.6, zorder=1.5, label=f"path of {j}")
+            self.static.append(line)
+
+    def _ground(self) -> None:
+        """Ground pivots as hatched triangles, guides on the ground as hatched lines."""
+        sc, ax = self.scene, self.ax
+        h = 3.2 * self.pin
+        for j in sc.ground_joints:
+            x, y = sc.xy[:, sc.index(j)][np.isfinite(sc.xy[:, sc.index(j), 0])][:1].ravel().tolist() or [math.nan] * 2
+            if not math.isfinite(x):
+                continue
+            tri = Polygon([[x, y], [x - 0.8 * h, y - h], [x + 0.8 * h, y - h]], closed=True, facecolor="#dddddd",
+                          edgecolor="black", linewidth=1.0, zorder=2)
+            ax.add_patch(tri)
+            base = Polygon([[x - 1.3 * h, y - h], [x + 1.3 * h, y - h], [x + 1.3 * h, y - 1.45 * h],
+                            [x - 1.3 * h, y - 1.45 * h]], closed=True, facecolor="none", edgecolor="black",
+                           hatch="////", linewidth=0.0, zorder=2)
+            ax.add_patch(base)
+            (pin,) = ax.plot([x], [y], linestyle="none", marker="o", markersize=6, markerfacecolor="white",
+                             markeredgecolor="black", markeredgewidth=1.3, zorder=6)
+            self.static += [tri, base, pin]
+        for sl in sc.sliders:
+            if sl.on != "ground":
+                continue
+            o, d = sl.origin[0], sl.direction[0]
+            a, b = o + sl.span[0] * d, o + sl.span[1] * d
+            (line,) = ax.plot([a[0], b[0]], [a[1], b[1]], color="black", linewidth=1.5, zorder=2)
+            nrm = np.array([d[1], -d[0]]) * 0.9 * h  # hatch below the guide (to its right)
+            strip = Polygon([a, b, b + nrm, a + nrm], closed=True, facecolor="none", edgecolor="black",
+                            hatch="////", linewidth=0.0, zorder=2)
+            ax.add_patch(strip)
+            self.static += [line, strip]
+
+    # ---------------------------------------------------------------- moving parts
+    def artists(self) -> list[Any]:
+        """Every artist :meth:`update` changes."""
+        return ([a for _, a, _ in self.links] + [g for _, g in self.moving_guides] + [self.pins]
+                + [t for _, t in self.labels] + [self.note])
+
+    def update(self, i: int) -> list[Any]:
+        """Move the drawing to sample ``i``; returns the artists changed."""
+        sc = self.scene
+        p = sc.xy[i]
+        ok = bool(sc.assembled[i])
+        for ln, art, idx in self.links:
+            pts = p[list(idx)]
+            if ln.kind == "block":
+                sl = next(s for s in sc.sliders if s.block == ln.name)
+                c, d = p[sc.index(sl.through)], sl.direction[i]
+                n = np.array([-d[1], d[0]])
+                w, h = 2.6 * self.pin, 1.6 * self.pin
+                art.set_xy(np.array([c - w * d - h * n, c + w * d - h * n, c + w * d + h * n, c - w * d + h * n]))
+                art.set_visible(ok)
+            elif ln.kind == "plate":
+                art.set_xy(pts)
+                art.set_visible(ok)
+            else:
+                art.set_data(pts[:, 0], pts[:, 1])
+                art.set_visible(ok)
+        for sl, line in self.moving_guides:
+            o, d = sl.origin[i], sl.direction[i]
+            a, b = o + sl.span[0] * d, o + sl.span[1] * d
+            line.set_data([a[0], b[0]], [a[1], b[1]])
+            line.set_visible(ok)
+        mv = p[self.moving]
+        self.pins.set_data(mv[:, 0], mv[:, 1])
+        self.pins.set_visible(ok)
+        for j, t in self.labels:
+            t.set_position((p[j, 0] + 0.8 * self.pin, p[j, 1] + 0.8 * self.pin))
+            t.set_visible(ok)
+        inputs = ", ".join(f"{k} = {sc.inputs[k][i]:.6g} {sc.input_units[k]}" for k in sc.drivers)
+        self.note.set_text("" if ok else f"does not assemble at {inputs}")
+        return self.artists()
+
+
+def draw_mechanism(
+    ax: Axes, res: Result | Scene, at: float | None = None, labels: bool = True, curves: bool = True
+) -> Axes:
+    """Draw the mechanism at input ``at`` (the sample nearest to it; default the first assembled) with its curves.
+
+    Parameters
+    ----------
+    ax : Axes
+    res : Result or Scene
+        One design's sweep (:func:`linkagekit.analyze`).
+    at : float, optional
+        Input of the first driver, in the file's units.
+    """
+    sc = _scene(res)
+    d = Drawing(ax, sc, labels=labels, curves=curves)
+    d.update(_sample(sc, at))
+    return ax
+
+
+def plot_quantity(
+    ax: Axes, res: Result | Scene, name: str, label: str | None = None, period: float | None = None
+) -> Axes:
+    """Plot one column of :meth:`Result.columns` (or a joint speed ``|v|[J]``) against the first driver's input.
+
+    Samples that do not assemble (or sit at a singular position, for rates and forces) are
+    gaps in the line, shaded grey where the mechanism does not assemble.  A link angle is
+    not drawn across its jump from +180 to -180 degrees (or ``period``, for other columns).
+    """
+    sc = _scene(res)
+    if name not in sc.columns:
+        from ..errors import UnknownNameError
+
+        raise UnknownNameError(f"no quantity {name!r} (quantities: {', '.join(list(sc.columns)[:12])}, ...)")
+    x = sc.inputs[sc.drivers[0]]
+    y = np.asarray(sc.columns[name], float)
+    if period is None and name.endswith(".angle"):
+        period = 360.0 if sc.angle_unit == "deg" else 2 * math.pi
+    ax.plot(*broken_at_wraps(x, y, period), label=label or name, linewidth=1.4)
+    for a, b in sc.gaps:
+        lo = x[max(a - 1, 0)] if a > 0 else x[0]
+        hi = x[min(b + 1, len(x) - 1)]
+        ax.axvspan(min(lo, hi), max(lo, hi), color="#e8e8e8", zorder=0, linewidth=0)
+    driver = sc.drivers[0]
+    ax.set_xlabel(f"{driver} [{sc.input_units[driver]}]")
+    unit = sc.units.get(name, "")
+    ax.set_ylabel(f"{name} [{unit}]" if unit else name)
+    ax.grid(True, linewidth=0.4, alpha=0.6)
+    return ax
+
+
+def plot_quantities(ax: Axes, res: Result | Scene, names: Sequence[str]) -> Axes:
+    """Several quantities on one Axes, with a legend (their units should agree)."""
+    sc = _scene(res)
+    for n in names:
+        plot_quantity(ax, sc, n)
+    units = {sc.units.get(n, "") for n in names}
+    if len(names) > 1:
+        ax.set_ylabel(" / ".join(sorted(units)) if units != {""} else "")
+        ax.legend(fontsize=7, loc="best")
+    return ax
+
+
+def mechanism_figure(res: Result, poses: Result | None = None, size: float = 6.0) -> Figure:
+    """A figure of the mechanism with the paths of its joints over the sweep ``res``.
+
+    The mechanism is drawn at each sample of ``poses`` (a result at a few inputs; earlier
+    ones faded), or at the reference pose's input when it is in the sweep (else the first
+    sample that assembles).
+    """
+    sc = build_scene(res)
+    pose_scene = build_scene(poses) if poses is not None else None
+    bounds = sc.bounds
+    if pose_scene is not None:
+        b = pose_scene.bounds
+        bounds = (min(bounds[0], b[0]), min(bounds[1], b[1]), max(bounds[2], b[2]), max(bounds[3], b[3]))
+    fig = Figure(figsize=(size, size * _aspect(sc)), dpi=100)
+    ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
+    Drawing(ax, sc, labels=False, curves=True)  # the curves (and the ground)
+    if pose_scene is None:
+        shown, indices = sc, [_pose_sample(res, sc)]
+    else:
+        shown, indices = pose_scene, list(range(pose_scene.n))
+    for k, i in enumerate(indices):
+        d = Drawing(ax, shown, labels=k == len(indices) - 1, curves=False)
+        d.update(i)
+        if k < len(indices) - 1:
+            for a in d.artists():
+                a.set_alpha(0.3)
+    ax.set_xlim(bounds[0], bounds[2])
+    ax.set_ylim(bounds[1], bounds[3])
+    i = indices[-1]
+    inputs = ", ".join(f"{k} = {shown.inputs[k][i]:.6g} {shown.input_units[k]}" for k in shown.drivers)
+    fig.suptitle(f"{sc.name or 'mechanism'}  ({inputs})", fontsize=10)
+    return fig
+
+
+def _pose_sample(res: Result, sc: Scene) -> int:
+    """The sample at the reference pose's input (nearest, when it assembles there), else the first assembled."""
+    mech = res.mechanism
+    z = np.stack([res.point(j) for j in mech.joint_names], axis=-1)
+    pose = np.array([mech.joints[j] for j in mech.joint_names])
+    with np.errstate(invalid="ignore"):
+        err = np.abs(z - pose).max(axis=-1)
+    if np.isfinite(err).any() and np.nanmin(err) <= 1e-6 * sc.size:
+        return int(np.nanargmin(err))
+    return _sample(sc, None)
+
+
+def _aspect(sc: Scene) -> float:
+    x0, y0, x1, y1 = sc.bounds
+    return float(np.clip((y1 - y0) / max(x1 - x0, 1e-12), 0.4, 1.6))
+
+
+def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float = 3.2) -> Figure:
+    """Every distinct assembly mode at one input, side by side (as in the figures of seeds 000 and 004).
+
+    Each panel is the mechanism in one mode (positions from :func:`linkagekit.modes`),
+    titled with its signs; the file's own mode is marked ``(pose)``.
+    """
+    from ..checks import modes as find_modes
+
+    found = find_modes(mech, at, mirrors=mirrors)
+    shown = [m for m in found.modes if m.assembled and m.same_as is None]
+    if not shown:
+        raise InputError(f"modes: the mechanism does not assemble at {found.input}")
+    names = mech.joint_names
+    xy = np.array([[m.joints[j] if m.joints[j] is not None else (np.nan, np.nan) for j in names] for m in shown])
+    cols = min(len(shown), 4)
+    rows = math.ceil(len(shown) / cols)
+    sc = _static_scene(mech, xy, found.input)
+    fig = Figure(figsize=(size * cols, size * rows * _aspect(sc) + 0.5), dpi=100)
+    axes = fig.subplots(rows, cols, squeeze=False)
+    for k, ax in enumerate(axes.ravel()):
+        if k >= len(shown):
+            ax.set_axis_off()
+            continue
+        d = Drawing(ax, sc, curves=False)
+        d.update(k)
+        m = shown[k]
+        signs = " ".join(f"{j}{'+' if s > 0 else '-'}" for j, s in m.signs.items())
+        if m.mirrors:
+            signs += " " + " ".join(f"{ln}{'~' if s < 0 else ''}" for ln, s in m.mirrors.items() if s < 0)
+        ax.set_title(f"{k + 1}: {signs or 'the only mode'}{' (pose)' if m.reference else ''}", fontsize=9)
+    inp = ", ".join(f"{k} = {v:g}" for k, v in found.input.items())
+    fig.suptitle(f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}", fontsize=10)
+    return fig
+
+
+def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
+    """A scene whose samples are given positions (the modes), with guides from their links."""
+    from .scene import SceneSlider, _gaps, _pose_angle, path_kinds, scene_links
+
+    names = mech.joint_names
+    n = xy.shape[0]
+    z = xy[..., 0] + 1j * xy[..., 1]
+    sliders = []
+    for s in mech.sliders:
+        if s.on == "ground":
+            o = np.full(n, mech.joints[s.through])
+            d = np.full(n, s.direction)
+        else:
+            on = mech.link(s.on)
+            if len(on.joints) >= 2:
+                a, b = names.index(on.joints[0]), names.index(on.joints[1])
+                turn = np.exp(1j * (np.angle(z[:, b] - z[:, a]) - _pose_angle(mech, s.on)))
+            else:
+                turn = np.ones(n)
+            ref = on.joints[0]
+            o = z[:, names.index(ref)] + turn * (mech.joints[s.through] - mech.joints[ref])
+            d = turn * s.direction
+        t = ((z[:, names.index(s.through)] - o) * np.conj(d)).real
+        ext = float(np.nanmax(np.ptp(xy.reshape(-1, 2), axis=0)))
+        span = (float(np.nanmin(t)) - 0.2 * ext, float(np.nanmax(t)) + 0.2 * ext)
+        sliders.append(SceneSlider(s.link, s.on, s.through, np.stack([o.real, o.imag], -1),
+                                   np.stack([d.real, d.imag], -1), span))
+    fin = xy[np.isfinite(xy[..., 0])]
+    x0, y0 = fin.min(axis=0)
+    x1, y1 = fin.max(axis=0)
+    pad = 0.15 * max(x1 - x0, y1 - y0, 1e-9)
+    coupler, other = path_kinds(mech)
+    assembled = np.isfinite(xy[..., 0]).all(axis=1)
+    return Scene(
+        name=mech.name, length_unit=mech.length_unit, angle_unit=mech.angle_unit, joints=names,
+        ground_joints=mech.link("ground").joints, links=scene_links(mech), sliders=tuple(sliders),
+        drivers=tuple(inputs), input_units={k: "" for k in inputs},
+        inputs={k: np.full(n, v) for k, v in inputs.items()}, xy=xy, assembled=assembled,
+        coupler_curves=coupler, other_paths=other, gaps=_gaps(assembled),
+        bounds=(float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad)), columns={}, units={},
+    )
+
+
+def quantities_figure(res: Result | Scene, groups: Sequence[Sequence[str]], size: float = 6.0) -> Figure:
+    """One plot per group of quantities (column names), stacked, against the first driver's input."""
+    sc = _scene(res)
+    fig = Figure(figsize=(size, 2.6 * len(groups) + 0.4), dpi=100)
+    axes = fig.subplots(len(groups), 1, squeeze=False)[:, 0]
+    for ax, names in zip(axes, groups, strict=True):
+        plot_quantities(ax, sc, names)
+    fig.suptitle(sc.name or "mechanism", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def data_to_pixels(ax: Axes) -> list[float]:
+    """``[sx, tx, sy, ty]``: pixel ``(col, row)`` of a point ``(x, y)`` is ``(sx x + tx, sy y + ty)``.
+
+    Rows count from the top of the image (as in a PNG); valid after the figure is drawn.
+    """
+    fig = ax.figure
+    h = fig.bbox.height
+    (x0, y0), (x1, y1) = ax.transData.transform([(0.0, 0.0), (1.0, 1.0)])
+    return [float(x1 - x0), float(x0), float(-(y1 - y0)), float(h - y0)]
+
+
+def save_figure(fig: Figure, path: str | Path, ax: Axes | None = None) -> Path:
+    """Save a figure (format from the suffix: png, svg, pdf) atomically.
+
+    For a PNG of a mechanism drawing, the map from file units to pixels of ``ax`` is stored
+    in the image's metadata under :data:`TRANSFORM_KEY` (so a test or a script can find
+    where a computed point is drawn).
+    """
+    import json
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    path = Path(path)
+    fmt = path.suffix.lower().lstrip(".")
+    if fmt not in ("png", "svg", "pdf"):
+        raise InputError(f"{path}: the output must end in .png, .svg or .pdf")
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    meta: dict[str, Any] = {}
+    if fmt == "png" and ax is not None:
+        meta[TRANSFORM_KEY] = json.dumps(data_to_pixels(ax))
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format=fmt, metadata=meta or None, facecolor=BACKGROUND)
+    return path

@@ -1,0 +1,382 @@
+"""One scene description of a solved sweep, drawn by matplotlib (files) and by the page's viewer (SVG).
+
+A :class:`Scene` holds only numbers the solver computed, arranged for drawing:
+
+* the joints, per sample (``xy``, NaN where the mechanism does not assemble);
+* the links, each drawn as a ``bar`` (two joints), a ``plate`` (three or more joints: a
+  filled polygon through its joints in angular order about their centroid), a ``block`` (a
+  slider block: one joint, drawn as a rectangle along its guide) or the ``ground``;
+* each slider's guide line per sample (a point and a unit direction): a guide on a moving
+  link turns and moves with that link, which is read off the link's solved angle;
+* the paths of the moving joints, split into *coupler curves* (joints of links that touch
+  neither the ground nor a guide on the ground: the curves users look for) and the other
+  paths (arcs of cranks and rockers, a slider's line);
+* the runs of samples where the mechanism does not assemble;
+* the plotted quantities (every column of :meth:`Result.columns`, with units, plus the
+  speed of each moving joint) and how they group into plots.
+
+Nothing here solves anything: the viewer in the page and the matplotlib drawing both read
+this scene, so a picture can only show what the solver returned.
+
+Examples
+--------
+>>> import linkagekit as lk
+>>> from linkagekit.viz.scene import build_scene
+>>> sc = build_scene(lk.analyze(lk.load("examples/seed000_fourbar.yaml")))
+>>> sc.coupler_curves, [ln.kind for ln in sc.links]
+(('P',), ['ground', 'bar', 'plate', 'bar'])
+>>> sc.xy.shape
+(361, 5, 2)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import Mechanism
+from ..result import Result
+
+#: margin around the drawing, as a fraction of its size
+MARGIN = 0.08
+
+
+@dataclass(frozen=True)
+class SceneLink:
+    """A link as drawn: ``kind`` is ``ground``, ``bar``, ``plate`` or ``block``.
+
+    ``outline`` is the order of its joints around its polygon (a plate), else its joints.
+    """
+
+    name: str
+    kind: str
+    joints: tuple[str, ...]
+    outline: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class SceneSlider:
+    """A slider: ``block`` slides on ``on`` through joint ``through``.
+
+    ``origin`` (n, 2) is a point of the guide and ``direction`` (n, 2) its unit direction at
+    each sample (fixed for a guide on the ground); ``span`` the stretch of the guide to draw,
+    as offsets along ``direction`` from ``origin``.
+    """
+
+    block: str
+    on: str
+    through: str
+    origin: np.ndarray
+    direction: np.ndarray
+    span: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Plot:
+    """One plot of the report or of ``plot --quantity``: ``series`` are column names sharing ``unit``."""
+
+    title: str
+    unit: str
+    series: tuple[str, ...]
+    #: the values are angles modulo this period: a line is broken where it wraps, not drawn across
+    period: float | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything a drawing of a solved sweep needs, in file units (see the module docstring)."""
+
+    name: str
+    length_unit: str
+    angle_unit: str
+    joints: tuple[str, ...]
+    ground_joints: tuple[str, ...]
+    links: tuple[SceneLink, ...]
+    sliders: tuple[SceneSlider, ...]
+    drivers: tuple[str, ...]
+    input_units: dict[str, str]
+    inputs: dict[str, np.ndarray]
+    xy: np.ndarray
+    assembled: np.ndarray
+    coupler_curves: tuple[str, ...]
+    other_paths: tuple[str, ...]
+    gaps: tuple[tuple[int, int], ...]
+    bounds: tuple[float, float, float, float]
+    columns: dict[str, np.ndarray] = field(repr=False)
+    units: dict[str, str] = field(repr=False)
+    plots: tuple[Plot, ...] = ()
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(self.xy.shape[0])
+
+    @property
+    def size(self) -> float:
+        """The larger side of :attr:`bounds` (a length scale for symbols)."""
+        x0, y0, x1, y1 = self.bounds
+        return max(x1 - x0, y1 - y0)
+
+    def index(self, joint: str) -> int:
+        """Position of a joint in :attr:`joints`."""
+        return self.joints.index(joint)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as plain JSON data (NaN as None) for the page's viewer.
+
+        Per-sample positions are in ``columns`` (``J.x``, ``J.y``), not repeated.
+        """
+        return {
+            "format": "linkagekit-scene/1",
+            "name": self.name,
+            "units": {"length": self.length_unit, "angle": self.angle_unit},
+            "joints": list(self.joints),
+            "ground_joints": list(self.ground_joints),
+            "links": [{"name": ln.name, "kind": ln.kind, "joints": list(ln.outline)} for ln in self.links],
+            "sliders": [
+                {
+                    "block": s.block,
+                    "on": s.on,
+                    "through": s.through,
+                    "origin": _json_array(s.origin),
+                    "direction": _json_array(s.direction),
+                    "span": list(s.span),
+                }
+                for s in self.sliders
+            ],
+            "drivers": list(self.drivers),
+            "input_units": self.input_units,
+            "n": self.n,
+            "coupler_curves": list(self.coupler_curves),
+            "other_paths": list(self.other_paths),
+            "gaps": [list(g) for g in self.gaps],
+            "bounds": list(self.bounds),
+            "columns": {k: _json_array(v) for k, v in self.columns.items()},
+            "units_of": self.units,
+            "plots": [
+                {"title": p.title, "unit": p.unit, "series": list(p.series), "period": p.period} for p in self.plots
+            ],
+        }
+
+
+def _json_array(a: np.ndarray) -> list[Any]:
+    """A float array as nested lists with None for NaN (booleans stay booleans)."""
+    arr = np.asarray(a)
+    if arr.dtype == bool:
+        return [bool(v) for v in arr.ravel()] if arr.ndim == 1 else arr.tolist()
+    obj = arr.astype(object)
+    obj[~np.isfinite(arr)] = None
+    return obj.tolist()  # type: ignore[no-any-return]
+
+
+def _outline(points: list[complex], names: tuple[str, ...]) -> tuple[str, ...]:
+    """The joints of a plate in angular order about their centroid (a simple polygon)."""
+    c = sum(points) / len(points)
+    order = sorted(range(len(points)), key=lambda i: math.atan2((points[i] - c).imag, (points[i] - c).real))
+    return tuple(names[i] for i in order)
+
+
+def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
+    """How each link is drawn (its kind and outline), from the reference pose."""
+    blocks = {s.link for s in mech.sliders}
+    out = []
+    for ln in mech.links:
+        if ln.name == "ground":
+            kind = "ground"
+        elif ln.name in blocks and len(ln.joints) == 1:
+            kind = "block"
+        elif len(ln.joints) >= 3:
+            kind = "plate"
+        else:
+            kind = "bar"
+        outline = _outline([mech.joints[j] for j in ln.joints], ln.joints) if kind == "plate" else ln.joints
+        out.append(SceneLink(ln.name, kind, ln.joints, outline))
+    return tuple(out)
+
+
+def path_kinds(mech: Mechanism) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(coupler-curve joints, other moving joints).
+
+    A coupler curve is the path of a joint none of whose links touches the ground (by a
+    pivot, or as a block sliding on a guide fixed to the ground): its path is not an arc or
+    a line, and it is what users trace.
+    """
+    ground = set(mech.link("ground").joints)
+    on_ground = {s.link for s in mech.sliders if s.on == "ground"} | {s.on for s in mech.sliders if s.link == "ground"}
+    grounded_links = {ln.name for ln in mech.links if ln.name == "ground" or ground & set(ln.joints)} | on_ground
+    coupler, other = [], []
+    for j in mech.joint_names:
+        if j in ground:
+            continue
+        (other if set(mech.links_of(j)) & grounded_links else coupler).append(j)
+    return tuple(coupler), tuple(other)
+
+
+def _pose_angle(mech: Mechanism, link: str) -> float:
+    """A link's angle in the reference pose, by the same rule as :attr:`Result.link_angle` (radians)."""
+    ln = mech.link(link)
+    if ln.name == "ground":
+        return 0.0
+    if len(ln.joints) >= 2:
+        d = mech.joints[ln.joints[1]] - mech.joints[ln.joints[0]]
+        return math.atan2(d.imag, d.real)
+    sl = next((s for s in mech.sliders if s.link == ln.name), None)
+    d = sl.direction if sl is not None else 1.0 + 0j
+    return math.atan2(d.imag, d.real)
+
+
+def _guides(res: Result, z: np.ndarray) -> tuple[SceneSlider, ...]:
+    """Each slider's guide line per sample, moved with the link that carries it."""
+    mech = res.mechanism
+    unit = mech.angle_to_rad
+    names = mech.joint_names
+    out = []
+    for s in mech.sliders:
+        through_pose = mech.joints[s.through]
+        if s.on == "ground":
+            origin = np.full(z.shape[0], through_pose)
+            direction = np.full(z.shape[0], s.direction)
+        else:
+            on = mech.link(s.on)
+            turn = np.exp(1j * (np.asarray(res.angle(s.on), float) * unit - _pose_angle(mech, s.on)))
+            ref = on.joints[0] if on.joints else s.through
+            origin = z[:, names.index(ref)] + turn * (through_pose - mech.joints[ref])
+            direction = turn * s.direction
+        # the stretch of the guide the joint travels along, plus a margin
+        with np.errstate(invalid="ignore"):
+            t = ((z[:, names.index(s.through)] - origin) * np.conj(direction)).real
+        t = t[np.isfinite(t)]
+        lo, hi = (float(t.min()), float(t.max())) if t.size else (0.0, 0.0)
+        pad = 0.15 * max(hi - lo, 1e-9) + 0.05 * _extent(z)
+        out.append(
+            SceneSlider(
+                s.link,
+                s.on,
+                s.through,
+                np.stack([origin.real, origin.imag], axis=-1),
+                np.stack([direction.real, direction.imag], axis=-1),
+                (lo - pad, hi + pad),
+            )
+        )
+    return tuple(out)
+
+
+def _extent(z: np.ndarray) -> float:
+    fin = z[np.isfinite(z)]
+    if fin.size == 0:
+        return 1.0
+    return float(max(np.ptp(fin.real), np.ptp(fin.imag), 1e-12))
+
+
+def _gaps(assembled: np.ndarray) -> tuple[tuple[int, int], ...]:
+    """Runs ``[first, last]`` (inclusive sample indices) where the mechanism does not assemble."""
+    bad = ~np.asarray(assembled, bool)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
+    return tuple((int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True))
+
+
+def broken_at_wraps(x: np.ndarray, y: np.ndarray, period: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, y)`` with a NaN point put where the angle ``y`` wraps (jumps by more than half a period).
+
+    A line through the result is not drawn across the jump from +180 to -180 degrees.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if period is None:
+        return x, y
+    with np.errstate(invalid="ignore"):
+        jumps = np.flatnonzero(np.abs(np.diff(y)) > period / 2) + 1
+    return np.insert(x, jumps, np.nan), np.insert(y, jumps, np.nan)
+
+
+def _plots(res: Result, columns: dict[str, np.ndarray], moving: list[str]) -> tuple[Plot, ...]:
+    """The plots of the report: link angles and rates, joint speeds, driver efforts and bearing loads."""
+    mech = res.mechanism
+    links = [ln.name for ln in mech.links if ln.name != "ground"]
+    lu = mech.length_unit
+    period = 360.0 if mech.angle_unit == "deg" else 2 * math.pi
+    plots = [Plot("Link angles", mech.angle_unit, tuple(f"{ln}.angle" for ln in links), period)]
+    if res.has_rates:
+        plots += [
+            Plot("Angular velocities", "rad/s", tuple(f"{ln}.omega" for ln in links)),
+            Plot("Angular accelerations", "rad/s²", tuple(f"{ln}.alpha" for ln in links)),
+            Plot("Joint speeds", f"{lu}/s", tuple(f"|v|[{j}]" for j in moving)),
+        ]
+    torques = tuple(k for k in columns if k.startswith("T["))
+    if torques:
+        plots.append(Plot("Driver torques", "N·m", torques))
+    pushes = tuple(k for k in columns if k.startswith("F[") and ":" not in k)  # F[driver]; reactions carry J:by>on
+    if pushes:
+        plots.append(Plot("Driver forces", "N", pushes))
+    bearings = tuple(k for k in columns if k.startswith("|F|["))
+    if bearings:
+        plots.append(Plot("Bearing loads", "N", bearings))
+    return tuple(p for p in plots if p.series)
+
+
+def build_scene(res: Result) -> Scene:
+    """The scene of one mechanism's solved sweep.
+
+    Parameters
+    ----------
+    res : Result
+        From :func:`linkagekit.analyze` for one design (``res.design(i)`` for one of a batch).
+
+    Raises
+    ------
+    InputError
+        For a batch result, or a result with no samples.
+    """
+    if not isinstance(res, Result):
+        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
+    if res.n_designs is not None:
+        raise InputError("a scene draws one design: pass res.design(i)")
+    mech = res.mechanism
+    names = mech.joint_names
+    z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
+    xy = np.stack([z.real, z.imag], axis=-1)
+    ground_joints = mech.link("ground").joints
+    coupler, other = path_kinds(mech)
+    moving = [j for j in names if j not in ground_joints]
+    columns = dict(res.columns())
+    units = dict(res.column_units())
+    if res.has_rates:
+        for j in moving:
+            columns[f"|v|[{j}]"] = np.abs(res.velocity(j))
+            units[f"|v|[{j}]"] = f"{mech.length_unit}/s"
+    sliders = _guides(res, z)
+    # bounds: every joint at every sample, the pose, and the drawn guides
+    pts = [z[np.isfinite(z)], np.array([mech.joints[j] for j in names])]
+    for s in sliders:
+        o = s.origin[..., 0] + 1j * s.origin[..., 1]
+        d = s.direction[..., 0] + 1j * s.direction[..., 1]
+        pts += [o + s.span[0] * d, o + s.span[1] * d]
+    allp = np.concatenate([np.ravel(p) for p in pts])
+    allp = allp[np.isfinite(allp)]
+    x0, x1, y0, y1 = allp.real.min(), allp.real.max(), allp.imag.min(), allp.imag.max()
+    pad = MARGIN * max(x1 - x0, y1 - y0, 1e-9)
+    bounds = (float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad))
+    return Scene(
+        name=mech.name,
+        length_unit=mech.length_unit,
+        angle_unit=mech.angle_unit,
+        joints=names,
+        ground_joints=ground_joints,
+        links=scene_links(mech),
+        sliders=sliders,
+        drivers=tuple(d.name for d in mech.drivers),
+        input_units={d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers},
+        inputs={k: np.broadcast_to(np.asarray(v, float), (res.n,)).copy() for k, v in res.inputs.items()},
+        xy=xy,
+        assembled=np.asarray(res.assembled, bool).copy(),
+        coupler_curves=coupler,
+        other_paths=tuple(j for j in other if j in moving),
+        gaps=_gaps(res.assembled),
+        bounds=bounds,
+        columns=columns,
+        units=units,
+        plots=_plots(res, columns, moving),
+    )

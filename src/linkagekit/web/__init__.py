@@ -1,0 +1,1 @@
+"""The self-contained report page (:mod:`.report`) and its one small SVG viewer (``viewer.js``)."""

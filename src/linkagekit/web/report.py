@@ -1,0 +1,168 @@
+"""The report page: one self-contained HTML file of a solved sweep (spec section 5).
+
+The page holds the scene (:mod:`linkagekit.viz.scene`) as JSON, the small SVG viewer
+(``viewer.js``, inlined), its style, the text of ``check`` and the mechanism file.  It
+loads nothing from anywhere: no CDN, no font, no image file.  The viewer only draws what
+the scene holds, so every number on the page comes from the Python solver.
+
+>>> import linkagekit as lk
+>>> from linkagekit.web.report import report_html
+>>> page = report_html(lk.analyze(lk.load("examples/seed000_fourbar.yaml")))
+>>> page.startswith("<!DOCTYPE html>"), 'data-role="input"' in page, "http" in page.split("<body")[0]
+(True, True, False)
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import __version__
+from ..errors import InputError
+from ..files import atomic_output
+from ..result import Result
+from ..viz.scene import Scene, build_scene
+
+STYLE = """
+:root { --ink: #1b1b1b; --muted: #666; --line: #d8d8d8; --accent: #e6007e; }
+* { box-sizing: border-box; }
+body { font: 14px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; color: var(--ink);
+       margin: 0 auto; max-width: 1400px; padding: 12px 20px 40px; }
+h1 { font-size: 20px; margin: 6px 0 2px; }
+h2 { font-size: 16px; margin: 22px 0 6px; border-bottom: 1px solid var(--line); padding-bottom: 3px; }
+.sub { color: var(--muted); margin: 0 0 10px; }
+.top { display: grid; grid-template-columns: minmax(320px, 1fr) minmax(320px, 1fr); gap: 18px; align-items: start; }
+@media (max-width: 900px) { .top { grid-template-columns: 1fr; } }
+svg[data-role=mechanism] { width: 100%; height: auto; border: 1px solid var(--line); border-radius: 4px;
+                           background: #fff; display: block; }
+svg text.label { fill: #333; }
+.controls { display: grid; grid-template-columns: auto 1fr auto; gap: 6px 10px; align-items: center; margin: 8px 0; }
+.controls input[type=range] { width: 100%; }
+.controls output { font-variant-numeric: tabular-nums; min-width: 12em; }
+button { font: inherit; padding: 3px 12px; border: 1px solid #888; border-radius: 4px; background: #f6f6f6;
+         cursor: pointer; }
+button:hover { background: #eee; }
+[data-role=message] { color: #b00000; min-height: 1.4em; }
+#lk-plots figure { margin: 0 0 6px; }
+#lk-plots svg { width: 100%; height: auto; display: block; }
+pre { background: #f7f7f7; border: 1px solid var(--line); border-radius: 4px; padding: 8px 10px; overflow: auto;
+      font: 12px/1.4 ui-monospace, SFMono-Regular, Menlo, Consolas, monospace; max-height: 420px; }
+.gaps { color: #8a4b00; }
+footer { color: var(--muted); font-size: 12px; margin-top: 24px; }
+"""
+
+
+def _viewer_js() -> str:
+    return resources.files("linkagekit.web").joinpath("viewer.js").read_text(encoding="utf-8")
+
+
+def _script_json(doc: Any) -> str:
+    """JSON safe inside a <script> element (no '</', no HTML comment openers)."""
+    text = json.dumps(doc, allow_nan=False, separators=(",", ":"))
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
+
+
+def _gap_text(sc: Scene) -> str:
+    if not sc.gaps:
+        return ""
+    d = sc.drivers[0]
+    x = sc.inputs[d]
+    parts = [f"[{x[a]:.6g}, {x[b]:.6g}]" if a != b else f"{x[a]:.6g}" for a, b in sc.gaps]
+    return f"Does not assemble at the samples {d} in {', '.join(parts)} {sc.input_units[d]} (the gaps in the curves)."
+
+
+def report_html(
+    res: Result, source: str | None = None, checks_text: str | None = None, title: str | None = None
+) -> str:
+    """The report page of one design's sweep, as a string.
+
+    Parameters
+    ----------
+    res : Result
+        From :func:`linkagekit.analyze` (one design).
+    source : str, optional
+        The mechanism file's text, shown on the page (default: the mechanism written as YAML).
+    checks_text : str, optional
+        The text of ``linkagekit check`` (default: computed here).
+    """
+    sc = build_scene(res)
+    mech = res.mechanism
+    if source is None:
+        import yaml
+
+        source = yaml.safe_dump(mech.to_dict(), sort_keys=False, allow_unicode=True)
+    if checks_text is None:
+        from .. import checks
+
+        units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+        rep = checks.check(mech).to_dict()
+        text_of = getattr(checks, "check_text", None)  # TEMP until check_text moves into checks
+        checks_text = text_of(rep, units, mech.name or "mechanism") if text_of else json.dumps(rep, indent=1)
+    esc = html.escape
+    name = mech.name or "mechanism"
+    ok = np.flatnonzero(sc.assembled)
+    start = int(ok[0]) if ok.size else 0
+    controls = []
+    for d in sc.drivers:
+        controls.append(
+            f'<label for="lk-in-{esc(d)}">{esc(d)}</label>'
+            f'<input type="range" id="lk-in-{esc(d)}" data-role="input" data-driver="{esc(d)}" '
+            f'min="0" max="{sc.n - 1}" step="1" value="{start}">'
+            f'<output data-role="input-value" data-driver="{esc(d)}"></output>'
+        )
+    file_name = "" if mech.source.startswith("<") else Path(mech.source).name
+    units = f"lengths in {esc(mech.length_unit)}, angles in {esc(mech.angle_unit)}"
+    body = f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="linkagekit {esc(__version__)}">
+<title>{esc(title or name)} · linkagekit report</title>
+<style>{STYLE}</style>
+</head>
+<body data-name="{esc(Path(file_name).stem or 'linkage')}">
+<h1>{esc(title or name)}</h1>
+<p class="sub">{esc(file_name)}{' · ' if file_name else ''}{units} · {sc.n} samples ·
+linkagekit {esc(__version__)}</p>
+<div class="top">
+<section>
+<svg data-role="mechanism" xmlns="http://www.w3.org/2000/svg" role="img" aria-label="the mechanism"></svg>
+<div class="controls">
+{''.join(controls)}
+</div>
+<p><button type="button" data-action="play">Play</button>
+<button type="button" data-action="csv">Download CSV</button></p>
+<p data-role="message" aria-live="polite"></p>
+<p class="gaps">{esc(_gap_text(sc))}</p>
+</section>
+<section id="lk-plots" aria-label="plots"></section>
+</div>
+<h2>Checks</h2>
+<pre data-role="checks">{esc(checks_text)}</pre>
+<h2>Mechanism file</h2>
+<pre data-role="source">{esc(source)}</pre>
+<footer>Every number on this page was computed by the linkagekit solver (Python) and stored in the page;
+the page only draws them. The coupler curves are in magenta, the other joint paths dashed grey.</footer>
+<script type="application/json" id="lk-scene">{_script_json(sc.to_dict())}</script>
+<script>{_viewer_js()}</script>
+</body>
+</html>
+"""
+    return body
+
+
+def write_report(res: Result, path: str | Path, **kwargs: Any) -> Path:
+    """Write :func:`report_html` to ``path`` atomically (a temporary file, then renamed)."""
+    path = Path(path)
+    if path.suffix.lower() not in (".html", ".htm"):
+        raise InputError(f"{path}: the report must end in .html")
+    text = report_html(res, **kwargs)
+    with atomic_output(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path

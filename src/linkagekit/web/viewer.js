@@ -1,0 +1,353 @@
+/* linkagekit viewer: draws a scene computed by the Python solver as inline SVG.
+ *
+ * It solves nothing: every position, curve and plotted value comes from the scene JSON
+ * embedded in the page (built by linkagekit.viz.scene). It only maps file units to pixels
+ * through one similarity transform (uniform scale, y up) and moves elements between
+ * samples. Hooks (spec section 5): [data-joint] with data-x/data-y (Python repr of the
+ * float, empty when not assembled), <input type=range data-role=input data-driver> whose
+ * value is the sample index, [data-role=input-value], [data-role=plot] with a
+ * [data-role=cursor], [data-action=play], [data-action=csv], [data-role=message].
+ */
+(function () {
+  "use strict";
+  var SVGNS = "http://www.w3.org/2000/svg";
+  var PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22"];
+  var CURVE = "#e6007e", PATH = "#9a9a9a";
+
+  /* Python's repr of a float: shortest round-trip digits, exponent form below 1e-4 and from 1e16. */
+  function pyRepr(x) {
+    if (x === null || x === undefined || !isFinite(x)) return "";
+    if (x === 0) return Object.is(x, -0) ? "-0.0" : "0.0";
+    var parts = x.toExponential().split("e");
+    var mant = parts[0], exp = parseInt(parts[1], 10);
+    var neg = mant.charAt(0) === "-";
+    if (neg) mant = mant.slice(1);
+    var digits = mant.replace(".", "");
+    var s;
+    if (exp < -4 || exp >= 16) {
+      s = digits.charAt(0) + (digits.length > 1 ? "." + digits.slice(1) : "") + "e" + (exp < 0 ? "-" : "+") +
+        (Math.abs(exp) < 10 ? "0" : "") + Math.abs(exp);
+    } else if (exp < 0) {
+      s = "0." + "0".repeat(-exp - 1) + digits;
+    } else if (digits.length <= exp + 1) {
+      s = digits + "0".repeat(exp + 1 - digits.length) + ".0";
+    } else {
+      s = digits.slice(0, exp + 1) + "." + digits.slice(exp + 1);
+    }
+    return (neg ? "-" : "") + s;
+  }
+
+  function fmt(x, unit) {
+    if (x === null || x === undefined || !isFinite(x)) return "—";
+    var a = Math.abs(x);
+    var s = (a !== 0 && (a < 1e-3 || a >= 1e6)) ? x.toExponential(4) : String(parseFloat(x.toPrecision(6)));
+    return unit ? s + " " + unit : s;
+  }
+
+  function el(name, attrs, parent) {
+    var e = document.createElementNS(SVGNS, name);
+    for (var k in attrs) if (Object.prototype.hasOwnProperty.call(attrs, k)) e.setAttribute(k, attrs[k]);
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+
+  function finite(v) { return v !== null && v !== undefined && isFinite(v); }
+
+  /* ------------------------------------------------------------------ the mechanism */
+  function Viewer(scene, svg) {
+    this.scene = scene;
+    this.svg = svg;
+    var b = scene.bounds, W = 640;
+    var s = W / (b[2] - b[0]);
+    var H = Math.max(120, Math.round((b[3] - b[1]) * s));
+    this.W = W; this.H = H; this.s = s;
+    this.tx = -b[0] * s; this.ty = b[3] * s;   // X = tx + s x ; Y = ty - s y
+    svg.setAttribute("viewBox", "0 0 " + W + " " + H);
+    svg.setAttribute("data-scale", String(s));
+    var cols = scene.columns;
+    this.X = {}; this.Y = {};
+    for (var i = 0; i < scene.joints.length; i++) {
+      var j = scene.joints[i];
+      this.X[j] = cols[j + ".x"]; this.Y[j] = cols[j + ".y"];
+    }
+    this.size = Math.max(b[2] - b[0], b[3] - b[1]);
+    this.pin = 0.012 * this.size * s;  // pixels
+    this.build();
+  }
+  Viewer.prototype.px = function (x) { return this.tx + this.s * x; };
+  Viewer.prototype.py = function (y) { return this.ty - this.s * y; };
+
+  Viewer.prototype.pathOf = function (xs, ys) {
+    var d = "", pen = false;
+    for (var i = 0; i < xs.length; i++) {
+      if (finite(xs[i]) && finite(ys[i])) {
+        d += (pen ? "L" : "M") + this.px(xs[i]).toFixed(2) + " " + this.py(ys[i]).toFixed(2);
+        pen = true;
+      } else pen = false;
+    }
+    return d;
+  };
+
+  Viewer.prototype.build = function () {
+    var sc = this.scene, svg = this.svg, self = this;
+    var gStatic = el("g", {"class": "static"}, svg);
+    sc.other_paths.forEach(function (j) {
+      el("path", {d: self.pathOf(self.X[j], self.Y[j]), fill: "none", stroke: PATH, "stroke-width": 1,
+        "stroke-dasharray": "4 3", "data-path": j}, gStatic);
+    });
+    sc.coupler_curves.forEach(function (j) {
+      el("path", {d: self.pathOf(self.X[j], self.Y[j]), fill: "none", stroke: CURVE, "stroke-width": 1.8,
+        "data-curve": j}, gStatic);
+    });
+    var h = 3.2 * this.pin;
+    sc.sliders.forEach(function (sl) {
+      if (sl.on !== "ground") return;
+      var o = sl.origin[0], d = sl.direction[0];
+      var a = [o[0] + sl.span[0] * d[0], o[1] + sl.span[0] * d[1]], b = [o[0] + sl.span[1] * d[0], o[1] + sl.span[1] * d[1]];
+      el("line", {x1: self.px(a[0]), y1: self.py(a[1]), x2: self.px(b[0]), y2: self.py(b[1]), stroke: "#000",
+        "stroke-width": 1.5}, gStatic);
+      var n = [d[1], -d[0]], len = Math.hypot(b[0] - a[0], b[1] - a[1]) * self.s, k = Math.floor(len / 8);
+      for (var i = 0; i <= k; i++) {
+        var t = i / Math.max(k, 1), x = a[0] + t * (b[0] - a[0]), y = a[1] + t * (b[1] - a[1]);
+        var X = self.px(x), Y = self.py(y);
+        el("line", {x1: X, y1: Y, x2: X + 0.6 * h * n[0] - 0.4 * h * d[0], y2: Y - 0.6 * h * n[1] + 0.4 * h * d[1],
+          stroke: "#000", "stroke-width": 0.8}, gStatic);
+      }
+    });
+    sc.ground_joints.forEach(function (j) {
+      var x = self.X[j].find(finite), y = self.Y[j].find(finite);
+      if (x === undefined) return;
+      var X = self.px(x), Y = self.py(y);
+      el("polygon", {points: [X, Y, X - 0.8 * h, Y + h, X + 0.8 * h, Y + h].join(" "), fill: "#ddd", stroke: "#000",
+        "stroke-width": 1}, gStatic);
+      for (var i = 0; i < 6; i++) {
+        var hx = X - 1.2 * h + i * 0.48 * h;
+        el("line", {x1: hx, y1: Y + h + 0.45 * h, x2: hx + 0.45 * h, y2: Y + h, stroke: "#000", "stroke-width": 0.8}, gStatic);
+      }
+      el("line", {x1: X - 1.3 * h, y1: Y + h, x2: X + 1.3 * h, y2: Y + h, stroke: "#000", "stroke-width": 1}, gStatic);
+    });
+    var gMove = el("g", {"class": "moving"}, svg);
+    this.links = [];
+    var k = 0;
+    sc.links.forEach(function (ln) {
+      if (ln.kind === "ground") return;
+      var color = PALETTE[k++ % PALETTE.length], e;
+      if (ln.kind === "plate") e = el("polygon", {fill: color, "fill-opacity": 0.35, stroke: color, "stroke-width": 3,
+        "stroke-linejoin": "round", "data-link": ln.name}, gMove);
+      else if (ln.kind === "block") e = el("polygon", {fill: color, "fill-opacity": 0.8, stroke: "#000",
+        "stroke-width": 1, "data-link": ln.name}, gMove);
+      else e = el("line", {stroke: color, "stroke-width": 6, "stroke-linecap": "round", "data-link": ln.name}, gMove);
+      self.links.push({link: ln, e: e, slider: sc.sliders.filter(function (s) { return s.block === ln.name; })[0]});
+    });
+    this.guides = [];
+    sc.sliders.forEach(function (sl) {
+      if (sl.on === "ground") return;
+      self.guides.push({sl: sl, e: el("line", {stroke: "#444", "stroke-width": 1.5}, gMove)});
+    });
+    this.joints = {};
+    sc.joints.forEach(function (j) {
+      var c = el("circle", {r: 4.5, fill: "#fff", stroke: "#000", "stroke-width": 1.5, "data-joint": j}, gMove);
+      var t = el("text", {"font-size": 11, "class": "label"}, gMove);
+      t.textContent = j;
+      self.joints[j] = {c: c, t: t};
+    });
+  };
+
+  Viewer.prototype.show = function (i) {
+    var self = this, sc = this.scene;
+    var ok = sc.columns.assembled[i];
+    sc.joints.forEach(function (j) {
+      var x = self.X[j][i], y = self.Y[j][i], je = self.joints[j];
+      var good = finite(x) && finite(y);
+      je.c.setAttribute("data-x", good ? pyRepr(x) : "");
+      je.c.setAttribute("data-y", good ? pyRepr(y) : "");
+      je.c.style.visibility = good ? "visible" : "hidden";
+      je.t.style.visibility = good ? "visible" : "hidden";
+      if (good) {
+        je.c.setAttribute("cx", self.px(x)); je.c.setAttribute("cy", self.py(y));
+        je.t.setAttribute("x", self.px(x) + 6); je.t.setAttribute("y", self.py(y) - 6);
+      }
+    });
+    this.links.forEach(function (L) {
+      var ln = L.link, e = L.e;
+      e.style.visibility = ok ? "visible" : "hidden";
+      if (!ok) return;
+      if (ln.kind === "plate") {
+        e.setAttribute("points", ln.joints.map(function (j) { return self.px(self.X[j][i]) + "," + self.py(self.Y[j][i]); }).join(" "));
+      } else if (ln.kind === "block") {
+        var sl = L.slider, j = sl.through, d = sl.direction[i];
+        var cx = self.px(self.X[j][i]), cy = self.py(self.Y[j][i]);
+        var dx = d[0], dy = -d[1], nx = -dy, ny = dx, w = 2.6 * self.pin, h = 1.6 * self.pin;
+        e.setAttribute("points", [cx - w * dx - h * nx, cy - w * dy - h * ny, cx + w * dx - h * nx, cy + w * dy - h * ny,
+          cx + w * dx + h * nx, cy + w * dy + h * ny, cx - w * dx + h * nx, cy - w * dy + h * ny].join(" "));
+      } else if (ln.joints.length >= 2) {
+        var a = ln.joints[0], b = ln.joints[1];
+        e.setAttribute("x1", self.px(self.X[a][i])); e.setAttribute("y1", self.py(self.Y[a][i]));
+        e.setAttribute("x2", self.px(self.X[b][i])); e.setAttribute("y2", self.py(self.Y[b][i]));
+      }
+    });
+    this.guides.forEach(function (G) {
+      var sl = G.sl, o = sl.origin[i], d = sl.direction[i];
+      G.e.style.visibility = ok && o[0] !== null ? "visible" : "hidden";
+      if (!ok || o[0] === null) return;
+      G.e.setAttribute("x1", self.px(o[0] + sl.span[0] * d[0])); G.e.setAttribute("y1", self.py(o[1] + sl.span[0] * d[1]));
+      G.e.setAttribute("x2", self.px(o[0] + sl.span[1] * d[0])); G.e.setAttribute("y2", self.py(o[1] + sl.span[1] * d[1]));
+    });
+  };
+
+  /* ------------------------------------------------------------------ plots */
+  function niceTicks(lo, hi, n) {
+    if (!(hi > lo)) { var c = isFinite(lo) ? lo : 0; lo = c - 1; hi = c + 1; }
+    var step = Math.pow(10, Math.floor(Math.log10((hi - lo) / n)));
+    var err = (hi - lo) / n / step;
+    if (err >= 7.5) step *= 10; else if (err >= 3.5) step *= 5; else if (err >= 1.5) step *= 2;
+    var t = [], v = Math.ceil(lo / step) * step;
+    for (; v <= hi + 1e-9 * step; v += step) t.push(Math.abs(v) < 1e-12 * step ? 0 : v);
+    return {lo: lo, hi: hi, ticks: t};
+  }
+
+  function Plot(scene, spec, svg) {
+    var W = 640, H = 210, L = 62, R = 12, T = 22, B = 34;
+    svg.setAttribute("viewBox", "0 0 " + W + " " + H);
+    var driver = scene.drivers[0], xs = scene.columns["input:" + driver];
+    var x0 = Math.min.apply(null, xs), x1 = Math.max.apply(null, xs);
+    if (!(x1 > x0)) { x1 = x0 + 1; }
+    var ys = [];
+    spec.series.forEach(function (k) { scene.columns[k].forEach(function (v) { if (finite(v)) ys.push(v); }); });
+    var ylo = ys.length ? Math.min.apply(null, ys) : -1, yhi = ys.length ? Math.max.apply(null, ys) : 1;
+    var pad = 0.05 * (yhi - ylo || Math.abs(yhi) || 1);
+    var yt = niceTicks(ylo - pad, yhi + pad, 5), xt = niceTicks(x0, x1, 8);
+    function X(x) { return L + (x - x0) / (x1 - x0) * (W - L - R); }
+    function Y(y) { return T + (yt.hi - y) / (yt.hi - yt.lo) * (H - T - B); }
+    this.X = X; this.xs = xs; this.scene = scene; this.spec = spec; this.Y = Y;
+    var title = el("text", {x: L, y: 15, "font-size": 12, "font-weight": "bold"}, svg);
+    title.textContent = spec.title + (spec.unit ? " [" + spec.unit + "]" : "");
+    scene.gaps.forEach(function (g) {
+      var a = xs[Math.max(g[0] - 1, 0)], b = xs[Math.min(g[1] + 1, xs.length - 1)];
+      el("rect", {x: Math.min(X(a), X(b)), y: T, width: Math.abs(X(b) - X(a)), height: H - T - B, fill: "#ececec",
+        "data-role": "gap"}, svg);
+    });
+    yt.ticks.forEach(function (v) {
+      if (v < yt.lo || v > yt.hi) return;
+      el("line", {x1: L, x2: W - R, y1: Y(v), y2: Y(v), stroke: "#ddd", "stroke-width": 0.7}, svg);
+      var t = el("text", {x: L - 5, y: Y(v) + 4, "font-size": 10, "text-anchor": "end"}, svg);
+      t.textContent = fmt(v);
+    });
+    xt.ticks.forEach(function (v) {
+      if (v < x0 - 1e-9 || v > x1 + 1e-9) return;
+      el("line", {x1: X(v), x2: X(v), y1: T, y2: H - B, stroke: "#eee", "stroke-width": 0.7}, svg);
+      var t = el("text", {x: X(v), y: H - B + 14, "font-size": 10, "text-anchor": "middle"}, svg);
+      t.textContent = fmt(v);
+    });
+    var xl = el("text", {x: (L + W - R) / 2, y: H - 4, "font-size": 11, "text-anchor": "middle"}, svg);
+    xl.textContent = driver + " [" + scene.input_units[driver] + "]";
+    el("rect", {x: L, y: T, width: W - L - R, height: H - T - B, fill: "none", stroke: "#888", "stroke-width": 0.8}, svg);
+    this.marks = [];
+    var self = this;
+    spec.series.forEach(function (k, n) {
+      var v = scene.columns[k], d = "", pen = false, color = PALETTE[n % PALETTE.length], period = spec.period;
+      for (var i = 0; i < xs.length; i++) {
+        if (finite(v[i])) {
+          // an angle that wraps (+180 to -180) is not joined across the jump
+          if (pen && period && Math.abs(v[i] - v[i - 1]) > period / 2) pen = false;
+          d += (pen ? "L" : "M") + X(xs[i]).toFixed(2) + " " + Y(v[i]).toFixed(2); pen = true;
+        } else pen = false;
+      }
+      el("path", {d: d, fill: "none", stroke: color, "stroke-width": 1.4, "data-series": k}, svg);
+      self.marks.push({k: k, e: el("circle", {r: 3, fill: color, "data-series": k}, svg)});
+      var lx = W - R - 4 - 110 * (spec.series.length - 1 - n);
+      var lg = el("text", {x: lx, y: 15, "font-size": 10, "text-anchor": "end", fill: color}, svg);
+      lg.textContent = "\u25AC " + k;
+    });
+    this.cursor = el("line", {y1: T, y2: H - B, stroke: "#000", "stroke-width": 1, "stroke-dasharray": "3 2",
+      "data-role": "cursor"}, svg);
+  }
+  Plot.prototype.show = function (i) {
+    var X = this.X(this.xs[i]), self = this;
+    this.cursor.setAttribute("x1", X); this.cursor.setAttribute("x2", X);
+    this.cursor.setAttribute("data-index", String(i));
+    this.marks.forEach(function (m) {
+      var v = self.scene.columns[m.k][i];
+      m.e.style.visibility = finite(v) ? "visible" : "hidden";
+      if (finite(v)) { m.e.setAttribute("cx", X); m.e.setAttribute("cy", self.Y(v)); }
+    });
+  };
+
+  /* ------------------------------------------------------------------ CSV */
+  function csvText(scene) {
+    var names = Object.keys(scene.columns), n = scene.n, lines = [names.join(",")];
+    for (var i = 0; i < n; i++) {
+      lines.push(names.map(function (k) {
+        var v = scene.columns[k][i];
+        if (v === true) return "1";
+        if (v === false) return "0";
+        return finite(v) ? pyRepr(v) : "";
+      }).join(","));
+    }
+    return lines.join("\n") + "\n";
+  }
+
+  /* ------------------------------------------------------------------ the page */
+  function start() {
+    var node = document.getElementById("lk-scene");
+    if (!node) return;
+    var scene = JSON.parse(node.textContent);
+    var viewer = new Viewer(scene, document.querySelector("svg[data-role=mechanism]"));
+    var plots = [];
+    var box = document.getElementById("lk-plots");
+    scene.plots.forEach(function (spec) {
+      var fig = document.createElement("figure");
+      var svg = el("svg", {"data-role": "plot", "data-title": spec.title, width: "100%"});
+      fig.appendChild(svg);
+      box.appendChild(fig);
+      plots.push(new Plot(scene, spec, svg));
+    });
+    var sliders = Array.prototype.slice.call(document.querySelectorAll("input[data-role=input]"));
+    var values = Array.prototype.slice.call(document.querySelectorAll("[data-role=input-value]"));
+    var message = document.querySelector("[data-role=message]");
+    var current = 0;
+    function show(i) {
+      i = Math.max(0, Math.min(scene.n - 1, i | 0));
+      current = i;
+      sliders.forEach(function (s) { if (String(s.value) !== String(i)) s.value = String(i); });
+      viewer.show(i);
+      plots.forEach(function (p) { p.show(i); });
+      values.forEach(function (v) {
+        var d = v.getAttribute("data-driver"), x = scene.columns["input:" + d][i];
+        v.setAttribute("data-value", pyRepr(x));
+        v.textContent = d + " = " + fmt(x, scene.input_units[d]);
+      });
+      var ok = scene.columns.assembled[i];
+      if (message) {
+        message.textContent = ok ? "" : "Does not assemble at " + scene.drivers.map(function (d) {
+          return d + " = " + fmt(scene.columns["input:" + d][i], scene.input_units[d]);
+        }).join(", ") + ".";
+      }
+    }
+    sliders.forEach(function (s) {
+      s.addEventListener("input", function () { stop(); show(parseInt(s.value, 10)); });
+    });
+    var timer = null, play = document.querySelector("[data-action=play]");
+    function stop() { if (timer !== null) { clearInterval(timer); timer = null; if (play) play.textContent = "Play"; } }
+    if (play) play.addEventListener("click", function () {
+      if (timer !== null) { stop(); return; }
+      play.textContent = "Pause";
+      timer = setInterval(function () { show((current + 1) % scene.n); }, Math.max(16, Math.round(6000 / scene.n)));
+    });
+    var csv = document.querySelector("[data-action=csv]");
+    if (csv) csv.addEventListener("click", function () {
+      var blob = new Blob([csvText(scene)], {type: "text/csv"});
+      var a = document.createElement("a");
+      a.href = URL.createObjectURL(blob);
+      a.download = (document.body.getAttribute("data-name") || "linkage") + ".csv";
+      document.body.appendChild(a); a.click(); a.remove();
+      setTimeout(function () { URL.revokeObjectURL(a.href); }, 1000);
+    });
+    var first = scene.columns.assembled.indexOf(true);
+    show(parseInt(sliders.length ? sliders[0].value : "0", 10) || (first > 0 ? first : 0));
+    window.linkagekit = {scene: scene, show: show, pyRepr: pyRepr, current: function () { return current; }};
+  }
+
+  if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);
+  else start();
+})();
