@@ -37,7 +37,8 @@ def same(a, b, scale, what):
     a, b = np.asarray(a), np.asarray(b)
     assert np.array_equal(np.isnan(a), np.isnan(b)), what
     ok = ~np.isnan(a)
-    assert np.all(np.abs(a[ok] - b[ok]) <= TOL * scale), (what, np.max(np.abs(a[ok] - b[ok])) / scale)
+    scale = np.broadcast_to(scale, a.shape)[ok]
+    assert np.all(np.abs(a[ok] - b[ok]) <= TOL * scale), (what, np.max(np.abs(a[ok] - b[ok]) / scale))
 
 
 def compare(mech, poses, inputs, speed=2.5, acceleration=-1.5):
@@ -46,6 +47,10 @@ def compare(mech, poses, inputs, speed=2.5, acceleration=-1.5):
     for i, pose in enumerate(poses):
         one = lk.analyze(mech.with_pose(pose), inputs, speed=speed, acceleration=acceleration)
         size = np.max(np.abs(pose)) + 1.0
+        # round-off differs between the two paths (other operation orders); near a singular
+        # position the rates amplify it by 1/c (velocities) and 1/c^2 (accelerations), c the
+        # solver's dimensionless condition of the sample: the tolerance follows it
+        c = np.clip(np.nan_to_num(np.asarray(one.condition, float), nan=1.0), 1e-6, 1.0)
         assert np.array_equal(batch.assembled[i], one.assembled), i
         assert np.array_equal(batch.singular[i], one.singular), i
         assert dict(batch.design(i).signs) == dict(one.signs)
@@ -53,15 +58,15 @@ def compare(mech, poses, inputs, speed=2.5, acceleration=-1.5):
             same(batch.xy(j)[i], one.xy(j), size, (i, j, "xy"))
             same(batch.point(j)[i], one.point(j), size, (i, j, "z"))
             vs = np.nanmax(np.abs(one.velocity(j)), initial=0.0) + size
-            same(batch.velocity(j)[i], one.velocity(j), vs, (i, j, "v"))
+            same(batch.velocity(j)[i], one.velocity(j), vs / c, (i, j, "v"))
             acs = np.nanmax(np.abs(one.acceleration(j)), initial=0.0) + size
-            same(batch.acceleration(j)[i], one.acceleration(j), acs, (i, j, "a"))
+            same(batch.acceleration(j)[i], one.acceleration(j), acs / c**2, (i, j, "a"))
         for ln in mech.links:
             same(np.cos(np.radians(batch.angle(ln.name)[i])), np.cos(np.radians(one.angle(ln.name))), 1, ln.name)
             ws = np.nanmax(np.abs(one.omega(ln.name)), initial=0.0) + 1
-            same(batch.omega(ln.name)[i], one.omega(ln.name), ws, (i, ln.name, "omega"))
+            same(batch.omega(ln.name)[i], one.omega(ln.name), ws / c, (i, ln.name, "omega"))
             als = np.nanmax(np.abs(one.alpha(ln.name)), initial=0.0) + 1
-            same(batch.alpha(ln.name)[i], one.alpha(ln.name), als, (i, ln.name, "alpha"))
+            same(batch.alpha(ln.name)[i], one.alpha(ln.name), als / c**2, (i, ln.name, "alpha"))
         if one.forces is not None:
             fb, fo = batch.forces, one.forces
             scale = max(np.nanmax([np.nanmax(np.abs(r.force), initial=0.0) for r in fo.reactions]), 1.0)
