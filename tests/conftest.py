@@ -1,3 +1,6 @@
+import os
+
+os.environ.setdefault("MPLBACKEND", "Agg")
 import sys
 from pathlib import Path
 

@@ -36,6 +36,14 @@ def test_bench_designs(capsys, monkeypatch):
     assert "50 designs" in out and "linkagekit --help" in out
 
 
+def test_bench_animate(capsys):
+    import bench_animate
+
+    bench_animate.main(4)
+    out = capsys.readouterr().out
+    assert "4 frames, GIF" in out and "ratio" in out
+
+
 def test_benchmarks_leave_no_module_cache():
-    for name in ("bench_positions", "bench_forces", "bench_designs", "timing"):
+    for name in ("bench_positions", "bench_forces", "bench_designs", "bench_animate", "timing"):
         sys.modules.pop(name, None)

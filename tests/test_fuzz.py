@@ -630,6 +630,46 @@ def test_fuzz_mechanism_files(fuzzdir: Path) -> None:
     _mechanism_failures.check()
 
 
+_picture_failures = Failures("picture")
+#: the picture commands are slower (matplotlib, a page): a tenth as many cases
+PICTURES = settings(FUZZ, max_examples=max(N_EXAMPLES // 10, 10))
+
+
+@PICTURES
+@given(case=mechanism_files(), command=st.integers(0, 2))
+def _fuzz_picture(fuzzdir: Path, case, command: int) -> None:
+    example, data, suffix, desc = case
+    path = fuzzdir / f"picture{suffix}"
+    path.write_bytes(data)
+    name = ("report", "plot", "animate")[command]
+    out = fuzzdir / ("out.html", "out.png", "out.gif")[command]
+    out.unlink(missing_ok=True)
+    argv = [name, str(path), "-o", str(out)] + (["--frames", "3"] if name == "animate" else [])
+    _picture_failures.n += 1
+    o = run_cli(argv)
+    bad = contract_violation(o, "none")
+    if bad is None and o.code == 0:
+        if not out.is_file() or out.stat().st_size == 0:
+            bad = "NO OUTPUT with exit 0"
+        elif name == "report":
+            m = re.search(r'id="lk-scene">(.*?)</script>', out.read_text(encoding="utf-8"), re.S)
+            try:
+                json.loads(m.group(1) if m else "", parse_constant=_no_constant)
+            except ValueError as exc:
+                bad = f"BAD SCENE JSON in the page: {str(exc)[:150]}"
+    elif bad is None and out.exists():
+        bad = f"OUTPUT LEFT with exit {o.code}"
+    if bad:
+        _picture_failures.record(bad, f"{example} [{desc}] {name}", data, suffix)
+
+
+def test_fuzz_picture_commands(fuzzdir: Path) -> None:
+    """Mutated example files through report / plot / animate: a whole output and exit 0, or exit 2 and one line."""
+    _picture_failures.items, _picture_failures.n = [], 0
+    _fuzz_picture(fuzzdir)
+    _picture_failures.check()
+
+
 # ---------------------------------------------------------------------- mutated command lines
 NUMBER_TEXT = st.one_of(
     st.sampled_from(

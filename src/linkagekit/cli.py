@@ -1,7 +1,7 @@
 """The ``linkagekit`` command line: parse the arguments, call the library, format its answer.
 
-Commands: ``analyze``, ``modes``, ``check`` (spec, section 2).  Exit status: 0 on success,
-2 on a bad file or bad arguments, 1 on anything else; every failure is one line on stderr,
+Commands: ``analyze``, ``modes``, ``check``, ``plot``, ``animate``, ``report`` (spec, section 2).
+Exit status: 0 on success, 2 on a bad file or bad arguments, 1 on anything else; every failure is one line on stderr,
 ``linkagekit: error: <message>`` (``linkagekit: internal error: <Class>: <message>`` for
 an unexpected exception), never a traceback.
 
@@ -311,7 +311,101 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", choices=("table", "json"), default="table", help="output format (default: %(default)s)")
     output_option(p)
     p.set_defaults(run=_check)
+
+    def sweep_option(p: argparse.ArgumentParser) -> None:
+        p.add_argument(
+            "--angles",
+            action="append",
+            metavar="START:STOP:STEP",
+            help="the sweep (NAME=START:STOP:STEP per driver; repeatable); default: the file's",
+        )
+
+    p = commands.add_parser(
+        "plot",
+        help="draw the mechanism and its coupler curves, its assembly modes, or any quantity",
+        description="Draw the mechanism (hatched ground, pins, links, sliders) with the path of every "
+        "moving joint over the sweep (coupler curves in colour, broken where it does not assemble); "
+        "--modes draws every assembly mode side by side; --quantity plots quantities against the input.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the picture: .png, .svg or .pdf")
+    p.add_argument(
+        "--at",
+        action="append",
+        metavar="V1,V2,...",
+        help="draw the mechanism at these inputs (earlier ones faded; NAME=... per driver); default: the pose's",
+    )
+    sweep_option(p)
+    p.add_argument("--modes", action="store_true", help="every assembly mode at --at (default: the pose's input)")
+    p.add_argument("--mirrors", action="store_true", help="with --modes: also flip links of three or more joints")
+    p.add_argument(
+        "--quantity",
+        "-q",
+        action="append",
+        metavar="NAME[,NAME...]",
+        help="plot these columns of 'analyze --format csv' against the input, one plot per option "
+        "(e.g. coupler.omega or 'T[crank]'), or a group: " + ", ".join(_QUANTITY_GROUPS),
+    )
+    p.set_defaults(run=_plot)
+
+    p = commands.add_parser(
+        "animate",
+        help="an animation of the sweep: GIF, or MP4 with an ffmpeg",
+        description="Animate the mechanism over the sweep, one frame per sample (at least 36). "
+        "MP4 needs an ffmpeg on PATH or pip install 'linkagekit[video]'.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the animation: .gif or .mp4")
+    sweep_option(p)
+    p.add_argument("--frames", metavar="N", help="this many frames, evenly over the sweep")
+    p.add_argument("--fps", metavar="F", default="24", help="frames per second (default: %(default)s)")
+    p.set_defaults(run=_animate)
+
+    p = commands.add_parser(
+        "report",
+        help="one self-contained HTML page: the mechanism moving, its curves, plots, checks",
+        description="Write one self-contained HTML page: the mechanism moving under a slider, its "
+        "curves, plots of its rates (and forces), the checks, the solve plan and the file itself.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the page: .html")
+    sweep_option(p)
+    p.set_defaults(run=_report)
     return parser
+
+
+#: --quantity groups: the report's plots, by a short name
+_QUANTITY_GROUPS = {
+    "angles": "Link angles",
+    "omegas": "Angular velocities",
+    "alphas": "Angular accelerations",
+    "speeds": "Joint speeds",
+    "torques": "Driver torques",
+    "forces": "Driver forces",
+    "bearings": "Bearing loads",
+}
+#: the most frames of an animation
+MAX_FRAMES = 3600
+
+
+def _frames(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise InputError(f"--frames: expected a whole number, got {shorten(repr(text))}") from None
+    if not 2 <= n <= MAX_FRAMES:
+        raise InputError(f"--frames: expected 2 to {MAX_FRAMES} frames, got {n}")
+    return n
+
+
+def _fps(text: str) -> float:
+    v = _one_number(text, "--fps")
+    if not 0.1 <= v <= 120:
+        raise InputError(f"--fps: expected 0.1 to 120 frames per second, got {text}")
+    return v
 
 
 # ---------------------------------------------------------------------- output
@@ -655,37 +749,11 @@ def modes_table(
     return "\n".join(lines) + "\n"
 
 
-def check_text(rep: Mapping[str, Any], units: Mapping[str, str], name: str) -> str:
-    """The plain-text report of ``check`` from its :meth:`CheckReport.to_dict` document.
+def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, name: str | None = None) -> str:
+    """The plain-text report of ``check``: :func:`linkagekit.checks.check_text` (imported when called)."""
+    from .checks import check_text as text
 
-    *units* maps each driver to the unit of its input values.
-    """
-    drivers = ", ".join(rep.get("drivers", []))
-    lines = [
-        f"{name}: valid; {rep['dof']} degree(s) of freedom, driven by {drivers}; "
-        f"solved {'in closed form' if rep.get('solvable') == 'closed-form' else rep.get('solvable', '')}.".rstrip(),
-        "Solve plan:",
-        *("  " + line for line in rep.get("plan", [])),
-    ]
-    if rep.get("signs"):
-        lines.append(
-            "Assembly mode of the reference pose: "
-            + ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items())
-        )
-    if rep.get("mirror_links"):
-        lines.append("Links that can be mirrored: " + ", ".join(rep["mirror_links"]))
-    ranges = rep.get("input_ranges") or {}
-    for driver, rng in ranges.items():
-        text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
-        unit = units.get(driver, "")
-        lines.append(f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else ""))
-    if "grashof" in rep:
-        loop = "-".join(rep.get("fourbar", {}).get("joints", []))
-        lines.append(f"Four-bar loop {loop}: {rep.get('grashof_detail', rep['grashof'])}")
-    if "transmission_angle" in rep:
-        ta = rep["transmission_angle"]
-        lines.append(f"Transmission angle: min {ta['min']:.4f}°, max {ta['max']:.4f}°")
-    return "\n".join(lines) + "\n"
+    return text(rep, units, name)
 
 
 # ---------------------------------------------------------------------- commands
@@ -771,6 +839,162 @@ def _check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
+    import os
+
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in allowed:
+        raise InputError(f"{option} {shorten(path, 80)}: expected a file ending in {', '.join(allowed)}")
+
+
+def _sweep(mech: Mechanism, angles: list[str] | None) -> dict[str, np.ndarray] | None:
+    """The ``--angles`` sweep of the picture commands, or the file's (refused when too long)."""
+    inputs = _inputs(mech, None, angles)
+    if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
+        raise InputError(
+            f"the file's sweep has {mech.drivers[0].sweep.count():.3g} samples, more than the command line "
+            f"takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
+        )
+    return inputs
+
+
+def _plot(args: argparse.Namespace) -> int:
+    """``linkagekit plot``."""
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .viz import draw
+
+    _suffix(args.output, (".png", ".svg", ".pdf"))
+    mech = lk.load(args.file)
+    if args.modes and args.quantity:
+        raise InputError("--modes and --quantity: give one of them")
+    if args.mirrors and not args.modes:
+        raise InputError("--mirrors goes with --modes")
+    if args.modes:
+        at: Any = None
+        if args.at:
+            given = _by_driver(mech, args.at, "--at", _numbers)
+            if any(len(v) != 1 for v in given.values()):
+                raise InputError("--at: one value per driver with --modes")
+            at = {k: v[0] for k, v in given.items()}
+        fig = draw.modes_figure(mech, at, mirrors=args.mirrors)
+        draw.save_figure(fig, args.output)
+        return 0
+    res = lk.analyze(mech, _sweep(mech, args.angles))
+    if args.quantity:
+        from .viz.scene import build_scene
+
+        scene = build_scene(res)
+        titles = {p.title: p.series for p in scene.plots}
+        groups = []
+        for item in args.quantity:
+            names: list[str] = []
+            for name in (n.strip() for n in item.split(",")):
+                if name in _QUANTITY_GROUPS:
+                    series = titles.get(_QUANTITY_GROUPS[name])
+                    if not series:
+                        raise InputError(f"--quantity {name}: this mechanism has no {_QUANTITY_GROUPS[name].lower()}")
+                    names += series
+                elif name in scene.columns:
+                    names.append(name)
+                else:
+                    raise InputError(
+                        f"--quantity: no quantity {shorten(repr(name), 60)}; the names are the columns of "
+                        f"'analyze --format csv' (e.g. {', '.join(list(scene.columns)[3:6])}) or a group: "
+                        + ", ".join(_QUANTITY_GROUPS)
+                    )
+            groups.append(names)
+        fig = draw.quantities_figure(scene, groups)
+        draw.save_figure(fig, args.output)
+        return 0
+    poses = None
+    if args.at:
+        poses = lk.analyze(mech, {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()})
+    fig = draw.mechanism_figure(res, poses)
+    draw.save_figure(fig, args.output, fig.axes[0])
+    return 0
+
+
+def _animate(args: argparse.Namespace) -> int:
+    """``linkagekit animate``."""
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .viz.animate import MIN_FRAMES, animate
+
+    _suffix(args.output, (".gif", ".mp4"))
+    fps = _fps(args.fps)
+    wanted = _frames(args.frames) if args.frames is not None else None
+    mech = lk.load(args.file)
+    inputs = _sweep(mech, args.angles)
+    values = inputs or {d.name: d.sweep.values() for d in mech.drivers}
+    n = max(len(v) for v in values.values())
+    frames = wanted or (n if n >= MIN_FRAMES else MIN_FRAMES)
+    if frames != n:  # evenly over each driver's sweep, ends included
+        values = {k: np.linspace(v[0], v[-1], frames) for k, v in values.items()}
+    res = lk.analyze(mech, values)
+    with _progress("frames") as tick:
+        animate(res, args.output, fps=fps, progress=tick)
+    return 0
+
+
+def _report(args: argparse.Namespace) -> int:
+    """``linkagekit report``."""
+    import linkagekit as lk
+
+    from .web.report import write_report
+
+    _suffix(args.output, (".html", ".htm"))
+    mech = lk.load(args.file)
+    res = lk.analyze(mech, _sweep(mech, args.angles))
+    try:
+        with open(args.file, encoding="utf-8-sig") as fh:
+            source = fh.read()
+    except (OSError, UnicodeDecodeError):  # it was read a moment ago; show it as saved instead
+        source = None
+    write_report(res, args.output, source=source)
+    return 0
+
+
+class _progress:
+    """A progress bar on stderr, when it is a terminal: ``with _progress(what) as tick: tick(done, total)``."""
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self.bar: Any = None
+        self.task: Any = None
+
+    def __enter__(self) -> Callable[[int, int], None]:
+        if sys.stderr.isatty():
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
+
+            self.bar = Progress(
+                "[progress.description]{task.description}",
+                BarColumn(),
+                MofNCompleteColumn(),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+                transient=True,
+            )
+            self.bar.start()
+        return self.tick
+
+    def tick(self, done: int, total: int) -> None:
+        if self.bar is None:
+            return
+        if self.task is None:
+            self.task = self.bar.add_task(self.what, total=total)
+        self.bar.update(self.task, completed=done)
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
 # ---------------------------------------------------------------------- entry point
 def _run(argv: list[str]) -> int:
     parser = build_parser()
@@ -782,7 +1006,7 @@ def _run(argv: list[str]) -> int:
     except _ParserExit as done:
         return done.status
     if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
-        raise InputError(f"give a command: analyze, modes or check (see '{PROG} --help')")
+        raise InputError(f"give a command: analyze, modes, check, plot, animate or report (see '{PROG} --help')")
     code: int = args.run(args)
     return code
 

@@ -94,8 +94,16 @@ def _write_gif(images: Iterator[np.ndarray], path: Path, fps: float, tick: Calla
             rest.append(img.quantize(palette=palette, dither=Image.Dither.NONE))
         tick()
     assert first is not None
-    first.save(path, format="GIF", save_all=True, append_images=rest, duration=round(1000 / fps), loop=0,
-               optimize=False, disposal=1)
+    first.save(
+        path,
+        format="GIF",
+        save_all=True,
+        append_images=rest,
+        duration=round(1000 / fps),
+        loop=0,
+        optimize=False,
+        disposal=1,
+    )
 
 
 def _write_mp4(images: Iterator[np.ndarray], path: Path, fps: float, tick: Callable[[], None], ffmpeg: str) -> None:
@@ -104,9 +112,30 @@ def _write_mp4(images: Iterator[np.ndarray], path: Path, fps: float, tick: Calla
         for rgb in images:
             if proc is None:
                 h, w = rgb.shape[:2]
-                cmd = [ffmpeg, "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w}x{h}",
-                       "-r", f"{fps:g}", "-i", "-", "-an", "-vcodec", "libx264", "-pix_fmt", "yuv420p",
-                       "-f", "mp4", str(path)]
+                cmd = [
+                    ffmpeg,
+                    "-y",
+                    "-loglevel",
+                    "error",
+                    "-f",
+                    "rawvideo",
+                    "-pix_fmt",
+                    "rgb24",
+                    "-s",
+                    f"{w}x{h}",
+                    "-r",
+                    f"{fps:g}",
+                    "-i",
+                    "-",
+                    "-an",
+                    "-vcodec",
+                    "libx264",
+                    "-pix_fmt",
+                    "yuv420p",
+                    "-f",
+                    "mp4",
+                    str(path),
+                ]
                 proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
             assert proc.stdin is not None
             proc.stdin.write(rgb.tobytes())
@@ -169,7 +198,7 @@ def animate(
         ffmpeg = find_ffmpeg()
         if ffmpeg is None:
             raise VideoError(
-                "an MP4 needs ffmpeg: install it (e.g. apt install ffmpeg) or pip install \"linkagekit[video]\"; "
+                'an MP4 needs ffmpeg: install it (e.g. apt install ffmpeg) or pip install "linkagekit[video]"; '
                 "or write a .gif"
             )
     scene = res if isinstance(res, Scene) else build_scene(res)

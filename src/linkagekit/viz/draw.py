@@ -103,12 +103,29 @@ class Drawing:
             k += 1
             idx = tuple(sc.index(j) for j in ln.outline)
             if ln.kind == "plate":
-                art: Any = Polygon(np.zeros((len(idx), 2)), closed=True, facecolor=color, alpha=0.35, edgecolor=color,
-                                   linewidth=2.5, joinstyle="round", zorder=3, animated=animated)
+                art: Any = Polygon(
+                    np.zeros((len(idx), 2)),
+                    closed=True,
+                    facecolor=color,
+                    alpha=0.35,
+                    edgecolor=color,
+                    linewidth=2.5,
+                    joinstyle="round",
+                    zorder=3,
+                    animated=animated,
+                )
                 ax.add_patch(art)
             elif ln.kind == "block":
-                art = Polygon(np.zeros((4, 2)), closed=True, facecolor=color, alpha=0.8, edgecolor="black",
-                              linewidth=1.0, zorder=4, animated=animated)
+                art = Polygon(
+                    np.zeros((4, 2)),
+                    closed=True,
+                    facecolor=color,
+                    alpha=0.8,
+                    edgecolor="black",
+                    linewidth=1.0,
+                    zorder=4,
+                    animated=animated,
+                )
                 ax.add_patch(art)
             else:
                 art = Line2D([], [], color=color, linewidth=5, solid_capstyle="round", zorder=3, animated=animated)
@@ -122,17 +139,38 @@ class Drawing:
                 self.moving_guides.append((sl, line))
         moving = [i for i, j in enumerate(sc.joints) if j not in sc.ground_joints]
         self.moving = moving
-        self.pins = Line2D([], [], linestyle="none", marker="o", markersize=6, markerfacecolor="white",
-                           markeredgecolor="black", markeredgewidth=1.3, zorder=6, animated=animated)
+        self.pins = Line2D(
+            [],
+            [],
+            linestyle="none",
+            marker="o",
+            markersize=6,
+            markerfacecolor="white",
+            markeredgecolor="black",
+            markeredgewidth=1.3,
+            zorder=6,
+            animated=animated,
+        )
         ax.add_line(self.pins)
         self.labels: list[tuple[int, Text]] = []
         if labels:
             for i in moving:
-                t = ax.text(0, 0, sc.joints[i], fontsize=8, zorder=7, animated=animated,
-                            ha="left", va="bottom", visible=False)
+                t = ax.text(
+                    0, 0, sc.joints[i], fontsize=8, zorder=7, animated=animated, ha="left", va="bottom", visible=False
+                )
                 self.labels.append((i, t))
-        self.note = ax.text(0.5, 0.02, "", transform=ax.transAxes, ha="center", va="bottom", fontsize=9,
-                            color="#b00000", zorder=8, animated=animated)
+        self.note = ax.text(
+            0.5,
+            0.02,
+            "",
+            transform=ax.transAxes,
+            ha="center",
+            va="bottom",
+            fontsize=9,
+            color="#b00000",
+            zorder=8,
+            animated=animated,
+        )
 
     # ---------------------------------------------------------------- static parts
     def _curves(self) -> None:
@@ -154,15 +192,36 @@ class Drawing:
             x, y = sc.xy[:, sc.index(j)][np.isfinite(sc.xy[:, sc.index(j), 0])][:1].ravel().tolist() or [math.nan] * 2
             if not math.isfinite(x):
                 continue
-            tri = Polygon([[x, y], [x - 0.8 * h, y - h], [x + 0.8 * h, y - h]], closed=True, facecolor="#dddddd",
-                          edgecolor="black", linewidth=1.0, zorder=2)
+            tri = Polygon(
+                [[x, y], [x - 0.8 * h, y - h], [x + 0.8 * h, y - h]],
+                closed=True,
+                facecolor="#dddddd",
+                edgecolor="black",
+                linewidth=1.0,
+                zorder=2,
+            )
             ax.add_patch(tri)
-            base = Polygon([[x - 1.3 * h, y - h], [x + 1.3 * h, y - h], [x + 1.3 * h, y - 1.45 * h],
-                            [x - 1.3 * h, y - 1.45 * h]], closed=True, facecolor="none", edgecolor="black",
-                           hatch="////", linewidth=0.0, zorder=2)
+            base = Polygon(
+                [[x - 1.3 * h, y - h], [x + 1.3 * h, y - h], [x + 1.3 * h, y - 1.45 * h], [x - 1.3 * h, y - 1.45 * h]],
+                closed=True,
+                facecolor="none",
+                edgecolor="black",
+                hatch="////",
+                linewidth=0.0,
+                zorder=2,
+            )
             ax.add_patch(base)
-            (pin,) = ax.plot([x], [y], linestyle="none", marker="o", markersize=6, markerfacecolor="white",
-                             markeredgecolor="black", markeredgewidth=1.3, zorder=6)
+            (pin,) = ax.plot(
+                [x],
+                [y],
+                linestyle="none",
+                marker="o",
+                markersize=6,
+                markerfacecolor="white",
+                markeredgecolor="black",
+                markeredgewidth=1.3,
+                zorder=6,
+            )
             self.static += [tri, base, pin]
         for sl in sc.sliders:
             if sl.on != "ground":
@@ -171,16 +230,28 @@ class Drawing:
             a, b = o + sl.span[0] * d, o + sl.span[1] * d
             (line,) = ax.plot([a[0], b[0]], [a[1], b[1]], color="black", linewidth=1.5, zorder=2)
             nrm = np.array([d[1], -d[0]]) * 0.9 * h  # hatch below the guide (to its right)
-            strip = Polygon([a, b, b + nrm, a + nrm], closed=True, facecolor="none", edgecolor="black",
-                            hatch="////", linewidth=0.0, zorder=2)
+            strip = Polygon(
+                [a, b, b + nrm, a + nrm],
+                closed=True,
+                facecolor="none",
+                edgecolor="black",
+                hatch="////",
+                linewidth=0.0,
+                zorder=2,
+            )
             ax.add_patch(strip)
             self.static += [line, strip]
 
     # ---------------------------------------------------------------- moving parts
     def artists(self) -> list[Any]:
         """Every artist :meth:`update` changes."""
-        return ([a for _, a, _ in self.links] + [g for _, g in self.moving_guides] + [self.pins]
-                + [t for _, t in self.labels] + [self.note])
+        return (
+            [a for _, a, _ in self.links]
+            + [g for _, g in self.moving_guides]
+            + [self.pins]
+            + [t for _, t in self.labels]
+            + [self.note]
+        )
 
     def update(self, i: int) -> list[Any]:
         """Move the drawing to sample ``i``; returns the artists changed."""
@@ -391,8 +462,9 @@ def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
         t = ((z[:, names.index(s.through)] - o) * np.conj(d)).real
         ext = float(np.nanmax(np.ptp(xy.reshape(-1, 2), axis=0)))
         span = (float(np.nanmin(t)) - 0.2 * ext, float(np.nanmax(t)) + 0.2 * ext)
-        sliders.append(SceneSlider(s.link, s.on, s.through, np.stack([o.real, o.imag], -1),
-                                   np.stack([d.real, d.imag], -1), span))
+        sliders.append(
+            SceneSlider(s.link, s.on, s.through, np.stack([o.real, o.imag], -1), np.stack([d.real, d.imag], -1), span)
+        )
     fin = xy[np.isfinite(xy[..., 0])]
     x0, y0 = fin.min(axis=0)
     x1, y1 = fin.max(axis=0)
@@ -400,12 +472,24 @@ def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
     coupler, other = path_kinds(mech)
     assembled = np.isfinite(xy[..., 0]).all(axis=1)
     return Scene(
-        name=mech.name, length_unit=mech.length_unit, angle_unit=mech.angle_unit, joints=names,
-        ground_joints=mech.link("ground").joints, links=scene_links(mech), sliders=tuple(sliders),
-        drivers=tuple(inputs), input_units={k: "" for k in inputs},
-        inputs={k: np.full(n, v) for k, v in inputs.items()}, xy=xy, assembled=assembled,
-        coupler_curves=coupler, other_paths=other, gaps=_gaps(assembled),
-        bounds=(float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad)), columns={}, units={},
+        name=mech.name,
+        length_unit=mech.length_unit,
+        angle_unit=mech.angle_unit,
+        joints=names,
+        ground_joints=mech.link("ground").joints,
+        links=scene_links(mech),
+        sliders=tuple(sliders),
+        drivers=tuple(inputs),
+        input_units={k: "" for k in inputs},
+        inputs={k: np.full(n, v) for k, v in inputs.items()},
+        xy=xy,
+        assembled=assembled,
+        coupler_curves=coupler,
+        other_paths=other,
+        gaps=_gaps(assembled),
+        bounds=(float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad)),
+        columns={},
+        units={},
     )
 
 

@@ -208,7 +208,8 @@ def path_kinds(mech: Mechanism) -> tuple[tuple[str, ...], tuple[str, ...]]:
     ground = set(mech.link("ground").joints)
     on_ground = {s.link for s in mech.sliders if s.on == "ground"} | {s.on for s in mech.sliders if s.link == "ground"}
     grounded_links = {ln.name for ln in mech.links if ln.name == "ground" or ground & set(ln.joints)} | on_ground
-    coupler, other = [], []
+    coupler: list[str] = []
+    other: list[str] = []
     for j in mech.joint_names:
         if j in ground:
             continue

@@ -97,12 +97,10 @@ def report_html(
 
         source = yaml.safe_dump(mech.to_dict(), sort_keys=False, allow_unicode=True)
     if checks_text is None:
-        from .. import checks
+        from ..checks import check, check_text
 
         units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
-        rep = checks.check(mech).to_dict()
-        text_of = getattr(checks, "check_text", None)  # TEMP until check_text moves into checks
-        checks_text = text_of(rep, units, mech.name or "mechanism") if text_of else json.dumps(rep, indent=1)
+        checks_text = check_text(check(mech).to_dict(), units, mech.name or "mechanism")
     esc = html.escape
     name = mech.name or "mechanism"
     ok = np.flatnonzero(sc.assembled)
@@ -116,7 +114,7 @@ def report_html(
             f'<output data-role="input-value" data-driver="{esc(d)}"></output>'
         )
     file_name = "" if mech.source.startswith("<") else Path(mech.source).name
-    units = f"lengths in {esc(mech.length_unit)}, angles in {esc(mech.angle_unit)}"
+    unit_text = f"lengths in {esc(mech.length_unit)}, angles in {esc(mech.angle_unit)}"
     body = f"""<!DOCTYPE html>
 <html lang="en">
 <head>
@@ -126,15 +124,15 @@ def report_html(
 <title>{esc(title or name)} · linkagekit report</title>
 <style>{STYLE}</style>
 </head>
-<body data-name="{esc(Path(file_name).stem or 'linkage')}">
+<body data-name="{esc(Path(file_name).stem or "linkage")}">
 <h1>{esc(title or name)}</h1>
-<p class="sub">{esc(file_name)}{' · ' if file_name else ''}{units} · {sc.n} samples ·
+<p class="sub">{esc(file_name)}{" · " if file_name else ""}{unit_text} · {sc.n} samples ·
 linkagekit {esc(__version__)}</p>
 <div class="top">
 <section>
 <svg data-role="mechanism" xmlns="http://www.w3.org/2000/svg" role="img" aria-label="the mechanism"></svg>
 <div class="controls">
-{''.join(controls)}
+{"".join(controls)}
 </div>
 <p><button type="button" data-action="play">Play</button>
 <button type="button" data-action="csv">Download CSV</button></p>

@@ -279,8 +279,8 @@
     for (var i = 0; i < n; i++) {
       lines.push(names.map(function (k) {
         var v = scene.columns[k][i];
-        if (v === true) return "1";
-        if (v === false) return "0";
+        if (v === true) return "true";  // as analyze --format csv writes them
+        if (v === false) return "false";
         return finite(v) ? pyRepr(v) : "";
       }).join(","));
     }

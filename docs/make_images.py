@@ -1,0 +1,41 @@
+"""Regenerate the pictures of docs/commands.md with the command line (run from the repository root).
+
+    python docs/make_images.py
+
+The report's screenshot (docs/images/report.png) is taken by the browser test:
+``LINKAGEKIT_SCREENSHOTS=1 pytest tests/test_report_browser.py``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from linkagekit.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+IMAGES = ROOT / "docs" / "images"
+
+COMMANDS = [
+    ["plot", "examples/jansen_leg.yaml", "-o", "docs/images/plot_jansen.png"],
+    ["plot", "examples/seed003_ex21.yaml", "--at", "90,180,270", "-o", "docs/images/plot_seed003_at.png"],
+    ["plot", "examples/seed000_fourbar.yaml", "--modes", "--at", "30", "-o", "docs/images/plot_modes_seed000.png"],
+    [
+        "plot",
+        "examples/slider_crank.yaml",
+        "-q",
+        "torques",
+        "-q",
+        "bearings",
+        "-o",
+        "docs/images/plot_quantities_slider_crank.png",
+    ],
+]
+
+if __name__ == "__main__":
+    import os
+
+    os.chdir(ROOT)
+    IMAGES.mkdir(exist_ok=True)
+    for cmd in COMMANDS:
+        assert main(cmd) == 0, cmd
+        print(cmd[-1])

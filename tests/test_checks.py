@@ -1,0 +1,553 @@
+"""``lk.check`` / ``linkagekit check``: four-bar loops, Grashof types, transmission angle, dead points,
+limit positions and time ratio, peak loads, drivers held at the pose.
+
+Every expected number is computed here by another formulation:
+
+* ranges, dead points, transmission angles and limit positions of a four-bar by the law of
+  cosines on the triangle O2-A-O4 / A-B-O4 / O2-B-O4 (crank and coupler collinear:
+  |O2 B| = b + a or b - a);
+* the loops of a file by enumerating its links (not through the solve plan);
+* the slider-crank's driver torque by an energy balance on closed-form slider-crank
+  kinematics, and its bearing loads by Newton-Euler written out by hand for its three links.
+
+Tolerances: inputs of dead points and limit positions 1e-8 deg (1.7e-10 rad; the check refines
+them to ~1e-12 rad), link angles 1e-8 deg, transmission angles 1e-9 deg, time ratios 1e-9
+relative, torques and forces 1e-9 relative (1e-6 against finite differences).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+import linkagekit as lk
+from linkagekit.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+DEG = 1e-8  # deg: inputs and angles (1.7e-10 rad)
+MU = 1e-9  # deg: transmission angle values
+REL = 1e-9
+
+
+# ----------------------------------------------------------------------------- hand geometry
+def cosines(a, b, c):
+    """The angle (rad) opposite side c in a triangle of sides a, b, c."""
+    return math.acos((a * a + b * b - c * c) / (2 * a * b))
+
+
+def wrap(deg):
+    """An angle in degrees to (-180, 180]."""
+    return 180.0 - (180.0 - deg) % 360.0
+
+
+def cross(u, v):
+    return (np.conj(u) * v).imag
+
+
+def fourbar(g, a, b, c, theta, gamma=0.0, mode=1, angle_unit="deg"):
+    """A four-bar: O2 = 0, O4 = g e^{i gamma}, crank a at theta (deg), coupler b, rocker c.
+
+    B is placed by the law of cosines on side ``mode`` of the directed line A -> O4 (the
+    solver's sign for B, which it keeps at every input).
+    """
+    O2, O4 = 0j, g * np.exp(1j * math.radians(gamma))
+    A = a * np.exp(1j * math.radians(theta))
+    f = abs(O4 - A)
+    B = A + b * np.exp(1j * (np.angle(O4 - A) + mode * cosines(b, f, c)))
+    sweep = {"start": 0, "stop": 360, "step": 1} if angle_unit == "deg" else {"start": 0, "stop": 6.2, "step": 0.1}
+    return lk.Mechanism.from_dict(
+        {
+            "units": {"length": "m", "angle": angle_unit},
+            "joints": {k: [v.real, v.imag] for k, v in dict(O2=O2, O4=O4, A=A, B=B).items()},
+            "links": {"ground": ["O2", "O4"], "crank": ["O2", "A"], "coupler": ["A", "B"], "rocker": ["O4", "B"]},
+            "drivers": [{"link": "crank", "pivot": "O2", "toward": "A", "angles": sweep}],
+        }
+    )
+
+
+def crank_angles_at_diagonal(g, a, f, gamma=0.0):
+    """Crank angles (deg) where |A O4| = f: gamma +- the angle at O2 of the triangle (a, g, f)."""
+    t = math.degrees(cosines(a, g, f))
+    return gamma - t, gamma + t
+
+
+def limit_positions_by_hand(g, a, b, c, gamma=0.0, mode=1):
+    """Crank-rocker limit positions by the law of cosines: crank and coupler collinear.
+
+    Extended: |O2 B| = a + b, A on the segment O2 B; folded: |O2 B| = b - a, A opposite B.
+    Of the two mirror images of each, the one with B on side ``mode`` of A -> O4.
+    Returns {name: (crank angle deg in [0, 360), rocker angle deg)} for 'extended', 'folded'.
+    """
+    O4 = g * np.exp(1j * math.radians(gamma))
+    out = {}
+    for name, reach, flip in (("extended", a + b, 0.0), ("folded", b - a, 180.0)):
+        psi = math.degrees(cosines(reach, g, c))
+        for s in (1, -1):
+            u = np.exp(1j * math.radians(gamma + s * psi))
+            B = reach * u
+            A = a * u * (1 if flip == 0.0 else -1)
+            if np.sign(cross(O4 - A, B - A)) == mode:
+                out[name] = ((gamma + s * psi + flip) % 360.0, math.degrees(np.angle(B - O4)))
+    return out
+
+
+def fourbar_in_range(g, a, b, c, mode=1):
+    """A four-bar posed in the middle of its first assembly arc (law of cosines), or None."""
+    lo, hi = abs(c - b), b + c
+    # |A O4|^2 = a^2 + g^2 - 2 a g cos(theta) must lie in [lo^2, hi^2]
+    cmin = max(-1.0, (a * a + g * g - hi * hi) / (2 * a * g))
+    cmax = min(1.0, (a * a + g * g - lo * lo) / (2 * a * g))
+    if cmin >= cmax:
+        return None
+    theta = math.degrees(0.5 * (math.acos(cmax) + math.acos(cmin)))
+    return fourbar(g, a, b, c, theta, mode=mode)
+
+
+# ----------------------------------------------------------------------------- Grashof
+@pytest.mark.parametrize(
+    ("dims", "kind", "detail"),
+    [
+        ((4.0, 1.0, 3.5, 3.0), "crank-rocker", "crank-rocker"),  # s = crank, 1 + 4 < 3.5 + 3
+        ((3.0, 2.5, 3.5, 1.0), "crank-rocker", "rocker-crank"),  # s = rocker
+        ((1.0, 3.0, 3.5, 3.2), "double-crank", "double crank"),  # s = ground, 1 + 3.5 < 3 + 3.2
+        ((3.0, 3.5, 1.0, 3.2), "double-rocker", "Grashof double rocker"),  # s = coupler
+        ((4.0, 2.0, 4.0, 2.0), "change-point", "change-point"),  # parallelogram: 2 + 4 = 2 + 4
+        ((2.0, 3.0, 2.5, 4.0), "non-grashof", "non-Grashof"),  # 2 + 4 > 3 + 2.5
+    ],
+)
+def test_grashof_of_each_kind(dims, kind, detail):
+    g, a, b, c = dims
+    mech = fourbar_in_range(g, a, b, c)
+    rep = lk.check(mech).to_dict()
+    assert rep["grashof"] == kind and rep["grashof_detail"].startswith(detail)
+    (loop,) = rep["fourbars"]
+    assert loop["grashof"] == kind and loop["joints"] == ["O2", "A", "B", "O4"]
+    assert loop["lengths"] == pytest.approx({"ground": g, "crank": a, "coupler": b, "rocker": c}, rel=1e-12)
+    assert rep["fourbar"] == {"joints": loop["joints"], "lengths": loop["lengths"]}
+    assert loop["input"] == {"link": "crank", "driver": "crank", "moved_by": "driver 'crank'"}
+
+
+# ----------------------------------------------------------------------------- transmission angle
+@pytest.mark.parametrize("gamma", [0.0, 33.0, -120.0])
+def test_transmission_angle_of_a_crank_rocker_by_the_law_of_cosines(gamma):
+    """cos mu = (b^2 + c^2 - f^2) / (2 b c) with f = |A O4| = g - a (crank along O2 O4) or g + a."""
+    g, a, b, c = 4.0, 1.0, 3.5, 3.0
+    rep = lk.check(fourbar(g, a, b, c, 50.0 + gamma, gamma)).to_dict()
+    ta = rep["fourbars"][0]["transmission_angle"]
+    mu_min = math.degrees(cosines(b, c, g - a))
+    mu_max = math.degrees(cosines(b, c, g + a))
+    assert rep["transmission_angle"] == pytest.approx({"min": mu_min, "max": mu_max}, abs=MU)
+    assert ta["min"] == pytest.approx(mu_min, abs=MU) and ta["max"] == pytest.approx(mu_max, abs=MU)
+    assert wrap(ta["min_at"] - gamma) == pytest.approx(0.0, abs=DEG)
+    assert wrap(ta["max_at"] - gamma - 180.0) == pytest.approx(0.0, abs=DEG)
+    assert ta["joint"] == "B"
+
+
+# ----------------------------------------------------------------------------- dead points and ranges
+@pytest.mark.parametrize(
+    ("dims", "how"),
+    [
+        ((350.0, 700.0, 300.0, 500.0), "stretched"),  # |A O4| <= b + c = 800 limits the crank
+        ((2.0, 3.0, 2.5, 4.0), "folded"),  # |A O4| >= c - b = 1.5 limits it
+    ],
+)
+def test_dead_points_of_a_non_grashof_fourbar(dims, how):
+    g, a, b, c = dims
+    f = b + c if how == "stretched" else c - b
+    lo, hi = crank_angles_at_diagonal(g, a, f)  # symmetric about the ground line
+    mech = fourbar_in_range(g, a, b, c)
+    rep = lk.check(mech).to_dict()
+    assert rep["grashof"] == "non-grashof"
+    ((start, stop),) = rep["input_range"]
+    expected = (lo, hi) if how == "stretched" else (hi, 360.0 + lo)  # through 0, or around 180
+    assert start == pytest.approx(expected[0], abs=DEG) and stop == pytest.approx(expected[1], abs=DEG)
+    dead = rep["dead_points"]["crank"]
+    assert [d["input"] for d in dead] == pytest.approx(list(expected), abs=DEG)
+    for d in dead:
+        assert d["kind"] == "end of range" and d["joint"] == "B" and set(d["links"]) == {"coupler", "rocker"}
+        assert d["detail"].endswith(f"({how})")
+    # the solver flags each as singular (or not assembled a hair outside): the mechanism locks there
+    res = lk.analyze(mech, [d["input"] for d in dead])
+    assert np.all(res.singular | ~res.assembled) and res.assembled.any()
+
+
+def test_dead_points_of_a_double_rocker():
+    """Ground 4, input 3, coupler 1, output 3.5: the input rocks between |A O4| = 4.5 and 2.5, on two arcs."""
+    g, a, b, c = 4.0, 3.0, 1.0, 3.5
+    fold = crank_angles_at_diagonal(g, a, c - b)  # (-38.62, 38.62)
+    stretch = crank_angles_at_diagonal(g, a, c + b)  # (-78.58, 78.58)
+    mech = fourbar_in_range(g, a, b, c)
+    rep = lk.check(mech).to_dict()
+    assert rep["grashof"] == "double-rocker"
+    expected = sorted([fold[1], stretch[1], 360 + stretch[0], 360 + fold[0]])
+    ranges = rep["input_range"]
+    assert len(ranges) == 2
+    np.testing.assert_allclose(ranges, [expected[:2], expected[2:]], atol=DEG)
+    dead = rep["dead_points"]["crank"]
+    np.testing.assert_allclose([d["input"] for d in dead], expected, atol=DEG)
+    assert [d["detail"].split("(")[-1] for d in dead] == ["folded)", "stretched)", "stretched)", "folded)"]
+    res = lk.analyze(mech, [d["input"] for d in dead])
+    assert np.all(res.singular | ~res.assembled)
+
+
+def test_change_points_of_the_parallelogram(examples):
+    """Seed 003 example 2.2: the four pivots are collinear at crank 0 and 180 deg; it turns fully."""
+    rep = lk.check(lk.load(examples / "seed003_ex22.yaml")).to_dict()
+    assert rep["input_range"] == [[0.0, 360.0]]
+    dead = rep["dead_points"]["crank"]
+    assert [d["kind"] for d in dead] == ["change point", "change point"]
+    assert [d["input"] for d in dead] == pytest.approx([0.0, 180.0], abs=DEG)
+    assert [d["detail"].split("(")[-1] for d in dead] == ["folded)", "stretched)"]  # |A O2| = 500 = 1000 - 500, 1500
+
+
+def test_full_turn_has_no_dead_point(examples):
+    rep = lk.check(lk.load(examples / "seed000_fourbar.yaml")).to_dict()
+    assert rep["dead_points"] == {"crank": []}
+
+
+# ----------------------------------------------------------------------------- limit positions
+@pytest.mark.parametrize(("gamma", "mode"), [(0.0, 1), (0.0, -1), (140.0, 1), (-75.0, -1)])
+def test_limit_positions_and_time_ratio_of_a_crank_rocker(gamma, mode):
+    g, a, b, c = 4.0, 1.0, 3.5, 3.0
+    hand = limit_positions_by_hand(g, a, b, c, gamma, mode)
+    (th_e, phi_e), (th_f, phi_f) = hand["extended"], hand["folded"]
+    # which limit is the rocker's largest angle: the other is reached by turning back through the swing
+    swing = abs(wrap(phi_e - phi_f))
+    top, bottom = ((th_e, phi_e), (th_f, phi_f)) if wrap(phi_e - phi_f) > 0 else ((th_f, phi_f), (th_e, phi_e))
+    rising = (top[0] - bottom[0]) % 360.0
+    ratio = max(rising, 360 - rising) / min(rising, 360 - rising)
+
+    mech = fourbar(g, a, b, c, gamma + 50.0, gamma, mode)
+    loop = lk.check(mech).to_dict()["fourbars"][0]
+    lims = {lim["extreme"]: lim for lim in loop["limit_positions"]}
+    assert len(loop["limit_positions"]) == 2 and set(lims) == {"min", "max"}
+    for lim, (theta, phi) in ((lims["max"], top), (lims["min"], bottom)):
+        assert wrap(lim["input"] - theta) == pytest.approx(0.0, abs=DEG)
+        assert wrap(lim["angle"] - phi) == pytest.approx(0.0, abs=DEG)
+    assert loop["rocker_turns_fully"] is False
+    assert loop["swing"] == pytest.approx(swing, abs=DEG)
+    assert loop["time_ratio"] == pytest.approx(ratio, rel=REL)
+    assert loop["strokes"]["rising"] == pytest.approx(rising, abs=DEG)
+    assert loop["strokes"]["falling"] == pytest.approx(360.0 - rising, abs=DEG)
+
+
+def test_limit_positions_in_radians():
+    """A file in radians reports the same positions in radians."""
+    g, a, b, c = 4.0, 1.0, 3.5, 3.0
+    hand = limit_positions_by_hand(g, a, b, c)
+    loop = lk.check(fourbar(g, a, b, c, 50.0, angle_unit="rad")).to_dict()["fourbars"][0]
+    got = sorted(lim["input"] for lim in loop["limit_positions"])
+    want = sorted(math.radians(t) for t, _ in hand.values())
+    assert got == pytest.approx(want, abs=math.radians(DEG))
+    assert loop["swing"] == pytest.approx(math.radians(abs(wrap(hand["extended"][1] - hand["folded"][1]))), abs=1e-9)
+
+
+def test_double_crank_rocker_turns_fully():
+    loop = lk.check(fourbar_in_range(1.0, 3.0, 3.5, 3.2)).to_dict()["fourbars"][0]
+    assert loop["rocker_turns_fully"] is True and loop["limit_positions"] == []
+    assert "swing" not in loop and "time_ratio" not in loop
+
+
+# ----------------------------------------------------------------------------- loops of a file
+def loops_by_enumeration(mech):
+    """Every four-bar loop (O2, A, B, O4) from the links alone, each once (one orientation)."""
+    ground = set(mech.link("ground").joints)
+    links = [ln for ln in mech.links if ln.name != "ground" and not any(s.link == ln.name for s in mech.sliders)]
+    pinned = {ln.name: [j for j in ln.joints if j in ground] for ln in links}
+    found = set()
+    for l2 in links:
+        for l4 in links:
+            if l2 is l4 or len(pinned[l2.name]) != 1 or len(pinned[l4.name]) != 1:
+                continue
+            o2, o4 = pinned[l2.name][0], pinned[l4.name][0]
+            if o2 == o4:
+                continue
+            for l3 in links:
+                if l3 in (l2, l4):
+                    continue
+                for A in set(l2.joints) & set(l3.joints) - ground:
+                    for B in set(l4.joints) & set(l3.joints) - ground - {A}:
+                        key = min((o2, A, B, o4), (o4, B, A, o2))
+                        found.add((key, frozenset({l2.name, l3.name, l4.name})))
+    return found
+
+
+def as_found(rep):
+    out = set()
+    for lp in rep["fourbars"]:
+        j = tuple(lp["joints"])
+        out.add((min(j, j[::-1]), frozenset(v for k, v in lp["links"].items() if k != "ground")))
+    return out
+
+
+@pytest.mark.parametrize(
+    ("name", "count"),
+    [
+        ("seed001_stephenson.yaml", 1),
+        ("watt2_sixbar.yaml", 2),
+        ("jansen_leg.yaml", 2),
+        ("seed000_fourbar.yaml", 1),
+        ("seed004_stephenson1.yaml", 1),
+        ("slider_crank.yaml", 0),
+        ("fivebar_two_drivers.yaml", 0),
+    ],
+)
+def test_every_loop_of_the_examples_is_found(examples, name, count):
+    mech = lk.load(examples / name)
+    rep = lk.check(mech).to_dict()
+    assert len(rep["fourbars"]) == count
+    assert as_found(rep) == loops_by_enumeration(mech)
+    for lp in rep["fourbars"]:  # lengths: distances between the loop's joints in the reference pose
+        o2, a, b, o4 = (mech.joints[j] for j in lp["joints"])
+        want = {"ground": abs(o4 - o2), "crank": abs(a - o2), "coupler": abs(b - a), "rocker": abs(b - o4)}
+        assert lp["lengths"] == pytest.approx(want, rel=1e-9)
+
+
+def test_the_stephenson_loop_of_seed001(examples):
+    """OA-S-W-OB: ground 4, input link OA-S 1.5, link4 S-W 4, output OB-W 3 (the file's lengths)."""
+    rep = lk.check(lk.load(examples / "seed001_stephenson.yaml")).to_dict()
+    (lp,) = rep["fourbars"]
+    assert lp["joints"] == ["OA", "S", "W", "OB"]
+    assert lp["links"] == {"ground": "ground", "crank": "input", "coupler": "link4", "rocker": "output"}
+    assert lp["lengths"] == pytest.approx({"ground": 4.0, "crank": 1.5, "coupler": 4.0, "rocker": 3.0}, rel=1e-9)
+    assert lp["grashof"] == "crank-rocker" and rep["grashof"] == "crank-rocker"  # 1.5 + 4 < 4 + 3, input shortest
+    assert lp["input"]["driver"] == "input"
+    # the input link OA-S turns with the driver: the transmission angle's extremes are the crank-rocker's
+    g, a, b, c = 4.0, 1.5, 4.0, 3.0
+    ta = lp["transmission_angle"]
+    assert ta["min"] == pytest.approx(math.degrees(cosines(b, c, g - a)), abs=MU)
+    assert ta["max"] == pytest.approx(math.degrees(cosines(b, c, g + a)), abs=MU)
+    assert rep["transmission_angle"] == {"min": ta["min"], "max": ta["max"]}
+    # and its limit positions: OA-S and S-W collinear, |OB W| = 3 with |OA W| = 5.5 or 2.5
+    phi_qs = math.degrees(cosines(2.0, 1.5, abs(1.285575219373 + 1.532088886238j - (1.477211629518 + 0.260472266500j))))
+    ground = math.degrees(math.atan2(0.487477373621, 3.970184606565))  # 7 deg
+    hand = limit_positions_by_hand(g, a, b, c, ground, mode=1)
+    got = sorted(lim["input"] for lim in lp["limit_positions"])
+    want = sorted((t + phi_qs) % 360 for t, _ in hand.values())  # driver angle = OA->Q = OA->S + 40 deg
+    assert phi_qs == pytest.approx(40.0, abs=1e-6)
+    assert got == pytest.approx(want, abs=DEG)
+
+
+def test_watt2_second_loop_is_moved_by_the_first(examples):
+    """Loop 2's input is loop 1's rocker; its output stops where loop 1's rocker stops or loop 2 folds flat."""
+    mech = lk.load(examples / "watt2_sixbar.yaml")
+    rep = lk.check(mech).to_dict()
+    first, second = rep["fourbars"]
+    assert second["input"] == {"link": "rocker", "driver": "crank", "moved_by": "loop 1 (its rocker 'rocker')"}
+    res = lk.analyze(mech, [lim["input"] for lim in second["limit_positions"]])
+    P = {j: res.point(j) for j in "ABCDEFG"}
+    loop1_flat = np.abs(cross(P["C"] - P["A"], P["D"] - P["C"])) / (20 * 70)  # crank and coupler1 in line
+    loop2_flat = np.abs(cross(P["F"] - P["B"], P["G"] - P["F"])) / (50 * 38)  # rocker and coupler2 in line
+    assert np.all(np.minimum(loop1_flat, loop2_flat) < 1e-9)
+    assert len(second["limit_positions"]) >= 2
+    # the rocker of loop 1 stops at loop 1's limit positions: those inputs are among loop 2's
+    for lim in first["limit_positions"]:
+        assert min(abs(wrap(lim["input"] - x["input"])) for x in second["limit_positions"]) < DEG
+
+
+# ----------------------------------------------------------------------------- several drivers
+def test_drivers_held_at_their_pose_values(examples, capsys):
+    mech = lk.load(examples / "fivebar_two_drivers.yaml")
+    rep = lk.check(mech).to_dict()
+    # the pose: A->C at 120 deg, B->D at 60 deg (C = (-15, 25.98), D = (65, 25.98), B = (50, 0))
+    held = rep["held_at"]
+    assert held["crank1"] == pytest.approx({"crank2": 60.0}, abs=1e-9)
+    assert held["crank2"] == pytest.approx({"crank1": 120.0}, abs=1e-9)
+    assert main(["check", str(examples / "fivebar_two_drivers.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "Assembles for crank1 in [0.000000, 360.000000] deg (crank2 = 60.000000 deg held at the pose)" in out
+    assert "(crank1 = 120.000000 deg held at the pose)" in out
+
+
+# ----------------------------------------------------------------------------- peak loads
+def slider_crank_by_hand(theta_deg, w=10.0):
+    """Closed-form kinematics of examples/slider_crank.yaml and its kinetostatics by hand.
+
+    Crank r = 0.05 from O, rod L from A to B, B on the x axis on the +x side; constant speed w.
+    Returns (torque by energy balance, torque by Newton-Euler, {reaction name: |F|}).
+    """
+    r, L = 0.05, 0.0939414711402797
+    mc, ic, mr, ir, mb = 0.5, 0.000104166666666667, 0.3, 0.000220625, 0.4
+    g = -9.81j
+    th = np.radians(theta_deg)
+    s, c = np.sin(th), np.cos(th)
+    S = np.sqrt(L * L - r * r * s * s)
+    dS = -r * r * s * c / S
+    d2S = -r * r * (c * c - s * s) / S - r**4 * s * s * c * c / S**3
+    A = r * np.exp(1j * th)
+    vA, aA = 1j * w * A, -(w**2) * A
+    B = r * c + S + 0j
+    vB = w * (-r * s + dS) + 0j
+    aB = w**2 * (-r * c + d2S) + 0j
+    d = B - A
+    w_rod = cross(d, vB - vA) / L**2
+    a_rod = cross(d, aB - aA) / L**2
+    Gc, vGc, aGc = A / 2, vA / 2, aA / 2
+    Gr, vGr, aGr = (A + B) / 2, (vA + vB) / 2, (aA + aB) / 2
+
+    def dot(u, v):
+        return (np.conj(u) * v).real
+
+    # energy balance: T w = d(kinetic energy)/dt - power of gravity - power of the 50 N load
+    kinetic = mc * dot(aGc, vGc) + mr * dot(aGr, vGr) + ir * a_rod * w_rod + mb * dot(aB, vB)
+    gravity = mc * dot(g, vGc) + mr * dot(g, vGr) + mb * dot(g, vB)
+    load = dot(-50 + 0j, vB)
+    t_energy = (kinetic - gravity - load) / w
+    # Newton-Euler: block (x: P_x - 50 = mb aBx), rod (moments about A), crank (moments about O)
+    Px = mb * aB.real + 50.0
+    Py = (d.imag * Px - ir * a_rod - cross(Gr - A, mr * (aGr - g))) / d.real
+    P = Px + 1j * Py  # by the rod on the block, at B
+    Q = mr * (aGr - g) + P  # by the crank on the rod, at A
+    N = mb * 9.81 - Py  # by the ground on the block, normal to the slide
+    R = mc * (aGc - g) + Q  # by the ground on the crank, at O
+    t_newton = cross(A, Q) + cross(Gc, mc * (aGc - g)) + ic * 0.0
+    return t_energy, t_newton, {"O": np.abs(R), "A": np.abs(Q), "B": np.abs(P), "B slider": np.abs(N)}
+
+
+def test_peak_loads_of_the_slider_crank(examples):
+    mech = lk.load(examples / "slider_crank.yaml")
+    dyn = lk.check(mech).to_dict()["dynamics"]
+    theta = np.arange(0.0, 361.0, 1.0)  # the file's sweep
+    t_energy, t_newton, bearings = slider_crank_by_hand(theta)
+    np.testing.assert_allclose(t_newton, t_energy, rtol=1e-12, atol=1e-12)  # the two hand formulations agree
+    i = int(np.argmax(np.abs(t_energy)))
+    second = np.sort(np.abs(t_energy[theta < 360]))[-2]
+    assert abs(t_energy[i]) - second > 1e-6  # the peak sample is well defined (360 repeats 0)
+    peak = dyn["peak_driver_torque"]["crank"]
+    assert peak["at"] == {"crank": theta[i]}
+    assert peak["value"] == pytest.approx(t_energy[i], rel=REL)
+    assert dyn["samples"] == 361 and dyn["speeds"] == {"crank": 10.0}
+    # bearing loads: the largest |F| of the four reactions over the sweep
+    names = list(bearings)
+    mags = np.array([bearings[k] for k in names])
+    k, j = np.unravel_index(int(np.argmax(mags)), mags.shape)
+    assert np.sort(mags[:, :-1].ravel())[-2] < mags[k, j] * (1 - 1e-6)  # a well-defined peak sample
+    bl = dyn["peak_bearing_load"]
+    assert bl["value"] == pytest.approx(mags[k, j], rel=REL)
+    assert bl["at"] == {"crank": theta[j]}
+    joint_links = {
+        "O": ("O", {"ground", "crank"}, "pin"),
+        "A": ("A", {"crank", "rod"}, "pin"),
+        "B": ("B", {"rod", "block"}, "pin"),
+        "B slider": ("B", {"ground", "block"}, "slider"),
+    }
+    joint, links, kind = joint_links[names[k]]
+    assert (bl["joint"], {bl["on"], bl["by"]}, bl["kind"]) == (joint, links, kind)
+
+
+def link_points(mech, link):
+    """The complex ratio of a link's centre of gravity to its first two joints, in the reference pose."""
+    ln = mech.link(link)
+    j0, j1 = (mech.joints[j] for j in ln.joints[:2])
+    return ln.joints[0], ln.joints[1], (ln.cg_pose - j0) / (j1 - j0)
+
+
+def test_peak_torque_of_seed001_by_the_energy_balance(examples):
+    """No gravity, no load: T w = d(kinetic energy)/dt = sum m a_G . v_G + I alpha w over the links.
+
+    Positions only from the solver (rates=False); every derivative by fourth-order central
+    differences in the input angle (h = 1e-3 rad; they agree to ~1e-10): v = w z',
+    a = alpha z' + w^2 z'' (w = 3 rad/s, alpha = -2 rad/s^2).
+    The peak is negative here (-515 N*m), so a peak taken on the signed torque would be wrong.
+    """
+    mech = lk.load(examples / "seed001_stephenson.yaml")
+    dyn = lk.check(mech).to_dict()["dynamics"]
+    theta = np.arange(0.0, 361.0, 2.0)
+    w, alpha, h = 3.0, -2.0, 1e-3  # h in rad
+    offsets = np.array([-2, -1, 0, 1, 2]) * h
+    res = lk.analyze(mech, (theta[:, None] + np.degrees(offsets)[None, :]).ravel(), rates=False, dynamics=False)
+
+    def derivatives(z):
+        z = z.reshape(len(theta), 5)
+        d1 = (z[:, 0] - 8 * z[:, 1] + 8 * z[:, 3] - z[:, 4]) / (12 * h)
+        d2 = (-z[:, 0] + 16 * z[:, 1] - 30 * z[:, 2] + 16 * z[:, 3] - z[:, 4]) / (12 * h * h)
+        return d1, d2
+
+    power = np.zeros(len(theta))
+    for ln in mech.links:
+        if ln.name == "ground":
+            continue
+        j0, j1, rho = link_points(mech, ln.name)
+        z0, z1 = res.point(j0), res.point(j1)
+        g1, g2 = derivatives(z0 + rho * (z1 - z0))
+        p1, p2 = derivatives(np.unwrap(np.angle(z1 - z0).reshape(len(theta), 5), axis=1).ravel())
+        vg, ag = w * g1, alpha * g1 + w * w * g2
+        om, al = w * p1, alpha * p1 + w * w * p2
+        power += ln.mass * (np.conj(ag) * vg).real + ln.inertia * al * om
+    torque = power / w
+    i = int(np.argmax(np.abs(torque)))
+    assert torque[i] < 0 and np.sort(np.abs(torque))[-2] < abs(torque[i]) - 1.0  # a clear, negative peak
+    peak = dyn["peak_driver_torque"]["input"]
+    assert peak["at"] == {"input": theta[i]}
+    assert peak["value"] == pytest.approx(torque[i], rel=1e-8)
+
+
+def test_peak_loads_in_text_and_json(examples, capsys):
+    path = str(examples / "seed001_stephenson.yaml")
+    assert main(["check", path, "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert set(doc["dynamics"]) >= {"peak_driver_torque", "peak_bearing_load", "samples", "speeds"}
+    assert len(doc["fourbars"]) == 1 and doc["grashof"] == "crank-rocker" and "transmission_angle" in doc
+    assert main(["check", path]) == 0
+    out = capsys.readouterr().out
+    assert "Four-bar loop OA-S-W-OB: crank-rocker (the input turns fully)" in out
+    assert "Transmission angle: min" in out and "Limit positions of output" in out and "Time ratio" in out
+    assert "Peak driver torque of input: " in out and " N*m at input = " in out and "Peak bearing load: " in out
+    assert "Dead points of input (where the mechanism locks): none" in out
+
+
+def test_no_dynamics_without_masses(examples):
+    assert "dynamics" not in lk.check(lk.load(examples / "seed000_fourbar.yaml")).to_dict()
+
+
+# ----------------------------------------------------------------------------- a property
+def grashof_by_hand(g, a, b, c):
+    """(Grashof?, which link is shortest) of a four-bar."""
+    lengths = {"ground": g, "crank": a, "coupler": b, "rocker": c}
+    s, p, q, ell = sorted(lengths.values())
+    return s + ell < p + q, min(lengths, key=lengths.get)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
+@given(
+    dims=st.tuples(*(st.floats(1.0, 10.0) for _ in range(4))),
+    mode=st.sampled_from([1, -1]),
+)
+def test_grashof_class_decides_whether_the_crank_turns(dims, mode):
+    """Grashof's law: the crank turns fully iff s + l < p + q with the crank or the ground shortest.
+
+    Away from the change point (|s + l - p - q| > 2 % of l): then a crank that turns has no dead
+    point and two limit positions of its rocker, which are crank-coupler collinear positions;
+    a crank that does not turn has a dead point at each end of each arc, and the solver flags them.
+    """
+    g, a, b, c = dims
+    s, p, q, ell = sorted(dims)
+    assume(abs(s + ell - p - q) > 0.02 * ell)
+    mech = fourbar_in_range(g, a, b, c, mode)
+    assume(mech is not None)
+    rep = lk.check(mech).to_dict()
+    grashof_law, shortest = grashof_by_hand(g, a, b, c)
+    turns = grashof_law and shortest in ("crank", "ground")
+    assert (rep["input_range"] == [[0.0, 360.0]]) == turns
+    assert (rep["grashof"] in ("crank-rocker", "double-crank")) == (grashof_law and shortest != "coupler")
+    dead = rep["dead_points"]["crank"]
+    loop = rep["fourbars"][0]
+    if turns:
+        assert dead == []
+        rocks = shortest == "crank"
+        assert loop["rocker_turns_fully"] is (not rocks)
+        if rocks:
+            assert len(loop["limit_positions"]) == 2 and loop["time_ratio"] >= 1.0
+            res = lk.analyze(mech, [lim["input"] for lim in loop["limit_positions"]])
+            O2, A, B = res.point("O2"), res.point("A"), res.point("B")
+            assert np.all(np.abs(cross(A - O2, B - A)) / (a * b) < 1e-9)  # crank and coupler in line
+    else:
+        assert len(dead) == 2 * len(rep["input_range"])
+        res = lk.analyze(mech, [d["input"] for d in dead])
+        assert np.all(res.singular | ~res.assembled)

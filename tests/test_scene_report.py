@@ -1,0 +1,239 @@
+"""The scene (what both drawings read) and the report page's file, without a browser.
+
+The scene must hold exactly what the solver returned (positions to the bit, gaps where it
+does not assemble), guides must carry their joints at every sample, and the page must be
+self-contained, small, and hold the Result's own columns.  The page in a real browser is
+tested in tests/test_report_browser.py.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import linkagekit as lk
+from linkagekit.cli import main
+from linkagekit.viz.scene import broken_at_wraps, build_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+EX = ROOT / "examples"
+
+
+def _cross(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+@pytest.mark.parametrize(
+    "name", ["seed000_fourbar", "jansen_leg", "slider_crank", "seed003_ex21", "seed001_stephenson"]
+)
+def test_scene_holds_the_results_positions_exactly(name):
+    res = lk.analyze(lk.load(EX / f"{name}.yaml"))
+    sc = build_scene(res)
+    for k, j in enumerate(sc.joints):
+        np.testing.assert_array_equal(sc.xy[:, k], res.xy(j))
+    np.testing.assert_array_equal(sc.assembled, res.assembled)
+    # gaps are exactly the runs of not-assembled samples
+    bad = np.zeros(sc.n, bool)
+    for a, b in sc.gaps:
+        assert a <= b and not bad[a : b + 1].any()
+        bad[a : b + 1] = True
+    np.testing.assert_array_equal(bad, ~res.assembled)
+    doc = json.loads(json.dumps(sc.to_dict(), allow_nan=False))
+    for col, values in res.columns().items():
+        got = np.array([np.nan if v is None else v for v in doc["columns"][col]], dtype=float)
+        np.testing.assert_array_equal(got, np.asarray(values, float))
+
+
+def test_gaps_of_seed003_match_its_assembly_range():
+    res = lk.analyze(lk.load(EX / "seed003_ex21.yaml"))
+    sc = build_scene(res)
+    x = sc.inputs["crank"]
+    # hand value (docs/seed-errata.md): assembles for crank in [86.782730, 273.217270] deg
+    assert sc.gaps == ((0, int(np.flatnonzero(x > 86.78273)[0]) - 1), (int(np.flatnonzero(x < 273.21727)[-1]) + 1, 360))
+
+
+def test_coupler_curves_are_the_joints_off_the_ground():
+    kinds = {
+        "seed000_fourbar": ("P",),
+        "jansen_leg": ("W", "F"),
+        "slider_crank": (),
+        "seed003_ex21": ("P",),
+    }
+    for name, want in kinds.items():
+        sc = build_scene(lk.analyze(lk.load(EX / f"{name}.yaml")))
+        assert sc.coupler_curves == want, name
+        assert not set(sc.coupler_curves) & set(sc.other_paths)
+        assert set(sc.coupler_curves) | set(sc.other_paths) | set(sc.ground_joints) == set(sc.joints)
+
+
+def test_link_kinds_and_plate_outlines():
+    sc = build_scene(lk.analyze(lk.load(EX / "jansen_leg.yaml")))
+    kinds = {ln.name: ln.kind for ln in sc.links}
+    assert kinds == {
+        "ground": "ground",
+        "crank": "bar",
+        "link_j": "bar",
+        "link_k": "bar",
+        "upper": "plate",
+        "link_c": "bar",
+        "link_f": "bar",
+        "foot": "plate",
+    }
+    mech = lk.load(EX / "jansen_leg.yaml")
+    for ln in sc.links:
+        assert sorted(ln.outline) == sorted(mech.link(ln.name).joints)
+
+
+def test_a_plate_outline_is_a_simple_polygon():
+    # four joints given in a crossing order: the outline must go round them
+    d = {
+        "joints": {"O": [0, 0], "A": [1, 0], "B": [3, 0], "C": [2, 1], "D": [2, 2], "E": [3, 2]},
+        "links": {"ground": ["O", "B"], "crank": ["O", "A"], "plate": ["A", "E", "C", "D"], "rocker": ["B", "E"]},
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }
+    sc = build_scene(lk.analyze(lk.Mechanism.from_dict(d), [0.0]))
+    outline = next(ln.outline for ln in sc.links if ln.name == "plate")
+    pts = np.array([d["joints"][j] for j in outline], float)
+    c = pts.mean(axis=0)
+    ang = np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0])
+    assert np.all(np.diff(ang) > 0)  # counter-clockwise about the centroid: no self-crossing
+
+
+def test_a_fixed_guide_carries_its_joint():
+    res = lk.analyze(lk.load(EX / "slider_crank.yaml"))
+    sc = build_scene(res)
+    (sl,) = sc.sliders
+    assert sl.on == "ground" and sl.through == "B"
+    b = res.xy("B")
+    # the file: B slides along the x axis through (0.115, 0)
+    np.testing.assert_allclose(sl.direction, np.tile([1.0, 0.0], (sc.n, 1)), atol=1e-15)
+    np.testing.assert_allclose(_cross(sl.direction, b - sl.origin), 0, atol=1e-12)
+    t = np.einsum("ij,ij->i", b - sl.origin, sl.direction)
+    assert sl.span[0] < t.min() and t.max() < sl.span[1]
+
+
+def test_a_guide_on_a_rocker_turns_with_it():
+    # inverted slider-crank: the block at A slides on the rocker Q-R along the line Q-A
+    d = {
+        "joints": {"O": [0, 0], "A": [0, 1], "Q": [3, 0], "R": [3, 2]},
+        "links": {"ground": ["O", "Q"], "crank": ["O", "A"], "block": ["A"], "rocker": ["Q", "R"]},
+        "sliders": [{"link": "block", "on": "rocker", "through": "A", "direction": [-3, 1]}],
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }
+    res = lk.analyze(lk.Mechanism.from_dict(d), np.linspace(0, 360, 73))
+    assert res.assembled.all()
+    (sl,) = build_scene(res).sliders
+    q, a, r = res.xy("Q"), res.xy("A"), res.xy("R")
+    # the guide passes through the rocker's pivot Q and the block's joint A at every sample,
+    np.testing.assert_allclose(_cross(sl.direction, q - sl.origin), 0, atol=1e-12)
+    np.testing.assert_allclose(_cross(sl.direction, a - sl.origin), 0, atol=1e-12)
+    # and keeps its angle to the rocker Q->R (atan2(1,-3) - 90 deg in the pose)
+    rel = np.arctan2(sl.direction[:, 1], sl.direction[:, 0]) - np.arctan2(r[:, 1] - q[:, 1], r[:, 0] - q[:, 0])
+    want = math.atan2(1, -3) - math.pi / 2
+    np.testing.assert_allclose(np.angle(np.exp(1j * (rel - want))), 0, atol=1e-12)
+
+
+def test_plots_follow_what_the_result_has():
+    kin = build_scene(lk.analyze(lk.load(EX / "seed000_fourbar.yaml")))
+    assert [p.title for p in kin.plots] == [
+        "Link angles",
+        "Angular velocities",
+        "Angular accelerations",
+        "Joint speeds",
+    ]
+    dyn = build_scene(lk.analyze(lk.load(EX / "slider_crank.yaml")))
+    titles = {p.title: p for p in dyn.plots}
+    assert titles["Driver torques"].series == ("T[crank]",)
+    assert len(titles["Bearing loads"].series) == 4
+    res = lk.analyze(lk.load(EX / "slider_crank.yaml"))
+    np.testing.assert_allclose(dyn.columns["|v|[A]"], np.hypot(*res.vxy("A").T), rtol=1e-15)
+    for p in dyn.plots:
+        assert all(s in dyn.columns and dyn.units[s] for s in p.series)
+
+
+def test_an_angle_is_broken_where_it_wraps_not_joined():
+    x = np.arange(6.0)
+    y = np.array([170.0, 178.0, -176.0, -170.0, np.nan, -160.0])
+    xb, yb = broken_at_wraps(x, y, 360.0)
+    assert np.isnan(yb[2]) and np.isnan(xb[2]) and len(yb) == 7
+    np.testing.assert_array_equal(yb[[0, 1, 3, 4, 6]], [170.0, 178.0, -176.0, -170.0, -160.0])
+    np.testing.assert_array_equal(broken_at_wraps(x, y, None)[1], y)  # not an angle: unchanged
+
+
+def test_a_batch_is_refused_with_a_clear_error():
+    mech = lk.load(EX / "seed000_fourbar.yaml")
+    res = lk.analyze(mech, [0.0, 10.0], poses=np.stack([mech.pose_array()] * 2))
+    with pytest.raises(lk.InputError, match="design"):
+        build_scene(res)
+    build_scene(res.design(1))  # one design of it is fine
+
+
+# ---------------------------------------------------------------------- the page file
+def _scene_of(page: str) -> dict:
+    m = re.search(r'<script type="application/json" id="lk-scene">(.*?)</script>', page, re.S)
+    assert m
+    return json.loads(m.group(1))
+
+
+def test_report_is_self_contained_small_and_holds_the_results_columns(tmp_path):
+    out = tmp_path / "r.html"
+    assert main(["report", str(EX / "seed000_fourbar.yaml"), "-o", str(out)]) == 0
+    page = out.read_text(encoding="utf-8")
+    assert out.stat().st_size < 1_000_000  # the issue: under 1 MB for a 361-sample four-bar
+    # nothing to fetch: no src/href attribute, no url(), no @import, no http(s) address but
+    # the SVG namespace (an identifier, never fetched)
+    assert not re.search(r"\b(src|href)\s*=", page.replace("a.href = URL.createObjectURL", ""))
+    assert "url(" not in page and "@import" not in page
+    assert set(re.findall(r"https?://[^\s\"'<>)]+", page)) <= {"http://www.w3.org/2000/svg"}
+    doc = _scene_of(page)
+    res = lk.analyze(lk.load(EX / "seed000_fourbar.yaml"))
+    assert doc["n"] == res.n == 361
+    for col, values in res.columns().items():
+        got = np.array([np.nan if v is None else v for v in doc["columns"][col]], dtype=float)
+        np.testing.assert_array_equal(got, np.asarray(values, float))
+    # the page shows the file itself and the checks with the solve plan
+    assert "Romero-Nunez" in page and "Solve plan" in page
+    assert page.count('data-role="input"') == 1
+
+
+def test_report_of_two_drivers_has_a_range_each(tmp_path):
+    out = tmp_path / "r.html"
+    assert main(["report", str(EX / "fivebar_two_drivers.yaml"), "-o", str(out)]) == 0
+    page = out.read_text(encoding="utf-8")
+    assert re.findall(r'data-role="input" data-driver="(\w+)"', page) == ["crank1", "crank2"]
+
+
+def test_report_escapes_what_the_file_says(tmp_path):
+    src = (EX / "seed000_fourbar.yaml").read_text()
+    evil = "</script><script>alert(1)</script><b>x</b> & co"
+    bad = tmp_path / "evil.yaml"
+    bad.write_text(re.sub(r"^name: .*$", "name: " + json.dumps(evil), src, count=1, flags=re.M))
+    out = tmp_path / "r.html"
+    assert main(["report", str(bad), "-o", str(out)]) == 0
+    page = out.read_text()
+    assert "<script>alert(1)" not in page and "<b>x</b>" not in page
+    assert _scene_of(page)["name"] == evil  # the JSON still reads back exactly
+    assert page.count("<script") == 2
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["report", "examples/seed000_fourbar.yaml", "-o", "out.txt"], ".html"),
+        (["report", "examples/seed000_fourbar.yaml"], "-o"),
+        (["report", "nope.yaml", "-o", "out.html"], "nope.yaml"),
+        (["report", "examples/seed000_fourbar.yaml", "-o", "out.html", "--angles", "0:10:0"], "STEP"),
+        (["report", "examples/seed000_fourbar.yaml", "-o", "/nonexistent-dir/out.html"], "cannot write"),
+    ],
+)
+def test_report_bad_arguments_exit_2_with_one_line(argv, words, capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err and "Traceback" not in err
+    assert not (ROOT / "out.html").exists() and not (ROOT / "out.txt").exists()
