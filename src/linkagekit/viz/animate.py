@@ -70,11 +70,26 @@ def frames(scene: Scene, size: float = 6.0, dpi: int = 100) -> Iterator[np.ndarr
     ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
     fig.suptitle(scene.name or "mechanism", fontsize=10)
     drawing = Drawing(ax, scene, animated=True)
+    # the inputs of the frame, and a thin bar of how far through the sweep it is (so two
+    # frames at one input still differ, and no GIF encoder merges them)
+    label = ax.text(0.0, 1.0, "", transform=ax.transAxes, ha="left", va="top", fontsize=9, animated=True)
+    (bar,) = ax.plot(
+        [0.0, 0.0],
+        [0.0, 0.0],
+        transform=ax.transAxes,
+        color="#999999",
+        linewidth=3,
+        solid_capstyle="butt",
+        clip_on=False,
+        animated=True,
+    )
     canvas.draw()
     background = canvas.copy_from_bbox(fig.bbox)
     for i in range(scene.n):
         canvas.restore_region(background)
-        for artist in drawing.update(i):
+        label.set_text(", ".join(f"{k} = {scene.inputs[k][i]:.6g} {scene.input_units[k]}" for k in scene.drivers))
+        bar.set_xdata([0.0, (i + 1) / scene.n])
+        for artist in [*drawing.update(i), label, bar]:
             ax.draw_artist(artist)
         yield np.asarray(canvas.buffer_rgba())[..., :3].copy()
 

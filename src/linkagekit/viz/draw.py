@@ -77,13 +77,26 @@ class Drawing:
         Draw the joint paths (coupler curves in colour, the other paths thin and grey).
     animated : bool
         Mark the moving artists as animated (drawn only on request, for blitting).
+    ground : bool
+        Draw the ground (pivots, fixed guides); off for a second pose on the same Axes.
+    size : float, optional
+        The length that sizes the symbols (default the scene's): give the first drawing's
+        when several scenes share an Axes, so that they are drawn alike.
     """
 
-    def __init__(self, ax: Axes, scene: Scene, labels: bool = True, curves: bool = True, animated: bool = False):
+    def __init__(
+        self,
+        ax: Axes,
+        scene: Scene,
+        labels: bool = True,
+        curves: bool = True,
+        animated: bool = False,
+        ground: bool = True,
+        size: float | None = None,
+    ):
         self.ax, self.scene = ax, scene
         sc = scene
-        s = sc.size
-        self.pin = 0.012 * s
+        self.pin = 0.012 * (sc.size if size is None else size)
         self.static: list[Any] = []
         ax.set_aspect("equal")
         ax.set_xlim(sc.bounds[0], sc.bounds[2])
@@ -92,7 +105,8 @@ class Drawing:
         ax.set_facecolor(BACKGROUND)
         if curves:
             self._curves()
-        self._ground()
+        if ground:
+            self._ground()
         # moving artists
         self.links: list[tuple[Any, Any, tuple[int, ...]]] = []
         k = 0
@@ -189,9 +203,7 @@ class Drawing:
         sc, ax = self.scene, self.ax
         h = 3.2 * self.pin
         for j in sc.ground_joints:
-            x, y = sc.xy[:, sc.index(j)][np.isfinite(sc.xy[:, sc.index(j), 0])][:1].ravel().tolist() or [math.nan] * 2
-            if not math.isfinite(x):
-                continue
+            x, y = sc.ground_xy[j]  # fixed: drawn even when no sample assembles
             tri = Polygon(
                 [[x, y], [x - 0.8 * h, y - h], [x + 0.8 * h, y - h]],
                 closed=True,
@@ -278,8 +290,9 @@ class Drawing:
             a, b = o + sl.span[0] * d, o + sl.span[1] * d
             line.set_data([a[0], b[0]], [a[1], b[1]])
             line.set_visible(ok)
-        mv = p[self.moving]
-        self.pins.set_data(mv[:, 0], mv[:, 1])
+        # every pin, the ground's too: blitted artists are drawn over the static background,
+        # so a ground pin left in the background would be hidden under the bars
+        self.pins.set_data(p[:, 0], p[:, 1])
         self.pins.set_visible(ok)
         for j, t in self.labels:
             t.set_position((p[j, 0] + 0.8 * self.pin, p[j, 1] + 0.8 * self.pin))
@@ -372,7 +385,7 @@ def mechanism_figure(res: Result, poses: Result | None = None, size: float = 6.0
     else:
         shown, indices = pose_scene, list(range(pose_scene.n))
     for k, i in enumerate(indices):
-        d = Drawing(ax, shown, labels=k == len(indices) - 1, curves=False)
+        d = Drawing(ax, shown, labels=k == len(indices) - 1, curves=False, ground=False, size=sc.size)
         d.update(i)
         if k < len(indices) - 1:
             for a in d.artists():
@@ -392,9 +405,8 @@ def _pose_sample(res: Result, sc: Scene) -> int:
     pose = np.array([mech.joints[j] for j in mech.joint_names])
     with np.errstate(invalid="ignore"):
         err = np.abs(z - pose).max(axis=-1)
-    if np.isfinite(err).any() and np.nanmin(err) <= 1e-6 * sc.size:
-        return int(np.nanargmin(err))
-    return _sample(sc, None)
+    near = np.flatnonzero(err <= 1e-6 * sc.size)  # NaN compares False
+    return int(near[0]) if near.size else _sample(sc, None)
 
 
 def _aspect(sc: Scene) -> float:
@@ -439,7 +451,7 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
 
 def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
     """A scene whose samples are given positions (the modes), with guides from their links."""
-    from .scene import SceneSlider, _gaps, _pose_angle, path_kinds, scene_links
+    from .scene import SceneSlider, _gaps, _ground_xy, _pose_angle, path_kinds, scene_links
 
     names = mech.joint_names
     n = xy.shape[0]
@@ -477,6 +489,7 @@ def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
         angle_unit=mech.angle_unit,
         joints=names,
         ground_joints=mech.link("ground").joints,
+        ground_xy=_ground_xy(mech),
         links=scene_links(mech),
         sliders=tuple(sliders),
         drivers=tuple(inputs),

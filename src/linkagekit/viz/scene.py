@@ -95,6 +95,7 @@ class Scene:
     angle_unit: str
     joints: tuple[str, ...]
     ground_joints: tuple[str, ...]
+    ground_xy: dict[str, tuple[float, float]]
     links: tuple[SceneLink, ...]
     sliders: tuple[SceneSlider, ...]
     drivers: tuple[str, ...]
@@ -136,6 +137,7 @@ class Scene:
             "units": {"length": self.length_unit, "angle": self.angle_unit},
             "joints": list(self.joints),
             "ground_joints": list(self.ground_joints),
+            "ground_xy": {j: list(p) for j, p in self.ground_xy.items()},
             "links": [{"name": ln.name, "kind": ln.kind, "joints": list(ln.outline)} for ln in self.links],
             "sliders": [
                 {
@@ -215,6 +217,11 @@ def path_kinds(mech: Mechanism) -> tuple[tuple[str, ...], tuple[str, ...]]:
             continue
         (other if set(mech.links_of(j)) & grounded_links else coupler).append(j)
     return tuple(coupler), tuple(other)
+
+
+def _ground_xy(mech: Mechanism) -> dict[str, tuple[float, float]]:
+    """The ground joints where the file puts them (the ground never moves)."""
+    return {j: (mech.joints[j].real, mech.joints[j].imag) for j in mech.link("ground").joints}
 
 
 def _pose_angle(mech: Mechanism, link: str) -> float:
@@ -366,6 +373,7 @@ def build_scene(res: Result) -> Scene:
         angle_unit=mech.angle_unit,
         joints=names,
         ground_joints=ground_joints,
+        ground_xy=_ground_xy(mech),
         links=scene_links(mech),
         sliders=sliders,
         drivers=tuple(d.name for d in mech.drivers),

@@ -115,9 +115,8 @@
       }
     });
     sc.ground_joints.forEach(function (j) {
-      var x = self.X[j].find(finite), y = self.Y[j].find(finite);
-      if (x === undefined) return;
-      var X = self.px(x), Y = self.py(y);
+      var g = sc.ground_xy[j];  // fixed: drawn even when no sample assembles
+      var X = self.px(g[0]), Y = self.py(g[1]);
       el("polygon", {points: [X, Y, X - 0.8 * h, Y + h, X + 0.8 * h, Y + h].join(" "), fill: "#ddd", stroke: "#000",
         "stroke-width": 1}, gStatic);
       for (var i = 0; i < 6; i++) {
