@@ -345,10 +345,11 @@ def test_bad_animate_arguments_exit_2(tmp_path, capsys, args, needle):
 
 # --------------------------------------------------------------------------- atomic output
 def failing_frames(after: int, exc: BaseException):
-    real = anim.frames
+    """A Frames.__iter__ that fails after ``after`` frames."""
+    real = anim.Frames.__iter__
 
-    def frames(scene, *a, **k):
-        for i, f in enumerate(real(scene, *a, **k)):
+    def frames(self):
+        for i, f in enumerate(real(self)):
             if i == after:
                 raise exc
             yield f
@@ -372,7 +373,7 @@ def test_failure_midway_leaves_the_previous_file(tmp_path, capsys, monkeypatch, 
     previous = b"the previous animation " * 100
     out.write_bytes(previous)
     os.chmod(out, 0o640)
-    monkeypatch.setattr(anim, "frames", failing_frames(5, exc))
+    monkeypatch.setattr(anim.Frames, "__iter__", failing_frames(5, exc))
     code = main(["animate", str(FOURBAR), "-o", str(out), "--angles", "0:360:10"])
     _, err = capsys.readouterr()
     assert code in (1, 2)

@@ -750,3 +750,87 @@ def test_screenshot_for_docs(open_report, tmp_path):
     img = np.asarray(Image.open(out).convert("L"), dtype=float)
     # not blank: a drawing and plots give many dark pixels and a spread of grey levels
     assert (img < 128).mean() > 0.01 and img.std() > 20, ((img < 128).mean(), img.std())
+
+
+# ------------------------------------------------- edge cases found by review (each broke the page)
+def _page_of(browser, tmp_path, mech, argv_extra=()):
+    """Open the report of ``mech`` (a Mechanism); returns (page, errors)."""
+    import linkagekit as lk
+    from linkagekit import cli
+
+    src = tmp_path / "m.yaml"
+    lk.save(mech, src)
+    out = tmp_path / "m.html"
+    assert cli.main(["report", str(src), "-o", str(out), *argv_extra]) == 0
+    ctx = browser.new_context(viewport=VIEWPORT)
+    page = ctx.new_page()
+    errors: list[str] = []
+    page.on("console", lambda msg: msg.type == "error" and errors.append(msg.text))
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    t0 = time.monotonic()
+    page.goto(out.as_uri(), wait_until="load")
+    return ctx, page, errors, time.monotonic() - t0
+
+
+def test_a_constant_plot_does_not_hang_the_page(browser, tmp_path):
+    """A crank alone: its joint speed is constant up to round-off (the tick loop never advanced)."""
+    import linkagekit as lk
+
+    mech = lk.Mechanism.from_dict(
+        {
+            "joints": {"A": [0, 0], "C": [0.3, 0.4]},
+            "links": {"ground": ["A"], "crank": ["A", "C"]},
+            "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+        }
+    )
+    ctx, page, errors, took = _page_of(browser, tmp_path, mech)
+    try:
+        assert not errors, errors
+        assert took < 5, took
+        got = page.locator('[data-joint="C"]').get_attribute("data-x")
+        res = lk.analyze(mech)
+        assert got == repr(float(res.xy("C")[0, 0]))
+        ticks = page.evaluate("() => window.linkagekit.niceTicks(1.4999999999999996, 1.5000000000000002, 5).ticks")
+        assert 2 <= len(ticks) <= 20 and all(abs(t - 1.5) < 0.2 for t in ticks), ticks
+    finally:
+        ctx.close()
+
+
+def test_extent_of_long_arrays(browser, tmp_path):
+    """The page's min/max over 500,000 values (Math.min.apply overflowed the stack from ~120,000)."""
+    import linkagekit as lk
+
+    ctx, page, errors, _ = _page_of(browser, tmp_path, lk.load(EXAMPLES / FILES["seed000"]))
+    try:
+        got = page.evaluate(
+            "() => window.linkagekit.extent([Array.from({length: 500000}, (_, i) => i % 1000 - 3), [null, 7777]])"
+        )
+        assert got == [-3, 7777], got
+        assert not errors, errors
+    finally:
+        ctx.close()
+
+
+def test_many_series_keep_their_legends_inside_the_plot(browser, tmp_path):
+    """Jansen's link angles: nine series; every legend entry lies inside its plot's box, none overlapping."""
+    import linkagekit as lk
+
+    ctx, page, errors, _ = _page_of(browser, tmp_path, lk.load(EXAMPLES / FILES["jansen"]))
+    try:
+        boxes = page.evaluate(
+            """() => [...document.querySelectorAll('svg[data-role=plot]')].map(svg => {
+                const o = svg.getBoundingClientRect();
+                return [[o.left, o.right], [...svg.querySelectorAll('[data-legend]')].map(t => {
+                    const b = t.getBoundingClientRect(); return [b.left, b.right, b.top, b.bottom]; })]; })"""
+        )
+        assert not errors, errors
+        for (left, right), entries in boxes:
+            assert entries
+            for a in entries:
+                assert left - 0.5 <= a[0] and a[1] <= right + 0.5, (a, left, right)
+            for i, a in enumerate(entries):
+                for b in entries[i + 1 :]:
+                    overlap = min(a[1], b[1]) - max(a[0], b[0]) > 1 and min(a[3], b[3]) - max(a[2], b[2]) > 1
+                    assert not overlap, (a, b)
+    finally:
+        ctx.close()

@@ -36,6 +36,8 @@ from .rates import SINGULAR_TOL, solve_rates
 from .steps import CircleLine, Dyad
 
 N_COARSE = 7200
+#: dead points the text of check lists per driver (the JSON has them all)
+MAX_TEXT_DEAD_POINTS = 24
 #: modes lists at most 2^MAX_MODE_SLOTS sign (and mirror) combinations
 MAX_MODE_SLOTS = 12
 N_BISECT = 60
@@ -600,15 +602,26 @@ def _driver_checks(
         if plan.n_signs:
             info.update(_step_links(params, k, fin, col))
         dead.append((v, info))
+    # change points, each once: candidates sorted by input, a candidate within tol_x of the
+    # one kept before it (or of a range end) is the same point found by another step
+    cands = []
     for k, kind, task in cp_tasks:
         col = task if kind == "root" else nr + task
         v = roots[task] if kind == "root" else mins[task]
-        if not (fin.assembled[col] and fvals[q.cond(k), col] < SINGULAR_TOL):
+        if fin.assembled[col] and fvals[q.cond(k), col] < SINGULAR_TOL:
+            cands.append((float(v), k, col))
+    cands.sort()
+    if cands and ends:
+        near_end = np.abs(np.array([c[0] for c in cands])[:, None] - ends_arr[None, :]).min(axis=1) <= tol_x
+        cands = [c for c, bad in zip(cands, near_end, strict=True) if not bad]
+    kept: list[tuple[float, int, int]] = []
+    for c in cands:
+        if kept and abs(_cyc(c[0] - kept[-1][0], cyclic, total)) <= tol_x:
             continue
-        if any(abs(v - e) <= tol_x for e in ends):
-            continue
-        if any(abs(_cyc(v - u, cyclic, total)) <= tol_x for u, _ in dead):
-            continue
+        kept.append(c)
+    if cyclic and len(kept) > 1 and abs(_cyc(kept[-1][0] - kept[0][0], cyclic, total)) <= tol_x:
+        kept.pop()  # the same point, once either side of the turn's start
+    for v, k, col in kept:
         info = {"input": file_value(v), "kind": "change point"}
         info.update(_step_links(params, k, fin, col))
         dead.append((v, info))
@@ -973,9 +986,11 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
             dps = dead_points[driver]
             lines.append(f"Dead points of {driver} (where the mechanism locks): " + ("none" if not dps else ""))
             lines[-1] = lines[-1].rstrip()
-            for dp in dps:
+            for dp in dps[:MAX_TEXT_DEAD_POINTS]:
                 detail = f"; {dp['detail']}" if dp.get("detail") else ""
                 lines.append(f"  {inp(driver, dp['input'])}: {dp['kind']}{detail}")
+            if len(dps) > MAX_TEXT_DEAD_POINTS:
+                lines.append(f"  ... and {len(dps) - MAX_TEXT_DEAD_POINTS} more (check --format json lists them all)")
     loops: list[Any] | None = rep.get("fourbars")
     if loops is None and "grashof" in rep:  # a report without the list: the first loop only
         loops = [dict(rep.get("fourbar") or {}, grashof=rep["grashof"], grashof_detail=rep.get("grashof_detail"))]

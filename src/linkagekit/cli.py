@@ -387,8 +387,6 @@ _QUANTITY_GROUPS = {
     "forces": "Driver forces",
     "bearings": "Bearing loads",
 }
-#: the most frames of an animation
-MAX_FRAMES = 3600
 
 
 def _frames(text: str) -> int:
@@ -396,6 +394,8 @@ def _frames(text: str) -> int:
         n = int(text)
     except ValueError:
         raise InputError(f"--frames: expected a whole number, got {shorten(repr(text))}") from None
+    from .viz.animate import MAX_FRAMES
+
     if not 2 <= n <= MAX_FRAMES:
         raise InputError(f"--frames: expected 2 to {MAX_FRAMES} frames, got {n}")
     return n
@@ -872,6 +872,10 @@ def _plot(args: argparse.Namespace) -> int:
         raise InputError("--modes and --quantity: give one of them")
     if args.mirrors and not args.modes:
         raise InputError("--mirrors goes with --modes")
+    if args.modes and args.angles:
+        raise InputError("--modes draws one input (--at), not a sweep: leave out --angles")
+    if args.quantity and args.at:
+        raise InputError("--quantity plots over the sweep (--angles), not at --at")
     if args.modes:
         at: Any = None
         if args.at:
@@ -923,16 +927,23 @@ def _animate(args: argparse.Namespace) -> int:
 
     import linkagekit as lk
 
-    from .viz.animate import MIN_FRAMES, animate
+    from .viz.animate import MAX_FRAMES, MAX_GIF_FPS, MIN_FRAMES, animate
 
     _suffix(args.output, (".gif", ".mp4"))
     fps = _fps(args.fps)
+    if args.output.lower().endswith(".gif") and fps > MAX_GIF_FPS:
+        raise InputError(f"--fps: a GIF plays at most {MAX_GIF_FPS:g} frames per second (write an .mp4 for more)")
     wanted = _frames(args.frames) if args.frames is not None else None
     mech = lk.load(args.file)
     inputs = _sweep(mech, args.angles)
     values = inputs or {d.name: d.sweep.values() for d in mech.drivers}
     n = max(len(v) for v in values.values())
     frames = wanted or (n if n >= MIN_FRAMES else MIN_FRAMES)
+    if frames > MAX_FRAMES:
+        raise InputError(
+            f"the sweep has {n} samples, more frames than an animation takes ({MAX_FRAMES}): "
+            "give --frames N or a coarser --angles"
+        )
     if frames != n:  # evenly over each driver's sweep, ends included
         values = {k: np.linspace(v[0], v[-1], frames) for k, v in values.items()}
     res = lk.analyze(mech, values)
@@ -1023,8 +1034,10 @@ def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else list(argv)
     try:
         with warnings.catch_warnings():
-            # a value that overflows is NaN/null in the output, not a warning on stderr
+            # a value that overflows is NaN/null in the output, not a warning on stderr; nor is
+            # matplotlib's note that a font lacks a glyph of a name (the picture shows a box)
             warnings.simplefilter("ignore", RuntimeWarning)
+            warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
             code = _run(args)
     except LinkageError as exc:
         prefix = f"{PROG}: error: "

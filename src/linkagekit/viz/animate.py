@@ -19,10 +19,13 @@ True
 
 from __future__ import annotations
 
+import numbers
+import os
 import shutil
 import subprocess
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +36,10 @@ from .scene import Scene, build_scene
 
 #: the fewest frames an animation has (spec: at least 36)
 MIN_FRAMES = 36
+#: the most frames (a GIF holds its frames in memory: about 0.4 MB each at the default size)
+MAX_FRAMES = 1000
+#: a GIF stores frame times in hundredths of a second, and viewers slow down times under 2
+MAX_GIF_FPS = 50.0
 
 
 class VideoError(LinkageError):
@@ -56,64 +63,114 @@ def find_ffmpeg() -> str | None:
         return None
 
 
+class Frames:
+    """RGB frames (height, width, 3) of a scene, one per sample; width and height even.
+
+    ``render(i)`` draws sample ``i`` (static parts from a saved background, the moving
+    artists blitted over it); iterating gives every sample in order.
+    """
+
+    def __init__(self, scene: Scene, size: float = 6.0, dpi: int = 100) -> None:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        from .draw import Drawing, _aspect, _t
+
+        self.scene = scene
+        w = int(round(size * dpi / 2)) * 2
+        h = int(round(size * _aspect(scene) * dpi / 2)) * 2
+        fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)
+        self.canvas = FigureCanvasAgg(fig)
+        self.ax = ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
+        fig.suptitle(_t(scene.name or "mechanism"), fontsize=10)
+        self.drawing = Drawing(ax, scene, animated=True)
+        # the inputs of the frame, and a thin bar of how far through the sweep it is (so two
+        # frames at one input still differ, and no GIF encoder merges them)
+        self.label = ax.text(0.0, 1.0, "", transform=ax.transAxes, ha="left", va="top", fontsize=9, animated=True)
+        (self.bar,) = ax.plot(
+            [0.0, 0.0],
+            [0.0, 0.0],
+            transform=ax.transAxes,
+            color="#999999",
+            linewidth=3,
+            solid_capstyle="butt",
+            clip_on=False,
+            animated=True,
+        )
+        self.canvas.draw()
+        self.background = self.canvas.copy_from_bbox(fig.bbox)
+        self._t = _t
+
+    def render(self, i: int) -> np.ndarray:
+        sc = self.scene
+        self.canvas.restore_region(self.background)
+        self.label.set_text(self._t(", ".join(f"{k} = {sc.inputs[k][i]:.6g} {sc.input_units[k]}" for k in sc.drivers)))
+        self.bar.set_xdata([0.0, (i + 1) / sc.n])
+        for artist in [*self.drawing.update(i), self.label, self.bar]:
+            self.ax.draw_artist(artist)
+        return np.asarray(self.canvas.buffer_rgba())[..., :3].copy()
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        for i in range(self.scene.n):
+            yield self.render(i)
+
+
 def frames(scene: Scene, size: float = 6.0, dpi: int = 100) -> Iterator[np.ndarray]:
-    """RGB frames (height, width, 3) of the scene, one per sample; width and height even."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from .draw import Drawing, _aspect
-
-    w = int(round(size * dpi / 2)) * 2
-    h = int(round(size * _aspect(scene) * dpi / 2)) * 2
-    fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)
-    canvas = FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
-    fig.suptitle(scene.name or "mechanism", fontsize=10)
-    drawing = Drawing(ax, scene, animated=True)
-    # the inputs of the frame, and a thin bar of how far through the sweep it is (so two
-    # frames at one input still differ, and no GIF encoder merges them)
-    label = ax.text(0.0, 1.0, "", transform=ax.transAxes, ha="left", va="top", fontsize=9, animated=True)
-    (bar,) = ax.plot(
-        [0.0, 0.0],
-        [0.0, 0.0],
-        transform=ax.transAxes,
-        color="#999999",
-        linewidth=3,
-        solid_capstyle="butt",
-        clip_on=False,
-        animated=True,
-    )
-    canvas.draw()
-    background = canvas.copy_from_bbox(fig.bbox)
-    for i in range(scene.n):
-        canvas.restore_region(background)
-        label.set_text(", ".join(f"{k} = {scene.inputs[k][i]:.6g} {scene.input_units[k]}" for k in scene.drivers))
-        bar.set_xdata([0.0, (i + 1) / scene.n])
-        for artist in [*drawing.update(i), label, bar]:
-            ax.draw_artist(artist)
-        yield np.asarray(canvas.buffer_rgba())[..., :3].copy()
+    """RGB frames (height, width, 3) of the scene, one per sample (see :class:`Frames`)."""
+    return iter(Frames(scene, size, dpi))
 
 
-def _write_gif(images: Iterator[np.ndarray], path: Path, fps: float, tick: Callable[[], None]) -> None:
+def _palette(images: Frames) -> tuple[Any, np.ndarray]:
+    """One palette for every frame, and a table of the colours it holds exactly.
+
+    The drawing's own colours come first, exactly, then the median-cut colours of a few
+    frames spread over the sweep.  A palette from the first frame alone missed the colours
+    of links that appear later (a first frame that does not assemble has no links).  The
+    table maps a 24-bit colour to its palette index (255: not exact); Pillow's mapping to a
+    palette is approximate (white came out as 252, 252, 252), so exact colours go by the table.
+    """
     from PIL import Image
 
-    first: Image.Image | None = None
-    rest: list[Image.Image] = []
-    palette: Image.Image | None = None
+    from .draw import CURVE_COLOR, PALETTE, PATH_COLOR
+
+    exact = ["#ffffff", "#000000", "#b00000", "#999999", "#dddddd", "#444444", CURVE_COLOR, PATH_COLOR, *PALETTE]
+    exact = list(dict.fromkeys(exact))
+    fixed = [int(c[k : k + 2], 16) for c in exact for k in (1, 3, 5)]
+    n = images.scene.n
+    picks = sorted({int(round(k)) for k in np.linspace(0, n - 1, min(n, 8))})
+    montage = Image.fromarray(np.concatenate([images.render(i) for i in picks], axis=0))
+    cut = montage.quantize(colors=255 - len(exact), method=Image.Quantize.MEDIANCUT).getpalette() or []
+    pal = Image.new("P", (1, 1))
+    pal.putpalette((fixed + list(cut))[: 3 * 255])
+    table = np.full(1 << 24, 255, dtype=np.uint8)
+    keys = [int(c[1:], 16) for c in exact]
+    table[keys] = np.arange(len(keys), dtype=np.uint8)
+    return pal, table
+
+
+def _indexed(rgb: np.ndarray, palette: Any, table: np.ndarray) -> Any:
+    """A frame as palette indices: the exact colours by the table, the others by Pillow."""
+    from PIL import Image
+
+    q = np.asarray(Image.fromarray(rgb).quantize(palette=palette, dither=Image.Dither.NONE))
+    key = (rgb[..., 0].astype(np.int32) << 16) | (rgb[..., 1].astype(np.int32) << 8) | rgb[..., 2]
+    hit = table[key]
+    out = Image.fromarray(np.where(hit != 255, hit, q).astype(np.uint8), mode="P")
+    out.putpalette(palette.getpalette())
+    return out
+
+
+def _write_gif(images: Frames, path: Path, fps: float, tick: Callable[[], None]) -> None:
+    palette, table = _palette(images)
+    gif = []
     for rgb in images:
-        img = Image.fromarray(rgb)
-        if palette is None:
-            palette = img.quantize(colors=255, method=Image.Quantize.MEDIANCUT)
-            first = palette
-        else:
-            rest.append(img.quantize(palette=palette, dither=Image.Dither.NONE))
+        gif.append(_indexed(rgb, palette, table))
         tick()
-    assert first is not None
-    first.save(
+    gif[0].save(
         path,
         format="GIF",
         save_all=True,
-        append_images=rest,
+        append_images=gif[1:],
         duration=round(1000 / fps),
         loop=0,
         optimize=False,
@@ -121,7 +178,7 @@ def _write_gif(images: Iterator[np.ndarray], path: Path, fps: float, tick: Calla
     )
 
 
-def _write_mp4(images: Iterator[np.ndarray], path: Path, fps: float, tick: Callable[[], None], ffmpeg: str) -> None:
+def _write_mp4(images: Frames, path: Path, fps: float, tick: Callable[[], None], ffmpeg: str) -> None:
     proc: subprocess.Popen[bytes] | None = None
     try:
         for rgb in images:
@@ -151,7 +208,12 @@ def _write_mp4(images: Iterator[np.ndarray], path: Path, fps: float, tick: Calla
                     "mp4",
                     str(path),
                 ]
-                proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                try:
+                    proc = subprocess.Popen(
+                        cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+                    )
+                except OSError as exc:
+                    raise VideoError(f"cannot run ffmpeg ({ffmpeg}): {exc.strerror or exc}") from None
             assert proc.stdin is not None
             proc.stdin.write(rgb.tobytes())
             tick()
@@ -201,13 +263,19 @@ def animate(
     InputError
         For another suffix or bad numbers; :class:`VideoError` when an MP4 has no ffmpeg.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise InputError(f"path: expected a file name ending in .gif or .mp4, got {type(path).__name__}")
     path = Path(path)
     fmt = path.suffix.lower()
     if fmt not in (".gif", ".mp4"):
         raise InputError(f"{path}: the output must end in .gif or .mp4")
-    for what, v, lo, hi in (("fps", fps, 0.1, 120.0), ("size", size, 1.0, 40.0), ("dpi", dpi, 20, 600)):
-        if not isinstance(v, int | float) or not lo <= float(v) <= hi:
-            raise InputError(f"{what}: expected a number in [{lo:g}, {hi:g}], got {v!r}")
+    top_fps = MAX_GIF_FPS if fmt == ".gif" else 120.0
+    for what, v, lo, hi in (("fps", fps, 0.1, top_fps), ("size", size, 1.0, 40.0), ("dpi", dpi, 20, 600)):
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not lo <= float(v) <= hi:
+            extra = " (a GIF stores frame times in hundredths of a second)" if what == "fps" and fmt == ".gif" else ""
+            raise InputError(f"{what}: expected a number in [{lo:g}, {hi:g}]{extra}, got {v!r}")
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress: expected a function progress(done, total), got {type(progress).__name__}")
     ffmpeg = None
     if fmt == ".mp4":
         ffmpeg = find_ffmpeg()
@@ -217,6 +285,11 @@ def animate(
                 "or write a .gif"
             )
     scene = res if isinstance(res, Scene) else build_scene(res)
+    if scene.n > MAX_FRAMES:
+        raise InputError(
+            f"{scene.n} samples make {scene.n} frames, more than an animation takes ({MAX_FRAMES}): "
+            "animate a coarser sweep"
+        )
     total = scene.n
     done = 0
 
@@ -227,9 +300,9 @@ def animate(
             progress(done, total)
 
     with atomic_output(path) as tmp:
-        images = frames(scene, size=size, dpi=int(dpi))
+        images = Frames(scene, size=float(size), dpi=int(dpi))
         if ffmpeg is None:
-            _write_gif(images, tmp, fps, tick)
+            _write_gif(images, tmp, float(fps), tick)
         else:
-            _write_mp4(images, tmp, fps, tick, ffmpeg)
+            _write_mp4(images, tmp, float(fps), tick, ffmpeg)
     return path

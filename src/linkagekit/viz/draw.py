@@ -22,6 +22,7 @@ solver; a sample that does not assemble draws no mechanism, and curves break the
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Polygon
 from matplotlib.text import Text
 
-from ..errors import InputError
+from ..errors import InputError, UnknownNameError
 from ..files import atomic_output
 from ..result import Result
 from .scene import Scene, broken_at_wraps, build_scene
@@ -45,8 +46,15 @@ CURVE_COLOR = "#e6007e"
 #: other joint paths
 PATH_COLOR = "#9a9a9a"
 BACKGROUND = "#ffffff"
+#: the most assembly modes a modes figure draws
+MAX_MODE_PANELS = 64
 #: PNG metadata key holding the map from file units to pixels (see :func:`save_figure`)
 TRANSFORM_KEY = "linkagekit:transform"
+
+
+def _t(text: str) -> str:
+    """A name as literal text: matplotlib would read ``$...$`` as mathematics."""
+    return text.replace("$", r"\$")
 
 
 def _scene(obj: Result | Scene) -> Scene:
@@ -55,13 +63,37 @@ def _scene(obj: Result | Scene) -> Scene:
     return build_scene(obj)
 
 
-def _sample(sc: Scene, at: float | int | None) -> int:
-    """The sample index nearest to input ``at`` of the first driver (None: the first assembled sample)."""
+def _axes(ax: Any) -> Axes:
+    if not isinstance(ax, Axes):
+        raise InputError(f"ax: expected a matplotlib Axes (e.g. plt.subplots()[1]), got {type(ax).__name__}")
+    return ax
+
+
+def _sample(sc: Scene, at: Any) -> int:
+    """The sample nearest to input ``at`` of the plotted driver (None: the first assembled sample).
+
+    ``at`` outside the sweep is refused: the drawing would show another input than asked.
+    """
     if at is None:
         ok = np.flatnonzero(sc.assembled)
         return int(ok[0]) if ok.size else 0
-    x = sc.inputs[sc.drivers[0]]
+    if isinstance(at, bool) or not isinstance(at, numbers.Real) or not math.isfinite(float(at)):
+        raise InputError(f"at: expected a finite number (the input of {sc.x_driver}), got {at!r}")
+    x = sc.inputs[sc.x_driver]
+    lo, hi = float(np.min(x)), float(np.max(x))
+    slack = 1e-9 * max(hi - lo, abs(lo), abs(hi), 1.0)
+    if not lo - slack <= float(at) <= hi + slack:
+        raise InputError(
+            f"at: {float(at):g} is outside the sweep of {sc.x_driver} [{lo:g}, {hi:g}]; analyze a sweep through it"
+        )
     return int(np.argmin(np.abs(x - float(at))))
+
+
+def _with_breaks(xy: np.ndarray, breaks: Sequence[int]) -> np.ndarray:
+    """Points with a NaN row after each sample of ``breaks``: no line across a gap between samples."""
+    if not breaks:
+        return xy
+    return np.insert(np.asarray(xy, float), [b + 1 for b in breaks], np.nan, axis=0)
 
 
 class Drawing:
@@ -170,7 +202,15 @@ class Drawing:
         if labels:
             for i in moving:
                 t = ax.text(
-                    0, 0, sc.joints[i], fontsize=8, zorder=7, animated=animated, ha="left", va="bottom", visible=False
+                    0,
+                    0,
+                    _t(sc.joints[i]),
+                    fontsize=8,
+                    zorder=7,
+                    animated=animated,
+                    ha="left",
+                    va="bottom",
+                    visible=False,
                 )
                 self.labels.append((i, t))
         self.note = ax.text(
@@ -190,12 +230,12 @@ class Drawing:
     def _curves(self) -> None:
         sc, ax = self.scene, self.ax
         for j in sc.other_paths:
-            p = sc.xy[:, sc.index(j)]
+            p = _with_breaks(sc.xy[:, sc.index(j)], sc.breaks)
             (line,) = ax.plot(p[:, 0], p[:, 1], color=PATH_COLOR, linewidth=0.8, linestyle=(0, (4, 3)), zorder=1)
             self.static.append(line)
         for j in sc.coupler_curves:
-            p = sc.xy[:, sc.index(j)]
-            (line,) = ax.plot(p[:, 0], p[:, 1], color=CURVE_COLOR, linewidth=1.6, zorder=1.5, label=f"path of {j}")
+            p = _with_breaks(sc.xy[:, sc.index(j)], sc.breaks)
+            (line,) = ax.plot(p[:, 0], p[:, 1], color=CURVE_COLOR, linewidth=1.6, zorder=1.5, label=_t(f"path of {j}"))
             self.static.append(line)
 
     def _ground(self) -> None:
@@ -298,7 +338,7 @@ class Drawing:
             t.set_position((p[j, 0] + 0.8 * self.pin, p[j, 1] + 0.8 * self.pin))
             t.set_visible(ok)
         inputs = ", ".join(f"{k} = {sc.inputs[k][i]:.6g} {sc.input_units[k]}" for k in sc.drivers)
-        self.note.set_text("" if ok else f"does not assemble at {inputs}")
+        self.note.set_text("" if ok else _t(f"does not assemble at {inputs}"))
         return self.artists()
 
 
@@ -313,10 +353,12 @@ def draw_mechanism(
     res : Result or Scene
         One design's sweep (:func:`linkagekit.analyze`).
     at : float, optional
-        Input of the first driver, in the file's units.
+        Input of the plotted driver (the first that varies over the sweep), in the file's
+        units, within the sweep.
     """
+    ax = _axes(ax)
     sc = _scene(res)
-    d = Drawing(ax, sc, labels=labels, curves=curves)
+    d = Drawing(ax, sc, labels=bool(labels), curves=bool(curves))
     d.update(_sample(sc, at))
     return ax
 
@@ -330,24 +372,31 @@ def plot_quantity(
     gaps in the line, shaded grey where the mechanism does not assemble.  A link angle is
     not drawn across its jump from +180 to -180 degrees (or ``period``, for other columns).
     """
+    ax = _axes(ax)
     sc = _scene(res)
-    if name not in sc.columns:
-        from ..errors import UnknownNameError
-
+    if not isinstance(name, str) or name not in sc.columns:
         raise UnknownNameError(f"no quantity {name!r} (quantities: {', '.join(list(sc.columns)[:12])}, ...)")
-    x = sc.inputs[sc.drivers[0]]
+    if label is not None and not isinstance(label, str):
+        raise InputError(f"label: expected text, got {type(label).__name__}")
+    if period is not None and (isinstance(period, bool) or not isinstance(period, numbers.Real) or not period > 0):
+        raise InputError(f"period: expected a positive number, got {period!r}")
+    x = sc.inputs[sc.x_driver]
     y = np.asarray(sc.columns[name], float)
     if period is None and name.endswith(".angle"):
         period = 360.0 if sc.angle_unit == "deg" else 2 * math.pi
-    ax.plot(*broken_at_wraps(x, y, period), label=label or name, linewidth=1.4)
+    if sc.breaks:  # no line across a gap between two samples
+        cut = [b + 1 for b in sc.breaks]
+        x, y = np.insert(x, cut, np.nan), np.insert(y, cut, np.nan)
+    xb, yb = broken_at_wraps(x, y, period if period is None else float(period))
+    ax.plot(xb, yb, label=_t(label or name), linewidth=1.4)
     for a, b in sc.gaps:
         lo = x[max(a - 1, 0)] if a > 0 else x[0]
         hi = x[min(b + 1, len(x) - 1)]
         ax.axvspan(min(lo, hi), max(lo, hi), color="#e8e8e8", zorder=0, linewidth=0)
-    driver = sc.drivers[0]
-    ax.set_xlabel(f"{driver} [{sc.input_units[driver]}]")
+    driver = sc.x_driver
+    ax.set_xlabel(_t(f"{driver} [{sc.input_units[driver]}]"))
     unit = sc.units.get(name, "")
-    ax.set_ylabel(f"{name} [{unit}]" if unit else name)
+    ax.set_ylabel(_t(f"{name} [{unit}]" if unit else name))
     ax.grid(True, linewidth=0.4, alpha=0.6)
     return ax
 
@@ -390,11 +439,18 @@ def mechanism_figure(res: Result, poses: Result | None = None, size: float = 6.0
         if k < len(indices) - 1:
             for a in d.artists():
                 a.set_alpha(0.3)
+            d.note.set_visible(False)
     ax.set_xlim(bounds[0], bounds[2])
     ax.set_ylim(bounds[1], bounds[3])
     i = indices[-1]
-    inputs = ", ".join(f"{k} = {shown.inputs[k][i]:.6g} {shown.input_units[k]}" for k in shown.drivers)
-    fig.suptitle(f"{sc.name or 'mechanism'}  ({inputs})", fontsize=10)
+
+    def inputs_at(i: int) -> str:
+        return ", ".join(f"{k} = {shown.inputs[k][i]:.6g} {shown.input_units[k]}" for k in shown.drivers)
+
+    # one note for every input drawn that does not assemble (each drawing's own would overlap)
+    missing = [inputs_at(k) for k in indices if not shown.assembled[k]]
+    d.note.set_text(_t("does not assemble at " + "; ".join(missing)) if missing else "")
+    fig.suptitle(_t(f"{sc.name or 'mechanism'}  ({inputs_at(i)})"), fontsize=10)
     return fig
 
 
@@ -424,8 +480,15 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
 
     found = find_modes(mech, at, mirrors=mirrors)
     shown = [m for m in found.modes if m.assembled and m.same_as is None]
+    units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+    inp = ", ".join(f"{k} = {v:g} {units[k]}" for k, v in found.input.items())
     if not shown:
-        raise InputError(f"modes: the mechanism does not assemble at {found.input}")
+        raise InputError(f"modes: the mechanism does not assemble at {inp}")
+    if len(shown) > MAX_MODE_PANELS:
+        raise InputError(
+            f"modes: {len(shown)} distinct assembly modes at {inp}, more than a figure shows ({MAX_MODE_PANELS}); "
+            "'linkagekit modes' lists them all"
+        )
     names = mech.joint_names
     xy = np.array([[m.joints[j] if m.joints[j] is not None else (np.nan, np.nan) for j in names] for m in shown])
     cols = min(len(shown), 4)
@@ -443,9 +506,8 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
         signs = " ".join(f"{j}{'+' if s > 0 else '-'}" for j, s in m.signs.items())
         if m.mirrors:
             signs += " " + " ".join(f"{ln}{'~' if s < 0 else ''}" for ln, s in m.mirrors.items() if s < 0)
-        ax.set_title(f"{k + 1}: {signs or 'the only mode'}{' (pose)' if m.reference else ''}", fontsize=9)
-    inp = ", ".join(f"{k} = {v:g}" for k, v in found.input.items())
-    fig.suptitle(f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}", fontsize=10)
+        ax.set_title(_t(f"{k + 1}: {signs or 'the only mode'}{' (pose)' if m.reference else ''}"), fontsize=9)
+    fig.suptitle(_t(f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}"), fontsize=10)
     return fig
 
 
@@ -493,6 +555,7 @@ def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
         links=scene_links(mech),
         sliders=tuple(sliders),
         drivers=tuple(inputs),
+        x_driver=next(iter(inputs), ""),
         input_units={k: "" for k in inputs},
         inputs={k: np.full(n, v) for k, v in inputs.items()},
         xy=xy,
@@ -513,7 +576,7 @@ def quantities_figure(res: Result | Scene, groups: Sequence[Sequence[str]], size
     axes = fig.subplots(len(groups), 1, squeeze=False)[:, 0]
     for ax, names in zip(axes, groups, strict=True):
         plot_quantities(ax, sc, names)
-    fig.suptitle(sc.name or "mechanism", fontsize=10)
+    fig.suptitle(_t(sc.name or "mechanism"), fontsize=10)
     fig.tight_layout()
     return fig
 

@@ -110,6 +110,11 @@ class Scene:
     columns: dict[str, np.ndarray] = field(repr=False)
     units: dict[str, str] = field(repr=False)
     plots: tuple[Plot, ...] = ()
+    #: the driver the plots run along: the first whose input varies over the sweep
+    x_driver: str = ""
+    #: samples ``i`` whose segment to ``i + 1`` must not be drawn: both assemble, but the
+    #: mechanism does not assemble somewhere between them (a gap no sample landed in)
+    breaks: tuple[int, ...] = ()
 
     @property
     def n(self) -> int:
@@ -156,6 +161,8 @@ class Scene:
             "coupler_curves": list(self.coupler_curves),
             "other_paths": list(self.other_paths),
             "gaps": [list(g) for g in self.gaps],
+            "breaks": list(self.breaks),
+            "x_driver": self.x_driver,
             "bounds": list(self.bounds),
             "columns": {k: _json_array(v) for k, v in self.columns.items()},
             "units_of": self.units,
@@ -300,6 +307,41 @@ def broken_at_wraps(x: np.ndarray, y: np.ndarray, period: float | None) -> tuple
     return np.insert(x, jumps, np.nan), np.insert(y, jumps, np.nan)
 
 
+def _x_driver(inputs: dict[str, np.ndarray], drivers: tuple[str, ...]) -> str:
+    """The first driver whose input changes over the sweep (the first driver if none does)."""
+    return next((d for d in drivers if np.ptp(inputs[d]) > 0), drivers[0])
+
+
+def _breaks(res: Result, x: np.ndarray) -> tuple[int, ...]:
+    """Segments between two assembled samples that cross a stretch where the mechanism does not assemble.
+
+    Only for one driver: its assembly intervals (:func:`linkagekit.checks.input_range`,
+    boundaries exact to ~1e-12) are compared with each segment; an angle's intervals repeat
+    every turn.
+    """
+    mech = res.mechanism
+    if len(mech.drivers) != 1 or res.n < 2:
+        return ()
+    from ..checks import input_range
+
+    ranges = np.array(input_range(mech, 0), float).reshape(-1, 2)
+    both = res.assembled[:-1] & res.assembled[1:]
+    if not both.any():
+        return ()
+    lo, hi = np.minimum(x[:-1], x[1:]), np.maximum(x[:-1], x[1:])
+    tol = 1e-9 * max(float(np.max(np.abs(x))), 1.0)
+    if mech.drivers[0].kind == "angle":
+        period = 2 * math.pi / mech.angle_to_rad
+        if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] >= period * (1 - 1e-12):
+            return ()  # a full turn
+        k = np.floor((lo[:, None] - ranges[None, :, 0] + tol) / period)
+        start, end = ranges[None, :, 0] + k * period, ranges[None, :, 1] + k * period
+    else:
+        start, end = ranges[None, :, 0], ranges[None, :, 1]
+    inside = ((start - tol <= lo[:, None]) & (hi[:, None] <= end + tol)).any(axis=1)
+    return tuple(int(i) for i in np.flatnonzero(both & ~inside))
+
+
 def _plots(res: Result, columns: dict[str, np.ndarray], moving: list[str]) -> tuple[Plot, ...]:
     """The plots of the report: link angles and rates, joint speeds, driver efforts and bearing loads."""
     mech = res.mechanism
@@ -356,6 +398,9 @@ def build_scene(res: Result) -> Scene:
             columns[f"|v|[{j}]"] = np.abs(res.velocity(j))
             units[f"|v|[{j}]"] = f"{mech.length_unit}/s"
     sliders = _guides(res, z)
+    drivers = tuple(d.name for d in mech.drivers)
+    inputs = {k: np.broadcast_to(np.asarray(v, float), (res.n,)).copy() for k, v in res.inputs.items()}
+    x_driver = _x_driver(inputs, drivers)
     # bounds: every joint at every sample, the pose, and the drawn guides
     pts = [z[np.isfinite(z)], np.array([mech.joints[j] for j in names])]
     for s in sliders:
@@ -376,9 +421,9 @@ def build_scene(res: Result) -> Scene:
         ground_xy=_ground_xy(mech),
         links=scene_links(mech),
         sliders=sliders,
-        drivers=tuple(d.name for d in mech.drivers),
+        drivers=drivers,
         input_units={d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers},
-        inputs={k: np.broadcast_to(np.asarray(v, float), (res.n,)).copy() for k, v in res.inputs.items()},
+        inputs=inputs,
         xy=xy,
         assembled=np.asarray(res.assembled, bool).copy(),
         coupler_curves=coupler,
@@ -388,4 +433,6 @@ def build_scene(res: Result) -> Scene:
         columns=columns,
         units=units,
         plots=_plots(res, columns, moving),
+        x_driver=x_driver,
+        breaks=_breaks(res, inputs[drivers[0]]),
     )

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import html
 import json
+import os
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,9 @@ from ..errors import InputError
 from ..files import atomic_output
 from ..result import Result
 from ..viz.scene import Scene, build_scene
+
+#: the most samples a page holds (each sample costs about 1 kB for a four-bar with rates)
+MAX_REPORT_SAMPLES = 10_000
 
 STYLE = """
 :root { --ink: #1b1b1b; --muted: #666; --line: #d8d8d8; --accent: #e6007e; }
@@ -90,6 +94,15 @@ def report_html(
     checks_text : str, optional
         The text of ``linkagekit check`` (default: computed here).
     """
+    if not isinstance(res, Result):
+        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
+    if res.n_samples > MAX_REPORT_SAMPLES:
+        raise InputError(
+            f"{res.n_samples} samples, more than a report page holds ({MAX_REPORT_SAMPLES}): report a coarser sweep"
+        )
+    for what, value in (("source", source), ("checks_text", checks_text), ("title", title)):
+        if value is not None and not isinstance(value, str):
+            raise InputError(f"{what}: expected text, got {type(value).__name__}")
     sc = build_scene(res)
     mech = res.mechanism
     if source is None:
@@ -155,12 +168,20 @@ the page only draws them. The coupler curves are in magenta, the other joint pat
     return body
 
 
-def write_report(res: Result, path: str | Path, **kwargs: Any) -> Path:
+def write_report(
+    res: Result,
+    path: str | Path,
+    source: str | None = None,
+    checks_text: str | None = None,
+    title: str | None = None,
+) -> Path:
     """Write :func:`report_html` to ``path`` atomically (a temporary file, then renamed)."""
+    if not isinstance(path, str | os.PathLike):
+        raise InputError(f"path: expected a file name ending in .html, got {type(path).__name__}")
     path = Path(path)
     if path.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"{path}: the report must end in .html")
-    text = report_html(res, **kwargs)
+    text = report_html(res, source=source, checks_text=checks_text, title=title)
     with atomic_output(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return path

@@ -53,6 +53,19 @@
 
   function finite(v) { return v !== null && v !== undefined && isFinite(v); }
 
+  /* [min, max] of the finite values of several arrays (a loop: spreading a long array into
+   * Math.min overflows the call stack) */
+  function extent(arrays) {
+    var lo = Infinity, hi = -Infinity;
+    for (var a = 0; a < arrays.length; a++) {
+      var v = arrays[a];
+      for (var i = 0; i < v.length; i++) {
+        if (finite(v[i])) { if (v[i] < lo) lo = v[i]; if (v[i] > hi) hi = v[i]; }
+      }
+    }
+    return [lo, hi];
+  }
+
   /* ------------------------------------------------------------------ the mechanism */
   function Viewer(scene, svg) {
     this.scene = scene;
@@ -77,12 +90,15 @@
   Viewer.prototype.px = function (x) { return this.tx + this.s * x; };
   Viewer.prototype.py = function (y) { return this.ty - this.s * y; };
 
+  /* an SVG path through the samples, lifted where a sample is missing and after each of
+   * the scene's breaks (a gap between two samples where the mechanism does not assemble) */
   Viewer.prototype.pathOf = function (xs, ys) {
-    var d = "", pen = false;
+    var d = "", pen = false, breaks = {};
+    this.scene.breaks.forEach(function (b) { breaks[b] = true; });
     for (var i = 0; i < xs.length; i++) {
       if (finite(xs[i]) && finite(ys[i])) {
         d += (pen ? "L" : "M") + this.px(xs[i]).toFixed(2) + " " + this.py(ys[i]).toFixed(2);
-        pen = true;
+        pen = !breaks[i];
       } else pen = false;
     }
     return d;
@@ -196,24 +212,40 @@
 
   /* ------------------------------------------------------------------ plots */
   function niceTicks(lo, hi, n) {
-    if (!(hi > lo)) { var c = isFinite(lo) ? lo : 0; lo = c - 1; hi = c + 1; }
+    // a range too narrow for its magnitude (a constant up to round-off) is widened first:
+    // a tick step below the spacing of the floats would never advance
+    var mid = isFinite(lo) && isFinite(hi) ? (lo + hi) / 2 : 0;
+    var least = 1e-9 * Math.max(Math.abs(lo), Math.abs(hi), 1e-300);
+    if (!(hi - lo > least)) { var w = Math.max(Math.abs(mid) * 0.05, 1e-12); lo = mid - w; hi = mid + w; }
     var step = Math.pow(10, Math.floor(Math.log10((hi - lo) / n)));
     var err = (hi - lo) / n / step;
     if (err >= 7.5) step *= 10; else if (err >= 3.5) step *= 5; else if (err >= 1.5) step *= 2;
-    var t = [], v = Math.ceil(lo / step) * step;
-    for (; v <= hi + 1e-9 * step; v += step) t.push(Math.abs(v) < 1e-12 * step ? 0 : v);
+    var t = [], first = Math.ceil(lo / step);
+    for (var k = 0; k <= 4 * n; k++) {
+      var v = (first + k) * step;
+      if (v > hi + 1e-9 * step) break;
+      t.push(Math.abs(v) < 1e-12 * step ? 0 : v);
+    }
     return {lo: lo, hi: hi, ticks: t};
   }
 
   function Plot(scene, spec, svg) {
-    var W = 640, H = 210, L = 62, R = 12, T = 22, B = 34;
+    var W = 640, L = 62, R = 12, B = 34, PH = 154;
+    // the legend: entries flow left to right under the title, wrapping to more rows
+    var rows = [[]], used = 0, avail = W - L - R;
+    spec.series.forEach(function (k, n) {
+      var w = 22 + 6.2 * k.length;
+      if (used + w > avail && rows[rows.length - 1].length) { rows.push([]); used = 0; }
+      rows[rows.length - 1].push({k: k, n: n, x: L + used});
+      used += w;
+    });
+    var T = 24 + 14 * rows.length, H = T + PH + B;
     svg.setAttribute("viewBox", "0 0 " + W + " " + H);
-    var driver = scene.drivers[0], xs = scene.columns["input:" + driver];
-    var x0 = Math.min.apply(null, xs), x1 = Math.max.apply(null, xs);
+    var driver = scene.x_driver || scene.drivers[0], xs = scene.columns["input:" + driver];
+    var xe = extent([xs]), x0 = xe[0], x1 = xe[1];
     if (!(x1 > x0)) { x1 = x0 + 1; }
-    var ys = [];
-    spec.series.forEach(function (k) { scene.columns[k].forEach(function (v) { if (finite(v)) ys.push(v); }); });
-    var ylo = ys.length ? Math.min.apply(null, ys) : -1, yhi = ys.length ? Math.max.apply(null, ys) : 1;
+    var ye = extent(spec.series.map(function (k) { return scene.columns[k]; }));
+    var ylo = isFinite(ye[0]) ? ye[0] : -1, yhi = isFinite(ye[1]) ? ye[1] : 1;
     var pad = 0.05 * (yhi - ylo || Math.abs(yhi) || 1);
     var yt = niceTicks(ylo - pad, yhi + pad, 5), xt = niceTicks(x0, x1, 8);
     function X(x) { return L + (x - x0) / (x1 - x0) * (W - L - R); }
@@ -241,6 +273,15 @@
     var xl = el("text", {x: (L + W - R) / 2, y: H - 4, "font-size": 11, "text-anchor": "middle"}, svg);
     xl.textContent = driver + " [" + scene.input_units[driver] + "]";
     el("rect", {x: L, y: T, width: W - L - R, height: H - T - B, fill: "none", stroke: "#888", "stroke-width": 0.8}, svg);
+    rows.forEach(function (row, r) {
+      row.forEach(function (it) {
+        var lg = el("text", {x: it.x, y: 30 + 14 * r, "font-size": 10, fill: PALETTE[it.n % PALETTE.length],
+          "data-legend": it.k}, svg);
+        lg.textContent = "\u25AC " + it.k;
+      });
+    });
+    var breaks = {};
+    scene.breaks.forEach(function (b) { breaks[b] = true; });
     this.marks = [];
     var self = this;
     spec.series.forEach(function (k, n) {
@@ -249,14 +290,12 @@
         if (finite(v[i])) {
           // an angle that wraps (+180 to -180) is not joined across the jump
           if (pen && period && Math.abs(v[i] - v[i - 1]) > period / 2) pen = false;
-          d += (pen ? "L" : "M") + X(xs[i]).toFixed(2) + " " + Y(v[i]).toFixed(2); pen = true;
+          d += (pen ? "L" : "M") + X(xs[i]).toFixed(2) + " " + Y(v[i]).toFixed(2);
+          pen = !breaks[i];
         } else pen = false;
       }
       el("path", {d: d, fill: "none", stroke: color, "stroke-width": 1.4, "data-series": k}, svg);
       self.marks.push({k: k, e: el("circle", {r: 3, fill: color, "data-series": k}, svg)});
-      var lx = W - R - 4 - 110 * (spec.series.length - 1 - n);
-      var lg = el("text", {x: lx, y: 15, "font-size": 10, "text-anchor": "end", fill: color}, svg);
-      lg.textContent = "\u25AC " + k;
     });
     this.cursor = el("line", {y1: T, y2: H - B, stroke: "#000", "stroke-width": 1, "stroke-dasharray": "3 2",
       "data-role": "cursor"}, svg);
@@ -344,7 +383,8 @@
     });
     var first = scene.columns.assembled.indexOf(true);
     show(parseInt(sliders.length ? sliders[0].value : "0", 10) || (first > 0 ? first : 0));
-    window.linkagekit = {scene: scene, show: show, pyRepr: pyRepr, current: function () { return current; }};
+    window.linkagekit = {scene: scene, show: show, pyRepr: pyRepr, current: function () { return current; },
+      niceTicks: niceTicks, extent: extent};
   }
 
   if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);
