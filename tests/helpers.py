@@ -139,3 +139,23 @@ def pose_inputs(mech):
         else:
             vals.append(0.0)
     return np.array(vals, float).reshape(-1, 1)
+
+
+def luminance(rgb):
+    """Luminance (0-255) of an RGB image (..., 3)."""
+    return rgb @ np.array([0.299, 0.587, 0.114])
+
+
+def dark_ring_rays(lum, c, r, rays=16):
+    """Rays from pixel (column c, row r) that meet a dark pixel (luminance < 110) between radius 2.5 and 6 px.
+
+    A pin (a white circle with a black edge) drawn at (c, r) gives a dark pixel on every ray.
+    """
+    h, w = lum.shape
+    a = 2 * np.pi * np.arange(rays) / rays
+    rad = np.arange(2.5, 6.01, 0.5)
+    cols = np.floor(c + rad[None, :] * np.cos(a)[:, None]).astype(int)
+    rows = np.floor(r + rad[None, :] * np.sin(a)[:, None]).astype(int)
+    inside = (cols >= 0) & (cols < w) & (rows >= 0) & (rows < h)
+    vals = np.where(inside, lum[np.clip(rows, 0, h - 1), np.clip(cols, 0, w - 1)], np.inf)
+    return int((vals.min(axis=1) < 110).sum())

@@ -30,6 +30,7 @@ from scipy import ndimage
 
 import linkagekit as lk
 import linkagekit.viz.animate as anim
+from helpers import dark_ring_rays, luminance
 from linkagekit.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -45,22 +46,6 @@ def gif_frames(path: Path) -> list[np.ndarray]:
         im.seek(i)
         out.append(np.asarray(im.convert("RGB"), float))
     return out
-
-
-def luminance(rgb: np.ndarray) -> np.ndarray:
-    return rgb @ np.array([0.299, 0.587, 0.114])
-
-
-def ring_dark_rays(lum: np.ndarray, c: float, r: float, rays: int = 16) -> int:
-    """Rays from (c, r) that meet a dark pixel (luminance < 110) between radius 2.5 and 6 px."""
-    h, w = lum.shape
-    a = 2 * np.pi * np.arange(rays) / rays
-    rad = np.arange(2.5, 6.01, 0.5)
-    cols = np.floor(c + rad[None, :] * np.cos(a)[:, None]).astype(int)
-    rows = np.floor(r + rad[None, :] * np.sin(a)[:, None]).astype(int)
-    inside = (cols >= 0) & (cols < w) & (rows >= 0) & (rows < h)
-    vals = np.where(inside, lum[np.clip(rows, 0, h - 1), np.clip(cols, 0, w - 1)], np.inf)
-    return int((vals.min(axis=1) < 110).sum())
 
 
 def find_pins(rgb: np.ndarray) -> np.ndarray:
@@ -79,7 +64,7 @@ def find_pins(rgb: np.ndarray) -> np.ndarray:
         if not 6 <= rows.size <= 45:
             continue
         c, r = cols.mean() + sl[1].start + 0.5, rows.mean() + sl[0].start + 0.5
-        if ring_dark_rays(lum, c, r) >= 14:
+        if dark_ring_rays(lum, c, r) >= 14:
             found.append((c, r))
     return np.array(found).reshape(-1, 2)
 

@@ -42,6 +42,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 import linkagekit as lk
+from helpers import dark_ring_rays, luminance
 from linkagekit.cli import main
 from linkagekit.viz import draw
 from linkagekit.viz.scene import build_scene
@@ -76,10 +77,6 @@ def read_png(path: Path) -> tuple[np.ndarray, list[float]]:
 
 def curve_mask(rgb: np.ndarray) -> np.ndarray:
     return np.linalg.norm(rgb - CURVE_RGB, axis=-1) < CURVE_DIST
-
-
-def luminance(rgb: np.ndarray) -> np.ndarray:
-    return rgb @ np.array([0.299, 0.587, 0.114])
 
 
 def to_px(t: list[float], xy: np.ndarray) -> np.ndarray:
@@ -127,13 +124,7 @@ def ring_at(rgb: np.ndarray, c: float, r: float, rays: int = 16) -> tuple[int, f
     """(rays with a dark pixel between radius 2.5 and 6 px, darkest luminance of the pixel and its 4 neighbours)."""
     lum = luminance(rgb) if rgb.ndim == 3 else rgb  # an RGB image, or its luminance
     h, w = lum.shape
-    a = 2 * np.pi * np.arange(rays) / rays
-    rad = np.arange(2.5, 6.01, 0.5)
-    cols = np.floor(c + rad[None, :] * np.cos(a)[:, None]).astype(int)
-    rows = np.floor(r + rad[None, :] * np.sin(a)[:, None]).astype(int)
-    inside = (cols >= 0) & (cols < w) & (rows >= 0) & (rows < h)
-    vals = np.where(inside, lum[np.clip(rows, 0, h - 1), np.clip(cols, 0, w - 1)], np.inf)
-    dark = int((vals.min(axis=1) < 110).sum())
+    dark = dark_ring_rays(lum, c, r, rays)
     ci, ri = int(math.floor(c)), int(math.floor(r))
     cross = [
         lum[ri + dr, ci + dc]

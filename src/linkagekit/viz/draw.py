@@ -96,6 +96,25 @@ def _with_breaks(xy: np.ndarray, breaks: Sequence[int]) -> np.ndarray:
     return np.insert(np.asarray(xy, float), [b + 1 for b in breaks], np.nan, axis=0)
 
 
+#: how a pin is drawn: a white circle with a black edge
+PIN: dict[str, Any] = {
+    "linestyle": "none",
+    "marker": "o",
+    "markersize": 6,
+    "markerfacecolor": "white",
+    "markeredgecolor": "black",
+    "markeredgewidth": 1.3,
+    "zorder": 6,
+}
+
+
+def _hatched(ax: Axes, points: Any) -> Polygon:
+    """A hatched region without an outline (the ground under a pivot or a guide)."""
+    patch = Polygon(points, closed=True, facecolor="none", edgecolor="black", hatch="////", linewidth=0.0, zorder=2)
+    ax.add_patch(patch)
+    return patch
+
+
 class Drawing:
     """The mechanism of a scene on an Axes: :meth:`update` moves it to a sample.
 
@@ -185,18 +204,7 @@ class Drawing:
                 self.moving_guides.append((sl, line))
         moving = [i for i, j in enumerate(sc.joints) if j not in sc.ground_joints]
         self.moving = moving
-        self.pins = Line2D(
-            [],
-            [],
-            linestyle="none",
-            marker="o",
-            markersize=6,
-            markerfacecolor="white",
-            markeredgecolor="black",
-            markeredgewidth=1.3,
-            zorder=6,
-            animated=animated,
-        )
+        self.pins = Line2D([], [], animated=animated, **PIN)
         ax.add_line(self.pins)
         self.labels: list[tuple[int, Text]] = []
         if labels:
@@ -253,27 +261,11 @@ class Drawing:
                 zorder=2,
             )
             ax.add_patch(tri)
-            base = Polygon(
+            base = _hatched(
+                ax,
                 [[x - 1.3 * h, y - h], [x + 1.3 * h, y - h], [x + 1.3 * h, y - 1.45 * h], [x - 1.3 * h, y - 1.45 * h]],
-                closed=True,
-                facecolor="none",
-                edgecolor="black",
-                hatch="////",
-                linewidth=0.0,
-                zorder=2,
             )
-            ax.add_patch(base)
-            (pin,) = ax.plot(
-                [x],
-                [y],
-                linestyle="none",
-                marker="o",
-                markersize=6,
-                markerfacecolor="white",
-                markeredgecolor="black",
-                markeredgewidth=1.3,
-                zorder=6,
-            )
+            (pin,) = ax.plot([x], [y], **PIN)
             self.static += [tri, base, pin]
         for sl in sc.sliders:
             if sl.on != "ground":
@@ -282,16 +274,7 @@ class Drawing:
             a, b = o + sl.span[0] * d, o + sl.span[1] * d
             (line,) = ax.plot([a[0], b[0]], [a[1], b[1]], color="black", linewidth=1.5, zorder=2)
             nrm = np.array([d[1], -d[0]]) * 0.9 * h  # hatch below the guide (to its right)
-            strip = Polygon(
-                [a, b, b + nrm, a + nrm],
-                closed=True,
-                facecolor="none",
-                edgecolor="black",
-                hatch="////",
-                linewidth=0.0,
-                zorder=2,
-            )
-            ax.add_patch(strip)
+            strip = _hatched(ax, [a, b, b + nrm, a + nrm])
             self.static += [line, strip]
 
     # ---------------------------------------------------------------- moving parts
