@@ -27,7 +27,7 @@ from .. import __version__
 from ..errors import InputError
 from ..files import atomic_output
 from ..result import Result
-from ..viz.scene import Scene, build_scene
+from ..viz.scene import build_scene
 
 #: the most samples a page holds (each sample costs about 1 kB for a four-bar with rates)
 MAX_REPORT_SAMPLES = 10_000
@@ -69,15 +69,6 @@ def _script_json(doc: Any) -> str:
     """JSON safe inside a <script> element (no '</', no HTML comment openers)."""
     text = json.dumps(doc, allow_nan=False, separators=(",", ":"))
     return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
-
-
-def _gap_text(sc: Scene) -> str:
-    if not sc.gaps:
-        return ""
-    d = sc.drivers[0]
-    x = sc.inputs[d]
-    parts = [f"[{x[a]:.6g}, {x[b]:.6g}]" if a != b else f"{x[a]:.6g}" for a, b in sc.gaps]
-    return f"Does not assemble at the samples {d} in {', '.join(parts)} {sc.input_units[d]} (the gaps in the curves)."
 
 
 def report_html(
@@ -150,7 +141,7 @@ linkagekit {esc(__version__)}</p>
 <p><button type="button" data-action="play">Play</button>
 <button type="button" data-action="csv">Download CSV</button></p>
 <p data-role="message" aria-live="polite"></p>
-<p class="gaps">{esc(_gap_text(sc))}</p>
+<p class="gaps" data-role="gaps"></p>
 </section>
 <section id="lk-plots" aria-label="plots"></section>
 </div>

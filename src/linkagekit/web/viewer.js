@@ -67,16 +67,23 @@
   }
 
   /* ------------------------------------------------------------------ the mechanism */
-  function Viewer(scene, svg) {
+  /* view: {W, H, s, tx, ty} to keep the transform of an earlier drawing (the editor keeps it
+   * while a joint is dragged, so the drawing does not slide under the pointer) */
+  function Viewer(scene, svg, view) {
     this.scene = scene;
     this.svg = svg;
     var b = scene.bounds, W = 640;
-    var s = W / (b[2] - b[0]);
-    var H = Math.max(120, Math.round((b[3] - b[1]) * s));
-    this.W = W; this.H = H; this.s = s;
-    this.tx = -b[0] * s; this.ty = b[3] * s;   // X = tx + s x ; Y = ty - s y
+    if (view) {
+      this.W = view.W; this.H = view.H; this.s = view.s; this.tx = view.tx; this.ty = view.ty;
+    } else {
+      var s = W / (b[2] - b[0]);
+      this.W = W; this.H = Math.max(120, Math.round((b[3] - b[1]) * s)); this.s = s;
+      this.tx = -b[0] * s; this.ty = b[3] * s;   // X = tx + s x ; Y = ty - s y
+    }
+    W = this.W;
+    var H = this.H;
     svg.setAttribute("viewBox", "0 0 " + W + " " + H);
-    svg.setAttribute("data-scale", String(s));
+    svg.setAttribute("data-scale", String(this.s));
     var cols = scene.columns;
     this.X = {}; this.Y = {};
     for (var i = 0; i < scene.joints.length; i++) {
@@ -84,9 +91,12 @@
       this.X[j] = cols[j + ".x"]; this.Y[j] = cols[j + ".y"];
     }
     this.size = Math.max(b[2] - b[0], b[3] - b[1]);
-    this.pin = 0.012 * this.size * s;  // pixels
+    this.pin = 0.012 * this.size * this.s;  // pixels
     this.build();
   }
+  Viewer.prototype.view = function () { return {W: this.W, H: this.H, s: this.s, tx: this.tx, ty: this.ty}; };
+  /* file units of an SVG point (the inverse of the transform) */
+  Viewer.prototype.toFile = function (X, Y) { return [(X - this.tx) / this.s, (this.ty - Y) / this.s]; };
   Viewer.prototype.px = function (x) { return this.tx + this.s * x; };
   Viewer.prototype.py = function (y) { return this.ty - this.s * y; };
 
@@ -326,24 +336,44 @@
   }
 
   /* ------------------------------------------------------------------ the page */
+  function gapText(scene) {
+    if (!scene.gaps.length) return "";
+    var d = scene.x_driver || scene.drivers[0], x = scene.columns["input:" + d];
+    return "Does not assemble at the samples " + d + " in " + scene.gaps.map(function (g) {
+      return g[0] === g[1] ? fmt(x[g[0]]) : "[" + fmt(x[g[0]]) + ", " + fmt(x[g[1]]) + "]";
+    }).join(", ") + " " + scene.input_units[d] + " (the gaps in the curves).";
+  }
+
   function start() {
     var node = document.getElementById("lk-scene");
     if (!node) return;
-    var scene = JSON.parse(node.textContent);
-    var viewer = new Viewer(scene, document.querySelector("svg[data-role=mechanism]"));
-    var plots = [];
+    var svgMech = document.querySelector("svg[data-role=mechanism]");
     var box = document.getElementById("lk-plots");
-    scene.plots.forEach(function (spec) {
-      var fig = document.createElement("figure");
-      var svg = el("svg", {"data-role": "plot", "data-title": spec.title, width: "100%"});
-      fig.appendChild(svg);
-      box.appendChild(fig);
-      plots.push(new Plot(scene, spec, svg));
-    });
     var sliders = Array.prototype.slice.call(document.querySelectorAll("input[data-role=input]"));
     var values = Array.prototype.slice.call(document.querySelectorAll("[data-role=input-value]"));
     var message = document.querySelector("[data-role=message]");
-    var current = 0;
+    var gaps = document.querySelector("[data-role=gaps]");
+    var scene, viewer, plots, current = 0;
+
+    /* draw a scene: everything is rebuilt from it (the editor calls this with each new solve) */
+    function load(newScene, view) {
+      scene = newScene;
+      while (svgMech.firstChild) svgMech.removeChild(svgMech.firstChild);
+      while (box.firstChild) box.removeChild(box.firstChild);
+      viewer = new Viewer(scene, svgMech, view);
+      plots = [];
+      scene.plots.forEach(function (spec) {
+        var fig = document.createElement("figure");
+        var svg = el("svg", {"data-role": "plot", "data-title": spec.title, width: "100%"});
+        fig.appendChild(svg);
+        box.appendChild(fig);
+        plots.push(new Plot(scene, spec, svg));
+      });
+      sliders.forEach(function (s) { s.max = String(scene.n - 1); });
+      if (gaps) gaps.textContent = gapText(scene);
+      api.scene = scene;
+      api.viewer = viewer;
+    }
     function show(i) {
       i = Math.max(0, Math.min(scene.n - 1, i | 0));
       current = i;
@@ -356,7 +386,7 @@
         v.textContent = d + " = " + fmt(x, scene.input_units[d]);
       });
       var ok = scene.columns.assembled[i];
-      if (message) {
+      if (message && !api.holdMessage) {
         message.textContent = ok ? "" : "Does not assemble at " + scene.drivers.map(function (d) {
           return d + " = " + fmt(scene.columns["input:" + d][i], scene.input_units[d]);
         }).join(", ") + ".";
@@ -381,10 +411,12 @@
       document.body.appendChild(a); a.click(); a.remove();
       setTimeout(function () { URL.revokeObjectURL(a.href); }, 1000);
     });
+    var api = window.linkagekit = {show: show, load: load, stop: stop, pyRepr: pyRepr, fmt: fmt, el: el,
+      current: function () { return current; }, niceTicks: niceTicks, extent: extent, holdMessage: false};
+    load(JSON.parse(node.textContent));
     var first = scene.columns.assembled.indexOf(true);
     show(parseInt(sliders.length ? sliders[0].value : "0", 10) || (first > 0 ? first : 0));
-    window.linkagekit = {scene: scene, show: show, pyRepr: pyRepr, current: function () { return current; },
-      niceTicks: niceTicks, extent: extent};
+    document.dispatchEvent(new CustomEvent("linkagekit:ready"));
   }
 
   if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);
