@@ -22,7 +22,7 @@ LAYERS = [
     {"positions", "rates", "forces", "vectorloop"},
     {"result", "api", "checks"},
     {"viz.scene"},
-    {"viz.draw", "viz.animate", "web.report"},
+    {"viz.draw", "viz.animate", "web.report", "web.editor"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

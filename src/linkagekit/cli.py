@@ -1,6 +1,6 @@
 """The ``linkagekit`` command line: parse the arguments, call the library, format its answer.
 
-Commands: ``analyze``, ``modes``, ``check``, ``plot``, ``animate``, ``report`` (spec, section 2).
+Commands: ``analyze``, ``modes``, ``check``, ``plot``, ``animate``, ``report``, ``edit`` (spec, section 2).
 Exit status: 0 on success, 2 on a bad file or bad arguments, 1 on anything else; every failure is one line on stderr,
 ``linkagekit: error: <message>`` (``linkagekit: internal error: <Class>: <message>`` for
 an unexpected exception), never a traceback.
@@ -374,6 +374,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", metavar="OUT", required=True, help="the page: .html")
     sweep_option(p)
     p.set_defaults(run=_report)
+
+    p = commands.add_parser(
+        "edit",
+        help="edit the mechanism in the browser: drag joints, see it re-solved; save the file",
+        description="Serve an editor of FILE on 127.0.0.1 (its URL, with a random token, is the first line "
+        "printed) and open it in the browser. Drag joints, change numbers, add links, choose the assembly "
+        "mode; every picture is solved by linkagekit. Save writes FILE atomically and keeps FILE.bak. "
+        "Stop with Ctrl-C.",
+        **common,
+    )
+    file_argument(p)
+    p.add_argument("--port", metavar="N", help="listen on this port (default: a free one)")
+    p.add_argument("--no-browser", action="store_true", help="do not open a browser; just print the URL")
+    p.set_defaults(run=_edit)
     return parser
 
 
@@ -970,6 +984,25 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _edit(args: argparse.Namespace) -> int:
+    """``linkagekit edit``: serve until interrupted (Ctrl-C ends it with status 0)."""
+    from .web.editor import serve
+
+    port = 0
+    if args.port is not None:
+        try:
+            port = int(args.port)
+        except ValueError:
+            raise InputError(f"--port: expected a whole number, got {shorten(repr(args.port))}") from None
+        if not 0 <= port <= 65535:
+            raise InputError(f"--port: expected 0 to 65535, got {port}")
+    try:
+        serve(args.file, port=port, open_browser=not args.no_browser)
+    except KeyboardInterrupt:
+        print(f"{PROG}: editor stopped", file=sys.stderr)
+    return 0
+
+
 class _progress:
     """A progress bar on stderr, when it is a terminal: ``with _progress(what) as tick: tick(done, total)``."""
 
@@ -1017,7 +1050,7 @@ def _run(argv: list[str]) -> int:
     except _ParserExit as done:
         return done.status
     if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
-        raise InputError(f"give a command: analyze, modes, check, plot, animate or report (see '{PROG} --help')")
+        raise InputError(f"give a command: analyze, modes, check, plot, animate, report or edit (see '{PROG} --help')")
     code: int = args.run(args)
     return code
 

@@ -58,11 +58,52 @@ pre { background: #f7f7f7; border: 1px solid var(--line); border-radius: 4px; pa
       font: 12px/1.4 ui-monospace, SFMono-Regular, Menlo, Consolas, monospace; max-height: 420px; }
 .gaps { color: #8a4b00; }
 footer { color: var(--muted); font-size: 12px; margin-top: 24px; }
+.editor h3 { font-size: 14px; margin: 8px 0 4px; }
+.editor .hint { color: var(--muted); font-size: 12px; }
+.editor-grid { display: grid; grid-template-columns: repeat(auto-fit, minmax(260px, 1fr)); gap: 12px; }
+.editor table { border-collapse: collapse; font-size: 13px; }
+.editor td { padding: 1px 6px; }
+.editor input[type=number] { width: 9em; }
+[data-role=status] { margin-left: 8px; color: var(--muted); }
+[data-role=modes] button { margin: 2px; }
+svg[data-role=mechanism] [data-joint] { cursor: grab; }
+svg[data-role=mechanism].adding { cursor: crosshair; }
 """
 
 
 def _viewer_js() -> str:
     return resources.files("linkagekit.web").joinpath("viewer.js").read_text(encoding="utf-8")
+
+
+def _editor_panel(editor: dict[str, Any], file_name: str) -> str:
+    """The editing controls of ``linkagekit edit`` (drawn by editor.js)."""
+    esc = html.escape
+    name = esc(editor.get("file", file_name))
+    return f"""<section class="editor" data-role="editor" aria-label="editing">
+<h2>Edit</h2>
+<p class="toolbar">
+<button type="button" data-action="undo" disabled>Undo</button>
+<button type="button" data-action="redo" disabled>Redo</button>
+<button type="button" data-action="save">Save</button>
+<button type="button" data-action="add-link" title="click joints or empty places, then Finish">Add link</button>
+<button type="button" data-action="finish-link" hidden>Finish link</button>
+<button type="button" data-action="ground" title="click a joint to fix it to the ground, or to free it">Ground</button>
+<span data-role="status" aria-live="polite"></span>
+</p>
+<p class="hint">Drag any joint: the mechanism takes the drawn configuration, with that joint moved, as its
+reference pose (its dimensions change, as if the file had been edited). Saving writes {name} in one step and keeps
+the previous version as {name}.bak; comment lines at the top of the file are kept, other comments are not.</p>
+<div class="editor-grid">
+<div><h3>Assembly modes at this input</h3><div data-role="modes"></div></div>
+<div><h3>Numbers</h3><table data-role="numbers"></table></div>
+<div><h3>Driver</h3><div data-role="driver"></div></div>
+</div>
+</section>"""
+
+
+def _editor_scripts(editor: dict[str, Any]) -> str:
+    js = resources.files("linkagekit.web").joinpath("editor.js").read_text(encoding="utf-8")
+    return f'<script type="application/json" id="lk-editor">{_script_json(editor)}</script>\n<script>{js}</script>'
 
 
 def _script_json(doc: Any) -> str:
@@ -72,7 +113,12 @@ def _script_json(doc: Any) -> str:
 
 
 def report_html(
-    res: Result, source: str | None = None, checks_text: str | None = None, title: str | None = None
+    res: Result,
+    source: str | None = None,
+    checks_text: str | None = None,
+    title: str | None = None,
+    editor: dict[str, Any] | None = None,
+    start: int | None = None,
 ) -> str:
     """The report page of one design's sweep, as a string.
 
@@ -84,6 +130,10 @@ def report_html(
         The mechanism file's text, shown on the page (default: the mechanism written as YAML).
     checks_text : str, optional
         The text of ``linkagekit check`` (default: computed here).
+    editor : dict, optional
+        The editor's state (``linkagekit edit``): adds the editing controls and ``editor.js``.
+    start : int, optional
+        The sample shown first (default: the first that assembles).
     """
     if not isinstance(res, Result):
         raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
@@ -108,7 +158,8 @@ def report_html(
     esc = html.escape
     name = mech.name or "mechanism"
     ok = np.flatnonzero(sc.assembled)
-    start = int(ok[0]) if ok.size else 0
+    if start is None:
+        start = int(ok[0]) if ok.size else 0
     controls = []
     for d in sc.drivers:
         controls.append(
@@ -125,7 +176,8 @@ def report_html(
 <meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <meta name="generator" content="linkagekit {esc(__version__)}">
-<title>{esc(title or name)} · linkagekit report</title>
+<title>{esc(title or name)} · linkagekit {"editor" if editor else "report"}</title>
+{'<link rel="icon" href="data:,">' if editor else ""}
 <style>{STYLE}</style>
 </head>
 <body data-name="{esc(Path(file_name).stem or "linkage")}">
@@ -142,6 +194,7 @@ linkagekit {esc(__version__)}</p>
 <button type="button" data-action="csv">Download CSV</button></p>
 <p data-role="message" aria-live="polite"></p>
 <p class="gaps" data-role="gaps"></p>
+{_editor_panel(editor, file_name) if editor else ""}
 </section>
 <section id="lk-plots" aria-label="plots"></section>
 </div>
@@ -153,6 +206,7 @@ linkagekit {esc(__version__)}</p>
 the page only draws them. The coupler curves are in magenta, the other joint paths dashed grey.</footer>
 <script type="application/json" id="lk-scene">{_script_json(sc.to_dict())}</script>
 <script>{_viewer_js()}</script>
+{_editor_scripts(editor) if editor else ""}
 </body>
 </html>
 """

@@ -1,0 +1,378 @@
+"""``linkagekit edit``: the report's page served from 127.0.0.1, where the mechanism can be edited.
+
+The page (``editor.js`` over the report's ``viewer.js``) never solves anything.  Each edit
+(a joint dragged, a number typed, a joint or a link added, an assembly mode chosen) sends
+the edited mechanism document to this server, which builds the :class:`Mechanism`, solves
+it with :func:`linkagekit.analyze` and answers with the new document and its scene.  While
+a joint is dragged the page asks for a coarse sweep and keeps only the newest request in
+flight; on release it asks for the full sweep with checks, modes and forces.  A document
+that does not solve is answered with its message, and the page keeps its last good picture.
+
+The server is the standard library's threading HTTP server: it binds 127.0.0.1 only, serves
+one page and three JSON calls under a random token, and refuses (403) a request without the
+token, with a ``Host`` other than the loopback address, from another ``Origin``, or for any
+other path.  Only the opened file (and its ``.bak`` backup) is ever written: ``save``
+writes a temporary file and renames it over the old one, after copying the old one to the
+backup, and refuses when the file changed on disk since it was opened or last saved.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import secrets
+import threading
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from typing import Any, Literal
+from urllib.parse import urlsplit
+
+import numpy as np
+
+from ..errors import InputError, LinkageError, one_line
+from ..files import atomic_output, dumps, load
+from ..model import Mechanism
+
+#: samples of the coarse sweep solved while a joint is dragged
+COARSE_SAMPLES = 73
+#: the largest request body the server reads
+MAX_BODY = 2 << 20
+#: seconds a request may take to arrive
+TIMEOUT = 10.0
+
+
+class ConflictError(LinkageError):
+    """The file changed on disk since the editor read or last saved it."""
+
+    exit_code = 1
+
+
+def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np.ndarray], int]:
+    """The file's sweep (or ``n`` samples evenly over it), with the reference pose's input in it.
+
+    Returns the inputs by driver and the index of the pose's sample, so that the page can
+    show the pose itself: a dragged joint stays under the pointer.
+    """
+    from ..api import prepare
+    from .report import MAX_REPORT_SAMPLES
+
+    params = prepare(mech)
+    pose = {
+        d.name: float(params.pose_inputs[i, 0] / (mech.angle_to_rad if d.kind == "angle" else 1.0))
+        for i, d in enumerate(mech.drivers)
+    }
+    count = mech.drivers[0].sweep.count()
+    n = n or (count if count <= MAX_REPORT_SAMPLES - 1 else MAX_REPORT_SAMPLES - 1)
+    base = {
+        d.name: d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n)
+        for d in mech.drivers
+    }
+    first = mech.drivers[0].name
+    x = base[first]
+    near = np.flatnonzero(
+        np.all([np.abs(base[k] - v) <= 1e-12 * max(1.0, abs(v)) for k, v in pose.items()], axis=0)
+    )
+    if near.size:
+        return base, int(near[0])
+    ascending = x.size < 2 or x[-1] >= x[0]
+    k = int(np.searchsorted(x, pose[first])) if ascending else int(x.size - np.searchsorted(x[::-1], pose[first]))
+    return {name: np.insert(v, k, pose[name]) for name, v in base.items()}, k
+
+
+def _hash(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _leading_comments(text: str) -> str:
+    """The comment lines (and blank lines) at the top of a YAML file, kept when it is saved."""
+    out = []
+    for line in text.splitlines():
+        if line.startswith("#") or not line.strip():
+            out.append(line)
+        else:
+            break
+    while out and not out[-1].strip():
+        out.pop()
+    return "\n".join(out) + "\n" if out else ""
+
+
+class Session:
+    """The file being edited: its text on disk, and the solves and saves of the page.
+
+    Parameters
+    ----------
+    path : str or Path
+        A mechanism file (YAML or JSON); it is loaded (and so validated) here.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.mech = load(self.path)  # a bad file: MechanismFileError, exit 2, before anything serves
+        data = self.path.read_bytes()
+        self.base = _hash(data)
+        self.text = data.decode("utf-8-sig", errors="replace")
+        self.fmt: Literal["yaml", "json"] = "json" if self.path.suffix.lower() == ".json" else "yaml"
+        self.backup = self.path.with_name(self.path.name + ".bak")
+        self.lock = threading.Lock()
+
+    # ---------------------------------------------------------------- solving
+    def solve(self, request: dict[str, Any]) -> dict[str, Any]:
+        """The answer to ``{"doc", "pose"?, "coarse"?, "at"?}``: the new document and its scene.
+
+        ``pose`` maps joint names to new positions (file units): the mechanism takes them as
+        its reference pose, every dimension read off it (:meth:`Mechanism.with_pose`).
+        ``coarse`` asks for :data:`COARSE_SAMPLES` samples over the sweep, no forces and no
+        checks; otherwise the file's sweep with forces, the text of ``check`` and the
+        assembly modes at input ``at`` (a mapping of driver to value).
+        """
+        from ..api import analyze
+        from ..checks import check, check_text, modes
+        from ..viz.scene import build_scene
+        doc = request.get("doc")
+        if not isinstance(doc, dict):
+            raise InputError("the request has no mechanism document ('doc')")
+        mech = Mechanism.from_dict(doc, source=str(self.path))
+        pose = request.get("pose")
+        if pose is not None:
+            if not isinstance(pose, dict):
+                raise InputError("'pose' must map joint names to [x, y]")
+            full = {j: pose.get(j, [z.real, z.imag]) for j, z in mech.joints.items()}
+            mech = mech.with_pose(full)
+        coarse = bool(request.get("coarse"))
+        inputs, index = sweep_with_pose(mech, COARSE_SAMPLES if coarse else None)
+        res = analyze(mech, inputs, dynamics=not coarse and mech.has_dynamics)
+        out: dict[str, Any] = {
+            "ok": True,
+            "doc": mech.to_dict(),
+            "scene": build_scene(res).to_dict(),
+            "pose_index": index,
+            "lengths": {
+                ln.name: {f"{a}-{b}": ln.length(a, b) for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]}
+                for ln in mech.links
+                if ln.name != "ground" and len(ln.joints) >= 2
+            },
+        }
+        if not coarse:
+            units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+            out["checks"] = check_text(check(mech).to_dict(), units, mech.name or self.path.name)
+            at = request.get("at")
+            try:
+                found = modes(mech, at if isinstance(at, dict) and at else None)
+                out["modes"] = [
+                    {"signs": m.signs, "reference": m.reference, "joints": m.joints}
+                    for m in found.modes
+                    if m.assembled and m.same_as is None
+                ]
+            except LinkageError as exc:  # too many sign steps: no list, and say why
+                out["modes"] = []
+                out["modes_note"] = one_line(str(exc), 200)
+        return out
+
+    # ---------------------------------------------------------------- saving
+    def save(self, request: dict[str, Any]) -> dict[str, Any]:
+        """Write ``doc`` to the file, if the file is still as the editor last saw it (``base``).
+
+        The old file is copied to ``FILE.bak`` first; the new text replaces the file in one
+        step.  Comment lines at the top of the file are kept; other comments are not (the
+        page says so).  The saved file is read back and must give the same mechanism.
+        """
+        doc = request.get("doc")
+        if not isinstance(doc, dict):
+            raise InputError("the request has no mechanism document ('doc')")
+        mech = Mechanism.from_dict(doc, source=str(self.path))
+        with self.lock:
+            try:
+                old = self.path.read_bytes()
+            except OSError as exc:
+                raise ConflictError(f"{self.path}: cannot read it any more ({exc.strerror or exc})") from None
+            if _hash(old) != request.get("base", self.base) or _hash(old) != self.base:
+                raise ConflictError(
+                    f"{self.path.name} changed on disk since it was opened or saved here: not overwritten "
+                    "(reload the page to edit the file as it is now)"
+                )
+            body = dumps(mech, self.fmt)
+            head = _leading_comments(old.decode("utf-8-sig", errors="replace")) if self.fmt == "yaml" else ""
+            text = head + body
+            with atomic_output(self.backup) as tmp:
+                tmp.write_bytes(old)
+            with atomic_output(self.path) as tmp:
+                tmp.write_text(text, encoding="utf-8")
+            again = load(self.path)
+            if again != mech:  # pragma: no cover - save and load are tested to round-trip
+                raise LinkageError(f"{self.path}: the saved file does not read back as the edited mechanism")
+            data = self.path.read_bytes()
+            self.base = _hash(data)
+            self.mech = mech
+            self.text = data.decode("utf-8")
+        return {"ok": True, "base": self.base, "saved": str(self.path), "backup": str(self.backup)}
+
+    # ---------------------------------------------------------------- the page
+    def page(self, token: str) -> str:
+        """The editor page: the report of the file's sweep, with the editor's script and state."""
+        from ..api import analyze
+        from .report import report_html
+
+        inputs, index = sweep_with_pose(self.mech)
+        res = analyze(self.mech, inputs)
+        first = self.solve({"doc": self.mech.to_dict()})  # checks, modes, lengths: as after each edit
+        state = {
+            "token": token,
+            "base": self.base,
+            "file": self.path.name,
+            "format": self.fmt,
+            "pose_index": index,
+            "answer": {k: v for k, v in first.items() if k != "scene"},
+        }
+        return report_html(res, source=self.text, checks_text=first.get("checks"), editor=state, start=index)
+
+
+class _Handler(BaseHTTPRequestHandler):
+    """One request: check where it comes from and what it asks, then answer it in JSON (or the page)."""
+
+    server: EditorServer
+    protocol_version = "HTTP/1.1"
+    timeout = TIMEOUT
+
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base class's name
+        pass  # quiet: the terminal shows the URL, not a request log
+
+    def _send(self, code: int, body: bytes, ctype: str) -> None:
+        self.send_response(code)
+        self.send_header("Content-Type", ctype)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-store")
+        self.send_header("X-Content-Type-Options", "nosniff")
+        self.send_header("Referrer-Policy", "no-referrer")
+        self.send_header(
+            "Content-Security-Policy",
+            "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data: blob:; "
+            "connect-src 'self'; form-action 'none'; frame-ancestors 'none'",
+        )
+        self.end_headers()
+        self.wfile.write(body)
+
+    def _json(self, code: int, doc: dict[str, Any]) -> None:
+        self._send(code, json.dumps(doc, allow_nan=False, separators=(",", ":")).encode(), "application/json")
+
+    def _allowed(self) -> str | None:
+        """The path after the token, or None after answering 403."""
+        srv = self.server
+        host = self.headers.get("Host", "")
+        if host not in srv.hosts:
+            self._json(403, {"ok": False, "error": "forbidden: wrong Host"})
+            return None
+        origin = self.headers.get("Origin")
+        if origin is not None and origin not in srv.origins:
+            self._json(403, {"ok": False, "error": "forbidden: another origin"})
+            return None
+        parts = urlsplit(self.path)
+        prefix = f"/{srv.token}/"
+        if parts.query or not parts.path.startswith(prefix):
+            self._json(403, {"ok": False, "error": "forbidden"})
+            return None
+        rest = parts.path[len(prefix):]
+        if rest not in srv.routes:
+            self._json(403, {"ok": False, "error": "forbidden"})
+            return None
+        return rest
+
+    def do_GET(self) -> None:  # noqa: N802 - http.server's name
+        rest = self._allowed()
+        if rest is None:
+            return
+        if rest != "":
+            self._json(405, {"ok": False, "error": "use POST"})
+            return
+        try:
+            page = self.server.session.page(self.server.token)
+        except LinkageError as exc:
+            self._json(500, {"ok": False, "error": one_line(str(exc), 300)})
+            return
+        self._send(200, page.encode("utf-8"), "text/html; charset=utf-8")
+
+    def do_POST(self) -> None:  # noqa: N802 - http.server's name
+        rest = self._allowed()
+        if rest is None:
+            return
+        if rest == "":
+            self._json(405, {"ok": False, "error": "use GET"})
+            return
+        if self.headers.get("Content-Type", "").split(";")[0].strip() != "application/json":
+            self._json(415, {"ok": False, "error": "send application/json"})
+            return
+        try:
+            length = int(self.headers.get("Content-Length", ""))
+        except ValueError:
+            self._json(411, {"ok": False, "error": "a Content-Length is needed"})
+            return
+        if not 0 <= length <= MAX_BODY:
+            self._json(413, {"ok": False, "error": f"a request of at most {MAX_BODY} bytes"})
+            return
+        try:
+            request = json.loads(self.rfile.read(length).decode("utf-8"), parse_constant=_no_constant)
+        except (ValueError, UnicodeDecodeError) as exc:
+            self._json(400, {"ok": False, "error": f"bad JSON: {one_line(str(exc), 120)}"})
+            return
+        if not isinstance(request, dict):
+            self._json(400, {"ok": False, "error": "bad request: expected a JSON object"})
+            return
+        session = self.server.session
+        try:
+            if rest == "api/solve":
+                self._json(200, session.solve(request))
+            else:
+                self._json(200, session.save(request))
+        except ConflictError as exc:
+            self._json(409, {"ok": False, "error": one_line(str(exc), 300), "conflict": True})
+        except LinkageError as exc:
+            # a document that does not solve: the page keeps its last good picture and shows this
+            self._json(200, {"ok": False, "error": one_line(str(exc), 300)})
+        except Exception as exc:  # noqa: BLE001 - a request must never take the server down
+            self._json(500, {"ok": False, "error": f"internal error: {type(exc).__name__}: {one_line(str(exc), 200)}"})
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+class EditorServer(ThreadingHTTPServer):
+    """The editor's HTTP server on 127.0.0.1 (``port`` 0: a free port)."""
+
+    daemon_threads = True
+    routes = ("", "api/solve", "api/save")
+
+    def __init__(self, session: Session, port: int = 0, token: str | None = None) -> None:
+        if not isinstance(port, int) or isinstance(port, bool) or not 0 <= port <= 65535:
+            raise InputError(f"--port: expected 0 to 65535, got {port!r}")
+        self.session = session
+        self.token = token or secrets.token_urlsafe(24)
+        try:
+            super().__init__(("127.0.0.1", port), _Handler)
+        except OSError as exc:
+            raise InputError(f"--port {port}: cannot listen on 127.0.0.1 ({exc.strerror or exc})") from None
+        self.port = int(self.server_address[1])
+        self.hosts = {f"127.0.0.1:{self.port}", f"localhost:{self.port}"}
+        self.origins = {f"http://{h}" for h in self.hosts}
+
+    @property
+    def url(self) -> str:
+        """The page's address, with its token."""
+        return f"http://127.0.0.1:{self.port}/{self.token}/"
+
+
+def serve(path: str | Path, port: int = 0, open_browser: bool = True, ready: Any = None) -> None:
+    """Serve the editor of ``path`` until interrupted; print its URL first (spec section 2)."""
+    session = Session(path)
+    server = EditorServer(session, port)
+    print(server.url, flush=True)
+    if ready is not None:
+        ready(server)
+    if open_browser:
+        import webbrowser
+
+        threading.Thread(target=webbrowser.open, args=(server.url,), daemon=True).start()
+    try:
+        server.serve_forever(poll_interval=0.2)
+    finally:
+        server.server_close()
+
