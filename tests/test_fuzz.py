@@ -670,6 +670,48 @@ def test_fuzz_picture_commands(fuzzdir: Path) -> None:
     _picture_failures.check()
 
 
+_editor_failures = Failures("editor")
+
+
+@PICTURES
+@given(case=mechanism_files(), coarse=st.booleans(), move=st.booleans())
+def _fuzz_editor(fuzzdir: Path, case, coarse: bool, move: bool) -> None:
+    """What the page may send the editor: a mutated document, maybe with a moved joint."""
+    from linkagekit.web.editor import Session
+
+    example, data, suffix, desc = case
+    try:
+        doc = json.loads(data) if suffix == ".json" else yaml.safe_load(data)
+    except (ValueError, yaml.YAMLError):
+        return  # not a document the page could hold
+    session = _editor_sessions.setdefault(example, Session(EXAMPLES / f"{example}.yaml"))
+    request: dict[str, Any] = {"doc": doc, "coarse": coarse}
+    if move and isinstance(doc, dict) and isinstance(doc.get("joints"), dict) and doc["joints"]:
+        request["pose"] = {next(iter(doc["joints"])): [0.5, -0.25]}
+    _editor_failures.n += 1
+    try:
+        with time_limit(TIMEOUT):
+            answer = session.solve(request)
+        json.dumps(answer, allow_nan=False)  # what the server sends must be strict JSON
+    except lk.LinkageError as exc:
+        if "\n" in str(exc) or not str(exc):
+            _editor_failures.record(f"MESSAGE {str(exc)[:150]!r}", f"{example} [{desc}]", data, suffix)
+    except Hang as exc:
+        _editor_failures.record(f"HANG: {exc}", f"{example} [{desc}]", data, suffix)
+    except Exception as exc:  # noqa: BLE001 - the server would answer 500: a defect
+        _editor_failures.record(f"ESCAPED {type(exc).__name__}: {str(exc)[:150]}", f"{example} [{desc}]", data, suffix)
+
+
+_editor_sessions: dict[str, Any] = {}
+
+
+def test_fuzz_editor_requests(fuzzdir: Path) -> None:
+    """Mutated documents sent to the editor's solver: an answer in strict JSON, or one clean LinkageError."""
+    _editor_failures.items, _editor_failures.n = [], 0
+    _fuzz_editor(fuzzdir)
+    _editor_failures.check()
+
+
 # ---------------------------------------------------------------------- mutated command lines
 NUMBER_TEXT = st.one_of(
     st.sampled_from(

@@ -64,14 +64,11 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     count = mech.drivers[0].sweep.count()
     n = n or (count if count <= MAX_REPORT_SAMPLES - 1 else MAX_REPORT_SAMPLES - 1)
     base = {
-        d.name: d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n)
-        for d in mech.drivers
+        d.name: d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n) for d in mech.drivers
     }
     first = mech.drivers[0].name
     x = base[first]
-    near = np.flatnonzero(
-        np.all([np.abs(base[k] - v) <= 1e-12 * max(1.0, abs(v)) for k, v in pose.items()], axis=0)
-    )
+    near = np.flatnonzero(np.all([np.abs(base[k] - v) <= 1e-12 * max(1.0, abs(v)) for k, v in pose.items()], axis=0))
     if near.size:
         return base, int(near[0])
     ascending = x.size < 2 or x[-1] >= x[0]
@@ -128,6 +125,7 @@ class Session:
         from ..api import analyze
         from ..checks import check, check_text, modes
         from ..viz.scene import build_scene
+
         doc = request.get("doc")
         if not isinstance(doc, dict):
             raise InputError("the request has no mechanism document ('doc')")
@@ -270,7 +268,7 @@ class _Handler(BaseHTTPRequestHandler):
         if parts.query or not parts.path.startswith(prefix):
             self._json(403, {"ok": False, "error": "forbidden"})
             return None
-        rest = parts.path[len(prefix):]
+        rest = parts.path[len(prefix) :]
         if rest not in srv.routes:
             self._json(403, {"ok": False, "error": "forbidden"})
             return None
@@ -375,4 +373,3 @@ def serve(path: str | Path, port: int = 0, open_browser: bool = True, ready: Any
         server.serve_forever(poll_interval=0.2)
     finally:
         server.server_close()
-
