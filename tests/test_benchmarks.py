@@ -44,6 +44,20 @@ def test_bench_animate(capsys):
     assert "4 frames, GIF" in out and "ratio" in out
 
 
+def test_bench_editor(capsys):
+    """A few drag moves of the Jansen leg in the editor (Chromium); same browser policy as the page tests."""
+    import os
+
+    if os.environ.get("LINKAGEKIT_NO_BROWSER") == "1":
+        pytest.skip("LINKAGEKIT_NO_BROWSER=1: the editor benchmark needs Chromium")
+    import bench_editor
+
+    got = bench_editor.main(steps=10)
+    out = capsys.readouterr().out
+    assert "of 10 answered" in out and "median" in out and "95th percentile" in out and "coarse request" in out
+    assert 1 <= got["answered"] <= 10 and got["median_ms"] > 0
+
+
 def test_benchmarks_leave_no_module_cache():
-    for name in ("bench_positions", "bench_forces", "bench_designs", "bench_animate", "timing"):
+    for name in ("bench_positions", "bench_forces", "bench_designs", "bench_animate", "bench_editor", "timing"):
         sys.modules.pop(name, None)

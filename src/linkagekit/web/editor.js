@@ -28,6 +28,11 @@
     if (!text) lk.show(lk.current());
   }
   function clone(x) { return JSON.parse(JSON.stringify(x)); }
+  function centroid(pts) {
+    var x = 0, y = 0;
+    pts.forEach(function (p) { x += p[0]; y += p[1]; });
+    return [x / pts.length, y / pts.length];
+  }
 
   function post(path, body) {
     return fetch(base + path, {method: "POST", headers: {"Content-Type": "application/json"}, body: JSON.stringify(body)})
@@ -35,30 +40,43 @@
   }
 
   /* ------------------------------------------------------------- solving, newest request only */
-  var inflight = false, pending = null, view = null, generation = 0;
+  /* edits (full solves) are queued and answered in order, none dropped; of the coarse
+   * requests of a drag only the newest waits (a newer move replaces it) */
+  var inflight = false, pending = null, finals = [], view = null, generation = 0, outstanding = null;
   function solve(body, done) {
-    pending = {body: body, done: done, t0: body.t0};
+    var job = {body: body, done: done, t0: body.t0};
+    if (body.coarse) pending = job; else finals.push(job);
     if (!inflight) pump();
+    return job;
   }
   function pump() {
-    if (!pending) return;
-    var job = pending; pending = null; inflight = true;
+    var job = finals.length ? finals.shift() : pending;
+    if (!job) return;
+    if (job === pending) pending = null;
+    inflight = true;
     var gen = generation;
     post("api/solve", job.body).then(function (r) {
       inflight = false;
-      if (gen === generation) apply(r, job);
-      if (pending) pump();
+      // a coarse answer overtaken by a newer edit is dropped; a full one (an edit) never is
+      if (gen === generation || !job.body.coarse) apply(r, job);
+      if (outstanding === job) outstanding = null;
+      if (pending || finals.length) pump();
+      else afterIdle();
     }, function (err) {
       inflight = false;
+      if (outstanding === job) outstanding = null;
       setError("The editor's server does not answer (" + err + "); nothing was changed.");
-      if (pending) pump();
+      if (pending || finals.length) pump();
+      else afterIdle();
     });
   }
   function apply(r, job) {
     if (!r.ok) { setError(r.error || "could not solve"); if (job.done) job.done(false); return; }
     doc = r.doc;
-    lk.load(r.scene, job.body.coarse ? view : null);
-    lk.show(r.pose_index);
+    if (!(drag && !job.body.coarse)) {   // a drag under way draws its own coarse answers
+      lk.load(r.scene, job.body.coarse ? view : null);
+      lk.show(r.pose_index);
+    }
     setError("");
     if (!job.body.coarse) { render(r); }
     if (job.t0 !== undefined) {
@@ -68,19 +86,39 @@
     if (job.done) job.done(true);
   }
 
+  /* things to do once no solve is in flight or waiting (a save clicked during a solve) */
+  var idle = [];
+  function whenIdle(f) { if (inflight || pending || finals.length) idle.push(f); else f(); }
+  function afterIdle() { var fs = idle; idle = []; fs.forEach(function (f) { f(); }); }
+
+  /* the modes listed are those at the shown input: asked again when the slider moves */
+  var modesTimer = null, modesBusy = false;
+  function refreshModes() {
+    clearTimeout(modesTimer);
+    modesBusy = true;
+    modesTimer = setTimeout(function () {
+      var shownAt = lk.current();
+      post("api/solve", {doc: doc, at: atNow(), modes_only: true}).then(function (r) {
+        if (r.ok && lk.current() === shownAt) renderModes(r);
+        if (lk.current() === shownAt) modesBusy = false;
+      }, function () { modesBusy = false; /* the drawing is unchanged; the list stays */ });
+    }, 120);
+  }
+
   /* ------------------------------------------------------------- undo, redo */
   function commit(newDoc) {       // an edit that changed the document: remember the one before
     undoStack.push(lastGood); redoStack = []; lastGood = clone(newDoc); buttons();
   }
   var lastGood = clone(doc);
   function buttons() {
-    q("[data-action=undo]").disabled = !undoStack.length;
+    q("[data-action=undo]").disabled = !undoStack.length && !draft;
     q("[data-action=redo]").disabled = !redoStack.length;
   }
   function restore(d) {
     solve({doc: d}, function (ok) { if (ok) { lastGood = clone(doc); buttons(); } });
   }
   q("[data-action=undo]").addEventListener("click", function () {
+    if (draft) { setDraft(null); setError(""); return; }
     if (!undoStack.length) return;
     redoStack.push(lastGood); restore(undoStack.pop());
   });
@@ -112,9 +150,12 @@
     if (!t.hasAttribute || !t.hasAttribute("data-joint") || t.getAttribute("data-x") === "") return;
     e.preventDefault();
     lk.stop();
+    if (draft) { setDraft(null); setError(""); }
     svg.setPointerCapture(e.pointerId);
     view = lk.viewer.view();
-    drag = {joint: t.getAttribute("data-joint"), pose: displayedPose(), doc: clone(doc), moved: false};
+    // a drag pressed before the previous edit is answered builds on that edit's pose
+    var start = outstanding ? clone(outstanding.body.pose) : displayedPose();
+    drag = {joint: t.getAttribute("data-joint"), pose: start, doc: clone(doc), moved: false};
     generation++;
   });
   svg.addEventListener("pointermove", function (e) {
@@ -133,7 +174,7 @@
     d.pose[d.joint] = svgPoint(e);
     generation++;           // coarse answers still on the way are not drawn over the full one
     pending = null;
-    solve({doc: d.doc, pose: d.pose, at: atNow()}, function (ok) {
+    outstanding = solve({doc: d.doc, pose: d.pose, at: atNow()}, function (ok) {
       if (ok) commit(doc);
       else { view = null; }
     });
@@ -147,81 +188,128 @@
   }
 
   /* ------------------------------------------------------------- adding links, the ground */
-  var mode = null, building = [];
+  /* A mechanism is built up one link at a time, and the steps in between do not solve (a new
+   * link hangs free until it is connected or grounded). Such a document is kept as a draft:
+   * the solver's message says what is missing, the last good drawing stays, and the draft's
+   * new joints and links are marked on top of it (dashed: the user's own clicks, nothing
+   * computed) so they can be clicked to go on. The draft is committed the moment it solves;
+   * Undo, a drag or any other edit drops it. */
+  var mode = null, building = [], draft = null;
   var finish = q("[data-action=finish-link]");
   function newName(prefix, taken) {
     for (var k = 1; ; k++) if (!Object.prototype.hasOwnProperty.call(taken, prefix + k)) return prefix + k;
   }
-  q("[data-action=add-link]").addEventListener("click", function () {
-    mode = mode === "link" ? null : "link"; building = [];
-    svg.classList.toggle("adding", mode === "link");
+  function groundOf(d) { return Array.isArray(d.links.ground) ? d.links.ground : d.links.ground.joints; }
+  function jointsOf(entry) { return Array.isArray(entry) ? entry : entry.joints; }
+  function setMode(m) {
+    mode = m; building = [];
+    svg.classList.toggle("adding", mode !== null);
     finish.hidden = mode !== "link";
-    setStatus(mode === "link" ? "Click joints, or empty places for new joints; then Finish link." : "");
-  });
-  q("[data-action=ground]").addEventListener("click", function () {
-    mode = mode === "ground" ? null : "ground";
-    svg.classList.toggle("adding", mode === "ground");
-    setStatus(mode === "ground" ? "Click a joint to fix it to the ground (or to free it)." : "");
-  });
+    setStatus(mode === "link" ? "Click joints, or empty places for new joints; then Finish link." :
+              mode === "ground" ? "Click a joint to fix it to the ground (or to free it)." : draftStatus());
+    drawDraft();
+  }
+  function draftStatus() {
+    return draft ? "Draft, not solved yet: add links or ground until it solves (Undo drops it)." : "";
+  }
+  function setDraft(d) {
+    draft = d;
+    if (mode === null) setStatus(draftStatus());
+    drawDraft(); buttons();
+  }
+  var SVGNS = "http://www.w3.org/2000/svg";
+  function drawDraft() {
+    var old = svg.querySelector("g[data-role=draft]");
+    if (old) old.parentNode.removeChild(old);
+    if (!draft && !building.length) return;
+    var g = document.createElementNS(SVGNS, "g"), v = lk.viewer, shown = displayedPose();
+    g.setAttribute("data-role", "draft");
+    var d = draft || doc, pend = pendingJoints();
+    function at(j) { return shown[j] && isFinite(shown[j][0]) ? shown[j] : (pend[j] || d.joints[j]); }
+    function mk(tag, attrs) {
+      var e = document.createElementNS(SVGNS, tag);
+      Object.keys(attrs).forEach(function (k) { e.setAttribute(k, attrs[k]); });
+      g.appendChild(e); return e;
+    }
+    var links = Object.keys(d.links).filter(function (ln) { return ln !== "ground" && !doc.links[ln]; })
+      .map(function (ln) { return jointsOf(d.links[ln]); });
+    if (building.length) links.push(building.map(function (b) { return b.name; }));
+    links.forEach(function (js) {
+      for (var k = 1; k < js.length; k++) {
+        var a = at(js[k - 1]), b = at(js[k]);
+        mk("line", {x1: v.px(a[0]), y1: v.py(a[1]), x2: v.px(b[0]), y2: v.py(b[1]), stroke: "#777",
+          "stroke-width": 2, "stroke-dasharray": "5 4", "pointer-events": "none"});
+      }
+    });
+    var fresh = Object.keys(d.joints).filter(function (j) { return !shown[j]; }).concat(Object.keys(pend));
+    fresh.forEach(function (j) {
+      var p = at(j), grounded = groundOf(d).indexOf(j) >= 0;
+      var c = mk("circle", {cx: v.px(p[0]), cy: v.py(p[1]), r: Math.max(5, v.pin * 1.3), fill: grounded ? "#bbb" : "#fff",
+        stroke: "#555", "stroke-width": 1.5, "stroke-dasharray": "3 2", "data-draft-joint": j});
+      c.style.cursor = "pointer";
+      var t = mk("text", {x: v.px(p[0]) + 7, y: v.py(p[1]) - 7, "font-size": 11, fill: "#555", "pointer-events": "none"});
+      t.textContent = j + (grounded ? " (ground)" : "");
+    });
+    svg.appendChild(g);
+  }
+  q("[data-action=add-link]").addEventListener("click", function () { setMode(mode === "link" ? null : "link"); });
+  q("[data-action=ground]").addEventListener("click", function () { setMode(mode === "ground" ? null : "ground"); });
+  function clickedJoint(t) {
+    if (!t.hasAttribute) return null;
+    if (t.hasAttribute("data-draft-joint")) return t.getAttribute("data-draft-joint");
+    return t.hasAttribute("data-joint") && t.getAttribute("data-x") !== "" ? t.getAttribute("data-joint") : null;
+  }
+  // a click's clientX/Y are whole pixels in Chromium; the pointerdown before it has fractions
+  var lastDown = null;
+  svg.addEventListener("pointerdown", function (e) { lastDown = {clientX: e.clientX, clientY: e.clientY}; }, true);
   svg.addEventListener("click", function (e) {
     if (mode === null) return;
-    var t = e.target, joint = t.hasAttribute && t.hasAttribute("data-joint") ? t.getAttribute("data-joint") : null;
+    var joint = clickedJoint(e.target), d;
     if (mode === "ground") {
       if (!joint) return;
-      var d = clone(doc), g = d.links.ground;
-      var list = Array.isArray(g) ? g : g.joints;
-      var k = list.indexOf(joint);
+      d = clone(draft || doc);
+      if (pendingJoints()[joint]) return;
+      var list = groundOf(d), k = list.indexOf(joint);
       if (k >= 0) list.splice(k, 1); else list.push(joint);
-      mode = null; svg.classList.remove("adding"); setStatus("");
-      edit(d);
+      setMode(null);
+      edit(d, true);
       return;
     }
     if (!joint) {
-      var p = svgPoint(e), name = newName("J", Object.assign({}, doc.joints, pendingJoints()));
+      var near = lastDown && Math.abs(lastDown.clientX - e.clientX) < 1 && Math.abs(lastDown.clientY - e.clientY) < 1;
+      var p = svgPoint(near ? lastDown : e), name = newName("J", Object.assign({}, (draft || doc).joints, pendingJoints()));
       building.push({name: name, at: p});
     } else if (building.every(function (b) { return b.name !== joint; })) {
       building.push({name: joint});
     }
     setStatus("New link: " + building.map(function (b) { return b.name; }).join(" - ") + " (Finish link when done)");
+    drawDraft();
   });
   function pendingJoints() { var o = {}; building.forEach(function (b) { if (b.at) o[b.name] = b.at; }); return o; }
   finish.addEventListener("click", function () {
-    var d = clone(doc);
-    building.forEach(function (b) { if (b.at) d.joints[b.name] = b.at; });
-    if (building.length >= 2) d.links[newName("link", d.links)] = building.map(function (b) { return b.name; });
-    mode = null; building = []; finish.hidden = true; svg.classList.remove("adding"); setStatus("");
-    edit(d);
+    var d = clone(draft || doc), add = building.slice();
+    add.forEach(function (b) { if (b.at) d.joints[b.name] = b.at; });
+    setMode(null);
+    if (add.length < 2) { setError("A link needs at least two joints."); return; }
+    d.links[newName("link", d.links)] = add.map(function (b) { return b.name; });
+    edit(d, true);
   });
 
-  /* an edit of the document (numbers, links, ground, driver): solved in full, undoable */
-  function edit(d) {
+  /* an edit of the document (numbers, links, ground, driver): solved in full, undoable; a
+   * structural edit that does not solve yet is kept as the draft */
+  function edit(d, structural) {
     generation++;
-    solve({doc: d, at: atNow()}, function (ok) { if (ok) commit(doc); });
+    solve({doc: d, at: atNow()}, function (ok) {
+      if (ok) { setDraft(null); commit(doc); }
+      else if (structural) setDraft(d);
+    });
   }
 
   /* ------------------------------------------------------------- side panels */
   function render(r) {
     var checks = q("[data-role=checks]");
     if (checks && r.checks) checks.textContent = r.checks;
-    var modes = q("[data-role=modes]");
-    if (modes) {
-      modes.textContent = "";
-      (r.modes || []).forEach(function (m, k) {
-        var b = document.createElement("button");
-        b.type = "button";
-        b.setAttribute("data-action", "mode");
-        b.setAttribute("data-mode", String(k));
-        var signs = Object.keys(m.signs).map(function (j) { return j + (m.signs[j] > 0 ? "+" : "-"); }).join(" ");
-        b.textContent = (k + 1) + ": " + (signs || "the only mode") + (m.reference ? " (this one)" : "");
-        b.disabled = m.reference;
-        b.addEventListener("click", function () {
-          generation++;
-          solve({doc: doc, pose: m.joints, at: atNow()}, function (ok) { if (ok) commit(doc); });
-        });
-        modes.appendChild(b);
-      });
-      if (r.modes_note) { var p = document.createElement("p"); p.textContent = r.modes_note; modes.appendChild(p); }
-    }
+    renderModes(r);
     var table = q("[data-role=numbers]");
     if (table) {
       table.textContent = "";
@@ -244,8 +332,17 @@
           var d = clone(doc), e2 = d.links[ln];
           if (Array.isArray(e2)) e2 = d.links[ln] = {joints: e2};
           e2.mass = v;
+          // a mass needs its centre of gravity: the centroid of the link's joints in the pose
+          // until the file says otherwise (the file format has no default)
+          if (!e2.cg) e2.cg = centroid(e2.joints.map(function (j) { return d.joints[j]; }));
           edit(d);
         });
+      });
+      var g = doc.gravity ? doc.gravity[1] : 0;
+      row(table, "gravity y [m/s\u00b2]", g, "signed", function (v) {
+        var d = clone(doc);
+        if (v === 0) delete d.gravity; else d.gravity = [d.gravity ? d.gravity[0] : 0, v];
+        edit(d);
       });
     }
     var drv = q("[data-role=driver]");
@@ -279,15 +376,42 @@
       drv.appendChild(label);
     }
   }
+  function renderModes(r) {
+    var modes = q("[data-role=modes]");
+    if (!modes) return;
+    modes.textContent = "";
+    (r.modes || []).forEach(function (m, k) {
+      var b = document.createElement("button");
+      b.type = "button";
+      b.setAttribute("data-action", "mode");
+      b.setAttribute("data-mode", String(k));
+      var signs = Object.keys(m.signs).map(function (j) { return j + (m.signs[j] > 0 ? "+" : "-"); }).join(" ");
+      b.textContent = (k + 1) + ": " + (signs || "the only mode") + (m.reference ? " (this one)" : "");
+      b.disabled = m.reference;
+      b.addEventListener("click", function () {
+        generation++;
+        // the mode by its signs, at the input shown when clicked (the list may be a moment old)
+        solve({doc: doc, mode: m.signs, at: atNow()}, function (ok) { if (ok) { setDraft(null); commit(doc); } });
+      });
+      modes.appendChild(b);
+    });
+    if (r.modes_note) { var p = document.createElement("p"); p.textContent = r.modes_note; modes.appendChild(p); }
+  }
   function row(table, label, value, kind, set) {
     var tr = document.createElement("tr"), a = document.createElement("td"), b = document.createElement("td");
     a.textContent = label;
     var inp = document.createElement("input");
-    inp.type = "number"; inp.step = "any"; inp.value = String(lk.pyRepr(value));
+    // shown to 10 significant digits (a length computed from two joints reads 50, not
+    // 50.00000000000001); the document keeps the exact value until this field is edited
+    inp.type = "number"; inp.step = "any"; inp.value = String(Number(Number(value).toPrecision(10)));
+    inp.title = String(lk.pyRepr(value));
     inp.setAttribute("data-number", label);
     inp.addEventListener("change", function () {
       var v = parseFloat(inp.value);
-      if (!isFinite(v) || (kind === "length" && v <= 0) || v < 0) { setError(label + ": expected a positive number"); return; }
+      if (!isFinite(v) || (kind === "length" && v <= 0) || (kind === "mass" && v < 0)) {
+        setError(label + (kind === "signed" ? ": expected a number" : ": expected a positive number"));
+        return;
+      }
       set(v);
     });
     b.appendChild(inp); tr.appendChild(a); tr.appendChild(b); table.appendChild(tr);
@@ -296,15 +420,23 @@
   /* ------------------------------------------------------------- saving */
   q("[data-action=save]").addEventListener("click", function () {
     setStatus("Saving...");
+    whenIdle(save);   // after the solve under way: save what the page then shows
+  });
+  function save() {
     post("api/save", {doc: doc, base: baseHash}).then(function (r) {
       if (r.ok) { baseHash = r.base; setStatus("Saved " + cfg.file + " (previous version: " + cfg.file + ".bak)."); }
       else { setStatus(""); setError(r.error || "not saved"); }
     }, function (err) { setStatus(""); setError("Not saved: the editor's server does not answer (" + err + ")."); });
-  });
+  }
 
   function ready() {
     lk = window.linkagekit;
-    lk.editor = {doc: function () { return doc; }, timing: timing, busy: function () { return inflight || !!pending; }};
+    function follow(sl) { sl.addEventListener("input", refreshModes); sl.addEventListener("input", drawDraft); }
+    Array.prototype.forEach.call(document.querySelectorAll("input[data-role=input]"), follow);
+    // a new driver gets a new range (viewer.js rebuilds them from the scene)
+    document.addEventListener("linkagekit:input-added", function (e) { follow(e.detail); });
+    lk.editor = {doc: function () { return doc; }, timing: timing,
+      busy: function () { return inflight || !!pending || finals.length > 0 || modesBusy; }};
     render(cfg.answer);
     lk.show(cfg.pose_index);
     buttons();

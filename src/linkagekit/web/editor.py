@@ -123,7 +123,7 @@ class Session:
         assembly modes at input ``at`` (a mapping of driver to value).
         """
         from ..api import analyze
-        from ..checks import check, check_text, modes
+        from ..checks import check, check_text
         from ..viz.scene import build_scene
 
         doc = request.get("doc")
@@ -131,11 +131,25 @@ class Session:
             raise InputError("the request has no mechanism document ('doc')")
         mech = Mechanism.from_dict(doc, source=str(self.path))
         pose = request.get("pose")
+        wanted = request.get("mode")
+        if wanted is not None:  # an assembly mode, by its signs, at input 'at': its positions become the pose
+            if not isinstance(wanted, dict):
+                raise InputError("'mode' must map sign joints to +1 or -1")
+            listed = self._modes(mech, request.get("at"))
+            match = [m for m in listed["modes"] if m["signs"] == wanted]
+            if not match:
+                raise InputError(
+                    listed.get("modes_note")
+                    or f"the mode {wanted} does not assemble at {listed.get('modes_at')}: move the input first"
+                )
+            pose = {j: list(xy) for j, xy in match[0]["joints"].items()}
         if pose is not None:
             if not isinstance(pose, dict):
                 raise InputError("'pose' must map joint names to [x, y]")
             full = {j: pose.get(j, [z.real, z.imag]) for j, z in mech.joints.items()}
             mech = mech.with_pose(full)
+        if request.get("modes_only"):
+            return {"ok": True, **self._modes(mech, request.get("at"))}
         coarse = bool(request.get("coarse"))
         inputs, index = sweep_with_pose(mech, COARSE_SAMPLES if coarse else None)
         res = analyze(mech, inputs, dynamics=not coarse and mech.has_dynamics)
@@ -153,18 +167,26 @@ class Session:
         if not coarse:
             units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
             out["checks"] = check_text(check(mech).to_dict(), units, mech.name or self.path.name)
-            at = request.get("at")
-            try:
-                found = modes(mech, at if isinstance(at, dict) and at else None)
-                out["modes"] = [
-                    {"signs": m.signs, "reference": m.reference, "joints": m.joints}
-                    for m in found.modes
-                    if m.assembled and m.same_as is None
-                ]
-            except LinkageError as exc:  # too many sign steps: no list, and say why
-                out["modes"] = []
-                out["modes_note"] = one_line(str(exc), 200)
+            out.update(self._modes(mech, request.get("at")))
         return out
+
+    @staticmethod
+    def _modes(mech: Mechanism, at: Any) -> dict[str, Any]:
+        """The distinct assembly modes at input ``at`` (driver -> value; default the pose's)."""
+        from ..checks import modes
+
+        try:
+            found = modes(mech, at if isinstance(at, dict) and at else None)
+        except LinkageError as exc:  # too many sign steps, a bad input: no list, and say why
+            return {"modes": [], "modes_note": one_line(str(exc), 200)}
+        return {
+            "modes": [
+                {"signs": m.signs, "reference": m.reference, "joints": m.joints}
+                for m in found.modes
+                if m.assembled and m.same_as is None
+            ],
+            "modes_at": found.input,
+        }
 
     # ---------------------------------------------------------------- saving
     def save(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -236,6 +258,11 @@ class _Handler(BaseHTTPRequestHandler):
 
     def _send(self, code: int, body: bytes, ctype: str) -> None:
         self.send_response(code)
+        if code >= 400:
+            # a refused request may leave its body unread on the connection: close it, so
+            # that the next request is not read from the middle of this one
+            self.send_header("Connection", "close")
+            self.close_connection = True
         self.send_header("Content-Type", ctype)
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")

@@ -92,7 +92,9 @@ def _editor_panel(editor: dict[str, Any], file_name: str) -> str:
 </p>
 <p class="hint">Drag any joint: the mechanism takes the drawn configuration, with that joint moved, as its
 reference pose (its dimensions change, as if the file had been edited). Saving writes {name} in one step and keeps
-the previous version as {name}.bak; comment lines at the top of the file are kept, other comments are not.</p>
+the previous version as {name}.bak; comment lines at the top of the file are kept, other comments are not.
+To add a dyad, add a link from a joint to an empty place, a second link from that new joint to another empty place,
+and mark the last one ground: the steps in between are kept as a dashed draft until the mechanism solves.</p>
 <div class="editor-grid">
 <div><h3>Assembly modes at this input</h3><div data-role="modes"></div></div>
 <div><h3>Numbers</h3><table data-role="numbers"></table></div>

@@ -351,6 +351,7 @@
     var box = document.getElementById("lk-plots");
     var sliders = Array.prototype.slice.call(document.querySelectorAll("input[data-role=input]"));
     var values = Array.prototype.slice.call(document.querySelectorAll("[data-role=input-value]"));
+    var controls = document.querySelector(".controls");
     var message = document.querySelector("[data-role=message]");
     var gaps = document.querySelector("[data-role=gaps]");
     var scene, viewer, plots, current = 0;
@@ -369,6 +370,8 @@
         box.appendChild(fig);
         plots.push(new Plot(scene, spec, svg));
       });
+      var named = sliders.map(function (s) { return s.getAttribute("data-driver"); });
+      if (controls && named.join("\n") !== scene.drivers.join("\n")) rebuildControls();
       sliders.forEach(function (s) { s.max = String(scene.n - 1); });
       if (gaps) gaps.textContent = gapText(scene);
       api.scene = scene;
@@ -392,9 +395,24 @@
         }).join(", ") + ".";
       }
     }
-    sliders.forEach(function (s) {
-      s.addEventListener("input", function () { stop(); show(parseInt(s.value, 10)); });
-    });
+    /* one range per driver (the editor may change the drivers: the ranges follow the scene) */
+    function listen(s) { s.addEventListener("input", function () { stop(); show(parseInt(s.value, 10)); }); }
+    function rebuildControls() {
+      while (controls.firstChild) controls.removeChild(controls.firstChild);
+      sliders = []; values = [];
+      scene.drivers.forEach(function (d) {
+        var label = document.createElement("label"), s = document.createElement("input");
+        var out = document.createElement("output");
+        label.htmlFor = "lk-in-" + d; label.textContent = d;
+        s.type = "range"; s.id = "lk-in-" + d; s.min = "0"; s.step = "1"; s.value = "0";
+        s.setAttribute("data-role", "input"); s.setAttribute("data-driver", d);
+        out.setAttribute("data-role", "input-value"); out.setAttribute("data-driver", d);
+        controls.appendChild(label); controls.appendChild(s); controls.appendChild(out);
+        sliders.push(s); values.push(out); listen(s);
+        document.dispatchEvent(new CustomEvent("linkagekit:input-added", {detail: s}));
+      });
+    }
+    sliders.forEach(listen);
     var timer = null, play = document.querySelector("[data-action=play]");
     function stop() { if (timer !== null) { clearInterval(timer); timer = null; if (play) play.textContent = "Play"; } }
     if (play) play.addEventListener("click", function () {

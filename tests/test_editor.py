@@ -1,0 +1,707 @@
+"""``linkagekit edit``: the server's security, the Session's solves and saves, and the command line.
+
+Written as an independent review of ``src/linkagekit/web/editor.py`` against
+mechanism-format.md sections 2 and 5 (the browser side is ``test_editor_browser.py``).
+Every test works on a copy of an example in ``tmp_path``; ``examples/`` is never written.
+
+* Session: a solve without a pose gives back the file's pose at the shown sample; a pose
+  moves the reference pose (``Mechanism.with_pose``: dimensions read off it, the pose's own
+  input in the sweep, the joints at that sample equal to the pose); coarse solves are small;
+  save writes FILE (``lk.load`` gives the edited mechanism), keeps the old bytes in FILE.bak
+  and the leading comment lines, refuses (and leaves the file alone) when the file changed on
+  disk or the document is invalid; a JSON file stays JSON.
+* Security, with plain ``http.client`` against an in-process server: it binds 127.0.0.1; a
+  missing or wrong token, any path but the page and the two calls, a query string, a foreign
+  ``Origin``, a wrong or missing ``Host`` get 403; malformed JSON, a non-object body, NaN,
+  bad UTF-8, a huge or missing ``Content-Length``, a missing or non-JSON ``Content-Type`` get
+  a 4xx JSON error, and the server keeps serving; a refused request with a body does not
+  leave that body to be read as the next request on the same connection; save requests,
+  whatever they carry, write FILE and FILE.bak only (the whole tree is compared).
+* Command line: bad ``--port`` values and a port in use exit 2 with one line; a bad file
+  exits 2 with one line and serves nothing; the real command prints its URL first, serves the
+  page and the solver, and stops on SIGINT with status 0 and no traceback.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import http.client
+import json
+import math
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+import linkagekit as lk
+from linkagekit.errors import LinkageError
+from linkagekit.web.editor import ConflictError, EditorServer, Session
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples"
+SEED000 = "seed000_fourbar.yaml"
+URL_RE = re.compile(r"^http://127\.0\.0\.1:(\d+)/([A-Za-z0-9_\-]{16,})/$")
+
+
+# ----------------------------------------------------------------------------- helpers
+def copy_example(tmp_path: Path, name: str = SEED000, sub: str = "work") -> Path:
+    d = tmp_path / sub
+    d.mkdir(parents=True, exist_ok=True)
+    dst = d / name
+    shutil.copyfile(EXAMPLES / name, dst)
+    return dst
+
+
+def close(a: float, b: float, size: float = 1.0, rel: float = 1e-9) -> bool:
+    return math.isclose(float(a), float(b), rel_tol=rel, abs_tol=rel * size)
+
+
+def leading_comments(text: str) -> list[str]:
+    out = []
+    for line in text.splitlines():
+        if line.startswith("#"):
+            out.append(line)
+        elif line.strip():
+            break
+    return out
+
+
+def tree(root: Path) -> dict[str, str]:
+    """Every file under root (relative name -> sha256 of its bytes)."""
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
+
+
+def joints_at(scene: dict, i: int) -> dict[str, tuple[float, float]]:
+    cols = scene["columns"]
+    return {j: (cols[f"{j}.x"][i], cols[f"{j}.y"][i]) for j in scene["joints"]}
+
+
+@pytest.fixture
+def server(tmp_path):
+    """An in-process editor server on a copy of seed000 (in tmp_path/work)."""
+    path = copy_example(tmp_path)
+    srv = EditorServer(Session(path), 0)
+    t = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    t.start()
+    yield srv
+    srv.shutdown()
+    srv.server_close()
+    t.join(5)
+
+
+class Client:
+    """Plain HTTP against one server: a fresh connection per request unless one is given."""
+
+    def __init__(self, srv: EditorServer) -> None:
+        self.srv = srv
+        self.port = srv.port
+        self.token = srv.token
+
+    def conn(self) -> http.client.HTTPConnection:
+        return http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
+
+    def request(self, method, path, body=None, headers=None, conn=None, ctype="application/json"):
+        c = conn or self.conn()
+        h = {}
+        if body is not None and ctype is not None:
+            h["Content-Type"] = ctype
+        h.update(headers or {})
+        if isinstance(body, str):
+            body = body.encode("utf-8")
+        c.request(method, path, body=body, headers=h)
+        r = c.getresponse()
+        data = r.read()
+        if conn is None:
+            c.close()
+        return r.status, dict(r.getheaders()), data
+
+    def raw(self, method, path, headers, body=b"", skip_host=False):
+        """A request with exactly these headers (http.client adds none but Host unless skip_host)."""
+        c = self.conn()
+        c.putrequest(method, path, skip_host=skip_host, skip_accept_encoding=True)
+        for k, v in headers.items():
+            c.putheader(k, v)
+        c.endheaders()
+        if body:
+            c.send(body)
+        r = c.getresponse()
+        data = r.read()
+        c.close()
+        return r.status, dict(r.getheaders()), data
+
+    def page(self):
+        return self.request("GET", f"/{self.token}/")
+
+    def solve(self, req: dict, **kw):
+        return self.request("POST", f"/{self.token}/api/solve", json.dumps(req), **kw)
+
+    def save(self, req: dict, **kw):
+        return self.request("POST", f"/{self.token}/api/save", json.dumps(req), **kw)
+
+    def still_serving(self) -> None:
+        status, headers, body = self.page()
+        assert status == 200 and b'data-role="mechanism"' in body, (status, body[:200])
+        doc = self.srv.session.mech.to_dict()
+        status, _, body = self.solve({"doc": doc, "coarse": True})
+        assert status == 200 and json.loads(body)["ok"] is True, (status, body[:200])
+
+
+def json_error(status: int, headers: dict, body: bytes, what: str) -> dict:
+    ctype = {k.lower(): v for k, v in headers.items()}.get("content-type", "")
+    assert ctype.startswith("application/json"), (
+        f"{what}: {status} answered with Content-Type {ctype!r}: {body[:200]!r}"
+    )
+    doc = json.loads(body)
+    assert isinstance(doc, dict) and doc.get("ok") is False, f"{what}: {doc}"
+    assert isinstance(doc.get("error"), str) and doc["error"], f"{what}: no error message: {doc}"
+    return doc
+
+
+# ============================================================================== Session
+def test_session_solve_gives_back_the_file_pose(tmp_path):
+    path = copy_example(tmp_path)
+    s = Session(path)
+    mech = lk.load(path)
+    out = s.solve({"doc": mech.to_dict()})
+    assert out["ok"] is True
+    sc = out["scene"]
+    i = out["pose_index"]
+    inputs = sc["columns"]["input:crank"]
+    assert len(inputs) == 361 and inputs[0] == 0.0 and inputs[-1] == 360.0, "the file's sweep, 0..360 step 1"
+    assert inputs[i] == 0.0, f"the pose's input is 0 deg, shown sample {i} has {inputs[i]}"
+    for j, (x, y) in joints_at(sc, i).items():
+        z = mech.joints[j]
+        assert close(x, z.real, 6) and close(y, z.imag, 6), (j, x, y, z)
+    assert "checks" in out and "crank-rocker" in out["checks"], out.get("checks", "")[:300]
+    assert len(out["modes"]) == 2 and sum(m["reference"] for m in out["modes"]) == 1, out["modes"]
+    assert Mechanism_of(out["doc"]) == lk.Mechanism.from_dict(mech.to_dict())
+
+
+def Mechanism_of(doc):  # noqa: N802 - reads as a constructor
+    return lk.Mechanism.from_dict(doc)
+
+
+@pytest.mark.parametrize("coarse", [True, False])
+def test_session_solve_with_pose_moves_the_reference_pose(tmp_path, coarse):
+    """Dragging D: the new reference pose, lengths read off it, D where it was put at the shown sample."""
+    path = copy_example(tmp_path)
+    s = Session(path)
+    mech = lk.load(path)
+    new_d = [1.3, 4.5]
+    out = s.solve({"doc": mech.to_dict(), "pose": {"D": new_d}, "coarse": coarse})
+    assert out["ok"] is True
+    m2 = lk.Mechanism.from_dict(out["doc"])
+    assert m2.joints["D"] == complex(*new_d)
+    for j in ("A", "B", "C", "P"):
+        assert m2.joints[j] == mech.joints[j], j
+    want = m2.with_pose({j: [z.real, z.imag] for j, z in mech.joints.items()} | {"D": new_d})
+    assert m2 == want, "the answer's document is Mechanism.with_pose of the drawn configuration"
+    cd = abs(complex(*new_d) - mech.joints["C"])
+    assert close(out["lengths"]["coupler"]["C-D"], cd, 5), (out["lengths"], cd)
+    sc, i = out["scene"], out["pose_index"]
+    n = len(sc["columns"]["input:crank"])
+    if coarse:
+        assert 30 <= n <= 200, f"a coarse solve has {n} samples"
+        assert "checks" not in out and "modes" not in out
+    else:
+        assert n == 361
+    for j, (x, y) in joints_at(sc, i).items():
+        z = m2.joints[j]
+        assert close(x, z.real, 6) and close(y, z.imag, 6), (j, x, y, z)
+
+
+def test_session_pose_off_the_sweep_grid_is_inserted(tmp_path):
+    """Dragging the crank pin to 37.5 deg: that input is a sample of the sweep, and the one shown."""
+    path = copy_example(tmp_path)
+    s = Session(path)
+    mech = lk.load(path)
+    a = math.radians(37.5)
+    c = [2 * math.cos(a), 2 * math.sin(a)]
+    out = s.solve({"doc": mech.to_dict(), "pose": {"C": c}})
+    xs = out["scene"]["columns"]["input:crank"]
+    i = out["pose_index"]
+    assert close(xs[i], 37.5, 360), xs[i]
+    assert list(xs) == sorted(xs), "the sweep stays ascending"
+    assert 361 <= len(xs) <= 362
+    x, y = joints_at(out["scene"], i)["C"]
+    assert close(x, c[0], 2) and close(y, c[1], 2)
+
+
+def test_session_save_writes_file_backup_and_keeps_comments(tmp_path):
+    path = copy_example(tmp_path)
+    original = path.read_bytes()
+    s = Session(path)
+    out = s.solve({"doc": lk.load(path).to_dict(), "pose": {"D": [1.25, 4.6], "P": [5.5, 3.25]}})
+    before = tree(path.parent)
+    got = s.save({"doc": out["doc"], "base": s.base})
+    assert got["ok"] is True
+    assert set(tree(path.parent)) == set(before) | {path.name + ".bak"}, sorted(tree(path.parent))
+    back = path.with_name(path.name + ".bak")
+    assert back.read_bytes() == original, "FILE.bak holds the previous file byte for byte"
+    saved = lk.load(path)
+    assert saved == lk.Mechanism.from_dict(out["doc"])
+    assert saved.joints["D"] == complex(1.25, 4.6) and saved.joints["P"] == complex(5.5, 3.25)
+    text = path.read_text(encoding="utf-8")
+    assert leading_comments(text) == leading_comments(original.decode()), "the leading comment lines are kept"
+    assert got["base"] == hashlib.sha256(path.read_bytes()).hexdigest()
+    # a second save from the same session: the backup is now the first saved version
+    first = path.read_bytes()
+    out2 = s.solve({"doc": out["doc"], "pose": {"D": [1.0, 4.7]}})
+    assert s.save({"doc": out2["doc"], "base": got["base"]})["ok"] is True
+    assert back.read_bytes() == first
+    assert lk.load(path).joints["D"] == complex(1.0, 4.7)
+
+
+def test_session_save_refuses_when_the_file_changed_on_disk(tmp_path):
+    path = copy_example(tmp_path)
+    s = Session(path)
+    doc = s.solve({"doc": lk.load(path).to_dict(), "pose": {"D": [1.25, 4.6]}})["doc"]
+    changed = path.read_text() + "# changed by someone else\n"
+    path.write_text(changed)
+    with pytest.raises(ConflictError):
+        s.save({"doc": doc, "base": s.base})
+    assert path.read_text() == changed
+    assert not path.with_name(path.name + ".bak").exists()
+
+
+def test_session_save_refuses_a_stale_base(tmp_path):
+    path = copy_example(tmp_path)
+    original = path.read_bytes()
+    s = Session(path)
+    doc = s.solve({"doc": lk.load(path).to_dict(), "pose": {"D": [1.25, 4.6]}})["doc"]
+    with pytest.raises(ConflictError):
+        s.save({"doc": doc, "base": "0" * 64})
+    assert path.read_bytes() == original
+
+
+def test_session_save_of_an_invalid_document_writes_nothing(tmp_path):
+    path = copy_example(tmp_path)
+    original = path.read_bytes()
+    s = Session(path)
+    doc = lk.load(path).to_dict()
+    doc["joints"]["D"] = list(doc["joints"]["P"])  # two joints of the coupler at one spot
+    with pytest.raises(LinkageError):
+        s.save({"doc": doc, "base": s.base})
+    assert path.read_bytes() == original
+    assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
+
+
+def test_session_json_file_stays_json(tmp_path):
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(lk.load(EXAMPLES / SEED000).to_dict(), indent=2))
+    s = Session(path)
+    doc = s.solve({"doc": lk.load(path).to_dict(), "pose": {"D": [1.25, 4.6]}, "coarse": True})["doc"]
+    assert s.save({"doc": doc, "base": s.base})["ok"] is True
+    assert isinstance(json.loads(path.read_text()), dict), "a JSON file is saved as JSON"
+    assert lk.load(path).joints["D"] == complex(1.25, 4.6)
+
+
+def test_session_of_a_bad_file_raises_a_linkage_error(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("format: linkagekit/1\njoints: {A: [0, 0]}\nlinks: {ground: [A], crank: [A, Z]}\n")
+    with pytest.raises(LinkageError):
+        Session(bad)
+    with pytest.raises(LinkageError):
+        Session(tmp_path / "missing.yaml")
+
+
+# ============================================================================== security
+def test_binds_loopback_only(server):
+    assert server.server_address[0] == "127.0.0.1"
+    assert URL_RE.match(server.url), server.url
+    assert len(server.token) >= 16
+
+
+def test_page_and_calls_with_the_token(server):
+    c = Client(server)
+    status, headers, body = c.page()
+    assert status == 200
+    h = {k.lower(): v for k, v in headers.items()}
+    assert h["content-type"].startswith("text/html")
+    assert "default-src 'none'" in h.get("content-security-policy", ""), h
+    assert b'data-role="mechanism"' in body and b'id="lk-editor"' in body
+    c.still_serving()
+
+
+def forbidden_requests(token: str, port: int) -> list[tuple[str, str, str, dict, str | None]]:
+    """(what, method, path, headers, body) that must all get 403."""
+    doc = json.dumps({"doc": {}})
+    return [
+        ("no token", "GET", "/", {}, None),
+        ("no token, API", "POST", "/api/solve", {}, doc),
+        ("wrong token", "GET", "/" + "x" * len(token) + "/", {}, None),
+        ("wrong token, API", "POST", "/" + "x" * len(token) + "/api/save", {}, doc),
+        ("token prefix", "GET", f"/{token[:-1]}/", {}, None),
+        ("token without the slash", "GET", f"/{token}", {}, None),
+        ("dot-dot", "GET", f"/{token}/../etc/passwd", {}, None),
+        ("encoded dot-dot", "GET", f"/{token}/%2e%2e/%2e%2e/etc/passwd", {}, None),
+        ("other API", "POST", f"/{token}/api/other", {}, doc),
+        ("other API, GET", "GET", f"/{token}/api/other", {}, None),
+        ("a file under the token", "GET", f"/{token}/x", {}, None),
+        ("a query", "GET", f"/{token}/x?y=1", {}, None),
+        ("a query on the page", "GET", f"/{token}/?y=1", {}, None),
+        ("a query on the API", "POST", f"/{token}/api/solve?y=1", {}, doc),
+        ("double slash, no token", "GET", "//evil.example/", {}, None),
+        ("foreign Origin", "GET", f"/{token}/", {"Origin": "http://evil.example"}, None),
+        ("foreign Origin, solve", "POST", f"/{token}/api/solve", {"Origin": "http://evil.example"}, doc),
+        ("foreign Origin, save", "POST", f"/{token}/api/save", {"Origin": "https://evil.example"}, doc),
+        ("Origin null", "POST", f"/{token}/api/save", {"Origin": "null"}, doc),
+        ("Origin, other port", "POST", f"/{token}/api/solve", {"Origin": f"http://127.0.0.1:{port + 1}"}, doc),
+        ("Origin, https", "POST", f"/{token}/api/solve", {"Origin": f"https://127.0.0.1:{port}"}, doc),
+        ("Host rebinding", "GET", f"/{token}/", {"Host": "evil.example"}, None),
+        ("Host rebinding with port", "GET", f"/{token}/", {"Host": f"evil.example:{port}"}, None),
+        ("Host rebinding, save", "POST", f"/{token}/api/save", {"Host": f"evil.example:{port}"}, doc),
+        ("Host, other port", "GET", f"/{token}/", {"Host": f"127.0.0.1:{port + 1}"}, None),
+        ("Host suffix", "GET", f"/{token}/", {"Host": f"127.0.0.1:{port}.evil.example"}, None),
+        ("Host without port", "GET", f"/{token}/", {"Host": "127.0.0.1"}, None),
+    ]
+
+
+def test_forbidden_requests_get_403(server):
+    c = Client(server)
+    bad = []
+    for what, method, path, headers, body in forbidden_requests(server.token, server.port):
+        hdrs = dict(headers)
+        if "Host" in hdrs:  # http.client would add its own Host: send exactly this one
+            if body is not None:
+                hdrs["Content-Type"] = "application/json"
+                hdrs["Content-Length"] = str(len(body))
+            status, rh, data = c.raw(method, path, hdrs, (body or "").encode(), skip_host=True)
+        else:
+            status, rh, data = c.request(method, path, body, headers=hdrs)
+        if status != 403:
+            bad.append(f"{what}: {method} {path} {headers} -> {status} {data[:120]!r}")
+        else:
+            json_error(status, rh, data, what)
+    assert not bad, "requests that must be refused with 403:\n  " + "\n  ".join(bad)
+    c.still_serving()
+
+
+def test_missing_host_is_refused(server):
+    c = Client(server)
+    status, headers, body = c.raw("GET", f"/{server.token}/", {}, skip_host=True)
+    assert status == 403, (status, body[:200])
+    c.still_serving()
+
+
+def test_forbidden_requests_write_nothing(server, tmp_path):
+    """The refused save requests above leave the directory as it was."""
+    before = tree(tmp_path)
+    c = Client(server)
+    doc = server.session.mech.to_dict()
+    doc["joints"]["D"] = [1.25, 4.6]
+    body = json.dumps({"doc": doc, "base": server.session.base})
+    for origin in ("http://evil.example", "null"):
+        status, _, _ = c.request("POST", f"/{server.token}/api/save", body, headers={"Origin": origin})
+        assert status == 403
+    status, _, _ = c.request("POST", "/" + "y" * len(server.token) + "/api/save", body)
+    assert status == 403
+    assert tree(tmp_path) == before
+
+
+@pytest.mark.parametrize(
+    "what, body, ctype, want",
+    [
+        ("malformed JSON", "{bad", "application/json", 400),
+        ("truncated JSON", '{"doc": {', "application/json", 400),
+        ("a list", "[1, 2]", "application/json", 400),
+        ("a string", '"doc"', "application/json", 400),
+        ("a number", "3", "application/json", 400),
+        ("null", "null", "application/json", 400),
+        ("NaN", '{"doc": NaN}', "application/json", 400),
+        ("Infinity", '{"coarse": Infinity}', "application/json", 400),
+        ("bad UTF-8", b'{"doc": "\xff\xfe"}', "application/json", 400),
+        ("empty body", "", "application/json", 400),
+        ("no Content-Type", '{"doc": {}}', None, 415),
+        ("text/plain (a cross-site form)", '{"doc": {}}', "text/plain", 415),
+        ("form encoded", "doc=1", "application/x-www-form-urlencoded", 415),
+    ],
+)
+def test_bad_bodies_get_4xx_json(server, what, body, ctype, want):
+    c = Client(server)
+    for call in ("api/solve", "api/save"):
+        status, headers, data = c.request("POST", f"/{server.token}/{call}", body, ctype=ctype)
+        assert 400 <= status < 500, f"{what} to {call}: status {status} {data[:200]!r}"
+        assert status == want, f"{what} to {call}: status {status}, expected {want}: {data[:200]!r}"
+        json_error(status, headers, data, f"{what} to {call}")
+    c.still_serving()
+
+
+def test_huge_or_missing_content_length(server):
+    c = Client(server)
+    t0 = time.monotonic()
+    status, headers, data = c.raw(
+        "POST", f"/{server.token}/api/solve", {"Content-Type": "application/json", "Content-Length": str(10**12)}
+    )
+    assert status == 413, (status, data[:200])
+    json_error(status, headers, data, "huge Content-Length")
+    assert time.monotonic() - t0 < 5, "a huge Content-Length is refused at once, not read"
+    status, headers, data = c.raw(
+        "POST", f"/{server.token}/api/solve", {"Content-Type": "application/json", "Content-Length": "-5"}
+    )
+    assert 400 <= status < 500, (status, data[:200])
+    json_error(status, headers, data, "negative Content-Length")
+    status, headers, data = c.raw("POST", f"/{server.token}/api/solve", {"Content-Type": "application/json"})
+    assert 400 <= status < 500, (status, data[:200])
+    json_error(status, headers, data, "no Content-Length")
+    status, headers, data = c.raw(
+        "POST", f"/{server.token}/api/save", {"Content-Type": "application/json", "Content-Length": "abc"}
+    )
+    assert 400 <= status < 500, (status, data[:200])
+    # a body just over the limit, actually sent
+    big = b'{"doc": "' + b"x" * (3 << 20) + b'"}'
+    try:
+        status, headers, data = c.request("POST", f"/{server.token}/api/solve", big)
+        assert status == 413, (status, data[:200])
+    except (ConnectionResetError, BrokenPipeError):
+        pass  # the server may close the connection before the body is sent: refused all the same
+    c.still_serving()
+
+
+def test_invalid_documents_are_answered_not_crashed(server):
+    """A document or pose that does not solve: a JSON answer with ok false and a message, never a 500."""
+    c = Client(server)
+    doc = server.session.mech.to_dict()
+    cases = {
+        "no doc": {},
+        "doc not a mapping": {"doc": [1]},
+        "joints not a mapping": {"doc": {"joints": 5}},
+        "pose not a mapping": {"doc": doc, "pose": [1, 2]},
+        "pose not numbers": {"doc": doc, "pose": {"D": "x"}},
+        "pose null coordinate": {"doc": doc, "pose": {"D": [1, None]}},
+        "pose too large": {"doc": doc, "pose": {"D": [1e308, 1e308]}},
+        "two joints of a link at one spot": {"doc": doc, "pose": {"D": doc["joints"]["P"]}},
+    }
+    bad = []
+    for what, req in cases.items():
+        status, headers, data = c.solve(req)
+        try:
+            got = json.loads(data)
+        except ValueError:
+            bad.append(f"{what}: {status} not JSON: {data[:120]!r}")
+            continue
+        if status >= 500 or got.get("ok") is not False or not got.get("error"):
+            bad.append(f"{what}: {status} {got if len(data) < 300 else data[:200]}")
+    assert not bad, "\n  ".join(bad)
+    c.still_serving()
+
+
+def test_a_refused_request_does_not_poison_its_connection(server):
+    """HTTP/1.1 keep-alive: after a refused POST with a body, the next request on the SAME
+    connection gets its own answer (the server reads the refused body, or closes the connection;
+    it must not read the body as the next request)."""
+    c = Client(server)
+    body = json.dumps({"doc": server.session.mech.to_dict()})
+    bad = []
+    refusals = [
+        ("foreign Origin", "api/solve", {"Origin": "http://evil.example"}, "application/json"),
+        ("text/plain", "api/solve", {}, "text/plain"),
+        ("other path", "api/other", {}, "application/json"),
+    ]
+    for what, call, headers, ctype in refusals:
+        conn = c.conn()
+        try:
+            status, _, _ = c.request("POST", f"/{server.token}/{call}", body, headers=headers, conn=conn, ctype=ctype)
+            assert 400 <= status < 500, (what, status)
+            try:
+                status2, h2, data2 = c.request("GET", f"/{server.token}/", conn=conn)
+            except (http.client.HTTPException, ConnectionError) as exc:
+                bad.append(f"after {what}: the next request on the connection failed: {exc!r}")
+                continue
+            if status2 != 200:
+                bad.append(f"after {what}: the next request on the connection got {status2} {data2[:80]!r}")
+        finally:
+            conn.close()
+    assert not bad, "\n  ".join(bad)
+
+
+def test_save_writes_only_the_file_and_its_backup(server, tmp_path):
+    """Whatever a save request carries, only FILE and FILE.bak change under tmp_path."""
+    c = Client(server)
+    path = server.session.path
+    before = tree(tmp_path)
+    original = path.read_bytes()
+    doc = server.session.mech.to_dict()
+    doc["joints"]["D"] = [1.25, 4.6]
+    doc["name"] = "../../evil"
+    requests = [
+        {"doc": doc, "base": server.session.base, "path": "../evil.yaml", "file": "/tmp/evil.yaml"},
+        {"doc": doc | {"source": str(tmp_path / "evil.yaml")}, "backup": str(tmp_path / "evil.bak")},
+        {"doc": doc, "format": "json", "saved": "../x"},
+    ]
+    rel = str(path.relative_to(tmp_path))
+    for k, req in enumerate(requests):
+        status, _, data = c.save(req)
+        got = json.loads(data)
+        assert status == 200, (k, status, got)
+        if k == 0:
+            assert got["ok"] is True, got
+            assert (tmp_path / (rel + ".bak")).read_bytes() == original
+        after = tree(tmp_path)
+        changed = sorted(n for n in set(before) | set(after) if before.get(n) != after.get(n))
+        assert set(changed) <= {rel, rel + ".bak"}, f"save request {k} wrote other files: {changed}"
+    assert lk.load(path).joints["D"] == complex(1.25, 4.6)
+    assert not list(tmp_path.parent.glob("evil*")) and not Path("/tmp/evil.yaml").exists()
+
+
+def test_save_over_http_conflict_is_409_and_keeps_the_file(server):
+    c = Client(server)
+    path = server.session.path
+    doc = server.session.mech.to_dict()
+    doc["joints"]["D"] = [1.25, 4.6]
+    changed = path.read_text() + "# edited elsewhere\n"
+    path.write_text(changed)
+    status, headers, data = c.save({"doc": doc, "base": server.session.base})
+    assert status == 409, (status, data[:200])
+    got = json_error(status, headers, data, "conflict")
+    assert "changed" in got["error"]
+    assert path.read_text() == changed
+    c.still_serving()
+
+
+# ============================================================================== command line
+def cli(*args: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "linkagekit.cli", *args],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+    )
+
+
+def finish(proc: subprocess.Popen, timeout: float = 30) -> tuple[int, str, str]:
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, err = proc.communicate()
+        pytest.fail(f"`{' '.join(proc.args[3:])}` still running after {timeout} s: it served instead of exiting 2")
+    return proc.returncode, out, err
+
+
+def one_line_exit_2(code: int, out: str, err: str, what: str) -> None:
+    assert code == 2, f"{what}: exit status {code}, expected 2 (stdout {out!r}, stderr {err!r})"
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].strip(), f"{what}: stderr is not one line: {err!r}"
+    assert "Traceback" not in err
+    assert "http://" not in out, f"{what}: printed a URL, so it served: {out!r}"
+
+
+def test_cli_bad_port_values_exit_2_with_one_line(tmp_path):
+    path = copy_example(tmp_path)
+    values = ["abc", "-1", "65536", "99999999999999999999", "1.5", "", "0x50", " "]
+    procs = {v: cli("edit", str(path), "--port", v, "--no-browser") for v in values}
+    bad = []
+    for v, p in procs.items():
+        code, out, err = finish(p)
+        try:
+            one_line_exit_2(code, out, err, f"--port {v!r}")
+        except AssertionError as exc:
+            bad.append(str(exc))
+    assert not bad, "\n".join(bad)
+
+
+def test_cli_port_in_use_exits_2(tmp_path):
+    path = copy_example(tmp_path)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        port = s.getsockname()[1]
+        code, out, err = finish(cli("edit", str(path), "--port", str(port), "--no-browser"))
+    one_line_exit_2(code, out, err, f"--port {port} (in use)")
+
+
+def test_cli_bad_file_exits_2_before_serving(tmp_path):
+    bad_yaml = tmp_path / "broken.yaml"
+    bad_yaml.write_text("joints: [A: {\n")
+    bad_mech = tmp_path / "unknown.yaml"
+    bad_mech.write_text(
+        "format: linkagekit/1\njoints: {A: [0, 0], C: [1, 0]}\nlinks: {ground: [A], crank: [A, Z]}\n"
+        "drivers: [{link: crank, pivot: A, toward: C}]\n"
+    )
+    cases = {
+        "missing file": str(tmp_path / "missing.yaml"),
+        "broken YAML": str(bad_yaml),
+        "unknown joint": str(bad_mech),
+        "a directory": str(tmp_path),
+    }
+    procs = {k: cli("edit", v, "--no-browser") for k, v in cases.items()}
+    bad = []
+    for k, p in procs.items():
+        code, out, err = finish(p)
+        try:
+            one_line_exit_2(code, out, err, k)
+        except AssertionError as exc:
+            bad.append(str(exc))
+    assert not bad, "\n".join(bad)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("explicit_port", [False, True])
+def test_cli_serves_then_stops_on_sigint(tmp_path, explicit_port):
+    path = copy_example(tmp_path)
+    before = path.read_bytes()
+    port = free_port() if explicit_port else None
+    args = ["edit", str(path), "--no-browser"] + (["--port", str(port)] if port else [])
+    proc = cli(*args)
+    try:
+        box: list[str] = []
+        reader = threading.Thread(target=lambda: box.append(proc.stdout.readline()), daemon=True)
+        reader.start()
+        reader.join(30)
+        assert box and box[0], f"no URL on stdout within 30 s (exit {proc.poll()}, stderr {proc.stderr})"
+        url = box[0].rstrip("\n")
+        m = URL_RE.match(url)
+        assert m, f"the first stdout line is not http://127.0.0.1:PORT/TOKEN/: {url!r}"
+        if port:
+            assert int(m.group(1)) == port
+        with urllib.request.urlopen(url, timeout=30) as r:
+            assert r.status == 200
+            page = r.read().decode()
+        assert "data-joint" in page and 'data-role="input"' in page
+        doc = lk.load(path).to_dict()
+        req = urllib.request.Request(
+            url + "api/solve",
+            data=json.dumps({"doc": doc, "pose": {"D": [1.25, 4.6]}, "coarse": True}).encode(),
+            headers={"Content-Type": "application/json"},
+            method="POST",
+        )
+        with urllib.request.urlopen(req, timeout=30) as r:
+            got = json.loads(r.read())
+        assert got["ok"] is True and got["doc"]["joints"]["D"] == [1.25, 4.6]
+        # the token is needed
+        bad = url.rsplit("/", 2)[0] + "/nottheright" + "token" * 4 + "/"
+        with pytest.raises(urllib.error.HTTPError) as exc:
+            urllib.request.urlopen(bad, timeout=30)
+        assert exc.value.code == 403
+        proc.send_signal(signal.SIGINT)
+        code, out, err = finish(proc, 15)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert code == 0, f"SIGINT: exit status {code}, stderr {err!r}"
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert len(err.strip().splitlines()) <= 1, err
+    assert path.read_bytes() == before, "serving alone does not write the file"
+    assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
