@@ -13,3 +13,44 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture
 def examples() -> Path:
     return ROOT / "examples"
+
+
+CHROMIUM = "/usr/bin/chromium"  # Debian's chromium; Playwright's own browser download cannot work here
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--disable-quic",
+]
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Debian's headless Chromium through Playwright, one per test module.
+
+    Without /usr/bin/chromium or playwright the browser tests FAIL (``.ci/run`` installs
+    chromium); they are skipped only when LINKAGEKIT_NO_BROWSER=1.
+    """
+    if os.environ.get("LINKAGEKIT_NO_BROWSER") == "1":
+        pytest.skip("LINKAGEKIT_NO_BROWSER=1: browser tests not run")
+    if not Path(CHROMIUM).exists():
+        pytest.fail(
+            f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium) to run the "
+            "browser tests, or set LINKAGEKIT_NO_BROWSER=1 to skip them",
+            pytrace=False,
+        )
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.fail(
+            "the python package playwright is missing (pip install playwright; the browser is "
+            f"{CHROMIUM}, from Debian's chromium), or set LINKAGEKIT_NO_BROWSER=1",
+            pytrace=False,
+        )
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()

@@ -159,3 +159,14 @@ def dark_ring_rays(lum, c, r, rays=16):
     inside = (cols >= 0) & (cols < w) & (rows >= 0) & (rows < h)
     vals = np.where(inside, lum[np.clip(rows, 0, h - 1), np.clip(cols, 0, w - 1)], np.inf)
     return int((vals.min(axis=1) < 110).sum())
+
+
+def leading_comments(text: str) -> list[str]:
+    """The comment lines at the top of a file (before its first other non-blank line)."""
+    out = []
+    for line in text.splitlines():
+        if line.startswith("#"):
+            out.append(line)
+        elif line.strip():
+            break
+    return out

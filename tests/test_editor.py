@@ -43,6 +43,7 @@ from pathlib import Path
 import pytest
 
 import linkagekit as lk
+from helpers import leading_comments
 from linkagekit.errors import LinkageError
 from linkagekit.web.editor import ConflictError, EditorServer, Session
 
@@ -63,16 +64,6 @@ def copy_example(tmp_path: Path, name: str = SEED000, sub: str = "work") -> Path
 
 def close(a: float, b: float, size: float = 1.0, rel: float = 1e-9) -> bool:
     return math.isclose(float(a), float(b), rel_tol=rel, abs_tol=rel * size)
-
-
-def leading_comments(text: str) -> list[str]:
-    out = []
-    for line in text.splitlines():
-        if line.startswith("#"):
-            out.append(line)
-        elif line.strip():
-            break
-    return out
 
 
 def tree(root: Path) -> dict[str, str]:

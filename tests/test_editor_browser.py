@@ -52,19 +52,10 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
+from helpers import leading_comments
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--disable-quic",
-]
 VIEWPORT = {"width": 1280, "height": 1000}
 IDLE_S = 15.0  # the longest a solve may take to land on the page
 RELEASE_PX = 0.75  # the dragged joint vs the release point, in CSS px
@@ -81,30 +72,6 @@ FILES = {
 
 
 # ----------------------------------------------------------------------------- browser
-@pytest.fixture(scope="module")
-def browser():
-    if os.environ.get("LINKAGEKIT_NO_BROWSER") == "1":
-        pytest.skip("LINKAGEKIT_NO_BROWSER=1: browser tests of the editor not run")
-    if not Path(CHROMIUM).exists():
-        pytest.fail(
-            f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium) to run the "
-            "editor browser tests, or set LINKAGEKIT_NO_BROWSER=1 to skip them",
-            pytrace=False,
-        )
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        pytest.fail(
-            "the python package playwright is missing (pip install playwright; the browser is "
-            f"{CHROMIUM}, from Debian's chromium), or set LINKAGEKIT_NO_BROWSER=1",
-            pytrace=False,
-        )
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
-
-
 JS_STATE = """
 () => {
   const lk = window.linkagekit, svg = document.querySelector('svg[data-role=mechanism]');
@@ -364,16 +331,6 @@ def check_curves(ep: EditorPage, st: dict, m2: Any, what: str) -> None:
         assert err.size == 0 or err.max() < CURVE_PX, (
             f"{ep.name} {what}: {key} is off m2's curve by {err.max():.3f} px at point {int(err.argmax())}"
         )
-
-
-def leading_comments(text: str) -> list[str]:
-    out = []
-    for line in text.splitlines():
-        if line.startswith("#"):
-            out.append(line)
-        elif line.strip():
-            break
-    return out
 
 
 def wait_until(cond, timeout: float = 5.0) -> bool:

@@ -55,16 +55,6 @@ import linkagekit as lk
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--disable-quic",
-]
 VIEWPORT = {"width": 1280, "height": 900}
 SETTLE_S = 1.0  # how long a move may take to show on the page
 PX_TOL = 0.5  # drawn positions: residual of the fitted transform, in CSS px
@@ -102,30 +92,6 @@ def rep(v: float) -> str:
 
 
 # ----------------------------------------------------------------------------- browser side
-@pytest.fixture(scope="module")
-def browser():
-    if os.environ.get("LINKAGEKIT_NO_BROWSER") == "1":
-        pytest.skip("LINKAGEKIT_NO_BROWSER=1: browser tests of the report page not run")
-    if not Path(CHROMIUM).exists():
-        pytest.fail(
-            f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium) to run the "
-            "report-page browser tests, or set LINKAGEKIT_NO_BROWSER=1 to skip them",
-            pytrace=False,
-        )
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        pytest.fail(
-            "the python package playwright is missing (pip install playwright; the browser is "
-            f"{CHROMIUM}, from Debian's chromium), or set LINKAGEKIT_NO_BROWSER=1",
-            pytrace=False,
-        )
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
-
-
 @pytest.fixture(scope="module")
 def report_file(tmp_path_factory):
     """``report_file(name)``: the HTML written by ``linkagekit report`` (once per module)."""
