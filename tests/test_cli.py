@@ -163,8 +163,8 @@ def test_several_drivers(capsys, examples):
     assert code == 2 and "NAME=" in err
 
 
-def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):
-    # a class-3 Assur group (triad) on a crank: no triangulation order
+def test_class3_group_is_solved_numerically(tmp_path, capsys):
+    # a class-3 Assur group (triad) on a crank: no triangulation order; the numerical group places it
     text = """
 joints: {A: [0,0], B: [6,0], G: [3,-3], C: [1,1], D: [2,4], E: [5,4], F: [3.5,6]}
 links:
@@ -174,6 +174,25 @@ links:
   l2: [B, E]
   l3: [G, F]
   tri: [D, E, F]
+drivers: [{link: crank, pivot: A, toward: C}]
+"""
+    code, out, _ = run(["check", write(tmp_path, text)], capsys)
+    assert code == 0 and "numerically" in out.splitlines()[0] and "D, E, F" in out
+
+
+def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):
+    # a triad whose third leg is a block sliding on the ground: a slider inside a class-3 group
+    text = """
+joints: {A: [0,0], B: [6,0], C: [1,1], D: [2,4], E: [5,4], F: [3.5,6]}
+links:
+  ground: [A, B]
+  crank: [A, C]
+  l1: [C, D]
+  l2: [B, E]
+  block: [F]
+  tri: [D, E, F]
+sliders:
+  - {link: block, on: ground, through: F, direction: [1, 0]}
 drivers: [{link: crank, pivot: A, toward: C}]
 """
     code, _, err = run(["check", write(tmp_path, text)], capsys)

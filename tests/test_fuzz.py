@@ -580,7 +580,14 @@ def mechanism_files(draw) -> tuple[str, bytes, str, str]:
 
 
 def _driver_names(example: str) -> list[str]:
-    return [d["link"] if "link" in d else f"slider{d['slider']}" for d in BASES[example]["drivers"]]
+    return [
+        d["link"]
+        if "link" in d
+        else d.get("name", "-".join(d["cylinder"]))
+        if "cylinder" in d
+        else f"slider{d['slider']}"
+        for d in BASES[example]["drivers"]
+    ]
 
 
 def _at_args(example: str, value: str) -> list[str]:

@@ -18,8 +18,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "linkagekit"
 LAYERS = [
     {"errors", "units", "geometry"},
     {"schema", "model", "files"},
-    {"steps", "plan", "params"},
-    {"positions", "rates", "forces", "vectorloop"},
+    {"steps", "group", "plan", "params"},
+    {"positions", "rates", "forces", "vectorloop", "groupmodes"},
     {"result", "api", "checks"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},

@@ -66,6 +66,7 @@ FILES = {
     "slider_crank": "slider_crank.yaml",  # slider, mass properties -> torque plot
     "seed003": "seed003_ex21.yaml",  # does not assemble outside about [86.78, 273.22] deg
     "fivebar": "fivebar_two_drivers.yaml",  # two drivers
+    "excavator": "excavator_boom.yaml",  # two cylinder drivers (drawn as barrel and rod), forces
 }
 ALL = list(FILES)
 
@@ -505,7 +506,9 @@ def test_plot_quantities(open_report, name):
         f"{name}: no angular-velocity plot among {titles}"
     )
     if rp.res.forces is not None:
-        assert any(w in low for w in ("torque", "t[")), f"{name} has mass properties: no torque plot among {titles}"
+        assert any(w in low for w in ("torque", "t[", "driver force")), (  # cylinders and sliders push
+            f"{name} has mass properties: no driver torque or force plot among {titles}"
+        )
         assert any(w in low for w in ("load", "reaction", "force", "|f|", "bearing")), (
             f"{name} has mass properties: no bearing-load plot among {titles}"
         )

@@ -49,19 +49,22 @@ MAX_RESULT_BYTES = 4 << 30
 MAX_ABS = 1e12
 
 
-def prepare(mech: Mechanism, poses: ArrayLike | None = None) -> Params:
-    """The plan and numbers of the mechanism (or of each of ``poses``), in their reference modes."""
+def prepare(mech: Mechanism, poses: ArrayLike | None = None, numerical: bool = False) -> Params:
+    """The plan and numbers of the mechanism (or of each of ``poses``), in their reference modes.
+
+    ``numerical``: place joints by numerical groups wherever possible (``method="numerical"``).
+    """
     if not isinstance(mech, Mechanism):
         raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
     if poses is None:
-        return _prepared(mech)
-    return compile(mech, as_poses(mech, poses), make_plan(mech))
+        return _prepared(mech, numerical)
+    return compile(mech, as_poses(mech, poses), make_plan(mech, numerical))
 
 
 @lru_cache(maxsize=64)
-def _prepared(mech: Mechanism) -> Params:
+def _prepared(mech: Mechanism, numerical: bool = False) -> Params:
     """One mechanism's parameters in its reference mode, cached (mechanisms are immutable; the arrays read-only)."""
-    return reference_mode(mech, compile(mech, None, make_plan(mech))).read_only()
+    return reference_mode(mech, compile(mech, None, make_plan(mech, numerical))).read_only()
 
 
 # ---------------------------------------------------------------------- argument checks
@@ -173,10 +176,14 @@ def analyze(
         False: positions only (faster, smaller).
     dynamics : bool
         False: no forces even when the mechanism has masses or loads.
-    method : {"natural", "vector-loop"}
-        ``"natural"`` (default): successive triangulation in natural coordinates.
+    method : {"natural", "vector-loop", "numerical"}
+        ``"natural"`` (default): successive triangulation in natural coordinates, with
+        numerical groups only where no closed-form step applies.
         ``"vector-loop"``: the independent link-angle formulation of seeds 003/001
         (:mod:`linkagekit.vectorloop`), four-bars and Stephenson six-bars, one design.
+        ``"numerical"``: numerical groups (Newton, continued from the pose) wherever they
+        apply, even where circle-circle steps could place the joints: a cross-check; the
+        assembly mode is the pose's.
     static : bool
         Zero speed and acceleration for every driver: the forces are then the static ones
         that balance gravity and the loads (not to be combined with ``speed``/``acceleration``).
@@ -191,7 +198,7 @@ def analyze(
         if not isinstance(value, bool | np.bool_):
             raise InputError(f"{flag}: expected True or False, got {type(value).__name__}")
     if not isinstance(method, str):
-        raise InputError(f"method: expected 'natural' or 'vector-loop', got {type(method).__name__}")
+        raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {type(method).__name__}")
     given = {k: _as_array(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
     n = max((len(v) for v in given.values()), default=0)
     for k, v in given.items():
@@ -212,7 +219,7 @@ def analyze(
             f"more than linkagekit.api.MAX_RESULT_BYTES ({MAX_RESULT_BYTES / 2**30:.0f} GB): use fewer samples, "
             "rates=False, or lk.analyze_chunks for many designs (or raise the limit)"
         )
-    params = prepare(mech, poses)
+    params = prepare(mech, poses, numerical=method == "numerical")
     plan = params.plan
     factors = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
     values: dict[str, np.ndarray] = {}
@@ -252,8 +259,8 @@ def analyze(
             raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
         mr = m == 1
 
-    if method not in ("natural", "vector-loop"):
-        raise InputError(f"method: expected 'natural' or 'vector-loop', got {method!r}")
+    if method not in ("natural", "vector-loop", "numerical"):
+        raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {method!r}")
     if method == "vector-loop" and (poses is not None or signs is not None or mirrors is not None):
         raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
     with_forces = rates and dynamics and mech.has_dynamics
@@ -351,7 +358,7 @@ class _Outputs:
         if not np.shares_memory(rt.v, self.v):
             self.v[:, sl], self.a[:, sl] = rt.v, rt.a
         self.singular[sl] = rt.singular
-        if params.plan.n_signs:
+        if len(rt.condition):
             self.condition[sl] = np.where(pos.assembled, np.min(np.abs(rt.condition), axis=0), np.nan)
         else:
             self.condition[sl] = np.where(pos.assembled, 1.0, np.nan)

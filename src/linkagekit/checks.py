@@ -29,11 +29,13 @@ import numpy as np
 
 from .api import analyze, prepare
 from .errors import InputError
+from .group import Group
+from .groupmodes import continuation_intervals, enumerate_modes
 from .model import Mechanism
 from .params import Params, all_sign_combinations
 from .positions import solve
 from .rates import SINGULAR_TOL, solve_rates
-from .steps import CircleLine, Dyad
+from .steps import CircleLine, CylinderDyad, CylinderLine, Dyad
 
 N_COARSE = 7200
 #: dead points the text of check lists per driver (the JSON has them all)
@@ -57,10 +59,17 @@ def _assembled(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
 
 
 def _span(mech: Mechanism, driver: int) -> tuple[float, float]:
-    """Where a driver's input is searched: a turn [0, 2 pi), or +-2 x the sum of the link sizes for a slider."""
-    if mech.drivers[driver].kind == "angle":
+    """Where a driver's input is searched: a turn [0, 2 pi), +-2 x the sum of the link sizes for a slider;
+    for a cylinder's length its stroke and 1 % of it either side, or (0, 2 x that sum] without a stroke."""
+    d = mech.drivers[driver]
+    if d.kind == "angle":
         return 0.0, 2 * math.pi
+    if d.stroke is not None:
+        lo, hi = d.stroke
+        return lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo)
     span = 2 * sum(max(ln.length(a, b) for a in ln.joints for b in ln.joints) for ln in mech.links)
+    if d.kind == "cylinder":
+        return 0.0, span
     return -span, span
 
 
@@ -70,6 +79,8 @@ def input_range(mech: Mechanism, driver: int = 0, params: Params | None = None) 
     The other drivers stay at their reference-pose values.  An angle's intervals lie in
     [0, 360) degrees (or [0, 2 pi)), except that an interval running through 0 starts at
     a negative value; a full turn is ``[[0, 360]]``.  Boundaries are exact to ~1e-12 rad.
+    With numerical groups it is the interval over which the pose's mode goes on, found by
+    continuation, its ends to 1e-9 rad (:func:`linkagekit.groupmodes.continuation_intervals`).
     """
     params = prepare(mech) if params is None else params
     factor = mech.angle_to_rad if mech.drivers[driver].kind == "angle" else 1.0
@@ -77,9 +88,15 @@ def input_range(mech: Mechanism, driver: int = 0, params: Params | None = None) 
 
 
 def _assembly_intervals(mech: Mechanism, driver: int, params: Params) -> list[list[float]]:
-    """:func:`input_range` in radians (or length units): every boundary is the last assembled value."""
+    """:func:`input_range` in radians (or length units): every boundary is the last assembled value.
+
+    With numerical groups, the interval over which the pose's mode goes on, by continuation
+    (:func:`linkagekit.groupmodes.continuation_intervals`).
+    """
     d = mech.drivers[driver]
     lo, hi = _span(mech, driver)
+    if params.plan.numerical:
+        return continuation_intervals(params, driver, lo, hi, d.kind == "angle", N_COARSE)
     x = np.linspace(lo, hi, N_COARSE, endpoint=False) if d.kind == "angle" else np.linspace(lo, hi, N_COARSE + 1)
     ok = _assembled(params, driver, x)
     if ok.all():
@@ -280,6 +297,10 @@ class _State:
 
 
 def _state(params: Params, driver: int, x: np.ndarray) -> _State:
+    if not len(x):  # nothing to solve (a numerical group walks from one sample to the next: it needs one)
+        nj, ns = len(params.plan.joint_names), params.plan.n_signs
+        none = np.zeros((nj, 0), complex)
+        return _State(np.zeros(0, bool), none, none, none, np.zeros((ns, 0)), np.zeros((ns, 0)))
     pos = solve(params, _inputs(params, driver, x))
     nd = params.pose_inputs.shape[0]
     speed = np.zeros((nd, 1, 1))
@@ -446,10 +467,38 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
     elif isinstance(step, CircleLine):
         out["links"] = [step.link, step.block]
         out["detail"] = f"{step.link} square to the line of slider {step.slider} at {names[step.joint]}"
+    elif isinstance(step, CylinderDyad | CylinderLine):
+        cyl = params.plan.drivers[step.driver]
+        s = float(abs(st.z[step.joint, col] - st.z[step.k2 if isinstance(step, CylinderDyad) else step.center, col]))
+        lo, hi = float(nums[-2][0, 0]), float(nums[-1][0, 0])
+        other = step.link if isinstance(step, CylinderDyad) else step.block
+        out["links"] = [other]
+        out["cylinder"] = cyl
+        if math.isfinite(s) and min(abs(s - lo), abs(s - hi)) <= 1e-6 * s:
+            end = "shortest" if abs(s - lo) <= abs(s - hi) else "longest"
+            out["detail"] = f"cylinder '{cyl}' at the end of its stroke ({end})"
+        elif isinstance(step, CylinderDyad):
+            out["detail"] = f"cylinder '{cyl}' in line with {other} at {names[step.joint]}"
+        else:
+            out["detail"] = f"cylinder '{cyl}' square to the line of slider {step.slider} at {names[step.joint]}"
     else:  # a guide turned about a pivot (Pivot)
         out["links"] = [getattr(step, "on", "")]
         out["detail"] = f"guide '{getattr(step, 'on', '')}' at the end of its turn ({names[step.joint]})"
     return out
+
+
+def _group_end(params: Params) -> dict[str, Any]:
+    """The numerical group(s) whose mode ends at an end of range (no sign step is at its limit there)."""
+    names = params.plan.joint_names
+    groups = [st for st in params.plan.steps if isinstance(st, Group)]
+    joints = [names[j] for st in groups for j in st.joints]
+    links = [gl.name for st in groups for gl in st.links]
+    what = "group " + ", ".join(joints) if len(groups) == 1 else "the numerical groups"
+    return {
+        "joints": joints,
+        "links": links,
+        "detail": f"{what} at a singular position (its Jacobian loses rank: the pose's mode turns back)",
+    }
 
 
 def _wrap(a: np.ndarray | float) -> Any:
@@ -583,7 +632,7 @@ def _driver_checks(
     nr, nm = len(roots), len(mins)
     cols = np.arange(nr + nm)
     fval = fvals[np.concatenate([rrow, mrow]), cols] if nr + nm else np.zeros(0)
-    tol_x = 1e-9 * (total if d.kind == "slider" else 1.0)
+    tol_x = 1e-9 * (total if d.kind != "angle" else 1.0)
 
     def file_value(v: float) -> float:
         if cyclic:
@@ -599,7 +648,9 @@ def _driver_checks(
         margins = fin.margin[:, col]
         k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
         info = {"input": float(v / factor), "kind": "end of range"}
-        if plan.n_signs:
+        if plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
+            info.update(_group_end(params))
+        elif plan.n_signs:
             info.update(_step_links(params, k, fin, col))
         dead.append((v, info))
     # change points, each once: candidates sorted by input, a candidate within tol_x of the
@@ -778,6 +829,9 @@ class CheckReport:
     describe the first four-bar loop (None without one); ``fourbars`` lists every loop.
     ``dead_points`` maps each driver to the input values where the mechanism locks;
     ``dynamics`` holds the peak loads of a file with masses, gravity or loads.
+    ``numerical_joints`` are the joints placed by numerical groups (Newton continued from
+    the pose), ``closed_form_joints`` the others; with numerical groups ``input_ranges`` is
+    where the pose's mode goes on (by continuation) and ``solvable`` is ``"numerical"``.
     """
 
     name: str
@@ -797,6 +851,8 @@ class CheckReport:
     held_at: dict[str, dict[str, float]] = field(default_factory=dict)
     input_units: dict[str, str] = field(default_factory=dict)
     dynamics: dict[str, Any] | None = None
+    closed_form_joints: tuple[str, ...] = ()
+    numerical_joints: tuple[str, ...] = ()
 
     @property
     def input_range(self) -> list[list[float]]:
@@ -809,7 +865,9 @@ class CheckReport:
             "name": self.name,
             "dof": self.dof,
             "drivers": list(self.drivers),
-            "solvable": "closed-form",
+            "solvable": "numerical" if self.numerical_joints else "closed-form",
+            "closed_form_joints": list(self.closed_form_joints),
+            "numerical_joints": list(self.numerical_joints),
             "plan": list(self.plan),
             "signs": self.signs,
             "mirror_links": list(self.mirror_links),
@@ -926,6 +984,8 @@ def check(mech: Mechanism) -> CheckReport:
         held_at=held_at,
         input_units={d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers},
         dynamics=peak_loads(mech) if mech.has_dynamics else None,
+        closed_form_joints=tuple(j for i, j in enumerate(names) if i not in plan.numerical),
+        numerical_joints=tuple(names[i] for i in plan.numerical),
         **extra,
     )
 
@@ -960,9 +1020,17 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
     def where(at: Mapping[str, Any]) -> str:
         return ", ".join(inp(k, v) for k, v in at.items())
 
+    numerical = list(rep.get("numerical_joints") or [])
+    if numerical:
+        closed = list(rep.get("closed_form_joints") or [])
+        how = (
+            f"solved numerically for {', '.join(numerical)} (Newton-Raphson, continued from the pose), "
+            f"in closed form for {', '.join(closed) or 'no other joint'}."
+        )
+    else:
+        how = f"solved {'in closed form' if rep.get('solvable') == 'closed-form' else rep.get('solvable', '')}."
     lines = [
-        f"{name}: valid; {rep['dof']} degree(s) of freedom, driven by {', '.join(drivers)}; "
-        f"solved {'in closed form' if rep.get('solvable') == 'closed-form' else rep.get('solvable', '')}.".rstrip(),
+        f"{name}: valid; {rep['dof']} degree(s) of freedom, driven by {', '.join(drivers)}; {how}".rstrip(),
         "Solve plan:",
         *("  " + line for line in rep.get("plan", [])),
     ]
@@ -982,6 +1050,11 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         if held.get(driver):
             line += " (" + ", ".join(f"{inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
         lines.append(line)
+        if numerical:
+            lines.append(
+                "  in the pose's mode, by continuation from the pose (ends refined by bisection through the solver); "
+                "other modes: linkagekit modes"
+            )
         if driver in dead_points:
             dps = dead_points[driver]
             lines.append(f"Dead points of {driver} (where the mechanism locks): " + ("none" if not dps else ""))
@@ -1070,7 +1143,26 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
 
 @dataclass(frozen=True)
 class Mode:
-    """One assembly mode (and mirror choice) at one input."""
+    """One assembly mode (and mirror choice) at one input.
+
+    Attributes
+    ----------
+    signs, mirrors : dict
+        The closed-form steps' signs (and the mirror flags, when asked for).
+    assembled, reference : bool
+        Whether it assembles; whether it is the mode the solver gives at this input (the
+        pose's signs, and each numerical group as continued from the pose).
+    joints : dict of str to (x, y) or None
+        Every joint's position (file units).
+    same_as : int or None
+        The first mode with the same positions.
+    groups : dict or None
+        With numerical groups: for each (named by its joints, ``"J1,J2,J3"``) ``{"index":
+        i, "of": n}``, its mode among the ``n`` real modes it has there (sorted by the angle
+        of the link the enumeration drives; index -1 when it has none or they were not
+        enumerated).  Signs alone do not tell such modes apart: choose one by its positions,
+        :meth:`mechanism`.
+    """
 
     signs: dict[str, int]
     mirrors: dict[str, int] | None
@@ -1078,11 +1170,31 @@ class Mode:
     reference: bool
     joints: dict[str, tuple[float, float] | None]
     same_as: int | None = None
+    groups: dict[str, dict[str, int]] | None = None
+
+    def mechanism(self, mech: Mechanism) -> Mechanism:
+        """``mech`` in this mode: its reference pose moved to this mode's positions (:meth:`Mechanism.with_pose`).
+
+        Every dimension is read off the new pose (exact to the mode's accuracy, ~1e-12
+        relative), and the pose picks the mode, so analysing the result at this input gives
+        these positions back and follows this mode from there (numerical groups continue
+        from it; closed-form steps keep its signs).
+
+        Raises
+        ------
+        InputError
+            The mode does not assemble.
+        """
+        if not self.assembled:
+            raise InputError("this mode does not assemble: it has no positions to make a pose of")
+        return mech.with_pose({j: p for j, p in self.joints.items() if p is not None})
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"signs": self.signs}
         if self.mirrors is not None:
             out["mirrors"] = self.mirrors
+        if self.groups is not None:
+            out["groups"] = self.groups
         out["assembled"] = self.assembled
         out["reference"] = self.reference
         if self.same_as is not None:
@@ -1098,18 +1210,27 @@ class Modes:
     input: dict[str, float]
     modes: tuple[Mode, ...]
     distinct: int
+    notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out: dict[str, Any] = {
             "format": "linkagekit-modes/1",
             "input": self.input,
             "distinct": self.distinct,
             "modes": [m.to_dict() for m in self.modes],
         }
+        if self.notes:
+            out["notes"] = list(self.notes)
+        return out
 
 
 def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     """Every assembly mode (and with ``mirrors`` every mirror image) at one input.
+
+    Each combination of the closed-form steps' signs is one mode; a numerical group
+    multiplies it by every real mode the group has there, found by
+    :func:`linkagekit.groupmodes.enumerate_modes` (see docs/method.md, "Every mode of a
+    numerical group").
 
     Parameters
     ----------
@@ -1159,41 +1280,53 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     combos = all_sign_combinations(k + mm)
     signs, mirror_flags = combos[:k], combos[k:] < 0
     n = combos.shape[1]
-    q = np.repeat(q0[:, None, None], n, axis=2)
-    sol = solve(params, q, signs[:, None, :], mirror_flags[:, None, :] if mm else None)
-    z = sol.z[:, 0]
-    assembled = sol.assembled[0]
-    reference = np.all(signs == params.signs[:, :1], axis=0)
-    if mm:
-        reference &= ~mirror_flags.any(axis=0)
-    out: list[Mode] = []
     tol = 1e-9 * mech.length_scale
+    groups: list[tuple[str, np.ndarray, np.ndarray]] = []  # label, mode index and count per row
+    notes: tuple[str, ...] = ()
+    if plan.numerical:  # every mode of each numerical group, for each combination (groupmodes.py)
+        table = enumerate_modes(mech, params, q0, signs, mirror_flags if mm else None)
+        z, assembled, col, notes = table.z, table.assembled, table.column, table.notes
+        for g, gi in enumerate(table.groups):
+            label = ",".join(names[j] for j in plan.steps[gi].joints)  # type: ignore[attr-defined]
+            groups.append((label, table.group_mode[g], table.group_count[g]))
+    else:
+        q = np.repeat(q0[:, None, None], n, axis=2)
+        sol = solve(params, q, signs[:, None, :], mirror_flags[:, None, :] if mm else None)
+        z, assembled, col = sol.z[:, 0], sol.assembled[0], np.arange(n)
+    reference = np.all(signs[:, col] == params.signs[:, :1], axis=0)
+    if mm:
+        reference &= ~mirror_flags[:, col].any(axis=0)
+    if plan.numerical:  # and each group in the mode the solver continues from the pose to this input
+        cont = solve(params, q0[:, None, None]).z[list(plan.numerical), 0, 0]
+        reference &= np.all(np.abs(z[list(plan.numerical)] - cont[:, None]) <= tol, axis=0)
+    out: list[Mode] = []
     # distinct configurations: bucket by positions rounded to 1e-6 of the size, then confirm
     # within the bucket to `tol` (two configurations within tol round alike but for a 1e-3 chance
     # at a rounding boundary, which only splits a duplicate, never merges two modes)
     keys = np.round(np.concatenate([z.real, z.imag]) / (1e3 * tol)).T
     buckets: dict[bytes, list[int]] = {}
     firsts: list[int] = []  # the first combination of each distinct assembled configuration
-    for c in range(n):
-        zc = z[:, c]
+    for r in range(len(col)):
+        zc, c = z[:, r], col[r]
         same = None
-        if assembled[c]:
-            bucket = buckets.setdefault(keys[c].tobytes(), [])
+        if assembled[r]:
+            bucket = buckets.setdefault(keys[r].tobytes(), [])
             same = next((f for f in bucket if np.all(np.abs(z[:, f] - zc) <= tol)), None)
             if same is None:
-                bucket.append(c)
-                firsts.append(c)
+                bucket.append(r)
+                firsts.append(r)
         out.append(
             Mode(
                 signs={j: int(signs[i, c]) for i, j in enumerate(plan.sign_joints)},
                 mirrors={ln: int(combos[k + i, c]) for i, ln in enumerate(plan.mirror_links)} if mm else None,
-                assembled=bool(assembled[c]),
-                reference=bool(reference[c]),
+                assembled=bool(assembled[r]),
+                reference=bool(reference[r]),
                 joints={
                     j: ((float(zc[i].real), float(zc[i].imag)) if np.isfinite(zc[i]) else None)
                     for i, j in enumerate(names)
                 },
                 same_as=same,
+                groups={lab: {"index": int(ix[r]), "of": int(cnt[r])} for lab, ix, cnt in groups} if groups else None,
             )
         )
-    return Modes(inp, tuple(out), len(firsts))
+    return Modes(inp, tuple(out), len(firsts), notes)

@@ -241,7 +241,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="positions, velocities, accelerations (and forces) over a sweep of the inputs",
         description="Positions, velocities and accelerations (and forces, when the file gives masses, "
         "gravity or loads) over a sweep of the inputs. Input values are in the file's angle unit "
-        "(length unit for a slider driver); with several drivers give NAME=... per driver.",
+        "(length unit for a slider's displacement or a cylinder's length); with several drivers give NAME=... "
+        "per driver.",
         **common,
     )
     file_argument(p)
@@ -259,13 +260,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--speed",
         action="append",
         metavar="W",
-        help="input speed, rad/s (length unit/s for a slider); NAME=W per driver; default: the file's",
+        help="input speed, rad/s (length unit/s for a slider or cylinder); NAME=W per driver; default: the file's",
     )
     p.add_argument(
         "--acceleration",
         action="append",
         metavar="A",
-        help="input acceleration, rad/s² (length unit/s² for a slider); NAME=A per driver; default: the file's",
+        help="input acceleration, rad/s² (length unit/s² for a slider or cylinder); NAME=A per driver; "
+        "default: the file's",
     )
     p.add_argument(
         "--format", choices=("table", "csv", "json"), default="table", help="output format (default: %(default)s)"
@@ -722,7 +724,8 @@ def modes_table(
     """The ``modes`` table of a :meth:`Modes.to_dict` document: one row per mode.
 
     Columns ``#``, ``signs`` (``D+ E-``), ``mirrors`` when asked for (``-`` when the
-    mechanism has no link to mirror), ``assembled`` (``yes (pose)`` for the reference
+    mechanism has no link to mirror), ``group modes`` with numerical groups (``2/6``: the
+    second of the six modes of a group there), ``assembled`` (``yes (pose)`` for the reference
     pose's mode, ``yes (same as #i)`` for a repeated configuration), then ``x`` and ``y``
     of every moving joint.
     """
@@ -730,6 +733,10 @@ def modes_table(
 
     def signs(d: Mapping[str, int] | None) -> str:
         return " ".join(f"{k}{'+' if v > 0 else '-'}" for k, v in d.items()) if d else "-"
+
+    def group_modes(d: Mapping[str, Mapping[str, int]] | None) -> str:
+        parts = [f"{g['index'] + 1}/{g['of']}" if g["index"] >= 0 else "-" for g in (d or {}).values()]
+        return " ".join(parts) or "-"
 
     def state(mo: Mapping[str, Any]) -> str:
         if not mo["assembled"]:
@@ -744,6 +751,8 @@ def modes_table(
     ]
     if mirrors:
         fixed.append(Column("mirrors", [signs(m.get("mirrors")) for m in modes], True))
+    if any(m.get("groups") for m in modes):  # numerical groups: which of their modes, "2/6"
+        fixed.append(Column("group modes", [group_modes(m.get("groups")) for m in modes], True))
     fixed.append(Column("assembled", [state(m) for m in modes], True))
     coords = [xy for m in modes for xy in m["joints"].values() if xy is not None]
     scale = max((abs(v) for xy in coords for v in xy if math.isfinite(v)), default=0.0)
@@ -760,6 +769,7 @@ def modes_table(
     lines = render_tables(title, fixed, groups, width) if groups else [*_wrap(title, width), *render_table(fixed)]
     distinct = doc.get("distinct", sum(1 for m in modes if m["assembled"] and "same_as" not in m))
     lines += ["", f"{distinct} distinct assembled configuration(s) of {len(modes)}."]
+    lines += [f"Note: {note}" for note in doc.get("notes", [])]
     return "\n".join(lines) + "\n"
 
 

@@ -17,7 +17,11 @@ The unknowns, written once each and entering two links with opposite signs:
   direction now) at its ``through`` joint and the moment ``M`` of the guide on the block
   (2 unknowns; frictionless, so nothing along ``E``).
 * a revolute driver: the torque ``T`` on its link, the frame taking ``-T`` (1 unknown); a
-  slider driver: the force along ``E`` on the block, the guide taking its opposite.
+  slider driver: the force along ``E`` on the block, the guide taking its opposite; a
+  cylinder (a massless two-force member): its force ``F`` along its axis, ``+F u`` on the
+  link of its first end and ``-F u`` on that of its second (``u`` the unit vector from the
+  second end to the first), so ``F > 0`` pushes its ends apart.  At a joint of several
+  links it acts on the first of them, the pin's carrier.
 
 With as many drivers as degrees of freedom this gives a square system of ``3 (n_links - 1)``
 equations: seed 001's 15x15 system for a Stephenson six-bar is the special case (see
@@ -72,7 +76,7 @@ class Forces:
 
     reactions: tuple[Reaction, ...]
     driver_torque: dict[str, np.ndarray]  # N*m, counter-clockwise positive, on the driver's link
-    driver_force: dict[str, np.ndarray]  # N, along the slide direction, on the block
+    driver_force: dict[str, np.ndarray]  # N: along the slide direction, on the block; a cylinder's push (> 0 extends)
     input_power: np.ndarray  # W: sum of torque * omega and force * slide speed
     shaking_force: np.ndarray  # N, complex: resultant force of the mechanism on the frame
     shaking_moment: np.ndarray  # N*m: its moment about the origin of the file's frame
@@ -302,11 +306,20 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
                 entries.append((row[link] + 2, col + 1, sign))
         labels.append(("slider", sl.through, sl.link, sl.on, str(k)))
         col += 2
+    cyl_dir: dict[str, np.ndarray] = {}
     for d in mech.drivers:
         if d.kind == "angle":
             if d.link != "ground":
                 entries.append((row[d.link] + 2, col, 1.0))
             labels.append(("torque", d.name))
+        elif d.kind == "cylinder":  # a massless two-force member: +F u on its first end, -F u on its second
+            assert d.ends is not None
+            za, zb = z_si[d.ends[0]], z_si[d.ends[1]]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                cyl_dir[d.name] = (za - zb) / np.abs(za - zb)  # from the second end to the first
+            put_force(mech.links_of(d.ends[0])[0], col, za, cyl_dir[d.name], +1.0)
+            put_force(mech.links_of(d.ends[1])[0], col, zb, cyl_dir[d.name], -1.0)
+            labels.append(("cylinder", d.name))
         else:
             assert d.slider is not None
             sl = mech.sliders[d.slider]
@@ -369,6 +382,16 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
             torque[lab[1]] = x[:, col]
             shaking_m -= x[:, col]
             col += 1
+        elif lab[0] == "cylinder":
+            d = next(dd for dd in mech.drivers if dd.name == lab[1])
+            assert d.ends is not None
+            push[lab[1]] = x[:, col]
+            for end, sign in ((d.ends[0], 1.0), (d.ends[1], -1.0)):
+                if mech.links_of(end)[0] == "ground":  # the frame holds this end of the cylinder
+                    fe = sign * x[:, col] * cyl_dir[d.name]
+                    shaking += fe
+                    shaking_m += cross(z_si[end], fe)
+            col += 1
         else:
             d = next(dd for dd in mech.drivers if dd.name == lab[1])
             assert d.slider is not None
@@ -382,7 +405,7 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
     power = np.zeros(n)
     for i, d in enumerate(mech.drivers):
         speed = np.broadcast_to(km.speeds[i], (n,))
-        power += torque[d.name] * speed if d.kind == "angle" else push[d.name] * speed * si
+        power += torque[d.name] * speed if d.kind == "angle" else push[d.name] * speed * si  # a cylinder: F ds/dt
     bad = ~good
     if bad.any():
         shaking[bad] = complex(np.nan, np.nan)

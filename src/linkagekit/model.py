@@ -202,14 +202,19 @@ class Sweep:
 
 @dataclass(frozen=True)
 class Driver:
-    """One input: a link turned about a pivot (``kind='angle'``) or a slider pushed.
+    """One input: a link turned about a pivot (``kind='angle'``), a slider pushed, or a cylinder.
 
     ``speed`` and ``acceleration`` are rad/s and rad/s^2 for an angle driver (whatever the
-    angle unit), length-unit/s and length-unit/s^2 for a slider driver.
+    angle unit), length-unit/s and length-unit/s^2 for a slider or cylinder driver.
+
+    A cylinder (``kind='cylinder'``) is a linear actuator between the joints ``ends``
+    (on two different links): it is not a link, it imposes ``|A - B| = s`` with ``s`` its
+    input (an absolute length, file unit); ``stroke`` ``(min, max)`` bounds ``s`` (samples
+    outside do not assemble).  Its ``link`` is ``""``.
     """
 
     name: str
-    kind: Literal["angle", "slider"]
+    kind: Literal["angle", "slider", "cylinder"]
     link: str
     sweep: Sweep
     speed: float = 1.0
@@ -217,11 +222,21 @@ class Driver:
     pivot: str | None = None
     toward: str | None = None
     slider: int | None = None
+    ends: tuple[str, str] | None = None
+    stroke: tuple[float, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The driver as the file writes it."""
         out: dict[str, Any]
-        if self.kind == "slider":
+        if self.kind == "cylinder":
+            assert self.ends is not None
+            out = {"cylinder": list(self.ends)}
+            if self.name != cylinder_name(*self.ends):
+                out["name"] = self.name
+            out["lengths"] = self.sweep.to_dict()
+            if self.stroke is not None:
+                out["stroke"] = [float(self.stroke[0]), float(self.stroke[1])]
+        elif self.kind == "slider":
             out = {"slider": self.slider, "displacements": self.sweep.to_dict()}
         else:
             out = {"link": self.link, "pivot": self.pivot, "toward": self.toward, "angles": self.sweep.to_dict()}
@@ -230,6 +245,11 @@ class Driver:
         if self.acceleration != 0.0:
             out["acceleration"] = float(self.acceleration)
         return out
+
+
+def cylinder_name(a: str, b: str) -> str:
+    """The default name of a cylinder driver between joints ``a`` and ``b``: ``"a-b"``."""
+    return f"{a}-{b}"
 
 
 @dataclass(frozen=True)
@@ -608,6 +628,12 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
     drivers: list[Driver] = []
     for i, d in enumerate(spec.drivers):
         key = f"drivers[{i}]"
+        if d.cylinder is not None:
+            drivers.append(_cylinder_driver(d, key, joints, links, fail, scale))
+            continue
+        for attr in ("name", "lengths", "stroke"):
+            if getattr(d, attr) is not None:
+                raise fail(f"{key}.{attr}", "belongs to a cylinder driver (`cylinder: [A, B]`)")
         if d.slider is not None:
             if not 0 <= d.slider < len(sliders):
                 raise fail(f"{key}.slider", f"no slider with index {d.slider} (there are {len(sliders)})")
@@ -667,6 +693,8 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
     names = [d.name for d in drivers]
     for n in names:
         if names.count(n) > 1:
+            if any(d.kind == "cylinder" and d.name == n for d in drivers):
+                raise fail("drivers", f"two drivers are named '{n}' (give the cylinder another `name`)")
             raise fail("drivers", f"link '{n}' is driven twice")
 
     loads: list[Load] = []
@@ -696,7 +724,10 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
         raise fail(
             "drivers",
             f"{len(drivers)} driver(s) given, but the mechanism has {dof} degree(s) "
-            f"of freedom (Gruebler: 3*({n_links}-1) - 2*({pins} pins + {len(sliders)} sliders) = {dof})",
+            f"of freedom (Gruebler: 3*({n_links}-1) - 2*({pins} pins + {len(sliders)} sliders) = {dof})"
+            + (
+                "; a cylinder counts as one driver, not as a link" if any(d.kind == "cylinder" for d in drivers) else ""
+            ),
         )
 
     return Mechanism(
@@ -711,6 +742,74 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
         loads=tuple(loads),
         source=src,
         description=spec.description,
+    )
+
+
+def _cylinder_driver(
+    d: Any, key: str, joints: dict[str, complex], links: list[Link], fail: Any, scale: float
+) -> Driver:
+    """A cylinder driver ``{cylinder: [A, B], lengths: {...}, stroke: [min, max], name: ...}``, checked."""
+    from .schema import SweepSpec
+
+    extra = [k for k in ("link", "pivot", "toward", "angles", "slider", "displacements") if getattr(d, k) is not None]
+    if extra:
+        raise fail(f"{key}.{extra[0]}", "a cylinder driver takes `lengths`, `stroke`, `name`, `speed`, `acceleration`")
+    assert d.cylinder is not None
+    a, b = d.cylinder
+    for i, j in enumerate((a, b)):
+        if j not in joints:
+            raise fail(f"{key}.cylinder[{i}]", f"unknown joint '{j}' (not under joints)")
+    if a == b:
+        raise fail(f"{key}.cylinder", f"both ends are joint '{a}': a cylinder joins two different joints")
+    common = next((ln.name for ln in links if a in ln.joints and b in ln.joints), None)
+    if common is not None:
+        raise fail(
+            f"{key}.cylinder",
+            f"joints '{a}' and '{b}' are both on link '{common}': a cylinder between two joints of one link "
+            f"cannot move it (attach its ends to two different links)",
+        )
+    length = abs(joints[b] - joints[a])
+    if length <= LENGTH_RTOL * scale:
+        raise fail(f"{key}.cylinder", f"joints '{a}' and '{b}' are at one spot in the pose: a cylinder needs a length")
+    stroke = None
+    if d.stroke is not None:
+        lo, hi = d.stroke
+        if lo <= 0:
+            raise fail(f"{key}.stroke", f"[min, max] with a positive min, got [{lo:g}, {hi:g}]")
+        if hi <= lo:
+            raise fail(f"{key}.stroke", f"[min, max] with min < max, got [{lo:g}, {hi:g}]")
+        if not lo * (1 - 1e-9) <= length <= hi * (1 + 1e-9):
+            raise fail(
+                f"{key}.stroke", f"the pose has the cylinder {length:.9g} long, outside its stroke [{lo:g}, {hi:g}]"
+            )
+        stroke = (lo, hi)
+    if d.lengths is not None:
+        sw = d.lengths
+    elif stroke is not None:  # the whole stroke in 100 steps
+        sw = SweepSpec(start=stroke[0], stop=stroke[1], step=(stroke[1] - stroke[0]) / 100)
+    else:  # the pose's length only (as a slider's default is its pose)
+        sw = SweepSpec(start=length, stop=length, step=1.0)
+    sweep = _sweep(sw, f"{key}.lengths", fail)
+    first, last = sweep.start, sweep.start + sweep.step * (sweep.count() - 1)
+    if min(first, last) <= 0:
+        raise fail(f"{key}.lengths", f"a cylinder's length must be positive, the sweep goes to {min(first, last):g}")
+    if stroke is not None and not (
+        stroke[0] * (1 - 1e-9) <= min(first, last) and max(first, last) <= stroke[1] * (1 + 1e-9)
+    ):
+        raise fail(
+            f"{key}.lengths",
+            f"{first:g} to {last:g} leaves the stroke [{stroke[0]:g}, {stroke[1]:g}] (keep the file's sweep "
+            f"inside it; inputs asked for outside it are flagged as not assembled)",
+        )
+    return Driver(
+        d.name if d.name is not None else cylinder_name(a, b),
+        "cylinder",
+        "",
+        sweep,
+        d.speed,
+        d.acceleration,
+        ends=(a, b),
+        stroke=stroke,
     )
 
 

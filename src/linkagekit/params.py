@@ -84,7 +84,8 @@ class Params:
     steps : tuple
         ``steps[i]`` is the numbers tuple of ``plan.steps[i]`` (see each step's ``numbers``).
     pose_inputs : ndarray, shape (n_drivers, D)
-        Driver values at each design's pose (radians, or length units for a slider).
+        Driver values at each design's pose (radians; length units for a slider's displacement
+        and a cylinder's length).
     signs : ndarray, shape (n_signs, D)
         Each design's reference assembly mode (+1/-1 per sign step).
     valid : ndarray of bool, shape (D,)
@@ -189,15 +190,22 @@ class _Shapes:
     def direction(self, slider: int) -> np.ndarray:
         return self.directions[slider]
 
+    def stroke(self, driver: int) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.mech.drivers[driver].stroke or (0.0, np.inf)
+        return np.full((self.D, 1), lo), np.full((self.D, 1), hi)
+
 
 def _pose_inputs(mech: Mechanism, plan: Plan, zpose: np.ndarray) -> np.ndarray:
-    """Driver values at the pose, (n_drivers, D): angle of pivot -> toward; slider displacement 0."""
+    """Driver values at the pose, (n_drivers, D): angle of pivot -> toward; slider displacement 0; cylinder length."""
     idx = {n: i for i, n in enumerate(plan.joint_names)}
     rows = []
     for d in mech.drivers:
         if d.kind == "angle":
             assert d.pivot is not None and d.toward is not None
             rows.append(np.angle(zpose[idx[d.toward]] - zpose[idx[d.pivot]]))
+        elif d.kind == "cylinder":
+            assert d.ends is not None
+            rows.append(np.abs(zpose[idx[d.ends[1]]] - zpose[idx[d.ends[0]]]))
         else:
             rows.append(np.zeros(zpose.shape[1]))
     return np.array(rows, float).reshape(len(mech.drivers), zpose.shape[1])

@@ -8,7 +8,10 @@ without solving anything: a greedy search for a triangulation order,
 1. start from the ground joints;
 2. repeatedly place every link with two known joints (``Place``), carry every link with
    one known joint whose rotation is known (``Carry``), apply every driver whose pivot or
-   guide is known (``Crank``, ``SliderDrive``);
+   guide is known (``Crank``, ``SliderDrive``) and every cylinder with one end known (its
+   other end on a circle of the cylinder's length: ``CylinderDyad``, ``CylinderLine``, each
+   reading one sign); slide a yoke whose guide is placed until a block with a known joint
+   fits its slot (``LineLine``: two lines, no sign);
 3. otherwise find one joint of two links that each have one known joint (``Dyad``: two
    circles), of a slider block and a link (``CircleLine``), or turn a guide about its one
    known joint through a known block joint (``Pivot``); each of these reads one sign.
@@ -36,7 +39,22 @@ from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 from .errors import MechanismFileError, NotSolvableError
-from .steps import Carry, CircleLine, Crank, Dyad, Ground, Pivot, Place, SliderDrive, Step, is_sign_step
+from .group import Group, GroupLink
+from .steps import (
+    Carry,
+    CircleLine,
+    Crank,
+    CylinderDyad,
+    CylinderLine,
+    Dyad,
+    Ground,
+    LineLine,
+    Pivot,
+    Place,
+    SliderDrive,
+    Step,
+    is_sign_step,
+)
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -73,6 +91,11 @@ class Plan:
     sign_labels: tuple[str, ...] = ()
 
     @property
+    def numerical(self) -> tuple[int, ...]:
+        """The joints placed by numerical groups (Newton), in step order."""
+        return tuple(j for st in self.steps if isinstance(st, Group) for j in st.joints)
+
+    @property
     def unwritten(self) -> tuple[int, ...]:
         """Joints no step places (none for a complete plan): the solver leaves them NaN."""
         written = {j for st in self.steps for j in st.writes()}
@@ -99,10 +122,14 @@ class Plan:
 
 
 @lru_cache(maxsize=256)
-def make_plan(mech: Mechanism) -> Plan:
+def make_plan(mech: Mechanism, numerical: bool = False) -> Plan:
     """Find a triangulation order; raise a located error when there is none.
 
-    Cached per mechanism (mechanisms are immutable and hashable).
+    Where no closed-form step applies, the smallest group of joints fixed together by their
+    links is placed numerically (:class:`~linkagekit.group.Group`). ``numerical=True``
+    prefers such groups to the circle-circle steps (a cross-check of the closed form, and
+    ``analyze(..., method="numerical")``). Cached per mechanism (mechanisms are immutable
+    and hashable).
     """
     names = tuple(mech.joints)
     idx = {n: i for i, n in enumerate(names)}
@@ -114,7 +141,8 @@ def make_plan(mech: Mechanism) -> Plan:
     placed: set[str] = {GROUND}
     steps: list[Step] = [Ground(tuple(idx[j] for j in links[GROUND].joints))]
     rot_known: set[str] = {GROUND}
-    pending = list(range(len(mech.drivers)))
+    pending = [i for i, d in enumerate(mech.drivers) if d.kind != "cylinder"]
+    cylinders = [i for i, d in enumerate(mech.drivers) if d.kind == "cylinder"]  # not in `pending`: see below
     mirror_links: list[str] = []
     slider_of = {s.link: (i, s) for i, s in enumerate(mech.sliders)}
     labels: list[str] = []
@@ -192,9 +220,39 @@ def make_plan(mech: Mechanism) -> Plan:
                     acted = True
         if acted:
             continue
-        found = _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, len(labels))
+        for ci in list(cylinders):  # a cylinder acts once one end is known: a circle of its length about it
+            cyl = _cylinder_step(mech, idx, known, placed, slider_of, anchors, ci, len(labels))
+            if cyl is not None:
+                steps.append(cyl[0])
+                known.add(cyl[1])
+                labels.append(cyl[2])
+                cylinders.remove(ci)
+                acted = True
+                break  # let the links it fixes be placed first (another cylinder may then be in conflict)
+        if acted:
+            continue
+        yoke = _line_line_step(mech, idx, known, placed, slider_of, anchors)
+        if yoke is not None:
+            steps.append(yoke)
+            known.update(links[yoke.yoke].joints)
+            placed.add(yoke.yoke)
+            rot_known.add(yoke.yoke)
+            anchors[yoke.yoke] = yoke.joints[0]
+            continue
+        group = _find_group(mech, idx, known, placed, slider_of, pending) if numerical else None
+        found = None if group else _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, len(labels))
         if found is None:
-            break
+            if group is None:
+                group = _find_group(mech, idx, known, placed, slider_of, pending)
+            if group is None:
+                break
+            steps.append(group)
+            known.update(names[j] for j in group.joints)
+            for gl in group.links:
+                placed.add(gl.name)
+                rot_known.add(gl.name)
+                anchors[gl.name] = gl.joints[0]
+            continue
         step, newly_known, newly_rot, label = found
         steps.append(step)
         known.update(newly_known)
@@ -215,12 +273,16 @@ def make_plan(mech: Mechanism) -> Plan:
     if missing:
         what = ", ".join(missing)
         raise NotSolvableError(
-            f"{mech.source}: no triangulation order places {what}: this mechanism needs the numerical solver "
-            f"(an Assur group of class 3 or more, or a slider arrangement not handled in closed form), "
-            f"which linkagekit does not have yet"
+            f"{mech.source}: no triangulation order places {what}, and no numerical group does: the numerical "
+            f"solver takes groups of revolute joints only (a slider or a cylinder inside an Assur group of "
+            f"class 3 or more is not handled yet)"
         )
     needs = {link for st in steps for link in st.rotation_needs()}
     steps = [replace(st, keep_rotation=True) if isinstance(st, Place) and st.link in needs else st for st in steps]
+    steps = [
+        replace(st, keep_rotation=tuple(g.name for g in st.links if g.name in needs)) if isinstance(st, Group) else st
+        for st in steps
+    ]
     return Plan(
         names,
         tuple(steps),
@@ -231,6 +293,79 @@ def make_plan(mech: Mechanism) -> Plan:
         mirror_links=tuple(mirror_links),
         sign_labels=tuple(labels),
     )
+
+
+def _cylinder_step(  # type: ignore[no-untyped-def]
+    mech, idx, known, placed, slider_of, anchors, ci, n_signs
+) -> tuple[Step, str, str] | None:
+    """The step of cylinder driver ``ci`` once one of its ends is known: (step, joint it places, sign label).
+
+    Its free end is found on a circle of the cylinder's length about the known end, crossed
+    with a circle about a known joint of a link through the free end (:class:`CylinderDyad`)
+    or with the line of a slider block whose guide is placed (:class:`CylinderLine`).  Both
+    ends known already is a conflict: the rest of the mechanism fixes the cylinder's length.
+    """
+    d = mech.drivers[ci]
+    a, b = d.ends
+    if a in known and b in known:
+        raise MechanismFileError(
+            f"{mech.source}: drivers[{ci}]: both ends of cylinder '{d.name}' ({a}, {b}) are already fixed by the "
+            f"rest of the mechanism, so it cannot set their distance; the drivers do not match its freedom"
+        )
+    for end, other in ((b, a), (a, b)):
+        if other not in known:
+            continue
+        anchored = {
+            next(j for j in ln.joints if j in known): ln.name
+            for ln in mech.links
+            if ln.name not in placed and end in ln.joints and any(j in known for j in ln.joints)
+        }
+        if len(anchored) >= 2:  # two links through `end` with known joints: a triangle, rigid without it
+            fixers = " and ".join(f"'{n}'" for n in anchored.values())
+            raise MechanismFileError(
+                f"{mech.source}: drivers[{ci}]: links {fixers} already fix '{end}', the end of cylinder "
+                f"'{d.name}', so it cannot set its length; the drivers do not match the mechanism's freedom"
+            )
+        for ln in mech.links:
+            if ln.name in placed or end not in ln.joints:
+                continue
+            k = next((j for j in ln.joints if j in known), None)
+            if k is not None:
+                step: Step = CylinderDyad(idx[end], idx[k], idx[other], ln.name, ci, n_signs)
+                return step, end, f"{end}: left of {k}->{other}"
+        for ln in mech.links:
+            if ln.name in placed or end not in ln.joints or ln.name not in slider_of:
+                continue
+            si, s = slider_of[ln.name]
+            if s.on in placed and not any(j in known for j in ln.joints):
+                step = CylinderLine(idx[end], idx[other], si, s.link, s.on, anchors.get(s.on), ci, n_signs)
+                return step, end, f"{end}: ahead of {other} along slider {si}"
+    return None
+
+
+def _line_line_step(mech, idx, known, placed, slider_of, anchors) -> LineLine | None:  # type: ignore[no-untyped-def]
+    """A yoke (a slider block with no known joint, on a placed guide) fixed by a block with a known joint sliding in it.
+
+    The yoke's position along its guide and the block's along the yoke are the two unknowns
+    of two lines crossing (:class:`LineLine`).  Parallel slides cannot fix the yoke: refused.
+    """
+    links = {ln.name: ln for ln in mech.links}
+    for s2i, s2 in enumerate(mech.sliders):  # the block, sliding in the yoke
+        yoke = s2.on
+        if yoke in placed or yoke not in slider_of or s2.link in placed:
+            continue
+        pins = [j for j in links[s2.link].joints if j in known]
+        s1i, s1 = slider_of[yoke]
+        if not pins or s1.on not in placed or any(j in known for j in links[yoke].joints):
+            continue
+        if abs((s1.direction.conjugate() * s2.direction).imag) <= 1e-9:
+            raise MechanismFileError(
+                f"{mech.source}: sliders[{s2i}]: its direction is parallel to that of slider {s1i}, which carries its "
+                f"guide '{yoke}': the block cannot fix where '{yoke}' is along its slide"
+            )
+        yoke_joints = tuple(idx[j] for j in links[yoke].joints)
+        return LineLine(yoke, s1.on, anchors.get(s1.on), s1i, s2i, idx[pins[0]], yoke_joints)
+    return None
 
 
 def _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, n_signs):  # type: ignore[no-untyped-def]
@@ -270,4 +405,51 @@ def _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, n_s
         if bj and len(oj) == 1:
             st = Pivot(si, s.on, idx[oj[0]], idx[bj[0]], n_signs)
             return st, set(), {s.on}, f"{bj[0]}: ahead of {oj[0]} along slider {si}"
+    return None
+
+
+#: at most this many unknown joints are searched for the smallest numerical group (2^n subsets)
+MAX_GROUP_SEARCH = 16
+
+
+def _find_group(mech, idx, known, placed, slider_of, pending):  # type: ignore[no-untyped-def]
+    """The smallest set of unknown joints that the links among them fix (2 equations per joint), or None.
+
+    A link counts ``2 n - 3`` equations (its rigidity, natural coordinates; see
+    :mod:`linkagekit.group`) once all its joints are known or in the set. Sets are tried by
+    size, then in file order, so the plan is deterministic. Slider blocks and guides, and
+    links a pending driver turns, are left to the closed-form steps.
+    """
+    from itertools import combinations
+
+    unknown = [j for j in mech.joints if j not in known]
+    if not unknown:
+        return None
+    driven = {mech.drivers[di].link for di in pending}
+    sliding = set(slider_of) | {s.on for s in mech.sliders}
+    free = [ln for ln in mech.links if ln.name not in placed and ln.name not in driven and ln.name not in sliding]
+    sizes = range(1, len(unknown) + 1) if len(unknown) <= MAX_GROUP_SEARCH else [len(unknown)]
+    for size in sizes:
+        for subset in combinations(unknown, size):
+            inside = set(subset)
+            links = [
+                ln
+                for ln in free
+                if len(ln.joints) >= 2
+                and any(j in inside for j in ln.joints)
+                and all(j in inside or j in known for j in ln.joints)
+            ]
+            if sum(2 * len(ln.joints) - 3 for ln in links) != 2 * size:
+                continue
+            slots = {j: i for i, j in enumerate(subset)}
+            held = [j for ln in links for j in ln.joints if j not in inside]
+            held = list(dict.fromkeys(held))
+            for i, j in enumerate(held):
+                slots[j] = size + i
+            group_links = []
+            for ln in links:
+                order = sorted(ln.joints, key=lambda j: (j in inside, ln.joints.index(j)))  # a known joint first
+                group_links.append(GroupLink(ln.name, tuple(slots[j] for j in order), tuple(idx[j] for j in order)))
+            angular = tuple(d.kind == "angle" for d in mech.drivers)
+            return Group(tuple(idx[j] for j in subset), tuple(idx[j] for j in held), tuple(group_links), (), angular)
     return None

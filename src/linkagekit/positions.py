@@ -105,12 +105,14 @@ def solve(
     missing = plan.unwritten
     if missing:  # a joint no step writes is NaN, never uninitialised memory
         z[list(missing)] = NAN_POINT
-    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps)
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
     assembled = np.all(k.margin >= 0, axis=0) if plan.n_signs else np.ones((D, n), bool)
+    if plan.numerical:  # a numerical group flags what it could not reach by NaN, not by a margin
+        assembled &= np.all(np.isfinite(z[list(plan.numerical)]), axis=0)
     if not params.valid.all():
         assembled &= params.valid[:, None]
     if not assembled.all():  # a mechanism that does not assemble has no joint positions at all

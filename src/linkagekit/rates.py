@@ -36,7 +36,8 @@ class Rates:
     """Velocities and accelerations of every joint, complex arrays (n_joints, D, n).
 
     ``omega``/``alpha``: angular rates of the links the steps knew them for; ``condition``
-    (n_signs, D, n) the dimensionless conditioning of each sign step; ``singular`` (D, n).
+    (n_signs + n_groups, D, n) the dimensionless conditioning of each sign step, then of each
+    numerical group; ``singular`` (D, n).
     """
 
     v: np.ndarray
@@ -84,6 +85,8 @@ def solve_rates(
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.rates(r, nums)
     singular = np.any(np.abs(r.cond) < tol, axis=0) & pos.assembled
+    for gc in r.extra_cond:  # numerical groups
+        singular |= (np.abs(gc) < tol) & pos.assembled
     bad = singular | ~pos.assembled
     if bad.any():
         r.v[:, bad] = NAN_POINT
@@ -91,7 +94,8 @@ def solve_rates(
         for rates_of in (r.om, r.al):
             for link in rates_of:
                 rates_of[link] = np.where(bad, np.nan, rates_of[link])
-    return Rates(r.v, r.a, r.om, r.al, r.cond, singular)
+    cond = np.concatenate([r.cond, np.stack(r.extra_cond)]) if r.extra_cond else r.cond
+    return Rates(r.v, r.a, r.om, r.al, cond, singular)
 
 
 #: a link's motion: rotation ``e^{i theta}`` from its shape frame, angular velocity, angular acceleration

@@ -91,6 +91,10 @@ class DriverSpec(_Strict):
     angles: SweepSpec | None = None
     slider: Index | None = None
     displacements: SweepSpec | None = None
+    cylinder: tuple[Name, Name] | None = None  # a linear actuator between two joints, driven by its length
+    name: Name | None = None  # a cylinder's name (other drivers are named by their link)
+    lengths: SweepSpec | None = None  # a cylinder's sweep of lengths
+    stroke: Point | None = None  # a cylinder's [min, max] length
     speed: Number = 1.0
     acceleration: Number = 0.0
 
@@ -140,6 +144,9 @@ _MESSAGES = {
 def _message(err: Any) -> str:
     """One pydantic error in the words of the file format."""
     kind, loc = err["type"], tuple(err["loc"])
+    tuple_error = kind in ("missing", "too_long", "too_short", "tuple_type")
+    if tuple_error and loc[:1] == ("drivers",) and len(loc) >= 3 and loc[2] in ("cylinder", "stroke"):
+        return "expected two joint names [A, B]" if loc[2] == "cylinder" else "expected [min, max]: two numbers"
     point = bool(loc) and isinstance(loc[-1], int) and kind in ("missing", "too_long", "too_short")
     if point or (kind in ("too_long", "too_short") and "tuple" in str(err.get("msg", "")).lower()):
         return "expected a point [x, y]: two numbers"

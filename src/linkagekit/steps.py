@@ -33,7 +33,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from .geometry import _TINY, NAN_POINT, circle_circle, cis, dot, link_rates, side
+from .geometry import _TINY, NAN_POINT, circle_circle, cis, cross, dot, link_rates, side
 
 Nums = tuple[Any, ...]
 
@@ -51,6 +51,10 @@ class Source(Protocol):
 
     def direction(self, slider: int) -> np.ndarray:
         """Unit direction of ``slider`` in the reference pose, shape (designs, 1), complex."""
+        ...
+
+    def stroke(self, driver: int) -> tuple[np.ndarray, np.ndarray]:
+        """Shortest and longest length of cylinder ``driver``, each (designs, 1) (0 and inf: no stroke)."""
         ...
 
 
@@ -71,6 +75,7 @@ class Kin:
     signs: np.ndarray
     mirrors: np.ndarray
     eps: float
+    q0: np.ndarray | None = None  # (n_drivers, D) driver values at the pose (numerical groups walk from it)
 
 
 @dataclass
@@ -87,6 +92,7 @@ class Rate:
     cond: np.ndarray  # (n_signs, D, n): dimensionless conditioning of each sign step
     om: dict[str, Any] = field(default_factory=dict)
     al: dict[str, Any] = field(default_factory=dict)
+    extra_cond: list[np.ndarray] = field(default_factory=list)  # (D, n) conditioning of each numerical group
 
     def frame(self, on: str, anchor: int | None) -> tuple[Any, Any, Any, Any, Any]:
         """Angular rates of link ``on`` and the motion of its anchor joint (zero for the ground)."""
@@ -514,11 +520,236 @@ class Carry(Step):
         return f"link '{self.link}': {moved} carried with '{self.rot_of}' from {names[self.anchor]}"
 
 
-SIGN_STEPS = (Dyad, CircleLine, Pivot)
+def _stroke_margin(s: Any, lo: Any, hi: Any, eps: float) -> Any:
+    """How far a cylinder's length ``s`` is inside its stroke ``[lo, hi]``, relative to ``s``; negative outside.
+
+    A length that is not positive is always outside (-1).
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        m = np.minimum(s - lo * (1 - eps), hi * (1 + eps) - s) / s
+    return np.where(s > 0, m, -1.0)
+
+
+@dataclass(frozen=True)
+class CylinderDyad(Step):
+    """A joint at the free end of a cylinder and on a link with one known joint: two circles, one of radius ``s(t)``.
+
+    The cylinder runs from the known joint ``k2`` to ``joint`` and is ``s`` long (the driver's
+    input); ``link`` carries ``joint`` and the known joint ``k1`` at the constant distance
+    ``r1``.  Positions as :class:`Dyad` with ``r2 = s``; ``t = +1`` puts ``joint`` left of
+    ``k1 -> k2``.  Rates: ``p . (v_j - v_k1) = 0`` and ``q . (v_j - v_k2) = s ds`` with
+    ``p = z_j - z_k1``, ``q = z_j - z_k2``; then
+    ``p . (a_j - a_k1) = -|v_j - v_k1|^2`` and ``q . (a_j - a_k2) = ds^2 + s dds - |v_j - v_k2|^2``.
+    """
+
+    joint: int
+    k1: int
+    k2: int
+    link: str
+    driver: int
+    sign: int  # index into the sign vector
+
+    def numbers(self, src: Source) -> Nums:
+        r1 = np.abs(src.shape(self.link, self.joint) - src.shape(self.link, self.k1))
+        lo, hi = src.stroke(self.driver)
+        return r1, lo, hi
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        r1, lo, hi = nums
+        s = k.q[self.driver]
+        with np.errstate(invalid="ignore"):
+            _, m = circle_circle(k.z[self.k1], k.z[self.k2], r1, s, k.signs[self.sign], k.eps, out=k.z[self.joint])
+        m = np.minimum(m, _stroke_margin(s, lo, hi, k.eps))
+        k.margin[self.sign] = m
+        k.z[self.joint] = np.where(m >= 0, k.z[self.joint], NAN_POINT)
+
+    def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
+        return side(zpose[self.k1], zpose[self.k2], zpose[self.joint])
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        r1 = nums[0]
+        z, v, a = r.z, r.v, r.a
+        p = z[self.joint] - z[self.k1]
+        q = z[self.joint] - z[self.k2]
+        s = np.abs(q)
+        ds, dds = r.w_in[self.driver], r.a_in[self.driver]
+        pc, qc = np.conj(p), np.conj(q)
+        det = (pc * q).imag
+        inv = 1.0 / det
+        r.cond[self.sign] = det / (r1 * s)
+        c1 = (pc * v[self.k1]).real
+        c2 = (qc * v[self.k2]).real + s * ds
+        vj = (c2 * p - c1 * q) * (1j * inv)
+        w1 = (pc * (vj - v[self.k1])).imag / (r1 * r1)
+        c1 = (pc * a[self.k1]).real - (w1 * r1) ** 2
+        c2 = (qc * a[self.k2]).real - np.abs(vj - v[self.k2]) ** 2 + ds * ds + s * dds
+        aj = (c2 * p - c1 * q) * (1j * inv)
+        v[self.joint], a[self.joint] = vj, aj
+        if self.link not in r.om:
+            r.om[self.link], r.al[self.link] = w1, (pc * (aj - a[self.k1])).imag / (r1 * r1)
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        n = names
+        r1 = f", {_num(nums[0])}" if nums else ""
+        return (
+            f"{n[self.joint]} = circle({n[self.k1]}{r1}) x circle({n[self.k2]}, cylinder length); "
+            f"sign +1: left of {n[self.k1]}->{n[self.k2]}"
+        )
+
+
+@dataclass(frozen=True)
+class CylinderLine(Step):
+    """A joint at the free end of a cylinder and on a slider block's line: a circle of radius ``s(t)`` and a line.
+
+    As :class:`CircleLine` with the radius the cylinder's length ``s`` about its known end
+    ``center``: ``z = A + u E``, ``w = conj(E)(z_c - A)``, ``u = Re w + t sqrt(s^2 - (Im w)^2)``.
+    Rates: ``du (p . E) = p . (v_c - v_A - u v_E) + s ds`` and
+    ``d2u (p . E) = p . (a_c - a_A - u a_E - 2 du v_E) - |v_j - v_c|^2 + ds^2 + s dds``.
+    """
+
+    joint: int
+    center: int  # the cylinder's known end
+    slider: int
+    block: str
+    on: str
+    anchor: int | None  # a known joint of `on` (None: `on` is the ground)
+    driver: int
+    sign: int  # index into the sign vector
+
+    def numbers(self, src: Source) -> Nums:
+        anchor_s = src.shape(self.on, self.anchor) if self.anchor is not None else 0j
+        lo, hi = src.stroke(self.driver)
+        return src.pose(self.joint), src.direction(self.slider), anchor_s, lo, hi
+
+    def rotation_needs(self) -> tuple[str, ...]:
+        return (self.on,)
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        point, direction, anchor_s, lo, hi = nums
+        s = k.q[self.driver]
+        origin, turn = _line_frame(self.anchor, k.z, k.rot, self.on, anchor_s)
+        a = origin + turn * point
+        e = turn * direction
+        w = (k.z[self.center] - a) * np.conj(e)  # the centre in line coordinates: (along, offset)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            m = (np.abs(s) * (1 + k.eps) - np.abs(w.imag)) / np.abs(s)
+        m = np.minimum(m, _stroke_margin(s, lo, hi, k.eps))
+        u = w.real + k.signs[self.sign] * np.sqrt(np.maximum(s * s - w.imag**2, 0.0))
+        k.z[self.joint] = np.where(m >= 0, a + u * e, NAN_POINT)
+        k.margin[self.sign] = m
+
+    def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
+        return np.where(dot(nums[1], zpose[self.joint] - zpose[self.center]) >= 0, 1.0, -1.0)
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        point, direction, anchor_s, _, _ = nums
+        z, v, a = r.z, r.v, r.a
+        w, alpha, va, aa, za = r.frame(self.on, self.anchor)
+        turn = r.rot[self.on] if self.anchor is not None else 1.0
+        z_a = (z[self.anchor] - turn * anchor_s if self.anchor is not None else 0.0) + turn * point
+        e = turn * direction
+        u = dot(e, z[self.joint] - z_a)
+        v_a = va + 1j * w * (z_a - za)
+        a_a = aa + (1j * alpha - w * w) * (z_a - za)
+        v_e, a_e = 1j * w * e, (1j * alpha - w * w) * e
+        p = z[self.joint] - z[self.center]
+        s = np.abs(p)
+        ds, dds = r.w_in[self.driver], r.a_in[self.driver]
+        pe = dot(p, e)
+        r.cond[self.sign] = pe / s
+        du = (dot(p, v[self.center] - v_a - u * v_e) + s * ds) / pe
+        v[self.joint] = v_a + u * v_e + du * e
+        dv = v[self.joint] - v[self.center]
+        ddu = (dot(p, a[self.center] - a_a - u * a_e - 2 * du * v_e) - np.abs(dv) ** 2 + ds * ds + s * dds) / pe
+        a[self.joint] = a_a + u * a_e + 2 * du * v_e + ddu * e
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        n = names
+        return (
+            f"{n[self.joint]} = circle({n[self.center]}, cylinder length) x line of slider {self.slider} "
+            f"('{self.block}' on '{self.on}'); sign +1: {n[self.joint]} ahead of {n[self.center]} along the slider"
+        )
+
+
+@dataclass(frozen=True)
+class LineLine(Step):
+    """A slider block (``yoke``) translating on its guide ``on``, fixed by a block that slides in it: two lines.
+
+    The yoke turns with ``on`` and is displaced by an unknown ``u1`` along ``d1`` (slider
+    ``slider1``); a block slides in the yoke along ``d2`` (slider ``slider2``, carried by the
+    yoke) and carries the known joint ``pin``.  In the frame of ``on`` (``p -> O + turn p``),
+    ``(z_pin - O) / turn - pose(pin) = u1 d1 + u2 d2``: a 2x2 linear system, unique unless the
+    lines are parallel (the plan refuses that), ``u1 = cross(w, d2) / cross(d1, d2)``.  The
+    yoke's joints are then ``O + turn (pose(j) + u1 d1)`` (a Scotch yoke: ``x = r cos(theta)``).
+    Rates: ``du1 E1 + du2 E2 = v_pin - v_O' - i w (z_pin - z_O')`` (``E = turn d``, ``O'`` the
+    anchor of ``on``) and ``dd u1 E1 + dd u2 E2 = a_pin - a_O' - (i alpha - w^2)(z_pin - z_O')
+    - 2 i w (du1 E1 + du2 E2)``.
+    """
+
+    yoke: str
+    on: str
+    anchor: int | None  # a known joint of `on` (None: `on` is the ground)
+    slider1: int  # the yoke on `on`
+    slider2: int  # the block on the yoke
+    pin: int  # the block's known joint
+    joints: tuple[int, ...]  # the yoke's joints
+
+    def numbers(self, src: Source) -> Nums:
+        anchor_s = src.shape(self.on, self.anchor) if self.anchor is not None else 0j
+        return (
+            anchor_s,
+            src.direction(self.slider1),
+            src.direction(self.slider2),
+            src.pose(self.pin),
+            tuple(src.pose(j) for j in self.joints),
+        )
+
+    def rotation_needs(self) -> tuple[str, ...]:
+        return (self.on,)
+
+    def writes(self) -> tuple[int, ...]:
+        return self.joints
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        anchor_s, d1, d2, pin, points = nums
+        origin, turn = _line_frame(self.anchor, k.z, k.rot, self.on, anchor_s)
+        w = (k.z[self.pin] - origin) / turn - pin  # = u1 d1 + u2 d2 in the frame of `on`
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u1 = cross(w, d2) / cross(d1, d2)
+        k.rot[self.yoke] = np.broadcast_to(turn, k.z.shape[1:])
+        for j, p in zip(self.joints, points, strict=True):
+            k.z[j] = origin + turn * (p + u1 * d1)
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        _, d1, d2, _, _ = nums
+        w, alpha, va, aa, za = r.frame(self.on, self.anchor)
+        turn = r.rot[self.on] if self.anchor is not None else 1.0
+        e1, e2 = turn * d1, turn * d2
+        det = cross(e1, e2)
+        rr = r.z[self.pin] - za
+        rel_v = r.v[self.pin] - va - 1j * w * rr  # du1 e1 + du2 e2
+        du1 = cross(rel_v, e2) / det
+        rel_a = r.a[self.pin] - aa - (1j * alpha - w * w) * rr - 2j * w * rel_v  # ddu1 e1 + ddu2 e2
+        ddu1 = cross(rel_a, e2) / det
+        r.om[self.yoke], r.al[self.yoke] = w, alpha
+        for j in self.joints:
+            rj = r.z[j] - za
+            r.v[j] = va + 1j * w * rj + du1 * e1
+            r.a[j] = aa + (1j * alpha - w * w) * rj + 2j * w * du1 * e1 + ddu1 * e1
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        placed = ", ".join(names[j] for j in self.joints)
+        return (
+            f"link '{self.yoke}': {placed} slid along slider {self.slider1} until the line of slider "
+            f"{self.slider2} passes {names[self.pin]} (two lines)"
+        )
+
+
+SIGN_STEPS = (Dyad, CircleLine, Pivot, CylinderDyad, CylinderLine)
 
 
 def is_sign_step(step: Step) -> bool:
-    """Does this step choose between two solutions (a circle-circle, circle-line or pivot step)?"""
+    """Does this step choose between two solutions (circle-circle, circle-line or pivot, a cylinder's too)?"""
     return isinstance(step, SIGN_STEPS)
 
 
@@ -526,9 +757,12 @@ __all__ = [
     "Carry",
     "CircleLine",
     "Crank",
+    "CylinderDyad",
+    "CylinderLine",
     "Dyad",
     "Ground",
     "Kin",
+    "LineLine",
     "Pivot",
     "Place",
     "Rate",

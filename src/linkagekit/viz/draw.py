@@ -43,6 +43,8 @@ from .scene import Scene, broken_at_wraps, build_scene
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 #: coupler curves
 CURVE_COLOR = "#e6007e"
+#: a cylinder: its rod (the whole length) and its barrel (the first BARREL of it)
+CYLINDER_ROD, CYLINDER_BARREL, BARREL = "#9a9a9a", "#505050", 0.55
 #: other joint paths
 PATH_COLOR = "#9a9a9a"
 BACKGROUND = "#ffffff"
@@ -163,6 +165,14 @@ class Drawing:
         k = 0
         for ln in sc.links:
             if ln.kind == "ground":
+                continue
+            if ln.kind == "cylinder":  # a rod over the whole length, a barrel over its first part
+                idx = tuple(sc.index(j) for j in ln.outline)
+                for width, shade in ((2.5, CYLINDER_ROD), (8, CYLINDER_BARREL)):
+                    part = Line2D([], [], color=shade, linewidth=width, solid_capstyle="butt", zorder=3.2)
+                    part.set_animated(animated)
+                    ax.add_line(part)
+                    self.links.append((ln, part, idx))
                 continue
             color = PALETTE[k % len(PALETTE)]
             k += 1
@@ -304,6 +314,10 @@ class Drawing:
                 art.set_visible(ok)
             elif ln.kind == "plate":
                 art.set_xy(pts)
+                art.set_visible(ok)
+            elif ln.kind == "cylinder" and art.get_linewidth() > 5:  # the barrel
+                end = pts[0] + BARREL * (pts[1] - pts[0])
+                art.set_data([pts[0, 0], end[0]], [pts[0, 1], end[1]])
                 art.set_visible(ok)
             else:
                 art.set_data(pts[:, 0], pts[:, 1])

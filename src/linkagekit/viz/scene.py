@@ -5,7 +5,8 @@ A :class:`Scene` holds only numbers the solver computed, arranged for drawing:
 * the joints, per sample (``xy``, NaN where the mechanism does not assemble);
 * the links, each drawn as a ``bar`` (two joints), a ``plate`` (three or more joints: a
   filled polygon through its joints in angular order about their centroid), a ``block`` (a
-  slider block: one joint, drawn as a rectangle along its guide) or the ``ground``;
+  slider block: one joint, drawn as a rectangle along its guide) or the ``ground``; and the
+  cylinder drivers (``cylinder``: a barrel and a rod between their two ends);
 * each slider's guide line per sample (a point and a unit direction): a guide on a moving
   link turns and moves with that link, which is read off the link's solved angle;
 * the paths of the moving joints, split into *coupler curves* (joints of links that touch
@@ -47,7 +48,9 @@ MARGIN = 0.08
 
 @dataclass(frozen=True)
 class SceneLink:
-    """A link as drawn: ``kind`` is ``ground``, ``bar``, ``plate`` or ``block``.
+    """A link as drawn: ``kind`` is ``ground``, ``bar``, ``plate``, ``block`` or ``cylinder``.
+
+    A ``cylinder`` is a cylinder driver (named by the driver), drawn between its two ends.
 
     ``outline`` is the order of its joints around its polygon (a plate), else its joints.
     """
@@ -204,6 +207,9 @@ def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
             kind = "bar"
         outline = _outline([mech.joints[j] for j in ln.joints], ln.joints) if kind == "plate" else ln.joints
         out.append(SceneLink(ln.name, kind, ln.joints, outline))
+    for d in mech.drivers:  # a cylinder is not a link, but it is drawn: a bar between its two ends
+        if d.kind == "cylinder" and d.ends is not None:
+            out.append(SceneLink(d.name, "cylinder", d.ends, d.ends))
     return tuple(out)
 
 

@@ -156,6 +156,11 @@
     var k = 0;
     sc.links.forEach(function (ln) {
       if (ln.kind === "ground") return;
+      if (ln.kind === "cylinder") { /* a cylinder driver: its rod, then its barrel over the first part */
+        self.links.push({link: ln, e: el("line", {stroke: "#9a9a9a", "stroke-width": 3, "data-cylinder": ln.name}, gMove)});
+        self.links.push({link: ln, barrel: true, e: el("line", {stroke: "#505050", "stroke-width": 8, "data-cylinder": ln.name}, gMove)});
+        return;
+      }
       var color = PALETTE[k++ % PALETTE.length], e;
       if (ln.kind === "plate") e = el("polygon", {fill: color, "fill-opacity": 0.35, stroke: color, "stroke-width": 3,
         "stroke-linejoin": "round", "data-link": ln.name}, gMove);
@@ -206,9 +211,10 @@
         e.setAttribute("points", [cx - w * dx - h * nx, cy - w * dy - h * ny, cx + w * dx - h * nx, cy + w * dy - h * ny,
           cx + w * dx + h * nx, cy + w * dy + h * ny, cx - w * dx + h * nx, cy - w * dy + h * ny].join(" "));
       } else if (ln.joints.length >= 2) {
-        var a = ln.joints[0], b = ln.joints[1];
-        e.setAttribute("x1", self.px(self.X[a][i])); e.setAttribute("y1", self.py(self.Y[a][i]));
-        e.setAttribute("x2", self.px(self.X[b][i])); e.setAttribute("y2", self.py(self.Y[b][i]));
+        var a = ln.joints[0], b = ln.joints[1], f = L.barrel ? 0.55 : 1;
+        var ax = self.X[a][i], ay = self.Y[a][i];
+        e.setAttribute("x1", self.px(ax)); e.setAttribute("y1", self.py(ay));
+        e.setAttribute("x2", self.px(ax + f * (self.X[b][i] - ax))); e.setAttribute("y2", self.py(ay + f * (self.Y[b][i] - ay)));
       }
     });
     this.guides.forEach(function (G) {
