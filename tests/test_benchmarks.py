@@ -58,6 +58,23 @@ def test_bench_editor(capsys):
     assert 1 <= got["answered"] <= 10 and got["median_ms"] > 0
 
 
+def test_bench_group(capsys):
+    import bench_group
+
+    got = bench_group.main(200)
+    out = capsys.readouterr().out
+    assert "triad, Newton" in out and "ratio" in out
+    assert got["ratio"] > 1 and all(v > 0 for v in got.values())
+
+
 def test_benchmarks_leave_no_module_cache():
-    for name in ("bench_positions", "bench_forces", "bench_designs", "bench_animate", "bench_editor", "timing"):
+    for name in (
+        "bench_positions",
+        "bench_forces",
+        "bench_designs",
+        "bench_animate",
+        "bench_editor",
+        "bench_group",
+        "timing",
+    ):
         sys.modules.pop(name, None)

@@ -696,3 +696,27 @@ def test_cli_serves_then_stops_on_sigint(tmp_path, explicit_port):
     assert len(err.strip().splitlines()) <= 1, err
     assert path.read_bytes() == before, "serving alone does not write the file"
     assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
+
+
+def test_session_chooses_a_mode_of_a_numerical_group(tmp_path):
+    """A class-3 triad: the modes listed carry their group index; asking for another one by its
+    signs and group index makes its positions the pose (lk.analyze of the answer gives them back)."""
+    path = tmp_path / "triad.yaml"
+    path.write_text(
+        "format: linkagekit/1\nunits: {length: mm, angle: deg}\n"
+        "joints: {O: [0, 0], A: [20, 0], B0: [120, -10], C0: [60, 80], J1: [50, 30], J2: [95, 35], J3: [70, 55]}\n"
+        "links: {ground: [O, B0, C0], crank: [O, A], l1: [A, J1], l2: [B0, J2], l3: [C0, J3], tern: [J1, J2, J3]}\n"
+        "drivers: [{link: crank, pivot: O, toward: A}]\n"
+    )
+    s = Session(path)
+    doc = lk.load(path).to_dict()
+    listed = s.solve({"doc": doc, "modes_only": True, "at": {"crank": 0.0}})
+    modes = listed["modes"]
+    assert len(modes) >= 2 and all(m["groups"] for m in modes)
+    other = next(m for m in modes if not m["reference"])
+    got = s.solve({"doc": doc, "mode": other["signs"], "mode_groups": other["groups"], "at": {"crank": 0.0}})
+    assert got["ok"], got
+    m2 = lk.Mechanism.from_dict(got["doc"])
+    res = lk.analyze(m2, {"crank": [0.0]})
+    for j, (x, y) in other["joints"].items():
+        assert abs(res.point(j)[0] - complex(x, y)) < 1e-9 * 100, (j, res.point(j)[0], (x, y))

@@ -490,10 +490,8 @@ def test_assembly_range_of_a_triad_against_its_singular_positions(which):
     assert abs(((hi - up) + 180) % 360 - 180) <= 1e-6, (hi, up)
     assert lo <= hi and hi - lo < 360
     # and analyze's own sweep assembles up to just inside each end (what it does past an end, where the
-    # pose's mode does not exist, is its own rule for coming back after a gap: not tested here).  Only
-    # for the file's triad: on seed 3 analyze's two-level sweep leaves the branch near -327.6 degrees
-    # (issue 10, reported), while check's walk and the continuation here both follow it to the end.
-    for end in (up - 1e-4, down + 1e-4) if which == "file" else ():
+    # pose's mode does not exist, is its own rule for coming back after a gap: not tested here)
+    for end in (up - 1e-4, down + 1e-4):
         walk = np.linspace(phi0, end, int(abs(end - phi0) / 0.05) + 2)  # the grid check walks on
         assert lk.analyze(mech, {"crank": walk}, rates=False).assembled.all()
 

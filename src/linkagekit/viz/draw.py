@@ -471,7 +471,7 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
     """Every distinct assembly mode at one input, side by side (as in the figures of seeds 000 and 004).
 
     Each panel is the mechanism in one mode (positions from :func:`linkagekit.modes`),
-    titled with its signs; the file's own mode is marked ``(pose)``.
+    titled with its signs (and a numerical group's mode index); the file's own mode is marked ``(pose)``.
     """
     from ..checks import modes as find_modes
 
@@ -503,6 +503,9 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
         signs = " ".join(f"{j}{'+' if s > 0 else '-'}" for j, s in m.signs.items())
         if m.mirrors:
             signs += " " + " ".join(f"{ln}{'~' if s < 0 else ''}" for ln, s in m.mirrors.items() if s < 0)
+        for g, gi in (m.groups or {}).items():  # a numerical group's mode: its index among the group's
+            signs += f" {g} " + (f"{gi['index'] + 1}/{gi['of']}" if gi["of"] > 0 else "(continued)")
+        signs = signs.strip()
         ax.set_title(_t(f"{k + 1}: {signs or 'the only mode'}{' (pose)' if m.reference else ''}"), fontsize=9)
     fig.suptitle(_t(f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}"), fontsize=10)
     return fig

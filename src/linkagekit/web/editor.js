@@ -386,12 +386,19 @@
       b.setAttribute("data-action", "mode");
       b.setAttribute("data-mode", String(k));
       var signs = Object.keys(m.signs).map(function (j) { return j + (m.signs[j] > 0 ? "+" : "-"); }).join(" ");
-      b.textContent = (k + 1) + ": " + (signs || "the only mode") + (m.reference ? " (this one)" : "");
+      var groups = Object.keys(m.groups || {}).map(function (g) {
+        var gi = m.groups[g];
+        return g + " " + (gi.of > 0 ? (gi.index + 1) + "/" + gi.of : "(continued)");
+      }).join(" ");
+      b.textContent = (k + 1) + ": " + ([signs, groups].filter(Boolean).join(" ") || "the only mode") +
+        (m.reference ? " (this one)" : "");
       b.disabled = m.reference;
       b.addEventListener("click", function () {
         generation++;
         // the mode by its signs, at the input shown when clicked (the list may be a moment old)
-        solve({doc: doc, mode: m.signs, at: atNow()}, function (ok) { if (ok) { setDraft(null); commit(doc); } });
+        solve({doc: doc, mode: m.signs, mode_groups: m.groups || null, at: atNow()}, function (ok) {
+          if (ok) { setDraft(null); commit(doc); }
+        });
       });
       modes.appendChild(b);
     });

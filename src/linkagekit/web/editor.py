@@ -136,7 +136,10 @@ class Session:
             if not isinstance(wanted, dict):
                 raise InputError("'mode' must map sign joints to +1 or -1")
             listed = self._modes(mech, request.get("at"))
-            match = [m for m in listed["modes"] if m["signs"] == wanted]
+            groups = request.get("mode_groups")  # a numerical group's mode: its index among the group's modes
+            match = [
+                m for m in listed["modes"] if m["signs"] == wanted and (groups is None or m.get("groups") == groups)
+            ]
             if not match:
                 raise InputError(
                     listed.get("modes_note")
@@ -181,7 +184,7 @@ class Session:
             return {"modes": [], "modes_note": one_line(str(exc), 200)}
         return {
             "modes": [
-                {"signs": m.signs, "reference": m.reference, "joints": m.joints}
+                {"signs": m.signs, "reference": m.reference, "joints": m.joints, "groups": m.groups}
                 for m in found.modes
                 if m.assembled and m.same_as is None
             ],
