@@ -170,3 +170,14 @@ def leading_comments(text: str) -> list[str]:
         elif line.strip():
             break
     return out
+
+
+#: a class-3 triad on a crank: ternary J1 J2 J3 held by three binary links (to A on the crank, B0, C0)
+TRIAD_LINKS = {
+    "ground": ["O", "B0", "C0"],
+    "crank": ["O", "A"],
+    "l1": ["A", "J1"],
+    "l2": ["B0", "J2"],
+    "l3": ["C0", "J3"],
+    "tern": ["J1", "J2", "J3"],
+}

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 from scipy.optimize import root
 
 import linkagekit as lk
-from helpers import fourbar_dict, points, random_points, stephenson_dict, velocities, watt2_dict, xy
+from helpers import TRIAD_LINKS, fourbar_dict, points, random_points, stephenson_dict, velocities, watt2_dict, xy
 from linkagekit.plan import make_plan
 
 REL = 1e-10
@@ -115,14 +115,6 @@ def test_forced_numerical_matches_random_linkages(seed, kind):
 
 
 # ----------------------------------------------------------------------------- class-3 triads
-TRIAD_LINKS = {
-    "ground": ["O", "B0", "C0"],
-    "crank": ["O", "A"],
-    "l1": ["A", "J1"],
-    "l2": ["B0", "J2"],
-    "l3": ["C0", "J3"],
-    "tern": ["J1", "J2", "J3"],
-}
 EXAMPLE = {"O": 0j, "A": 20 + 0j, "B0": 120 - 10j, "C0": 60 + 80j, "J1": 50 + 30j, "J2": 95 + 35j, "J3": 70 + 55j}
 TRIAD_BARS = [("O", "A"), ("A", "J1"), ("B0", "J2"), ("C0", "J3"), ("J1", "J2"), ("J2", "J3"), ("J1", "J3")]
 

@@ -37,16 +37,9 @@ from numpy.polynomial import Polynomial
 from scipy.optimize import root
 
 import linkagekit as lk
+from helpers import TRIAD_LINKS
 from linkagekit.plan import make_plan
 
-TRIAD_LINKS = {
-    "ground": ["O", "B0", "C0"],
-    "crank": ["O", "A"],
-    "l1": ["A", "J1"],
-    "l2": ["B0", "J2"],
-    "l3": ["C0", "J3"],
-    "tern": ["J1", "J2", "J3"],
-}
 MOVING = ("J1", "J2", "J3")
 
 
