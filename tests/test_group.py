@@ -294,3 +294,21 @@ def test_no_branch_jump_near_a_singular_position():
     # near the limit the group's Jacobian is nearly singular: the condition says so
     near = int(np.flatnonzero(inputs == top)[0])
     assert res.condition[near] < 0.05 * np.nanmax(res.condition)
+
+
+def test_triads_over_the_design_axis_equal_single_solves():
+    """Five triad designs in one call (poses=...) give each design's own single solve (1e-10)."""
+    base = triad(EXAMPLE)
+    rng = np.random.default_rng(7)
+    poses = base.pose_array()[None] + rng.normal(0, 2.0, (5, len(base.joint_names), 2))
+    inputs = {"crank": np.arange(-20.0, 100.0, 2.0)}
+    batch = lk.analyze(base, inputs, poses=poses)
+    assert batch.shape == (5, len(inputs["crank"]))
+    for d in range(5):
+        one = lk.analyze(base.with_pose(poses[d]), inputs)
+        assert np.array_equal(batch.assembled[d], one.assembled), d
+        ok = one.assembled
+        assert ok.sum() > 10
+        for j in base.joint_names:
+            assert np.max(np.abs(batch.point(j)[d][ok] - one.point(j)[ok])) <= 1e-10 * scale_of(base), (d, j)
+            assert np.max(np.abs(batch.velocity(j)[d][ok] - one.velocity(j)[ok])) <= 1e-8 * scale_of(base), (d, j)

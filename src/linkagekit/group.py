@@ -514,7 +514,9 @@ def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.nd
     The samples are sorted by the driver input that varies most (the first design's inputs),
     measured from the pose's input as given (not modulo a turn: a class-3 group may come back
     in another mode after a full turn of its crank, and the walk follows the motion); inputs
-    equal to the pose's go up. ``angular`` is kept for the description of the walk.
+    equal to the pose's go up. ``angular`` is kept for the description of the walk. Over a
+    design axis every design walks in this one order from its own pose (the first
+    sub-step reaches the nearest sample by homotopy), so the walk stays continuous per design.
     """
     if k.q.shape[0] == 0 or n == 0:
         return [np.arange(n)]
