@@ -213,3 +213,16 @@ def test_json_and_yaml_files_are_equivalent(tmp_path, capsys):
     b = run(["analyze", write(tmp_path, json.dumps(data), "m.json"), "--format", "json"], capsys)[1]
     assert json.loads(a)["joints"] == json.loads(b)["joints"]
     assert np.isfinite(json.loads(a)["joints"]["D"]["x"][0])
+
+
+def test_method_numerical_gives_the_closed_form_numbers(tmp_path, capsys, examples):
+    """--method numerical (Newton continued from the pose) prints the numbers of the default method (JSON, 1e-9)."""
+    f = str(examples / "seed001_stephenson.yaml")
+    a = json.loads(run(["analyze", f, "--format", "json"], capsys)[1])
+    code, out, _ = run(["analyze", f, "--format", "json", "--method", "numerical"], capsys)
+    b = json.loads(out)
+    assert code == 0 and a["joints"].keys() == b["joints"].keys()
+    for j in a["joints"]:
+        for k in ("x", "y"):
+            x, y = np.array(a["joints"][j][k], float), np.array(b["joints"][j][k], float)
+            assert np.allclose(x, y, rtol=0, atol=1e-9 * max(1.0, np.nanmax(np.abs(x)))), (j, k)

@@ -275,10 +275,12 @@ def build_parser() -> argparse.ArgumentParser:
     output_option(p)
     p.add_argument(
         "--method",
-        choices=("natural", "vector-loop"),
+        choices=("natural", "vector-loop", "numerical"),
         default="natural",
-        help="natural: triangulation in joint coordinates (any mechanism); vector-loop: link angles "
-        "by iteration (four-bars, Stephenson six-bars) (default: %(default)s)",
+        help="natural: triangulation in joint coordinates, Newton only where no triangulation exists "
+        "(any mechanism); vector-loop: link angles by iteration (four-bars, Stephenson six-bars); "
+        "numerical: Newton continued from the pose wherever it applies, a cross-check "
+        "(default: %(default)s)",
     )
     p.add_argument(
         "--static",
