@@ -19,6 +19,8 @@ COMMANDS = [
     ["plot", "examples/jansen_leg.yaml", "-o", "docs/images/plot_jansen.png"],
     ["plot", "examples/seed003_ex21.yaml", "--at", "90,180,270", "-o", "docs/images/plot_seed003_at.png"],
     ["plot", "examples/seed000_fourbar.yaml", "--modes", "--at", "30", "-o", "docs/images/plot_modes_seed000.png"],
+    ["plot", "examples/triad_six_modes.yaml", "--modes", "--at", "57.08", "-o", "docs/images/plot_modes_triad.png"],
+    ["plot", "examples/excavator_boom.yaml", "-o", "docs/images/plot_excavator.png"],
     [
         "plot",
         "examples/slider_crank.yaml",

@@ -310,7 +310,8 @@ def test_dof(path: Path) -> None:
     m = load(path)
     assert m.dof == (2 if path.name in ("fivebar_two_drivers.yaml", "excavator_boom.yaml") else 1)
     assert m.dof == len(m.drivers)
-    assert m.has_given_lengths
+    # every example gives exact lengths, but the triad: its dimensions are its pose's (docs/commands.md)
+    assert m.has_given_lengths or path.name == "triad_six_modes.yaml"
 
 
 def test_drivers_must_match_dof() -> None:
