@@ -265,7 +265,14 @@ def test_help_is_plain(capsys, command):
     assert code == 0 and err == "" and out.startswith("usage: linkagekit")
     assert "<bool>" not in out and "<list" not in out and "[bold]" not in out
     if command == ["analyze"]:
-        for text in ("START:STOP:STEP", "V1,V2,...", "{table,csv,json}", "{natural,vector-loop}", "-o OUT", "--static"):
+        for text in (
+            "START:STOP:STEP",
+            "V1,V2,...",
+            "{table,csv,json}",
+            "{natural,vector-loop,numerical}",
+            "-o OUT",
+            "--static",
+        ):
             assert text in out, text
     if command == ["modes"]:
         assert "--mirrors" in out and "{table,json}" in out
