@@ -230,7 +230,7 @@ class Group(Step):
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
         for half in _walks(k, D, n, self.angular):
-            state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT))
+            state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
             if len(half) < 4 * COARSE_STRIDE_MIN:
                 self._walk(half, state, K_all, out, ref_sign, conv0, nums, dn)
                 continue
@@ -242,7 +242,7 @@ class Group(Step):
                 ends = np.append(ends, len(half) - 1)
             snaps, clean = [], []
             for e in ends:
-                snaps.append((state[0].copy(), state[1].copy(), state[2].copy()))
+                snaps.append((state[0].copy(), state[1].copy(), state[2].copy(), state[3].copy()))
                 direct = self._walk(half[e : e + 1], state, K_all, out, ref_sign, conv0, nums, dn)
                 clean.append(direct)
             lo = np.concatenate([[-1], ends[:-1]])
@@ -258,7 +258,7 @@ class Group(Step):
     def _walk(
         self,
         samples: np.ndarray,
-        state: tuple[np.ndarray, np.ndarray, np.ndarray],
+        state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         K_all: np.ndarray,
         out: np.ndarray,
         ref_sign: np.ndarray,
@@ -266,15 +266,14 @@ class Group(Step):
         nums: Nums,
         dn: Nums,
     ) -> np.ndarray:
-        """Walk ``samples`` in order from ``state`` (U, knowns, previous U), updated in place.
+        """Walk ``samples`` in order from ``state`` (U, knowns, previous U, fresh), updated in place.
 
         Returns, per design, whether every sample was accepted by a plain continuation step
         (no restart after a gap, no failure).
         """
-        U, Kc, U_prev = state
+        U, Kc, U_prev, fresh = state  # fresh: the last sample walked was solved (sub-steps allowed)
         size = _size(dn)
         clean = np.ones(U.shape[1], bool)
-        fresh = np.ones(U.shape[1], bool)
         for s in samples:
             K_t = K_all[:, :, s]
             target_ok = np.all(np.isfinite(K_t), axis=0) & conv0
@@ -300,7 +299,7 @@ class Group(Step):
                 found = np.all(np.isfinite(U_r), axis=0)
                 U_new[:, idx[found]] = U_r[:, found]
                 acc[idx[found]] = True
-            fresh = acc | ~target_ok  # halving only from a good sample just before; after a gap, restarts
+            fresh[:] = acc  # sub-steps only from a sample solved just before; after a gap, restarts (dyads)
             clean &= acc
             out[:, acc, s] = U_new[:, acc]
             U_prev[:, acc] = U[:, acc]
@@ -315,7 +314,7 @@ class Group(Step):
         half: np.ndarray,
         lo: np.ndarray,
         hi: np.ndarray,
-        snaps: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+        snaps: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
         clean: list[np.ndarray],
         start: np.ndarray,
         K_all: np.ndarray,
@@ -365,8 +364,8 @@ class Group(Step):
                     redo.append(i)
         for i in sorted(redo):
             a, b = lo[i], hi[i]
-            U, Kc, U_prev = (x.copy() for x in snaps[i])
-            self._walk(half[a + 1 : b], (U, Kc, U_prev), K_all, out, ref_sign, conv0, nums, dn)
+            U, Kc, U_prev, fresh = (x.copy() for x in snaps[i])
+            self._walk(half[a + 1 : b], (U, Kc, U_prev, fresh), K_all, out, ref_sign, conv0, nums, dn)
 
     def _halving(
         self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray

@@ -78,6 +78,7 @@ def solve(
     mirrors: np.ndarray | None = None,
     eps: float = ASSEMBLY_RTOL,
     out: np.ndarray | None = None,
+    _dense: bool = False,
 ) -> Positions:
     """Positions of every joint for every design and input sample.
 
@@ -96,6 +97,18 @@ def solve(
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
+    if plan.numerical and not _dense:
+        dense = _walk_inputs(params, q)
+        if dense is not None:  # the numerical group walks along the inputs, not across gaps between them
+            qd, keep = dense
+            m = qd.shape[-1]
+            sd, md = _dense_choice(signs, len(keep), m), _dense_choice(mirrors, len(keep), m)
+            full = solve(params, qd, sd, md, eps, _dense=True)
+            got = _take_samples(full, keep)
+            if out is not None:
+                out[...] = got.z
+                got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
+            return got
     sg = params.signs[:, :, None] if signs is None else np.asarray(signs, float)
     mr = np.zeros((plan.n_mirrors, 1, 1), bool) if mirrors is None else np.asarray(mirrors, bool)
     D = params.n_designs
@@ -162,3 +175,58 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
             errs.append(float(np.nansum(d)) if np.isfinite(d).any() else np.inf)
         signs[i] = 1.0 if errs[0] <= errs[1] else -1.0
     return replace(params, signs=signs)
+
+
+#: the numerical group's walk passes through inputs at most this far apart (radians; lengths use
+#: 1/360 of the sweep's span): a sub-step between two samples moves the known joints along a chord,
+#: which must not skip a turning point of the motion
+WALK_STEP = np.radians(1.0)
+
+
+def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The inputs with the samples the numerical walk needs added: (inputs, columns of the given ones).
+
+    Along the driver that moves most, from the pose's input to every sample, at most ``WALK_STEP``
+    apart; the other drivers are interpolated along it. None when nothing needs adding, or when
+    the inputs carry a design axis.
+    """
+    n = q.shape[-1]
+    if q.ndim != 3 or q.shape[1] != 1 or n == 0 or q.shape[0] == 0:
+        return None
+    q0 = params.pose_inputs[:, 0]
+    key = np.concatenate([q0[:, None], q[:, 0, :]], axis=1)  # the pose's input first
+    d = int(np.argmax(np.ptp(key, axis=1)))
+    x = key[d]
+    angle = bool(params.plan.steps) and any(
+        getattr(st, "angular", ()) and st.angular[d] for st in params.plan.steps if hasattr(st, "angular")
+    )
+    step = WALK_STEP if angle else max(float(np.ptp(x)) / 360.0, 1e-300)
+    order = np.unique(x)
+    added = [
+        np.linspace(a, b, int(np.ceil((b - a) / step)) + 1)[1:-1] for a, b in zip(order[:-1], order[1:], strict=True)
+    ]
+    extra = np.concatenate(added) if added else np.zeros(0)
+    if not len(extra) or len(extra) > 64 * n + 100_000:
+        return None
+    srt = np.argsort(x, kind="stable")
+    rows = [extra if i == d else np.interp(extra, x[srt], key[i][srt]) for i in range(q.shape[0])]
+    dense = np.concatenate([q[:, 0, :], np.array(rows)], axis=1)[:, None, :]
+    return dense, np.arange(n)
+
+
+def _dense_choice(arr: np.ndarray | None, n: int, n_total: int) -> np.ndarray | None:
+    """Signs or mirrors given per sample, extended to the added samples (with the first sample's)."""
+    if arr is None:
+        return None
+    a = np.asarray(arr)
+    if a.ndim == 0 or a.shape[-1] != n or n == 1:
+        return a
+    return np.concatenate([a, np.repeat(a[..., :1], n_total - n, axis=-1)], axis=-1)
+
+
+def _take_samples(full: Positions, keep: np.ndarray) -> Positions:
+    """The given samples of a dense solve."""
+    rot = {k: (v[..., keep] if np.ndim(v) and np.shape(v)[-1] > 1 else v) for k, v in full.rot.items()}
+    sg = full.signs[..., keep] if full.signs.shape[-1] > 1 else full.signs
+    mr = full.mirrors[..., keep] if full.mirrors.shape[-1] > 1 else full.mirrors
+    return Positions(full.z[..., keep], rot, full.margin[..., keep], full.assembled[..., keep], sg, mr)
