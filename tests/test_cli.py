@@ -226,3 +226,12 @@ def test_method_numerical_gives_the_closed_form_numbers(tmp_path, capsys, exampl
         for k in ("x", "y"):
             x, y = np.array(a["joints"][j][k], float), np.array(b["joints"][j][k], float)
             assert np.allclose(x, y, rtol=0, atol=1e-9 * max(1.0, np.nanmax(np.abs(x)))), (j, k)
+
+
+def test_ground_angle_is_converted_once(examples):
+    """The ground's angle is its shape's direction A -> B in the file's unit (seed 000: atan(1/4) in degrees)."""
+    import linkagekit as lk
+
+    res = lk.analyze(lk.load(examples / "seed000_fourbar.yaml"), {"crank": [0.0, 30.0]})
+    assert np.allclose(res.angle("ground"), np.degrees(np.arctan2(1.0, 4.0)), rtol=0, atol=1e-12)
+    assert np.allclose(res.angle("crank"), [0.0, 30.0], rtol=0, atol=1e-12)

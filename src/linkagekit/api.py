@@ -392,7 +392,7 @@ def _result(
     ground_angle: Any = 0.0
     if len(ground.joints) >= 2:
         sa, sb = params.bases["ground"]
-        per_design = np.angle(sb - sa)[:, 0] / mech.angle_to_rad
+        per_design = np.angle(sb - sa)[:, 0]  # radians: link_angle converts to the file unit once
         ground_angle = per_design[:, None] if batch else float(per_design[0])
 
     # the mode used, per sign joint: an int (one design), or an array (per design and/or per sample)
