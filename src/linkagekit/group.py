@@ -99,7 +99,7 @@ class Group(Step):
     known: tuple[int, ...]  # the known joints its links hold (plan indices)
     links: tuple[GroupLink, ...]
     keep_rotation: tuple[str, ...] = ()
-    angular: tuple[bool, ...] = ()  # per driver: an angle (the walk measures it around the circle)
+    angular: tuple[bool, ...] = ()  # per driver: an angle (the walk's added samples are 1 degree apart)
 
     # ------------------------------------------------------------------ numbers
     def numbers(self, src: Source) -> Nums:
@@ -229,7 +229,7 @@ class Group(Step):
         K_all = z[list(self.known)] if self.known else np.zeros((0, D, n), complex)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
-        for half in _walks(k, D, n, self.angular):
+        for half in _walks(k, D, n):
             state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
             if len(half) < 4 * COARSE_STRIDE_MIN:
                 self._walk(half, state, K_all, out, ref_sign, conv0, nums, dn)
@@ -484,9 +484,6 @@ class Group(Step):
             return s[:, -1] / s[:, 0]
 
     # ------------------------------------------------------------------ description
-    def rotation_needs(self) -> tuple[str, ...]:
-        return ()
-
     def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
         placed = ", ".join(names[j] for j in self.joints)
         links = ", ".join(f"'{gl.name}'" for gl in self.links)
@@ -507,13 +504,13 @@ def _take(dn: Nums, cols: np.ndarray) -> Nums:
     return tuple(L[cols] for L in lengths), tuple(tuple(r[cols] for r in rho) for rho in rhos)
 
 
-def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.ndarray]:
+def _walks(k: Kin, D: int, n: int) -> list[np.ndarray]:
     """The sample indices in walking order: from the pose's input up, then from it down.
 
     The samples are sorted by the driver input that varies most (the first design's inputs),
     measured from the pose's input as given (not modulo a turn: a class-3 group may come back
     in another mode after a full turn of its crank, and the walk follows the motion); inputs
-    equal to the pose's go up. ``angular`` is kept for the description of the walk. Over a
+    equal to the pose's go up. Over a
     design axis every design walks in this one order from its own pose (the first
     sub-step reaches the nearest sample by homotopy), so the walk stays continuous per design.
     """

@@ -33,6 +33,7 @@ import numpy as np
 
 from .errors import MechanismFileError
 from .geometry import ASSEMBLY_RTOL, NAN_POINT
+from .group import Group
 from .params import Params, all_sign_combinations
 from .steps import Kin
 
@@ -197,10 +198,8 @@ def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     key = np.concatenate([q0[:, None], q[:, 0, :]], axis=1)  # the pose's input first
     d = int(np.argmax(np.ptp(key, axis=1)))
     x = key[d]
-    angle = bool(params.plan.steps) and any(
-        getattr(st, "angular", ()) and st.angular[d] for st in params.plan.steps if hasattr(st, "angular")
-    )
-    step = WALK_STEP if angle else max(float(np.ptp(x)) / 360.0, 1e-300)
+    angular = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
+    step = WALK_STEP if d < len(angular) and angular[d] else max(float(np.ptp(x)) / 360.0, 1e-300)
     order = np.unique(x)
     added = [
         np.linspace(a, b, int(np.ceil((b - a) / step)) + 1)[1:-1] for a, b in zip(order[:-1], order[1:], strict=True)
