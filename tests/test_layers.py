@@ -23,6 +23,10 @@ LAYERS = [
     {"result", "api", "checks"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},
+    {"synthesis.targets", "synthesis.space", "synthesis.objective"},
+    {"synthesis.distribute"},
+    {"synthesis.optimize"},
+    {"synthesis.run"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

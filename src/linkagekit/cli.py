@@ -392,6 +392,47 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--port", metavar="N", help="listen on this port (default: a free one)")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser; just print the URL")
     p.set_defaults(run=_edit)
+
+    p = commands.add_parser(
+        "synthesize",
+        help="find a four-bar or six-bar whose tracer point P passes near target points",
+        description="Dimensional synthesis: read target points (CSV with the header x,y or x,y,input, or an SVG "
+        "path) and write a mechanism file whose tracer point P passes near every target, its driver the link "
+        "'crank'. With an input column (the crank angle at each target, degrees) the tracer must be at each "
+        "target at its own angle, up to one common offset. The crank turns fully and every transmission angle "
+        "stays within [MIN, 180 - MIN]. Differential evolution over whole generations, then a least-squares "
+        "polish; the same --seed gives the same result (unless --seconds stops the run).",
+        **common,
+    )
+    p.add_argument("targets", metavar="TARGET", help="target points: .csv (x,y[,input]) or .svg (its first path)")
+    p.add_argument(
+        "--topology",
+        default="fourbar",
+        metavar="NAME|FILE",
+        help="fourbar (default), watt2, stephenson3, or a mechanism file used as a template (see --free)",
+    )
+    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the mechanism file to write: .yaml or .json")
+    p.add_argument("--seconds", metavar="S", default="60", help="time budget (default 60)")
+    p.add_argument("--seed", metavar="N", default="0", help="random seed (default 0)")
+    p.add_argument(
+        "--min-transmission", metavar="DEG", default="20", help="smallest transmission angle, degrees (default 20)"
+    )
+    p.add_argument("--workers", metavar="N", default="1", help="evaluate each generation on N local processes")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
+    p.add_argument("--checkpoint", metavar="FILE", help="save the search after every generation; resume from it")
+    p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
+    p.add_argument("--points", metavar="N", default="40", help="points sampled along an SVG path (default 40)")
+    p.add_argument("--ordered", action="store_true", help="meet the targets in their order along the curve")
+    p.add_argument("--free", metavar="J1,J2,...", help="with a template file: the joints that move (default all)")
+    p.add_argument("--pivots", metavar="X0:X1,Y0:Y1", help="the region of the ground pivots")
+    p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
+    p.add_argument(
+        "--reach", metavar="R", default="1", help="joints lie within R target diagonals of the targets (default 1)"
+    )
+    p.add_argument("--restarts", metavar="N", default="8", help="independent searches at most (default 8)")
+    p.add_argument("--generations", metavar="N", default="500", help="generations per search at most (default 500)")
+    p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
+    p.set_defaults(run=_synthesize)
     return parser
 
 
@@ -1015,6 +1056,180 @@ def _edit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _integer(text: str, option: str, low: int, high: int) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise InputError(f"{option}: expected a whole number, got {shorten(repr(text))}") from None
+    if not low <= v <= high:
+        raise InputError(f"{option}: expected {low} to {high}, got {v}")
+    return v
+
+
+def _interval(text: str, option: str) -> tuple[float, float]:
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise InputError(f"{option}: expected LOW:HIGH, got {shorten(repr(text))}")
+    lo, hi = (_one_number(p, option) for p in parts)
+    if not lo < hi:
+        raise InputError(f"{option}: LOW must be below HIGH, got {shorten(repr(text))}")
+    return lo, hi
+
+
+def _synthesize(args: argparse.Namespace) -> int:
+    """``linkagekit synthesize``."""
+    import os
+
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .synthesis.run import synthesize
+    from .synthesis.space import TOPOLOGIES
+    from .synthesis.targets import read_targets
+
+    _suffix(args.output, (".yaml", ".yml", ".json"))
+    if args.plot:
+        _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    seconds = _one_number(args.seconds, "--seconds")
+    if not 0 < seconds <= 1e7:
+        raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
+    seed = _integer(args.seed, "--seed", 0, 2**32 - 1)
+    min_tr = _one_number(args.min_transmission, "--min-transmission")
+    workers = _integer(args.workers, "--workers", 1, 1024)
+    points = _integer(args.points, "--points", 3, 100_000)
+    restarts = _integer(args.restarts, "--restarts", 1, 10_000)
+    generations = _integer(args.generations, "--generations", 1, 10_000_000)
+    reach = _one_number(args.reach, "--reach")
+    if not 0 < reach <= 100:
+        raise InputError(f"--reach: expected a positive number up to 100, got {args.reach}")
+    pivots = None
+    if args.pivots:
+        xy = args.pivots.split(",")
+        if len(xy) != 2:
+            raise InputError(f"--pivots: expected X0:X1,Y0:Y1, got {shorten(repr(args.pivots))}")
+        pivots = (_interval(xy[0], "--pivots"), _interval(xy[1], "--pivots"))
+    lengths = _interval(args.lengths, "--lengths") if args.lengths else None
+    if lengths is not None and lengths[0] < 0:
+        raise InputError("--lengths: lengths are not negative")
+    if args.checkpoint and os.path.isdir(args.checkpoint):
+        raise InputError(f"--checkpoint {shorten(args.checkpoint, 80)}: is a directory")
+    targets = read_targets(args.targets, units=args.units, points=points)
+    topology: Any = args.topology
+    if topology not in TOPOLOGIES:
+        if not os.path.exists(topology):
+            raise InputError(
+                f"--topology: '{shorten(topology)}' is neither a topology ({', '.join(TOPOLOGIES)}) nor a file"
+            )
+        topology = lk.load(topology)
+        if topology.units.get("length") != targets.unit:
+            raise InputError(
+                f"--topology {shorten(args.topology, 80)}: its length unit is {topology.units.get('length')}, "
+                f"the targets' is {targets.unit} (--units)"
+            )
+    elif args.free:
+        raise InputError("--free goes with a template file given as --topology")
+    free = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
+    with _Search(seconds) as progress:
+        out = synthesize(
+            targets,
+            topology,
+            min_transmission=min_tr,
+            ordered=args.ordered,
+            lengths=lengths,
+            pivots=pivots,
+            free=free,
+            reach=reach,
+            seed=seed,
+            seconds=seconds,
+            restarts=restarts,
+            generations=generations,
+            workers=workers,
+            scheduler=args.scheduler,
+            checkpoint=args.checkpoint,
+            progress=progress,
+        )
+    lk.save(out.mechanism, args.output)
+    if args.plot:
+        from .viz import draw
+
+        res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(0.0, 360.0, 721)})
+        fig = draw.synthesis_figure(res, targets.xy, out.errors, closed=targets.closed)
+        draw.save_figure(fig, args.plot, fig.axes[0])
+    print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
+    return 0
+
+
+def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
+    """The table of targets and errors, and the summary, that ``synthesize`` prints."""
+    cols = [
+        Column("target", [str(i + 1) for i in range(len(xy))]),
+        Column(f"x [{unit}]", format_cells(xy[:, 0])),
+        Column(f"y [{unit}]", format_cells(xy[:, 1])),
+    ]
+    if inputs is not None:
+        cols.append(Column("input [deg]", format_cells(inputs)))
+    cols.append(Column("crank [deg]", format_cells(out.inputs % 360.0)))
+    cols.append(Column(f"error [{unit}]", format_cells(out.errors)))
+    cols.append(Column("error [% diag]", format_cells(100.0 * out.errors / out.diagonal)))
+    o = out.outcome
+    lines = render_table(cols)
+    lines.append("")
+    lines.append(
+        f"max error {out.max_error:.6g} {unit} ({100 * out.max_error / out.diagonal:.4g} % of the targets' "
+        f"diagonal {out.diagonal:.6g} {unit}), rms {out.rms_error:.6g} {unit}"
+    )
+    if out.offset is not None:
+        lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    state = "the crank turns fully" if out.feasible else "CONSTRAINTS NOT MET (the best design found breaks one)"
+    lines.append(f"{state}; smallest transmission angle {out.min_transmission:.4g} deg")
+    why = {"goal": "reaching the goal", "restarts": "the last search", "time": "the time limit"}[o.stopped_by]
+    lines.append(
+        f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs evaluated in "
+        f"{o.seconds:.1f} s; stopped by {why}"
+    )
+    lines.append(f"wrote {path}")
+    return "\n".join(lines)
+
+
+class _Search:
+    """The synthesis progress bar on stderr (a terminal only): search, generation, best error so far."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self.bar: Any = None
+        self.task: Any = None
+
+    def __enter__(self) -> Callable[[Any], None]:
+        if sys.stderr.isatty():
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self.bar = Progress(
+                TextColumn("search {task.fields[restart]} gen {task.fields[generation]}"),
+                BarColumn(),
+                TextColumn("best error {task.fields[best]}"),
+                TimeElapsedColumn(),
+                console=Console(stderr=True),
+                transient=True,
+            )
+            self.bar.start()
+            self.task = self.bar.add_task("synthesis", total=self.seconds, restart=1, generation=0, best="-")
+        return self.update
+
+    def update(self, p: Any) -> None:
+        if self.bar is None:
+            return
+        best = f"{100 * p.best_error:.3g} %" if p.best_error == p.best_error else f"cost {p.best_cost:.3g}"
+        self.bar.update(
+            self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation, best=best
+        )
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
 class _progress:
     """A progress bar on stderr, when it is a terminal: ``with _progress(what) as tick: tick(done, total)``."""
 
@@ -1062,7 +1277,9 @@ def _run(argv: list[str]) -> int:
     except _ParserExit as done:
         return done.status
     if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
-        raise InputError(f"give a command: analyze, modes, check, plot, animate, report or edit (see '{PROG} --help')")
+        raise InputError(
+            f"give a command: analyze, modes, check, plot, animate, report, edit or synthesize (see '{PROG} --help')"
+        )
     code: int = args.run(args)
     return code
 

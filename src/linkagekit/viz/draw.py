@@ -451,6 +451,48 @@ def mechanism_figure(res: Result, poses: Result | None = None, size: float = 6.0
     return fig
 
 
+#: colour of synthesis targets and of their error segments
+TARGET_COLOR = "#0050b4"
+
+
+def synthesis_figure(
+    res: Result, targets: Any, errors: Any = None, closed: bool = False, tracer: str = "P", size: float = 6.0
+) -> Figure:
+    """The mechanism of a synthesis with its curves, and the targets on them.
+
+    ``res``: the synthesised mechanism over a crank turn; ``targets`` (m, 2); ``errors``
+    (m,) the distances the synthesis found (in the title). Each target is a numbered ring;
+    a thin segment joins it to the nearest sampled point of the tracer's curve, so a target
+    the curve misses shows how far off it is.
+    """
+    fig = mechanism_figure(res, size=size)
+    ax = fig.axes[0]
+    t = np.asarray(targets, float)
+    P = res.xy(tracer)
+    ok = np.all(np.isfinite(P), axis=1)
+    if ok.any():
+        d = np.hypot(P[ok][None, :, 0] - t[:, None, 0], P[ok][None, :, 1] - t[:, None, 1])
+        near = P[ok][np.argmin(d, axis=1)]
+        for (x, y), (u, v) in zip(t, near, strict=True):
+            ax.plot([x, u], [y, v], color=TARGET_COLOR, linewidth=0.8, zorder=6)
+    ax.plot(t[:, 0], t[:, 1], "o", markersize=6, markerfacecolor="none", markeredgecolor=TARGET_COLOR, zorder=7)
+    for i, (x, y) in enumerate(t):
+        ax.annotate(str(i + 1), (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7, color=TARGET_COLOR)
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    pad = 0.03 * max(x1 - x0, y1 - y0)
+    ax.set_xlim(min(x0, t[:, 0].min() - pad), max(x1, t[:, 0].max() + pad))
+    ax.set_ylim(min(y0, t[:, 1].min() - pad), max(y1, t[:, 1].max() + pad))
+    if errors is not None:
+        e = np.asarray(errors, float)
+        kind = "closed" if closed else "open"
+        fig.suptitle(
+            _t(f"{len(t)} targets ({kind}): max error {np.max(e):.4g}, rms {np.sqrt(np.mean(e * e)):.4g}"),
+            fontsize=10,
+        )
+    return fig
+
+
 def _pose_sample(res: Result, sc: Scene) -> int:
     """The sample at the reference pose's input (nearest, when it assembles there), else the first assembled."""
     mech = res.mechanism

@@ -1,0 +1,131 @@
+"""Where a generation's candidates are evaluated: here, on local processes, or on a Dask cluster.
+
+Each generation is split into chunks of designs; every chunk is one call of
+:func:`~linkagekit.synthesis.objective.evaluate` (vectorized over its designs). The chunks
+and their order do not depend on where they run, and the score of a design does not
+depend on the chunk it is in (every operation is elementwise or reduces over that design's
+own samples), so the same seed gives the same result on one process, on ``N`` local
+processes and on a cluster.
+
+Examples
+--------
+>>> import numpy as np
+>>> chunks(np.zeros((10, 3)), 3)[0].shape
+(4, 3)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .objective import Problem, evaluate
+
+#: the problem a worker process evaluates (set once per process by the pool's initializer)
+_PROBLEM: Problem | None = None
+#: designs per chunk at most (bounds each call's memory; see objective.CHUNK)
+MAX_CHUNK = 4096
+
+
+def chunks(X: np.ndarray, parts: int) -> list[np.ndarray]:
+    """``X`` split along its designs into ``parts`` nearly equal chunks (more if a chunk would exceed ``MAX_CHUNK``)."""
+    k = max(1, parts, -(-len(X) // MAX_CHUNK))
+    return [c for c in np.array_split(X, min(k, len(X))) if len(c)]
+
+
+def _install(problem: Problem) -> None:
+    global _PROBLEM
+    _PROBLEM = problem
+
+
+def _cost_here(X: np.ndarray) -> np.ndarray:
+    assert _PROBLEM is not None
+    return evaluate(_PROBLEM, X).cost
+
+
+def _cost_of(problem: Problem, X: np.ndarray) -> np.ndarray:
+    return evaluate(problem, X).cost
+
+
+class Evaluator:
+    """Scores of a generation, ``cost(X)``, evaluated where asked.
+
+    Parameters
+    ----------
+    problem : Problem
+    workers : int
+        Local processes (1: in this process).
+    scheduler : str, optional
+        Address of a running Dask distributed scheduler (``tcp://host:port``); the chunks
+        go to its workers (``dask[distributed]`` must be installed).
+    """
+
+    def __init__(self, problem: Problem, workers: int = 1, scheduler: str | None = None) -> None:
+        if workers < 1:
+            raise InputError(f"--workers: expected a positive number of processes, got {workers}")
+        self.problem = problem
+        self.workers = workers
+        self._pool: Any = None
+        self._client: Any = None
+        self._remote: Any = None
+        if scheduler is not None:
+            try:
+                from distributed import Client
+            except ImportError:
+                raise InputError("--scheduler needs Dask: pip install 'dask[distributed]'") from None
+            try:
+                self._client = Client(scheduler, timeout=20, set_as_default=False)
+            except (OSError, TimeoutError, ValueError) as e:
+                raise InputError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({e})") from None
+            self._remote = self._client.scatter(problem, broadcast=True)
+            self.parts = max(1, sum(self._client.nthreads().values()))
+        elif workers > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            # fork where there is one: a script that calls synthesize() needs no `if __name__ == "__main__"`
+            # guard (spawn re-imports the main module); the workers only evaluate NumPy over arrays
+            methods = multiprocessing.get_all_start_methods()
+            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+            self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_install, initargs=(problem,))
+            self.parts = workers
+        else:
+            self.parts = 1
+
+    @property
+    def where(self) -> str:
+        if self._client is not None:
+            return f"Dask cluster ({self.parts} threads)"
+        return f"{self.workers} local processes" if self._pool is not None else "this process"
+
+    def cost(self, X: np.ndarray) -> np.ndarray:
+        """The cost of every design of ``X`` (N, dim)."""
+        parts = chunks(np.asarray(X, float), self.parts)
+        if self._client is not None:
+            futures = self._client.map(_cost_of, [self._remote] * len(parts), parts, pure=False)
+            got = self._client.gather(futures)
+        elif self._pool is not None:
+            got = list(self._pool.map(_cost_here, parts))
+        else:
+            got = [_cost_of(self.problem, p) for p in parts]
+        return np.concatenate(got)
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+            self._pool = None
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+
+    def __enter__(self) -> Evaluator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+CostFunction = Callable[[np.ndarray], np.ndarray]

@@ -1,0 +1,326 @@
+r"""The synthesis objective, over (designs x samples) at once.
+
+A :class:`Problem` holds the targets, the design space and the constraints; :func:`evaluate`
+scores a batch of design vectors through the design axis (one :func:`~linkagekit.params.compile`
+and a few :func:`~linkagekit.positions.solve` calls per chunk of designs; no loop per design).
+
+Error of a design (lengths in the targets' unit, ``L`` the targets' bounding-box diagonal)
+---------------------------------------------------------------------------------------
+*Without timing*, ``e_i`` is the distance from target ``T_i`` to the tracer's curve
+``P(theta)`` over a full crank turn. The curve is sampled at ``n`` inputs from the pose's
+input; the nearest sample ``theta_k`` seeds Newton's method on
+
+.. math:: g(\theta) = \tfrac12 \frac{d}{d\theta}|P(\theta) - T|^2 = \operatorname{Re}\big(\overline{(P - T)}\,P'\big),
+          \qquad g' = |P'|^2 + \operatorname{Re}\big(\overline{(P - T)}\,P''\big),
+
+with ``P'`` and ``P''`` by central differences of step ``h`` (all targets of all designs in
+one solve of ``3m`` samples per design); a step is clipped to one sample spacing and kept
+only where it brings the point nearer. So ``e_i`` is the distance to an actual point of
+the curve (never an underestimate), and at a stationary point its gradient in the design
+is that of the true distance (the envelope theorem), which the local polish needs.
+
+*With timing* (an input angle ``phi_i`` per target), ``e_i = |P(phi_i + delta) - T_i|`` with
+one common offset ``delta = theta_pose - phi_0``: the pose is the mechanism at the first
+target's input (its tracer is searched near the first target), so the offset is not a
+search variable and the design vector is the same as without timing.
+
+*Order*: when asked, the inputs ``theta_i`` of the nearest points must visit the targets
+in their order, in one direction, within one turn: the forward steps
+``(theta_{i+1} - theta_i) mod 2 pi`` around the closed sequence add up to ``2 pi w`` and
+the order holds when ``w = 1`` (or ``w = m - 1``, the reverse direction).
+
+Feasibility (penalised by how far from feasible, never by a cliff)
+----------------------------------------------------------------
+* the crank turns fully: the mean over the sweep of each dyad step's negative margin
+  (``positions.solve``: how far the circles are from meeting, relative);
+* every transmission angle ``mu`` of the space stays within ``[MIN, 180 - MIN]``: the largest
+  ``|cos mu| - cos MIN`` over the sweep;
+* link lengths within bounds, when given: the largest relative excess;
+* the order of the targets, when asked: ``(min(w, m - w) - 1) / m``.
+
+The score is ``mean_i (e_i / L)^2 + PENALTY * violation``: an exact penalty (linear in the
+violation), so a feasible optimum stays feasible.
+
+Examples
+--------
+>>> import numpy as np
+>>> from linkagekit.synthesis.space import builtin_space
+>>> sp = builtin_space("fourbar", (0.0, 0.0), 4.0)
+>>> mech_x = np.array([0, 0, 4, 1, 2, 0, 0.82055, 4.85890, 5.61821, 3.45088])  # seed 000's pose
+>>> curve = evaluate(Problem(sp, np.array([5.61821 + 3.45088j, 0, 1j])), mech_x[None], refine=0)
+>>> float(curve.errors[0, 0]) < 1e-9, bool(curve.violation[0] == 0)
+(True, True)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import InputError
+from ..params import compile as compile_params
+from ..positions import solve
+from .space import DesignSpace
+
+#: weight of the violation against the mean squared relative error (large: a design that gains accuracy
+#: by violating a constraint a little is still worse than a feasible one)
+PENALTY = 100.0
+#: design-samples per chunk (bounds memory: ~16 bytes x this x a few arrays)
+CHUNK = 1 << 19
+#: degrees added to the smallest transmission angle while searching, so that the design found keeps
+#: the limit between the samples too (the result is checked densely against the limit itself)
+MARGIN = 0.25
+#: central-difference step of the refinement (radians)
+H_THETA = 1e-4
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """What to synthesise: targets, a design space, constraints.
+
+    Attributes
+    ----------
+    space : DesignSpace
+    targets : ndarray, complex, shape (m,)
+        Target points ``x + iy`` in the template's length unit.
+    inputs : ndarray, shape (m,), optional
+        Prescribed input angles (radians): timing, up to one common offset (the pose is at
+        the first target's input).
+    ordered : bool
+        Without timing: the targets must be met in their order along the curve.
+    min_transmission : float
+        Degrees; every angle of ``space.transmission`` stays within ``[MIN, 180 - MIN]``.
+    lengths : (float, float), optional
+        Bounds on every link length (between any two joints of a link).
+    samples : int
+        Samples of the crank turn.
+    """
+
+    space: DesignSpace
+    targets: np.ndarray
+    inputs: np.ndarray | None = None
+    ordered: bool = False
+    min_transmission: float = 20.0
+    lengths: tuple[float, float] | None = None
+    samples: int = 180
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.targets)
+        if t.ndim != 1 or len(t) < 3 or not np.all(np.isfinite(t)):
+            raise InputError("targets: at least 3 finite points are needed")
+        if not 0.0 <= self.min_transmission < 90.0:
+            raise InputError(f"--min-transmission: {self.min_transmission:g} is not within [0, 90) degrees")
+        if self.samples < 8:
+            raise InputError("samples: at least 8 samples of the crank turn are needed")
+
+    @cached_property
+    def scale(self) -> float:
+        """The targets' bounding-box diagonal ``L``."""
+        t = self.targets
+        return float(np.hypot(np.ptp(t.real), np.ptp(t.imag))) or 1.0
+
+    @property
+    def timed(self) -> bool:
+        return self.inputs is not None
+
+    @property
+    def dim(self) -> int:
+        return self.space.dim
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the design vector."""
+        return self.space.lower, self.space.upper
+
+    def offset(self, X: np.ndarray) -> np.ndarray:
+        """With timing: the input offset ``delta`` (radians) of each design, ``theta_pose - phi_0``."""
+        assert self.inputs is not None
+        params = compile_params(self.space.template, self.space.poses(np.atleast_2d(X)), self.space.plan)
+        return np.asarray(params.pose_inputs[0] - self.inputs[0])
+
+    def fingerprint(self) -> str:
+        """A digest of everything that defines the problem (to match a checkpoint to its run)."""
+        import hashlib
+
+        h = hashlib.sha256()
+        for a in (self.targets, self.space.lower, self.space.upper, self.inputs if self.timed else np.zeros(0)):
+            h.update(np.ascontiguousarray(a).tobytes())
+        h.update(repr((self.space.topology, self.space.free, self.space.tracer, self.space.transmission)).encode())
+        h.update(repr((self.ordered, self.min_transmission, self.lengths, self.samples)).encode())
+        h.update(repr(self.space.template.to_dict()).encode())
+        return h.hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Scores of N designs.
+
+    Attributes
+    ----------
+    cost : ndarray (N,)
+        ``mean (e / L)^2 + PENALTY * violation``.
+    errors : ndarray (N, m)
+        Distance of each target to the curve (or to its timed point), in length units; NaN
+        where the design has no such point.
+    theta : ndarray (N, m)
+        The input (radians) of the point each target is measured to.
+    violation : ndarray (N,)
+        0 for a feasible design.
+    transmission : ndarray (N,)
+        The smallest transmission angle over the sampled turn (degrees; NaN if none assembles).
+    """
+
+    cost: np.ndarray
+    errors: np.ndarray
+    theta: np.ndarray
+    violation: np.ndarray
+    transmission: np.ndarray
+
+
+def evaluate(
+    problem: Problem, X: np.ndarray, refine: int = 1, samples: int | None = None, margin: float = MARGIN
+) -> Evaluation:
+    """Score the design vectors ``X`` (N, dim) of ``problem`` (see the module's description).
+
+    ``refine``: Newton iterations on each target's nearest input (untimed problems);
+    ``samples``: samples of the crank turn (default ``problem.samples``); ``margin``: degrees
+    added to the transmission-angle limit.
+    """
+    X = np.atleast_2d(np.asarray(X, float))
+    n = int(samples or problem.samples)
+    m = len(problem.targets)
+    per_design = n + m * (3 * refine + 1)
+    step = max(1, CHUNK // per_design)
+    parts = [_evaluate(problem, X[s : s + step], refine, n, margin) for s in range(0, len(X), step)]
+    return Evaluation(*(np.concatenate([getattr(p, f) for p in parts]) for f in Evaluation.__dataclass_fields__))
+
+
+def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: float) -> Evaluation:
+    sp = problem.space
+    N = len(X)
+    L = problem.scale
+    params = compile_params(sp.template, sp.poses(X), sp.plan)
+    q0 = params.pose_inputs[0]  # (N,) the crank's input at each pose
+    theta = q0[:, None] + (2 * np.pi / n) * np.arange(n)
+    sol = solve(params, theta[None])
+    z = sol.z
+    with np.errstate(invalid="ignore"):
+        # -- feasibility: assembly over the whole turn, transmission angles, lengths
+        short = np.nan_to_num(np.maximum(-sol.margin, 0.0), nan=0.0)
+        violation = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(N)
+        violation = np.where(params.valid, violation, violation + 1.0)
+        cos_lim = np.cos(np.radians(min(problem.min_transmission + margin, 89.0)))
+        worst_cos = np.zeros(N)
+        mu_min = np.full(N, np.nan)
+        for j, a, b in sp.transmission:
+            zj = z[sp.joint(j)]
+            u, v = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj
+            c = (np.conj(u) * v).real / (np.abs(u) * np.abs(v))
+            worst = np.nanmax(np.where(np.isfinite(c), np.abs(c), -np.inf), axis=-1)
+            worst_cos = np.maximum(worst_cos, worst)
+            mu = np.degrees(np.arccos(np.clip(worst, -1.0, 1.0)))
+            mu_min = np.where(np.isfinite(worst), np.fmin(mu_min, mu), mu_min)
+        violation = violation + np.maximum(worst_cos - cos_lim, 0.0)
+        if problem.lengths is not None:
+            violation = violation + _length_excess(sp, params.pose, *problem.lengths)
+        # -- errors
+        T = problem.targets
+        P = z[sp.joint(sp.tracer)]
+        if problem.timed:
+            assert problem.inputs is not None
+            th = q0[:, None] + (problem.inputs - problem.inputs[0])[None, :]
+            err = np.abs(_tracer(params, sp, th) - T[None, :])
+        else:
+            th, err = _nearest(params, sp, P, theta, T, refine, n, problem.ordered)
+        rel = np.where(np.isfinite(err), err / L, 1.0)
+        cost = np.mean(rel * rel, axis=1) + PENALTY * violation
+    return Evaluation(cost, err, th, violation, mu_min)
+
+
+def _tracer(params, sp: DesignSpace, th: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """The tracer point at inputs ``th`` (N, k), NaN where a design does not assemble."""
+    return solve(params, th[None]).z[sp.joint(sp.tracer)]
+
+
+def _nearest(params, sp, P, theta, T, refine, n, ordered=False):  # type: ignore[no-untyped-def]
+    """(inputs, distances) of the nearest curve point to every target, (N, m) each."""
+    far = ~np.isfinite(P)
+    Px = np.where(far, np.inf, P.real)[:, None, :]  # an unassembled sample is infinitely far
+    Py = np.where(far, 0.0, P.imag)[:, None, :]
+    dx = Px - T.real[None, :, None]
+    dy = Py - T.imag[None, :, None]
+    d2 = dx * dx + dy * dy  # (N, m, n)
+    k = _ordered(d2) if ordered else np.argmin(d2, axis=-1)
+    best = np.take_along_axis(d2, k[..., None], axis=-1)[..., 0]
+    th = np.take_along_axis(theta, k, axis=-1)  # (N, m)
+    spacing = 2 * np.pi / n
+    h = H_THETA
+    m = len(T)
+    for _ in range(refine):
+        Z = _tracer(params, sp, np.concatenate([th - h, th, th + h], axis=1))
+        Pm, P0, Pp = Z[:, :m], Z[:, m : 2 * m], Z[:, 2 * m :]
+        r = P0 - T[None, :]
+        d1 = (Pp - Pm) / (2 * h)
+        dd = (Pp - 2 * P0 + Pm) / (h * h)
+        g = (np.conj(r) * d1).real
+        gp = np.abs(d1) ** 2 + (np.conj(r) * dd).real
+        gp = np.where(gp > 0, gp, np.abs(d1) ** 2)  # not convex here: a gradient step of Gauss-Newton's size
+        step = np.clip(-g / gp, -spacing, spacing)
+        cand = th + np.where(np.isfinite(step), step, 0.0)
+        dc = np.abs(_tracer(params, sp, cand) - T[None, :]) ** 2
+        better = np.isfinite(dc) & (dc < best)
+        th = np.where(better, cand, th)
+        best = np.where(better, dc, best)
+    return th, np.where(np.isfinite(best), np.sqrt(best), np.nan)
+
+
+def _ordered(d2: np.ndarray) -> np.ndarray:
+    """Sample indices (N, m) of the targets met in order: the monotone assignment of least total ``d2``.
+
+    ``d2`` (N, m, n): squared distance of each target to each sample of the closed curve.
+    The curve is unrolled from the sample nearest the first target, once forwards and once
+    backwards; along it the targets' samples must not decrease (dynamic programming with a
+    running minimum: ``acc_i(j) = d2_i(j) + min_{j' <= j} acc_{i-1}(j')``), and the cheaper
+    direction wins. The total is a minimum of sums of continuous functions of the design,
+    so it is continuous too.
+    """
+    N, m, n = d2.shape
+    k0 = np.argmin(d2[:, 0, :], axis=-1)
+    rows = np.arange(N)[:, None, None]
+    best_total = np.full(N, np.inf)
+    best_k = np.zeros((N, m), np.intp)
+    for direction in (1, -1):
+        idx = np.mod(k0[:, None] + direction * np.arange(n)[None, :], n)  # (N, n) unrolled -> sample
+        D = d2[rows, np.arange(m)[None, :, None], idx[:, None, :]]  # (N, m, n)
+        acc = np.empty_like(D)
+        acc[:, 0] = D[:, 0]
+        for i in range(1, m):
+            acc[:, i] = D[:, i] + np.minimum.accumulate(acc[:, i - 1], axis=-1)
+        j = np.argmin(acc[:, -1], axis=-1)
+        total = acc[np.arange(N), -1, j]
+        path = np.empty((N, m), np.intp)
+        path[:, -1] = j
+        for i in range(m - 2, -1, -1):  # back-track: the best earlier sample not after the next target's
+            masked = np.where(np.arange(n)[None, :] <= path[:, i + 1 : i + 2], acc[:, i], np.inf)
+            path[:, i] = np.argmin(masked, axis=-1)
+        k = np.take_along_axis(idx, path, axis=-1)
+        better = total < best_total
+        best_total = np.where(better, total, best_total)
+        best_k = np.where(better[:, None], k, best_k)
+    return best_k
+
+
+def _length_excess(sp: DesignSpace, pose: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Largest relative excess of a link length (between two joints of one link) outside ``[lo, hi]``."""
+    out = np.zeros(pose.shape[1])
+    for ln in sp.template.links:
+        if ln.name == "ground":
+            continue
+        ids = [sp.joint(j) for j in ln.joints]
+        for i, a in enumerate(ids):
+            for b in ids[i + 1 :]:
+                d = np.abs(pose[a] - pose[b])
+                out = np.maximum(out, np.maximum(lo - d, d - hi) / hi)
+    return np.maximum(out, 0.0)

@@ -1,0 +1,391 @@
+"""Differential evolution over whole generations, a least-squares polish, restarts, checkpoints.
+
+One restart
+    :class:`scipy.optimize.differential_evolution`'s solver (``rand1bin``, dithered
+    mutation, ``updating="deferred"``, ``vectorized=True``): every generation's trial
+    designs go to :class:`~linkagekit.synthesis.distribute.Evaluator` as one array.
+    Stepping the solver one generation at a time (its iterator) is what lets the run save
+    its state after every generation and stop on the clock.
+Polish
+    The ``POLISHED`` best distinct members are refined by
+    :func:`scipy.optimize.least_squares` (``dogbox``: dogleg steps in rectangular trust regions; it
+    keeps the bounds and, unlike trust-region reflective, converges in a few steps on these
+    nearly degenerate residuals) on the
+    residuals ``e_i / (L sqrt(m))`` and ``sqrt(PENALTY * violation)``, with the Jacobian by
+    forward differences computed as one batch of ``dim + 1`` designs; the refinement of the
+    nearest points is run to convergence there (3 Newton steps), so the residuals are
+    smooth in the design.
+Restarts
+    Up to ``restarts`` independent runs, each from its own child of ``SeedSequence(seed)``;
+    the run stops early once a design meets every target within ``goal * L``.
+
+The same seed gives the same result (on any number of processes or a cluster) unless the
+clock stops the run (``seconds``); the result says which.
+
+Checkpoints
+    A ``.npz`` file (NumPy arrays and one JSON header, read with ``allow_pickle=False``, so
+    loading a checkpoint never executes anything), written atomically after every
+    generation: the restart and generation, the solver's population, energies, random
+    generator state and dither, and the results of the restarts already done. A run given
+    the same checkpoint continues where the file left off and ends with the result of an
+    uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, LinkageError
+from .distribute import Evaluator
+from .objective import PENALTY, Problem, evaluate
+
+#: designs polished per restart
+POLISHED = 5
+#: residual evaluations of the last polish of the best design
+FINAL_POLISH = 2000
+#: the solver's fields that change from generation to generation (all else follows from its arguments)
+_SOLVER_STATE = ("population", "population_energies", "_random_population_index", "feasible", "constraint_violation")
+CHECKPOINT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How to search.
+
+    Attributes
+    ----------
+    seed : int
+    seconds : float
+        Time budget of the whole run (checked between generations).
+    restarts : int
+        Independent differential-evolution runs at most.
+    generations : int
+        Generations per run at most.
+    popsize : int
+        Population = ``popsize * dim`` (scipy's convention).
+    goal : float
+        Stop once every target is within ``goal * L`` (relative to the targets' diagonal).
+    workers : int
+    scheduler : str, optional
+    checkpoint : str, optional
+    """
+
+    seed: int = 0
+    seconds: float = 60.0
+    restarts: int = 8
+    generations: int = 500
+    popsize: int = 15
+    goal: float = 1e-5
+    workers: int = 1
+    scheduler: str | None = None
+    checkpoint: str | None = None
+
+    def key(self) -> dict[str, Any]:
+        """What a checkpoint must agree on to be continued."""
+        return {"seed": self.seed, "restarts": self.restarts, "generations": self.generations, "popsize": self.popsize}
+
+
+@dataclass
+class Progress:
+    """What the progress callback sees after every generation."""
+
+    restart: int
+    generation: int
+    best_cost: float
+    best_error: float  # largest target error of the best design so far, relative to L (NaN until known)
+    evaluations: int
+    elapsed: float
+
+
+@dataclass
+class Outcome:
+    """The best design of a run and how the run went."""
+
+    x: np.ndarray
+    cost: float
+    restarts: int
+    generations: int
+    evaluations: int
+    seconds: float
+    stopped_by: str  # "goal", "restarts" or "time"
+    history: list[tuple[float, float]] = field(default_factory=list)  # (cost, max error / L) per restart
+
+
+def optimize(
+    problem: Problem,
+    settings: Settings,
+    progress: Callable[[Progress], None] | None = None,
+) -> Outcome:
+    """Search ``problem`` as ``settings`` say; returns the best design found."""
+    from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
+
+    start = time.monotonic()
+    lo, hi = problem.bounds
+    seeds = np.random.SeedSequence(settings.seed).spawn(settings.restarts)
+    state = _load(settings, problem) if settings.checkpoint else None
+    done: list[dict[str, Any]] = [] if state is None else state["done"]
+    restart = 0 if state is None else state["restart"]
+    generation = 0 if state is None else state["generation"]
+    evaluations = 0 if state is None else state["evaluations"]
+    elapsed0 = 0.0 if state is None else state["elapsed"]
+    stopped_by = "restarts"
+    total_generations = sum(d["generations"] for d in done)
+
+    def clock() -> float:
+        return elapsed0 + time.monotonic() - start
+
+    def best_so_far() -> tuple[float, float]:
+        if not done:
+            return np.inf, np.nan
+        d = min(done, key=lambda d: d["cost"])
+        return d["cost"], d["max_error"]
+
+    if any(d["max_error"] <= settings.goal for d in done):
+        stopped_by = "goal"
+        restart = settings.restarts
+    with Evaluator(problem, settings.workers, settings.scheduler) as ev:
+
+        def cost(x: np.ndarray) -> np.ndarray:  # scipy's vectorized call: x is (dim, S)
+            return ev.cost(np.asarray(x).T)
+
+        while restart < settings.restarts:
+            solver = DifferentialEvolutionSolver(
+                cost,
+                list(zip(lo, hi, strict=True)),
+                strategy="rand1bin",
+                maxiter=settings.generations,
+                popsize=settings.popsize,
+                tol=0,
+                mutation=(0.5, 1.0),
+                recombination=0.9,
+                rng=np.random.Generator(np.random.PCG64(seeds[restart])),
+                polish=False,
+                init="latinhypercube",
+                updating="deferred",
+                vectorized=True,
+            )
+            if state is not None and state.get("solver") is not None:
+                _restore(solver, state["solver"])
+            designs = 0
+            if state is not None and state.get("solver") is not None:
+                designs = evaluations - state["evaluations_done"]
+                evaluations = state["evaluations_done"]
+            state = None
+            out_of_time = False
+            while generation < settings.generations:
+                try:
+                    next(solver)
+                except StopIteration:  # pragma: no cover - maxfun is not set
+                    break
+                generation += 1
+                designs += len(solver.population) * (2 if generation == 1 else 1)  # the first adds the initial one
+                best_cost, best_err = best_so_far()
+                if progress is not None:
+                    progress(
+                        Progress(
+                            restart,
+                            generation,
+                            min(best_cost, float(solver.population_energies[0])),
+                            best_err,
+                            evaluations + designs,
+                            clock(),
+                        )
+                    )
+                if settings.checkpoint:
+                    _save(
+                        settings, problem, restart, generation, evaluations + designs, clock(), _capture(solver), done
+                    )
+                if clock() > settings.seconds:
+                    out_of_time = True
+                    break
+            x, c, err = _polish(problem, solver, ev)
+            done.append({"x": x, "cost": c, "max_error": err, "generations": generation, "designs": designs})
+            evaluations += designs
+            total_generations += generation
+            restart += 1
+            generation = 0
+            if settings.checkpoint:
+                _save(settings, problem, restart, 0, evaluations, clock(), None, done)
+            if progress is not None:
+                bc, be = best_so_far()
+                progress(Progress(restart, 0, bc, be, evaluations, clock()))
+            if err <= settings.goal:
+                stopped_by = "goal"
+                break
+            if out_of_time or clock() > settings.seconds:
+                stopped_by = "time"
+                break
+    best = min(done, key=lambda d: d["cost"])
+    x = np.asarray(best["x"], float)
+    if best["max_error"] > settings.goal:  # a last, longer polish of the best design
+        deep = polish(problem, x, max_nfev=FINAL_POLISH)
+        e = evaluate(problem, np.array([x, deep]), refine=3)
+        if e.cost[1] < e.cost[0]:
+            best = {**best, "x": deep, "cost": float(e.cost[1])}
+    return Outcome(
+        np.asarray(best["x"], float),
+        float(best["cost"]),
+        len(done),
+        total_generations,
+        evaluations,
+        clock(),
+        stopped_by,
+        [(float(d["cost"]), float(d["max_error"])) for d in done],
+    )
+
+
+# ---------------------------------------------------------------------- polish
+def residuals(problem: Problem, X: np.ndarray) -> np.ndarray:
+    """Least-squares residuals of designs ``X`` (N, dim): (N, m + 1), whose squared sum is the cost."""
+    e = evaluate(problem, X, refine=3)
+    m = len(problem.targets)
+    rel = np.where(np.isfinite(e.errors), e.errors / problem.scale, 1.0) / np.sqrt(m)
+    return np.concatenate([rel, np.sqrt(PENALTY * e.violation)[:, None]], axis=1)
+
+
+def polish(problem: Problem, x0: np.ndarray, max_nfev: int = 100) -> np.ndarray:
+    """A local least-squares refinement of one design vector within the bounds."""
+    from scipy.optimize import least_squares
+
+    lo, hi = problem.bounds
+    h = 1e-7 * problem.scale
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        return residuals(problem, x[None])[0]
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        steps = np.where(x + h <= hi, h, -h)
+        X = np.repeat(x[None], len(x) + 1, axis=0)
+        X[1:] += np.diag(steps)
+        R = residuals(problem, X)
+        return ((R[1:] - R[0]) / steps[:, None]).T
+
+    x0 = np.clip(x0, lo, hi)
+    r = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="dogbox", x_scale="jac", max_nfev=max_nfev)
+    return np.asarray(r.x, float)
+
+
+def _polish(problem: Problem, solver: Any, ev: Evaluator) -> tuple[np.ndarray, float, float]:
+    """The best of the population's ``POLISHED`` best distinct members after polishing: (x, cost, max error / L)."""
+    pop = solver._scale_parameters(solver.population)
+    order = np.argsort(solver.population_energies, kind="stable")
+    picked: list[np.ndarray] = []
+    for i in order:
+        if len(picked) == POLISHED:
+            break
+        if all(np.max(np.abs(pop[i] - p)) > 1e-9 * problem.scale for p in picked):
+            picked.append(pop[i])
+    cands = np.array([polish(problem, p) for p in picked] + picked)
+    e = evaluate(problem, cands, refine=3)
+    k = int(np.argmin(e.cost))
+    err = np.nanmax(e.errors[k]) / problem.scale if np.all(np.isfinite(e.errors[k])) else np.inf
+    return cands[k], float(e.cost[k]), float(err if e.violation[k] == 0 else np.inf)
+
+
+# ---------------------------------------------------------------------- checkpoints
+def _capture(solver: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {k: np.array(getattr(solver, k)) for k in _SOLVER_STATE}
+    out["scale"] = float(solver.scale)
+    out["nfev"] = int(solver._nfev)
+    out["rng"] = solver.random_number_generator.bit_generator.state
+    return out
+
+
+def _restore(solver: Any, saved: dict[str, Any]) -> None:
+    for k in _SOLVER_STATE:
+        current = getattr(solver, k)
+        value = np.asarray(saved[k], dtype=current.dtype).reshape(current.shape)
+        setattr(solver, k, value)
+    solver.scale = float(saved["scale"])
+    solver._nfev = int(saved["nfev"])
+    solver.random_number_generator.bit_generator.state = saved["rng"]
+
+
+def _save(
+    settings: Settings,
+    problem: Problem,
+    restart: int,
+    generation: int,
+    evaluations: int,
+    elapsed: float,
+    solver: dict[str, Any] | None,
+    done: list[dict[str, Any]],
+) -> None:
+    assert settings.checkpoint is not None
+    path = Path(settings.checkpoint)
+    header = {
+        "format": "linkagekit-checkpoint/1",
+        "version": CHECKPOINT_VERSION,
+        "problem": problem.fingerprint(),
+        "settings": settings.key(),
+        "restart": restart,
+        "generation": generation,
+        "evaluations": evaluations,
+        "evaluations_done": int(sum(d.get("designs", 0) for d in done)),
+        "elapsed": elapsed,
+        "done": [
+            {"cost": d["cost"], "max_error": d["max_error"], "generations": d["generations"], "designs": d["designs"]}
+            for d in done
+        ],
+        "solver": None,
+    }
+    arrays: dict[str, np.ndarray] = {f"done_x_{i}": np.asarray(d["x"], float) for i, d in enumerate(done)}
+    if solver is not None:
+        header["solver"] = {"scale": solver["scale"], "nfev": solver["nfev"], "rng": solver["rng"]}
+        arrays.update({f"solver_{k}": solver[k] for k in _SOLVER_STATE})
+    arrays["header"] = np.array(json.dumps(header, default=int))
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            np.savez(f, **arrays)  # type: ignore[arg-type]
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        raise LinkageError(f"{path}: cannot write the checkpoint ({e.strerror or e})") from None
+
+
+def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
+    """The saved state, or None when the file does not exist yet."""
+    assert settings.checkpoint is not None
+    path = Path(settings.checkpoint)
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(str(z["header"]))
+            arrays = {k: z[k] for k in z.files if k != "header"}
+        if header.get("format") != "linkagekit-checkpoint/1":
+            raise ValueError("not a linkagekit checkpoint")
+        done = [
+            {**d, "x": arrays[f"done_x_{i}"], "cost": float(d["cost"]), "max_error": float(d["max_error"])}
+            for i, d in enumerate(header["done"])
+        ]
+        solver = None
+        if header["solver"] is not None:
+            solver = dict(header["solver"])
+            solver.update({k: arrays[f"solver_{k}"] for k in _SOLVER_STATE})
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise InputError(f"{path}: not a readable linkagekit checkpoint ({e})") from None
+    if header["problem"] != problem.fingerprint():
+        raise InputError(f"{path}: this checkpoint belongs to another problem (other targets, topology or options)")
+    if header["settings"] != settings.key():
+        raise InputError(f"{path}: this checkpoint was made with other settings: {header['settings']}")
+    return {
+        "restart": int(header["restart"]),
+        "generation": int(header["generation"]),
+        "evaluations": int(header["evaluations"]),
+        "evaluations_done": int(header["evaluations_done"]),
+        "elapsed": float(header["elapsed"]),
+        "done": done,
+        "solver": solver,
+    }
