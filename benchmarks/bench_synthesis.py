@@ -7,8 +7,8 @@ Timed, ns per design-sample, every joint's position at 360 crank angles (0, 1, .
 * ``lk.analyze(mech, {"crank": deg}, poses=poses, rates=False)``,
 * one layer below, what the synthesis objective calls: ``compile(mech, poses, make_plan(mech))``
   then ``solve(params, q, out=...)`` (compile included; each call writes into the chunk's one
-  positions array, as ``lk.analyze`` does), one call per chunk of designs and in calls of 2^19
-  (``CHUNK`` of ``linkagekit.synthesis.objective`` as written) and 2^17 (``lk.analyze``'s) design-samples,
+  positions array, as ``lk.analyze`` does), one call per chunk of designs and in calls of 2^17
+  (``lk.analyze``'s) and 2^16 (``CHUNK`` of ``linkagekit.synthesis.objective``) design-samples,
 * the hand-written NumPy kernel of ``bench_designs`` (the same numbers, checked equal first),
 * pylinkage (optional: ``pip install pylinkage numba``): its batch over designs,
   ``pylinkage.population.Ensemble(linkage, dimensions, positions).simulate(iterations)`` (one
@@ -49,7 +49,7 @@ CHUNK = 10_000  # designs per chunk: ~0.3 GB of positions per method at 360 samp
 LOOP_DESIGNS = 2000  # designs of pylinkage's per-design path (step_fast)
 RTOL = 1e-9  # pylinkage against us: largest difference / largest coordinate of the design
 #: design-samples per compile + solve call (None: the whole chunk in one call)
-SOLVE_CALLS = (None, 1 << 19, 1 << 17)
+SOLVE_CALLS = (None, 1 << 17, 1 << 16)
 
 
 # ---------------------------------------------------------------------- linkagekit
@@ -242,8 +242,27 @@ def main(n=100_000, chunk=CHUNK, repeat=3, loop_designs=LOOP_DESIGNS):
             "  (ratios against the faster pylinkage path timed on every design; its per-design "
             "step_fast path is timed on the first designs: its cost per design does not depend on N)"
         )
+    ns["objective"] = objective_ns(mech, poses, repeat)
+    print(
+        f"  the synthesis objective on the same designs (12 targets: the {N_SAMPLES}-sample curve, nearest points "
+        f"refined by one Newton step, transmission angle, penalties): {ns['objective']:.1f} ns per design-sample "
+        f"of the curve"
+    )
     print(f"  peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB")
     return ns
+
+
+def objective_ns(mech, poses, repeat):
+    """ns per design-sample of ``evaluate`` (what a generation of the synthesis costs), over ``poses``."""
+    from linkagekit.synthesis.objective import evaluate
+    from linkagekit.synthesis.run import make_problem
+
+    targets = lk.analyze(mech, {"crank": np.arange(0.0, 360.0, 30.0)}).xy("P")
+    problem = make_problem(targets, "fourbar", unit="cm", samples=N_SAMPLES)
+    sp = problem.space
+    X = np.stack([np.concatenate([p[mech.joint_names.index(j)] for j in sp.free]) for p in poses])
+    t = best_of(lambda: evaluate(problem, X), repeat)
+    return t * 1e9 / (len(X) * N_SAMPLES)
 
 
 if __name__ == "__main__":

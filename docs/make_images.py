@@ -22,6 +22,16 @@ COMMANDS = [
     ["plot", "examples/triad_six_modes.yaml", "--modes", "--at", "57.08", "-o", "docs/images/plot_modes_triad.png"],
     ["plot", "examples/excavator_boom.yaml", "-o", "docs/images/plot_excavator.png"],
     [
+        "synthesize",
+        "examples/targets/d_path.csv",
+        "--units",
+        "mm",
+        "-o",
+        "/tmp/d_path_fourbar.yaml",
+        "--plot",
+        "docs/images/synthesize_dpath.png",
+    ],
+    [
         "plot",
         "examples/slider_crank.yaml",
         "-q",

@@ -24,10 +24,9 @@ one common offset ``delta = theta_pose - phi_0``: the pose is the mechanism at t
 target's input (its tracer is searched near the first target), so the offset is not a
 search variable and the design vector is the same as without timing.
 
-*Order*: when asked, the inputs ``theta_i`` of the nearest points must visit the targets
-in their order, in one direction, within one turn: the forward steps
-``(theta_{i+1} - theta_i) mod 2 pi`` around the closed sequence add up to ``2 pi w`` and
-the order holds when ``w = 1`` (or ``w = m - 1``, the reverse direction).
+*Order*: when asked, the targets are met in their order along the curve, in one direction,
+within one turn: each target's sample is chosen by the monotone assignment of least total
+squared distance (:func:`_ordered`, dynamic programming), then refined as above.
 
 Feasibility (penalised by how far from feasible, never by a cliff)
 ----------------------------------------------------------------
@@ -35,8 +34,7 @@ Feasibility (penalised by how far from feasible, never by a cliff)
   (``positions.solve``: how far the circles are from meeting, relative);
 * every transmission angle ``mu`` of the space stays within ``[MIN, 180 - MIN]``: the largest
   ``|cos mu| - cos MIN`` over the sweep;
-* link lengths within bounds, when given: the largest relative excess;
-* the order of the targets, when asked: ``(min(w, m - w) - 1) / m``.
+* link lengths within bounds, when given: the largest relative excess.
 
 The score is ``mean_i (e_i / L)^2 + PENALTY * violation``: an exact penalty (linear in the
 violation), so a feasible optimum stays feasible.
@@ -67,8 +65,9 @@ from .space import DesignSpace
 #: weight of the violation against the mean squared relative error (large: a design that gains accuracy
 #: by violating a constraint a little is still worse than a feasible one)
 PENALTY = 100.0
-#: design-samples per chunk (bounds memory: ~16 bytes x this x a few arrays)
-CHUNK = 1 << 19
+#: design-samples per chunk: bounds memory (~16 bytes x this x a few arrays) and keeps a chunk's arrays
+#: in cache (benchmarks/bench_synthesis.py: 2^16 is about 1.6x faster per design-sample than 2^19 here)
+CHUNK = 1 << 16
 #: degrees added to the smallest transmission angle while searching, so that the design found keeps
 #: the limit between the samples too (the result is checked densely against the limit itself)
 MARGIN = 0.25

@@ -148,6 +148,7 @@ def optimize(
         d = min(done, key=lambda d: d["cost"])
         return d["cost"], d["max_error"]
 
+    reserve = 0.0  # seconds kept for the polish after a search's last generation
     if any(d["max_error"] <= settings.goal for d in done):
         stopped_by = "goal"
         restart = settings.restarts
@@ -203,10 +204,12 @@ def optimize(
                     _save(
                         settings, problem, restart, generation, evaluations + designs, clock(), _capture(solver), done
                     )
-                if clock() > settings.seconds:
+                if clock() + reserve > settings.seconds:  # leave time to polish within the budget
                     out_of_time = True
                     break
+            t0 = clock()
             x, c, err = _polish(problem, solver, ev)
+            reserve = max(reserve, 2.0 * (clock() - t0))  # this polish and the last, longer one
             done.append({"x": x, "cost": c, "max_error": err, "generations": generation, "designs": designs})
             evaluations += designs
             total_generations += generation
@@ -220,13 +223,13 @@ def optimize(
             if err <= settings.goal:
                 stopped_by = "goal"
                 break
-            if out_of_time or clock() > settings.seconds:
+            if out_of_time or clock() + reserve > settings.seconds:
                 stopped_by = "time"
                 break
     best = min(done, key=lambda d: d["cost"])
     x = np.asarray(best["x"], float)
     if best["max_error"] > settings.goal:  # a last, longer polish of the best design
-        deep = polish(problem, x, max_nfev=FINAL_POLISH)
+        deep = polish(problem, x, max_nfev=FINAL_POLISH, until=start + max(settings.seconds - elapsed0, 0.0))
         e = evaluate(problem, np.array([x, deep]), refine=3)
         if e.cost[1] < e.cost[0]:
             best = {**best, "x": deep, "cost": float(e.cost[1])}
@@ -251,15 +254,25 @@ def residuals(problem: Problem, X: np.ndarray) -> np.ndarray:
     return np.concatenate([rel, np.sqrt(PENALTY * e.violation)[:, None]], axis=1)
 
 
-def polish(problem: Problem, x0: np.ndarray, max_nfev: int = 100) -> np.ndarray:
-    """A local least-squares refinement of one design vector within the bounds."""
+def polish(problem: Problem, x0: np.ndarray, max_nfev: int = 100, until: float | None = None) -> np.ndarray:
+    """A local least-squares refinement of one design vector within the bounds.
+
+    ``until``: a ``time.monotonic()`` deadline; past it the refinement stops at its best point so far.
+    """
     from scipy.optimize import least_squares
 
     lo, hi = problem.bounds
     h = 1e-7 * problem.scale
 
+    best: list[Any] = [np.inf, np.asarray(x0, float)]
+
     def fun(x: np.ndarray) -> np.ndarray:
-        return residuals(problem, x[None])[0]
+        if until is not None and time.monotonic() > until:
+            raise _OutOfTime
+        r = residuals(problem, x[None])[0]
+        if float(r @ r) < best[0]:
+            best[:] = [float(r @ r), x.copy()]
+        return r
 
     def jac(x: np.ndarray) -> np.ndarray:
         steps = np.where(x + h <= hi, h, -h)
@@ -269,8 +282,15 @@ def polish(problem: Problem, x0: np.ndarray, max_nfev: int = 100) -> np.ndarray:
         return ((R[1:] - R[0]) / steps[:, None]).T
 
     x0 = np.clip(x0, lo, hi)
-    r = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="dogbox", x_scale="jac", max_nfev=max_nfev)
+    try:
+        r = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="dogbox", x_scale="jac", max_nfev=max_nfev)
+    except _OutOfTime:
+        return np.asarray(best[1], float)
     return np.asarray(r.x, float)
+
+
+class _OutOfTime(Exception):
+    """The polish's deadline passed."""
 
 
 def _polish(problem: Problem, solver: Any, ev: Evaluator) -> tuple[np.ndarray, float, float]:
