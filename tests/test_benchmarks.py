@@ -67,6 +67,40 @@ def test_bench_group(capsys):
     assert got["ratio"] > 1 and all(v > 0 for v in got.values())
 
 
+def test_bench_synthesis(capsys):
+    """The synthesis benchmark at a small size: its equality checks (hand kernel, compile + solve, and pylinkage's
+    positions when the optional bench dependencies are installed) hold, and it prints every row."""
+    import bench_synthesis
+
+    ns = bench_synthesis.main(50, chunk=20, repeat=1, loop_designs=5)
+    out = capsys.readouterr().out
+    assert "50 four-bar designs" in out and "hand NumPy kernel" in out and "synthesis objective" in out
+    assert all(v > 0 for v in ns.values())
+    if "pylinkage" in ns:
+        assert "positions equal to ours" in out and "ratio pylinkage / this" in out
+    else:
+        assert "pylinkage" in out and "not installed" in out
+
+
+def test_bench_recovery(capsys):
+    import bench_recovery
+
+    rows = bench_recovery.main(1, seconds=2.0, workers=1)
+    out = capsys.readouterr().out
+    assert len(rows) == 3 and "within 0.1 % in 2 s" in out
+    assert all(r[2] >= 0 and r[3] > 0 for r in rows)
+
+
+def test_bench_synthesis_without_pylinkage(capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "pylinkage", None)  # as if not installed
+    import bench_synthesis
+
+    ns = bench_synthesis.main(20, repeat=1)
+    out = capsys.readouterr().out
+    assert "pylinkage not installed" in out and "lk.analyze" in out
+    assert not any(k.startswith("pylinkage") for k in ns)
+
+
 def test_benchmarks_leave_no_module_cache():
     for name in (
         "bench_positions",
@@ -75,6 +109,9 @@ def test_benchmarks_leave_no_module_cache():
         "bench_animate",
         "bench_editor",
         "bench_group",
+        "bench_synthesis",
+        "bench_recovery",
+        "test_synthesis",
         "timing",
     ):
         sys.modules.pop(name, None)
