@@ -6,6 +6,8 @@ library's natural-coordinate triangulation is checked against.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 
@@ -181,3 +183,34 @@ TRIAD_LINKS = {
     "l3": ["C0", "J3"],
     "tern": ["J1", "J2", "J3"],
 }
+
+
+# ---------------------------------------------------------------------- synthesis: independent measures
+def curve_distance(mech: Any, targets: np.ndarray, step: float = 0.01) -> np.ndarray:
+    """Distance from each target (m, 2) to the polyline of P over a full crank turn sampled every ``step`` degrees."""
+    import linkagekit as lk
+
+    P = lk.analyze(mech, {"crank": np.arange(0.0, 360.0 + step / 2, step)}).xy("P")
+    assert np.all(np.isfinite(P)), "the crank does not turn fully"
+    a, ab = P[:-1], P[1:] - P[:-1]
+    out = []
+    for t in np.asarray(targets, float):
+        s = np.clip(np.sum((t - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0.0, 1.0)
+        out.append(np.min(np.hypot(*(a + s[:, None] * ab - t).T)))
+    return np.array(out)
+
+
+def diagonal(xy: np.ndarray) -> float:
+    return float(np.hypot(*np.ptp(np.asarray(xy, float), axis=0)))
+
+
+def assert_buildable(mech: Any, min_transmission: float = 20.0) -> None:
+    """The crank turns fully and every four-bar loop's transmission angle stays in [MIN, 180 - MIN] (lk.check)."""
+    import linkagekit as lk
+
+    rep = lk.check(mech)
+    assert rep.input_ranges["crank"] == [[0.0, 360.0]], rep.input_ranges
+    assert rep.fourbars, "no four-bar loop found by lk.check"
+    for loop in rep.fourbars:
+        ta = loop["transmission_angle"]
+        assert min_transmission - 1e-6 <= ta["min"] and ta["max"] <= 180 - min_transmission + 1e-6, ta

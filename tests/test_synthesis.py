@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import linkagekit as lk
+from helpers import assert_buildable, curve_distance, diagonal
 from linkagekit.synthesis.objective import Problem, _ordered, evaluate
 from linkagekit.synthesis.optimize import Settings, optimize
 from linkagekit.synthesis.run import make_problem, synthesize
@@ -25,31 +26,6 @@ SEED000 = "examples/seed000_fourbar.yaml"
 
 
 # ---------------------------------------------------------------------- independent measures
-def curve_distance(mech: lk.Mechanism, targets: np.ndarray, step: float = 0.01) -> np.ndarray:
-    """Distance from each target (m, 2) to the polyline of P over a full crank turn sampled every ``step`` degrees."""
-    P = lk.analyze(mech, {"crank": np.arange(0.0, 360.0 + step / 2, step)}).xy("P")
-    assert np.all(np.isfinite(P)), "the crank does not turn fully"
-    a, b = P[:-1], P[1:]
-    ab = b - a
-    out = []
-    for t in np.asarray(targets, float):
-        s = np.clip(np.sum((t - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0.0, 1.0)
-        out.append(np.min(np.hypot(*(a + s[:, None] * ab - t).T)))
-    return np.array(out)
-
-
-def diagonal(targets: np.ndarray) -> float:
-    return float(np.hypot(*np.ptp(np.asarray(targets, float), axis=0)))
-
-
-def assert_buildable(mech: lk.Mechanism, min_transmission: float = 20.0) -> None:
-    rep = lk.check(mech)
-    assert rep.input_ranges["crank"] == [[0.0, 360.0]], rep.input_ranges
-    for loop in rep.fourbars:
-        ta = loop["transmission_angle"]
-        assert min_transmission - 1e-6 <= ta["min"] and ta["max"] <= 180 - min_transmission + 1e-6, ta
-
-
 def random_designs(topology: str, n: int, seed: int, min_transmission: float = 30.0):
     """Designs of a built-in topology whose crank turns fully with some margin and which lie in the default
     search box of their own coupler curve (every joint, at every input, within 0.9 curve diagonals of the

@@ -1122,9 +1122,9 @@ def _synthesize(args: argparse.Namespace) -> int:
                 f"--topology: '{shorten(topology)}' is neither a topology ({', '.join(TOPOLOGIES)}) nor a file"
             )
         topology = lk.load(topology)
-        if topology.units.get("length") != targets.unit:
+        if topology.length_unit != targets.unit:
             raise InputError(
-                f"--topology {shorten(args.topology, 80)}: its length unit is {topology.units.get('length')}, "
+                f"--topology {shorten(args.topology, 80)}: its length unit is {topology.length_unit}, "
                 f"the targets' is {targets.unit} (--units)"
             )
     elif args.free:

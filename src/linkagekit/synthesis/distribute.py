@@ -50,6 +50,19 @@ def _cost_of(problem: Problem, X: np.ndarray) -> np.ndarray:
     return evaluate(problem, X).cost
 
 
+def _check_address(address: str) -> None:
+    """Refuse an address that is not ``tcp://host:port`` or ``tls://host:port`` (before Dask tries it)."""
+    from distributed.comm import parse_address, parse_host_port
+
+    try:
+        protocol, loc = parse_address(address, strict=True)
+        parse_host_port(loc)
+    except (ValueError, TypeError) as e:
+        raise InputError(f"--scheduler: '{address}' is not a scheduler address like tcp://host:8786 ({e})") from None
+    if protocol not in ("tcp", "tls"):
+        raise InputError(f"--scheduler: '{address}': only tcp:// and tls:// scheduler addresses are supported")
+
+
 class Evaluator:
     """Scores of a generation, ``cost(X)``, evaluated where asked.
 
@@ -76,8 +89,9 @@ class Evaluator:
                 from distributed import Client
             except ImportError:
                 raise InputError("--scheduler needs Dask: pip install 'dask[distributed]'") from None
+            _check_address(scheduler)
             try:
-                self._client = Client(scheduler, timeout=20, set_as_default=False)
+                self._client = Client(scheduler, timeout=10, set_as_default=False)
             except (OSError, TimeoutError, ValueError) as e:
                 raise InputError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({e})") from None
             self._remote = self._client.scatter(problem, broadcast=True)

@@ -362,7 +362,7 @@ def _save(
         header["solver"] = {"scale": solver["scale"], "nfev": solver["nfev"], "rng": solver["rng"]}
         arrays.update({f"solver_{k}": solver[k] for k in _SOLVER_STATE})
     arrays["header"] = np.array(json.dumps(header, default=int))
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = _temporary(path)
     try:
         with open(tmp, "wb") as f:
             np.savez(f, **arrays)  # type: ignore[arg-type]
@@ -374,17 +374,25 @@ def _save(
         raise LinkageError(f"{path}: cannot write the checkpoint ({e.strerror or e})") from None
 
 
+def _temporary(path: Path) -> Path:
+    """Where a checkpoint is written before it is renamed over ``path`` (one name: a killed run's is reused)."""
+    return path.with_name(f".{path.name}.tmp")
+
+
 def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
     """The saved state, or None when the file does not exist yet."""
+    import zipfile
+
     assert settings.checkpoint is not None
     path = Path(settings.checkpoint)
+    _temporary(path).unlink(missing_ok=True)  # left by a run killed while writing; the checkpoint itself is whole
     if not path.exists():
         return None
     try:
         with np.load(path, allow_pickle=False) as z:
             header = json.loads(str(z["header"]))
             arrays = {k: z[k] for k in z.files if k != "header"}
-        if header.get("format") != "linkagekit-checkpoint/1":
+        if not isinstance(header, dict) or header.get("format") != "linkagekit-checkpoint/1":
             raise ValueError("not a linkagekit checkpoint")
         done = [
             {**d, "x": arrays[f"done_x_{i}"], "cost": float(d["cost"]), "max_error": float(d["max_error"])}
@@ -394,18 +402,20 @@ def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
         if header["solver"] is not None:
             solver = dict(header["solver"])
             solver.update({k: arrays[f"solver_{k}"] for k in _SOLVER_STATE})
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise InputError(f"{path}: not a readable linkagekit checkpoint ({e})") from None
-    if header["problem"] != problem.fingerprint():
+        fingerprint, key = header["problem"], header["settings"]
+        state = {
+            "restart": int(header["restart"]),
+            "generation": int(header["generation"]),
+            "evaluations": int(header["evaluations"]),
+            "evaluations_done": int(header["evaluations_done"]),
+            "elapsed": float(header["elapsed"]),
+            "done": done,
+            "solver": solver,
+        }
+    except (OSError, EOFError, ValueError, KeyError, TypeError, AttributeError, zipfile.BadZipFile) as e:
+        raise InputError(f"{path}: not a readable linkagekit checkpoint ({type(e).__name__}: {e})") from None
+    if fingerprint != problem.fingerprint():
         raise InputError(f"{path}: this checkpoint belongs to another problem (other targets, topology or options)")
-    if header["settings"] != settings.key():
-        raise InputError(f"{path}: this checkpoint was made with other settings: {header['settings']}")
-    return {
-        "restart": int(header["restart"]),
-        "generation": int(header["generation"]),
-        "evaluations": int(header["evaluations"]),
-        "evaluations_done": int(header["evaluations_done"]),
-        "elapsed": float(header["elapsed"]),
-        "done": done,
-        "solver": solver,
-    }
+    if key != settings.key():
+        raise InputError(f"{path}: this checkpoint was made with other settings: {key}")
+    return state

@@ -1,0 +1,587 @@
+"""`linkagekit synthesize` end to end: the file it writes, the table it prints, determinism, resume, Dask.
+
+Everything a run prints or writes is checked against an independent computation:
+
+* the written mechanism is loaded with ``lk.load`` and its coupler curve recomputed with
+  ``lk.analyze`` on a 0.01 degree sweep; each target's distance to that polyline is compared
+  with the error column of the printed table (within 1e-6 of the targets' diagonal);
+* the crank range and transmission angle come from ``lk.check``;
+* the ``--plot`` PNG is read pixel by pixel through the map stored in its metadata
+  (``linkagekit:transform``), with a shifted map as the negative control;
+* determinism is byte equality of the written files (same seed twice, 1 vs 2 local
+  processes, local processes vs a Dask ``LocalCluster``, with vs without a checkpoint, an
+  uninterrupted run vs a run killed with SIGKILL and resumed from its checkpoint);
+* the resumed run is proven to resume (not to start over) by counting the generations it
+  evaluates (``Evaluator.cost`` calls), which must be exactly those the killed run had not done.
+
+The targets are nine points of the coupler curve of ``examples/seed000_fourbar.yaml`` (cm); the
+runs are small (``--restarts 2 --generations 40``) and ``--seconds 1000`` so the clock never
+decides a result.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import linkagekit as lk
+from helpers import assert_buildable, curve_distance, diagonal
+from linkagekit.cli import main
+from linkagekit.synthesis.distribute import Evaluator
+
+ROOT = Path(__file__).resolve().parents[1]
+SEED000 = ROOT / "examples" / "seed000_fourbar.yaml"
+ANGLES = np.arange(0.0, 360.0, 40.0)  # nine targets
+SMALL = ["--units", "cm", "--restarts", "2", "--generations", "40", "--seconds", "1000"]
+TARGET_RGB = np.array([0x00, 0x50, 0xB4])  # draw.TARGET_COLOR
+ERROR_PREFIX = "linkagekit: error: "
+
+
+# ---------------------------------------------------------------------- helpers
+def write_csv(path: Path, xy: np.ndarray, inputs: np.ndarray | None = None) -> Path:
+    lines = ["x,y,input" if inputs is not None else "x,y"]
+    for i, (x, y) in enumerate(np.asarray(xy, float)):
+        row = [repr(float(x)), repr(float(y))] + ([repr(float(inputs[i]))] if inputs is not None else [])
+        lines.append(",".join(row))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def seed000_curve(angles: np.ndarray) -> np.ndarray:
+    return lk.analyze(lk.load(SEED000), {"crank": np.asarray(angles, float)}).xy("P")
+
+
+def read_csv(path: Path) -> np.ndarray:
+    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def run_cli(args: list[str], cwd: Path, timeout: float = 240) -> subprocess.CompletedProcess[str]:
+    """The command line in a fresh interpreter (``python -m linkagekit.cli``)."""
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    return subprocess.run(
+        [sys.executable, "-m", "linkagekit.cli", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+def run_main(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    """The command line in this process: (status, stdout, stderr)."""
+    capsys.readouterr()
+    code = main(args)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_error(code: int, err: str, *fragments: str) -> None:
+    assert code == 2, (code, err)
+    assert err.startswith(ERROR_PREFIX), err
+    assert err.endswith("\n") and err.count("\n") == 1, f"not exactly one line on stderr: {err!r}"
+    assert "Traceback" not in err
+    for f in fragments:
+        assert f in err, (f, err)
+
+
+def parse_table(stdout: str) -> tuple[list[str], np.ndarray]:
+    """The printed table of targets: (header cells, values), up to the first blank line."""
+    lines = stdout.split("\n")
+    end = lines.index("")
+    header = re.split(r"\s{2,}", lines[0].strip())
+    assert set(lines[1].replace(" ", "")) == {"-"}, lines[1]
+    rows = [[float("nan") if c == "—" else float(c) for c in line.split()] for line in lines[2:end]]
+    assert all(len(r) == len(header) for r in rows), (header, rows)
+    return header, np.array(rows, float)
+
+
+def summary(stdout: str) -> dict[str, float | str]:
+    m = re.search(
+        r"^max error (\S+) (\w+) \((\S+) % of the targets' diagonal (\S+) \w+\), rms (\S+) \w+$", stdout, re.M
+    )
+    assert m, stdout
+    out: dict[str, float | str] = {
+        "max": float(m[1]),
+        "unit": m[2],
+        "percent": float(m[3]),
+        "diagonal": float(m[4]),
+        "rms": float(m[5]),
+    }
+    m = re.search(
+        r"^(\d+) searches, (\d+) generations, (\d+) designs evaluated in [\d.]+ s; stopped by (.+)$", stdout, re.M
+    )
+    assert m, stdout
+    out.update(searches=int(m[1]), generations=int(m[2]), designs=int(m[3]), stopped=m[4])
+    m = re.search(r"^input offset (\S+) deg", stdout, re.M)
+    if m:
+        out["offset"] = float(m[1])
+    return out
+
+
+def without_clock(stdout: str) -> str:
+    """The printout without what may differ between equal runs: the seconds and the output's name."""
+    text = re.sub(r"evaluated in [\d.]+ s", "evaluated in - s", stdout)
+    return "\n".join(line for line in text.split("\n") if not line.startswith("wrote "))
+
+
+def checkpoint_header(path: Path) -> dict | None:
+    """The JSON header of a checkpoint, or None while it does not exist (or cannot be read yet)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return json.loads(str(z["header"]))
+    except (OSError, ValueError, KeyError, EOFError):
+        return None
+
+
+def temp_files(directory: Path) -> list[str]:
+    return sorted(p.name for p in directory.iterdir() if p.name.startswith(".") or p.name.endswith(".tmp"))
+
+
+class CostCounter:
+    """Counts ``Evaluator.cost`` calls (one per generation, two for a search's first) in this process."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        self.calls = 0
+        original = Evaluator.cost
+
+        def counted(ev: Evaluator, X: np.ndarray) -> np.ndarray:
+            self.calls += 1
+            return original(ev, X)
+
+        monkeypatch.setattr(Evaluator, "cost", counted)
+
+
+# ---------------------------------------------------------------------- fixtures
+@pytest.fixture(scope="module")
+def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    d = tmp_path_factory.mktemp("synthesize")
+    write_csv(d / "t.csv", seed000_curve(ANGLES))
+    return d
+
+
+@pytest.fixture(scope="module")
+def base_run(work: Path) -> subprocess.CompletedProcess[str]:
+    """seed 1, one process, with --plot: the reference of the small runs."""
+    proc = run_cli(["synthesize", "t.csv", "-o", "base.yaml", "--seed", "1", "--plot", "base.png", *SMALL], work)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+@pytest.fixture(scope="module")
+def workers2_run(work: Path, base_run: subprocess.CompletedProcess[str]) -> Path:
+    proc = run_cli(["synthesize", "t.csv", "-o", "w2.yaml", "--seed", "1", "--workers", "2", *SMALL], work)
+    assert proc.returncode == 0, proc.stderr
+    assert without_clock(proc.stdout) == without_clock(base_run.stdout)
+    return work / "w2.yaml"
+
+
+@pytest.fixture(scope="module")
+def dask_cluster():
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=50
+    )
+    try:
+        yield cluster
+    finally:
+        cluster.close()
+
+
+# ---------------------------------------------------------------------- output
+def test_writes_a_mechanism_and_an_error_table_that_an_independent_measure_confirms(work, base_run):
+    T = read_csv(work / "t.csv")
+    L = diagonal(T)
+    assert base_run.stderr == ""
+    mech = lk.load(work / "base.yaml")
+    assert "P" in mech.joint_names
+    assert [d.name for d in mech.drivers] == ["crank"]
+    assert mech.length_unit == "cm"
+
+    header, table = parse_table(base_run.stdout)
+    assert header == ["target", "x [cm]", "y [cm]", "crank [deg]", "error [cm]", "error [% diag]"]
+    assert len(table) == len(T)
+    assert table[:, 0].tolist() == list(range(1, len(T) + 1))
+    np.testing.assert_allclose(table[:, 1:3], T, rtol=1e-5, atol=1e-6 * L)
+
+    d = curve_distance(mech, T)
+    printed = table[:, 4]
+    assert np.max(np.abs(printed - d)) <= 1e-6 * L, np.c_[printed, d]
+    np.testing.assert_allclose(table[:, 5], 100 * printed / L, rtol=1e-4, atol=1e-9)
+    # the crank column: the tracer at that input is the nearest point, as far from the target as printed
+    P = lk.analyze(mech, {"crank": table[:, 3]}).xy("P")
+    assert np.max(np.abs(np.hypot(*(P - T).T) - d)) <= 1e-4 * L
+
+    s = summary(base_run.stdout)
+    assert s["unit"] == "cm"
+    assert abs(s["max"] - d.max()) <= 1e-6 * L and abs(s["rms"] - np.sqrt(np.mean(d**2))) <= 1e-6 * L
+    assert abs(s["diagonal"] - L) <= 1e-5 * L
+    assert s["searches"] <= 2 and s["generations"] <= 80 and s["stopped"] in ("the last search", "reaching the goal")
+    assert "the crank turns fully" in base_run.stdout
+    assert base_run.stdout.rstrip("\n").endswith("wrote base.yaml")
+    assert d.max() <= 0.1 * L  # near every target, even after this small search
+    assert_buildable(mech)
+
+
+def test_plot_draws_every_target_where_the_png_transform_maps_it(work, base_run):
+    from PIL import Image
+
+    with Image.open(work / "base.png") as im:
+        assert im.format == "PNG"
+        sx, tx, sy, ty = json.loads(im.text["linkagekit:transform"])
+        rgb = np.asarray(im.convert("RGB")).astype(int)
+    h, w, _ = rgb.shape
+    colours = len(np.unique(rgb.reshape(-1, 3), axis=0))
+    assert colours > 50, "a blank image"
+    blue = np.abs(rgb - TARGET_RGB).sum(axis=-1) <= 60
+    T = read_csv(work / "t.csv")
+
+    def hits(dx: float, dy: float, r: int = 5) -> np.ndarray:
+        out = []
+        for x, y in T:
+            c, k = int(round(sx * x + tx + dx)), int(round(sy * y + ty + dy))
+            assert 0 <= c < w and 0 <= k < h, "a target outside the image"
+            out.append(int(blue[max(k - r, 0) : k + r + 1, max(c - r, 0) : c + r + 1].sum()))
+        return np.array(out)
+
+    at = hits(0, 0)
+    assert np.all(at >= 3), at
+    for shift in [(25, 25), (-25, -25), (40, 0), (0, -40), (w / 4, 0), (0, h / 4)]:  # negative controls
+        assert np.sum(hits(*shift) >= 3) <= len(T) // 3, (shift, hits(*shift))
+
+
+# ---------------------------------------------------------------------- determinism
+def test_same_seed_gives_the_same_file(work, base_run, capsys):
+    code, out, err = run_main(
+        ["synthesize", str(work / "t.csv"), "-o", str(work / "again.yaml"), "--seed", "1", *SMALL], capsys
+    )
+    assert code == 0 and err == "", err
+    assert (work / "again.yaml").read_bytes() == (work / "base.yaml").read_bytes()
+    assert without_clock(out) == without_clock(base_run.stdout)
+
+
+def test_two_local_processes_give_the_same_file_as_one(work, base_run, workers2_run):
+    assert workers2_run.read_bytes() == (work / "base.yaml").read_bytes()
+
+
+def test_checkpointed_run_gives_the_same_file_leaves_no_temp_file_and_a_finished_checkpoint_replays(
+    work, base_run, tmp_path, capsys, monkeypatch
+):
+    shutil.copy(work / "t.csv", tmp_path / "t.csv")
+    args = ["synthesize", "t.csv", "--seed", "1", "--checkpoint", "ck.npz", *SMALL]
+    proc = run_cli([*args, "-o", "ck.yaml"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "ck.yaml").read_bytes() == (work / "base.yaml").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ck.npz", "ck.yaml", "t.csv"]
+    header = checkpoint_header(tmp_path / "ck.npz")
+    assert header is not None and header["restart"] == 2 and header["solver"] is None
+    assert len(header["done"]) == 2
+    # a finished checkpoint: the same command again replays it to the same result
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_main([*args, "-o", "replay.yaml"], capsys)
+    assert code == 0, err
+    assert (tmp_path / "replay.yaml").read_bytes() == (work / "base.yaml").read_bytes()
+    assert without_clock(out) == without_clock(base_run.stdout)
+
+
+def test_resumed_run_leaves_no_temp_file_of_a_writer_killed_mid_write(work, tmp_path, capsys, monkeypatch):
+    shutil.copy(work / "t.csv", tmp_path / "t.csv")
+    monkeypatch.chdir(tmp_path)
+    args = ["synthesize", "t.csv", "-o", "out.yaml", "--checkpoint", "ck.npz", "--units", "cm", "--restarts", "1"]
+    code, _, err = run_main([*args, "--generations", "2", "--seconds", "1000"], capsys)
+    assert code == 0, err
+    # what a writer killed between open() and os.replace() leaves: a partial copy under the temporary name
+    stale = tmp_path / ".ck.npz.tmp"
+    stale.write_bytes((tmp_path / "ck.npz").read_bytes()[:100])
+    code, _, err = run_main([*args, "--generations", "2", "--seconds", "1000"], capsys)
+    assert code == 0, err
+    assert temp_files(tmp_path) == []
+
+
+# ---------------------------------------------------------------------- resume after SIGKILL
+RESUME = ["--units", "cm", "--restarts", "2", "--generations", "150", "--seconds", "1000", "--seed", "3"]
+
+
+def test_killed_run_resumes_from_its_checkpoint_to_the_uninterrupted_result(work, tmp_path, capsys, monkeypatch):
+    csv = tmp_path / "t.csv"
+    shutil.copy(work / "t.csv", csv)
+    counter = CostCounter(monkeypatch)
+
+    # the uninterrupted run, no checkpoint
+    code, ref_out, err = run_main(["synthesize", str(csv), "-o", str(tmp_path / "ref.yaml"), *RESUME], capsys)
+    assert code == 0, err
+    ref_calls, counter.calls = counter.calls, 0
+    ref = summary(ref_out)
+    assert ref["generations"] == 150 * ref["searches"]  # no early stop: both searches run (else the test is weak)
+    assert ref_calls == 151 * ref["searches"]  # one cost call per generation, two for a search's first
+
+    # the same command with a checkpoint, killed with SIGKILL during a search
+    ck = tmp_path / "ck.npz"
+    cmd = [sys.executable, "-m", "linkagekit.cli", "synthesize", "t.csv", "-o", "out.yaml", "--checkpoint", "ck.npz"]
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    proc = subprocess.Popen([*cmd, *RESUME], cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    seen = None
+    deadline = time.monotonic() + 120
+    try:
+        while time.monotonic() < deadline and proc.poll() is None:
+            h = checkpoint_header(ck)
+            if h is not None and h["restart"] in (0, 1) and h["generation"] >= 20:
+                seen = h
+                os.kill(proc.pid, signal.SIGKILL)
+                break
+            time.sleep(0.005)
+    finally:
+        if proc.poll() is None and seen is None:
+            os.kill(proc.pid, signal.SIGKILL)
+        _, stderr = proc.communicate(timeout=60)
+    assert seen is not None, f"the run ended (status {proc.returncode}) before it could be killed: {stderr!r}"
+    assert proc.returncode == -signal.SIGKILL
+    assert not (tmp_path / "out.yaml").exists()
+    killed = checkpoint_header(ck)  # never half-written: the last complete generation
+    assert killed is not None, "the checkpoint left by the killed run cannot be read"
+    assert (killed["restart"], killed["generation"]) >= (seen["restart"], seen["generation"])
+    r, g = killed["restart"], killed["generation"]
+    done_calls = 151 * r + (g + 1 if g >= 1 else 0)
+
+    # the same command again, with the same checkpoint, to the end
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_main([*cmd[3:], *RESUME], capsys)
+    assert code == 0, err
+    assert counter.calls == ref_calls - done_calls, "the resumed run did not continue where the checkpoint left off"
+    assert (tmp_path / "out.yaml").read_bytes() == (tmp_path / "ref.yaml").read_bytes()
+    assert without_clock(out) == without_clock(ref_out)
+    # no temporary file of the resumed run remains (the killed writer may have left its own mid-write)
+    assert [n for n in temp_files(tmp_path) if f".{proc.pid}." not in n] == []
+    final = checkpoint_header(ck)
+    assert final is not None and final["restart"] == 2 and final["solver"] is None
+
+
+def test_checkpoint_of_another_problem_or_other_settings_is_refused(work, tmp_path, capsys):
+    ck = tmp_path / "ck.npz"
+    small = ["--units", "cm", "--restarts", "1", "--generations", "2", "--seconds", "1000", "--checkpoint", str(ck)]
+    write_csv(tmp_path / "t.csv", seed000_curve(ANGLES))
+    code, _, err = run_main(["synthesize", str(tmp_path / "t.csv"), "-o", str(tmp_path / "a.yaml"), *small], capsys)
+    assert code == 0, err
+    before = ck.read_bytes()
+    other = write_csv(tmp_path / "other.csv", seed000_curve(ANGLES + 7.0))
+    code, out, err = run_main(["synthesize", str(other), "-o", str(tmp_path / "b.yaml"), *small], capsys)
+    assert_one_line_error(code, err, str(ck), "another problem")
+    assert out == "" and not (tmp_path / "b.yaml").exists()
+    code, _, err = run_main(
+        ["synthesize", str(tmp_path / "t.csv"), "-o", str(tmp_path / "c.yaml"), *small, "--seed", "9"], capsys
+    )
+    assert_one_line_error(code, err, str(ck), "other settings")
+    assert ck.read_bytes() == before  # a refused checkpoint is left as it was
+
+
+def _npz(**arrays: np.ndarray) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def _real_checkpoint(tmp: Path) -> bytes:
+    ck = tmp / "real.npz"
+    args = ["synthesize", str(tmp / "t.csv"), "-o", str(tmp / "real.yaml"), "--units", "cm", "--restarts", "1"]
+    assert main([*args, "--generations", "2", "--seconds", "1000", "--checkpoint", str(ck)]) == 0
+    return ck.read_bytes()
+
+
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "garbage",
+        "not JSON",
+        "no header",
+        "truncated",
+        "empty",
+        "header a list",
+        "header without problem",
+    ],
+)
+def test_corrupt_checkpoint_is_one_line_exit_2(work, tmp_path, capsys, kind):
+    shutil.copy(work / "t.csv", tmp_path / "t.csv")
+    content = {
+        "garbage": lambda: b"\x80garbage" * 64,
+        "not JSON": lambda: _npz(header=np.array("{not json")),
+        "no header": lambda: _npz(x=np.zeros(3)),
+        "truncated": lambda: (lambda b: b[: len(b) // 2])(_real_checkpoint(tmp_path)),
+        "empty": lambda: b"",
+        "header a list": lambda: _npz(header=np.array("[]")),
+        "header without problem": lambda: _npz(
+            header=np.array(json.dumps({"format": "linkagekit-checkpoint/1", "done": [], "solver": None}))
+        ),
+    }[kind]()
+    ck = tmp_path / "ck.npz"
+    ck.write_bytes(content)
+    args = ["synthesize", str(tmp_path / "t.csv"), "-o", str(tmp_path / "out.yaml"), "--units", "cm"]
+    code, out, err = run_main([*args, "--restarts", "1", "--generations", "2", "--checkpoint", str(ck)], capsys)
+    assert_one_line_error(code, err, str(ck))
+    assert out == "" and not (tmp_path / "out.yaml").exists()
+    assert ck.read_bytes() == content
+
+
+# ---------------------------------------------------------------------- Dask
+def test_dask_cluster_gives_the_same_file_as_local_processes(work, workers2_run, dask_cluster, capsys):
+    out_path = work / "dask.yaml"
+    code, out, err = run_main(
+        ["synthesize", str(work / "t.csv"), "-o", str(out_path), "--seed", "1", *SMALL]
+        + ["--scheduler", dask_cluster.scheduler_address],
+        capsys,
+    )
+    assert code == 0, err
+    assert out_path.read_bytes() == workers2_run.read_bytes()
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_scheduler_nobody_listens_on_is_one_line_exit_2_in_bounded_time(work, tmp_path):
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    t0 = time.monotonic()
+    proc = run_cli(["synthesize", str(work / "t.csv"), "-o", "o.yaml", *SMALL, "--scheduler", address], tmp_path, 90)
+    assert time.monotonic() - t0 < 60
+    assert_one_line_error(proc.returncode, proc.stderr, "--scheduler", address)
+    assert proc.stdout == "" and not (tmp_path / "o.yaml").exists()
+
+
+def test_malformed_scheduler_address_is_one_line_exit_2_quickly(work, tmp_path):
+    try:
+        proc = run_cli(
+            ["synthesize", str(work / "t.csv"), "-o", "o.yaml", *SMALL, "--scheduler", "not-an-address"], tmp_path, 15
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail("a malformed --scheduler address did not end the command within 15 s")
+    assert_one_line_error(proc.returncode, proc.stderr, "--scheduler")
+
+
+# ---------------------------------------------------------------------- bad input
+@pytest.mark.parametrize(
+    "name, body, fragment",
+    [
+        ("two.csv", "x,y\n0,0\n1,1\n", "at least 3"),
+        ("nan.csv", "x,y\n0,0\n1,nan\n2,0\n3,1\n", "line 3"),
+        ("header.csv", "a,b\n0,0\n1,1\n2,0\n", "header"),
+        ("empty.csv", "", "empty"),
+        ("missing.csv", None, "no such file"),
+    ],
+)
+def test_bad_targets_are_one_line_exit_2_naming_the_file(tmp_path, name, body, fragment):
+    if body is not None:
+        (tmp_path / name).write_text(body)
+    proc = run_cli(["synthesize", name, "-o", "out.yaml", *SMALL], tmp_path, 60)
+    assert_one_line_error(proc.returncode, proc.stderr, name, fragment)
+    assert proc.stdout == "" and not (tmp_path / "out.yaml").exists()
+
+
+@pytest.mark.parametrize(
+    "options, fragment",
+    [
+        (["--topology", "sevenbar"], "--topology"),
+        (["--workers", "0"], "--workers"),
+        (["--seconds", "-1"], "--seconds"),
+        (["--seed", "x"], "--seed"),
+        (["-o", "out.txt"], "-o out.txt"),
+        (["--plot", "out.gif"], "--plot"),
+        (["--free", "C,D"], "--free"),
+        (["--lengths", "5:1"], "--lengths"),
+        (["--pivots", "1:2"], "--pivots"),
+        (["--units", "furlong"], "furlong"),
+        (["--min-transmission", "95"], "--min-transmission"),
+        (["--restarts", "0"], "--restarts"),
+    ],
+)
+def test_bad_options_are_one_line_exit_2(work, tmp_path, capsys, options, fragment):
+    out_path = tmp_path / "out.yaml"
+    args = ["synthesize", str(work / "t.csv"), "-o", str(out_path), *SMALL, *options]
+    code, out, err = run_main(args, capsys)
+    assert_one_line_error(code, err, fragment)
+    assert out == "" and not out_path.exists()
+    assert not (tmp_path / "out.gif").exists()
+
+
+def test_template_with_another_length_unit_is_one_line_exit_2(work, tmp_path, capsys):
+    text = SEED000.read_text().replace("units: {length: cm, angle: deg}", "units: {length: mm, angle: deg}")
+    assert "length: mm" in text
+    (tmp_path / "tpl_mm.yaml").write_text(text)
+    args = ["synthesize", str(work / "t.csv"), "-o", str(tmp_path / "out.yaml"), *SMALL]
+    code, _, err = run_main([*args, "--topology", str(tmp_path / "tpl_mm.yaml")], capsys)
+    assert_one_line_error(code, err, "tpl_mm.yaml", "mm", "cm")
+
+
+# ---------------------------------------------------------------------- a template
+def test_template_file_with_free_joints_keeps_the_others(work, tmp_path, capsys):
+    tpl = tmp_path / "tpl.yaml"
+    shutil.copy(SEED000, tpl)
+    out_path = tmp_path / "out.yaml"
+    args = ["synthesize", str(work / "t.csv"), "-o", str(out_path), "--topology", str(tpl), "--free", "C,D,P"]
+    code, out, err = run_main([*args, *SMALL, "--seed", "1"], capsys)
+    assert code == 0, err
+    mech, template = lk.load(out_path), lk.load(tpl)
+    assert mech.joints["A"] == template.joints["A"] and mech.joints["B"] == template.joints["B"]
+    assert [d.name for d in mech.drivers] == ["crank"]
+    T = read_csv(work / "t.csv")
+    _, table = parse_table(out)
+    assert np.max(np.abs(table[:, -2] - curve_distance(mech, T))) <= 1e-6 * diagonal(T)
+    assert_buildable(mech)
+
+
+def test_template_with_free_joints_through_the_library_keeps_the_others(work):
+    """The library path the CLI's --topology FILE --free C,D,P calls (works, unlike the CLI; see above)."""
+    from linkagekit.synthesis.run import synthesize
+    from linkagekit.synthesis.targets import read_targets
+
+    template = lk.load(SEED000)
+    targets = read_targets(work / "t.csv", units="cm")
+    out = synthesize(targets, template, free=["C", "D", "P"], seed=1, restarts=1, generations=40, seconds=1000)
+    mech = out.mechanism
+    assert mech.joints["A"] == template.joints["A"] and mech.joints["B"] == template.joints["B"]
+    d = curve_distance(mech, targets.xy)
+    assert np.max(np.abs(out.errors - d)) <= 1e-6 * diagonal(targets.xy)
+    assert_buildable(mech)
+
+
+# ---------------------------------------------------------------------- timing
+def test_timed_targets_print_the_input_offset_that_the_mechanism_confirms(tmp_path, capsys):
+    """Targets at seed 000's crank angle ``input + 25``. Two four-bars trace this timed curve: seed 000 itself
+    (offset 25) and its Roberts cognate on the pivots B and O_C (the apex of the triangle on AB similar to the
+    coupler triangle, here equilateral), whose crank turns with seed 000's crank but 60 degrees ahead (offset 85)."""
+    T = seed000_curve(ANGLES + 25.0)
+    csv = write_csv(tmp_path / "timed.csv", T, inputs=ANGLES)
+    out_path = tmp_path / "timed.yaml"
+    code, out, err = run_main(["synthesize", str(csv), "-o", str(out_path), "--seed", "1", *SMALL], capsys)
+    assert code == 0, err
+    header, table = parse_table(out)
+    assert header == ["target", "x [cm]", "y [cm]", "input [deg]", "crank [deg]", "error [cm]", "error [% diag]"]
+    np.testing.assert_allclose(table[:, 3], ANGLES)
+    s = summary(out)
+    offset = s["offset"]
+    assert isinstance(offset, float)
+    # the crank column is input + offset
+    assert np.max(np.abs((table[:, 4] - table[:, 3] - offset + 180.0) % 360.0 - 180.0)) <= 2e-3
+    # independent: the written mechanism at input + offset is at each target, as far as printed
+    mech = lk.load(out_path)
+    L = diagonal(T)
+    got = lk.analyze(mech, {"crank": ANGLES + offset}).xy("P")
+    e = np.hypot(*(got - T).T)
+    assert np.max(e) <= 1e-3 * L
+    assert np.max(np.abs(e - table[:, 5])) <= 1e-5 * L
+    assert min(abs((offset - known + 180.0) % 360.0 - 180.0) for known in (25.0, 85.0)) <= 0.05, offset
+    assert_buildable(mech)
