@@ -39,6 +39,8 @@ _LAZY = {
     "plot_quantity": "viz.draw",
     "animate": "viz.animate",
     "write_report": "web.report",
+    "synthesize": "synthesis.run",
+    "read_targets": "synthesis.targets",
 }
 
 __all__ = [
@@ -59,8 +61,10 @@ __all__ = [
     "load",
     "modes",
     "plot_quantity",
+    "read_targets",
     "reference_signs",
     "save",
+    "synthesize",
     "write_report",
 ]
 
@@ -70,6 +74,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .files import load, save
     from .model import Mechanism
     from .result import Result
+    from .synthesis.run import synthesize
+    from .synthesis.targets import read_targets
     from .viz.animate import animate
     from .viz.draw import draw_mechanism, plot_quantity
     from .viz.scene import build_scene
