@@ -10,7 +10,8 @@ For every problem file (targets, timing, parametrisation ``cabrera``, published 
    crank turns fully and whether its transmission angle stays within [20, 160] degrees
    (what the comparison asks of every design; the published problems do not constrain it).
 2. **Our synthesis.** ``synthesize(targets, "fourbar", ...)`` for a fixed budget (``--seconds``,
-   fixed ``--seed``, one worker, ``min_transmission=20``, default bounds ``reach=1``), with
+   fixed ``--seed``, one worker, ``min_transmission=20``, ``reach`` per ``--reach``: the joints lie
+   within reach x the targets' diagonal of their centre, the library's default is 1), with
    the problem's timing as ``inputs`` (crank angle = input + one free offset; ground frame
    free) or, without timing, free crank angles (``ordered=True`` where the problem asks for
    a sequence). Two target sets (``pairs10``) are synthesised on their midpoints: for the
@@ -27,12 +28,15 @@ For every problem file (targets, timing, parametrisation ``cabrera``, published 
    kept on the +x axis. Our API cannot also fix the timing offset (it is read off the
    pose's crank angle, and a joint's bounds are an axis-aligned box, so C cannot be held on
    the first input's ray while B is held on the x axis): the variant keeps that one extra
-   degree of freedom, and the offset found is reported.
+   degree of freedom, and the offset found is reported, with the value of the same design
+   put exactly into the published formulation (theta0 = x0 = y0 = 0, theta2 = the inputs).
 
-Printed: a markdown table per part, the formulation differences per problem, and a JSON
-dump (``--json``).
+Printed: three markdown tables (the cross-check, the comparison with its notes on how the
+formulations differ, the search), progress on stderr, every number with ``--json``. The
+run is stopped by the clock, so its numbers vary a little with the machine's load.
 
-    python benchmarks/bench_published.py [--seconds 120] [--seed 1] [--only NAME ...] [--json FILE]
+    python benchmarks/bench_published.py [--seconds 120] [--seed 1] [--reach 1 [3 ...]] [--only NAME ...]
+                                         [--no-fair] [--json FILE]
 """
 
 from __future__ import annotations
@@ -107,7 +111,21 @@ def timing(problem: dict[str, Any]) -> tuple[str, list[float] | None]:
 
 
 def sequence_asked(problem: dict[str, Any]) -> bool:
-    return timing(problem)[0] == "none" and any("sequence" in c for c in problem.get("constraints", []))
+    """An untimed problem whose crank angles must come in the targets' order."""
+    cons = problem.get("constraints", [])
+    return timing(problem)[0] == "none" and any("sequence" in c or "theta2^1 <" in c for c in cons)
+
+
+def relevant(problem: dict[str, Any], design: dict[str, Any]) -> list[str]:
+    """The violations (``evaluate_designs.violations``) of the constraint set the problem's source uses:
+    Grashof with r2 the shortest link and a cyclic order (Nguyen-Van), or the CIDETEC link ordering and
+    plainly increasing angles (when the file lists only those)."""
+    nguyen_van = any(c.startswith("Grashof") for c in problem.get("constraints", []))
+    keys = ["grashof s+l-p-q", "crank r2 not shortest"] if nguyen_van else ["order r2<=r3<=r4<=r1, r1+r2<=r3+r4"]
+    if sequence_asked(problem):
+        keys.append("not in cyclic order (either sense)" if nguyen_van else "not plainly increasing in [0, 2pi)")
+    v = violations(design)
+    return [k for k in keys if v.get(k, 0.0) > 0]
 
 
 def entries(problem: dict[str, Any]) -> list[tuple[str, dict[str, Any], dict[str, Any]]]:
@@ -257,8 +275,7 @@ def cross_check(name: str, problem: dict[str, Any]) -> list[dict[str, Any]]:
         row["analyze"] = analyze_objective(problem, mech, crank)
         row["agree"] = value is not None and abs(row["analyze"] - value) <= RTOL * max(value, 1e-300) + 1e-18
         row.update(checked(mech))
-        viol = {k: v for k, v in violations(design).items() if v > 0}
-        row["violations"] = sorted(viol)
+        row["violations"] = relevant(problem, design)
         rows.append(row)
     return rows
 
@@ -269,12 +286,17 @@ def our_targets(problem: dict[str, Any]) -> np.ndarray:
     return sets[0] if len(sets) == 1 else np.mean(sets, axis=0)
 
 
-def evaluate_ours(problem: dict[str, Any], syn: Any) -> dict[str, Any]:
-    """Our design under the published objective, three ways, and its checks."""
+def evaluate_ours(problem: dict[str, Any], syn: Any, strict: bool = True) -> dict[str, Any]:
+    """Our design under the published objective, three ways, and its checks.
+
+    ``strict``: also its value in the published formulation exactly (``at_published_timing``): crank angles
+    from the ground line = the inputs and, for a fixed-frame problem, theta0 = x0 = y0 = 0 (meaningful when
+    our frame was fixed too)."""
     mech = syn.mechanism
     design, branch = cabrera_of(mech)
     crank = np.asarray(syn.inputs, float)  # absolute crank angles (deg) where the targets are met
-    design["theta2"] = [float(t) for t in np.radians(crank) - design["theta0"]]
+    design["theta0"] %= 2 * math.pi  # within the published bounds [0, 2 pi)
+    design["theta2"] = [float(t) for t in (np.radians(crank) - design["theta0"]) % (2 * math.pi)]
     value = published_objective(problem, design, branch)
     via_analyze = analyze_objective(problem, mech, crank)
     sets = target_sets(problem)
@@ -292,7 +314,7 @@ def evaluate_ours(problem: dict[str, Any], syn: Any) -> dict[str, Any]:
         "max_error": syn.max_error,
         "feasible": syn.feasible,
         "min_transmission_synthesis": syn.min_transmission,
-        "violations": sorted(k for k, v in violations(design).items() if v > 0),
+        "violations": relevant(problem, design),
         "outcome": {
             "restarts": syn.outcome.restarts,
             "generations": syn.outcome.generations,
@@ -307,9 +329,11 @@ def evaluate_ours(problem: dict[str, Any], syn: Any) -> dict[str, Any]:
         rel = np.degrees(np.asarray(design["theta2"])) - np.asarray(inputs)  # crank from ground - input
         out["timing_shift_deg"] = float((rel[0] + 180.0) % 360.0 - 180.0)
         out["timing_spread_deg"] = float(np.ptp((rel - rel[0] + 180.0) % 360.0 - 180.0))
-        if kind == "prescribed" and branch == 1:  # our design at the published timing (theta2 = inputs exactly)
-            strict = {**design, "theta2": [math.radians(a) for a in inputs]}
-            out["at_published_timing"] = objective(problem, strict)
+        if strict and kind == "prescribed" and branch == 1:  # at the published timing (theta2 = inputs exactly)
+            exact = {**design, "theta2": [math.radians(a) for a in inputs]}
+            if fixed_frame(problem):
+                exact.update(theta0=0.0, x0=0.0, y0=0.0)
+            out["at_published_timing"] = objective(problem, exact)
     return out
 
 
@@ -322,8 +346,18 @@ def in_box(problem_obj: Any, mech: Mechanism | None) -> bool | None:
     return bool(np.all(x >= lo - 1e-12) and np.all(x <= hi + 1e-12))
 
 
+def reach_needed(targets: np.ndarray, mech: Mechanism | None) -> float | None:
+    """The ``reach`` whose default box (targets' centre +- reach x diagonal) holds joints A, B, C, D of ``mech``."""
+    if mech is None:
+        return None
+    centre = (targets.min(axis=0) + targets.max(axis=0)) / 2
+    diag = float(np.hypot(*np.ptp(targets, axis=0)))
+    pose = dict(zip(mech.joint_names, mech.pose_array(), strict=True))
+    return float(max(np.max(np.abs(pose[j] - centre)) for j in "ABCD") / diag)
+
+
 def run_ours(
-    name: str, problem: dict[str, Any], seconds: float, seed: int, best: dict[str, Any] | None
+    name: str, problem: dict[str, Any], seconds: float, seed: int, best: dict[str, Any] | None, reach: float = 1.0
 ) -> dict[str, Any]:
     kind, inputs = timing(problem)
     ordered = sequence_asked(problem)
@@ -336,6 +370,7 @@ def run_ours(
         unit="m",
         ordered=ordered,
         min_transmission=MIN_TRANSMISSION,
+        reach=reach,
         seed=seed,
         seconds=seconds,
         restarts=RESTARTS,
@@ -343,21 +378,26 @@ def run_ours(
         workers=1,
     )
     wall = time.monotonic() - t0
-    out = evaluate_ours(problem, syn)
-    out.update({"problem": name, "variant": "default", "wall": wall, "ordered": ordered, "timing": kind})
+    out = evaluate_ours(problem, syn, strict=not fixed_frame(problem))
+    out.update(
+        {"problem": name, "variant": "default", "wall": wall, "ordered": ordered, "timing": kind, "reach": reach}
+    )
     if best is not None:  # is the best published design inside our default search box?
-        prob = make_problem(targets, "fourbar", inputs, "m", ordered, MIN_TRANSMISSION)
-        th = angles(problem, best)
-        out["best_published_in_box"] = in_box(prob, mechanism_of(best, th[0], "best"))
+        prob = make_problem(targets, "fourbar", inputs, "m", ordered, MIN_TRANSMISSION, reach=reach)
+        mech = mechanism_of(best, angles(problem, best)[0], "best")
+        out["best_published_in_box"] = in_box(prob, mech)
+        out["best_published_reach"] = reach_needed(targets, mech)
     return out
 
 
-def fixed_frame_template(targets: np.ndarray) -> tuple[Mechanism, dict[str, Any]]:
-    """Template with A at the origin (not free), B on the +x axis, C, D, P in a box around targets and origin."""
+def fixed_frame_template(targets: np.ndarray, reach: float = 1.0) -> tuple[Mechanism, dict[str, Any]]:
+    """Template with A at the origin (not free), B on the +x axis (within 1e-6 diagonals), C and D in the box of
+    the targets and the origin widened by ``1 + reach`` diagonals, P near the first target (as ``synthesize`` does)."""
     lo = np.minimum(targets.min(axis=0), 0.0)
     hi = np.maximum(targets.max(axis=0), 0.0)
     diag = float(np.hypot(*np.ptp(targets, axis=0)))
-    box = ((lo[0] - diag, hi[0] + diag), (lo[1] - diag, hi[1] + diag))
+    w = (1.0 + reach) * diag
+    box = ((lo[0] - w, hi[0] + w), (lo[1] - w, hi[1] + w))
     eps = 1e-6 * diag
     first = targets[0]
     free = {
@@ -371,11 +411,11 @@ def fixed_frame_template(targets: np.ndarray) -> tuple[Mechanism, dict[str, Any]
 
 
 def run_fixed_frame(
-    name: str, problem: dict[str, Any], seconds: float, seed: int, best: dict[str, Any] | None
+    name: str, problem: dict[str, Any], seconds: float, seed: int, best: dict[str, Any] | None, reach: float = 1.0
 ) -> dict[str, Any]:
     _, inputs = timing(problem)
     targets = our_targets(problem)
-    template, free = fixed_frame_template(targets)
+    template, free = fixed_frame_template(targets, reach)
     t0 = time.monotonic()
     syn = synthesize(
         targets,
@@ -391,8 +431,17 @@ def run_fixed_frame(
         workers=1,
     )
     wall = time.monotonic() - t0
-    out = evaluate_ours(problem, syn)
-    out.update({"problem": name, "variant": "fixed frame", "wall": wall, "ordered": False, "timing": "prescribed"})
+    out = evaluate_ours(problem, syn, strict=True)
+    out.update(
+        {
+            "problem": name,
+            "variant": "fixed frame",
+            "wall": wall,
+            "ordered": False,
+            "timing": "prescribed",
+            "reach": reach,
+        }
+    )
     if best is not None:
         prob = make_problem(targets, template, inputs, "m", False, MIN_TRANSMISSION, free=free)
         out["best_published_in_box"] = in_box(prob, mechanism_of(best, angles(problem, best)[0], "best"))
@@ -406,9 +455,16 @@ def differences(problem: dict[str, Any], ours: dict[str, Any]) -> list[str]:
     kind, _ = timing(problem)
     if ours["variant"] == "fixed frame":
         notes.append(
-            f"A fixed at (0, 0), B on +x (theta0 = {ours['design']['theta0']:.1e}); the timing offset stays free "
+            f"A fixed at (0, 0), B on +x (theta0 = {math.remainder(ours['design']['theta0'], 2 * math.pi):.1e}); "
+            "the timing offset stays free "
             f"(ours {ours['timing_shift_deg']:+.4g} deg, published 0): not expressible in our API"
         )
+        s = ours.get("at_published_timing")
+        if s is not None:
+            notes.append(
+                f"the same r1..r4, rcx, rcy with theta0 = x0 = y0 = 0 and theta2 = the inputs exactly "
+                f"(the published formulation) give {s:.4g}"
+            )
     elif fixed_frame(problem):
         notes.append(
             "published: frame fixed (theta0 = x0 = y0 = 0) and absolute crank angles; ours: frame and offset free"
@@ -436,11 +492,23 @@ def differences(problem: dict[str, Any], ours: dict[str, Any]) -> list[str]:
     if problem.get("target_sets"):
         notes.append("two target sets: ours synthesised on their midpoints (same minimisers)")
     if ours["branch"] == -1:
-        notes.append("our design is in the other assembly branch than the cabrera closed form (its mirror image)")
+        notes.append(
+            "our design is in the other assembly branch than the cabrera closed form's root (value: the same "
+            "formula on its mirror image), so not a point of the published parametrisation as it stands; a Roberts "
+            "cognate of it may be"
+        )
     if ours["violations"]:
         notes.append("our design violates the published constraints: " + ", ".join(ours["violations"]))
     if ours.get("best_published_in_box") is False:
-        notes.append("the best published design lies outside our search box (reach 1)")
+        r = ours.get("best_published_reach")
+        notes.append(
+            "the best published design lies outside our search box"
+            + (
+                f" (it needs reach {r:.2g}, ours {ours['reach']:g})"
+                if r is not None and ours["variant"] == "default"
+                else ""
+            )
+        )
     return notes
 
 
@@ -451,10 +519,11 @@ def fmt(v: Any, spec: str = ".4g") -> str:
     return format(v, spec)
 
 
-def best_reference(rows: list[dict[str, Any]]) -> tuple[dict[str, Any] | None, str]:
-    """The best published design (else the best code result), and its label."""
+def best_reference(rows: list[dict[str, Any]], feasible: bool = False) -> tuple[dict[str, Any] | None, str]:
+    """The best published design (else the best code result), and its label; ``feasible``: among those
+    whose crank turns fully with the transmission angle within [20, 160] degrees."""
     for kind in ("published", "code"):
-        cand = [r for r in rows if r["kind"] == kind and r["value"] is not None]
+        cand = [r for r in rows if r["kind"] == kind and r["value"] is not None and (r.get("ok") or not feasible)]
         if cand:
             r = min(cand, key=lambda r: r["value"])
             return r, r["by"] + (" (code run, not published)" if kind == "code" else "")
@@ -465,42 +534,72 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=120.0, help="budget of each synthesis run (default 120)")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument(
+        "--reach", type=float, nargs="+", default=[1.0], help="synthesize's reach, one run per value (default 1)"
+    )
     ap.add_argument("--only", nargs="*", help="problem files whose name contains one of these")
     ap.add_argument("--no-fair", action="store_true", help="skip the fixed-frame variant")
     ap.add_argument("--json", help="write every number to this file")
+    ap.add_argument("--from-json", help="print the tables of an earlier --json file (no search)")
     args = ap.parse_args(argv)
 
     problems = load_problems(args.only)
+    if args.from_json:
+        data = json.loads(Path(args.from_json).read_text())
+        names = {name for name, _ in problems}
+        checks = [r for r in data["checks"] if r["problem"] in names]
+        results = [o for o in data["results"] if o["problem"] in names]
+        for o in results:  # the notes as this version words them
+            o["notes"] = differences(dict(problems)[o["problem"]], o)
+    else:
+        checks, results = search(problems, args)
+        if args.json:
+            Path(args.json).write_text(json.dumps({"checks": checks, "results": results}, indent=1, default=str))
+    render(checks, results)
+    return 0
+
+
+def search(problems: list[tuple[str, dict[str, Any]]], args: Any) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The cross-check and every synthesis run: (rows of part 1, our results)."""
     checks: list[dict[str, Any]] = []
     results: list[dict[str, Any]] = []
     for name, problem in problems:
         rows = cross_check(name, problem)
         checks.extend(rows)
         ref, ref_label = best_reference(rows)
+        feas, feas_label = best_reference(rows, feasible=True)
         best = next((d for _, e, d in entries(problem) if ref and label(e) == ref["by"]), None)
-        print(f"== {name}: synthesis, {args.seconds:g} s ...", file=sys.stderr, flush=True)
-        variants = [run_ours(name, problem, args.seconds, args.seed, best)]
-        if fixed_frame(problem) and not args.no_fair:
-            print(f"== {name}: fixed-frame variant, {args.seconds:g} s ...", file=sys.stderr, flush=True)
-            variants.append(run_fixed_frame(name, problem, args.seconds, args.seed, best))
-        for ours in variants:
-            ours["reference"] = ref["value"] if ref else None
-            ours["reference_by"] = ref_label
-            ours["reference_ok"] = ref.get("ok") if ref else None
-            ours["notes"] = differences(problem, ours)
-            ours["points"] = len(problem["targets"]) * len(target_sets(problem))
-            results.append(ours)
-            print(
-                f"   {ours['variant']}: {fmt(ours['value'])} (analyze {fmt(ours['analyze'])}, "
-                f"errors {fmt(ours['from_errors'])}), mu {fmt(ours['mu_worst'], '.2f')}, "
-                f"{ours['outcome']['restarts']} restarts, {ours['wall']:.0f} s, {ours['outcome']['stopped_by']}",
-                file=sys.stderr,
-                flush=True,
-            )
+        for reach in args.reach:
+            for fixed in (False, True):
+                if fixed and (args.no_fair or not fixed_frame(problem)):
+                    continue
+                what = "fixed-frame variant" if fixed else "synthesis"
+                print(f"== {name}: {what}, reach {reach:g}, {args.seconds:g} s ...", file=sys.stderr, flush=True)
+                run = run_fixed_frame if fixed else run_ours
+                ours = run(name, problem, args.seconds, args.seed, best, reach)
+                ours["reference"] = ref["value"] if ref else None
+                ours["reference_by"] = ref_label
+                ours["reference_ok"] = ref.get("ok") if ref else None
+                ours["feasible_reference"] = feas["value"] if feas else None
+                ours["feasible_reference_by"] = feas_label
+                ours["notes"] = differences(problem, ours)
+                ours["points"] = len(problem["targets"]) * len(target_sets(problem))
+                results.append(ours)
+                print(
+                    f"   {fmt(ours['value'])} (analyze {fmt(ours['analyze'])}, errors {fmt(ours['from_errors'])}), "
+                    f"mu {fmt(ours['mu_worst'], '.2f')}, {ours['outcome']['restarts']} restarts, {ours['wall']:.0f} s, "
+                    f"stopped by {ours['outcome']['stopped_by']}",
+                    file=sys.stderr,
+                    flush=True,
+                )
+    return checks, results
 
+
+def render(checks: list[dict[str, Any]], results: list[dict[str, Any]]) -> None:
+    """The three markdown tables."""
     print("## Published designs: cabrera closed form (evaluate_designs.py) vs lk.analyze, and lk.check\n")
     print("| problem | design | value (closed form) | lk.analyze | agree | full turn | transmission min / max (deg) | "
-          "violations (published constraint sets) |")  # fmt: skip
+          "violations (constraints of the problem's source) |")  # fmt: skip
     print("|---|---|---|---|---|---|---|---|")
     for r in checks:
         flag = "" if r.get("ok") else " **(outside [20, 160] or no full turn)**"
@@ -513,18 +612,25 @@ def main(argv: list[str] | None = None) -> int:
         )
 
     print("\n## linkagekit against the best published value (published objective, min transmission 20 deg)\n")
-    print("| problem | points | timing | best published (recomputed) | ours | ratio | our min transmission (deg) | "
-          "seconds | notes |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| problem | points | timing | best published (recomputed) | best with transmission in [20, 160] | ours | "
+          "ratio ours / best (/ best in [20, 160]) | our min transmission (deg) | seconds | notes |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for o in results:
         ratio = o["value"] / o["reference"] if o["value"] is not None and o["reference"] else None
+        ratio_f = o["value"] / o["feasible_reference"] if o["value"] is not None and o["feasible_reference"] else None
         ref = f"{fmt(o['reference'])} ({o['reference_by']})" if o["reference"] is not None else "none"
         if o["reference"] is not None and not o["reference_ok"]:
-            ref += ", **transmission < 20 deg or no full turn**"
-        variant = "" if o["variant"] == "default" else f" ({o['variant']})"
+            ref += ", **transmission outside [20, 160]**"
+        feas = "same" if o["feasible_reference_by"] == o["reference_by"] and o["reference"] is not None else "none"
+        if feas == "none" and o["feasible_reference"] is not None:
+            feas = f"{fmt(o['feasible_reference'])} ({o['feasible_reference_by']})"
+        variant = (
+            f" (reach {o['reach']:g})" if o["variant"] == "default" else f" ({o['variant']}, reach {o['reach']:g})"
+        )
         print(
-            f"| `{o['problem']}`{variant} | {o['points']} | {o['timing']} | {ref} | {fmt(o['value'])} | "
-            f"{fmt(ratio, '.3g')} | {fmt(o['mu_worst'], '.1f')} | {o['wall']:.0f} | {'; '.join(o['notes'])} |"
+            f"| `{o['problem']}`{variant} | {o['points']} | {o['timing']} | {ref} | {feas} | {fmt(o['value'])} | "
+            f"{fmt(ratio, '.3g')} ({fmt(ratio_f, '.3g')}) | {fmt(o['mu_worst'], '.1f')} | {o['wall']:.0f} | "
+            f"{'; '.join(o['notes'])} |"
         )
     print("\n## Our designs: agreement of the three evaluations, search\n")
     print("| problem | cabrera closed form | lk.analyze | from Synthesis.errors | agree | branch | restarts | "
@@ -532,15 +638,14 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|---|---|---|---|---|---|")
     for o in results:
         oc = o["outcome"]
-        variant = "" if o["variant"] == "default" else f" ({o['variant']})"
+        variant = (
+            f" (reach {o['reach']:g})" if o["variant"] == "default" else f" ({o['variant']}, reach {o['reach']:g})"
+        )
         print(
             f"| `{o['problem']}`{variant} | {fmt(o['value'], '.7g')} | {fmt(o['analyze'], '.7g')} | "
             f"{fmt(o['from_errors'], '.7g')} | {'yes' if o['agree'] else 'NO'} | {o['branch']:+d} | "
             f"{oc['restarts']} | {oc['generations']} | {oc['evaluations']} | {oc['stopped_by']} |"
         )
-    if args.json:
-        Path(args.json).write_text(json.dumps({"checks": checks, "results": results}, indent=1, default=str))
-    return 0
 
 
 if __name__ == "__main__":
