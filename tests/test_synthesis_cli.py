@@ -155,9 +155,9 @@ class CostCounter:
         self.calls = 0
         original = Evaluator.cost
 
-        def counted(ev: Evaluator, X: np.ndarray) -> np.ndarray:
+        def counted(ev: Evaluator, X: np.ndarray, which: int = 0) -> np.ndarray:
             self.calls += 1
-            return original(ev, X)
+            return original(ev, X, which)
 
         monkeypatch.setattr(Evaluator, "cost", counted)
 

@@ -24,8 +24,8 @@ import numpy as np
 from ..errors import InputError
 from .objective import Problem, evaluate
 
-#: the problem a worker process evaluates (set once per process by the pool's initializer)
-_PROBLEM: Problem | None = None
+#: the problems a worker process evaluates (set once per process by the pool's initializer)
+_PROBLEMS: tuple[Problem, ...] = ()
 #: designs per chunk at most (bounds each call's memory; see objective.CHUNK)
 MAX_CHUNK = 4096
 
@@ -36,14 +36,13 @@ def chunks(X: np.ndarray, parts: int) -> list[np.ndarray]:
     return [c for c in np.array_split(X, min(k, len(X))) if len(c)]
 
 
-def _install(problem: Problem) -> None:
-    global _PROBLEM
-    _PROBLEM = problem
+def _install(problems: tuple[Problem, ...]) -> None:
+    global _PROBLEMS
+    _PROBLEMS = problems
 
 
-def _cost_here(X: np.ndarray) -> np.ndarray:
-    assert _PROBLEM is not None
-    return evaluate(_PROBLEM, X).cost
+def _cost_here(which: int, X: np.ndarray) -> np.ndarray:
+    return evaluate(_PROBLEMS[which], X).cost
 
 
 def _cost_of(problem: Problem, X: np.ndarray) -> np.ndarray:
@@ -68,7 +67,8 @@ class Evaluator:
 
     Parameters
     ----------
-    problem : Problem
+    problem : Problem or tuple of Problem
+        What to score; with several (variants of one problem), ``cost(X, which)`` picks one.
     workers : int
         Local processes (1: in this process).
     scheduler : str, optional
@@ -76,10 +76,10 @@ class Evaluator:
         go to its workers (``dask[distributed]`` must be installed).
     """
 
-    def __init__(self, problem: Problem, workers: int = 1, scheduler: str | None = None) -> None:
+    def __init__(self, problem: Problem | tuple[Problem, ...], workers: int = 1, scheduler: str | None = None) -> None:
         if workers < 1:
             raise InputError(f"--workers: expected a positive number of processes, got {workers}")
-        self.problem = problem
+        self.problems = problem if isinstance(problem, tuple) else (problem,)
         self.workers = workers
         self._pool: Any = None
         self._client: Any = None
@@ -94,7 +94,7 @@ class Evaluator:
                 self._client = Client(scheduler, timeout=10, set_as_default=False)
             except (OSError, TimeoutError, ValueError) as e:
                 raise InputError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({e})") from None
-            self._remote = self._client.scatter(problem, broadcast=True)
+            self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]
             self.parts = max(1, sum(self._client.nthreads().values()))
         elif workers > 1:
             import multiprocessing
@@ -104,7 +104,7 @@ class Evaluator:
             # guard (spawn re-imports the main module); the workers only evaluate NumPy over arrays
             methods = multiprocessing.get_all_start_methods()
             ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-            self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_install, initargs=(problem,))
+            self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_install, initargs=(self.problems,))
             self.parts = workers
         else:
             self.parts = 1
@@ -115,16 +115,16 @@ class Evaluator:
             return f"Dask cluster ({self.parts} threads)"
         return f"{self.workers} local processes" if self._pool is not None else "this process"
 
-    def cost(self, X: np.ndarray) -> np.ndarray:
-        """The cost of every design of ``X`` (N, dim)."""
+    def cost(self, X: np.ndarray, which: int = 0) -> np.ndarray:
+        """The cost of every design of ``X`` (N, dim) in problem ``which``."""
         parts = chunks(np.asarray(X, float), self.parts)
         if self._client is not None:
-            futures = self._client.map(_cost_of, [self._remote] * len(parts), parts, pure=False)
+            futures = self._client.map(_cost_of, [self._remote[which]] * len(parts), parts, pure=False)
             got = self._client.gather(futures)
         elif self._pool is not None:
-            got = list(self._pool.map(_cost_here, parts))
+            got = list(self._pool.map(_cost_here, [which] * len(parts), parts))
         else:
-            got = [_cost_of(self.problem, p) for p in parts]
+            got = [_cost_of(self.problems[which], p) for p in parts]
         return np.concatenate(got)
 
     def close(self) -> None:
