@@ -16,7 +16,6 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -140,6 +139,3 @@ class Evaluator:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-CostFunction = Callable[[np.ndarray], np.ndarray]

@@ -58,6 +58,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InputError
+from ..params import Params
 from ..params import compile as compile_params
 from ..positions import solve
 from .space import DesignSpace
@@ -226,24 +227,32 @@ def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: floa
             violation = violation + _length_excess(sp, params.pose, *problem.lengths)
         # -- errors
         T = problem.targets
-        P = z[sp.joint(sp.tracer)]
         if problem.timed:
             assert problem.inputs is not None
             th = q0[:, None] + (problem.inputs - problem.inputs[0])[None, :]
             err = np.abs(_tracer(params, sp, th) - T[None, :])
         else:
-            th, err = _nearest(params, sp, P, theta, T, refine, n, problem.ordered)
+            th, err = _nearest(params, sp, z[sp.joint(sp.tracer)], theta, T, refine, n, problem.ordered)
         rel = np.where(np.isfinite(err), err / L, 1.0)
         cost = np.mean(rel * rel, axis=1) + PENALTY * violation
     return Evaluation(cost, err, th, violation, mu_min)
 
 
-def _tracer(params, sp: DesignSpace, th: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
+def _tracer(params: Params, sp: DesignSpace, th: np.ndarray) -> np.ndarray:
     """The tracer point at inputs ``th`` (N, k), NaN where a design does not assemble."""
     return solve(params, th[None]).z[sp.joint(sp.tracer)]
 
 
-def _nearest(params, sp, P, theta, T, refine, n, ordered=False):  # type: ignore[no-untyped-def]
+def _nearest(
+    params: Params,
+    sp: DesignSpace,
+    P: np.ndarray,
+    theta: np.ndarray,
+    T: np.ndarray,
+    refine: int,
+    n: int,
+    ordered: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """(inputs, distances) of the nearest curve point to every target, (N, m) each."""
     far = ~np.isfinite(P)
     Px = np.where(far, np.inf, P.real)[:, None, :]  # an unassembled sample is infinitely far

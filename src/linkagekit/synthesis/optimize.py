@@ -181,8 +181,8 @@ def optimize(
                 _restore(solver, state["solver"])
             designs = 0
             if state is not None and state.get("solver") is not None:
-                designs = evaluations - state["evaluations_done"]
-                evaluations = state["evaluations_done"]
+                evaluations = sum(d["designs"] for d in done)  # the finished searches'; the rest is this one's
+                designs = state["evaluations"] - evaluations
             state = None
             out_of_time = False
             while generation < settings.generations:
@@ -353,7 +353,6 @@ def _save(
         "restart": restart,
         "generation": generation,
         "evaluations": evaluations,
-        "evaluations_done": int(sum(d.get("designs", 0) for d in done)),
         "elapsed": elapsed,
         "done": [
             {"cost": d["cost"], "max_error": d["max_error"], "generations": d["generations"], "designs": d["designs"]}
@@ -411,7 +410,6 @@ def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
             "restart": int(header["restart"]),
             "generation": int(header["generation"]),
             "evaluations": int(header["evaluations"]),
-            "evaluations_done": int(header["evaluations_done"]),
             "elapsed": float(header["elapsed"]),
             "done": done,
             "solver": solver,
