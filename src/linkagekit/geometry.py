@@ -69,45 +69,75 @@ def circle_circle(
     sign: ArrayLike,
     eps: float = ASSEMBLY_RTOL,
     out: np.ndarray | None = None,
+    margin: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Intersection of the circles ``|z - z1| = r1`` and ``|z - z2| = r2`` (seed 000, eqs. 11-15).
 
     With ``d = z2 - z1``, ``s = |d|``: ``along = (r1^2 - r2^2 + s^2) / (2 s)``,
     ``h = sign sqrt(r1^2 - along^2)``, ``z = z1 + (along + i h) d / s``; ``sign=+1`` picks the
     point to the left of the directed line ``z1 -> z2``.  The radii broadcast against the
-    centres (one radius per design, one centre per design and sample).  Written in real
-    arithmetic (the x and y parts of ``out``), which NumPy runs faster than complex products.
-    Returns ``(z, margin)``: ``margin`` is the relative distance from the nearest assembly
-    limit, negative where the circles do not meet, and there ``z`` is NaN.
+    centres (one radius per design, one centre per design and sample).  Returns
+    ``(z, margin)``: ``margin`` is the relative distance from the nearest assembly limit,
+    negative where the circles do not meet, and there ``z`` is NaN.  ``out`` (complex) and
+    ``margin`` (float) are written in place when given.
+
+    Written in real arithmetic (the x and y parts of ``out``), which NumPy runs faster than
+    complex products, and in place into five work arrays taken at once: on large batches
+    a fresh temporary per operation (new memory, handed over zeroed page by page) cost
+    more than the arithmetic on it.
     """
-    x1, y1 = z1.real, z1.imag
-    dx = z2.real - x1
-    dy = z2.imag - y1
-    s2 = dx * dx + dy * dy
-    s = np.sqrt(s2)
-    total = r1 + r2
-    margin = np.minimum(total * (1 + eps) - s, s - np.abs(r1 - r2) + eps * total)
-    margin /= total
+    shape = np.broadcast_shapes(*(np.shape(a) for a in (z1, z2, r1, r2, sign)))
     if out is None:
-        out = np.empty(np.broadcast_shapes(z1.shape, z2.shape), complex)
+        out = np.empty(shape, complex)
+    if margin is None:
+        margin = np.empty(shape)
+    dx, dy, s2, s, along = np.empty((5, *shape))  # one allocation for the work arrays
+    x1, y1 = z1.real, z1.imag
+    np.subtract(z2.real, x1, out=dx)
+    np.subtract(z2.imag, y1, out=dy)
+    np.multiply(dx, dx, out=s2)
+    np.multiply(dy, dy, out=s)
+    s2 += s
+    np.sqrt(s2, out=s)
+    total = r1 + r2
+    # margin = min(total (1 + eps) - s, s - |r1 - r2| + eps total) / total
+    np.subtract(total * (1 + eps), s, out=margin)
+    np.subtract(s, np.abs(r1 - r2) - eps * total, out=along)
+    np.minimum(margin, along, out=margin)
+    margin /= total
     with np.errstate(divide="ignore", invalid="ignore"):
         r1sq = r1 * r1
-        along = (r1sq - r2 * r2 + s2) / (2 * s)
-        h = r1sq - along * along
+        np.add(r1sq - r2 * r2, s2, out=along)  # along = (r1^2 - r2^2 + s^2) / (2 s)
+        np.multiply(s, 2.0, out=s2)
+        along /= s2
+        h = s2
+        np.multiply(along, along, out=h)  # h = sign sqrt(max(r1^2 - along^2, 0))
+        np.subtract(r1sq, h, out=h)
         np.maximum(h, 0.0, out=h)
         np.sqrt(h, out=h)
         h *= sign
-        inv = 1.0 / s
-        along *= inv
-        h *= inv
-        out.real = x1 + along * dx - h * dy
-        out.imag = y1 + along * dy + h * dx
-    ok = margin >= 0
-    ok &= s > eps * total
-    if ok.all():
+        np.divide(1.0, s, out=s)  # along, h over s: the unit vector d / s folded in
+        along *= s
+        h *= s
+        tmp = s
+        xo, yo = out.real, out.imag
+        np.multiply(along, dx, out=xo)  # x = x1 + along dx - h dy
+        xo += x1
+        np.multiply(h, dy, out=tmp)
+        xo -= tmp
+        np.multiply(along, dy, out=yo)  # y = y1 + along dy + h dx
+        yo += y1
+        np.multiply(h, dx, out=tmp)
+        yo += tmp
+    # coincident centres (s <= eps total) are flagged too; with margin >= 0 they need r1 and r2
+    # within 2 eps total of each other, so the batch is checked sample by sample only then
+    if margin.min(initial=0.0) >= 0 and not np.any(np.abs(r1 - r2) <= 2 * eps * total):
         return out, margin
+    ok = margin >= 0
+    ok &= np.hypot(dx, dy) > eps * total
     out[~ok] = NAN_POINT
-    return out, np.where(ok, margin, np.minimum(margin, -_TINY))
+    np.copyto(margin, np.minimum(margin, -_TINY), where=~ok)
+    return out, margin
 
 
 def link_rates(base: np.ndarray, vbase: np.ndarray, abase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

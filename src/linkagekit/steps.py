@@ -219,7 +219,9 @@ class Place(Step):
         if self.keep_rotation:
             k.rot[self.link] = base / scale
         for j, ratio in zip(self.joints, ratios, strict=True):
-            k.z[j] = k.z[self.k1] + self._rho(k.mirrors, ratio) * base
+            zj = k.z[j]  # z_k1 + rho base, written in place (no temporaries of the batch's size)
+            np.multiply(base, self._rho(k.mirrors, ratio), out=zj)
+            zj += k.z[self.k1]
 
     def rates(self, r: Rate, nums: Nums) -> None:
         v, a = r.v, r.a
@@ -262,9 +264,8 @@ class Dyad(Step):
         return r1, r2
 
     def place(self, k: Kin, nums: Nums) -> None:
-        _, k.margin[self.sign] = circle_circle(
-            k.z[self.k1], k.z[self.k2], nums[0], nums[1], k.signs[self.sign], k.eps, out=k.z[self.joint]
-        )
+        z, sign = k.z, k.signs[self.sign]
+        circle_circle(z[self.k1], z[self.k2], nums[0], nums[1], sign, k.eps, z[self.joint], k.margin[self.sign])
 
     def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
         return side(zpose[self.k1], zpose[self.k2], zpose[self.joint])

@@ -254,15 +254,11 @@ def _nearest(
     ordered: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(inputs, distances) of the nearest curve point to every target, (N, m) each."""
-    far = ~np.isfinite(P)
-    Px = np.where(far, np.inf, P.real)[:, None, :]  # an unassembled sample is infinitely far
-    Py = np.where(far, 0.0, P.imag)[:, None, :]
-    dx = Px - T.real[None, :, None]
-    dy = Py - T.imag[None, :, None]
-    d2 = dx * dx + dy * dy  # (N, m, n)
-    k = _ordered(d2) if ordered else np.argmin(d2, axis=-1)
-    best = np.take_along_axis(d2, k[..., None], axis=-1)[..., 0]
+    d2 = _distances2(P, T)  # (N, m, n)
+    k = _ordered(d2) if ordered else np.argmin(d2.transpose(1, 0, 2), axis=-1).T  # over d2's memory order
     th = np.take_along_axis(theta, k, axis=-1)  # (N, m)
+    best = np.abs(np.take_along_axis(P, k, axis=-1) - T[None, :]) ** 2  # exactly, not by the expansion
+    best = np.where(np.isfinite(best), best, np.inf)
     spacing = 2 * np.pi / n
     h = H_THETA
     m = len(T)
@@ -282,6 +278,29 @@ def _nearest(
         th = np.where(better, cand, th)
         best = np.where(better, dc, best)
     return th, np.where(np.isfinite(best), np.sqrt(best), np.nan)
+
+
+def _distances2(P: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Squared distances (N, m, n) from the targets ``T`` (m,) to the curve samples ``P`` (N, n), inf where NaN.
+
+    ``|P - T|^2 = |P|^2 - 2 (T . P) + |T|^2`` about the targets' centre, the middle term one
+    matrix product over all designs and samples (no (N, m, n) temporaries of the differences).
+    Rounding is about ``eps |P - c|^2``: enough to pick the nearest sample, which is all it
+    is used for (the distances kept are computed directly).
+    """
+    c = T.mean()
+    far = ~np.isfinite(P)
+    Pc = np.where(far, 0.0, P - c)
+    Tc = T - c
+    N, n = P.shape
+    xy = np.empty((2, N, n))
+    xy[0], xy[1] = Pc.real, Pc.imag
+    d2 = np.stack([Tc.real, Tc.imag], axis=1) @ xy.reshape(2, N * n)  # (m, N n): T . P
+    d2 *= -2.0
+    d2 += (np.abs(Tc) ** 2)[:, None]
+    d2 = d2.reshape(len(T), N, n)
+    d2 += np.where(far, np.inf, Pc.real * Pc.real + Pc.imag * Pc.imag)[None]  # an unassembled sample is infinitely far
+    return d2.transpose(1, 0, 2)
 
 
 def _ordered(d2: np.ndarray) -> np.ndarray:
