@@ -1,4 +1,4 @@
-"""The circle-circle kernel against the defining equations, and the objective's squared distances against direct ones."""
+"""The circle-circle kernel against its defining equations; the objective's squared distances against direct ones."""
 
 from __future__ import annotations
 

@@ -429,8 +429,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--reach", metavar="R", default="1", help="joints lie within R target diagonals of the targets (default 1)"
     )
-    p.add_argument("--restarts", metavar="N", default="8", help="independent searches at most (default 8)")
-    p.add_argument("--generations", metavar="N", default="500", help="generations per search at most (default 500)")
+    p.add_argument("--restarts", metavar="N", default="32", help="independent searches at most (default 32)")
+    p.add_argument(
+        "--generations", metavar="N", default="500", help="differential-evolution generations per search (default 500)"
+    )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
     p.set_defaults(run=_synthesize)
     return parser

@@ -1,11 +1,12 @@
-"""Differential evolution over whole generations, a least-squares polish, restarts, checkpoints.
+"""Differential evolution and CMA-ES over whole generations, a least-squares polish, restarts, checkpoints.
 
 One restart
-    :class:`scipy.optimize.differential_evolution`'s solver (``rand1bin``, dithered
-    mutation, ``updating="deferred"``, ``vectorized=True``): every generation's trial
-    designs go to :class:`~linkagekit.synthesis.distribute.Evaluator` as one array.
-    Stepping the solver one generation at a time (its iterator) is what lets the run save
-    its state after every generation and stop on the clock.
+    Either :class:`scipy.optimize.differential_evolution`'s solver (``rand1bin``, dithered
+    mutation, ``updating="deferred"``, ``vectorized=True``) or CMA-ES
+    (:mod:`linkagekit.synthesis.cmaes`); they take turns from restart to restart. Every
+    generation's designs go to :class:`~linkagekit.synthesis.distribute.Evaluator` as one
+    array. Stepping a search one generation at a time is what lets the run save its state
+    after every generation and stop on the clock.
 Polish
     The ``POLISHED`` best distinct members are refined by
     :func:`scipy.optimize.least_squares` (``dogbox``: dogleg steps in rectangular trust regions; it
@@ -49,11 +50,15 @@ from .objective import PENALTY, Problem, evaluate
 
 #: designs polished per restart
 POLISHED = 5
+#: residual evaluations of each of them
+POLISH_NFEV = 100
 #: residual evaluations of the last polish of the best design
 FINAL_POLISH = 2000
 #: the solver's fields that change from generation to generation (all else follows from its arguments)
 _SOLVER_STATE = ("population", "population_energies", "_random_population_index", "feasible", "constraint_violation")
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
+#: the search a restart runs, as a function of its cost: (designs, dim) -> (designs,)
+Cost = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -68,7 +73,8 @@ class Settings:
     restarts : int
         Independent differential-evolution runs at most.
     generations : int
-        Generations per run at most.
+        Generations of a differential-evolution search at most; a CMA-ES search evaluates
+        at most as many designs (``generations * popsize * dim``).
     popsize : int
         Population = ``popsize * dim`` (scipy's convention).
     goal : float
@@ -80,7 +86,7 @@ class Settings:
 
     seed: int = 0
     seconds: float = 60.0
-    restarts: int = 8
+    restarts: int = 32
     generations: int = 500
     popsize: int = 15
     goal: float = 1e-5
@@ -125,10 +131,7 @@ def optimize(
     progress: Callable[[Progress], None] | None = None,
 ) -> Outcome:
     """Search ``problem`` as ``settings`` say; returns the best design found."""
-    from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
-
     start = time.monotonic()
-    lo, hi = problem.bounds
     seeds = np.random.SeedSequence(settings.seed).spawn(settings.restarts)
     state = _load(settings, problem) if settings.checkpoint else None
     done: list[dict[str, Any]] = [] if state is None else state["done"]
@@ -159,60 +162,31 @@ def optimize(
         while restart < settings.restarts:
             which = restart % len(variants)
 
-            def cost(x: np.ndarray, which: int = which) -> np.ndarray:  # scipy's vectorized call: x is (dim, S)
-                return ev.cost(np.asarray(x).T, which)
+            def cost(X: np.ndarray, which: int = which) -> np.ndarray:  # X is (designs, dim)
+                return ev.cost(X, which)
 
-            solver = DifferentialEvolutionSolver(
-                cost,
-                list(zip(lo, hi, strict=True)),
-                strategy="rand1bin",
-                maxiter=settings.generations,
-                popsize=settings.popsize,
-                tol=0,
-                mutation=(0.5, 1.0),
-                recombination=0.9,
-                rng=np.random.Generator(np.random.PCG64(seeds[restart])),
-                polish=False,
-                init="latinhypercube",
-                updating="deferred",
-                vectorized=True,
-            )
-            if state is not None and state.get("solver") is not None:
-                _restore(solver, state["solver"])
+            search = _search(restart, len(variants), problem, settings, seeds[restart], cost)
             designs = 0
             if state is not None and state.get("solver") is not None:
+                search.restore(state["solver"])
                 evaluations = sum(d["designs"] for d in done)  # the finished searches'; the rest is this one's
                 designs = state["evaluations"] - evaluations
             state = None
             out_of_time = False
-            while generation < settings.generations:
-                try:
-                    next(solver)
-                except StopIteration:  # pragma: no cover - maxfun is not set
-                    break
+            while not search.finished(generation):
+                designs += search.step()
                 generation += 1
-                designs += len(solver.population) * (2 if generation == 1 else 1)  # the first adds the initial one
                 best_cost, best_err = best_so_far()
+                n_eval = evaluations + designs
                 if progress is not None:
-                    progress(
-                        Progress(
-                            restart,
-                            generation,
-                            min(best_cost, float(solver.population_energies[0])),
-                            best_err,
-                            evaluations + designs,
-                            clock(),
-                        )
-                    )
+                    progress(Progress(restart, generation, min(best_cost, search.best), best_err, n_eval, clock()))
                 if settings.checkpoint:
-                    _save(
-                        settings, problem, restart, generation, evaluations + designs, clock(), _capture(solver), done
-                    )
+                    _save(settings, problem, restart, generation, n_eval, clock(), search.capture(), done)
                 if clock() + reserve > settings.seconds:  # leave time to polish within the budget
                     out_of_time = True
                     break
             t0 = clock()
-            x, c, err = _polish(problem, solver, ev)
+            x, c, err = _polish(problem, *search.candidates())
             reserve = max(reserve, 2.0 * (clock() - t0))  # this polish and the last, longer one
             done.append({"x": x, "cost": c, "max_error": err, "generations": generation, "designs": designs})
             evaluations += designs
@@ -247,6 +221,157 @@ def optimize(
         stopped_by,
         [(float(d["cost"]), float(d["max_error"])) for d in done],
     )
+
+
+# ---------------------------------------------------------------------- the two searches
+#: CMA-ES's first step size, in unit-box lengths
+CMA_SIGMA = 0.3
+#: CMA-ES's population grows by this factor from one of its restarts to the next (IPOP), at most this often
+CMA_GROWTH, CMA_DOUBLINGS = 2, 3
+#: every this many searches, one is CMA-ES (the others differential evolution)
+CMA_EVERY = 2
+
+
+def _search(restart: int, n_variants: int, problem: Problem, settings: Settings, seed: Any, cost: Cost) -> Search:
+    """The search of restart ``restart``: differential evolution and CMA-ES take turns (after the variants)."""
+    rng = np.random.Generator(np.random.PCG64(seed))
+    turn = restart // n_variants
+    if turn % CMA_EVERY != CMA_EVERY - 1:
+        return DESearch(problem, settings, rng, cost)
+    return CMASearch(problem, settings, rng, cost, CMA_GROWTH ** min(turn // CMA_EVERY, CMA_DOUBLINGS))
+
+
+class Search:
+    """One restart's population search: steps of one generation, a state to save, candidates to polish."""
+
+    kind = ""
+    best = np.inf  # the best cost found so far
+
+    def finished(self, generation: int) -> bool:
+        raise NotImplementedError
+
+    def step(self) -> int:
+        """One generation; returns the number of designs it evaluated."""
+        raise NotImplementedError
+
+    def candidates(self) -> tuple[np.ndarray, np.ndarray]:
+        """Designs (k, dim) and their costs (k,), best first."""
+        raise NotImplementedError
+
+    def capture(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def restore(self, saved: dict[str, Any]) -> None:
+        raise NotImplementedError
+
+
+class DESearch(Search):
+    """scipy's differential evolution (``rand1bin``, dithered mutation, deferred updating, vectorized)."""
+
+    kind = "de"
+
+    def __init__(self, problem: Problem, settings: Settings, rng: np.random.Generator, cost: Cost) -> None:
+        from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
+
+        lo, hi = problem.bounds
+        self.settings = settings
+        self.solver = DifferentialEvolutionSolver(
+            lambda x: cost(np.asarray(x).T),  # scipy's vectorized call: x is (dim, S)
+            list(zip(lo, hi, strict=True)),
+            strategy="rand1bin",
+            maxiter=settings.generations,
+            popsize=settings.popsize,
+            tol=0,
+            mutation=(0.5, 1.0),
+            recombination=0.9,
+            rng=rng,
+            polish=False,
+            init="latinhypercube",
+            updating="deferred",
+            vectorized=True,
+        )
+        self.first = True
+
+    @property
+    def best(self) -> float:  # type: ignore[override]
+        return float(self.solver.population_energies[0])
+
+    def finished(self, generation: int) -> bool:
+        return generation >= self.settings.generations
+
+    def step(self) -> int:
+        next(self.solver)
+        n = len(self.solver.population) * (2 if self.first else 1)  # the first adds the initial population
+        self.first = False
+        return n
+
+    def candidates(self) -> tuple[np.ndarray, np.ndarray]:
+        order = np.argsort(self.solver.population_energies, kind="stable")
+        pop = self.solver._scale_parameters(self.solver.population)
+        return pop[order], np.asarray(self.solver.population_energies)[order]
+
+    def capture(self) -> dict[str, Any]:
+        sv = self.solver
+        out: dict[str, Any] = {k: np.array(getattr(sv, k)) for k in _SOLVER_STATE}
+        out.update(scale=float(sv.scale), nfev=int(sv._nfev), rng=sv.random_number_generator.bit_generator.state)
+        return out
+
+    def restore(self, saved: dict[str, Any]) -> None:
+        sv = self.solver
+        for k in _SOLVER_STATE:
+            current = getattr(sv, k)
+            setattr(sv, k, np.asarray(saved[k], dtype=current.dtype).reshape(current.shape))
+        sv.scale = float(saved["scale"])
+        sv._nfev = int(saved["nfev"])
+        sv.random_number_generator.bit_generator.state = saved["rng"]
+        self.first = False
+
+
+class CMASearch(Search):
+    """CMA-ES (:mod:`linkagekit.synthesis.cmaes`) in the unit box, from a random start.
+
+    The population is the default ``4 + 3 ln n`` times ``growth``; the search ends when the
+    strategy converges or stalls, or after as many designs as a differential-evolution search.
+    """
+
+    kind = "cma"
+
+    def __init__(
+        self, problem: Problem, settings: Settings, rng: np.random.Generator, cost: Cost, growth: int = 1
+    ) -> None:
+        from .cmaes import CMAES
+
+        self.lo, self.hi = problem.bounds
+        n = len(self.lo)
+        self.cost = cost
+        self.budget = settings.generations * settings.popsize * n
+        self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * growth)
+
+    def _x(self, U: np.ndarray) -> np.ndarray:
+        return self.lo + U * (self.hi - self.lo)
+
+    @property
+    def best(self) -> float:  # type: ignore[override]
+        return self.es.best_f
+
+    def finished(self, generation: int) -> bool:
+        return self.es.evaluations >= self.budget or self.es.stop() is not None
+
+    def step(self) -> int:
+        U = self.es.ask()
+        self.es.tell(U, self.cost(self._x(U)))
+        return len(U)
+
+    def candidates(self) -> tuple[np.ndarray, np.ndarray]:
+        es = self.es
+        X = np.vstack([es.best_x[None], es.last_X])
+        return self._x(X), np.concatenate([[es.best_f], es.last_f])
+
+    def capture(self) -> dict[str, Any]:
+        return self.es.state()
+
+    def restore(self, saved: dict[str, Any]) -> None:
+        self.es.restore(saved)
 
 
 # ---------------------------------------------------------------------- polish
@@ -297,17 +422,15 @@ class _OutOfTime(Exception):
     """The polish's deadline passed."""
 
 
-def _polish(problem: Problem, solver: Any, ev: Evaluator) -> tuple[np.ndarray, float, float]:
-    """The best of the population's ``POLISHED`` best distinct members after polishing: (x, cost, max error / L)."""
-    pop = solver._scale_parameters(solver.population)
-    order = np.argsort(solver.population_energies, kind="stable")
+def _polish(problem: Problem, X: np.ndarray, energies: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The best of the ``POLISHED`` best distinct candidates after polishing: (x, cost, max error / L)."""
     picked: list[np.ndarray] = []
-    for i in order:
+    for i in np.argsort(energies, kind="stable"):
         if len(picked) == POLISHED:
             break
-        if all(np.max(np.abs(pop[i] - p)) > 1e-9 * problem.scale for p in picked):
-            picked.append(pop[i])
-    cands = np.array([polish(problem, p) for p in picked] + picked)
+        if all(np.max(np.abs(X[i] - p)) > 1e-9 * problem.scale for p in picked):
+            picked.append(X[i])
+    cands = np.array([polish(problem, p, max_nfev=POLISH_NFEV) for p in picked] + picked)
     e = evaluate(problem, cands, refine=3)
     k = int(np.argmin(e.cost))
     err = np.nanmax(e.errors[k]) / problem.scale if np.all(np.isfinite(e.errors[k])) else np.inf
@@ -315,24 +438,6 @@ def _polish(problem: Problem, solver: Any, ev: Evaluator) -> tuple[np.ndarray, f
 
 
 # ---------------------------------------------------------------------- checkpoints
-def _capture(solver: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {k: np.array(getattr(solver, k)) for k in _SOLVER_STATE}
-    out["scale"] = float(solver.scale)
-    out["nfev"] = int(solver._nfev)
-    out["rng"] = solver.random_number_generator.bit_generator.state
-    return out
-
-
-def _restore(solver: Any, saved: dict[str, Any]) -> None:
-    for k in _SOLVER_STATE:
-        current = getattr(solver, k)
-        value = np.asarray(saved[k], dtype=current.dtype).reshape(current.shape)
-        setattr(solver, k, value)
-    solver.scale = float(saved["scale"])
-    solver._nfev = int(saved["nfev"])
-    solver.random_number_generator.bit_generator.state = saved["rng"]
-
-
 def _save(
     settings: Settings,
     problem: Problem,
@@ -345,8 +450,8 @@ def _save(
 ) -> None:
     assert settings.checkpoint is not None
     path = Path(settings.checkpoint)
-    header = {
-        "format": "linkagekit-checkpoint/1",
+    header: dict[str, Any] = {
+        "format": "linkagekit-checkpoint/2",
         "version": CHECKPOINT_VERSION,
         "problem": problem.fingerprint(),
         "settings": settings.key(),
@@ -361,9 +466,10 @@ def _save(
         "solver": None,
     }
     arrays: dict[str, np.ndarray] = {f"done_x_{i}": np.asarray(d["x"], float) for i, d in enumerate(done)}
-    if solver is not None:
-        header["solver"] = {"scale": solver["scale"], "nfev": solver["nfev"], "rng": solver["rng"]}
-        arrays.update({f"solver_{k}": solver[k] for k in _SOLVER_STATE})
+    if solver is not None:  # the search's arrays into the file's arrays, its numbers into the header
+        names = [k for k, v in solver.items() if isinstance(v, np.ndarray)]
+        header["solver"] = {**{k: v for k, v in solver.items() if k not in names}, "arrays": names}
+        arrays.update({f"solver_{k}": solver[k] for k in names})
     arrays["header"] = np.array(json.dumps(header, default=int))
     tmp = _temporary(path)
     try:
@@ -395,7 +501,9 @@ def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
         with np.load(path, allow_pickle=False) as z:
             header = json.loads(str(z["header"]))
             arrays = {k: z[k] for k in z.files if k != "header"}
-        if not isinstance(header, dict) or header.get("format") != "linkagekit-checkpoint/1":
+        if isinstance(header, dict) and header.get("format") == "linkagekit-checkpoint/1":
+            raise ValueError("written by an earlier linkagekit (format 1); delete it to start a new run")
+        if not isinstance(header, dict) or header.get("format") != "linkagekit-checkpoint/2":
             raise ValueError("not a linkagekit checkpoint")
         done = [
             {**d, "x": arrays[f"done_x_{i}"], "cost": float(d["cost"]), "max_error": float(d["max_error"])}
@@ -404,7 +512,7 @@ def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
         solver = None
         if header["solver"] is not None:
             solver = dict(header["solver"])
-            solver.update({k: arrays[f"solver_{k}"] for k in _SOLVER_STATE})
+            solver.update({k: arrays[f"solver_{k}"] for k in solver.pop("arrays")})
         fingerprint, key = header["problem"], header["settings"]
         state = {
             "restart": int(header["restart"]),

@@ -145,7 +145,7 @@ def synthesize(
     reach: float = 1.0,
     seed: int = 0,
     seconds: float = 60.0,
-    restarts: int = 8,
+    restarts: int = 32,
     generations: int = 500,
     popsize: int = 15,
     goal: float = 1e-5,
