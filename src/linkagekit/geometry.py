@@ -81,54 +81,45 @@ def circle_circle(
     negative where the circles do not meet, and there ``z`` is NaN.  ``out`` (complex) and
     ``margin`` (float) are written in place when given.
 
-    Written in real arithmetic (the x and y parts of ``out``), which NumPy runs faster than
-    complex products, and in place into five work arrays taken at once: on large batches
-    a fresh temporary per operation (new memory, handed over zeroed page by page) cost
-    more than the arithmetic on it.
+    Computed as ``z = z1 + w d`` with ``w = a + i b``, ``a = along / s = 1/2 + (r1^2 - r2^2) / (2 s^2)``
+    and ``b = h / s = sign sqrt(r1^2 / s^2 - a^2)``: one complex product places the point
+    (NumPy runs complex products as fast as real ones), and every operation writes in place
+    into four work arrays taken in two allocations: on large batches a fresh temporary per
+    operation (new memory, handed over zeroed page by page) cost more than the arithmetic.
     """
     shape = np.broadcast_shapes(*(np.shape(a) for a in (z1, z2, r1, r2, sign)))
     if out is None:
         out = np.empty(shape, complex)
     if margin is None:
         margin = np.empty(shape)
-    dx, dy, s2, s, along = np.empty((5, *shape))  # one allocation for the work arrays
-    x1, y1 = z1.real, z1.imag
-    np.subtract(z2.real, x1, out=dx)
-    np.subtract(z2.imag, y1, out=dy)
+    d, w = np.empty((2, *shape), complex)  # d = z2 - z1 and w = a + i b
+    s2, t = np.empty((2, *shape))
+    np.subtract(z2, z1, out=d)
+    dx, dy = d.real, d.imag
     np.multiply(dx, dx, out=s2)
-    np.multiply(dy, dy, out=s)
-    s2 += s
-    np.sqrt(s2, out=s)
+    np.multiply(dy, dy, out=t)
+    s2 += t
+    np.sqrt(s2, out=t)  # t = s
     total = r1 + r2
     # margin = min(total (1 + eps) - s, s - |r1 - r2| + eps total) / total
-    np.subtract(total * (1 + eps), s, out=margin)
-    np.subtract(s, np.abs(r1 - r2) - eps * total, out=along)
-    np.minimum(margin, along, out=margin)
-    margin /= total
+    np.subtract(total * (1 + eps), t, out=margin)
+    np.subtract(t, np.abs(r1 - r2) - eps * total, out=t)
+    np.minimum(margin, t, out=margin)
+    margin *= 1.0 / total
+    a, b = w.real, w.imag
     with np.errstate(divide="ignore", invalid="ignore"):
         r1sq = r1 * r1
-        np.add(r1sq - r2 * r2, s2, out=along)  # along = (r1^2 - r2^2 + s^2) / (2 s)
-        np.multiply(s, 2.0, out=s2)
-        along /= s2
-        h = s2
-        np.multiply(along, along, out=h)  # h = sign sqrt(max(r1^2 - along^2, 0))
-        np.subtract(r1sq, h, out=h)
-        np.maximum(h, 0.0, out=h)
-        np.sqrt(h, out=h)
-        h *= sign
-        np.divide(1.0, s, out=s)  # along, h over s: the unit vector d / s folded in
-        along *= s
-        h *= s
-        tmp = s
-        xo, yo = out.real, out.imag
-        np.multiply(along, dx, out=xo)  # x = x1 + along dx - h dy
-        xo += x1
-        np.multiply(h, dy, out=tmp)
-        xo -= tmp
-        np.multiply(along, dy, out=yo)  # y = y1 + along dy + h dx
-        yo += y1
-        np.multiply(h, dx, out=tmp)
-        yo += tmp
+        np.divide(1.0, s2, out=s2)  # s2 = 1 / s^2
+        np.multiply(s2, 0.5 * (r1sq - r2 * r2), out=t)
+        np.add(t, 0.5, out=a)
+        np.multiply(s2, r1sq, out=s2)  # b = sign sqrt(max(r1^2 / s^2 - a^2, 0))
+        np.multiply(a, a, out=t)
+        s2 -= t
+        np.maximum(s2, 0.0, out=s2)
+        np.sqrt(s2, out=s2)
+        np.multiply(s2, sign, out=b)
+        np.multiply(w, d, out=out)
+        out += z1
     # coincident centres (s <= eps total) are flagged too; with margin >= 0 they need r1 and r2
     # within 2 eps total of each other, so the batch is checked sample by sample only then
     if margin.min(initial=0.0) >= 0 and not np.any(np.abs(r1 - r2) <= 2 * eps * total):

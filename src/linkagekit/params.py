@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -241,13 +242,10 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
     if poses is None:
         valid = np.ones(1, bool)
     else:
+        # a design is valid when no two joints of one link coincide (relative to the design's size)
         scale = np.max(np.abs(zpose - zpose.mean(axis=0)), axis=0)[:, 0]  # (D,)
-        valid = np.ones(src.D, bool)
-        for ln in mech.links:
-            ids = [plan.joint_names.index(j) for j in ln.joints]
-            for i, a in enumerate(ids):
-                for b in ids[i + 1 :]:
-                    valid &= np.abs(zpose[a, :, 0] - zpose[b, :, 0]) > 1e-9 * scale
+        ia, ib = _link_pairs(mech, plan.joint_names)
+        valid = np.all(np.abs(zpose[ia, :, 0] - zpose[ib, :, 0]) > 1e-9 * scale, axis=0)
     bases = {}
     for ln in mech.links:
         if len(ln.joints) >= 2:
@@ -258,6 +256,13 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
     signs = np.array(sign_rows, float).reshape(plan.n_signs, src.D)
     bodies, loads = _dynamics(mech, src)
     return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases, bodies, loads)
+
+
+@lru_cache(maxsize=64)
+def _link_pairs(mech: Mechanism, names: tuple[str, ...]) -> tuple[list[int], list[int]]:
+    """Every pair of joints that share a link, as two lists of joint indices."""
+    pairs = [(a, b) for ln in mech.links for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]]
+    return [names.index(a) for a, _ in pairs], [names.index(b) for _, b in pairs]
 
 
 def _on_link(mech: Mechanism, link: str, local: complex) -> complex:

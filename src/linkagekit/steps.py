@@ -170,8 +170,7 @@ class Crank(Step):
     def place(self, k: Kin, nums: Nums) -> None:
         zt = k.z[self.toward]
         e = cis(k.q[self.driver])  # e^{i phi} once per sample, not per design
-        np.multiply(e.real, nums[0], out=zt.real)  # real products: NumPy casts float to complex slowly
-        np.multiply(e.imag, nums[0], out=zt.imag)
+        np.multiply(e, nums[0] + 0j, out=zt)  # the radius made complex once per design: one complex product
         zt += k.z[self.pivot]
 
     def rates(self, r: Rate, nums: Nums) -> None:
@@ -215,13 +214,19 @@ class Place(Step):
 
     def place(self, k: Kin, nums: Nums) -> None:
         scale, ratios = nums
-        base = k.z[self.k2] - k.z[self.k1]
+        z1, z2 = k.z[self.k1], k.z[self.k2]
+        base = None
         if self.keep_rotation:
+            base = z2 - z1
             k.rot[self.link] = base / scale
         for j, ratio in zip(self.joints, ratios, strict=True):
-            zj = k.z[j]  # z_k1 + rho base, written in place (no temporaries of the batch's size)
-            np.multiply(base, self._rho(k.mirrors, ratio), out=zj)
-            zj += k.z[self.k1]
+            zj = k.z[j]  # z_k1 + rho (z_k2 - z_k1), written in place (no temporaries of the batch's size)
+            if base is None:
+                np.subtract(z2, z1, out=zj)
+                zj *= self._rho(k.mirrors, ratio)
+            else:
+                np.multiply(base, self._rho(k.mirrors, ratio), out=zj)
+            zj += z1
 
     def rates(self, r: Rate, nums: Nums) -> None:
         v, a = r.v, r.a
