@@ -317,7 +317,7 @@ def test_resumed_run_leaves_no_temp_file_of_a_writer_killed_mid_write(work, tmp_
 
 
 # ---------------------------------------------------------------------- resume after SIGKILL
-RESUME = ["--units", "cm", "--restarts", "2", "--generations", "150", "--seconds", "1000", "--seed", "3"]
+RESUME = ["--units", "cm", "--restarts", "2", "--generations", "150", "--seconds", "1000", "--seed", "3", "--goal", "0"]
 
 
 @pytest.mark.parametrize("kill_in", [0, 1], ids=["differential evolution", "CMA-ES"])
@@ -524,6 +524,8 @@ def test_bad_targets_are_one_line_exit_2_naming_the_file(tmp_path, name, body, f
         (["--units", "furlong"], "furlong"),
         (["--min-transmission", "95"], "--min-transmission"),
         (["--restarts", "0"], "--restarts"),
+        (["--goal", "-0.1"], "--goal"),
+        (["--goal", "nan"], "--goal"),
     ],
 )
 def test_bad_options_are_one_line_exit_2(work, tmp_path, capsys, options, fragment):

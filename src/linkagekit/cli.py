@@ -433,6 +433,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--generations", metavar="N", default="500", help="differential-evolution generations per search (default 500)"
     )
+    p.add_argument(
+        "--goal",
+        metavar="F",
+        default="1e-5",
+        help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
+    )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
     p.set_defaults(run=_synthesize)
     return parser
@@ -1102,6 +1108,9 @@ def _synthesize(args: argparse.Namespace) -> int:
     points = _integer(args.points, "--points", 3, 100_000)
     restarts = _integer(args.restarts, "--restarts", 1, 10_000)
     generations = _integer(args.generations, "--generations", 1, 10_000_000)
+    goal = _one_number(args.goal, "--goal")
+    if not 0 <= goal < 1:
+        raise InputError(f"--goal: expected a fraction of the targets' diagonal in [0, 1), got {args.goal}")
     reach = _one_number(args.reach, "--reach")
     if not 0 < reach <= 100:
         raise InputError(f"--reach: expected a positive number up to 100, got {args.reach}")
@@ -1146,6 +1155,7 @@ def _synthesize(args: argparse.Namespace) -> int:
             seconds=seconds,
             restarts=restarts,
             generations=generations,
+            goal=goal,
             workers=workers,
             scheduler=args.scheduler,
             checkpoint=args.checkpoint,

@@ -206,11 +206,14 @@ def optimize(
                 break
     best = min(done, key=lambda d: d["cost"])
     x = np.asarray(best["x"], float)
-    if best["max_error"] > settings.goal:  # a last, longer polish of the best design
-        deep = polish(problem, x, max_nfev=FINAL_POLISH, until=start + max(settings.seconds - elapsed0, 0.0))
-        e = evaluate(problem, np.array([x, deep]), refine=3)
-        if e.cost[1] < e.cost[0]:
-            best = {**best, "x": deep, "cost": float(e.cost[1])}
+    if best["max_error"] > settings.goal:  # a last, longer polish of the best design, by both methods
+        until = start + max(settings.seconds - elapsed0, 0.0)
+        first = polish_method(problem)
+        deep = [polish(problem, x, FINAL_POLISH, until, m) for m in (first, "dogbox" if first == "trf" else "trf")]
+        e = evaluate(problem, np.array([x, *deep]), refine=3)
+        k = int(np.argmin(e.cost))
+        if k > 0:
+            best = {**best, "x": deep[k - 1], "cost": float(e.cost[k])}
     return Outcome(
         np.asarray(best["x"], float),
         float(best["cost"]),
@@ -230,6 +233,8 @@ CMA_SIGMA = 0.3
 CMA_GROWTH, CMA_DOUBLINGS = 2, 3
 #: every this many searches, one is CMA-ES (the others differential evolution)
 CMA_EVERY = 2
+#: CMA-ES's first population, in multiples of its default 4 + 3 ln n
+CMA_POPULATION = 8
 
 
 def _search(restart: int, n_variants: int, problem: Problem, settings: Settings, seed: Any, cost: Cost) -> Search:
@@ -345,7 +350,7 @@ class CMASearch(Search):
         n = len(self.lo)
         self.cost = cost
         self.budget = settings.generations * settings.popsize * n
-        self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * growth)
+        self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
 
     def _x(self, U: np.ndarray) -> np.ndarray:
         return self.lo + U * (self.hi - self.lo)
@@ -383,10 +388,23 @@ def residuals(problem: Problem, X: np.ndarray) -> np.ndarray:
     return np.concatenate([rel, np.sqrt(PENALTY * e.violation)[:, None]], axis=1)
 
 
-def polish(problem: Problem, x0: np.ndarray, max_nfev: int = 100, until: float | None = None) -> np.ndarray:
+def polish_method(problem: Problem) -> str:
+    """The least-squares method that refines designs of ``problem`` best (measured; docs/method.md, "Search").
+
+    Without timing the residuals have a manifold of exact solutions (a rank-deficient
+    Jacobian), on which dogbox stalls and trust-region reflective converges; with timing,
+    trust-region reflective crawls where dogbox converges.
+    """
+    return "dogbox" if problem.timed else "trf"
+
+
+def polish(
+    problem: Problem, x0: np.ndarray, max_nfev: int = 100, until: float | None = None, method: str | None = None
+) -> np.ndarray:
     """A local least-squares refinement of one design vector within the bounds.
 
     ``until``: a ``time.monotonic()`` deadline; past it the refinement stops at its best point so far.
+    ``method``: ``"trf"`` or ``"dogbox"`` (default: :func:`polish_method`).
     """
     from scipy.optimize import least_squares
 
@@ -412,7 +430,9 @@ def polish(problem: Problem, x0: np.ndarray, max_nfev: int = 100, until: float |
 
     x0 = np.clip(x0, lo, hi)
     try:
-        r = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="dogbox", x_scale="jac", max_nfev=max_nfev)
+        method = method or polish_method(problem)
+        scaling = "jac" if method == "dogbox" else 1.0
+        r = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method=method, x_scale=scaling, max_nfev=max_nfev)
     except _OutOfTime:
         return np.asarray(best[1], float)
     return np.asarray(r.x, float)
