@@ -231,7 +231,9 @@ def main(n=100_000, chunk=CHUNK, repeat=3, loop_designs=LOOP_DESIGNS):
     for key, label in labels.items():
         line = f"  {label:52s} {ns[key]:8.1f}"
         if pl is not None and (key == "analyze" or key.startswith("solve")):
-            line += f"   ratio pylinkage / this {ns['pylinkage_best'] / ns[key]:5.2f}  (goal >= 5)"
+            line += f"   ratio pylinkage / this {ns['pylinkage_best'] / ns[key]:5.2f}"
+            # the goal is about the paths a user and the synthesis take; one call over a whole chunk works out of cache
+            line += "  (goal >= 5)" if key != "solveNone" else "  (out of cache: for comparison)"
         elif key == "hand":
             line += f"   ratio lk.analyze / this {ns['analyze'] / ns[key]:5.2f}"
         elif key.startswith("pylinkage"):

@@ -208,8 +208,7 @@ def optimize(
     x = np.asarray(best["x"], float)
     if best["max_error"] > settings.goal:  # a last, longer polish of the best design, by both methods
         until = start + max(settings.seconds - elapsed0, 0.0)
-        first = polish_method(problem)
-        deep = [polish(problem, x, FINAL_POLISH, until, m) for m in (first, "dogbox" if first == "trf" else "trf")]
+        deep = [polish(problem, x, FINAL_POLISH, until, m) for m in _both_methods(problem)]
         e = evaluate(problem, np.array([x, *deep]), refine=3)
         k = int(np.argmin(e.cost))
         if k > 0:
@@ -398,6 +397,12 @@ def polish_method(problem: Problem) -> str:
     return "dogbox" if problem.timed else "trf"
 
 
+def _both_methods(problem: Problem) -> tuple[str, str]:
+    """Both least-squares methods, the one that suits ``problem`` first."""
+    first = polish_method(problem)
+    return first, "dogbox" if first == "trf" else "trf"
+
+
 def polish(
     problem: Problem, x0: np.ndarray, max_nfev: int = 100, until: float | None = None, method: str | None = None
 ) -> np.ndarray:
@@ -443,14 +448,15 @@ class _OutOfTime(Exception):
 
 
 def _polish(problem: Problem, X: np.ndarray, energies: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """The best of the ``POLISHED`` best distinct candidates after polishing: (x, cost, max error / L)."""
+    """The best of the ``POLISHED`` best distinct candidates, each polished both ways: (x, cost, max error / L)."""
     picked: list[np.ndarray] = []
     for i in np.argsort(energies, kind="stable"):
         if len(picked) == POLISHED:
             break
         if all(np.max(np.abs(X[i] - p)) > 1e-9 * problem.scale for p in picked):
             picked.append(X[i])
-    cands = np.array([polish(problem, p, max_nfev=POLISH_NFEV) for p in picked] + picked)
+    methods = _both_methods(problem)
+    cands = np.array([polish(problem, p, POLISH_NFEV, method=m) for p in picked for m in methods] + picked)
     e = evaluate(problem, cands, refine=3)
     k = int(np.argmin(e.cost))
     err = np.nanmax(e.errors[k]) / problem.scale if np.all(np.isfinite(e.errors[k])) else np.inf
