@@ -107,7 +107,7 @@ def circle_circle(
     np.minimum(margin, t, out=margin)
     margin *= 1.0 / total
     a, b = w.real, w.imag
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # s -> 0 is flagged below
         r1sq = r1 * r1
         np.divide(1.0, s2, out=s2)  # s2 = 1 / s^2
         np.multiply(s2, 0.5 * (r1sq - r2 * r2), out=t)
