@@ -426,6 +426,7 @@ def _real_checkpoint(tmp: Path) -> bytes:
         "header a list",
         "header without problem",
         "format 1",
+        "format 2",
     ],
 )
 def test_corrupt_checkpoint_is_one_line_exit_2(work, tmp_path, capsys, kind):
@@ -438,15 +439,16 @@ def test_corrupt_checkpoint_is_one_line_exit_2(work, tmp_path, capsys, kind):
         "empty": lambda: b"",
         "header a list": lambda: _npz(header=np.array("[]")),
         "format 1": lambda: _npz(header=np.array(json.dumps({"format": "linkagekit-checkpoint/1"}))),
+        "format 2": lambda: _npz(header=np.array(json.dumps({"format": "linkagekit-checkpoint/2"}))),
         "header without problem": lambda: _npz(
-            header=np.array(json.dumps({"format": "linkagekit-checkpoint/2", "done": [], "solver": None}))
+            header=np.array(json.dumps({"format": "linkagekit-checkpoint/3", "done": [], "solver": None}))
         ),
     }[kind]()
     ck = tmp_path / "ck.npz"
     ck.write_bytes(content)
     args = ["synthesize", str(tmp_path / "t.csv"), "-o", str(tmp_path / "out.yaml"), "--units", "cm"]
     code, out, err = run_main([*args, "--restarts", "1", "--generations", "2", "--checkpoint", str(ck)], capsys)
-    assert_one_line_error(code, err, str(ck))
+    assert_one_line_error(code, err, str(ck), *(["earlier linkagekit", kind] if kind.startswith("format") else []))
     assert out == "" and not (tmp_path / "out.yaml").exists()
     assert ck.read_bytes() == content
 

@@ -56,7 +56,7 @@ POLISH_NFEV = 100
 FINAL_POLISH = 2000
 #: the solver's fields that change from generation to generation (all else follows from its arguments)
 _SOLVER_STATE = ("population", "population_energies", "_random_population_index", "feasible", "constraint_violation")
-CHECKPOINT_VERSION = 2
+CHECKPOINT_VERSION = 3  # 3: CMA-ES population and polish changed, so earlier checkpoints cannot continue
 #: the search a restart runs, as a function of its cost: (designs, dim) -> (designs,)
 Cost = Callable[[np.ndarray], np.ndarray]
 
@@ -477,7 +477,7 @@ def _save(
     assert settings.checkpoint is not None
     path = Path(settings.checkpoint)
     header: dict[str, Any] = {
-        "format": "linkagekit-checkpoint/2",
+        "format": f"linkagekit-checkpoint/{CHECKPOINT_VERSION}",
         "version": CHECKPOINT_VERSION,
         "problem": problem.fingerprint(),
         "settings": settings.key(),
@@ -527,9 +527,11 @@ def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
         with np.load(path, allow_pickle=False) as z:
             header = json.loads(str(z["header"]))
             arrays = {k: z[k] for k in z.files if k != "header"}
-        if isinstance(header, dict) and header.get("format") == "linkagekit-checkpoint/1":
-            raise ValueError("written by an earlier linkagekit (format 1); delete it to start a new run")
-        if not isinstance(header, dict) or header.get("format") != "linkagekit-checkpoint/2":
+        earlier = {f"linkagekit-checkpoint/{v}": v for v in range(1, CHECKPOINT_VERSION)}
+        if isinstance(header, dict) and header.get("format") in earlier:
+            v = earlier[header["format"]]
+            raise ValueError(f"written by an earlier linkagekit (format {v}, another search); delete it to start anew")
+        if not isinstance(header, dict) or header.get("format") != f"linkagekit-checkpoint/{CHECKPOINT_VERSION}":
             raise ValueError("not a linkagekit checkpoint")
         done = [
             {**d, "x": arrays[f"done_x_{i}"], "cost": float(d["cost"]), "max_error": float(d["max_error"])}
