@@ -215,17 +215,12 @@ class Place(Step):
     def place(self, k: Kin, nums: Nums) -> None:
         scale, ratios = nums
         z1, z2 = k.z[self.k1], k.z[self.k2]
-        base = None
         if self.keep_rotation:
-            base = z2 - z1
-            k.rot[self.link] = base / scale
+            k.rot[self.link] = (z2 - z1) / scale
         for j, ratio in zip(self.joints, ratios, strict=True):
             zj = k.z[j]  # z_k1 + rho (z_k2 - z_k1), written in place (no temporaries of the batch's size)
-            if base is None:
-                np.subtract(z2, z1, out=zj)
-                zj *= self._rho(k.mirrors, ratio)
-            else:
-                np.multiply(base, self._rho(k.mirrors, ratio), out=zj)
+            np.subtract(z2, z1, out=zj)
+            zj *= self._rho(k.mirrors, ratio)
             zj += z1
 
     def rates(self, r: Rate, nums: Nums) -> None:

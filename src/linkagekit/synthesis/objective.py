@@ -58,6 +58,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InputError
+from ..geometry import abs2
 from ..params import Params
 from ..params import compile as compile_params
 from ..positions import solve
@@ -297,9 +298,9 @@ def _distances2(P: np.ndarray, T: np.ndarray) -> np.ndarray:
     xy[0], xy[1] = Pc.real, Pc.imag
     d2 = np.stack([Tc.real, Tc.imag], axis=1) @ xy.reshape(2, N * n)  # (m, N n): T . P
     d2 *= -2.0
-    d2 += (np.abs(Tc) ** 2)[:, None]
+    d2 += abs2(Tc)[:, None]
     d2 = d2.reshape(len(T), N, n)
-    d2 += np.where(far, np.inf, Pc.real * Pc.real + Pc.imag * Pc.imag)[None]  # an unassembled sample is infinitely far
+    d2 += np.where(far, np.inf, abs2(Pc))[None]  # an unassembled sample is infinitely far
     return d2.transpose(1, 0, 2)
 
 

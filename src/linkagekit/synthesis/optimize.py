@@ -9,13 +9,12 @@ One restart
     after every generation and stop on the clock.
 Polish
     The ``POLISHED`` best distinct members are refined by
-    :func:`scipy.optimize.least_squares` (``dogbox``: dogleg steps in rectangular trust regions; it
-    keeps the bounds and, unlike trust-region reflective, converges in a few steps on these
-    nearly degenerate residuals) on the
-    residuals ``e_i / (L sqrt(m))`` and ``sqrt(PENALTY * violation)``, with the Jacobian by
-    forward differences computed as one batch of ``dim + 1`` designs; the refinement of the
-    nearest points is run to convergence there (3 Newton steps), so the residuals are
-    smooth in the design.
+    :func:`scipy.optimize.least_squares` on the residuals ``e_i / (L sqrt(m))`` and
+    ``sqrt(PENALTY * violation)``, each by both of its bounded methods (trust-region
+    reflective suits untimed problems, whose exact solutions form a manifold; dogbox suits
+    timed ones; see :func:`polish_method`), with the Jacobian by forward differences
+    computed as one batch of ``dim + 1`` designs; the refinement of the nearest points is
+    run to convergence there (3 Newton steps), so the residuals are smooth in the design.
 Restarts
     Up to ``restarts`` independent runs, each from its own child of ``SeedSequence(seed)``;
     the run stops early once a design meets every target within ``goal * L``.
@@ -71,7 +70,7 @@ class Settings:
     seconds : float
         Time budget of the whole run (checked between generations).
     restarts : int
-        Independent differential-evolution runs at most.
+        Independent searches at most (differential evolution and CMA-ES in turn).
     generations : int
         Generations of a differential-evolution search at most; a CMA-ES search evaluates
         at most as many designs (``generations * popsize * dim``).
@@ -248,7 +247,6 @@ def _search(restart: int, n_variants: int, problem: Problem, settings: Settings,
 class Search:
     """One restart's population search: steps of one generation, a state to save, candidates to polish."""
 
-    kind = ""
     best = np.inf  # the best cost found so far
 
     def finished(self, generation: int) -> bool:
@@ -271,8 +269,6 @@ class Search:
 
 class DESearch(Search):
     """scipy's differential evolution (``rand1bin``, dithered mutation, deferred updating, vectorized)."""
-
-    kind = "de"
 
     def __init__(self, problem: Problem, settings: Settings, rng: np.random.Generator, cost: Cost) -> None:
         from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
@@ -334,11 +330,9 @@ class DESearch(Search):
 class CMASearch(Search):
     """CMA-ES (:mod:`linkagekit.synthesis.cmaes`) in the unit box, from a random start.
 
-    The population is the default ``4 + 3 ln n`` times ``growth``; the search ends when the
+    The population is the default ``4 + 3 ln n`` times ``CMA_POPULATION`` times ``growth``; the search ends when the
     strategy converges or stalls, or after as many designs as a differential-evolution search.
     """
-
-    kind = "cma"
 
     def __init__(
         self, problem: Problem, settings: Settings, rng: np.random.Generator, cost: Cost, growth: int = 1
@@ -387,6 +381,11 @@ def residuals(problem: Problem, X: np.ndarray) -> np.ndarray:
     return np.concatenate([rel, np.sqrt(PENALTY * e.violation)[:, None]], axis=1)
 
 
+def _both_methods(problem: Problem) -> tuple[str, str]:
+    """Both least-squares methods, the one that suits ``problem`` first (see :func:`polish_method`)."""
+    return ("dogbox", "trf") if problem.timed else ("trf", "dogbox")
+
+
 def polish_method(problem: Problem) -> str:
     """The least-squares method that refines designs of ``problem`` best (measured; docs/method.md, "Search").
 
@@ -394,13 +393,7 @@ def polish_method(problem: Problem) -> str:
     Jacobian), on which dogbox stalls and trust-region reflective converges; with timing,
     trust-region reflective crawls where dogbox converges.
     """
-    return "dogbox" if problem.timed else "trf"
-
-
-def _both_methods(problem: Problem) -> tuple[str, str]:
-    """Both least-squares methods, the one that suits ``problem`` first."""
-    first = polish_method(problem)
-    return first, "dogbox" if first == "trf" else "trf"
+    return _both_methods(problem)[0]
 
 
 def polish(
