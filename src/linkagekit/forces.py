@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .catalogue import ReactionKey
 from .errors import UnknownNameError, shorten
 from .geometry import cross
 from .params import Body, LoadParams
@@ -100,54 +101,9 @@ class Forces:
             raise UnknownNameError(f"no reaction {what}")
         raise UnknownNameError(f"several reactions {what} (by {', '.join(b for b, _ in found)}): name `by`")
 
-    def to_dict(self) -> dict[str, Any]:
-        """The force part of the JSON result (spec section 3), one design: NaN becomes ``None``."""
-        out: dict[str, Any] = {"reactions": []}
-        for r in self.reactions:
-            entry: dict[str, Any] = {
-                "joint": r.joint,
-                "on": r.on,
-                "by": r.by,
-                "fx": json_list(r.force.real),
-                "fy": json_list(r.force.imag),
-                "magnitude": json_list(r.magnitude),
-            }
-            if r.moment is not None:
-                entry["kind"] = "slider"
-                entry["moment"] = json_list(r.moment)
-            out["reactions"].append(entry)
-        out["driver_torque"] = {k: json_list(v) for k, v in self.driver_torque.items()}
-        if self.driver_force:
-            out["driver_force"] = {k: json_list(v) for k, v in self.driver_force.items()}
-        out["input_power"] = json_list(self.input_power)
-        out["shaking_force"] = {"fx": json_list(self.shaking_force.real), "fy": json_list(self.shaking_force.imag)}
-        out["shaking_moment"] = json_list(self.shaking_moment)
-        return out
-
-    def columns(self) -> dict[str, np.ndarray]:
-        """Named columns (CSV, tables, pandas): components, bearing loads, driver efforts, power, shaking."""
-        cols: dict[str, np.ndarray] = {}
-        for r in self.reactions:
-            tag = f"{r.joint}:{r.by}>{r.on}"
-            cols[f"F[{tag}].fx"] = r.force.real
-            cols[f"F[{tag}].fy"] = r.force.imag
-            if r.moment is not None:
-                cols[f"F[{tag}].moment"] = r.moment
-            cols[f"|F|[{tag}]"] = r.magnitude
-        cols.update({f"T[{k}]": v for k, v in self.driver_torque.items()})
-        cols.update({f"F[{k}]": v for k, v in self.driver_force.items()})
-        cols["input_power"] = self.input_power
-        cols["shaking.fx"] = self.shaking_force.real
-        cols["shaking.fy"] = self.shaking_force.imag
-        cols["shaking.moment"] = self.shaking_moment
-        return cols
-
-    def column_units(self) -> dict[str, str]:
-        """The unit of each of :meth:`columns`."""
-        return {
-            k: ("N·m" if k.startswith("T[") or k.endswith("moment") else "W" if k == "input_power" else "N")
-            for k in self.columns()
-        }
+    def layout(self) -> tuple[ReactionKey, ...]:
+        """The reactions' layout for the output catalogue (:func:`linkagekit.catalogue.build`)."""
+        return tuple(ReactionKey(r.joint, r.by, r.on, r.moment is not None) for r in self.reactions)
 
     def reshape(self, shape: tuple[int, ...]) -> Forces:
         """The same forces with every array reshaped (flat samples back to (designs, samples))."""

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .catalogue import Catalogue, build
 from .errors import InputError, UnknownNameError, shorten
 from .forces import Forces, json_list
 
@@ -268,62 +269,31 @@ class Result:
         return int(i) % n
 
     # ---------------------------------------------------------------- tables
+    @cached_property
+    def catalogue(self) -> Catalogue:
+        """Every quantity of this analysis, declared once (:mod:`linkagekit.catalogue`): name, owner, unit, group."""
+        return build(
+            self.mechanism,
+            rates=self.has_rates,
+            reactions=None if self.forces is None else self.forces.layout(),
+        )
+
     def columns(self) -> dict[str, np.ndarray]:
         """Every quantity as a named column, each of shape ``shape``, in a fixed order.
 
         ``input:<driver>``, ``assembled``, ``singular``, per joint ``<j>.x``, ``.y`` (and
         ``.vx``, ``.vy``, ``.ax``, ``.ay`` with rates), per link ``<l>.angle`` (and ``.omega``,
-        ``.alpha``), then the force columns (:meth:`Forces.columns`).  CSV, tables, JSON and
-        :meth:`to_pandas` are all made from this.
+        ``.alpha``), then the force columns (reactions ``F[J:by>on].fx``, ``.fy``, ``.moment``
+        of a slider, ``|F|[J:by>on]``, ``T[driver]``, ``F[driver]``, ``input_power``,
+        ``shaking.fx``, ``.fy``, ``.moment``): the table quantities of :attr:`catalogue`.
+        CSV, tables, JSON and :meth:`to_pandas` are all made from this.
         """
         shape = self.shape
-        cols: dict[str, np.ndarray] = {f"input:{k}": np.broadcast_to(v, shape) for k, v in self.inputs.items()}
-        cols["assembled"] = self.assembled
-        cols["singular"] = self.singular
-        for j in self.mechanism.joint_names:
-            z = self.point(j)
-            cols[f"{j}.x"], cols[f"{j}.y"] = z.real, z.imag
-            if self.has_rates:
-                v, a = self.velocity(j), self.acceleration(j)
-                cols[f"{j}.vx"], cols[f"{j}.vy"] = v.real, v.imag
-                cols[f"{j}.ax"], cols[f"{j}.ay"] = a.real, a.imag
-        for ln in self.mechanism.links:
-            cols[f"{ln.name}.angle"] = self.link_angle[ln.name]
-            if self.has_rates:
-                cols[f"{ln.name}.omega"] = self.link_omega[ln.name]
-                cols[f"{ln.name}.alpha"] = self.link_alpha[ln.name]
-        if self.forces is not None:
-            cols.update(self.forces.columns())
-        return cols
+        return {q.name: np.broadcast_to(q.values(self), shape) for q in self.catalogue.table}
 
     def column_units(self) -> dict[str, str]:
-        """The unit of each of :meth:`columns` (``""`` for the flags)."""
-        m = self.mechanism
-        lu, au = m.length_unit, m.angle_unit
-        kinds = {d.name: d.kind for d in m.drivers}
-        out: dict[str, str] = {}
-        force_units = self.forces.column_units() if self.forces is not None else {}
-        for name in self.columns():
-            if name.startswith("input:"):
-                out[name] = au if kinds[name[6:]] == "angle" else lu
-            elif name in ("assembled", "singular"):
-                out[name] = ""
-            elif name in force_units:
-                out[name] = force_units[name]
-            else:
-                tail = name.rsplit(".", 1)[1]
-                out[name] = {
-                    "x": lu,
-                    "y": lu,
-                    "vx": f"{lu}/s",
-                    "vy": f"{lu}/s",
-                    "ax": f"{lu}/s²",
-                    "ay": f"{lu}/s²",
-                    "angle": au,
-                    "omega": "rad/s",
-                    "alpha": "rad/s²",
-                }[tail]
-        return out
+        """The unit of each of :meth:`columns` (``""`` for the flags), from :attr:`catalogue`."""
+        return {q.name: q.unit_symbol for q in self.catalogue.table}
 
     def to_pandas(self) -> Any:
         """A :class:`pandas.DataFrame` of :meth:`columns` (pandas is optional: ``pip install pandas``).
@@ -346,37 +316,33 @@ class Result:
     def to_dict(self) -> dict[str, Any]:
         """The JSON result of the spec (section 3); NaN becomes ``None``.
 
-        For a batch every array is a list per design.  Without rates the velocity,
-        acceleration and link-rate keys are absent.
+        Every quantity of :attr:`catalogue`'s table goes to its ``json_path``; ``quantities``
+        lists the entries (name, owner, unit, group, path).  For a batch every array is a
+        list per design.  Without rates the velocity, acceleration and link-rate keys are absent.
         """
         m = self.mechanism
         out: dict[str, Any] = {
             "format": "linkagekit-result/1",
             "name": m.name,
             "units": {"length": m.length_unit, "angle": m.angle_unit, "time": "s", "force": "N", "torque": "N*m"},
-            "inputs": {k: json_list(v) for k, v in self.inputs.items()},
+            "inputs": {},
             "speeds": {k: json_list(v) for k, v in self.speeds.items()},
             "input_accelerations": {k: json_list(v) for k, v in self.accelerations.items()},
-            "assembled": np.asarray(self.assembled).tolist(),
-            "singular": np.asarray(self.singular).tolist(),
+            "assembled": None,
+            "singular": None,
             "signs": {k: np.asarray(v).tolist() for k, v in self.signs.items()},
-            "joints": {},
-            "links": {},
+            "joints": {j: {} for j in m.joint_names},
+            "links": {ln.name: {} for ln in m.links},
         }
-        for j in m.joint_names:
-            z = self.point(j)
-            entry = {"x": json_list(z.real), "y": json_list(z.imag)}
-            if self.has_rates:
-                v, a = self.velocity(j), self.acceleration(j)
-                entry.update(vx=json_list(v.real), vy=json_list(v.imag), ax=json_list(a.real), ay=json_list(a.imag))
-            out["joints"][j] = entry
-        for ln in m.links:
-            entry = {"angle": json_list(self.link_angle[ln.name])}
-            if self.has_rates:
-                entry.update(omega=json_list(self.link_omega[ln.name]), alpha=json_list(self.link_alpha[ln.name]))
-            out["links"][ln.name] = entry
         if self.forces is not None:
-            out.update(self.forces.to_dict())
+            out["reactions"] = [
+                {"joint": r.joint, "on": r.on, "by": r.by, **({"kind": "slider"} if r.slider else {})}
+                for r in self.forces.layout()
+            ]
+            out["driver_torque"] = {}
+        for q in self.catalogue.table:
+            _put(out, q.json_path, q.values(self))
+        out["quantities"] = [q.to_dict() for q in self.catalogue]
         return out
 
     def __repr__(self) -> str:
@@ -390,6 +356,18 @@ class Result:
             f"<Result {m.name!r}: {what}, {int(np.sum(self.assembled))} assembled, "
             f"{int(np.sum(self.singular))} singular; joints {names}{extra}>"
         )
+
+
+def _put(doc: dict[str, Any], path: tuple[str | int, ...], values: Any) -> None:
+    """Store ``values`` at ``path`` in the JSON document (flags as booleans, numbers with null for NaN)."""
+    node: Any = doc
+    for key in path[:-1]:
+        if isinstance(node, dict):
+            node = node.setdefault(key, {})
+        else:
+            node = node[key]
+    arr = np.asarray(values)
+    node[path[-1]] = arr.tolist() if arr.dtype == bool else json_list(arr)
 
 
 def _one_sign(value: Any, i: int) -> Any:
