@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import linkagekit
+from linkagekit.catalogue import KINDS, Catalogue, Owner, Quantity, UnitKind
 from linkagekit.cli import (
     MAX_ROWS,
     NAN,
@@ -371,13 +372,27 @@ def synthetic(n: int, joints: str = "ABCDEFGH") -> tuple[dict[str, np.ndarray], 
     return cols, units
 
 
+def synthetic_catalogue(cols: dict[str, np.ndarray], units: dict[str, str], ground: str = "A") -> Catalogue:
+    """The catalogue of the synthetic columns, entry by entry (what each column is, not parsed from its name)."""
+    kind = {(k.owner, k.component): k for k in KINDS}
+    what = {"input:crank": (Owner.DRIVER, "input", "crank"), "assembled": (Owner.MECHANISM, "assembled", "")}
+    what |= {"singular": (Owner.MECHANISM, "singular", ""), "bar.angle": (Owner.LINK, "angle", "bar")}
+    what |= {"T[crank]": (Owner.DRIVER, "torque", "crank"), "F[B:ground>bar].fx": (Owner.REACTION, "fx", "B:ground>bar")}
+    out = []
+    for name in cols:
+        owner, component, owner_name = what.get(name) or (Owner.JOINT, name[2:], name[0])
+        k = kind[owner, component]
+        out.append(Quantity(name, k, owner_name, 0, k.unit or UnitKind.ANGLE, units[name], owner_name == ground, None))
+    return Catalogue(tuple(out))
+
+
 def test_analysis_tables_on_synthetic_columns():
     cols, units = synthetic(361)
-    sections = analysis_sections(cols, list("ABCDEFGH"), ["A"], "demo")
+    sections = analysis_sections(synthetic_catalogue(cols, units), "demo")
     assert [title for title, _ in sections][:2] == ["demo: joint positions", "joint velocities"]
     assert sections[0][1][0] == ["B.x", "B.y"] and sections[-1][1] == [["T[crank]"]]  # no .fx in tables
     t = time.perf_counter()
-    text = analysis_tables(cols, units, sections, width=80)
+    text = analysis_tables(cols, units, sections, inputs={"input:crank": "crank"}, width=80)
     assert time.perf_counter() - t < 0.5
     lines = text.splitlines()
     assert max(map(len, lines)) <= 80
@@ -412,7 +427,9 @@ def test_split_columns_keeps_groups_and_width():
 
 def test_no_samples():
     cols = {"input:crank": np.array([]), "assembled": np.array([], bool), "C.x": np.array([])}
-    text = analysis_tables(cols, {"input:crank": "deg", "C.x": "cm"}, [("joint positions", [["C.x"]])])
+    text = analysis_tables(
+        cols, {"input:crank": "deg", "C.x": "cm"}, [("joint positions", [["C.x"]])], inputs={"input:crank": "crank"}
+    )
     assert "C.x [cm]" in text and "samples shown" not in text
 
 

@@ -18,7 +18,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "linkagekit"
 LAYERS = [
     {"errors", "units", "geometry"},
     {"schema", "model", "files"},
-    {"steps", "group", "plan", "params"},
+    {"steps", "group", "plan", "params", "catalogue"},
     {"positions", "rates", "forces", "vectorloop", "groupmodes"},
     {"result", "api", "checks"},
     {"viz.scene"},

@@ -5,8 +5,8 @@ Exit status: 0 on success, 2 on a bad file or bad arguments, 1 on anything else;
 ``linkagekit: error: <message>`` (``linkagekit: internal error: <Class>: <message>`` for
 an unexpected exception), never a traceback.
 
-Start-up is kept short: this module imports only the standard library and
-:mod:`linkagekit.errors`; NumPy and the library are imported by the command that needs them,
+Start-up is kept short: this module imports only the standard library,
+:mod:`linkagekit.errors` and the declarations of :mod:`linkagekit.catalogue` (no NumPy); NumPy and the library are imported by the command that needs them,
 so ``linkagekit --help`` never loads them.
 
 Tables (``--format table``, the default) are plain text: every header carries its unit,
@@ -37,12 +37,15 @@ import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NoReturn
 
+from .catalogue import Group
 from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
     import numpy as np
 
     from linkagekit import Mechanism
+
+    from .catalogue import Catalogue
 
 PROG = "linkagekit"
 MAX_ROWS = 37
@@ -444,16 +447,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: --quantity groups: the report's plots, by a short name
-_QUANTITY_GROUPS = {
-    "angles": "Link angles",
-    "omegas": "Angular velocities",
-    "alphas": "Angular accelerations",
-    "speeds": "Joint speeds",
-    "torques": "Driver torques",
-    "forces": "Driver forces",
-    "bearings": "Bearing loads",
-}
+#: --quantity groups: the report's plots, by their short name
+_QUANTITY_GROUPS = {g.short: g for g in Group if g.plotted}
 
 
 def _frames(text: str) -> int:
@@ -668,6 +663,7 @@ def analysis_tables(
     units: Mapping[str, str],
     sections: Sequence[tuple[str, Sequence[Sequence[str]]]],
     *,
+    inputs: Mapping[str, str],
     width: int = 80,
     max_rows: int = MAX_ROWS,
 ) -> str:
@@ -676,12 +672,15 @@ def analysis_tables(
     Parameters
     ----------
     columns : mapping of str to array
-        As :meth:`linkagekit.Result.columns`: ``input:<driver>`` columns, the ``assembled``
-        and ``singular`` flags, then the values.
+        As :meth:`linkagekit.Result.columns`: the input columns, the ``assembled`` and
+        ``singular`` flags, then the values.
     units : mapping of str to str
         The unit of each column (``""``: none).
     sections : sequence of (title, groups)
-        Each section's title and its column names, in groups kept together when they fit.
+        Each section's title and its column names, in groups kept together when they fit
+        (:func:`analysis_sections`).
+    inputs : mapping of str to str
+        The input columns, by column name, to the driver name their header shows.
     width : int
         Most characters on a line.
     max_rows : int
@@ -694,11 +693,7 @@ def analysis_tables(
     """
     n = len(next(iter(columns.values()))) if columns else 0
     rows = sample_rows(n, max_rows)
-    fixed = [
-        Column(_header(k[len("input:") :], {k[len("input:") :]: units.get(k, "")}), format_cells(v, rows))
-        for k, v in columns.items()
-        if k.startswith("input:")
-    ]
+    fixed = [Column(_header(d, {d: units.get(k, "")}), format_cells(columns[k], rows)) for k, d in inputs.items()]
     fixed.append(Column("state", _state_cells(columns, rows), left=True))
     out: list[str] = []
     for title, keys in sections:
@@ -713,60 +708,38 @@ def analysis_tables(
     return "\n".join(out) + "\n"
 
 
-def analysis_sections(
-    columns: Iterable[str], joint_names: Sequence[str], ground_joints: Iterable[str], name: str = ""
-) -> list[tuple[str, list[list[str]]]]:
-    """Titles and column groups of the ``analyze`` tables, from the names of the result's columns.
+def analysis_sections(catalogue: Catalogue, name: str = "") -> list[tuple[str, list[list[str]]]]:
+    """Titles and column groups of the ``analyze`` tables, from the result's catalogue.
 
-    Joint positions, velocities and accelerations of the moving joints; the angle and rates of
-    every link but the ground; and, when there are forces, the bearing loads ``|F|``, driver
-    torques and forces and the input power.
+    Each :class:`~linkagekit.catalogue.Section` in turn (joint positions, velocities and
+    accelerations of the moving joints; the angle and rates of every link but the ground;
+    and, when there are forces, the bearing loads ``|F|``, driver torques and forces and the
+    input power); a joint's or a link's columns form one group, kept together.  A section
+    with no columns is left out.
 
-    >>> keys = ["input:crank", "assembled", "A.x", "A.y", "C.x", "C.y", "crank.angle", "crank.omega", "T[crank]"]
-    >>> for title, groups in analysis_sections(keys, ["A", "C"], ["A"], "four-bar"):
+    >>> import linkagekit as lk
+    >>> res = lk.analyze(lk.load("examples/seed000_fourbar.yaml"), [0.0, 90.0])
+    >>> for title, groups in analysis_sections(res.catalogue, "four-bar")[::2]:
     ...     print(title, groups)
-    four-bar: joint positions [['C.x', 'C.y']]
-    joint velocities []
-    joint accelerations []
-    link angles and rates [['crank.angle', 'crank.omega']]
-    forces (|F| at joint:by>on, driver torques and forces, input power) [['T[crank]']]
+    four-bar: joint positions [['C.x', 'C.y'], ['D.x', 'D.y'], ['P.x', 'P.y']]
+    joint accelerations [['C.ax', 'C.ay'], ['D.ax', 'D.ay'], ['P.ax', 'P.ay']]
     """
-    keys = list(columns)
-    ground = set(ground_joints)
-    moving = [j for j in joint_names if j not in ground]
-    joint_keys = {f"{j}.{c}" for j in joint_names for c in ("x", "y", "vx", "vy", "ax", "ay")}
-    links = [k[: -len(".angle")] for k in keys if k.endswith(".angle") and k not in joint_keys]
-    link_keys = {f"{ln}.{c}" for ln in links for c in ("angle", "omega", "alpha")}
+    from .catalogue import Owner, Section
 
-    def present(group: list[str]) -> list[str]:
-        return [k for k in group if k in keys]
-
-    def per_joint(a: str, b: str) -> list[list[str]]:
-        return [g for g in (present([f"{j}.{a}", f"{j}.{b}"]) for j in moving) if g]
-
-    lead = f"{name}: " if name else ""
-    sections = [
-        (f"{lead}joint positions", per_joint("x", "y")),
-        ("joint velocities", per_joint("vx", "vy")),
-        ("joint accelerations", per_joint("ax", "ay")),
-        (
-            "link angles and rates",
-            [
-                g
-                for g in (present([f"{ln}.angle", f"{ln}.omega", f"{ln}.alpha"]) for ln in links if ln != "ground")
-                if g
-            ],
-        ),
-    ]
-    forces = [
-        [k]
-        for k in keys
-        if not (k.startswith("input:") or k in ("assembled", "singular") or k in joint_keys or k in link_keys)
-        and not k.endswith((".fx", ".fy", ".moment"))
-    ]
-    if forces:
-        sections.append(("forces (|F| at joint:by>on, driver torques and forces, input power)", forces))
-    return sections
+    out: list[tuple[str, list[list[str]]]] = []
+    for section in Section:
+        groups: list[list[str]] = []
+        last: tuple[Owner, str] | None = None
+        for q in catalogue.in_section(section):
+            owner = (q.owner, q.owner_name)
+            if groups and owner == last and q.owner in (Owner.JOINT, Owner.LINK):
+                groups[-1].append(q.name)
+            else:
+                groups.append([q.name])
+            last = owner
+        if groups:
+            out.append((f"{name}: {section.value}" if name and not out else section.value, groups))
+    return out
 
 
 def modes_table(
@@ -833,7 +806,9 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
 
 # ---------------------------------------------------------------------- commands
 def _input_units(mech: Mechanism) -> dict[str, str]:
-    return {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+    from .catalogue import input_units
+
+    return input_units(mech)
 
 
 def _moving_joints(mech: Mechanism) -> list[str]:
@@ -869,8 +844,12 @@ def _analyze(args: argparse.Namespace) -> int:
     if args.format == "csv":
         _emit(format_csv(columns), args.output)
         return 0
-    sections = analysis_sections(columns, mech.joint_names, mech.link("ground").joints, mech.name or "")
-    _emit(analysis_tables(columns, res.column_units(), sections, width=terminal_width()), args.output)
+    cat = res.catalogue
+    inputs = {q.name: q.owner_name for q in cat.table if q.group is Group.INPUTS}
+    text = analysis_tables(
+        columns, res.column_units(), analysis_sections(cat, mech.name or ""), inputs=inputs, width=terminal_width()
+    )
+    _emit(text, args.output)
     return 0
 
 
@@ -966,25 +945,7 @@ def _plot(args: argparse.Namespace) -> int:
         from .viz.scene import build_scene
 
         scene = build_scene(res)
-        titles = {p.title: p.series for p in scene.plots}
-        groups = []
-        for item in args.quantity:
-            names: list[str] = []
-            for name in (n.strip() for n in item.split(",")):
-                if name in _QUANTITY_GROUPS:
-                    series = titles.get(_QUANTITY_GROUPS[name])
-                    if not series:
-                        raise InputError(f"--quantity {name}: this mechanism has no {_QUANTITY_GROUPS[name].lower()}")
-                    names += series
-                elif name in scene.columns:
-                    names.append(name)
-                else:
-                    raise InputError(
-                        f"--quantity: no quantity {shorten(repr(name), 60)}; the names are the columns of "
-                        f"'analyze --format csv' (e.g. {', '.join(list(scene.columns)[3:6])}) or a group: "
-                        + ", ".join(_QUANTITY_GROUPS)
-                    )
-            groups.append(names)
+        groups = [_quantities(res.catalogue, item) for item in args.quantity]
         fig = draw.quantities_figure(scene, groups)
         draw.save_figure(fig, args.output)
         return 0
@@ -994,6 +955,27 @@ def _plot(args: argparse.Namespace) -> int:
     fig = draw.mechanism_figure(res, poses)
     draw.save_figure(fig, args.output, fig.axes[0])
     return 0
+
+
+def _quantities(catalogue: Catalogue, item: str) -> list[str]:
+    """The column names one ``--quantity NAME[,NAME...]`` asks for: columns, or whole plot groups."""
+    names: list[str] = []
+    for name in (n.strip() for n in item.split(",")):
+        if name in _QUANTITY_GROUPS:
+            group = _QUANTITY_GROUPS[name]
+            series = [q.name for q in catalogue.of_group(group)]
+            if not series:
+                raise InputError(f"--quantity {name}: this mechanism has no {group.title.lower()}")
+            names += series
+        elif name in catalogue:
+            names.append(name)
+        else:
+            examples = ", ".join(q.name for q in catalogue.quantities[3:6])
+            raise InputError(
+                f"--quantity: no quantity {shorten(repr(name), 60)}; the names are the columns of "
+                f"'analyze --format csv' (e.g. {examples}) or a group: " + ", ".join(_QUANTITY_GROUPS)
+            )
+    return names
 
 
 def _animate(args: argparse.Namespace) -> int:

@@ -34,6 +34,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Polygon
 from matplotlib.text import Text
 
+from ..catalogue import input_units
 from ..errors import InputError, UnknownNameError
 from ..files import atomic_output
 from ..result import Result
@@ -379,8 +380,8 @@ def plot_quantity(
         raise InputError(f"period: expected a positive number, got {period!r}")
     x = sc.inputs[sc.x_driver]
     y = np.asarray(sc.columns[name], float)
-    if period is None and name.endswith(".angle"):
-        period = 360.0 if sc.angle_unit == "deg" else 2 * math.pi
+    if period is None and name in sc.catalogue:
+        period = sc.catalogue[name].period
     if sc.breaks:  # no line across a gap between two samples
         cut = [b + 1 for b in sc.breaks]
         x, y = np.insert(x, cut, np.nan), np.insert(y, cut, np.nan)
@@ -519,7 +520,7 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
 
     found = find_modes(mech, at, mirrors=mirrors)
     shown = [m for m in found.modes if m.assembled and m.same_as is None]
-    units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+    units = input_units(mech)
     inp = ", ".join(f"{k} = {v:g} {units[k]}" for k, v in found.input.items())
     if not shown:
         raise InputError(f"modes: the mechanism does not assemble at {inp}")

@@ -13,8 +13,9 @@ A :class:`Scene` holds only numbers the solver computed, arranged for drawing:
   neither the ground nor a guide on the ground: the curves users look for) and the other
   paths (arcs of cranks and rockers, a slider's line);
 * the runs of samples where the mechanism does not assemble;
-* the plotted quantities (every column of :meth:`Result.columns`, with units, plus the
-  speed of each moving joint) and how they group into plots.
+* the quantities (every entry of the result's :mod:`~linkagekit.catalogue`: the columns of
+  :meth:`Result.columns` plus the plotted speed of each moving joint) and their plots, one
+  per plotted :class:`~linkagekit.catalogue.Group`.
 
 Nothing here solves anything: the viewer in the page and the matplotlib drawing both read
 this scene, so a picture can only show what the solver returned.
@@ -38,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from ..catalogue import Catalogue, Group, Owner, UnitKind, driver_unit, input_units
 from ..errors import InputError
 from ..model import Mechanism
 from ..result import Result
@@ -118,6 +120,8 @@ class Scene:
     #: samples ``i`` whose segment to ``i + 1`` must not be drawn: both assemble, but the
     #: mechanism does not assemble somewhere between them (a gap no sample landed in)
     breaks: tuple[int, ...] = ()
+    #: what each column is (owner, unit, group, period): the result's output catalogue
+    catalogue: Catalogue = field(default=Catalogue(()), repr=False)
 
     @property
     def n(self) -> int:
@@ -169,6 +173,7 @@ class Scene:
             "bounds": list(self.bounds),
             "columns": {k: _json_array(v) for k, v in self.columns.items()},
             "units_of": self.units,
+            "quantities": [q.to_dict() for q in self.catalogue],
             "plots": [
                 {"title": p.title, "unit": p.unit, "series": list(p.series), "period": p.period} for p in self.plots
             ],
@@ -336,7 +341,7 @@ def _breaks(res: Result, x: np.ndarray) -> tuple[int, ...]:
         return ()
     lo, hi = np.minimum(x[:-1], x[1:]), np.maximum(x[:-1], x[1:])
     tol = 1e-9 * max(float(np.max(np.abs(x))), 1.0)
-    if mech.drivers[0].kind == "angle":
+    if driver_unit(mech, mech.drivers[0]) is UnitKind.ANGLE:
         period = 2 * math.pi / mech.angle_to_rad
         if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] >= period * (1 - 1e-12):
             return ()  # a full turn
@@ -348,29 +353,14 @@ def _breaks(res: Result, x: np.ndarray) -> tuple[int, ...]:
     return tuple(int(i) for i in np.flatnonzero(both & ~inside))
 
 
-def _plots(res: Result, columns: dict[str, np.ndarray], moving: list[str]) -> tuple[Plot, ...]:
-    """The plots of the report: link angles and rates, joint speeds, driver efforts and bearing loads."""
-    mech = res.mechanism
-    links = [ln.name for ln in mech.links if ln.name != "ground"]
-    lu = mech.length_unit
-    period = 360.0 if mech.angle_unit == "deg" else 2 * math.pi
-    plots = [Plot("Link angles", mech.angle_unit, tuple(f"{ln}.angle" for ln in links), period)]
-    if res.has_rates:
-        plots += [
-            Plot("Angular velocities", "rad/s", tuple(f"{ln}.omega" for ln in links)),
-            Plot("Angular accelerations", "rad/s²", tuple(f"{ln}.alpha" for ln in links)),
-            Plot("Joint speeds", f"{lu}/s", tuple(f"|v|[{j}]" for j in moving)),
-        ]
-    torques = tuple(k for k in columns if k.startswith("T["))
-    if torques:
-        plots.append(Plot("Driver torques", "N·m", torques))
-    pushes = tuple(k for k in columns if k.startswith("F[") and ":" not in k)  # F[driver]; reactions carry J:by>on
-    if pushes:
-        plots.append(Plot("Driver forces", "N", pushes))
-    bearings = tuple(k for k in columns if k.startswith("|F|["))
-    if bearings:
-        plots.append(Plot("Bearing loads", "N", bearings))
-    return tuple(p for p in plots if p.series)
+def _plots(catalogue: Catalogue) -> tuple[Plot, ...]:
+    """The plots of the report: one per plotted group of the catalogue that has quantities."""
+    plots = []
+    for group in Group:
+        shown = catalogue.of_group(group) if group.plotted else ()
+        if shown:
+            plots.append(Plot(group.title, shown[0].unit_symbol, tuple(q.name for q in shown), shown[0].period))
+    return tuple(plots)
 
 
 def build_scene(res: Result) -> Scene:
@@ -397,15 +387,12 @@ def build_scene(res: Result) -> Scene:
     ground_joints = mech.link("ground").joints
     coupler, other = path_kinds(mech)
     moving = [j for j in names if j not in ground_joints]
-    columns = dict(res.columns())
-    units = dict(res.column_units())
-    if res.has_rates:
-        for j in moving:
-            columns[f"|v|[{j}]"] = np.abs(res.velocity(j))
-            units[f"|v|[{j}]"] = f"{mech.length_unit}/s"
+    cat = res.catalogue
+    columns = {q.name: np.broadcast_to(q.values(res), res.shape) for q in cat}
+    units = {q.name: q.unit_symbol for q in cat}
     sliders = _guides(res, z)
     drivers = tuple(d.name for d in mech.drivers)
-    inputs = {k: np.broadcast_to(np.asarray(v, float), (res.n,)).copy() for k, v in res.inputs.items()}
+    inputs = {d: np.asarray(columns[cat.find(Owner.DRIVER, d, "input").name], float).copy() for d in drivers}
     x_driver = _x_driver(inputs, drivers)
     # bounds: every joint at every sample, the pose, and the drawn guides
     pts = [z[np.isfinite(z)], np.array([mech.joints[j] for j in names])]
@@ -428,7 +415,7 @@ def build_scene(res: Result) -> Scene:
         links=scene_links(mech),
         sliders=sliders,
         drivers=drivers,
-        input_units={d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers},
+        input_units=input_units(mech),
         inputs=inputs,
         xy=xy,
         assembled=np.asarray(res.assembled, bool).copy(),
@@ -438,7 +425,8 @@ def build_scene(res: Result) -> Scene:
         bounds=bounds,
         columns=columns,
         units=units,
-        plots=_plots(res, columns, moving),
+        plots=_plots(cat),
         x_driver=x_driver,
         breaks=_breaks(res, inputs[drivers[0]]),
+        catalogue=cat,
     )

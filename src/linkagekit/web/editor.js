@@ -140,7 +140,7 @@
   }
   function displayedPose() {    // every joint where it is drawn now (the solver's numbers)
     var sc = lk.scene, i = lk.current(), pose = {};
-    sc.joints.forEach(function (j) { pose[j] = [sc.columns[j + ".x"][i], sc.columns[j + ".y"][i]]; });
+    sc.joints.forEach(function (j) { pose[j] = [lk.column(sc, "joint", j, "x")[i], lk.column(sc, "joint", j, "y")[i]]; });
     return pose;
   }
   var drag = null;
@@ -183,7 +183,7 @@
   svg.addEventListener("pointercancel", release);
   function atNow() {
     var out = {}, sc = lk.scene, i = lk.current();
-    sc.drivers.forEach(function (d) { out[d] = sc.columns["input:" + d][i]; });
+    sc.drivers.forEach(function (d) { out[d] = lk.inputOf(sc, d)[i]; });
     return out;
   }
 

@@ -29,6 +29,7 @@ from urllib.parse import urlsplit
 
 import numpy as np
 
+from ..catalogue import UnitKind, driver_unit, input_units
 from ..errors import InputError, LinkageError, one_line
 from ..files import atomic_output, dumps, load
 from ..model import Mechanism
@@ -58,7 +59,7 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
 
     params = prepare(mech)
     pose = {
-        d.name: float(params.pose_inputs[i, 0] / (mech.angle_to_rad if d.kind == "angle" else 1.0))
+        d.name: float(params.pose_inputs[i, 0] / (mech.angle_to_rad if driver_unit(mech, d) is UnitKind.ANGLE else 1.0))
         for i, d in enumerate(mech.drivers)
     }
     count = mech.drivers[0].sweep.count()
@@ -168,7 +169,7 @@ class Session:
             },
         }
         if not coarse:
-            units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+            units = input_units(mech)
             out["checks"] = check_text(check(mech).to_dict(), units, mech.name or self.path.name)
             out.update(self._modes(mech, request.get("at")))
         return out

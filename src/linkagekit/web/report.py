@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from ..catalogue import input_units
 from ..errors import InputError
 from ..files import atomic_output
 from ..result import Result
@@ -155,7 +156,7 @@ def report_html(
     if checks_text is None:
         from ..checks import check, check_text
 
-        units = {d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers}
+        units = input_units(mech)
         checks_text = check_text(check(mech).to_dict(), units, mech.name or "mechanism")
     esc = html.escape
     name = mech.name or "mechanism"

@@ -53,6 +53,19 @@
 
   function finite(v) { return v !== null && v !== undefined && isFinite(v); }
 
+  /* The values of one quantity of the scene's catalogue (its `quantities`: owner, component,
+   * unit, group...), found by what it is, never by parsing a column name. */
+  function column(scene, owner, ownerName, component) {
+    var qs = scene.quantities;
+    for (var k = 0; k < qs.length; k++) {
+      var q = qs[k];
+      if (q.owner === owner && q.owner_name === ownerName && q.component === component) return scene.columns[q.name];
+    }
+    throw new Error("linkagekit: the scene has no " + component + " of " + owner + " " + ownerName);
+  }
+  function inputOf(scene, driver) { return column(scene, "driver", driver, "input"); }
+  function assembledOf(scene) { return column(scene, "mechanism", "", "assembled"); }
+
   /* [min, max] of the finite values of several arrays (a loop: spreading a long array into
    * Math.min overflows the call stack) */
   function extent(arrays) {
@@ -84,11 +97,10 @@
     var H = this.H;
     svg.setAttribute("viewBox", "0 0 " + W + " " + H);
     svg.setAttribute("data-scale", String(this.s));
-    var cols = scene.columns;
     this.X = {}; this.Y = {};
     for (var i = 0; i < scene.joints.length; i++) {
       var j = scene.joints[i];
-      this.X[j] = cols[j + ".x"]; this.Y[j] = cols[j + ".y"];
+      this.X[j] = column(scene, "joint", j, "x"); this.Y[j] = column(scene, "joint", j, "y");
     }
     this.size = Math.max(b[2] - b[0], b[3] - b[1]);
     this.pin = 0.012 * this.size * this.s;  // pixels
@@ -185,7 +197,7 @@
 
   Viewer.prototype.show = function (i) {
     var self = this, sc = this.scene;
-    var ok = sc.columns.assembled[i];
+    var ok = assembledOf(sc)[i];
     sc.joints.forEach(function (j) {
       var x = self.X[j][i], y = self.Y[j][i], je = self.joints[j];
       var good = finite(x) && finite(y);
@@ -257,7 +269,7 @@
     });
     var T = 24 + 14 * rows.length, H = T + PH + B;
     svg.setAttribute("viewBox", "0 0 " + W + " " + H);
-    var driver = scene.x_driver || scene.drivers[0], xs = scene.columns["input:" + driver];
+    var driver = scene.x_driver || scene.drivers[0], xs = inputOf(scene, driver);
     var xe = extent([xs]), x0 = xe[0], x1 = xe[1];
     if (!(x1 > x0)) { x1 = x0 + 1; }
     var ye = extent(spec.series.map(function (k) { return scene.columns[k]; }));
@@ -328,8 +340,10 @@
   };
 
   /* ------------------------------------------------------------------ CSV */
+  /* the table of `analyze --format csv`: the catalogue's table quantities, in its order */
   function csvText(scene) {
-    var names = Object.keys(scene.columns), n = scene.n, lines = [names.join(",")];
+    var names = scene.quantities.filter(function (q) { return q.table; }).map(function (q) { return q.name; });
+    var n = scene.n, lines = [names.join(",")];
     for (var i = 0; i < n; i++) {
       lines.push(names.map(function (k) {
         var v = scene.columns[k][i];
@@ -344,7 +358,7 @@
   /* ------------------------------------------------------------------ the page */
   function gapText(scene) {
     if (!scene.gaps.length) return "";
-    var d = scene.x_driver || scene.drivers[0], x = scene.columns["input:" + d];
+    var d = scene.x_driver || scene.drivers[0], x = inputOf(scene, d);
     return "Does not assemble at the samples " + d + " in " + scene.gaps.map(function (g) {
       return g[0] === g[1] ? fmt(x[g[0]]) : "[" + fmt(x[g[0]]) + ", " + fmt(x[g[1]]) + "]";
     }).join(", ") + " " + scene.input_units[d] + " (the gaps in the curves).";
@@ -390,14 +404,14 @@
       viewer.show(i);
       plots.forEach(function (p) { p.show(i); });
       values.forEach(function (v) {
-        var d = v.getAttribute("data-driver"), x = scene.columns["input:" + d][i];
+        var d = v.getAttribute("data-driver"), x = inputOf(scene, d)[i];
         v.setAttribute("data-value", pyRepr(x));
         v.textContent = d + " = " + fmt(x, scene.input_units[d]);
       });
-      var ok = scene.columns.assembled[i];
+      var ok = assembledOf(scene)[i];
       if (message && !api.holdMessage) {
         message.textContent = ok ? "" : "Does not assemble at " + scene.drivers.map(function (d) {
-          return d + " = " + fmt(scene.columns["input:" + d][i], scene.input_units[d]);
+          return d + " = " + fmt(inputOf(scene, d)[i], scene.input_units[d]);
         }).join(", ") + ".";
       }
     }
@@ -436,9 +450,10 @@
       setTimeout(function () { URL.revokeObjectURL(a.href); }, 1000);
     });
     var api = window.linkagekit = {show: show, load: load, stop: stop, pyRepr: pyRepr, fmt: fmt, el: el,
-      current: function () { return current; }, niceTicks: niceTicks, extent: extent, holdMessage: false};
+      current: function () { return current; }, niceTicks: niceTicks, extent: extent, holdMessage: false,
+      column: column, inputOf: inputOf, csvText: csvText};
     load(JSON.parse(node.textContent));
-    var first = scene.columns.assembled.indexOf(true);
+    var first = assembledOf(scene).indexOf(true);
     show(parseInt(sliders.length ? sliders[0].value : "0", 10) || (first > 0 ? first : 0));
     document.dispatchEvent(new CustomEvent("linkagekit:ready"));
   }
