@@ -377,7 +377,10 @@ def synthetic_catalogue(cols: dict[str, np.ndarray], units: dict[str, str], grou
     kind = {(k.owner, k.component): k for k in KINDS}
     what = {"input:crank": (Owner.DRIVER, "input", "crank"), "assembled": (Owner.MECHANISM, "assembled", "")}
     what |= {"singular": (Owner.MECHANISM, "singular", ""), "bar.angle": (Owner.LINK, "angle", "bar")}
-    what |= {"T[crank]": (Owner.DRIVER, "torque", "crank"), "F[B:ground>bar].fx": (Owner.REACTION, "fx", "B:ground>bar")}
+    what |= {
+        "T[crank]": (Owner.DRIVER, "torque", "crank"),
+        "F[B:ground>bar].fx": (Owner.REACTION, "fx", "B:ground>bar"),
+    }
     out = []
     for name in cols:
         owner, component, owner_name = what.get(name) or (Owner.JOINT, name[2:], name[0])

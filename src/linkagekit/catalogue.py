@@ -236,11 +236,11 @@ class Quantity:
     @property
     def json_path(self) -> tuple[str | int, ...]:
         """Where :meth:`Result.to_dict` holds the values (keys, and a list index for a reaction)."""
-        subst = {OWNER_KEY: self.owner_name, INDEX_KEY: self.index}
+        subst: dict[str, str | int] = {OWNER_KEY: self.owner_name, INDEX_KEY: self.index}
         return tuple(subst.get(p, p) for p in self.kind.json)
 
     def values(self, result: Any) -> Any:
-        """The quantity's values in ``result`` (broadcastable to ``result.shape``: an input shared by a batch is not repeated)."""
+        """The values in ``result``, broadcastable to ``result.shape`` (an input a batch shares is not repeated)."""
         return self.kind.read(result, self)
 
     def to_dict(self) -> dict[str, Any]:
@@ -435,6 +435,9 @@ def build(
                     continue
                 unit = k.unit if k.unit is not None else driver_unit(mech, mech.drivers[o.index])
                 column = k.pattern.replace("{}", o.name)
-                out.append(Quantity(column, k, o.name, o.index, unit, unit.symbol(lu, au), o.on_ground,
-                                    turn if k.wraps else None))
+                out.append(
+                    Quantity(
+                        column, k, o.name, o.index, unit, unit.symbol(lu, au), o.on_ground, turn if k.wraps else None
+                    )
+                )
     return Catalogue(tuple(out))

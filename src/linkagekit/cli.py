@@ -5,9 +5,9 @@ Exit status: 0 on success, 2 on a bad file or bad arguments, 1 on anything else;
 ``linkagekit: error: <message>`` (``linkagekit: internal error: <Class>: <message>`` for
 an unexpected exception), never a traceback.
 
-Start-up is kept short: this module imports only the standard library,
-:mod:`linkagekit.errors` and the declarations of :mod:`linkagekit.catalogue` (no NumPy); NumPy and the library are imported by the command that needs them,
-so ``linkagekit --help`` never loads them.
+Start-up is kept short: this module imports only the standard library, :mod:`linkagekit.errors`
+and the declarations of :mod:`linkagekit.catalogue` (no NumPy); NumPy and the library are
+imported by the command that needs them, so ``linkagekit --help`` never loads them.
 
 Tables (``--format table``, the default) are plain text: every header carries its unit,
 round-off prints as ``0``, NaN as ``—``, and the columns are split into as many tables as
@@ -845,9 +845,9 @@ def _analyze(args: argparse.Namespace) -> int:
         _emit(format_csv(columns), args.output)
         return 0
     cat = res.catalogue
-    inputs = {q.name: q.owner_name for q in cat.table if q.group is Group.INPUTS}
+    shown = {q.name: q.owner_name for q in cat.table if q.group is Group.INPUTS}
     text = analysis_tables(
-        columns, res.column_units(), analysis_sections(cat, mech.name or ""), inputs=inputs, width=terminal_width()
+        columns, res.column_units(), analysis_sections(cat, mech.name or ""), inputs=shown, width=terminal_width()
     )
     _emit(text, args.output)
     return 0

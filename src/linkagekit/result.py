@@ -362,10 +362,7 @@ def _put(doc: dict[str, Any], path: tuple[str | int, ...], values: Any) -> None:
     """Store ``values`` at ``path`` in the JSON document (flags as booleans, numbers with null for NaN)."""
     node: Any = doc
     for key in path[:-1]:
-        if isinstance(node, dict):
-            node = node.setdefault(key, {})
-        else:
-            node = node[key]
+        node = node.setdefault(key, {}) if isinstance(node, dict) else node[key]
     arr = np.asarray(values)
     node[path[-1]] = arr.tolist() if arr.dtype == bool else json_list(arr)
 

@@ -340,10 +340,12 @@
   };
 
   /* ------------------------------------------------------------------ CSV */
+  /* a header cell quoted as Python's csv module does (a name may hold a comma or a quote) */
+  function csvCell(s) { return /[",\r\n]/.test(s) ? '"' + s.replace(/"/g, '""') + '"' : s; }
   /* the table of `analyze --format csv`: the catalogue's table quantities, in its order */
   function csvText(scene) {
     var names = scene.quantities.filter(function (q) { return q.table; }).map(function (q) { return q.name; });
-    var n = scene.n, lines = [names.join(",")];
+    var n = scene.n, lines = [names.map(csvCell).join(",")];
     for (var i = 0; i < n; i++) {
       lines.push(names.map(function (k) {
         var v = scene.columns[k][i];
@@ -451,7 +453,7 @@
     });
     var api = window.linkagekit = {show: show, load: load, stop: stop, pyRepr: pyRepr, fmt: fmt, el: el,
       current: function () { return current; }, niceTicks: niceTicks, extent: extent, holdMessage: false,
-      column: column, inputOf: inputOf, csvText: csvText};
+      column: column, inputOf: inputOf};
     load(JSON.parse(node.textContent));
     var first = assembledOf(scene).indexOf(true);
     show(parseInt(sliders.length ? sliders[0].value : "0", 10) || (first > 0 ? first : 0));
