@@ -32,6 +32,7 @@ import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from enum import Enum
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 from .errors import UnknownNameError, shorten
@@ -360,14 +361,18 @@ class Catalogue:
     def __len__(self) -> int:
         return len(self.quantities)
 
+    @cached_property
+    def _by_name(self) -> dict[str, Quantity]:
+        return {q.name: q for q in self.quantities}
+
     def __contains__(self, name: object) -> bool:
-        return any(q.name == name for q in self.quantities)
+        return isinstance(name, str) and name in self._by_name
 
     def __getitem__(self, name: str) -> Quantity:
-        for q in self.quantities:
-            if q.name == name:
-                return q
-        raise UnknownNameError(f"no quantity {shorten(repr(name))}")
+        try:
+            return self._by_name[name]
+        except (KeyError, TypeError):
+            raise UnknownNameError(f"no quantity {shorten(repr(name))}") from None
 
     @property
     def table(self) -> tuple[Quantity, ...]:
