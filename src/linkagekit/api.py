@@ -221,7 +221,7 @@ def analyze(
         )
     params = prepare(mech, poses, numerical=method == "numerical")
     plan = params.plan
-    factors = np.array([mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers])
+    factors = np.array([d.input_scale(mech) for d in mech.drivers])
     values: dict[str, np.ndarray] = {}
     per_design = [d.name not in given and d.sweep.count() != n for d in mech.drivers]
     q = np.empty((len(mech.drivers), D if any(per_design) else 1, n))  # shared inputs: no design axis

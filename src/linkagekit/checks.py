@@ -31,7 +31,7 @@ from .api import analyze, prepare
 from .errors import InputError
 from .group import Group
 from .groupmodes import continuation_intervals, enumerate_modes
-from .model import Mechanism
+from .model import CrankType, Mechanism
 from .params import Params, all_sign_combinations
 from .positions import solve
 from .rates import SINGULAR_TOL, solve_rates
@@ -61,16 +61,8 @@ def _assembled(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
 def _span(mech: Mechanism, driver: int) -> tuple[float, float]:
     """Where a driver's input is searched: a turn [0, 2 pi), +-2 x the sum of the link sizes for a slider;
     for a cylinder's length its stroke and 1 % of it either side, or (0, 2 x that sum] without a stroke."""
-    d = mech.drivers[driver]
-    if d.kind == "angle":
-        return 0.0, 2 * math.pi
-    if d.stroke is not None:
-        lo, hi = d.stroke
-        return lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo)
     span = 2 * sum(max(ln.length(a, b) for a in ln.joints for b in ln.joints) for ln in mech.links)
-    if d.kind == "cylinder":
-        return 0.0, span
-    return -span, span
+    return mech.drivers[driver].type.search_span(span)
 
 
 def input_range(mech: Mechanism, driver: int = 0, params: Params | None = None) -> list[list[float]]:
@@ -83,7 +75,7 @@ def input_range(mech: Mechanism, driver: int = 0, params: Params | None = None) 
     continuation, its ends to 1e-9 rad (:func:`linkagekit.groupmodes.continuation_intervals`).
     """
     params = prepare(mech) if params is None else params
-    factor = mech.angle_to_rad if mech.drivers[driver].kind == "angle" else 1.0
+    factor = mech.drivers[driver].input_scale(mech)
     return [[float(s / factor), float(e / factor)] for s, e in _assembly_intervals(mech, driver, params)]
 
 
@@ -93,18 +85,18 @@ def _assembly_intervals(mech: Mechanism, driver: int, params: Params) -> list[li
     With numerical groups, the interval over which the pose's mode goes on, by continuation
     (:func:`linkagekit.groupmodes.continuation_intervals`).
     """
-    d = mech.drivers[driver]
+    cyclic = mech.drivers[driver].type.cyclic
     lo, hi = _span(mech, driver)
     if params.plan.numerical:
-        return continuation_intervals(params, driver, lo, hi, d.kind == "angle", N_COARSE)
-    x = np.linspace(lo, hi, N_COARSE, endpoint=False) if d.kind == "angle" else np.linspace(lo, hi, N_COARSE + 1)
+        return continuation_intervals(params, driver, lo, hi, cyclic, N_COARSE)
+    x = np.linspace(lo, hi, N_COARSE, endpoint=False) if cyclic else np.linspace(lo, hi, N_COARSE + 1)
     ok = _assembled(params, driver, x)
     if ok.all():
         return [[lo, hi]]
     if not ok.any():
         return []
     # boundaries: a change between sample i and i+1 (cyclic for an angle)
-    nxt = np.roll(ok, -1) if d.kind == "angle" else np.append(ok[1:], ok[-1])
+    nxt = np.roll(ok, -1) if cyclic else np.append(ok[1:], ok[-1])
     idx = np.flatnonzero(ok != nxt)
     a = x[idx]
     step = x[1] - x[0]
@@ -120,7 +112,7 @@ def _assembly_intervals(mech: Mechanism, driver: int, params: Params) -> list[li
     starts = np.sort(edge[~inside_a])
     ends = np.sort(edge[inside_a])
     intervals: list[list[float]] = []
-    if d.kind == "angle":
+    if cyclic:
         # on the circle every start is followed by the next end; an interval whose end
         # comes only after 0 runs through 0 and is reported as [start - 2 pi, end]
         for s in starts:
@@ -188,7 +180,7 @@ def fourbar_loops(mech: Mechanism, params: Params | None = None) -> list[FourBar
     names = plan.joint_names
     ground = set(mech.link("ground").joints)
     blocks = {s.link for s in mech.sliders}
-    driven = {d.link: i for i, d in enumerate(mech.drivers) if d.kind == "angle"}
+    driven = {d.link: i for i, d in enumerate(mech.drivers) if isinstance(d.type, CrankType)}
     line_of = _plan_lines(plan)
     loops: list[FourBar] = []
     for st in plan.steps:
@@ -521,12 +513,12 @@ def _driver_checks(
     facts}), every value in file units.
     """
     d = mech.drivers[driver]
-    factor = mech.angle_to_rad if d.kind == "angle" else 1.0
+    factor = d.input_scale(mech)
     if not intervals:
         return [], {}
     lo, hi = _span(mech, driver)
     total = hi - lo
-    cyclic = d.kind == "angle" and len(intervals) == 1 and intervals[0][1] - intervals[0][0] >= total * (1 - 1e-12)
+    cyclic = d.type.cyclic and len(intervals) == 1 and intervals[0][1] - intervals[0][0] >= total * (1 - 1e-12)
     sw = _sweep(intervals, cyclic, total)
     x = sw.x
     plan = params.plan
@@ -625,14 +617,14 @@ def _driver_checks(
     mrow = cat(min_row).astype(int)
     roots, mins = _refine(params, driver, q, (cat(root_a), cat(root_b), rrow, rsign), (cat(min_a), cat(min_b), mrow))
     # the range ends (not the artificial ends of a slider's search span) are dead points
-    ends = [] if cyclic else [v for s, e in intervals for v in (s, e) if lo < v < hi or d.kind == "angle"]
+    ends = [] if cyclic else [v for s, e in intervals for v in (s, e) if lo < v < hi or d.type.cyclic]
     ends_arr = np.array(ends, float)
     fin = _state(params, driver, np.concatenate([roots, mins, ends_arr]))
     fvals = q.rows(fin)
     nr, nm = len(roots), len(mins)
     cols = np.arange(nr + nm)
     fval = fvals[np.concatenate([rrow, mrow]), cols] if nr + nm else np.zeros(0)
-    tol_x = 1e-9 * (total if d.kind != "angle" else 1.0)
+    tol_x = 1e-9 * (1.0 if d.type.cyclic else total)
 
     def file_value(v: float) -> float:
         if cyclic:
@@ -732,7 +724,7 @@ def _driver_checks(
                     if not cand:
                         cand = [float(np.min(u)), float(np.max(u))]
                     out["swing"] = float((max(cand) - min(cand)) / unit)
-        if cyclic and d.kind == "angle" and len(limits) == 2 and {t[2] for t in limits} == {"min", "max"}:
+        if cyclic and len(limits) == 2 and {t[2] for t in limits} == {"min", "max"}:
             vmin = next(t[0] for t in limits if t[2] == "min")
             vmax = next(t[0] for t in limits if t[2] == "max")
             rising = float(np.mod(vmax - vmin, total))
@@ -753,7 +745,7 @@ def transmission_angle(
     """
     params = prepare(mech) if params is None else params
     driver = fb.driver if fb.driver is not None else 0
-    factor = mech.angle_to_rad if mech.drivers[driver].kind == "angle" else 1.0
+    factor = mech.drivers[driver].input_scale(mech)
     intervals = [[s * factor, e * factor] for s, e in ranges]
     _, facts = _driver_checks(mech, params, driver, intervals, [(0, fb)])
     ta = facts.get(0, {}).get("transmission_angle", {})
@@ -928,7 +920,7 @@ def check(mech: Mechanism) -> CheckReport:
     params = prepare(mech)
     plan = params.plan
     names = plan.joint_names
-    factors = [mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers]
+    factors = [d.input_scale(mech) for d in mech.drivers]
     internal = [_assembly_intervals(mech, i, params) for i in range(len(mech.drivers))]
     ranges = {
         d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
@@ -982,7 +974,7 @@ def check(mech: Mechanism) -> CheckReport:
         fourbars=tuple(entries),
         dead_points=dead,
         held_at=held_at,
-        input_units={d.name: mech.angle_unit if d.kind == "angle" else mech.length_unit for d in mech.drivers},
+        input_units={d.name: d.input_unit(mech) for d in mech.drivers},
         dynamics=peak_loads(mech) if mech.has_dynamics else None,
         closed_form_joints=tuple(j for i, j in enumerate(names) if i not in plan.numerical),
         numerical_joints=tuple(names[i] for i in plan.numerical),
@@ -1246,7 +1238,7 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     plan = params.plan
     names = plan.joint_names
     q0 = params.pose_inputs[:, 0].copy()
-    factors = [mech.angle_to_rad if d.kind == "angle" else 1.0 for d in mech.drivers]
+    factors = [d.input_scale(mech) for d in mech.drivers]
     given: dict[str, Any] = {}
     if at is not None:
         if isinstance(at, dict):

@@ -34,13 +34,14 @@ Samples that do not assemble or sit at a singular position have NaN forces.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, assert_never
 
 import numpy as np
 
 from .catalogue import ReactionKey
 from .errors import UnknownNameError, shorten
 from .geometry import cross
+from .model import CrankType, CylinderType, SliderType
 from .params import Body, LoadParams
 from .rates import LinkMotion
 
@@ -263,26 +264,25 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
         labels.append(("slider", sl.through, sl.link, sl.on, str(k)))
         col += 2
     cyl_dir: dict[str, np.ndarray] = {}
+    first_driver = col  # one column per driver, in the drivers' order: its generalized force
     for d in mech.drivers:
-        if d.kind == "angle":
-            if d.link != "ground":
-                entries.append((row[d.link] + 2, col, 1.0))
-            labels.append(("torque", d.name))
-        elif d.kind == "cylinder":  # a massless two-force member: +F u on its first end, -F u on its second
-            assert d.ends is not None
-            za, zb = z_si[d.ends[0]], z_si[d.ends[1]]
-            with np.errstate(invalid="ignore", divide="ignore"):
-                cyl_dir[d.name] = (za - zb) / np.abs(za - zb)  # from the second end to the first
-            put_force(mech.links_of(d.ends[0])[0], col, za, cyl_dir[d.name], +1.0)
-            put_force(mech.links_of(d.ends[1])[0], col, zb, cyl_dir[d.name], -1.0)
-            labels.append(("cylinder", d.name))
-        else:
-            assert d.slider is not None
-            sl = mech.sliders[d.slider]
-            zt = z_si[sl.through]
-            put_force(sl.link, col, zt, slide_dir[d.slider], +1.0)
-            put_force(sl.on, col, zt, slide_dir[d.slider], -1.0)
-            labels.append(("push", d.name))
+        match d.type:
+            case CrankType():  # a torque on the driven link
+                if d.link != "ground":
+                    entries.append((row[d.link] + 2, col, 1.0))
+            case CylinderType(ends=(a, b)):  # a massless two-force member: +F u on its first end, -F u on its second
+                za, zb = z_si[a], z_si[b]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    cyl_dir[d.name] = (za - zb) / np.abs(za - zb)  # from the second end to the first
+                put_force(mech.links_of(a)[0], col, za, cyl_dir[d.name], +1.0)
+                put_force(mech.links_of(b)[0], col, zb, cyl_dir[d.name], -1.0)
+            case SliderType(slider=k):  # a push along the slide, on the block (its reaction on the guide)
+                sl = mech.sliders[k]
+                zt = z_si[sl.through]
+                put_force(sl.link, col, zt, slide_dir[k], +1.0)
+                put_force(sl.on, col, zt, slide_dir[k], -1.0)
+            case _:
+                assert_never(d.type)
         col += 1
     if col != m:  # pragma: no cover - the model already checked the degrees of freedom
         raise AssertionError(f"kinetostatics: {col} unknowns for {m} equations")
@@ -334,34 +334,32 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
                 shaking -= f
                 shaking_m -= cross(z_si[j], f) + moment
             col += 2
-        elif lab[0] == "torque":
-            torque[lab[1]] = x[:, col]
-            shaking_m -= x[:, col]
-            col += 1
-        elif lab[0] == "cylinder":
-            d = next(dd for dd in mech.drivers if dd.name == lab[1])
-            assert d.ends is not None
-            push[lab[1]] = x[:, col]
-            for end, sign in ((d.ends[0], 1.0), (d.ends[1], -1.0)):
-                if mech.links_of(end)[0] == "ground":  # the frame holds this end of the cylinder
-                    fe = sign * x[:, col] * cyl_dir[d.name]
-                    shaking += fe
-                    shaking_m += cross(z_si[end], fe)
-            col += 1
-        else:
-            d = next(dd for dd in mech.drivers if dd.name == lab[1])
-            assert d.slider is not None
-            sl = mech.sliders[d.slider]
-            push[lab[1]] = x[:, col]
-            if sl.on == "ground":
-                fe = x[:, col] * slide_dir[d.slider]
-                shaking -= fe
-                shaking_m -= cross(z_si[sl.through], fe)
-            col += 1
-    power = np.zeros(n)
     for i, d in enumerate(mech.drivers):
+        effort = x[:, first_driver + i]
+        match d.type:
+            case CrankType():
+                torque[d.name] = effort
+                shaking_m -= effort
+            case CylinderType(ends=(a, b)):
+                push[d.name] = effort
+                for end, sign in ((a, 1.0), (b, -1.0)):
+                    if mech.links_of(end)[0] == "ground":  # the frame holds this end of the cylinder
+                        fe = sign * effort * cyl_dir[d.name]
+                        shaking += fe
+                        shaking_m += cross(z_si[end], fe)
+            case SliderType(slider=k):
+                push[d.name] = effort
+                sl = mech.sliders[k]
+                if sl.on == "ground":
+                    fe = effort * slide_dir[k]
+                    shaking -= fe
+                    shaking_m -= cross(z_si[sl.through], fe)
+            case _:
+                assert_never(d.type)
+    power = np.zeros(n)
+    for i, d in enumerate(mech.drivers):  # T w, or F ds/dt (in m/s)
         speed = np.broadcast_to(km.speeds[i], (n,))
-        power += torque[d.name] * speed if d.kind == "angle" else push[d.name] * speed * si  # a cylinder: F ds/dt
+        power += x[:, first_driver + i] * speed * d.type.rate_to_si(si)
     bad = ~good
     if bad.any():
         shaking[bad] = complex(np.nan, np.nan)

@@ -36,9 +36,9 @@ True
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, TypeVar
 
 import numpy as np
 
@@ -46,7 +46,7 @@ from .errors import MechanismFileError, UnknownNameError, shorten
 from .units import ANGLE_UNITS, LENGTH_UNITS
 
 if TYPE_CHECKING:
-    from .schema import FileSpec, LinkSpec, SweepSpec
+    from .schema import DriverSpec, FileSpec, LinkSpec, SweepSpec
 
 GROUND = "ground"
 #: Relative tolerance on lengths: two joints of a link closer than this (relative to the
@@ -200,46 +200,212 @@ class Sweep:
         return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}
 
 
+# ---------------------------------------------------------------------- driver types
+class _DriverType:
+    """What each driver type declares once (the subclasses below; see :class:`Driver`).
+
+    Attributes
+    ----------
+    tag : str
+        The type's name in files and in ``Driver.kind``: ``"angle"``, ``"slider"`` or ``"cylinder"``.
+    sweep_key : str
+        The file key of its default sweep (``angles``, ``displacements``, ``lengths``).
+    cyclic : bool
+        Whether an input value repeats every turn (an angle) rather than runs along a line.
+    effort_symbol, effort_unit : str
+        What holds its input: a torque ``T`` in N·m, or a force ``F`` in N.
+    """
+
+    tag: ClassVar[Literal["angle", "slider", "cylinder"]]
+    sweep_key: ClassVar[str]
+    cyclic: ClassVar[bool]
+    effort_symbol: ClassVar[str]
+    effort_unit: ClassVar[str]
+
+    def input_unit(self, mech: Mechanism) -> str:
+        """The unit of its input values in the file and in every output (the file's angle or length unit)."""
+        raise NotImplementedError
+
+    def input_scale(self, mech: Mechanism) -> float:
+        """Solver units per file unit of its input: rad per angle unit, 1 for a length."""
+        raise NotImplementedError
+
+    def rate_to_si(self, length_to_si: float) -> float:
+        """SI units per unit of its ``speed`` (rad/s whatever the angle unit, or length unit/s -> m/s)."""
+        raise NotImplementedError
+
+    def search_span(self, size: float) -> tuple[float, float]:
+        """Where its input is searched for assembly (solver units), ``size`` twice the links' sizes summed."""
+        raise NotImplementedError
+
+    def file_entry(self, name: str, link: str, sweep: Sweep) -> dict[str, Any]:
+        """Its keys of a file's driver entry (speed and acceleration aside)."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class CrankType(_DriverType):
+    """A link turned about ``pivot`` (its input: the angle of ``pivot -> toward``, counter-clockwise)."""
+
+    pivot: str
+    toward: str
+    tag: ClassVar[Literal["angle"]] = "angle"
+    sweep_key: ClassVar[str] = "angles"
+    cyclic: ClassVar[bool] = True
+    effort_symbol: ClassVar[str] = "T"
+    effort_unit: ClassVar[str] = "N·m"
+
+    def input_unit(self, mech: Mechanism) -> str:
+        return mech.angle_unit
+
+    def input_scale(self, mech: Mechanism) -> float:
+        return mech.angle_to_rad
+
+    def rate_to_si(self, length_to_si: float) -> float:
+        return 1.0  # speeds are rad/s, accelerations rad/s^2, whatever the angle unit
+
+    def search_span(self, size: float) -> tuple[float, float]:
+        return 0.0, 2 * math.pi  # a turn
+
+    def file_entry(self, name: str, link: str, sweep: Sweep) -> dict[str, Any]:
+        return {"link": link, "pivot": self.pivot, "toward": self.toward, "angles": sweep.to_dict()}
+
+
+class _LinearType(_DriverType):
+    """A driver whose input is a length (file length unit) held by a force."""
+
+    cyclic: ClassVar[bool] = False
+    effort_symbol: ClassVar[str] = "F"
+    effort_unit: ClassVar[str] = "N"
+
+    def input_unit(self, mech: Mechanism) -> str:
+        return mech.length_unit
+
+    def input_scale(self, mech: Mechanism) -> float:
+        return 1.0
+
+    def rate_to_si(self, length_to_si: float) -> float:
+        return length_to_si
+
+
+@dataclass(frozen=True)
+class SliderType(_LinearType):
+    """A slider pushed: block of slider ``slider`` displaced along its line (its input; 0 at the pose)."""
+
+    slider: int
+    tag: ClassVar[Literal["slider"]] = "slider"
+    sweep_key: ClassVar[str] = "displacements"
+
+    def search_span(self, size: float) -> tuple[float, float]:
+        return -size, size
+
+    def file_entry(self, name: str, link: str, sweep: Sweep) -> dict[str, Any]:
+        return {"slider": self.slider, "displacements": sweep.to_dict()}
+
+
+@dataclass(frozen=True)
+class CylinderType(_LinearType):
+    """A linear actuator between joints ``ends`` (on two links): it imposes ``|A - B| = s``, its input.
+
+    Not a link; ``stroke`` ``(min, max)`` bounds ``s`` (samples outside do not assemble).
+    """
+
+    ends: tuple[str, str]
+    stroke: tuple[float, float] | None = None
+    tag: ClassVar[Literal["cylinder"]] = "cylinder"
+    sweep_key: ClassVar[str] = "lengths"
+
+    def search_span(self, size: float) -> tuple[float, float]:
+        if self.stroke is None:
+            return 0.0, size
+        lo, hi = self.stroke  # the stroke and 1 % of it either side
+        return lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo)
+
+    def file_entry(self, name: str, link: str, sweep: Sweep) -> dict[str, Any]:
+        out: dict[str, Any] = {"cylinder": list(self.ends)}
+        if name != cylinder_name(*self.ends):
+            out["name"] = name
+        out["lengths"] = sweep.to_dict()
+        if self.stroke is not None:
+            out["stroke"] = [float(self.stroke[0]), float(self.stroke[1])]
+        return out
+
+
+#: Every driver type; a new kind of driver is one more class here (and one more case where a
+#: ``match`` on it must decide: the planner, the force solve, the pose inputs).
+DriverType = CrankType | SliderType | CylinderType
+
+
 @dataclass(frozen=True)
 class Driver:
-    """One input: a link turned about a pivot (``kind='angle'``), a slider pushed, or a cylinder.
+    """One input of a mechanism: its name, the link it moves, its default sweep and rates, and its type.
 
-    ``speed`` and ``acceleration`` are rad/s and rad/s^2 for an angle driver (whatever the
-    angle unit), length-unit/s and length-unit/s^2 for a slider or cylinder driver.
+    ``type`` says what kind of input it is (:class:`CrankType`, :class:`SliderType`,
+    :class:`CylinderType`) and holds all that depends on it: the unit of its input, its
+    conversion to solver units, the effort that holds it, how the file writes it.
 
-    A cylinder (``kind='cylinder'``) is a linear actuator between the joints ``ends``
-    (on two different links): it is not a link, it imposes ``|A - B| = s`` with ``s`` its
-    input (an absolute length, file unit); ``stroke`` ``(min, max)`` bounds ``s`` (samples
-    outside do not assemble).  Its ``link`` is ``""``.
+    ``speed`` and ``acceleration`` are rad/s and rad/s^2 for a crank (whatever the angle
+    unit), length-unit/s and length-unit/s^2 for a slider or cylinder.  A cylinder's
+    ``link`` is ``""`` (it is not a link).
+
+    Examples
+    --------
+    >>> d = Driver("crank", "crank", Sweep(0.0, 360.0, 1.0), CrankType("A", "C"))
+    >>> d.kind, d.type.cyclic, d.type.effort_symbol, d.pivot, d.stroke
+    ('angle', True, 'T', 'A', None)
+    >>> d.to_dict()
+    {'link': 'crank', 'pivot': 'A', 'toward': 'C', 'angles': {'start': 0.0, 'stop': 360.0, 'step': 1.0}}
     """
 
     name: str
-    kind: Literal["angle", "slider", "cylinder"]
     link: str
     sweep: Sweep
+    type: DriverType
     speed: float = 1.0
     acceleration: float = 0.0
-    pivot: str | None = None
-    toward: str | None = None
-    slider: int | None = None
-    ends: tuple[str, str] | None = None
-    stroke: tuple[float, float] | None = None
+
+    @property
+    def kind(self) -> Literal["angle", "slider", "cylinder"]:
+        """The type's tag (``"angle"``, ``"slider"``, ``"cylinder"``), as files and earlier versions name it."""
+        return self.type.tag
+
+    def input_unit(self, mech: Mechanism) -> str:
+        """The unit of this driver's input values (the file's angle or length unit)."""
+        return self.type.input_unit(mech)
+
+    def input_scale(self, mech: Mechanism) -> float:
+        """Solver units (rad or length unit) per file unit of this driver's input."""
+        return self.type.input_scale(mech)
+
+    # read-only views of the type's fields (None where the type has no such field)
+    @property
+    def pivot(self) -> str | None:
+        """A crank's pivot joint."""
+        return self.type.pivot if isinstance(self.type, CrankType) else None
+
+    @property
+    def toward(self) -> str | None:
+        """A crank's second joint (its input is the angle of ``pivot -> toward``)."""
+        return self.type.toward if isinstance(self.type, CrankType) else None
+
+    @property
+    def slider(self) -> int | None:
+        """A slider driver's slider index."""
+        return self.type.slider if isinstance(self.type, SliderType) else None
+
+    @property
+    def ends(self) -> tuple[str, str] | None:
+        """A cylinder's two joints."""
+        return self.type.ends if isinstance(self.type, CylinderType) else None
+
+    @property
+    def stroke(self) -> tuple[float, float] | None:
+        """A cylinder's stroke ``(min, max)``, if given."""
+        return self.type.stroke if isinstance(self.type, CylinderType) else None
 
     def to_dict(self) -> dict[str, Any]:
         """The driver as the file writes it."""
-        out: dict[str, Any]
-        if self.kind == "cylinder":
-            assert self.ends is not None
-            out = {"cylinder": list(self.ends)}
-            if self.name != cylinder_name(*self.ends):
-                out["name"] = self.name
-            out["lengths"] = self.sweep.to_dict()
-            if self.stroke is not None:
-                out["stroke"] = [float(self.stroke[0]), float(self.stroke[1])]
-        elif self.kind == "slider":
-            out = {"slider": self.slider, "displacements": self.sweep.to_dict()}
-        else:
-            out = {"link": self.link, "pivot": self.pivot, "toward": self.toward, "angles": self.sweep.to_dict()}
+        out = self.type.file_entry(self.name, self.link, self.sweep)
         if self.speed != 1.0:
             out["speed"] = float(self.speed)
         if self.acceleration != 0.0:
@@ -416,28 +582,27 @@ class Mechanism:
         new = self._pose_points(pose)
         d = self.to_dict()
         d["joints"] = {name: _xy(z) for name, z in new.items()}
-        old = self.joints
-
-        def moved(p: complex, joints: tuple[str, ...]) -> complex:
-            a = joints[0]
-            if len(joints) < 2:
-                return p - old[a] + new[a]
-            b = joints[1]
-            rho = (p - old[a]) / (old[b] - old[a])
-            return new[a] + rho * (new[b] - new[a])
-
         for ln in self.links:
             entry = d["links"][ln.name]
             if isinstance(entry, dict):
                 entry.pop("lengths", None)
                 if ln.cg_pose is not None:
-                    entry["cg"] = _xy(moved(ln.cg_pose, ln.joints))
+                    entry["cg"] = _xy(self._moved(new, ln.cg_pose, ln.joints))
                 if list(entry) == ["joints"] and not ln.written_as_mapping:
                     d["links"][ln.name] = entry["joints"]
         for entry, ld in zip(d.get("loads", []), self.loads, strict=True):
             if ld.at_pose is not None and ld.at_joint is None:
-                entry["at"] = _xy(moved(ld.at_pose, self.link(ld.link).joints))
+                entry["at"] = _xy(self._moved(new, ld.at_pose, self.link(ld.link).joints))
         return Mechanism.from_dict(d, source=self.source)
+
+    def _moved(self, new: Mapping[str, complex], p: complex, joints: tuple[str, ...]) -> complex:
+        """Pose point ``p`` of a link through ``joints``, moved with it to the pose ``new`` (see :meth:`with_pose`)."""
+        old, a = self.joints, joints[0]
+        if len(joints) < 2:
+            return p - old[a] + new[a]
+        b = joints[1]
+        rho = (p - old[a]) / (old[b] - old[a])
+        return new[a] + rho * (new[b] - new[a])
 
     def _pose_points(self, pose: Any) -> dict[str, complex]:
         names = self.joint_names
@@ -538,256 +703,307 @@ def _gruebler(links: tuple[Link, ...] | list[Link], n_sliders: int) -> tuple[int
 
 # ---------------------------------------------------------------------- building
 def _build(spec: FileSpec, src: str) -> Mechanism:
-    from .schema import LinkSpec, SweepSpec
-
-    joints = {name: complex(x, y) for name, (x, y) in spec.joints.items()}
-
-    def fail(key: str, msg: str) -> MechanismFileError:
-        return MechanismFileError(f"{src}: {key}: {msg}")
-
-    if GROUND not in spec.links:
-        raise fail("links", "no link named 'ground' (the fixed frame)")
-    slider_links = {s.link for s in spec.sliders}
-    scale = max((abs(a - b) for a in joints.values() for b in joints.values()), default=0.0) or 1.0
-
-    links: list[Link] = []
-    used: set[str] = set()
-    for lname, lspec in spec.links.items():
-        as_mapping = isinstance(lspec, LinkSpec)
-        ls = lspec if isinstance(lspec, LinkSpec) else LinkSpec(joints=lspec)
-        key = f"links.{lname}"
-        for j in ls.joints:
-            if j not in joints:
-                raise fail(key, f"unknown joint '{j}' (not under joints)")
-        if len(set(ls.joints)) != len(ls.joints):
-            dup = next(j for j in ls.joints if ls.joints.count(j) > 1)
-            raise fail(key, f"joint '{dup}' is listed twice")
-        if len(ls.joints) < 2 and lname != GROUND and lname not in slider_links:
-            raise fail(key, "a link needs at least two joints (only ground and a slider block may carry one)")
-        for i, a in enumerate(ls.joints):
-            for b in ls.joints[i + 1 :]:
-                if abs(joints[a] - joints[b]) <= LENGTH_RTOL * scale:
-                    raise fail(key, f"joints '{a}' and '{b}' are at one spot on one link")
-        used.update(ls.joints)
-        shape = _shape(lname, ls, joints, fail, scale)
-        cg = cg_pose = None
-        if ls.cg is not None:
-            cg_pose = complex(*ls.cg)
-            cg = _register(cg_pose, tuple(ls.joints), joints, shape)
-        if ls.mass is not None and ls.mass < 0:
-            raise fail(f"{key}.mass", "must not be negative")
-        if ls.inertia is not None and ls.inertia < 0:
-            raise fail(f"{key}.inertia", "must not be negative")
-        if (ls.mass or 0.0) > 0 and cg is None:
-            raise fail(f"{key}.cg", "a link with mass needs its centre of gravity `cg`")
-        links.append(
-            Link(
-                lname,
-                tuple(ls.joints),
-                FrozenMap(shape),
-                ls.mass or 0.0,
-                cg,
-                ls.inertia or 0.0,
-                lengths=FrozenMap(ls.lengths or {}),
-                cg_pose=cg_pose,
-                written_as_mapping=as_mapping,
-            )
-        )
-
-    for i, la in enumerate(links):  # two links through the same two joints would be one rigid body
-        for lb in links[i + 1 :]:
-            shared = [j for j in la.joints if j in lb.joints]
-            if len(shared) >= 2:
-                raise fail(
-                    f"links.{lb.name}",
-                    f"shares joints '{shared[0]}' and '{shared[1]}' with link '{la.name}': two links through "
-                    f"the same two joints are one rigid body (merge them into one link)",
-                )
-    for j in joints:
-        if j not in used:
-            raise fail(f"joints.{j}", "not carried by any link")
-    by_name = {ln.name: ln for ln in links}
-
-    sliders: list[Slider] = []
-    for i, s in enumerate(spec.sliders):
-        key = f"sliders[{i}]"
-        for attr in ("link", "on"):
-            if getattr(s, attr) not in by_name:
-                raise fail(f"{key}.{attr}", f"unknown link '{getattr(s, attr)}'")
-        if s.link == s.on:
-            raise fail(key, "a link cannot slide on itself")
-        if s.link == GROUND:
-            raise fail(f"{key}.link", "the ground cannot be the sliding block (swap `link` and `on`)")
-        if s.through not in joints:
-            raise fail(f"{key}.through", f"unknown joint '{s.through}'")
-        direction = complex(*s.direction)
-        if abs(direction) == 0:
-            raise fail(f"{key}.direction", "must not be the zero vector")
-        sliders.append(Slider(s.link, s.on, s.through, direction / abs(direction), direction))
-
-    drivers: list[Driver] = []
-    for i, d in enumerate(spec.drivers):
-        key = f"drivers[{i}]"
-        if d.cylinder is not None:
-            drivers.append(_cylinder_driver(d, key, joints, links, fail, scale))
-            continue
-        for attr in ("name", "lengths", "stroke"):
-            if getattr(d, attr) is not None:
-                raise fail(f"{key}.{attr}", "belongs to a cylinder driver (`cylinder: [A, B]`)")
-        if d.slider is not None:
-            if not 0 <= d.slider < len(sliders):
-                raise fail(f"{key}.slider", f"no slider with index {d.slider} (there are {len(sliders)})")
-            if d.angles is not None or d.pivot is not None or d.toward is not None:
-                raise fail(key, "a slider driver takes `displacements`, not `angles`/`pivot`/`toward`")
-            sl = sliders[d.slider]
-            if d.link is not None and d.link != sl.link:
-                raise fail(f"{key}.link", f"slider {d.slider} moves link '{sl.link}', not '{d.link}'")
-            sw = d.displacements or SweepSpec(start=0.0, stop=0.0, step=1.0)
-            drivers.append(
-                Driver(
-                    sl.link,
-                    "slider",
-                    sl.link,
-                    _sweep(sw, f"{key}.displacements", fail),
-                    d.speed,
-                    d.acceleration,
-                    slider=d.slider,
-                )
-            )
-            continue
-        if d.link is None:
-            raise fail(f"{key}.link", "required key is missing (or give `slider:`)")
-        if d.link not in by_name:
-            raise fail(f"{key}.link", f"unknown link '{d.link}'")
-        if d.link == GROUND:
-            raise fail(f"{key}.link", "the ground cannot be driven")
-        if d.displacements is not None:
-            raise fail(key, "`displacements` belongs to a slider driver (`slider: INDEX`)")
-        link = by_name[d.link]
-        for attr in ("pivot", "toward"):
-            j = getattr(d, attr)
-            if j is None:
-                raise fail(f"{key}.{attr}", "required key is missing")
-            if j not in link.joints:
-                raise fail(f"{key}.{attr}", f"joint '{j}' is not on link '{d.link}'")
-        if d.pivot == d.toward:
-            raise fail(key, "`pivot` and `toward` must be different joints")
-        sw = d.angles or SweepSpec(
-            start=0.0,
-            stop=360.0 if spec.units.angle == "deg" else 2 * math.pi,
-            step=1.0 if spec.units.angle == "deg" else math.pi / 180,
-        )
-        # speed and acceleration are rad/s and rad/s^2 whatever the angle unit (spec section 1)
-        drivers.append(
-            Driver(
-                d.link,
-                "angle",
-                d.link,
-                _sweep(sw, f"{key}.angles", fail),
-                d.speed,
-                d.acceleration,
-                pivot=d.pivot,
-                toward=d.toward,
-            )
-        )
-    names = [d.name for d in drivers]
-    for n in names:
-        if names.count(n) > 1:
-            if any(d.kind == "cylinder" and d.name == n for d in drivers):
-                raise fail("drivers", f"two drivers are named '{n}' (give the cylinder another `name`)")
-            raise fail("drivers", f"link '{n}' is driven twice")
-
-    loads: list[Load] = []
-    for i, ld in enumerate(spec.loads):
-        key = f"loads[{i}]"
-        if ld.link not in by_name:
-            raise fail(f"{key}.link", f"unknown link '{ld.link}'")
-        if ld.force is None and ld.torque is None:
-            raise fail(key, "give a `force`, a `torque`, or both")
-        at_joint = None
-        at: complex | None = None
-        at_pose: complex | None = None
-        if isinstance(ld.at, str):
-            if ld.at not in by_name[ld.link].joints:
-                raise fail(f"{key}.at", f"joint '{ld.at}' is not on link '{ld.link}'")
-            at_joint = ld.at
-            at = by_name[ld.link].shape[ld.at]
-        elif ld.at is not None:
-            at_pose = complex(*ld.at)
-            at = _register(at_pose, by_name[ld.link].joints, joints, by_name[ld.link].shape)
-        if ld.force is not None and at is None:
-            raise fail(f"{key}.at", "a force needs its point of application `at`")
-        loads.append(Load(ld.link, at, at_joint, complex(*(ld.force or (0.0, 0.0))), ld.torque or 0.0, at_pose=at_pose))
-
-    dof, n_links, pins = _gruebler(links, len(sliders))
-    if dof != len(drivers):
-        raise fail(
-            "drivers",
-            f"{len(drivers)} driver(s) given, but the mechanism has {dof} degree(s) "
-            f"of freedom (Gruebler: 3*({n_links}-1) - 2*({pins} pins + {len(sliders)} sliders) = {dof})"
-            + (
-                "; a cylinder counts as one driver, not as a link" if any(d.kind == "cylinder" for d in drivers) else ""
-            ),
-        )
-
+    """The mechanism a parsed file describes, each section checked by its own validator of :class:`_Builder`."""
+    b = _Builder(spec, src)
+    links = b.links()
+    sliders = b.sliders()
+    drivers = b.drivers(sliders)
+    loads = b.loads()
+    b.check_freedom(drivers, len(sliders))
     return Mechanism(
         name=spec.name,
         length_unit=spec.units.length,
         angle_unit=spec.units.angle,
-        joints=FrozenMap(joints),
-        links=tuple(links),
-        drivers=tuple(drivers),
-        sliders=tuple(sliders),
+        joints=FrozenMap(b.joints),
+        links=links,
+        drivers=drivers,
+        sliders=sliders,
         gravity=complex(*spec.gravity) if spec.gravity is not None else None,
-        loads=tuple(loads),
+        loads=loads,
         source=src,
         description=spec.description,
     )
 
 
-def _cylinder_driver(
-    d: Any, key: str, joints: dict[str, complex], links: list[Link], fail: Any, scale: float
-) -> Driver:
-    """A cylinder driver ``{cylinder: [A, B], lengths: {...}, stroke: [min, max], name: ...}``, checked."""
+Fail = Callable[[str, str], MechanismFileError]
+
+
+class _Builder:
+    """The validators of a file's sections, in the order they depend on each other.
+
+    Each raises :class:`MechanismFileError` naming the file and the offending key.
+    """
+
+    def __init__(self, spec: FileSpec, src: str) -> None:
+        self.spec, self.src = spec, src
+        self.joints = {name: complex(x, y) for name, (x, y) in spec.joints.items()}
+        #: the mechanism's size, for relative tolerances on lengths
+        self.scale = max((abs(a - b) for a in self.joints.values() for b in self.joints.values()), default=0.0) or 1.0
+        self.by_name: dict[str, Link] = {}
+        if GROUND not in spec.links:
+            raise self.fail("links", "no link named 'ground' (the fixed frame)")
+
+    def fail(self, key: str, msg: str) -> MechanismFileError:
+        """The error for ``key`` of this file."""
+        return MechanismFileError(f"{self.src}: {key}: {msg}")
+
+    # -------------------------------------------------------------- links
+    def links(self) -> tuple[Link, ...]:
+        """Every link, its shape registered on the pose; two links never share two joints, every joint is carried."""
+        from .schema import LinkSpec
+
+        links = []
+        for lname, lspec in self.spec.links.items():
+            ls = lspec if isinstance(lspec, LinkSpec) else LinkSpec(joints=lspec)
+            links.append(self._link(lname, ls, isinstance(lspec, LinkSpec)))
+        for i, la in enumerate(links):  # two links through the same two joints would be one rigid body
+            for lb in links[i + 1 :]:
+                shared = [j for j in la.joints if j in lb.joints]
+                if len(shared) >= 2:
+                    raise self.fail(
+                        f"links.{lb.name}",
+                        f"shares joints '{shared[0]}' and '{shared[1]}' with link '{la.name}': two links through "
+                        f"the same two joints are one rigid body (merge them into one link)",
+                    )
+        used = {j for ln in links for j in ln.joints}
+        for j in self.joints:
+            if j not in used:
+                raise self.fail(f"joints.{j}", "not carried by any link")
+        self.by_name = {ln.name: ln for ln in links}
+        return tuple(links)
+
+    def _link(self, lname: str, ls: LinkSpec, as_mapping: bool) -> Link:
+        """One link: its joints checked, its shape, its mass properties."""
+        key = f"links.{lname}"
+        self._link_joints(lname, ls.joints)
+        shape = _shape(lname, ls, self.joints, self.fail, self.scale)
+        cg = cg_pose = None
+        if ls.cg is not None:
+            cg_pose = complex(*ls.cg)
+            cg = _register(cg_pose, tuple(ls.joints), self.joints, shape)
+        for attr in ("mass", "inertia"):
+            if (getattr(ls, attr) or 0.0) < 0:
+                raise self.fail(f"{key}.{attr}", "must not be negative")
+        if (ls.mass or 0.0) > 0 and cg is None:
+            raise self.fail(f"{key}.cg", "a link with mass needs its centre of gravity `cg`")
+        return Link(
+            lname,
+            tuple(ls.joints),
+            FrozenMap(shape),
+            ls.mass or 0.0,
+            cg,
+            ls.inertia or 0.0,
+            lengths=FrozenMap(ls.lengths or {}),
+            cg_pose=cg_pose,
+            written_as_mapping=as_mapping,
+        )
+
+    def _link_joints(self, lname: str, js: list[str]) -> None:
+        """A link's joints: known, each once, two at least (but on the ground or a block), never at one spot."""
+        key = f"links.{lname}"
+        for j in js:
+            if j not in self.joints:
+                raise self.fail(key, f"unknown joint '{j}' (not under joints)")
+        if len(set(js)) != len(js):
+            dup = next(j for j in js if js.count(j) > 1)
+            raise self.fail(key, f"joint '{dup}' is listed twice")
+        if len(js) < 2 and lname != GROUND and lname not in {s.link for s in self.spec.sliders}:
+            raise self.fail(key, "a link needs at least two joints (only ground and a slider block may carry one)")
+        for i, a in enumerate(js):
+            for b in js[i + 1 :]:
+                if abs(self.joints[a] - self.joints[b]) <= LENGTH_RTOL * self.scale:
+                    raise self.fail(key, f"joints '{a}' and '{b}' are at one spot on one link")
+
+    # -------------------------------------------------------------- sliders
+    def sliders(self) -> tuple[Slider, ...]:
+        """Every slider: two different known links (the ground never the block), a known joint, a direction."""
+        out = []
+        for i, s in enumerate(self.spec.sliders):
+            key = f"sliders[{i}]"
+            for attr in ("link", "on"):
+                if getattr(s, attr) not in self.by_name:
+                    raise self.fail(f"{key}.{attr}", f"unknown link '{getattr(s, attr)}'")
+            if s.link == s.on:
+                raise self.fail(key, "a link cannot slide on itself")
+            if s.link == GROUND:
+                raise self.fail(f"{key}.link", "the ground cannot be the sliding block (swap `link` and `on`)")
+            if s.through not in self.joints:
+                raise self.fail(f"{key}.through", f"unknown joint '{s.through}'")
+            direction = complex(*s.direction)
+            if abs(direction) == 0:
+                raise self.fail(f"{key}.direction", "must not be the zero vector")
+            out.append(Slider(s.link, s.on, s.through, direction / abs(direction), direction))
+        return tuple(out)
+
+    # -------------------------------------------------------------- drivers
+    def drivers(self, sliders: tuple[Slider, ...]) -> tuple[Driver, ...]:
+        """Every driver, by the keys its entry gives (``cylinder``, ``slider`` or a link); names are unique."""
+        drivers = []
+        for i, d in enumerate(self.spec.drivers):
+            key = f"drivers[{i}]"
+            if d.cylinder is not None:
+                drivers.append(self._cylinder_driver(d, key))
+                continue
+            for attr in ("name", "lengths", "stroke"):
+                if getattr(d, attr) is not None:
+                    raise self.fail(f"{key}.{attr}", "belongs to a cylinder driver (`cylinder: [A, B]`)")
+            drivers.append(self._slider_driver(d, key, sliders) if d.slider is not None else self._crank_driver(d, key))
+        names = [d.name for d in drivers]
+        for n in names:
+            if names.count(n) > 1:
+                if any(isinstance(d.type, CylinderType) and d.name == n for d in drivers):
+                    raise self.fail("drivers", f"two drivers are named '{n}' (give the cylinder another `name`)")
+                raise self.fail("drivers", f"link '{n}' is driven twice")
+        return tuple(drivers)
+
+    def _slider_driver(self, d: DriverSpec, key: str, sliders: tuple[Slider, ...]) -> Driver:
+        """``{slider: INDEX, displacements: {...}}``: its block pushed along the slider's line (0 at the pose)."""
+        from .schema import SweepSpec
+
+        assert d.slider is not None
+        if not 0 <= d.slider < len(sliders):
+            raise self.fail(f"{key}.slider", f"no slider with index {d.slider} (there are {len(sliders)})")
+        if d.angles is not None or d.pivot is not None or d.toward is not None:
+            raise self.fail(key, "a slider driver takes `displacements`, not `angles`/`pivot`/`toward`")
+        sl = sliders[d.slider]
+        if d.link is not None and d.link != sl.link:
+            raise self.fail(f"{key}.link", f"slider {d.slider} moves link '{sl.link}', not '{d.link}'")
+        sw = d.displacements or SweepSpec(start=0.0, stop=0.0, step=1.0)
+        sweep = _sweep(sw, f"{key}.displacements", self.fail)
+        return Driver(sl.link, sl.link, sweep, SliderType(d.slider), d.speed, d.acceleration)
+
+    def _crank_driver(self, d: DriverSpec, key: str) -> Driver:
+        """``{link, pivot, toward, angles: {...}}``: a link turned about one of its joints (a turn by default)."""
+        from .schema import SweepSpec
+
+        if d.link is None:
+            raise self.fail(f"{key}.link", "required key is missing (or give `slider:`)")
+        if d.link not in self.by_name:
+            raise self.fail(f"{key}.link", f"unknown link '{d.link}'")
+        if d.link == GROUND:
+            raise self.fail(f"{key}.link", "the ground cannot be driven")
+        if d.displacements is not None:
+            raise self.fail(key, "`displacements` belongs to a slider driver (`slider: INDEX`)")
+        for attr in ("pivot", "toward"):
+            j = getattr(d, attr)
+            if j is None:
+                raise self.fail(f"{key}.{attr}", "required key is missing")
+            if j not in self.by_name[d.link].joints:
+                raise self.fail(f"{key}.{attr}", f"joint '{j}' is not on link '{d.link}'")
+        assert d.pivot is not None and d.toward is not None
+        if d.pivot == d.toward:
+            raise self.fail(key, "`pivot` and `toward` must be different joints")
+        deg = self.spec.units.angle == "deg"
+        sw = d.angles or SweepSpec(start=0.0, stop=360.0 if deg else 2 * math.pi, step=1.0 if deg else math.pi / 180)
+        # speed and acceleration are rad/s and rad/s^2 whatever the angle unit (spec section 1)
+        sweep = _sweep(sw, f"{key}.angles", self.fail)
+        return Driver(d.link, d.link, sweep, CrankType(d.pivot, d.toward), d.speed, d.acceleration)
+
+    def _cylinder_driver(self, d: DriverSpec, key: str) -> Driver:
+        """``{cylinder: [A, B], lengths: {...}, stroke: [min, max], name: ...}``, checked."""
+        extra = [
+            k for k in ("link", "pivot", "toward", "angles", "slider", "displacements") if getattr(d, k) is not None
+        ]
+        if extra:
+            raise self.fail(
+                f"{key}.{extra[0]}", "a cylinder driver takes `lengths`, `stroke`, `name`, `speed`, `acceleration`"
+            )
+        assert d.cylinder is not None
+        a, b = d.cylinder
+        length = self._cylinder_length(key, a, b)
+        stroke = None if d.stroke is None else _stroke(key, d.stroke, length, self.fail)
+        sweep = _cylinder_sweep(key, d.lengths, stroke, length, self.fail)
+        name = d.name if d.name is not None else cylinder_name(a, b)
+        return Driver(name, "", sweep, CylinderType((a, b), stroke), d.speed, d.acceleration)
+
+    def _cylinder_length(self, key: str, a: str, b: str) -> float:
+        """The pose's length of a cylinder between joints ``a`` and ``b`` (known, on two links, apart)."""
+        for i, j in enumerate((a, b)):
+            if j not in self.joints:
+                raise self.fail(f"{key}.cylinder[{i}]", f"unknown joint '{j}' (not under joints)")
+        if a == b:
+            raise self.fail(f"{key}.cylinder", f"both ends are joint '{a}': a cylinder joins two different joints")
+        common = next((ln.name for ln in self.by_name.values() if a in ln.joints and b in ln.joints), None)
+        if common is not None:
+            raise self.fail(
+                f"{key}.cylinder",
+                f"joints '{a}' and '{b}' are both on link '{common}': a cylinder between two joints of one link "
+                f"cannot move it (attach its ends to two different links)",
+            )
+        length = abs(self.joints[b] - self.joints[a])
+        if length <= LENGTH_RTOL * self.scale:
+            raise self.fail(
+                f"{key}.cylinder", f"joints '{a}' and '{b}' are at one spot in the pose: a cylinder needs a length"
+            )
+        return length
+
+    # -------------------------------------------------------------- loads, freedom
+    def loads(self) -> tuple[Load, ...]:
+        """Every load: on a known link, a force with its point (a joint of the link, or a pose point)."""
+        out = []
+        for i, ld in enumerate(self.spec.loads):
+            key = f"loads[{i}]"
+            if ld.link not in self.by_name:
+                raise self.fail(f"{key}.link", f"unknown link '{ld.link}'")
+            if ld.force is None and ld.torque is None:
+                raise self.fail(key, "give a `force`, a `torque`, or both")
+            link = self.by_name[ld.link]
+            at_joint: str | None = None
+            at: complex | None = None
+            at_pose: complex | None = None
+            if isinstance(ld.at, str):
+                if ld.at not in link.joints:
+                    raise self.fail(f"{key}.at", f"joint '{ld.at}' is not on link '{ld.link}'")
+                at_joint, at = ld.at, link.shape[ld.at]
+            elif ld.at is not None:
+                at_pose = complex(*ld.at)
+                at = _register(at_pose, link.joints, self.joints, link.shape)
+            if ld.force is not None and at is None:
+                raise self.fail(f"{key}.at", "a force needs its point of application `at`")
+            force = complex(*(ld.force or (0.0, 0.0)))
+            out.append(Load(ld.link, at, at_joint, force, ld.torque or 0.0, at_pose=at_pose))
+        return tuple(out)
+
+    def check_freedom(self, drivers: tuple[Driver, ...], n_sliders: int) -> None:
+        """One driver per degree of freedom (Gruebler count)."""
+        dof, n_links, pins = _gruebler(tuple(self.by_name.values()), n_sliders)
+        if dof == len(drivers):
+            return
+        cylinders = any(isinstance(d.type, CylinderType) for d in drivers)
+        raise self.fail(
+            "drivers",
+            f"{len(drivers)} driver(s) given, but the mechanism has {dof} degree(s) "
+            f"of freedom (Gruebler: 3*({n_links}-1) - 2*({pins} pins + {n_sliders} sliders) = {dof})"
+            + ("; a cylinder counts as one driver, not as a link" if cylinders else ""),
+        )
+
+
+def _stroke(key: str, given: tuple[float, float], length: float, fail: Fail) -> tuple[float, float]:
+    """A cylinder's stroke ``[min, max]``: positive, increasing, holding the pose's ``length``."""
+    lo, hi = given
+    if lo <= 0:
+        raise fail(f"{key}.stroke", f"[min, max] with a positive min, got [{lo:g}, {hi:g}]")
+    if hi <= lo:
+        raise fail(f"{key}.stroke", f"[min, max] with min < max, got [{lo:g}, {hi:g}]")
+    if not lo * (1 - 1e-9) <= length <= hi * (1 + 1e-9):
+        raise fail(f"{key}.stroke", f"the pose has the cylinder {length:.9g} long, outside its stroke [{lo:g}, {hi:g}]")
+    return lo, hi
+
+
+def _cylinder_sweep(
+    key: str, given: SweepSpec | None, stroke: tuple[float, float] | None, length: float, fail: Fail
+) -> Sweep:
+    """A cylinder's sweep of lengths: as given, else its whole stroke in 100 steps, else the pose's length only.
+
+    Every length is positive and inside the stroke.
+    """
     from .schema import SweepSpec
 
-    extra = [k for k in ("link", "pivot", "toward", "angles", "slider", "displacements") if getattr(d, k) is not None]
-    if extra:
-        raise fail(f"{key}.{extra[0]}", "a cylinder driver takes `lengths`, `stroke`, `name`, `speed`, `acceleration`")
-    assert d.cylinder is not None
-    a, b = d.cylinder
-    for i, j in enumerate((a, b)):
-        if j not in joints:
-            raise fail(f"{key}.cylinder[{i}]", f"unknown joint '{j}' (not under joints)")
-    if a == b:
-        raise fail(f"{key}.cylinder", f"both ends are joint '{a}': a cylinder joins two different joints")
-    common = next((ln.name for ln in links if a in ln.joints and b in ln.joints), None)
-    if common is not None:
-        raise fail(
-            f"{key}.cylinder",
-            f"joints '{a}' and '{b}' are both on link '{common}': a cylinder between two joints of one link "
-            f"cannot move it (attach its ends to two different links)",
-        )
-    length = abs(joints[b] - joints[a])
-    if length <= LENGTH_RTOL * scale:
-        raise fail(f"{key}.cylinder", f"joints '{a}' and '{b}' are at one spot in the pose: a cylinder needs a length")
-    stroke = None
-    if d.stroke is not None:
-        lo, hi = d.stroke
-        if lo <= 0:
-            raise fail(f"{key}.stroke", f"[min, max] with a positive min, got [{lo:g}, {hi:g}]")
-        if hi <= lo:
-            raise fail(f"{key}.stroke", f"[min, max] with min < max, got [{lo:g}, {hi:g}]")
-        if not lo * (1 - 1e-9) <= length <= hi * (1 + 1e-9):
-            raise fail(
-                f"{key}.stroke", f"the pose has the cylinder {length:.9g} long, outside its stroke [{lo:g}, {hi:g}]"
-            )
-        stroke = (lo, hi)
-    if d.lengths is not None:
-        sw = d.lengths
-    elif stroke is not None:  # the whole stroke in 100 steps
+    if given is not None:
+        sw = given
+    elif stroke is not None:
         sw = SweepSpec(start=stroke[0], stop=stroke[1], step=(stroke[1] - stroke[0]) / 100)
-    else:  # the pose's length only (as a slider's default is its pose)
+    else:  # as a slider's default is its pose
         sw = SweepSpec(start=length, stop=length, step=1.0)
     sweep = _sweep(sw, f"{key}.lengths", fail)
     first, last = sweep.start, sweep.start + sweep.step * (sweep.count() - 1)
@@ -801,19 +1017,10 @@ def _cylinder_driver(
             f"{first:g} to {last:g} leaves the stroke [{stroke[0]:g}, {stroke[1]:g}] (keep the file's sweep "
             f"inside it; inputs asked for outside it are flagged as not assembled)",
         )
-    return Driver(
-        d.name if d.name is not None else cylinder_name(a, b),
-        "cylinder",
-        "",
-        sweep,
-        d.speed,
-        d.acceleration,
-        ends=(a, b),
-        stroke=stroke,
-    )
+    return sweep
 
 
-def _sweep(sw: SweepSpec, key: str, fail: Any) -> Sweep:
+def _sweep(sw: SweepSpec, key: str, fail: Fail) -> Sweep:
     if sw.step == 0:
         raise fail(f"{key}.step", "must not be zero")
     if (sw.stop - sw.start) * sw.step < 0:
@@ -834,7 +1041,7 @@ def _parse_pair(key: str, link: tuple[str, ...]) -> tuple[str, str] | None:
     return None
 
 
-def _shape(lname: str, ls: LinkSpec, pose: dict[str, complex], fail: Any, scale: float) -> dict[str, complex]:
+def _shape(lname: str, ls: LinkSpec, pose: dict[str, complex], fail: Fail, scale: float) -> dict[str, complex]:
     """Local coordinates of a link's joints, registered on the pose, honouring given lengths.
 
     The first two joints anchor the frame (the first at its pose position, the second on

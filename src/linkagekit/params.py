@@ -36,11 +36,12 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, assert_never
 
 import numpy as np
 
 from .errors import InputError
+from .model import CrankType, CylinderType, SliderType
 from .plan import Plan, make_plan
 from .steps import Nums, is_sign_step
 
@@ -171,6 +172,7 @@ class _Shapes:
     def __init__(self, mech: Mechanism, plan: Plan, poses: np.ndarray | None) -> None:
         self.names = plan.joint_names
         self.mech = mech
+        self.z: np.ndarray  # (n_joints, D, 1) complex
         if poses is None:
             self.z = np.array([mech.joints[j] for j in self.names], complex)[:, None, None]
             self.batch = False
@@ -182,11 +184,12 @@ class _Shapes:
 
     def shape(self, link: str, joint: int) -> np.ndarray:
         if self.batch:
-            return self.z[joint]
+            return self.pose(joint)
         return np.full((1, 1), self.mech.link(link).shape[self.names[joint]])
 
     def pose(self, joint: int) -> np.ndarray:
-        return self.z[joint]
+        z: np.ndarray = self.z[joint]
+        return z
 
     def direction(self, slider: int) -> np.ndarray:
         return self.directions[slider]
@@ -201,14 +204,15 @@ def _pose_inputs(mech: Mechanism, plan: Plan, zpose: np.ndarray) -> np.ndarray:
     idx = {n: i for i, n in enumerate(plan.joint_names)}
     rows = []
     for d in mech.drivers:
-        if d.kind == "angle":
-            assert d.pivot is not None and d.toward is not None
-            rows.append(np.angle(zpose[idx[d.toward]] - zpose[idx[d.pivot]]))
-        elif d.kind == "cylinder":
-            assert d.ends is not None
-            rows.append(np.abs(zpose[idx[d.ends[1]]] - zpose[idx[d.ends[0]]]))
-        else:
-            rows.append(np.zeros(zpose.shape[1]))
+        match d.type:
+            case CrankType(pivot=pivot, toward=toward):
+                rows.append(np.angle(zpose[idx[toward]] - zpose[idx[pivot]]))
+            case CylinderType(ends=(a, b)):
+                rows.append(np.abs(zpose[idx[b]] - zpose[idx[a]]))
+            case SliderType():
+                rows.append(np.zeros(zpose.shape[1]))
+            case _:
+                assert_never(d.type)
     return np.array(rows, float).reshape(len(mech.drivers), zpose.shape[1])
 
 

@@ -36,10 +36,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from itertools import combinations
+from typing import TYPE_CHECKING, Any, assert_never
 
 from .errors import MechanismFileError, NotSolvableError
 from .group import Group, GroupLink
+from .model import CrankType, CylinderType, SliderType
 from .steps import (
     Carry,
     CircleLine,
@@ -57,7 +59,7 @@ from .steps import (
 )
 
 if TYPE_CHECKING:
-    from .model import Mechanism
+    from .model import Link, Mechanism
 
 GROUND = "ground"
 
@@ -131,325 +133,373 @@ def make_plan(mech: Mechanism, numerical: bool = False) -> Plan:
     ``analyze(..., method="numerical")``). Cached per mechanism (mechanisms are immutable
     and hashable).
     """
-    names = tuple(mech.joints)
-    idx = {n: i for i, n in enumerate(names)}
     if mech.dof != len(mech.drivers):  # pragma: no cover - the model already refuses it
         raise MechanismFileError(f"{mech.source}: drivers: {len(mech.drivers)} driver(s) for {mech.dof} freedom(s)")
+    return _Planner(mech, numerical).plan()
 
-    links = {ln.name: ln for ln in mech.links}
-    known: set[str] = set(links[GROUND].joints)
-    placed: set[str] = {GROUND}
-    steps: list[Step] = [Ground(tuple(idx[j] for j in links[GROUND].joints))]
-    rot_known: set[str] = {GROUND}
-    pending = [i for i, d in enumerate(mech.drivers) if d.kind != "cylinder"]
-    cylinders = [i for i, d in enumerate(mech.drivers) if d.kind == "cylinder"]  # not in `pending`: see below
-    mirror_links: list[str] = []
-    slider_of = {s.link: (i, s) for i, s in enumerate(mech.sliders)}
-    labels: list[str] = []
-    anchors: dict[str, int] = {}  # a known joint of each placed link, where its frame is anchored
 
-    def place_all() -> bool:
+#: A step that reads a sign, with the joints it makes known, the links whose rotation it makes known, its label.
+SignStep = tuple[Step, set[str], set[str], str]
+
+
+class _Planner:
+    """The greedy search of :func:`make_plan`: its state (what is known) and one method per rule.
+
+    The rules are tried in the order of the module's docstring; the first that applies acts,
+    and the search starts over, until none applies.
+    """
+
+    def __init__(self, mech: Mechanism, numerical: bool) -> None:
+        self.mech, self.numerical = mech, numerical
+        self.names = tuple(mech.joints)
+        self.idx = {n: i for i, n in enumerate(self.names)}
+        self.links = {ln.name: ln for ln in mech.links}
+        ground = self.links[GROUND].joints
+        self.known: set[str] = set(ground)  # joints placed
+        self.placed: set[str] = {GROUND}  # links placed
+        self.rot_known: set[str] = {GROUND}  # links whose rotation is known
+        self.steps: list[Step] = [Ground(tuple(self.idx[j] for j in ground))]
+        self.mirror_links: list[str] = []
+        self.labels: list[str] = []  # one per sign
+        self.anchors: dict[str, int] = {}  # a known joint of each placed link, where its frame is anchored
+        self.slider_of = {s.link: (i, s) for i, s in enumerate(mech.sliders)}
+        self.drives: list[tuple[int, CrankType | SliderType]] = []  # applied as soon as their pivot or guide is known
+        self.cylinders: list[tuple[int, CylinderType]] = []  # applied one at a time, once links are placed
+        for di, d in enumerate(mech.drivers):
+            match d.type:
+                case CrankType() | SliderType() as t:
+                    self.drives.append((di, t))
+                case CylinderType() as c:
+                    self.cylinders.append((di, c))
+                case _:
+                    assert_never(d.type)
+
+    def plan(self) -> Plan:
+        """Apply the rules until none applies, check every joint is placed, and return the plan."""
+        while self._place_links() or self._drive() or self._cylinder() or self._line_line() or self._sign_or_group():
+            pass
+        self._check_complete()
+        needs = {link for st in self.steps for link in st.rotation_needs()}
+        steps = [_keep_rotation(st, needs) for st in self.steps]
+        mech = self.mech
+        drivers = tuple(d.name for d in mech.drivers)
+        labels, mirrors = tuple(self.labels), tuple(self.mirror_links)
+        return Plan(self.names, tuple(steps), len(labels), len(mirrors), mech.dof, drivers, mirrors, labels)
+
+    def _take(self, link: str, anchor: int, joints: tuple[str, ...] | None = None) -> None:
+        """``link`` placed (its rotation known, its frame anchored at joint ``anchor``), with its joints."""
+        self.known.update(self.links[link].joints if joints is None else joints)
+        self.placed.add(link)
+        self.rot_known.add(link)
+        self.anchors[link] = anchor
+
+    # ------------------------------------------------------------------ rules
+    def _place_links(self) -> bool:
+        """Place every link with two known joints, carry every link with one known joint and a known rotation."""
         progress = False
-        for ln in mech.links:
-            if ln.name in placed:
+        for ln in self.mech.links:
+            if ln.name in self.placed:
                 continue
-            kn = [j for j in ln.joints if j in known]
+            kn = [j for j in ln.joints if j in self.known]
+            rest = tuple(self.idx[j] for j in ln.joints if j not in self.known)
             if len(kn) >= 2:
-                k1, k2 = kn[0], kn[1]
-                rest = [j for j in ln.joints if j not in known]
                 mirror = None
                 if rest and len(ln.joints) >= 3:
-                    mirror = len(mirror_links)
-                    mirror_links.append(ln.name)
-                steps.append(Place(ln.name, idx[k1], idx[k2], tuple(idx[j] for j in rest), mirror))
-                anchors[ln.name] = idx[k1]
-            elif len(kn) == 1:
-                rot_from = None
-                if ln.name in rot_known:
-                    rot_from = ln.name
-                elif ln.name in slider_of and slider_of[ln.name][1].on in rot_known:
-                    rot_from = slider_of[ln.name][1].on
-                if rot_from is None:
-                    continue
-                rest = [j for j in ln.joints if j not in known]
-                steps.append(Carry(ln.name, rot_from, idx[kn[0]], tuple(idx[j] for j in rest)))
-                anchors[ln.name] = idx[kn[0]]
+                    mirror = len(self.mirror_links)
+                    self.mirror_links.append(ln.name)
+                self.steps.append(Place(ln.name, self.idx[kn[0]], self.idx[kn[1]], rest, mirror))
+            elif len(kn) == 1 and (rot_from := self._rotation_from(ln.name)) is not None:
+                self.steps.append(Carry(ln.name, rot_from, self.idx[kn[0]], rest))
             else:
                 continue
-            known.update(ln.joints)
-            placed.add(ln.name)
-            rot_known.add(ln.name)
+            self._take(ln.name, self.idx[kn[0]])
             progress = True
         return progress
 
-    while True:
-        if place_all():
-            continue
+    def _rotation_from(self, link: str) -> str | None:
+        """The link whose rotation ``link`` shares: itself if known, else the guide of its slider."""
+        if link in self.rot_known:
+            return link
+        if link in self.slider_of and self.slider_of[link][1].on in self.rot_known:
+            return self.slider_of[link][1].on
+        return None
+
+    def _drive(self) -> bool:
+        """Apply every crank whose pivot is known and every slider driver whose guide is placed."""
         acted = False
-        for di in list(pending):  # drivers, as soon as they can act
-            d = mech.drivers[di]
-            if d.kind == "angle":
-                assert d.pivot is not None and d.toward is not None
-                if d.link in placed or d.toward in known:
-                    raise MechanismFileError(
-                        f"{mech.source}: drivers[{di}]: link '{d.link}' is already fixed by the rest of the "
-                        f"mechanism; the drivers do not match its freedom"
-                    )
-                if d.pivot in known:
-                    steps.append(Crank(di, d.link, idx[d.pivot], idx[d.toward]))
-                    known.add(d.toward)
-                    pending.remove(di)
-                    acted = True
-            else:
-                assert d.slider is not None
-                s = mech.sliders[d.slider]
-                if d.link in placed:
-                    raise MechanismFileError(
-                        f"{mech.source}: drivers[{di}]: block '{d.link}' is already fixed by the rest of the "
-                        f"mechanism; the drivers do not match its freedom"
-                    )
-                if s.on in rot_known and s.on in placed:
-                    blk = links[s.link]
-                    anchor = anchors.get(s.on)
-                    steps.append(SliderDrive(di, d.slider, s.link, s.on, anchor, tuple(idx[j] for j in blk.joints)))
-                    anchors[s.link] = idx[blk.joints[0]]
-                    known.update(blk.joints)
-                    placed.add(s.link)
-                    rot_known.add(s.link)
-                    pending.remove(di)
-                    acted = True
-        if acted:
-            continue
-        for ci in list(cylinders):  # a cylinder acts once one end is known: a circle of its length about it
-            cyl = _cylinder_step(mech, idx, known, placed, slider_of, anchors, ci, len(labels))
-            if cyl is not None:
-                steps.append(cyl[0])
-                known.add(cyl[1])
-                labels.append(cyl[2])
-                cylinders.remove(ci)
+        for di, t in list(self.drives):
+            match t:
+                case CrankType():
+                    done = self._crank(di, t)
+                case SliderType():
+                    done = self._slider_drive(di, t)
+                case _:
+                    assert_never(t)
+            if done:
+                self.drives.remove((di, t))
                 acted = True
-                break  # let the links it fixes be placed first (another cylinder may then be in conflict)
-        if acted:
-            continue
-        yoke = _line_line_step(mech, idx, known, placed, slider_of, anchors)
-        if yoke is not None:
-            steps.append(yoke)
-            known.update(links[yoke.yoke].joints)
-            placed.add(yoke.yoke)
-            rot_known.add(yoke.yoke)
-            anchors[yoke.yoke] = yoke.joints[0]
-            continue
-        group = _find_group(mech, idx, known, placed, slider_of, pending) if numerical else None
-        found = None if group else _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, len(labels))
-        if found is None:
-            if group is None:
-                group = _find_group(mech, idx, known, placed, slider_of, pending)
-            if group is None:
-                break
-            steps.append(group)
-            known.update(names[j] for j in group.joints)
-            for gl in group.links:
-                placed.add(gl.name)
-                rot_known.add(gl.name)
-                anchors[gl.name] = gl.joints[0]
-            continue
-        step, newly_known, newly_rot, label = found
-        steps.append(step)
-        known.update(newly_known)
-        rot_known.update(newly_rot)
-        labels.append(label)
+        return acted
 
-    missing = [j for j in names if j not in known]
-    for di in pending:  # a driver whose pivot (or guide) nothing fixed: the file asks for the impossible
-        d = mech.drivers[di]
-        if d.kind == "angle":
+    def _crank(self, di: int, t: CrankType) -> bool:
+        """Driver ``di`` turns its link about its known pivot: its ``toward`` joint placed (:class:`Crank`)."""
+        d = self.mech.drivers[di]
+        if d.link in self.placed or t.toward in self.known:
             raise MechanismFileError(
-                f"{mech.source}: drivers[{di}]: link '{d.link}' turns about '{d.pivot}', which nothing fixes "
-                f"before it: a driver turns a link about a pivot on the ground (or on a link placed before it)"
+                f"{self.mech.source}: drivers[{di}]: link '{d.link}' is already fixed by the rest of the "
+                f"mechanism; the drivers do not match its freedom"
             )
-        raise MechanismFileError(
-            f"{mech.source}: drivers[{di}]: slider {d.slider} slides on a link that nothing fixes before it"
-        )
-    if missing:
-        what = ", ".join(missing)
-        raise NotSolvableError(
-            f"{mech.source}: no triangulation order places {what}, and no numerical group does: the numerical "
-            f"solver takes groups of revolute joints only (a slider or a cylinder inside an Assur group of "
-            f"class 3 or more is not handled yet)"
-        )
-    needs = {link for st in steps for link in st.rotation_needs()}
-    steps = [replace(st, keep_rotation=True) if isinstance(st, Place) and st.link in needs else st for st in steps]
-    steps = [
-        replace(st, keep_rotation=tuple(g.name for g in st.links if g.name in needs)) if isinstance(st, Group) else st
-        for st in steps
-    ]
-    return Plan(
-        names,
-        tuple(steps),
-        len(labels),
-        len(mirror_links),
-        mech.dof,
-        tuple(d.name for d in mech.drivers),
-        mirror_links=tuple(mirror_links),
-        sign_labels=tuple(labels),
-    )
+        if t.pivot not in self.known:
+            return False
+        self.steps.append(Crank(di, d.link, self.idx[t.pivot], self.idx[t.toward]))
+        self.known.add(t.toward)
+        return True
 
-
-def _cylinder_step(  # type: ignore[no-untyped-def]
-    mech, idx, known, placed, slider_of, anchors, ci, n_signs
-) -> tuple[Step, str, str] | None:
-    """The step of cylinder driver ``ci`` once one of its ends is known: (step, joint it places, sign label).
-
-    Its free end is found on a circle of the cylinder's length about the known end, crossed
-    with a circle about a known joint of a link through the free end (:class:`CylinderDyad`)
-    or with the line of a slider block whose guide is placed (:class:`CylinderLine`).  Both
-    ends known already is a conflict: the rest of the mechanism fixes the cylinder's length.
-    """
-    d = mech.drivers[ci]
-    a, b = d.ends
-    if a in known and b in known:
-        raise MechanismFileError(
-            f"{mech.source}: drivers[{ci}]: both ends of cylinder '{d.name}' ({a}, {b}) are already fixed by the "
-            f"rest of the mechanism, so it cannot set their distance; the drivers do not match its freedom"
-        )
-    for end, other in ((b, a), (a, b)):
-        if other not in known:
-            continue
-        anchored = {
-            next(j for j in ln.joints if j in known): ln.name
-            for ln in mech.links
-            if ln.name not in placed and end in ln.joints and any(j in known for j in ln.joints)
-        }
-        if len(anchored) >= 2:  # two links through `end` with known joints: a triangle, rigid without it
-            fixers = " and ".join(f"'{n}'" for n in anchored.values())
+    def _slider_drive(self, di: int, t: SliderType) -> bool:
+        """Driver ``di`` pushes a block along its placed guide: the block placed (:class:`SliderDrive`)."""
+        d, s = self.mech.drivers[di], self.mech.sliders[t.slider]
+        if d.link in self.placed:
             raise MechanismFileError(
-                f"{mech.source}: drivers[{ci}]: links {fixers} already fix '{end}', the end of cylinder "
-                f"'{d.name}', so it cannot set its length; the drivers do not match the mechanism's freedom"
+                f"{self.mech.source}: drivers[{di}]: block '{d.link}' is already fixed by the rest of the "
+                f"mechanism; the drivers do not match its freedom"
             )
-        for ln in mech.links:
-            if ln.name in placed or end not in ln.joints:
+        if s.on not in self.rot_known or s.on not in self.placed:
+            return False
+        blk = self.links[s.link]
+        joints = tuple(self.idx[j] for j in blk.joints)
+        self.steps.append(SliderDrive(di, t.slider, s.link, s.on, self.anchors.get(s.on), joints))
+        self._take(s.link, self.idx[blk.joints[0]])
+        return True
+
+    def _cylinder(self) -> bool:
+        """Apply the first cylinder with one end known (then let the links it fixes be placed first)."""
+        for ci, c in self.cylinders:
+            found = self._cylinder_step(ci, c)
+            if found is not None:
+                step, joint, label = found
+                self.steps.append(step)
+                self.known.add(joint)
+                self.labels.append(label)
+                self.cylinders.remove((ci, c))
+                return True  # another cylinder may then be in conflict
+        return False
+
+    def _cylinder_step(self, ci: int, c: CylinderType) -> tuple[Step, str, str] | None:
+        """The step of cylinder driver ``ci`` once one of its ends is known: (step, joint it places, sign label).
+
+        Its free end is found on a circle of the cylinder's length about the known end, crossed
+        with a circle about a known joint of a link through the free end (:class:`CylinderDyad`)
+        or with the line of a slider block whose guide is placed (:class:`CylinderLine`).  Both
+        ends known already is a conflict: the rest of the mechanism fixes the cylinder's length.
+        """
+        mech, known, name = self.mech, self.known, self.mech.drivers[ci].name
+        a, b = c.ends
+        if a in known and b in known:
+            raise MechanismFileError(
+                f"{mech.source}: drivers[{ci}]: both ends of cylinder '{name}' ({a}, {b}) are already fixed by the "
+                f"rest of the mechanism, so it cannot set their distance; the drivers do not match its freedom"
+            )
+        for end, other in ((b, a), (a, b)):
+            if other not in known:
                 continue
-            k = next((j for j in ln.joints if j in known), None)
-            if k is not None:
-                step: Step = CylinderDyad(idx[end], idx[k], idx[other], ln.name, ci, n_signs)
-                return step, end, f"{end}: left of {k}->{other}"
-        for ln in mech.links:
-            if ln.name in placed or end not in ln.joints or ln.name not in slider_of:
+            free = [ln for ln in mech.links if ln.name not in self.placed and end in ln.joints]
+            anchored = {next(j for j in ln.joints if j in known): ln.name for ln in free if set(ln.joints) & known}
+            if len(anchored) >= 2:  # two links through `end` with known joints: a triangle, rigid without it
+                fixers = " and ".join(f"'{n}'" for n in anchored.values())
+                raise MechanismFileError(
+                    f"{mech.source}: drivers[{ci}]: links {fixers} already fix '{end}', the end of cylinder "
+                    f"'{name}', so it cannot set its length; the drivers do not match the mechanism's freedom"
+                )
+            for ln in free:
+                k = next((j for j in ln.joints if j in known), None)
+                if k is not None:
+                    step: Step = CylinderDyad(
+                        self.idx[end], self.idx[k], self.idx[other], ln.name, ci, len(self.labels)
+                    )
+                    return step, end, f"{end}: left of {k}->{other}"
+            for ln in free:
+                if ln.name not in self.slider_of:
+                    continue
+                si, s = self.slider_of[ln.name]
+                if s.on in self.placed:
+                    anchor = self.anchors.get(s.on)
+                    step = CylinderLine(self.idx[end], self.idx[other], si, s.link, s.on, anchor, ci, len(self.labels))
+                    return step, end, f"{end}: ahead of {other} along slider {si}"
+        return None
+
+    def _line_line(self) -> bool:
+        """Slide a yoke (a block with no known joint, on a placed guide) until a block in it fits (:class:`LineLine`).
+
+        The yoke's position along its guide and the block's along the yoke are the two unknowns
+        of two lines crossing.  Parallel slides cannot fix the yoke: refused.
+        """
+        mech, known, placed = self.mech, self.known, self.placed
+        for s2i, s2 in enumerate(mech.sliders):  # the block, sliding in the yoke
+            yoke = s2.on
+            if yoke in placed or yoke not in self.slider_of or s2.link in placed:
                 continue
-            si, s = slider_of[ln.name]
-            if s.on in placed and not any(j in known for j in ln.joints):
-                step = CylinderLine(idx[end], idx[other], si, s.link, s.on, anchors.get(s.on), ci, n_signs)
-                return step, end, f"{end}: ahead of {other} along slider {si}"
-    return None
+            pins = [j for j in self.links[s2.link].joints if j in known]
+            s1i, s1 = self.slider_of[yoke]
+            if not pins or s1.on not in placed or any(j in known for j in self.links[yoke].joints):
+                continue
+            if abs((s1.direction.conjugate() * s2.direction).imag) <= 1e-9:
+                raise MechanismFileError(
+                    f"{mech.source}: sliders[{s2i}]: its direction is parallel to that of slider {s1i}, which carries "
+                    f"its guide '{yoke}': the block cannot fix where '{yoke}' is along its slide"
+                )
+            yoke_joints = tuple(self.idx[j] for j in self.links[yoke].joints)
+            self.steps.append(LineLine(yoke, s1.on, self.anchors.get(s1.on), s1i, s2i, self.idx[pins[0]], yoke_joints))
+            self._take(yoke, yoke_joints[0])
+            return True
+        return False
 
+    def _sign_or_group(self) -> bool:
+        """A step that reads a sign, else the smallest numerical group (the group first when ``numerical``)."""
+        group = self._find_group() if self.numerical else None
+        found = None if group else self._next_sign_step()
+        if found is not None:
+            step, newly_known, newly_rot, label = found
+            self.steps.append(step)
+            self.known.update(newly_known)
+            self.rot_known.update(newly_rot)
+            self.labels.append(label)
+            return True
+        if group is None:
+            group = self._find_group()
+        if group is None:
+            return False
+        self.steps.append(group)
+        self.known.update(self.names[j] for j in group.joints)
+        for gl in group.links:
+            self.placed.add(gl.name)
+            self.rot_known.add(gl.name)
+            self.anchors[gl.name] = gl.joints[0]
+        return True
 
-def _line_line_step(mech, idx, known, placed, slider_of, anchors) -> LineLine | None:  # type: ignore[no-untyped-def]
-    """A yoke (a slider block with no known joint, on a placed guide) fixed by a block with a known joint sliding in it.
+    def _next_sign_step(self) -> SignStep | None:
+        """The next circle-circle or circle-line step for an unknown joint, else a pivot step, or None."""
+        for j in self.mech.joints:
+            if j not in self.known:
+                found = self._dyad(j) or self._circle_line(j)
+                if found is not None:
+                    return found
+        return self._pivot()
 
-    The yoke's position along its guide and the block's along the yoke are the two unknowns
-    of two lines crossing (:class:`LineLine`).  Parallel slides cannot fix the yoke: refused.
-    """
-    links = {ln.name: ln for ln in mech.links}
-    for s2i, s2 in enumerate(mech.sliders):  # the block, sliding in the yoke
-        yoke = s2.on
-        if yoke in placed or yoke not in slider_of or s2.link in placed:
-            continue
-        pins = [j for j in links[s2.link].joints if j in known]
-        s1i, s1 = slider_of[yoke]
-        if not pins or s1.on not in placed or any(j in known for j in links[yoke].joints):
-            continue
-        if abs((s1.direction.conjugate() * s2.direction).imag) <= 1e-9:
-            raise MechanismFileError(
-                f"{mech.source}: sliders[{s2i}]: its direction is parallel to that of slider {s1i}, which carries its "
-                f"guide '{yoke}': the block cannot fix where '{yoke}' is along its slide"
-            )
-        yoke_joints = tuple(idx[j] for j in links[yoke].joints)
-        return LineLine(yoke, s1.on, anchors.get(s1.on), s1i, s2i, idx[pins[0]], yoke_joints)
-    return None
+    def _anchored(self, j: str) -> list[tuple[Link, str]]:
+        """The unplaced links through joint ``j`` that have a known joint, each with its first known joint."""
+        owners = [ln for ln in self.mech.links if j in ln.joints and ln.name not in self.placed]
+        return [(ln, next(k for k in ln.joints if k in self.known)) for ln in owners if set(ln.joints) & self.known]
 
+    def _dyad(self, j: str) -> SignStep | None:
+        """``j`` on two circles about known joints of two links (:class:`Dyad`)."""
+        anchored = self._anchored(j)
+        for a, (l1, k1) in enumerate(anchored):
+            for l2, k2 in anchored[a + 1 :]:
+                if k1 != k2:
+                    st = Dyad(self.idx[j], self.idx[k1], self.idx[k2], (l1.name, l2.name), len(self.labels))
+                    return st, {j}, set(), f"{j}: left of {k1}->{k2}"
+        return None
 
-def _next_sign_step(mech, idx, known, placed, rot_known, slider_of, anchors, n_signs):  # type: ignore[no-untyped-def]
-    """The next circle-circle, circle-line or pivot step, or None when there is none."""
-    links = {ln.name: ln for ln in mech.links}
-    for j in mech.joints:
-        if j in known:
-            continue
-        owners = [ln for ln in mech.links if j in ln.joints and ln.name not in placed]
-        anchored = [
-            (ln, next(k for k in ln.joints if k in known)) for ln in owners if any(k in known for k in ln.joints)
-        ]
-        for a in range(len(anchored)):  # two circles
-            for b in range(a + 1, len(anchored)):
-                (l1, k1), (l2, k2) = anchored[a], anchored[b]
-                if k1 == k2:
-                    continue
-                st = Dyad(idx[j], idx[k1], idx[k2], (l1.name, l2.name), n_signs)
-                return st, {j}, set(), f"{j}: left of {k1}->{k2}"
-        # circle and line: j on a block whose guide is placed, and on a link with one known joint
-        for ln in owners:
-            if ln.name in slider_of:
-                si, s = slider_of[ln.name]
-                if s.on not in placed or any(k in known for k in ln.joints):
-                    continue
-                for l2, k2 in anchored:
-                    if l2.name == ln.name:
-                        continue
-                    st = CircleLine(idx[j], idx[k2], l2.name, si, s.link, s.on, anchors.get(s.on), n_signs)
+    def _circle_line(self, j: str) -> SignStep | None:
+        """``j`` on a block whose guide is placed, and on a link with one known joint (:class:`CircleLine`)."""
+        anchored = self._anchored(j)
+        for ln in self.mech.links:
+            if j not in ln.joints or ln.name in self.placed or ln.name not in self.slider_of:
+                continue
+            si, s = self.slider_of[ln.name]
+            if s.on not in self.placed or any(k in self.known for k in ln.joints):
+                continue
+            for l2, k2 in anchored:
+                if l2.name != ln.name:
+                    anchor = self.anchors.get(s.on)
+                    st = CircleLine(self.idx[j], self.idx[k2], l2.name, si, s.link, s.on, anchor, len(self.labels))
                     return st, {j}, set(), f"{j}: ahead of {k2} along slider {si}"
-    # pivot: a block with a known joint slides on a link with exactly one known joint
-    for si, s in enumerate(mech.sliders):
-        if s.on in placed or s.on in rot_known:
-            continue
-        bj = [k for k in links[s.link].joints if k in known]
-        oj = [k for k in links[s.on].joints if k in known]
-        if bj and len(oj) == 1:
-            st = Pivot(si, s.on, idx[oj[0]], idx[bj[0]], n_signs)
-            return st, set(), {s.on}, f"{bj[0]}: ahead of {oj[0]} along slider {si}"
-    return None
+        return None
+
+    def _pivot(self) -> SignStep | None:
+        """A block with a known joint slides on a link with exactly one known joint: turn it (:class:`Pivot`)."""
+        for si, s in enumerate(self.mech.sliders):
+            if s.on in self.placed or s.on in self.rot_known:
+                continue
+            bj = [k for k in self.links[s.link].joints if k in self.known]
+            oj = [k for k in self.links[s.on].joints if k in self.known]
+            if bj and len(oj) == 1:
+                st = Pivot(si, s.on, self.idx[oj[0]], self.idx[bj[0]], len(self.labels))
+                return st, set(), {s.on}, f"{bj[0]}: ahead of {oj[0]} along slider {si}"
+        return None
+
+    def _find_group(self) -> Group | None:
+        """The smallest set of unknown joints that the links among them fix (2 equations per joint), or None.
+
+        A link counts ``2 n - 3`` equations (its rigidity, natural coordinates; see
+        :mod:`linkagekit.group`) once all its joints are known or in the set. Sets are tried by
+        size, then in file order, so the plan is deterministic. Slider blocks and guides, and
+        links a pending driver turns, are left to the closed-form steps.
+        """
+        mech, known = self.mech, self.known
+        unknown = [j for j in mech.joints if j not in known]
+        driven = {mech.drivers[di].link for di, _ in self.drives}
+        sliding = set(self.slider_of) | {s.on for s in mech.sliders}
+        left = self.placed | driven | sliding
+        free = [(ln, set(ln.joints)) for ln in mech.links if ln.name not in left and len(ln.joints) >= 2]
+        sizes = range(1, len(unknown) + 1) if len(unknown) <= MAX_GROUP_SEARCH else [len(unknown)]
+        for size in sizes:
+            for subset in combinations(unknown, size):
+                inside = set(subset)
+                reach = inside | known
+                links = [ln for ln, js in free if js & inside and js <= reach]
+                if sum(2 * len(ln.joints) - 3 for ln in links) == 2 * size:
+                    return self._group(subset, links)
+        return None
+
+    def _group(self, subset: tuple[str, ...], links: list[Link]) -> Group:
+        """The numerical group placing the joints ``subset`` by the rigidity of ``links``."""
+        inside = set(subset)
+        slots = {j: i for i, j in enumerate(subset)}
+        held = list(dict.fromkeys(j for ln in links for j in ln.joints if j not in inside))
+        slots.update({j: len(subset) + i for i, j in enumerate(held)})
+        group_links = []
+        for ln in links:
+            order = sorted(ln.joints, key=lambda j: (j in inside, ln.joints.index(j)))  # a known joint first
+            group_links.append(GroupLink(ln.name, tuple(slots[j] for j in order), tuple(self.idx[j] for j in order)))
+        cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
+        idx = self.idx
+        return Group(tuple(idx[j] for j in subset), tuple(idx[j] for j in held), tuple(group_links), (), cyclic)
+
+    # ------------------------------------------------------------------ the end
+    def _check_complete(self) -> None:
+        """Every driver applied and every joint placed, else a located error."""
+        mech = self.mech
+        for di, t in self.drives:  # a driver whose pivot (or guide) nothing fixed: the file asks for the impossible
+            d = mech.drivers[di]
+            match t:
+                case CrankType():
+                    raise MechanismFileError(
+                        f"{mech.source}: drivers[{di}]: link '{d.link}' turns about '{t.pivot}', which nothing fixes "
+                        f"before it: a driver turns a link about a pivot on the ground (or on a link placed before it)"
+                    )
+                case SliderType():
+                    raise MechanismFileError(
+                        f"{mech.source}: drivers[{di}]: slider {t.slider} slides on a link that nothing fixes before it"
+                    )
+                case _:
+                    assert_never(t)
+        missing = [j for j in self.names if j not in self.known]
+        if missing:
+            raise NotSolvableError(
+                f"{mech.source}: no triangulation order places {', '.join(missing)}, and no numerical group does: "
+                f"the numerical solver takes groups of revolute joints only (a slider or a cylinder inside an Assur "
+                f"group of class 3 or more is not handled yet)"
+            )
+
+
+def _keep_rotation(st: Step, needs: set[str]) -> Step:
+    """``st``, told to keep the rotation of its links that a later step reads."""
+    if isinstance(st, Place) and st.link in needs:
+        return replace(st, keep_rotation=True)
+    if isinstance(st, Group):
+        return replace(st, keep_rotation=tuple(g.name for g in st.links if g.name in needs))
+    return st
 
 
 #: at most this many unknown joints are searched for the smallest numerical group (2^n subsets)
 MAX_GROUP_SEARCH = 16
-
-
-def _find_group(mech, idx, known, placed, slider_of, pending):  # type: ignore[no-untyped-def]
-    """The smallest set of unknown joints that the links among them fix (2 equations per joint), or None.
-
-    A link counts ``2 n - 3`` equations (its rigidity, natural coordinates; see
-    :mod:`linkagekit.group`) once all its joints are known or in the set. Sets are tried by
-    size, then in file order, so the plan is deterministic. Slider blocks and guides, and
-    links a pending driver turns, are left to the closed-form steps.
-    """
-    from itertools import combinations
-
-    unknown = [j for j in mech.joints if j not in known]
-    if not unknown:
-        return None
-    driven = {mech.drivers[di].link for di in pending}
-    sliding = set(slider_of) | {s.on for s in mech.sliders}
-    free = [ln for ln in mech.links if ln.name not in placed and ln.name not in driven and ln.name not in sliding]
-    sizes = range(1, len(unknown) + 1) if len(unknown) <= MAX_GROUP_SEARCH else [len(unknown)]
-    for size in sizes:
-        for subset in combinations(unknown, size):
-            inside = set(subset)
-            links = [
-                ln
-                for ln in free
-                if len(ln.joints) >= 2
-                and any(j in inside for j in ln.joints)
-                and all(j in inside or j in known for j in ln.joints)
-            ]
-            if sum(2 * len(ln.joints) - 3 for ln in links) != 2 * size:
-                continue
-            slots = {j: i for i, j in enumerate(subset)}
-            held = [j for ln in links for j in ln.joints if j not in inside]
-            held = list(dict.fromkeys(held))
-            for i, j in enumerate(held):
-                slots[j] = size + i
-            group_links = []
-            for ln in links:
-                order = sorted(ln.joints, key=lambda j: (j in inside, ln.joints.index(j)))  # a known joint first
-                group_links.append(GroupLink(ln.name, tuple(slots[j] for j in order), tuple(idx[j] for j in order)))
-            angular = tuple(d.kind == "angle" for d in mech.drivers)
-            return Group(tuple(idx[j] for j in subset), tuple(idx[j] for j in held), tuple(group_links), (), angular)
-    return None

@@ -43,6 +43,7 @@ import numpy as np
 
 from .errors import MethodNotApplicableError
 from .geometry import NAN_POINT, cross
+from .model import CrankType
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -55,7 +56,8 @@ ASSEMBLY_RTOL = 1e-12
 
 def cis(theta: np.ndarray) -> np.ndarray:
     """``e^{i theta}``, the unit vector at angle ``theta``."""
-    return np.cos(theta) + 1j * np.sin(theta)
+    out: np.ndarray = np.cos(theta) + 1j * np.sin(theta)
+    return out
 
 
 def fixed_point_loop(
@@ -377,7 +379,8 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
     Joints that are not loop joints (coupler points) are carried as ``Z1 e^{i beta}`` from
     their link's base joint, as seed 003 does for ``P``.
     """
-    if mech.sliders or len(mech.drivers) != 1 or mech.drivers[0].kind != "angle":
+    drive = mech.drivers[0].type if len(mech.drivers) == 1 else None
+    if mech.sliders or not isinstance(drive, CrankType):
         raise _unsupported(mech, "this one has sliders or not exactly one crank driver")
     drv = mech.drivers[0]
     links = {ln.name: ln for ln in mech.links}
@@ -386,8 +389,7 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
         raise _unsupported(mech, "a joint joins three or more links")
     ground = links["ground"]
     crank = links[drv.link]
-    oa = drv.pivot
-    assert oa is not None and drv.toward is not None
+    oa, toward = drive.pivot, drive.toward
     if oa not in ground.joints:
         raise _unsupported(mech, "the driver's pivot is not on the ground")
     others = [j for j in hinges["ground"] if j != oa]
@@ -406,7 +408,7 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
 
     sg = ground.shape
     gvec = complex(sg[ob] - sg[oa])
-    theta_in = np.angle(crank.shape[drv.toward] - crank.shape[oa])
+    theta_in = np.angle(crank.shape[toward] - crank.shape[oa])
     if len(mech.links) == 4 and all(len(h) == 2 for h in hinges.values()):
         ja = next(j for j in hinges[crank.name] if j != oa)
         coupler = other_link(ja, crank.name)

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import InputError, UnknownNameError
+from ..model import CrankType
 
 if TYPE_CHECKING:
     from ..model import Mechanism
@@ -134,7 +135,7 @@ class DesignSpace:
         for j in (*self.free, self.tracer, *(n for t in self.transmission for n in t)):
             if j not in names:
                 raise UnknownNameError(f"{self.topology or 'design space'}: no joint named '{j}'")
-        if len(self.template.drivers) != 1 or self.template.drivers[0].kind != "angle":
+        if len(self.template.drivers) != 1 or not isinstance(self.template.drivers[0].type, CrankType):
             raise InputError(f"{self.topology}: synthesis needs exactly one crank driver (a driven angle)")
         if len(self.lower) != self.dim or len(self.upper) != self.dim or np.any(self.lower >= self.upper):
             raise InputError(f"{self.topology}: every free coordinate needs bounds low < high")

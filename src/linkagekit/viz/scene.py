@@ -41,7 +41,7 @@ import numpy as np
 
 from ..catalogue import Catalogue, Group, Owner, UnitKind, driver_unit, input_units
 from ..errors import InputError
-from ..model import Mechanism
+from ..model import CylinderType, Mechanism
 from ..result import Result
 
 #: margin around the drawing, as a fraction of its size
@@ -213,8 +213,8 @@ def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
         outline = _outline([mech.joints[j] for j in ln.joints], ln.joints) if kind == "plate" else ln.joints
         out.append(SceneLink(ln.name, kind, ln.joints, outline))
     for d in mech.drivers:  # a cylinder is not a link, but it is drawn: a bar between its two ends
-        if d.kind == "cylinder" and d.ends is not None:
-            out.append(SceneLink(d.name, "cylinder", d.ends, d.ends))
+        if isinstance(d.type, CylinderType):
+            out.append(SceneLink(d.name, "cylinder", d.type.ends, d.type.ends))
     return tuple(out)
 
 
@@ -341,8 +341,8 @@ def _breaks(res: Result, x: np.ndarray) -> tuple[int, ...]:
         return ()
     lo, hi = np.minimum(x[:-1], x[1:]), np.maximum(x[:-1], x[1:])
     tol = 1e-9 * max(float(np.max(np.abs(x))), 1.0)
-    if driver_unit(mech, mech.drivers[0]) is UnitKind.ANGLE:
-        period = 2 * math.pi / mech.angle_to_rad
+    if mech.drivers[0].type.cyclic:
+        period = 2 * math.pi / mech.drivers[0].input_scale(mech)
         if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] >= period * (1 - 1e-12):
             return ()  # a full turn
         k = np.floor((lo[:, None] - ranges[None, :, 0] + tol) / period)
