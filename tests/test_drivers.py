@@ -16,6 +16,7 @@ import pytest
 
 import linkagekit as lk
 from linkagekit.model import CrankType, CylinderType, Driver, DriverType, Mechanism, SliderType, Sweep
+from linkagekit.units import UnitKind
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "linkagekit"
@@ -43,16 +44,16 @@ def mechs() -> dict[str, Mechanism]:
 
 
 def test_each_type_declares_its_tag_unit_and_effort(mechs):
-    expected = {  # tag: (type, sweep key, cyclic, effort symbol, effort unit, input unit)
-        "angle": (CrankType, "angles", True, "T", "N·m", "deg"),
-        "slider": (SliderType, "displacements", False, "F", "N", "mm"),
-        "cylinder": (CylinderType, "lengths", False, "F", "N", "m"),
+    expected = {  # tag: (type, sweep key, cyclic, effort, effort unit, input unit)
+        "angle": (CrankType, "angles", True, UnitKind.TORQUE, "N·m", "deg"),
+        "slider": (SliderType, "displacements", False, UnitKind.FORCE, "N", "mm"),
+        "cylinder": (CylinderType, "lengths", False, UnitKind.FORCE, "N", "m"),
     }
     for tag, (cls, key, cyclic, symbol, unit, input_unit) in expected.items():
         mech = mechs[tag]
         d = mech.drivers[0]
         assert isinstance(d.type, cls) and d.kind == tag == cls.tag
-        assert (d.type.sweep_key, d.type.cyclic, d.type.effort_symbol, d.type.effort_unit) == (
+        assert (d.type.sweep_key, d.type.cyclic, d.type.effort, d.type.effort.symbol("mm", "deg")) == (
             key,
             cyclic,
             symbol,
@@ -66,7 +67,7 @@ def test_every_type_of_the_union_is_complete():
     assert set(members) == {CrankType, SliderType, CylinderType}
     assert len({m.tag for m in members}) == len(members)
     for m in members:
-        for attr in ("tag", "sweep_key", "cyclic", "effort_symbol", "effort_unit"):
+        for attr in ("tag", "sweep_key", "cyclic", "input_kind", "effort"):
             assert attr in dir(m), (m, attr)
 
 
@@ -136,9 +137,6 @@ def test_compatibility_views(mechs):
 
 
 # ------------------------------------------------------------------ the source
-#: Sites that still name a driver's kind by its tag, owned by the output catalogue change
-#: (per-driver input units of output tables, an editor's pose inputs); remove as they go.
-PENDING = {"cli.py": 1, "web/report.py": 1, "web/editor.py": 2, "viz/scene.py": 1, "viz/draw.py": 1}
 
 
 def kind_compares(path: Path) -> int:
@@ -163,7 +161,7 @@ def kind_compares(path: Path) -> int:
 def test_no_module_decides_on_the_kind_string():
     found = {str(p.relative_to(SRC)): kind_compares(p) for p in sorted(SRC.rglob("*.py"))}
     found = {k: v for k, v in found.items() if v}
-    assert found == PENDING, "decide on the driver's type (match d.type / its attributes), not on d.kind"
+    assert found == {}, "decide on the driver's type (match d.type / its attributes), not on d.kind"
 
 
 def test_kind_compares_finds_them(tmp_path):

@@ -36,46 +36,10 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 from .errors import UnknownNameError, shorten
+from .units import UnitKind
 
 if TYPE_CHECKING:
     from .model import Driver, Mechanism
-
-
-class UnitKind(Enum):
-    """What a quantity measures; :meth:`symbol` gives its unit in a file's units."""
-
-    NONE = "none"
-    LENGTH = "length"
-    VELOCITY = "velocity"
-    ACCELERATION = "acceleration"
-    ANGLE = "angle"
-    ANGULAR_VELOCITY = "angular velocity"
-    ANGULAR_ACCELERATION = "angular acceleration"
-    FORCE = "force"
-    TORQUE = "torque"
-    POWER = "power"
-    TIME = "time"
-
-    def symbol(self, length_unit: str, angle_unit: str) -> str:
-        """The unit as shown in headers and on plots (``""`` for none).
-
-        >>> UnitKind.ACCELERATION.symbol("mm", "deg"), UnitKind.TORQUE.symbol("mm", "deg")
-        ('mm/s²', 'N·m')
-        """
-        fixed = {
-            UnitKind.NONE: "",
-            UnitKind.LENGTH: length_unit,
-            UnitKind.VELOCITY: f"{length_unit}/s",
-            UnitKind.ACCELERATION: f"{length_unit}/s²",
-            UnitKind.ANGLE: angle_unit,
-            UnitKind.ANGULAR_VELOCITY: "rad/s",
-            UnitKind.ANGULAR_ACCELERATION: "rad/s²",
-            UnitKind.FORCE: "N",
-            UnitKind.TORQUE: "N·m",
-            UnitKind.POWER: "W",
-            UnitKind.TIME: "s",
-        }
-        return fixed[self]
 
 
 class Owner(Enum):
@@ -266,9 +230,9 @@ class Quantity:
 def driver_unit(mech: Mechanism, driver: Driver) -> UnitKind:
     """The unit of a driver's input: an angle for a turned link, a length for a slider or a cylinder.
 
-    The one place that reads a driver's kind for its unit.
+    Declared by the driver's type (:attr:`~linkagekit.model.CrankType.input_kind`).
     """
-    return UnitKind.ANGLE if driver.kind == "angle" else UnitKind.LENGTH
+    return driver.type.input_kind
 
 
 def input_units(mech: Mechanism) -> dict[str, str]:
@@ -277,11 +241,11 @@ def input_units(mech: Mechanism) -> dict[str, str]:
 
 
 def _angle_driver(mech: Mechanism, owner: OwnerRef) -> bool:
-    return driver_unit(mech, mech.drivers[owner.index]) is UnitKind.ANGLE
+    return mech.drivers[owner.index].type.effort is UnitKind.TORQUE
 
 
 def _push_driver(mech: Mechanism, owner: OwnerRef) -> bool:
-    return not _angle_driver(mech, owner)
+    return mech.drivers[owner.index].type.effort is UnitKind.FORCE
 
 
 def _moving_joint(mech: Mechanism, owner: OwnerRef) -> bool:

@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, TypeVar
 import numpy as np
 
 from .errors import MechanismFileError, UnknownNameError, shorten
-from .units import ANGLE_UNITS, LENGTH_UNITS
+from .units import ANGLE_UNITS, LENGTH_UNITS, UnitKind
 
 if TYPE_CHECKING:
     from .schema import DriverSpec, FileSpec, LinkSpec, SweepSpec
@@ -212,19 +212,21 @@ class _DriverType:
         The file key of its default sweep (``angles``, ``displacements``, ``lengths``).
     cyclic : bool
         Whether an input value repeats every turn (an angle) rather than runs along a line.
-    effort_symbol, effort_unit : str
-        What holds its input: a torque ``T`` in N·m, or a force ``F`` in N.
+    input_kind : UnitKind
+        What its input measures: an angle, or a length.
+    effort : UnitKind
+        What holds its input: a torque (``T[...]`` in N·m), or a force (``F[...]`` in N).
     """
 
     tag: ClassVar[Literal["angle", "slider", "cylinder"]]
     sweep_key: ClassVar[str]
     cyclic: ClassVar[bool]
-    effort_symbol: ClassVar[str]
-    effort_unit: ClassVar[str]
+    input_kind: ClassVar[UnitKind]
+    effort: ClassVar[UnitKind]
 
     def input_unit(self, mech: Mechanism) -> str:
         """The unit of its input values in the file and in every output (the file's angle or length unit)."""
-        raise NotImplementedError
+        return self.input_kind.symbol(mech.length_unit, mech.angle_unit)
 
     def input_scale(self, mech: Mechanism) -> float:
         """Solver units per file unit of its input: rad per angle unit, 1 for a length."""
@@ -252,11 +254,8 @@ class CrankType(_DriverType):
     tag: ClassVar[Literal["angle"]] = "angle"
     sweep_key: ClassVar[str] = "angles"
     cyclic: ClassVar[bool] = True
-    effort_symbol: ClassVar[str] = "T"
-    effort_unit: ClassVar[str] = "N·m"
-
-    def input_unit(self, mech: Mechanism) -> str:
-        return mech.angle_unit
+    input_kind: ClassVar[UnitKind] = UnitKind.ANGLE
+    effort: ClassVar[UnitKind] = UnitKind.TORQUE
 
     def input_scale(self, mech: Mechanism) -> float:
         return mech.angle_to_rad
@@ -275,11 +274,8 @@ class _LinearType(_DriverType):
     """A driver whose input is a length (file length unit) held by a force."""
 
     cyclic: ClassVar[bool] = False
-    effort_symbol: ClassVar[str] = "F"
-    effort_unit: ClassVar[str] = "N"
-
-    def input_unit(self, mech: Mechanism) -> str:
-        return mech.length_unit
+    input_kind: ClassVar[UnitKind] = UnitKind.LENGTH
+    effort: ClassVar[UnitKind] = UnitKind.FORCE
 
     def input_scale(self, mech: Mechanism) -> float:
         return 1.0
@@ -351,8 +347,8 @@ class Driver:
     Examples
     --------
     >>> d = Driver("crank", "crank", Sweep(0.0, 360.0, 1.0), CrankType("A", "C"))
-    >>> d.kind, d.type.cyclic, d.type.effort_symbol, d.pivot, d.stroke
-    ('angle', True, 'T', 'A', None)
+    >>> d.kind, d.type.cyclic, d.type.effort.name, d.pivot, d.stroke
+    ('angle', True, 'TORQUE', 'A', None)
     >>> d.to_dict()
     {'link': 'crank', 'pivot': 'A', 'toward': 'C', 'angles': {'start': 0.0, 'stop': 360.0, 'step': 1.0}}
     """

@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from ..catalogue import Catalogue, Group, Owner, UnitKind, driver_unit, input_units
+from ..catalogue import Catalogue, Group, Owner, input_units
 from ..errors import InputError
 from ..model import CylinderType, Mechanism
 from ..result import Result
