@@ -76,6 +76,7 @@ from typing import Any
 import numpy as np
 
 from .errors import LinkageError
+from .geometry import FloatArray
 from .group import Group
 from .model import FORMAT, Mechanism
 from .params import Params, all_sign_combinations, compile
@@ -669,11 +670,12 @@ def _verify(st: Group, nums: Nums, U: np.ndarray, K: np.ndarray, size: float) ->
     dn = st._design_nums(nums, np.zeros(n, int))
     m = len(st.joints)
 
-    def worst(Uc: np.ndarray) -> np.ndarray:
+    def worst(Uc: FloatArray) -> FloatArray:
         P = np.concatenate([Uc, K]) if len(K) else Uc
         with np.errstate(invalid="ignore"):
             res, scale = st.residual(P, dn)
-            return np.max(np.abs(res) / scale, axis=1)
+            largest: FloatArray = np.max(np.abs(res) / scale, axis=1)
+        return largest
 
     err = worst(U)
     good = np.isfinite(err) & (err <= VERIFY_TOL)

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, LinkageError
+from ..geometry import FloatArray
 from .distribute import Evaluator
 from .objective import PENALTY, Problem, evaluate
 
@@ -345,8 +346,9 @@ class CMASearch(Search):
         self.budget = settings.generations * settings.popsize * n
         self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
 
-    def _x(self, U: np.ndarray) -> np.ndarray:
-        return self.lo + U * (self.hi - self.lo)
+    def _x(self, U: FloatArray) -> FloatArray:
+        X: FloatArray = self.lo + U * (self.hi - self.lo)
+        return X
 
     @property
     def best(self) -> float:  # type: ignore[override]
@@ -411,20 +413,21 @@ def polish(
 
     best: list[Any] = [np.inf, np.asarray(x0, float)]
 
-    def fun(x: np.ndarray) -> np.ndarray:
+    def fun(x: FloatArray) -> FloatArray:
         if until is not None and time.monotonic() > until:
             raise _OutOfTime
-        r = residuals(problem, x[None])[0]
+        r: FloatArray = residuals(problem, x[None])[0]
         if float(r @ r) < best[0]:
             best[:] = [float(r @ r), x.copy()]
         return r
 
-    def jac(x: np.ndarray) -> np.ndarray:
+    def jac(x: FloatArray) -> FloatArray:
         steps = np.where(x + h <= hi, h, -h)
         X = np.repeat(x[None], len(x) + 1, axis=0)
         X[1:] += np.diag(steps)
         R = residuals(problem, X)
-        return ((R[1:] - R[0]) / steps[:, None]).T
+        J: FloatArray = ((R[1:] - R[0]) / steps[:, None]).T
+        return J
 
     x0 = np.clip(x0, lo, hi)
     try:
