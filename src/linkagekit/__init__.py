@@ -8,10 +8,7 @@ first solve, pydantic with the first file read).
 ['Mechanism', 'Result', 'analyze', 'analyze_chunks', 'animate', 'build_scene']
 """
 
-from __future__ import annotations
-
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from .errors import (
     InputError,
@@ -82,7 +79,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from .web.report import write_report
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
+    """The public name ``name``, imported from its module on first use (PEP 562)."""
+    from importlib import import_module
+
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'linkagekit' has no attribute {name!r}")
@@ -92,4 +92,8 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    """The public names (``__all__``) and the module's dunder attributes, not its helpers or submodules."""
+    return sorted(set(__all__) | {n for n in globals() if n.startswith("__") and n.endswith("__")})
+
+
+del TYPE_CHECKING  # a helper of this file, not a name of the package

@@ -137,21 +137,9 @@ def _yaml_data(text: str, source: str) -> Any:
     import yaml
 
     def fail(node: Any, msg: str) -> MechanismFileError:
-        mark = getattr(node, "start_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        return MechanismFileError(f"{source}{where}: {msg}")
+        return MechanismFileError(f"{source}{_where(getattr(node, 'start_mark', None))}: {msg}")
 
-    try:
-        nodes = list(yaml.compose_all(text, Loader=_loader_class()))
-    except RecursionError:
-        raise MechanismFileError(f"{source}: nested too deep (at most {MAX_DEPTH} levels)") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise MechanismFileError(f"{source}: YAML syntax error{where}: {shorten(problem)}") from None
-    if len(nodes) != 1:
-        raise MechanismFileError(f"{source}: expected one YAML document, found {len(nodes)}")
+    root = _yaml_node(text, source)
     count = 0
 
     def convert(node: Any, depth: int) -> Any:
@@ -183,7 +171,29 @@ def _yaml_data(text: str, source: str) -> Any:
             out[key] = convert(value_node, depth + 1)
         return out
 
-    return convert(nodes[0], 0)
+    return convert(root, 0)
+
+
+def _where(mark: Any) -> str:
+    """`` at line L, column C`` of a YAML mark (1-based), or nothing without one."""
+    return f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+
+
+def _yaml_node(text: str, source: str) -> Any:
+    """The node graph of the one YAML document in ``text`` (composed, nothing constructed)."""
+    import yaml
+
+    try:
+        nodes = list(yaml.compose_all(text, Loader=_loader_class()))
+    except RecursionError:
+        raise MechanismFileError(f"{source}: nested too deep (at most {MAX_DEPTH} levels)") from None
+    except yaml.YAMLError as exc:
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        where = _where(getattr(exc, "problem_mark", None))
+        raise MechanismFileError(f"{source}: YAML syntax error{where}: {shorten(problem)}") from None
+    if len(nodes) != 1:
+        raise MechanismFileError(f"{source}: expected one YAML document, found {len(nodes)}")
+    return nodes[0]
 
 
 def _json_data(text: str, source: str) -> Any:

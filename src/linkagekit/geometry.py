@@ -20,6 +20,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 #: relative tolerance of the assembly tests (see docs/method.md, "Tolerances")
 ASSEMBLY_RTOL = 1e-12
@@ -27,27 +28,35 @@ ASSEMBLY_RTOL = 1e-12
 NAN_POINT = complex(np.nan, np.nan)
 _TINY = 1e-300
 
+#: anything NumPy reads as an array (scalars, sequences, arrays); left open for the arithmetic
 ArrayLike = Any
+#: arrays by element type: real values, planar points (complex numbers), flags, indices
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+BoolArray = NDArray[np.bool_]
+IntArray = NDArray[np.intp]
 
 
-def abs2(a: np.ndarray) -> np.ndarray:
+def abs2(a: ComplexArray) -> FloatArray:
     """Squared magnitude of planar vectors written as complex numbers."""
     return a.real * a.real + a.imag * a.imag
 
 
-def dot(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+def dot(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Dot product of planar vectors written as complex numbers."""
-    a, b = np.asarray(a), np.asarray(b)
-    return a.real * b.real + a.imag * b.imag
+    x: ComplexArray = np.asarray(a)
+    y: ComplexArray = np.asarray(b)
+    return x.real * y.real + x.imag * y.imag
 
 
-def cross(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+def cross(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """z-component of the cross product of planar vectors written as complex numbers."""
-    a, b = np.asarray(a), np.asarray(b)
-    return a.real * b.imag - a.imag * b.real
+    x: ComplexArray = np.asarray(a)
+    y: ComplexArray = np.asarray(b)
+    return x.real * y.imag - x.imag * y.real
 
 
-def cis(theta: ArrayLike) -> np.ndarray:
+def cis(theta: ArrayLike) -> ComplexArray:
     """``e^{i theta}``, the unit vector at angle ``theta`` (radians)."""
     theta = np.asarray(theta, float)
     out = np.empty(theta.shape, complex)
@@ -56,21 +65,21 @@ def cis(theta: ArrayLike) -> np.ndarray:
     return out
 
 
-def side(k1: ArrayLike, k2: ArrayLike, j: ArrayLike) -> np.ndarray:
+def side(k1: ArrayLike, k2: ArrayLike, j: ArrayLike) -> FloatArray:
     """+1 where ``j`` lies left of (or on) the directed line ``k1 -> k2``, else -1."""
     return np.where(cross(np.asarray(k2) - k1, np.asarray(j) - k1) >= 0, 1.0, -1.0)
 
 
 def circle_circle(
-    z1: np.ndarray,
-    z2: np.ndarray,
+    z1: ComplexArray,
+    z2: ComplexArray,
     r1: ArrayLike,
     r2: ArrayLike,
     sign: ArrayLike,
     eps: float = ASSEMBLY_RTOL,
-    out: np.ndarray | None = None,
-    margin: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+    out: ComplexArray | None = None,
+    margin: FloatArray | None = None,
+) -> tuple[ComplexArray, FloatArray]:
     """Intersection of the circles ``|z - z1| = r1`` and ``|z - z2| = r2`` (seed 000, eqs. 11-15).
 
     With ``d = z2 - z1``, ``s = |d|``: ``along = (r1^2 - r2^2 + s^2) / (2 s)``,
@@ -101,11 +110,7 @@ def circle_circle(
     s2 += t
     np.sqrt(s2, out=t)  # t = s
     total = r1 + r2
-    # margin = min(total (1 + eps) - s, s - |r1 - r2| + eps total) / total
-    np.subtract(total * (1 + eps), t, out=margin)
-    np.subtract(t, np.abs(r1 - r2) - eps * total, out=t)
-    np.minimum(margin, t, out=margin)
-    margin *= 1.0 / total
+    _assembly_margin(margin, t, r1, r2, eps, total)
     a, b = w.real, w.imag
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # s -> 0 is flagged below
         r1sq = r1 * r1
@@ -120,18 +125,37 @@ def circle_circle(
         np.multiply(s2, sign, out=b)
         np.multiply(w, d, out=out)
         out += z1
-    # coincident centres (s <= eps total) are flagged too; with margin >= 0 they need r1 and r2
-    # within 2 eps total of each other, so the batch is checked sample by sample only then
-    if margin.min(initial=0.0) >= 0 and not np.any(np.abs(r1 - r2) <= 2 * eps * total):
-        return out, margin
-    ok = margin >= 0
-    ok &= np.hypot(dx, dy) > eps * total
-    out[~ok] = NAN_POINT
-    np.copyto(margin, np.minimum(margin, -_TINY), where=~ok)
+    _flag_unassembled(out, margin, d, r1, r2, eps, total)
     return out, margin
 
 
-def link_rates(base: np.ndarray, vbase: np.ndarray, abase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _assembly_margin(
+    margin: FloatArray, s: FloatArray, r1: ArrayLike, r2: ArrayLike, eps: float, total: ArrayLike
+) -> None:
+    """``margin = min(total (1 + eps) - s, s - |r1 - r2| + eps total) / total`` in place (``s`` is overwritten)."""
+    np.subtract(total * (1 + eps), s, out=margin)
+    np.subtract(s, np.abs(r1 - r2) - eps * total, out=s)
+    np.minimum(margin, s, out=margin)
+    margin *= 1.0 / total
+
+
+def _flag_unassembled(
+    out: ComplexArray, margin: FloatArray, d: ComplexArray, r1: ArrayLike, r2: ArrayLike, eps: float, total: ArrayLike
+) -> None:
+    """NaN points and negative margins, in place, where the circles do not meet or the centres coincide.
+
+    Coincident centres (``s <= eps total``) are flagged too; with ``margin >= 0`` they need ``r1``
+    and ``r2`` within ``2 eps total`` of each other, so the batch is checked sample by sample only then.
+    """
+    if margin.min(initial=0.0) >= 0 and not np.any(np.abs(r1 - r2) <= 2 * eps * total):
+        return
+    ok = margin >= 0
+    ok &= np.hypot(d.real, d.imag) > eps * total
+    out[~ok] = NAN_POINT
+    np.copyto(margin, np.minimum(margin, -_TINY), where=~ok)
+
+
+def link_rates(base: ComplexArray, vbase: ComplexArray, abase: ComplexArray) -> tuple[FloatArray, FloatArray]:
     """Angular velocity and acceleration of the line ``base`` from its first two derivatives.
 
     ``base = |b| e^{i theta}`` with constant length, so ``vbase = i w base`` and

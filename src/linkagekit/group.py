@@ -62,7 +62,7 @@ from typing import Any
 
 import numpy as np
 
-from .geometry import NAN_POINT, link_rates
+from .geometry import NAN_POINT, FloatArray, link_rates
 from .steps import Kin, Nums, Rate, Source, Step
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
@@ -494,9 +494,10 @@ class Group(Step):
         )
 
 
-def _size(dn: Nums) -> np.ndarray:
+def _size(dn: Nums) -> FloatArray:
     """The mean link length of each design (a batch row) of design numbers."""
-    return np.mean(np.array([np.broadcast_to(L, np.shape(dn[0][0])) for L in dn[0]]), axis=0)
+    size: FloatArray = np.mean(np.array([np.broadcast_to(L, np.shape(dn[0][0])) for L in dn[0]]), axis=0)
+    return size
 
 
 def _take(dn: Nums, cols: np.ndarray) -> Nums:

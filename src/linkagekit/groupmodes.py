@@ -69,13 +69,15 @@ assembled state, to :data:`RANGE_TOL` (:func:`_refine_end`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .errors import LinkageError
+from .geometry import FloatArray
 from .group import Group
 from .model import FORMAT, Mechanism
 from .params import Params, all_sign_combinations, compile
@@ -332,16 +334,7 @@ def _refine_end(
         if np.all(np.abs(b - a) <= tol):
             break
         w = b - a
-        with np.errstate(invalid="ignore", divide="ignore"):
-            est = a + g * (a - a_prev) / (g_prev - g)
-            u = (est - a) / w
-            spread = np.where(np.isfinite(est_prev), 2 * np.abs(est - est_prev) / np.abs(w), 0.25)
-        spread = np.maximum(spread, 0.5 * tol / np.maximum(np.abs(w), 1e-300))
-        valid = np.isfinite(u) & (u > 0) & (u < 1) & (g_prev > g) & (g > 0)
-        u1 = np.where(valid, u - spread, 0.5)
-        u2 = np.where(valid, u + spread, 0.5)
-        u1 = np.where(u1 <= 0, 0.5 * np.where(valid, u, 1.0), u1)
-        u2 = np.where(u2 >= 1, 0.5 * (1 + np.where(valid, u, 0.0)), u2)
+        u1, u2, est, valid = _trials(a, w, a_prev, g_prev, g, est_prev, tol)
         x = np.concatenate([a + u1 * w, a + u2 * w])
         rep = np.concatenate([np.arange(E), np.arange(E)])
         p = restarted(params, z[:, rep], _driver_inputs(params, driver, a[rep]))
@@ -360,6 +353,34 @@ def _refine_end(
         b = np.where(~ok1, x[:E], np.where(~ok2, x[E:], b))
         est_prev = np.where(valid, est, np.nan)
     return a
+
+
+def _trials(
+    a: np.ndarray,
+    w: np.ndarray,
+    a_prev: np.ndarray,
+    g_prev: np.ndarray,
+    g: np.ndarray,
+    est_prev: np.ndarray,
+    tol: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two points to try in each bracket ``[a, a + w]``, as fractions of it: ``(u1, u2, est, valid)``.
+
+    ``est`` is the secant prediction of the end from the indicator ``g`` at ``a`` and ``g_prev``
+    at ``a_prev``; where it is ``valid`` (inside the bracket, the indicator falling to zero) the
+    points straddle it by twice its last correction (``est - est_prev``), else both are the midpoint.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        est = a + g * (a - a_prev) / (g_prev - g)
+        u = (est - a) / w
+        spread = np.where(np.isfinite(est_prev), 2 * np.abs(est - est_prev) / np.abs(w), 0.25)
+    spread = np.maximum(spread, 0.5 * tol / np.maximum(np.abs(w), 1e-300))
+    valid = np.isfinite(u) & (u > 0) & (u < 1) & (g_prev > g) & (g > 0)
+    u1 = np.where(valid, u - spread, 0.5)
+    u2 = np.where(valid, u + spread, 0.5)
+    u1 = np.where(u1 <= 0, 0.5 * np.where(valid, u, 1.0), u1)
+    u2 = np.where(u2 >= 1, 0.5 * (1 + np.where(valid, u, 0.0)), u2)
+    return u1, u2, est, valid
 
 
 # ---------------------------------------------------------------------- one group cut to one freedom
@@ -550,29 +571,47 @@ def group_modes(red: Reduction, known: np.ndarray, nums: Nums, n: int = N_THETA)
         Per configuration: ``joints`` (n_modes, m) complex, the group's joints in each mode
         (``group.joints`` order), sorted by ``theta``, the driven link's angle in [0, 2 pi).
     """
-    B = known.shape[1]
-    C = red.combos.shape[1]
-    NB = B * C
+    B, C = known.shape[1], red.combos.shape[1]
     th = 2 * math.pi * np.arange(n) / n
-    cell = 2 * math.pi / n
-    br = np.repeat(np.arange(NB), n)
 
     def f_of(branch: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return red.closure(known[:, branch // C], branch % C, theta)
 
+    ring = _ring(f_of, th, B * C)  # 1. every branch's samples and the ends of its assembled stretches
+    brackets, touch_b, touch_t = _brackets(f_of, ring, TOUCH_TOL * red.length)  # 2., 3.
+    roots_b, roots_t, z_r = _roots(f_of, brackets, touch_b, touch_t)
+    # 4. verify each root against the group's own constraints; polish; deduplicate
+    cfg = roots_b // C
+    U, good = _verify(red.group, nums, z_r, known[:, cfg], red.size)
+    theta = np.mod(roots_t, 2 * math.pi)
+    return [_distinct(U, theta, np.flatnonzero((cfg == c) & good), red.size) for c in range(B)]
+
+
+#: the closure of a group's branches: (branch, theta) -> (f, joints)
+Closure = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: intervals of theta where the closure changes sign: (branch, lo, hi, f(lo) >= 0)
+Brackets = list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+
+
+class _Ring(NamedTuple):
+    """Every branch's samples in order of theta, with their neighbours round the turn."""
+
+    b: np.ndarray  # the branch of each sample
+    t: np.ndarray
+    f: np.ndarray
+    t_next: np.ndarray  # unwrapped: the last sample's next is the first one's angle + 2 pi
+    t_prev: np.ndarray
+    f_next: np.ndarray
+    f_prev: np.ndarray
+
+
+def _ring(f_of: Closure, th: np.ndarray, NB: int) -> _Ring:
+    """The closure of ``NB`` branches on the grid ``th`` and at the ends of their assembled stretches."""
+    n = len(th)
+    br = np.repeat(np.arange(NB), n)
     F = f_of(br, np.tile(th, NB))[0].reshape(NB, n)
-    ok = np.isfinite(F)
-    # 1. the ends of each branch's assembled stretches, by bisection
-    cb, ci = np.nonzero(ok != np.roll(ok, -1, axis=1))
-    lo, hi = th[ci].copy(), th[ci] + cell
-    inside = ok[cb, ci]
-    for _ in range(N_BISECT):
-        mid = 0.5 * (lo + hi)
-        same = np.isfinite(f_of(cb, mid)[0]) == inside
-        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
-    edge = np.mod(np.where(inside, lo, hi), 2 * math.pi)
+    cb, edge = _assembly_ends(f_of, th, np.isfinite(F))
     f_edge = f_of(cb, edge)[0]
-    # every branch's samples in order of theta (grid and ends), with neighbours round the turn
     b_all = np.concatenate([br, cb])
     t_all = np.concatenate([np.tile(th, NB), edge])
     f_all = np.concatenate([F.ravel(), f_edge])
@@ -585,28 +624,56 @@ def group_modes(red: Reduction, known: np.ndarray, nums: Nums, n: int = N_THETA)
     prv = np.where(j > first, j - 1, last)
     t_next = t_all[nxt] + np.where(j == last, 2 * math.pi, 0.0)
     t_prev = t_all[prv] - np.where(j == first, 2 * math.pi, 0.0)
-    fin = np.isfinite(f_all)
-    f_next, f_prev = f_all[nxt], f_all[prv]
-    pos, pos_next, pos_prev = f_all >= 0, f_next >= 0, f_prev >= 0
+    return _Ring(b_all, t_all, f_all, t_next, t_prev, f_all[nxt], f_all[prv])
+
+
+def _assembly_ends(f_of: Closure, th: np.ndarray, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ends of the assembled stretches (``ok`` (NB, n) on the grid ``th``), by bisection: (branch, theta)."""
+    cell = 2 * math.pi / len(th)
+    cb, ci = np.nonzero(ok != np.roll(ok, -1, axis=1))
+    lo, hi = th[ci].copy(), th[ci] + cell
+    inside = ok[cb, ci]
+    for _ in range(N_BISECT):
+        mid = 0.5 * (lo + hi)
+        same = np.isfinite(f_of(cb, mid)[0]) == inside
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    return cb, np.mod(np.where(inside, lo, hi), 2 * math.pi)
+
+
+def _brackets(f_of: Closure, r: _Ring, touch_tol: float) -> tuple[Brackets, np.ndarray, np.ndarray]:
+    """Brackets of the roots (sign changes, and both sides of a dip through zero) and the touching roots.
+
+    Returns the brackets and the branches and angles of the local minima of ``|f|`` that touch zero
+    (within ``touch_tol``) without a sign change.
+    """
+    fin = np.isfinite(r.f)
+    pos, pos_next, pos_prev = r.f >= 0, r.f_next >= 0, r.f_prev >= 0
     # 2. sign changes between neighbours
-    sc = fin & np.isfinite(f_next) & (pos != pos_next)
-    brackets = [(b_all[sc], t_all[sc], t_next[sc], pos[sc])]
+    sc = fin & np.isfinite(r.f_next) & (pos != pos_next)
+    brackets = [(r.b[sc], r.t[sc], r.t_next[sc], pos[sc])]
     # 3. local minima of |f| with no sign change either side
-    vp, vn = np.isfinite(f_prev), np.isfinite(f_next)
-    a_f = np.abs(f_all)
+    vp, vn = np.isfinite(r.f_prev), np.isfinite(r.f_next)
+    a_f = np.abs(r.f)
     with np.errstate(invalid="ignore"):
-        cond_p = ~vp | ((a_f <= np.abs(f_prev)) & (pos_prev == pos))
-        cond_n = ~vn | ((a_f <= np.abs(f_next)) & (pos_next == pos))
-    cand = fin & (vp | vn) & cond_p & cond_n & (f_all != 0)
-    g_b = b_all[cand]
-    g_lo = np.where(vp[cand], t_prev[cand], t_all[cand])
-    g_hi = np.where(vn[cand], t_next[cand], t_all[cand])
+        cond_p = ~vp | ((a_f <= np.abs(r.f_prev)) & (pos_prev == pos))
+        cond_n = ~vn | ((a_f <= np.abs(r.f_next)) & (pos_next == pos))
+    cand = fin & (vp | vn) & cond_p & cond_n & (r.f != 0)
+    g_b = r.b[cand]
+    g_lo = np.where(vp[cand], r.t_prev[cand], r.t[cand])
+    g_hi = np.where(vn[cand], r.t_next[cand], r.t[cand])
     g_s = np.where(pos[cand], 1.0, -1.0)
     t_min, g_min = _golden(f_of, g_b, g_lo, g_hi, g_s)
-    touch = np.isfinite(g_min) & (g_min >= 0) & (g_min <= TOUCH_TOL * red.length)
+    touch = np.isfinite(g_min) & (g_min >= 0) & (g_min <= touch_tol)
     cross = np.isfinite(g_min) & (g_min < 0)
     brackets.append((g_b[cross], g_lo[cross], t_min[cross], g_s[cross] > 0))
     brackets.append((g_b[cross], t_min[cross], g_hi[cross], g_s[cross] < 0))
+    return brackets, g_b[touch], t_min[touch]
+
+
+def _roots(
+    f_of: Closure, brackets: Brackets, touch_b: np.ndarray, touch_t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The roots in ``brackets`` by bisection, and the touching ones: (branch, theta, joints (m, n_roots))."""
     rb = np.concatenate([x[0] for x in brackets])
     rlo = np.concatenate([x[1] for x in brackets])
     rhi = np.concatenate([x[2] for x in brackets])
@@ -616,8 +683,8 @@ def group_modes(red: Reduction, known: np.ndarray, nums: Nums, n: int = N_THETA)
         fm = f_of(rb, mid)[0]
         same = (fm >= 0) == rpos
         rlo, rhi = np.where(same, mid, rlo), np.where(same, rhi, mid)
-    roots_b = np.concatenate([rb, rb, g_b[touch]])
-    roots_t = np.concatenate([rlo, rhi, t_min[touch]])
+    roots_b = np.concatenate([rb, rb, touch_b])
+    roots_t = np.concatenate([rlo, rhi, touch_t])
     f_r, z_r = f_of(roots_b, roots_t)
     # of the two ends of a bisection keep the one nearer the root
     nr = len(rb)
@@ -625,24 +692,22 @@ def group_modes(red: Reduction, known: np.ndarray, nums: Nums, n: int = N_THETA)
         pick = np.abs(f_r[:nr]) <= np.abs(f_r[nr : 2 * nr])
         keep = np.concatenate([pick, ~pick, np.ones(len(roots_b) - 2 * nr, bool)])
         roots_b, roots_t, z_r = roots_b[keep], roots_t[keep], z_r[:, keep]
-    # 4. verify each root against the group's own constraints; polish; deduplicate
-    cfg = roots_b // C
-    K = known[:, cfg]
-    U, good = _verify(red.group, nums, z_r, K, red.size)
-    out = []
-    theta = np.mod(roots_t, 2 * math.pi)
-    for c in range(B):
-        idx = np.flatnonzero((cfg == c) & good)
-        idx = idx[np.argsort(theta[idx], kind="stable")]
-        kept: list[int] = []
-        for i in idx:
-            if not any(np.max(np.abs(U[:, i] - U[:, k])) <= DEDUPE_RTOL * red.size for k in kept):
-                kept.append(int(i))
-        out.append((U[:, kept].T.copy(), theta[kept]))
-    return out
+    return roots_b, roots_t, z_r
 
 
-def _golden(f_of: Any, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _distinct(U: np.ndarray, theta: np.ndarray, idx: np.ndarray, size: float) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct modes among the columns ``idx`` of ``U``, by ``theta``: (joints (k, m), theta (k,))."""
+    idx = idx[np.argsort(theta[idx], kind="stable")]
+    kept: list[int] = []
+    for i in idx:
+        if not any(np.max(np.abs(U[:, i] - U[:, k])) <= DEDUPE_RTOL * size for k in kept):
+            kept.append(int(i))
+    return U[:, kept].T.copy(), theta[kept]
+
+
+def _golden(
+    f_of: Closure, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, s: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Golden-section search for the minimum of ``s f`` on each [lo, hi] (NaN counts as +inf): (argmin, min)."""
     g = (math.sqrt(5) - 1) / 2
     lo, hi = lo.copy(), hi.copy()
@@ -669,11 +734,12 @@ def _verify(st: Group, nums: Nums, U: np.ndarray, K: np.ndarray, size: float) ->
     dn = st._design_nums(nums, np.zeros(n, int))
     m = len(st.joints)
 
-    def worst(Uc: np.ndarray) -> np.ndarray:
+    def worst(Uc: FloatArray) -> FloatArray:
         P = np.concatenate([Uc, K]) if len(K) else Uc
         with np.errstate(invalid="ignore"):
             res, scale = st.residual(P, dn)
-            return np.max(np.abs(res) / scale, axis=1)
+            largest: FloatArray = np.max(np.abs(res) / scale, axis=1)
+        return largest
 
     err = worst(U)
     good = np.isfinite(err) & (err <= VERIFY_TOL)
@@ -765,22 +831,7 @@ def enumerate_modes(
             continue
         sol = _solve_rows(params, q, signs[:, col], None if mirrors is None else mirrors[:, col], starts, upto=gi)
         K = sol[list(st.known)]
-        rows_ok = np.all(np.isfinite(K), axis=0)
-        found: list[tuple[np.ndarray, np.ndarray]] = []
-        inverse = np.full(len(col), -1)
-        if rows_ok.any():
-            flat = np.concatenate([K.real, K.imag])[:, rows_ok].T
-            uniq, inv = np.unique(flat, axis=0, return_inverse=True)
-            inverse[rows_ok] = np.ravel(inv)
-            Ku = uniq[:, : len(st.known)] + 1j * uniq[:, len(st.known) :]
-            found = group_modes(red, Ku.T, params.steps[gi])
-        counts = np.array([len(found[u][0]) if u >= 0 else 0 for u in inverse], int)
-        rep = np.maximum(counts, 1)
-        rows = np.repeat(np.arange(len(col)), rep)
-        within = np.arange(len(rows)) - np.repeat(np.cumsum(rep) - rep, rep)
-        zu = np.full((len(st.joints), len(rows)), complex(np.nan, np.nan))
-        for r in np.flatnonzero(counts[rows] > 0):
-            zu[:, r] = found[inverse[rows[r]]][0][within[r]]
+        rows, within, counts, zu = _rows_per_mode(red, K, params.steps[gi])
         col = col[rows]
         starts = {g: (zu_g[:, rows], zk_g[:, rows]) for g, (zu_g, zk_g) in starts.items()}
         starts[gi] = (zu, K[:, rows])
@@ -789,6 +840,33 @@ def enumerate_modes(
     z = _solve_rows(params, q, signs[:, col], None if mirrors is None else mirrors[:, col], starts)
     assembled = np.all(np.isfinite(z), axis=0) if z.shape[0] else np.ones(len(col), bool)
     return ModeTable(z, assembled, col, gmode, gcount, gsteps, tuple(notes))
+
+
+def _rows_per_mode(red: Reduction, K: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each row repeated once per mode of the group at its known joints ``K`` (n_known, R).
+
+    The modes are enumerated once per distinct set of known joints (:func:`group_modes`); a row
+    without a mode (or with unknown joints) stays as one row.  Returns ``(rows, within, counts,
+    zu)``: the row each new row repeats, its mode's number, each old row's mode count, and the
+    group's joints in each new row's mode (NaN without one).
+    """
+    rows_ok = np.all(np.isfinite(K), axis=0)
+    found: list[tuple[np.ndarray, np.ndarray]] = []
+    inverse = np.full(K.shape[1], -1)
+    if rows_ok.any():
+        flat = np.concatenate([K.real, K.imag])[:, rows_ok].T
+        uniq, inv = np.unique(flat, axis=0, return_inverse=True)
+        inverse[rows_ok] = np.ravel(inv)
+        Ku = uniq[:, : K.shape[0]] + 1j * uniq[:, K.shape[0] :]
+        found = group_modes(red, Ku.T, nums)
+    counts = np.array([len(found[u][0]) if u >= 0 else 0 for u in inverse], int)
+    rep = np.maximum(counts, 1)
+    rows = np.repeat(np.arange(K.shape[1]), rep)
+    within = np.arange(len(rows)) - np.repeat(np.cumsum(rep) - rep, rep)
+    zu = np.full((len(red.group.joints), len(rows)), complex(np.nan, np.nan))
+    for r in np.flatnonzero(counts[rows] > 0):
+        zu[:, r] = found[inverse[rows[r]]][0][within[r]]
+    return rows, within, counts, zu
 
 
 def _solve_rows(

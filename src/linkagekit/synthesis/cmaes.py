@@ -45,12 +45,14 @@ from typing import Any
 
 import numpy as np
 
+from ..geometry import FloatArray
+
 #: the numbers of a state, beside its arrays
 _SCALARS = ("sigma", "generation", "evaluations", "best_f", "lam")
 _ARRAYS = ("mean", "C", "ps", "pc", "best_x", "history", "last_X", "last_f")
 
 
-def reflect(u: np.ndarray) -> np.ndarray:
+def reflect(u: FloatArray) -> FloatArray:
     """``u`` folded into ``[0, 1]`` by reflection at the faces (period 2)."""
     return 1.0 - np.abs(np.mod(u, 2.0) - 1.0)
 

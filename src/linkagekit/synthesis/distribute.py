@@ -82,7 +82,7 @@ def _cost_of(problem: Problem, X: np.ndarray) -> np.ndarray:
 
 def _check_address(address: str) -> None:
     """Refuse an address that is not ``tcp://host:port`` or ``tls://host:port`` (before Dask tries it)."""
-    from distributed.comm import parse_address, parse_host_port
+    from distributed.comm.addressing import parse_address, parse_host_port
 
     try:
         protocol, loc = parse_address(address, strict=True)
@@ -123,7 +123,8 @@ class Evaluator:
                 raise InputError("--scheduler needs Dask: pip install 'dask[distributed]'") from None
             _check_address(scheduler)
             try:
-                self._client = Client(scheduler, timeout=10, set_as_default=False)
+                connect: Any = Client  # distributed leaves Client.__init__ unannotated
+                self._client = connect(scheduler, timeout=10, set_as_default=False)
             except (OSError, TimeoutError, ValueError) as e:
                 raise InputError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({e})") from None
             self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]

@@ -58,7 +58,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InputError
-from ..geometry import abs2
+from ..geometry import ComplexArray, FloatArray, abs2
 from ..params import Params
 from ..params import compile as compile_params
 from ..positions import solve
@@ -239,9 +239,10 @@ def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: floa
     return Evaluation(cost, err, th, violation, mu_min)
 
 
-def _tracer(params: Params, sp: DesignSpace, th: np.ndarray) -> np.ndarray:
+def _tracer(params: Params, sp: DesignSpace, th: FloatArray) -> ComplexArray:
     """The tracer point at inputs ``th`` (N, k), NaN where a design does not assemble."""
-    return solve(params, th[None]).z[sp.joint(sp.tracer)]
+    z: ComplexArray = solve(params, th[None]).z[sp.joint(sp.tracer)]
+    return z
 
 
 def _nearest(

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, LinkageError
+from ..geometry import FloatArray
 from .distribute import Evaluator
 from .objective import PENALTY, Problem, evaluate
 
@@ -100,19 +101,56 @@ class Settings:
 
 @dataclass
 class Progress:
-    """What the progress callback sees after every generation."""
+    """What the progress callback sees after every generation.
+
+    Attributes
+    ----------
+    restart : int
+        The restart under way (counted from 0; after a restart's polish, the next one's number).
+    generation : int
+        Generations of this restart so far (0 right after a polish).
+    best_cost : float
+        The lowest cost found so far in the run.
+    best_error : float
+        The largest target error of the best polished design so far, relative to the targets'
+        diagonal ``L`` (NaN until a restart is finished).
+    evaluations : int
+        Designs scored in the run so far.
+    elapsed : float
+        Seconds of the run so far.
+    """
 
     restart: int
     generation: int
     best_cost: float
-    best_error: float  # largest target error of the best design so far, relative to L (NaN until known)
+    best_error: float
     evaluations: int
     elapsed: float
 
 
 @dataclass
 class Outcome:
-    """The best design of a run and how the run went."""
+    """The best design of a run and how the run went.
+
+    Attributes
+    ----------
+    x : ndarray (dim,)
+        The best design vector found.
+    cost : float
+        Its cost (mean squared relative error plus the constraint penalty).
+    restarts : int
+        Restarts finished (each search ended by its polish), those of a checkpoint included.
+    generations : int
+        Generations run over all restarts.
+    evaluations : int
+        Designs scored over all restarts.
+    seconds : float
+        Wall-clock time of the run.
+    stopped_by : str
+        What ended the run: ``"goal"``, ``"restarts"`` or ``"time"``.
+    history : list of (float, float)
+        ``(cost, max error / L)`` of each restart's best design.
+    """
 
     x: np.ndarray
     cost: float
@@ -130,98 +168,136 @@ def optimize(
     progress: Callable[[Progress], None] | None = None,
 ) -> Outcome:
     """Search ``problem`` as ``settings`` say; returns the best design found."""
-    start = time.monotonic()
-    seeds = np.random.SeedSequence(settings.seed).spawn(settings.restarts)
-    state = _load(settings, problem) if settings.checkpoint else None
-    done: list[dict[str, Any]] = [] if state is None else state["done"]
-    restart = 0 if state is None else state["restart"]
-    generation = 0 if state is None else state["generation"]
-    evaluations = 0 if state is None else state["evaluations"]
-    elapsed0 = 0.0 if state is None else state["elapsed"]
-    stopped_by = "restarts"
-    total_generations = sum(d["generations"] for d in done)
-
-    def clock() -> float:
-        return elapsed0 + time.monotonic() - start
-
-    def best_so_far() -> tuple[float, float]:
-        if not done:
-            return np.inf, np.nan
-        d = min(done, key=lambda d: d["cost"])
-        return d["cost"], d["max_error"]
-
-    reserve = 0.0  # seconds kept for the polish after a search's last generation
-    if any(d["max_error"] <= settings.goal for d in done):
-        stopped_by = "goal"
-        restart = settings.restarts
+    run = _Run.begin(problem, settings, progress)
     # With the order asked for, every other search scores without it (cheaper, and a fit found without the
     # order may well be in order); the polish and the choice of the best always use the problem itself.
     variants = (problem, replace(problem, ordered=False)) if problem.ordered else (problem,)
     with Evaluator(variants, settings.workers, settings.scheduler) as ev:
-        while restart < settings.restarts:
-            which = restart % len(variants)
+        while run.restart < settings.restarts:
+            if run.search_once(ev, variants):
+                break
+    return run.outcome()
 
-            def cost(X: np.ndarray, which: int = which) -> np.ndarray:  # X is (designs, dim)
-                return ev.cost(X, which)
 
-            search = _search(restart, len(variants), problem, settings, seeds[restart], cost)
-            designs = 0
-            if state is not None and state.get("solver") is not None:
-                search.restore(state["solver"])
-                evaluations = sum(d["designs"] for d in done)  # the finished searches'; the rest is this one's
-                designs = state["evaluations"] - evaluations
-            state = None
-            out_of_time = False
-            while not search.finished(generation):
-                designs += search.step()
-                generation += 1
-                best_cost, best_err = best_so_far()
-                n_eval = evaluations + designs
-                if progress is not None:
-                    progress(Progress(restart, generation, min(best_cost, search.best), best_err, n_eval, clock()))
-                if settings.checkpoint:
-                    _save(settings, problem, restart, generation, n_eval, clock(), search.capture(), done)
-                if clock() + reserve > settings.seconds:  # leave time to polish within the budget
-                    out_of_time = True
-                    break
-            t0 = clock()
-            x, c, err = _polish(problem, *search.candidates())
-            reserve = max(reserve, 2.0 * (clock() - t0))  # this polish and the last, longer one
-            done.append({"x": x, "cost": c, "max_error": err, "generations": generation, "designs": designs})
-            evaluations += designs
-            total_generations += generation
-            restart += 1
-            generation = 0
+@dataclass
+class _Run:
+    """One :func:`optimize` run: its restarts so far, the one under way, the clock (continued from a checkpoint)."""
+
+    problem: Problem
+    settings: Settings
+    progress: Callable[[Progress], None] | None
+    start: float
+    seeds: list[np.random.SeedSequence]
+    state: dict[str, Any] | None = None  # a checkpoint's, until its unfinished search is restored
+    done: list[dict[str, Any]] = field(default_factory=list)  # the finished restarts
+    restart: int = 0
+    generation: int = 0
+    evaluations: int = 0
+    elapsed0: float = 0.0  # the checkpointed runs' time
+    stopped_by: str = "restarts"
+    reserve: float = 0.0  # seconds kept for the polish after a search's last generation
+
+    @classmethod
+    def begin(cls, problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> _Run:
+        """A new run, or the checkpoint's when there is one."""
+        start = time.monotonic()
+        run = cls(problem, settings, progress, start, np.random.SeedSequence(settings.seed).spawn(settings.restarts))
+        state = _load(settings, problem) if settings.checkpoint else None
+        if state is not None:
+            run.state, run.done, run.restart = state, state["done"], state["restart"]
+            run.generation, run.evaluations, run.elapsed0 = state["generation"], state["evaluations"], state["elapsed"]
+        if any(d["max_error"] <= settings.goal for d in run.done):
+            run.stopped_by, run.restart = "goal", settings.restarts
+        return run
+
+    def clock(self) -> float:
+        """Seconds of the run, the checkpointed ones included."""
+        return self.elapsed0 + time.monotonic() - self.start
+
+    def best_so_far(self) -> tuple[float, float]:
+        """Cost and max error / L of the best finished restart (inf, NaN before the first)."""
+        if not self.done:
+            return np.inf, np.nan
+        d = min(self.done, key=lambda d: d["cost"])
+        return d["cost"], d["max_error"]
+
+    def search_once(self, ev: Evaluator, variants: tuple[Problem, ...]) -> bool:
+        """Restart ``self.restart``: its search, then its polish; True when the run is to stop."""
+        which = self.restart % len(variants)
+
+        def cost(X: np.ndarray, which: int = which) -> np.ndarray:  # X is (designs, dim)
+            return ev.cost(X, which)
+
+        search = _search(self.restart, len(variants), self.problem, self.settings, self.seeds[self.restart], cost)
+        designs, out_of_time = self._generations(search, self._resume(search))
+        t0 = self.clock()
+        x, c, err = _polish(self.problem, *search.candidates())
+        self.reserve = max(self.reserve, 2.0 * (self.clock() - t0))  # this polish and the last, longer one
+        self.done.append({"x": x, "cost": c, "max_error": err, "generations": self.generation, "designs": designs})
+        self.evaluations += designs
+        self.restart += 1
+        self.generation = 0
+        if self.settings.checkpoint:
+            _save(self.settings, self.problem, self.restart, 0, self.evaluations, self.clock(), None, self.done)
+        if self.progress is not None:
+            self.progress(Progress(self.restart, 0, *self.best_so_far(), self.evaluations, self.clock()))
+        if err <= self.settings.goal:
+            self.stopped_by = "goal"
+        elif out_of_time or self.clock() + self.reserve > self.settings.seconds:
+            self.stopped_by = "time"
+        else:
+            return False
+        return True
+
+    def _resume(self, search: Search) -> int:
+        """The designs ``search`` has scored already: a checkpoint's unfinished search's, else none."""
+        designs = 0
+        if self.state is not None and self.state.get("solver") is not None:
+            search.restore(self.state["solver"])
+            self.evaluations = sum(d["designs"] for d in self.done)  # the finished searches'; the rest is this one's
+            designs = self.state["evaluations"] - self.evaluations
+        self.state = None
+        return designs
+
+    def _generations(self, search: Search, designs: int) -> tuple[int, bool]:
+        """Generations until ``search`` is finished or the time is up: (designs scored, out of time)."""
+        settings = self.settings
+        while not search.finished(self.generation):
+            designs += search.step()
+            self.generation += 1
+            best_cost, best_err = self.best_so_far()
+            n_eval = self.evaluations + designs
+            if self.progress is not None:
+                best = min(best_cost, search.best)
+                self.progress(Progress(self.restart, self.generation, best, best_err, n_eval, self.clock()))
             if settings.checkpoint:
-                _save(settings, problem, restart, 0, evaluations, clock(), None, done)
-            if progress is not None:
-                bc, be = best_so_far()
-                progress(Progress(restart, 0, bc, be, evaluations, clock()))
-            if err <= settings.goal:
-                stopped_by = "goal"
-                break
-            if out_of_time or clock() + reserve > settings.seconds:
-                stopped_by = "time"
-                break
-    best = min(done, key=lambda d: d["cost"])
-    x = np.asarray(best["x"], float)
-    if best["max_error"] > settings.goal:  # a last, longer polish of the best design, by both methods
-        until = start + max(settings.seconds - elapsed0, 0.0)
-        deep = [polish(problem, x, FINAL_POLISH, until, m) for m in _both_methods(problem)]
-        e = evaluate(problem, np.array([x, *deep]), refine=3)
-        k = int(np.argmin(e.cost))
-        if k > 0:
-            best = {**best, "x": deep[k - 1], "cost": float(e.cost[k])}
-    return Outcome(
-        np.asarray(best["x"], float),
-        float(best["cost"]),
-        len(done),
-        total_generations,
-        evaluations,
-        clock(),
-        stopped_by,
-        [(float(d["cost"]), float(d["max_error"])) for d in done],
-    )
+                state = search.capture()
+                _save(settings, self.problem, self.restart, self.generation, n_eval, self.clock(), state, self.done)
+            if self.clock() + self.reserve > settings.seconds:  # leave time to polish within the budget
+                return designs, True
+        return designs, False
+
+    def outcome(self) -> Outcome:
+        """The best design, polished once more when it misses the goal, and the run's account."""
+        best = min(self.done, key=lambda d: d["cost"])
+        x = np.asarray(best["x"], float)
+        if best["max_error"] > self.settings.goal:  # a last, longer polish of the best design, by both methods
+            until = self.start + max(self.settings.seconds - self.elapsed0, 0.0)
+            deep = [polish(self.problem, x, FINAL_POLISH, until, m) for m in _both_methods(self.problem)]
+            e = evaluate(self.problem, np.array([x, *deep]), refine=3)
+            k = int(np.argmin(e.cost))
+            if k > 0:
+                best = {**best, "x": deep[k - 1], "cost": float(e.cost[k])}
+        return Outcome(
+            np.asarray(best["x"], float),
+            float(best["cost"]),
+            len(self.done),
+            sum(d["generations"] for d in self.done),
+            self.evaluations,
+            self.clock(),
+            self.stopped_by,
+            [(float(d["cost"]), float(d["max_error"])) for d in self.done],
+        )
 
 
 # ---------------------------------------------------------------------- the two searches
@@ -345,8 +421,9 @@ class CMASearch(Search):
         self.budget = settings.generations * settings.popsize * n
         self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
 
-    def _x(self, U: np.ndarray) -> np.ndarray:
-        return self.lo + U * (self.hi - self.lo)
+    def _x(self, U: FloatArray) -> FloatArray:
+        X: FloatArray = self.lo + U * (self.hi - self.lo)
+        return X
 
     @property
     def best(self) -> float:  # type: ignore[override]
@@ -411,20 +488,21 @@ def polish(
 
     best: list[Any] = [np.inf, np.asarray(x0, float)]
 
-    def fun(x: np.ndarray) -> np.ndarray:
+    def fun(x: FloatArray) -> FloatArray:
         if until is not None and time.monotonic() > until:
             raise _OutOfTime
-        r = residuals(problem, x[None])[0]
+        r: FloatArray = residuals(problem, x[None])[0]
         if float(r @ r) < best[0]:
             best[:] = [float(r @ r), x.copy()]
         return r
 
-    def jac(x: np.ndarray) -> np.ndarray:
+    def jac(x: FloatArray) -> FloatArray:
         steps = np.where(x + h <= hi, h, -h)
         X = np.repeat(x[None], len(x) + 1, axis=0)
         X[1:] += np.diag(steps)
         R = residuals(problem, X)
-        return ((R[1:] - R[0]) / steps[:, None]).T
+        J: FloatArray = ((R[1:] - R[0]) / steps[:, None]).T
+        return J
 
     x0 = np.clip(x0, lo, hi)
     try:

@@ -45,6 +45,9 @@ class Synthesis:
     mechanism : Mechanism
         The design (tracer ``P``, driver ``crank`` for the built-in topologies), lengths
         read off its pose, in the targets' unit.
+    x : ndarray (dim,)
+        The design vector found: ``[x_0, y_0, x_1, y_1, ...]`` over the free joints of the
+        pose, in the targets' unit (:mod:`linkagekit.synthesis.space`).
     errors : ndarray (m,)
         Distance from each target to the tracer's curve (or to its point at the target's
         input, with timing), in the targets' unit, checked on ``CHECK_SAMPLES`` samples
@@ -76,10 +79,12 @@ class Synthesis:
 
     @property
     def max_error(self) -> float:
+        """The largest distance from a target to the tracer (``max(errors)``), in the targets' unit."""
         return float(np.max(self.errors))
 
     @property
     def rms_error(self) -> float:
+        """The root mean square of the distances ``errors``, in the targets' unit."""
         return float(np.sqrt(np.mean(self.errors**2)))
 
 
@@ -166,6 +171,8 @@ def synthesize(
         the targets' neighbourhood, all by default; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
+    unit : str
+        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's.
     ordered : bool
         Without timing, meet the targets in their order along the curve.
     min_transmission : float
@@ -183,15 +190,22 @@ def synthesize(
     progress : callable, optional
         Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
     """
+    targets, inputs, unit = _unpack(targets, inputs, unit)
+    problem = make_problem(targets, topology, inputs, unit, ordered, min_transmission, lengths, pivots, free, reach)
+    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
+    return finish(problem, optimize(problem, settings, progress))
+
+
+def _unpack(targets: Any, inputs: Sequence[float] | None, unit: str) -> tuple[Any, Sequence[float] | None, str]:
+    """``(points, inputs, unit)``: a :class:`~linkagekit.synthesis.targets.Targets`'s own, else as given.
+
+    Inputs given explicitly win over the targets' own.
+    """
     if hasattr(targets, "xy") and hasattr(targets, "unit"):
         if inputs is None and getattr(targets, "inputs", None) is not None:
             inputs = list(targets.inputs)
-        unit = targets.unit
-        targets = targets.xy
-    problem = make_problem(targets, topology, inputs, unit, ordered, min_transmission, lengths, pivots, free, reach)
-    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
-    outcome = optimize(problem, settings, progress)
-    return finish(problem, outcome)
+        return targets.xy, inputs, targets.unit
+    return targets, inputs, unit
 
 
 def finish(problem: Problem, outcome: Outcome) -> Synthesis:
