@@ -78,6 +78,7 @@ KNOWN_MISSING: set[str] = {
     "Scene.angle_unit",
     "Scene.assembled",
     "Scene.bounds",
+    "Scene.catalogue",
     "Scene.breaks",
     "Scene.columns",
     "Scene.coupler_curves",

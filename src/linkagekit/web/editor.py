@@ -29,7 +29,7 @@ from urllib.parse import urlsplit
 
 import numpy as np
 
-from ..catalogue import UnitKind, driver_unit, input_units
+from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
 from ..files import atomic_output, dumps, load
 from ..model import Mechanism
@@ -58,10 +58,7 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     from .report import MAX_REPORT_SAMPLES
 
     params = prepare(mech)
-    pose = {
-        d.name: float(params.pose_inputs[i, 0] / (mech.angle_to_rad if driver_unit(mech, d) is UnitKind.ANGLE else 1.0))
-        for i, d in enumerate(mech.drivers)
-    }
+    pose = {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
     count = mech.drivers[0].sweep.count()
     n = n or (count if count <= MAX_REPORT_SAMPLES - 1 else MAX_REPORT_SAMPLES - 1)
     base = {
