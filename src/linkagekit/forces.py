@@ -8,7 +8,9 @@ first joint)::
     sum (r - Q) x F_on_b + sum tau + (G - Q) x m g + sum (r_ext - Q) x F_ext + tau_ext
                                           = I_G alpha + (G - Q) x m a_G
 
-The unknowns, written once each and entering two links with opposite signs:
+The unknowns, written once each and entering two links with opposite signs (each a small
+type that knows its columns, its entries in the matrix and its load on the frame:
+:class:`PinForce`, :class:`SliderReaction`, :class:`DriverEffort`, listed by :func:`unknowns`):
 
 * a revolute joint shared by links ``c`` (the first of them in the file) and ``o``: the
   force ``F`` by ``c`` on ``o`` at the joint (2 unknowns).  A joint of k links gives k - 1
@@ -33,8 +35,9 @@ Samples that do not assemble or sit at a singular position have NaN forces.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, assert_never
+from typing import TYPE_CHECKING, Any, ClassVar, assert_never
 
 import numpy as np
 
@@ -46,7 +49,7 @@ from .params import Body, LoadParams
 from .rates import LinkMotion
 
 if TYPE_CHECKING:
-    from .model import Mechanism
+    from .model import Driver, Mechanism
 
 #: samples per batched solve (bounds the memory of the stacked matrices)
 CHUNK = 16384
@@ -69,7 +72,8 @@ class Reaction:
     @property
     def magnitude(self) -> np.ndarray:
         """The bearing load ``|F|`` (N)."""
-        return np.abs(self.force)
+        out: np.ndarray = np.abs(self.force)
+        return out
 
 
 @dataclass(frozen=True)
@@ -110,7 +114,7 @@ class Forces:
         """The same forces with every array reshaped (flat samples back to (designs, samples))."""
         return self.map(lambda a: a.reshape(shape))
 
-    def map(self, f: Any) -> Forces:
+    def map(self, f: Callable[[np.ndarray], np.ndarray]) -> Forces:
         """The same forces with ``f`` applied to every array."""
         return Forces(
             tuple(
@@ -141,7 +145,7 @@ class Forces:
 def json_list(a: Any) -> list[Any]:
     """A 1-D array as a JSON list; NaN becomes ``None`` (``null``); nested for more dimensions."""
     arr = np.asarray(a, float)
-    out = arr.tolist()  # Python floats, nested for more dimensions
+    out: list[Any] = arr.tolist()  # Python floats, nested for more dimensions
     bad = ~np.isfinite(arr)
     if bad.any():
         if arr.ndim == 1:
@@ -191,176 +195,269 @@ class Kinematics:
 
 
 # ------------------------------------------------------------------------------- the system
-def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
-    """Joint reactions, driver torques/forces and derived quantities for every sample of ``km``."""
-    n = km.z.shape[1]
-    si = mech.length_to_si
-    moving = [ln for ln in mech.links if ln.name != "ground"]
-    row = {ln.name: 3 * i for i, ln in enumerate(moving)}  # first of the link's three rows
-    m = 3 * len(moving)
-    names = mech.joint_names
-    z_si = {j: km.z[i] * si for i, j in enumerate(names)}  # joint positions in metres, once
+@dataclass(frozen=True)
+class _Frame:
+    """What every column and the right-hand side read: rows, reference points and directions (m, per sample).
 
-    # reference point Q of every link (m): the centre of gravity, or the first joint
+    ``row[link]`` is the first of the link's three equations (force x, force y, moment
+    about ``Q[link]``); ``slide_dir[k]`` is slider k's direction now (it turns with its
+    guide); ``cyl_dir[name]`` is a cylinder's unit vector from its second end to its first.
+    """
+
+    mech: Mechanism
+    n: int
+    row: dict[str, int]
+    z: dict[str, np.ndarray]
+    Q: dict[str, np.ndarray]
+    slide_dir: tuple[np.ndarray, ...]
+    cyl_dir: dict[str, np.ndarray]
+
+
+#: one entry of the stacked matrices: (row, column, coefficient: a number or one per sample)
+Entry = tuple[int, int, Any]
+
+
+def _force(fr: _Frame, link: str, col: int, at: np.ndarray, direction: Any, sign: float) -> list[Entry]:
+    """Unit-force column ``col``: ``sign * direction`` at point ``at`` (m) on ``link`` (the frame has no rows)."""
+    if link == "ground":
+        return []
+    r0 = fr.row[link]
+    d = sign * np.broadcast_to(direction, (fr.n,))
+    return [(r0, col, np.real(d)), (r0 + 1, col, np.imag(d)), (r0 + 2, col, cross(at - fr.Q[link], d))]
+
+
+def _moment(fr: _Frame, link: str, col: int, sign: float) -> list[Entry]:
+    """Unit-moment column ``col``: ``sign`` on ``link``'s moment row."""
+    return [] if link == "ground" else [(fr.row[link] + 2, col, sign)]
+
+
+#: a force (N, complex) and a moment about the origin (N*m) on the frame, per sample
+Load = tuple[Any, Any]
+
+
+@dataclass(frozen=True)
+class PinForce:
+    """The force ``F = x[col] + i x[col + 1]`` by the pin's carrier ``by`` on ``on`` at ``joint``."""
+
+    joint: str
+    on: str
+    by: str
+    col: int
+    width: ClassVar[int] = 2
+
+    def entries(self, fr: _Frame) -> list[Entry]:
+        zj = fr.z[self.joint]
+        out: list[Entry] = []
+        for c, e in ((self.col, 1.0), (self.col + 1, 1j)):
+            out += _force(fr, self.on, c, zj, e, +1.0) + _force(fr, self.by, c, zj, e, -1.0)
+        return out
+
+    def reaction(self, x: np.ndarray, fr: _Frame) -> Reaction:
+        return Reaction(self.joint, self.on, self.by, x[:, self.col] + 1j * x[:, self.col + 1])
+
+    def on_frame(self, r: Reaction, fr: _Frame) -> list[Load]:
+        """The frame feels ``-F`` if it exerts ``F``, ``+F`` if it receives it."""
+        if "ground" not in (self.by, self.on):
+            return []
+        f = -r.force if self.by == "ground" else r.force
+        return [(f, cross(fr.z[self.joint], f))]
+
+
+@dataclass(frozen=True)
+class SliderReaction:
+    """Slider ``k``'s normal force ``x[col]`` (along ``i E``) at ``joint`` and moment ``x[col + 1]``, guide on block."""
+
+    k: int
+    joint: str
+    block: str
+    guide: str
+    col: int
+    width: ClassVar[int] = 2
+
+    def entries(self, fr: _Frame) -> list[Entry]:
+        zt, n_dir = fr.z[self.joint], 1j * fr.slide_dir[self.k]
+        out = _force(fr, self.block, self.col, zt, n_dir, +1.0) + _force(fr, self.guide, self.col, zt, n_dir, -1.0)
+        return out + _moment(fr, self.block, self.col + 1, 1.0) + _moment(fr, self.guide, self.col + 1, -1.0)
+
+    def reaction(self, x: np.ndarray, fr: _Frame) -> Reaction:
+        f = x[:, self.col] * (1j * fr.slide_dir[self.k])
+        return Reaction(self.joint, self.block, self.guide, f, x[:, self.col + 1])
+
+    def on_frame(self, r: Reaction, fr: _Frame) -> list[Load]:
+        if self.guide != "ground":
+            return []
+        assert r.moment is not None  # made by reaction() above
+        return [(-r.force, -(cross(fr.z[self.joint], r.force) + r.moment))]
+
+
+@dataclass(frozen=True)
+class DriverEffort:
+    """The driver's generalized force ``x[col]``: a crank's torque, a slider's push, a cylinder's force."""
+
+    driver: Driver
+    index: int  # in the drivers' order (its speed's row)
+    col: int
+    width: ClassVar[int] = 1
+
+    def entries(self, fr: _Frame) -> list[Entry]:
+        d, col = self.driver, self.col
+        match d.type:
+            case CrankType():  # a torque on the driven link
+                return _moment(fr, d.link, col, 1.0)
+            case CylinderType(ends=(a, b)):  # a massless two-force member: +F u on its first end, -F u on its second
+                u, carrier = fr.cyl_dir[d.name], fr.mech.links_of
+                return _force(fr, carrier(a)[0], col, fr.z[a], u, +1.0) + _force(
+                    fr, carrier(b)[0], col, fr.z[b], u, -1.0
+                )
+            case SliderType(slider=k):  # a push along the slide, on the block (its reaction on the guide)
+                sl, e = fr.mech.sliders[k], fr.slide_dir[k]
+                zt = fr.z[sl.through]
+                return _force(fr, sl.link, col, zt, e, +1.0) + _force(fr, sl.on, col, zt, e, -1.0)
+            case _:
+                assert_never(d.type)
+
+    def on_frame(self, effort: np.ndarray, fr: _Frame) -> list[Load]:
+        d = self.driver
+        match d.type:
+            case CrankType():  # the frame takes -T
+                return [(0.0, -effort)]
+            case CylinderType(ends=(a, b)):  # the frame holds an end of the cylinder
+                ends = ((end, sign * effort * fr.cyl_dir[d.name]) for end, sign in ((a, 1.0), (b, -1.0)))
+                return [(fe, cross(fr.z[end], fe)) for end, fe in ends if fr.mech.links_of(end)[0] == "ground"]
+            case SliderType(slider=k):
+                sl = fr.mech.sliders[k]
+                if sl.on != "ground":
+                    return []
+                fe = effort * fr.slide_dir[k]
+                return [(-fe, -cross(fr.z[sl.through], fe))]
+            case _:
+                assert_never(d.type)
+
+
+Unknown = PinForce | SliderReaction | DriverEffort
+
+
+def unknowns(mech: Mechanism) -> tuple[Unknown, ...]:
+    """The unknowns in column order: pin forces (2 columns each), slider reactions (2), driver efforts (1).
+
+    A joint of k links gives k - 1 pin forces, each by the first link (the pin's carrier) on another.
+    """
+    out: list[Unknown] = []
+    col = 0
+    for j in mech.joint_names:
+        carrier, *others = mech.links_of(j)
+        for other in others:
+            out.append(PinForce(j, other, carrier, col))
+            col += 2
+    for k, sl in enumerate(mech.sliders):
+        out.append(SliderReaction(k, sl.through, sl.link, sl.on, col))
+        col += 2
+    for i, d in enumerate(mech.drivers):
+        out.append(DriverEffort(d, i, col))
+        col += 1
+    return tuple(out)
+
+
+def _frame(mech: Mechanism, km: Kinematics) -> tuple[_Frame, np.ndarray]:
+    """The frame of the system, and its right-hand side: inertia, gravity and loads, (n, 3 moving links)."""
+    n, si = km.z.shape[1], mech.length_to_si
+    moving = [ln for ln in mech.links if ln.name != "ground"]
+    row = {ln.name: 3 * i for i, ln in enumerate(moving)}
+    z = {j: km.z[i] * si for i, j in enumerate(mech.joint_names)}  # joint positions in metres, once
     Q: dict[str, np.ndarray] = {}
-    rhs = np.zeros((n, m))
+    rhs = np.zeros((n, 3 * len(moving)))
     g = mech.gravity if mech.gravity is not None else 0j
-    for body in km.bodies:
+    for body in km.bodies:  # m (a_G - g) and I_G alpha, about Q = G (or the first joint when massless)
         r0 = row[body.link]
         al = np.broadcast_to(km.motion[body.link][2], (n,))
         if body.cg is not None:
             zg, _vg, ag = point_motion(mech, body.link, body.cg, km)
             Q[body.link] = zg * si
-            inertial = body.mass * (ag * si - g)  # m (a_G - g), N
+            inertial = body.mass * (ag * si - g)
             rhs[:, r0] += inertial.real
             rhs[:, r0 + 1] += inertial.imag
         else:
-            Q[body.link] = z_si[mech.link(body.link).joints[0]]
+            Q[body.link] = z[mech.link(body.link).joints[0]]
         rhs[:, r0 + 2] += body.inertia * al
-    for ld in km.loads:
+    for ld in km.loads:  # external loads move to the other side
         r0 = row[ld.link]
         rhs[:, r0 + 2] -= ld.torque
         zp = point_motion(mech, ld.link, ld.at, km)[0] * si if ld.at is not None else Q[ld.link]
         rhs[:, r0] -= ld.force.real
         rhs[:, r0 + 1] -= ld.force.imag
         rhs[:, r0 + 2] -= cross(zp - Q[ld.link], ld.force)
-
-    # columns: unknowns and where they enter, as (row, column, coefficient per sample);
-    # the matrices are filled chunk by chunk into one reused buffer below
-    entries: list[tuple[int, int, Any]] = []
-    labels: list[tuple[str, ...]] = []
-    col = 0
-
-    def put_force(link: str, c: int, at: np.ndarray, direction: Any, sign: float) -> None:
-        """Unit-force column c: ``sign * direction`` at point ``at`` (m) on ``link``."""
-        if link == "ground":
-            return
-        r0 = row[link]
-        d = sign * np.broadcast_to(direction, (n,))
-        entries.extend(((r0, c, np.real(d)), (r0 + 1, c, np.imag(d)), (r0 + 2, c, cross(at - Q[link], d))))
-
-    for j in names:
-        holders = mech.links_of(j)
-        if len(holders) < 2:
-            continue
-        zj = z_si[j]
-        carrier = holders[0]
-        for other in holders[1:]:
-            for c, e in ((col, 1.0), (col + 1, 1j)):
-                put_force(other, c, zj, e, +1.0)
-                put_force(carrier, c, zj, e, -1.0)
-            labels.append(("pin", j, other, carrier))
-            col += 2
-    slide_dir: dict[int, np.ndarray] = {}
-    for k, sl in enumerate(mech.sliders):
-        zt = z_si[sl.through]
-        e_now = km.motion[sl.on][0] * sl.direction  # the slide direction turns with the guide
-        slide_dir[k] = np.broadcast_to(e_now, (n,))
-        put_force(sl.link, col, zt, 1j * slide_dir[k], +1.0)
-        put_force(sl.on, col, zt, 1j * slide_dir[k], -1.0)
-        for link, sign in ((sl.link, 1.0), (sl.on, -1.0)):
-            if link != "ground":
-                entries.append((row[link] + 2, col + 1, sign))
-        labels.append(("slider", sl.through, sl.link, sl.on, str(k)))
-        col += 2
+    slide_dir = tuple(np.broadcast_to(km.motion[sl.on][0] * sl.direction, (n,)) for sl in mech.sliders)
     cyl_dir: dict[str, np.ndarray] = {}
-    first_driver = col  # one column per driver, in the drivers' order: its generalized force
     for d in mech.drivers:
-        match d.type:
-            case CrankType():  # a torque on the driven link
-                if d.link != "ground":
-                    entries.append((row[d.link] + 2, col, 1.0))
-            case CylinderType(ends=(a, b)):  # a massless two-force member: +F u on its first end, -F u on its second
-                za, zb = z_si[a], z_si[b]
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    cyl_dir[d.name] = (za - zb) / np.abs(za - zb)  # from the second end to the first
-                put_force(mech.links_of(a)[0], col, za, cyl_dir[d.name], +1.0)
-                put_force(mech.links_of(b)[0], col, zb, cyl_dir[d.name], -1.0)
-            case SliderType(slider=k):  # a push along the slide, on the block (its reaction on the guide)
-                sl = mech.sliders[k]
-                zt = z_si[sl.through]
-                put_force(sl.link, col, zt, slide_dir[k], +1.0)
-                put_force(sl.on, col, zt, slide_dir[k], -1.0)
-            case _:
-                assert_never(d.type)
-        col += 1
-    if col != m:  # pragma: no cover - the model already checked the degrees of freedom
-        raise AssertionError(f"kinetostatics: {col} unknowns for {m} equations")
+        if isinstance(d.type, CylinderType):
+            za, zb = z[d.type.ends[0]], z[d.type.ends[1]]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                cyl_dir[d.name] = (za - zb) / np.abs(za - zb)
+    return _Frame(mech, n, row, z, Q, slide_dir, cyl_dir), rhs
 
-    good = km.good
+
+def solve_stacked(
+    entries: list[Entry], rhs: np.ndarray, good: np.ndarray, size: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``A x = b`` for every sample (``A`` filled from ``entries``), in chunks into one reused buffer.
+
+    Returns ``x`` (n, m) and the relative residual per sample, max |A x - b| over
+    (max |b| + size * max |x|); NaN where not ``good`` (there ``A`` is a placeholder).
+    """
+    n, m = rhs.shape
     rhs[~good] = 0.0
     x = np.empty((n, m))
     residual = np.empty(n)
-    size = max(1.0, mech.length_scale * si)  # lever arms are at most about this (m)
     buf = np.empty((min(n, CHUNK), m, m))
     eye = np.eye(m)
-    for start in range(0, n, CHUNK):  # one reused buffer: no 3-D array over all samples
+    for start in range(0, n, CHUNK):  # no 3-D array over all samples
         stop = min(start + CHUNK, n)
         Ak, bk = buf[: stop - start], rhs[start:stop]
         Ak.fill(0.0)
         for r, c, coef in entries:
             Ak[:, r, c] += coef[start:stop] if isinstance(coef, np.ndarray) else coef
-        Ak[~good[start:stop]] = eye  # placeholders, answered NaN below
+        Ak[~good[start:stop]] = eye
         xk = np.linalg.solve(Ak, bk[..., None])[..., 0]
         x[start:stop] = xk
         err = np.max(np.abs(np.matmul(Ak, xk[..., None])[..., 0] - bk), axis=1)
         residual[start:stop] = err / np.maximum(np.max(np.abs(bk), axis=1) + size * np.max(np.abs(xk), axis=1), 1e-300)
     x[~good] = np.nan
     residual[~good] = np.nan
+    return x, residual
 
-    # unpack
+
+def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
+    """Joint reactions, driver torques/forces and derived quantities for every sample of ``km``."""
+    fr, rhs = _frame(mech, km)
+    cols = unknowns(mech)
+    if sum(u.width for u in cols) != rhs.shape[1]:  # pragma: no cover - the model already checked the dof
+        raise AssertionError(f"kinetostatics: {sum(u.width for u in cols)} unknowns for {rhs.shape[1]} equations")
+    entries = [e for u in cols for e in u.entries(fr)]
+    size = max(1.0, mech.length_scale * mech.length_to_si)  # lever arms are at most about this (m)
+    x, residual = solve_stacked(entries, rhs, km.good, size)
+
     reactions: list[Reaction] = []
     torque: dict[str, np.ndarray] = {}
     push: dict[str, np.ndarray] = {}
-    shaking = np.zeros(n, complex)
-    shaking_m = np.zeros(n)
-    col = 0
-    for lab in labels:
-        if lab[0] == "pin":
-            _, j, other, carrier = lab
-            f = x[:, col] + 1j * x[:, col + 1]
-            reactions.append(Reaction(j, other, carrier, f))
-            if "ground" in (carrier, other):  # the frame feels -f if it exerts f, +f if it receives it
-                on_frame = -f if carrier == "ground" else f
-                shaking += on_frame
-                shaking_m += cross(z_si[j], on_frame)
-            col += 2
-        elif lab[0] == "slider":
-            _, j, block, guide, index = lab
-            f = x[:, col] * (1j * slide_dir[int(index)])
-            moment = x[:, col + 1]
-            reactions.append(Reaction(j, block, guide, f, moment))
-            if guide == "ground":
-                shaking -= f
-                shaking_m -= cross(z_si[j], f) + moment
-            col += 2
-    for i, d in enumerate(mech.drivers):
-        effort = x[:, first_driver + i]
-        match d.type:
-            case CrankType():
-                torque[d.name] = effort
-                shaking_m -= effort
-            case CylinderType(ends=(a, b)):
-                push[d.name] = effort
-                for end, sign in ((a, 1.0), (b, -1.0)):
-                    if mech.links_of(end)[0] == "ground":  # the frame holds this end of the cylinder
-                        fe = sign * effort * cyl_dir[d.name]
-                        shaking += fe
-                        shaking_m += cross(z_si[end], fe)
-            case SliderType(slider=k):
-                push[d.name] = effort
-                sl = mech.sliders[k]
-                if sl.on == "ground":
-                    fe = effort * slide_dir[k]
-                    shaking -= fe
-                    shaking_m -= cross(z_si[sl.through], fe)
-            case _:
-                assert_never(d.type)
-    power = np.zeros(n)
-    for i, d in enumerate(mech.drivers):  # T w, or F ds/dt (in m/s)
-        speed = np.broadcast_to(km.speeds[i], (n,))
-        power += x[:, first_driver + i] * speed * d.type.rate_to_si(si)
-    bad = ~good
+    frame: list[Load] = []
+    for u in cols:
+        if isinstance(u, DriverEffort):
+            effort = x[:, u.col]
+            (torque if isinstance(u.driver.type, CrankType) else push)[u.driver.name] = effort
+            frame += u.on_frame(effort, fr)
+        else:
+            reactions.append(u.reaction(x, fr))
+            frame += u.on_frame(reactions[-1], fr)
+    shaking, shaking_m = np.zeros(fr.n, complex), np.zeros(fr.n)
+    for f, moment in frame:
+        shaking += f
+        shaking_m += moment
+    power = np.zeros(fr.n)
+    for u in cols:  # T w, or F ds/dt (in m/s)
+        if isinstance(u, DriverEffort):
+            speed = np.broadcast_to(km.speeds[u.index], (fr.n,))
+            power += x[:, u.col] * speed * u.driver.type.rate_to_si(mech.length_to_si)
+    bad = ~km.good
     if bad.any():
         shaking[bad] = complex(np.nan, np.nan)
         shaking_m[bad] = np.nan
