@@ -23,7 +23,7 @@ True
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from types import MappingProxyType
 from typing import Any
@@ -134,6 +134,193 @@ def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, default
     return arr[:, None, :]
 
 
+# ---------------------------------------------------------------------- the request
+METHODS = ("natural", "vector-loop", "numerical")
+
+
+@dataclass(frozen=True)
+class Options:
+    """The keyword arguments of :func:`analyze`, as given (see there)."""
+
+    speed: Mapping[str, ArrayLike] | ArrayLike | None = None
+    acceleration: Mapping[str, ArrayLike] | ArrayLike | None = None
+    signs: ArrayLike | Mapping[str, int] | None = None
+    mirrors: ArrayLike | Mapping[str, bool] | None = None
+    poses: ArrayLike | None = None
+    rates: bool = True
+    dynamics: bool = True
+    method: str = "natural"
+    static: bool = False
+
+
+@dataclass(frozen=True)
+class Request:
+    """An analysis as asked for, checked and normalised by :func:`request`: what :func:`solve_request` solves.
+
+    ``q`` (drivers, D or 1, n) are the inputs in solver units (no design axis when every
+    design shares them); ``values``, ``speeds``, ``accels`` are per driver in file units
+    (speeds in rad/s or length/s), as the Result shows them; ``w_in``, ``a_in`` are
+    (drivers, 1, n).  ``signs`` (sign steps, D or 1, n or 1) and ``mirrors`` (mirror links,
+    ...) are None when the pose's own are used.
+    """
+
+    mech: Mechanism
+    params: Params
+    poses: np.ndarray | None
+    n_designs: int
+    n: int
+    values: dict[str, np.ndarray]
+    q: np.ndarray
+    speeds: dict[str, np.ndarray]
+    accels: dict[str, np.ndarray]
+    w_in: np.ndarray
+    a_in: np.ndarray
+    signs: np.ndarray | None
+    mirrors: np.ndarray | None
+    method: str
+    rates: bool
+    forces: bool
+
+
+def _check_kinds(mech: Mechanism, o: Options) -> None:
+    """The argument types checked before anything is computed."""
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    for flag, value in (("rates", o.rates), ("dynamics", o.dynamics), ("static", o.static)):
+        if not isinstance(value, bool | np.bool_):
+            raise InputError(f"{flag}: expected True or False, got {type(value).__name__}")
+    if not isinstance(o.method, str):
+        raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {type(o.method).__name__}")
+
+
+def _given_inputs(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None) -> tuple[dict[str, Any], int]:
+    """The inputs given per driver (1-D arrays), and the number of samples (the file's sweep's when none is given)."""
+    given = {k: _as_array(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
+    n = max((len(v) for v in given.values()), default=0)
+    for k, v in given.items():
+        if len(v) not in (1, n):
+            raise InputError(f"inputs: driver '{k}' has {len(v)} values but another has {n}; give equal lengths")
+    return given, n if n else mech.drivers[0].sweep.count()
+
+
+def _n_designs(mech: Mechanism, poses: ArrayLike | None, n: int, rates: bool) -> int:
+    """The number of designs, once the result's size is known to stay within :data:`MAX_RESULT_BYTES`."""
+    try:
+        shape = np.shape(poses) if poses is not None else ()
+    except (TypeError, ValueError, OverflowError):
+        shape = ()
+    D = int(shape[0]) if len(shape) == 3 else 1  # the size is checked before anything is built for it
+    J, L = len(mech.joints), len(mech.links)
+    nbytes = D * n * (16 * J * (3 if rates else 1) + (2 * 8 * L if rates else 0) + 32)
+    if nbytes > MAX_RESULT_BYTES:
+        raise InputError(
+            f"this call would hold about {nbytes / 2**30:.1f} GB of results ({D} design(s) x {n} samples), "
+            f"more than linkagekit.api.MAX_RESULT_BYTES ({MAX_RESULT_BYTES / 2**30:.0f} GB): use fewer samples, "
+            "rates=False, or lk.analyze_chunks for many designs (or raise the limit)"
+        )
+    return D
+
+
+def _input_values(
+    mech: Mechanism, params: Params, given: dict[str, Any], n: int, D: int, batch: bool
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Every driver's input values (file units) and ``q`` (drivers, D or 1, n) in solver units.
+
+    A driver not given follows its file's sweep when that has ``n`` samples, and otherwise
+    stays at each design's reference-pose value.
+    """
+    factors = np.array([d.input_scale(mech) for d in mech.drivers])
+    values: dict[str, np.ndarray] = {}
+    per_design = [d.name not in given and d.sweep.count() != n for d in mech.drivers]
+    q = np.empty((len(mech.drivers), D if any(per_design) else 1, n))  # shared inputs: no design axis
+    for i, d in enumerate(mech.drivers):
+        if d.name in given:
+            values[d.name] = np.broadcast_to(given[d.name], (n,)).astype(float)
+        elif d.sweep.count() == n:
+            values[d.name] = d.sweep.values()
+        else:
+            values[d.name] = np.repeat(params.pose_inputs[i][:, None] / factors[i], n, axis=1)
+        q[i] = values[d.name] * factors[i]
+        if not batch:
+            values[d.name] = np.reshape(values[d.name], (-1, n))[0]
+    return values, q
+
+
+def _input_rates(mech: Mechanism, o: Options, n: int) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Every driver's input speed and acceleration over the samples (``static``: zero)."""
+    speed, acceleration = o.speed, o.acceleration
+    if o.static:
+        if speed is not None or acceleration is not None:
+            raise InputError("static: the input speed and acceleration are zero; do not give them too")
+        speed = {d.name: 0.0 for d in mech.drivers}
+        acceleration = {d.name: 0.0 for d in mech.drivers}
+    sp = _per_driver(mech, speed, "speed")
+    ac = _per_driver(mech, acceleration, "acceleration")
+    speeds = {d.name: _rate(sp.get(d.name, d.speed), n, f"speed[{d.name}]") for d in mech.drivers}
+    accels = {d.name: _rate(ac.get(d.name, d.acceleration), n, f"acceleration[{d.name}]") for d in mech.drivers}
+    return speeds, accels
+
+
+def _modes(params: Params, o: Options, n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The assembly signs and mirror flags asked for (None: the pose's own)."""
+    plan = params.plan
+    sg = None if o.signs is None else _choice(o.signs, plan.sign_joints, n, "signs", params.signs)
+    if sg is not None and not np.all(np.abs(sg) == 1):
+        raise InputError("signs: every sign must be +1 or -1")
+    mr = None
+    if o.mirrors is not None:
+        m = _choice(o.mirrors, plan.mirror_links, n, "mirrors", np.zeros((plan.n_mirrors, 1)))
+        if not np.all((m == 0) | (m == 1)):
+            raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
+        mr = m == 1
+    if o.method not in METHODS:
+        raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {o.method!r}")
+    if o.method == "vector-loop" and (o.poses is not None or sg is not None or mr is not None):
+        raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
+    return sg, mr
+
+
+def request(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None, o: Options) -> Request:
+    """Check and normalise the arguments of :func:`analyze` (each error names its argument)."""
+    _check_kinds(mech, o)
+    given, n = _given_inputs(mech, inputs)
+    D = _n_designs(mech, o.poses, n, o.rates)
+    poses = None if o.poses is None else as_poses(mech, o.poses)
+    params = prepare(mech, poses, numerical=o.method == "numerical")
+    values, q = _input_values(mech, params, given, n, D, poses is not None)
+    speeds, accels = _input_rates(mech, o, n)
+    w_in = np.array([speeds[d.name] for d in mech.drivers])[:, None, :]
+    a_in = np.array([accels[d.name] for d in mech.drivers])[:, None, :]
+    sg, mr = _modes(params, o, n)
+    forces = bool(o.rates and o.dynamics and mech.has_dynamics)
+    return Request(mech, params, poses, D, n, values, q, speeds, accels, w_in, a_in, sg, mr, o.method, o.rates, forces)
+
+
+def solve_request(req: Request) -> Result:
+    """Solve a request chunk of designs by chunk of designs (bounded working memory) into one Result."""
+    out = _Outputs(req.mech, req.params.plan, req.n_designs, req.n, req.rates)
+    chunk = max(1, CHUNK_SAMPLES // max(req.n, 1))
+    for start in range(0, req.n_designs, chunk):  # every chunk writes its slice
+        sl = slice(start, min(start + chunk, req.n_designs))
+        p = req.params.take(sl)
+
+        def cut(a: np.ndarray | None, sl: slice = sl) -> np.ndarray | None:
+            """A chunk's designs of an array with a design axis (axis 1), or the array itself when it has none."""
+            return a[:, sl] if a is not None and a.shape[1] > 1 else a
+
+        rt: Rates | None = None
+        if req.method == "vector-loop":
+            pos, rt = _vector_loop(req.mech, req.params, req.q, req.w_in, req.a_in)
+        else:
+            pos = solve(p, cut(req.q), cut(req.signs), cut(req.mirrors), out=out.z[:, sl])  # type: ignore[arg-type]
+            if out.v is not None and out.a is not None:
+                rt = solve_rates(p, pos, req.w_in, req.a_in, out=(out.v[:, sl], out.a[:, sl]))
+        out.write(sl, p, pos, rt)
+        if req.forces:
+            out.write_forces(sl, _forces(req.mech, p, out, sl, req.speeds))
+    return _result(req, out)
+
+
 # ---------------------------------------------------------------------- analyze
 def analyze(
     mech: Mechanism,
@@ -192,99 +379,8 @@ def analyze(
     -------
     Result
     """
-    if not isinstance(mech, Mechanism):
-        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
-    for flag, value in (("rates", rates), ("dynamics", dynamics), ("static", static)):
-        if not isinstance(value, bool | np.bool_):
-            raise InputError(f"{flag}: expected True or False, got {type(value).__name__}")
-    if not isinstance(method, str):
-        raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {type(method).__name__}")
-    given = {k: _as_array(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
-    n = max((len(v) for v in given.values()), default=0)
-    for k, v in given.items():
-        if len(v) not in (1, n):
-            raise InputError(f"inputs: driver '{k}' has {len(v)} values but another has {n}; give equal lengths")
-    if n == 0:
-        n = mech.drivers[0].sweep.count()
-    try:
-        shape = np.shape(poses) if poses is not None else ()
-    except (TypeError, ValueError, OverflowError):
-        shape = ()
-    D = int(shape[0]) if len(shape) == 3 else 1  # the size is checked before anything is built for it
-    J, L = len(mech.joints), len(mech.links)
-    nbytes = D * n * (16 * J * (3 if rates else 1) + (2 * 8 * L if rates else 0) + 32)
-    if nbytes > MAX_RESULT_BYTES:
-        raise InputError(
-            f"this call would hold about {nbytes / 2**30:.1f} GB of results ({D} design(s) x {n} samples), "
-            f"more than linkagekit.api.MAX_RESULT_BYTES ({MAX_RESULT_BYTES / 2**30:.0f} GB): use fewer samples, "
-            "rates=False, or lk.analyze_chunks for many designs (or raise the limit)"
-        )
-    params = prepare(mech, poses, numerical=method == "numerical")
-    plan = params.plan
-    factors = np.array([d.input_scale(mech) for d in mech.drivers])
-    values: dict[str, np.ndarray] = {}
-    per_design = [d.name not in given and d.sweep.count() != n for d in mech.drivers]
-    q = np.empty((len(mech.drivers), D if any(per_design) else 1, n))  # shared inputs: no design axis
-    for i, d in enumerate(mech.drivers):
-        if d.name in given:
-            values[d.name] = np.broadcast_to(given[d.name], (n,)).astype(float)
-        else:
-            own = d.sweep.count() == n
-            values[d.name] = (
-                d.sweep.values() if own else np.repeat(params.pose_inputs[i][:, None] / factors[i], n, axis=1)
-            )
-        q[i] = values[d.name] * factors[i]
-        if poses is None:
-            values[d.name] = np.reshape(values[d.name], (-1, n))[0]
-
-    if static:
-        if speed is not None or acceleration is not None:
-            raise InputError("static: the input speed and acceleration are zero; do not give them too")
-        speed = {d.name: 0.0 for d in mech.drivers}
-        acceleration = {d.name: 0.0 for d in mech.drivers}
-    sp = _per_driver(mech, speed, "speed")
-    ac = _per_driver(mech, acceleration, "acceleration")
-    speeds = {d.name: _rate(sp.get(d.name, d.speed), n, f"speed[{d.name}]") for d in mech.drivers}
-    accels = {d.name: _rate(ac.get(d.name, d.acceleration), n, f"acceleration[{d.name}]") for d in mech.drivers}
-    w_in = np.array([speeds[d.name] for d in mech.drivers])[:, None, :]
-    a_in = np.array([accels[d.name] for d in mech.drivers])[:, None, :]
-
-    sg = None if signs is None else _choice(signs, plan.sign_joints, n, "signs", params.signs)
-    if sg is not None and not np.all(np.abs(sg) == 1):
-        raise InputError("signs: every sign must be +1 or -1")
-    mr = None
-    if mirrors is not None:
-        m = _choice(mirrors, plan.mirror_links, n, "mirrors", np.zeros((plan.n_mirrors, 1)))
-        if not np.all((m == 0) | (m == 1)):
-            raise InputError("mirrors: expected true/false (or 1/0) per link: true flips it")
-        mr = m == 1
-
-    if method not in ("natural", "vector-loop", "numerical"):
-        raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {method!r}")
-    if method == "vector-loop" and (poses is not None or signs is not None or mirrors is not None):
-        raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
-    with_forces = rates and dynamics and mech.has_dynamics
-    out = _Outputs(mech, plan, D, n, rates)
-    chunk = max(1, CHUNK_SAMPLES // max(n, 1))
-    for start in range(0, D, chunk):  # bounded working memory; every chunk writes its slice
-        sl = slice(start, min(start + chunk, D))
-        p = params.take(sl)
-
-        def cut(a: np.ndarray | None, sl: slice = sl) -> np.ndarray | None:
-            """A chunk's designs of an array with a design axis (axis 1), or the array itself when it has none."""
-            return a[:, sl] if a is not None and a.shape[1] > 1 else a
-
-        rt: Rates | None = None
-        if method == "vector-loop":
-            pos, rt = _vector_loop(mech, params, q, w_in, a_in)
-        else:
-            pos = solve(p, cut(q), cut(sg), cut(mr), out=out.z[:, sl])  # type: ignore[arg-type]
-            if out.v is not None and out.a is not None:
-                rt = solve_rates(p, pos, w_in, a_in, out=(out.v[:, sl], out.a[:, sl]))
-        out.write(sl, p, pos, rt)
-        if with_forces:
-            out.write_forces(sl, _forces(mech, p, out, sl, speeds))
-    return _result(mech, params, poses, values, speeds, accels, out, sg)
+    options = Options(speed, acceleration, signs, mirrors, poses, rates, dynamics, method, static)
+    return solve_request(request(mech, inputs, options))
 
 
 def analyze_chunks(
@@ -368,37 +464,58 @@ class _Outputs:
                 self.rot[name][sl] = rot
 
 
-def _result(
-    mech: Mechanism,
-    params: Params,
-    poses: ArrayLike | None,
-    values: dict[str, np.ndarray],
-    speeds: dict[str, np.ndarray],
-    accels: dict[str, np.ndarray],
-    out: _Outputs,
-    sg: np.ndarray | None,
-) -> Result:
-    plan = params.plan
-    batch = poses is not None
+def _result(req: Request, out: _Outputs) -> Result:
+    """The read-only Result of a solved request (the design axis dropped for one mechanism)."""
+    mech, params, batch = req.mech, req.params, req.poses is not None
 
     def squeeze(a: np.ndarray) -> np.ndarray:
         """Drop the design axis (axis -2) of a single mechanism's arrays."""
         return frozen(a if batch else a[..., 0, :])
 
-    def ro(d: dict[str, np.ndarray] | None) -> MappingProxyType[str, np.ndarray] | None:
+    def ro(d: Mapping[str, np.ndarray] | None) -> MappingProxyType[str, np.ndarray] | None:
         return None if d is None else MappingProxyType({k: squeeze(val) for k, val in d.items()})
 
-    ground = next(ln for ln in mech.links if ln.name == "ground")
-    ground_angle: Any = 0.0
-    if len(ground.joints) >= 2:
-        sa, sb = params.bases["ground"]
-        per_design = np.angle(sb - sa)[:, 0]  # radians: link_angle converts to the file unit once
-        ground_angle = per_design[:, None] if batch else float(per_design[0])
+    def proxy(d: dict[str, np.ndarray]) -> MappingProxyType[str, np.ndarray]:
+        return MappingProxyType({k: frozen(v) for k, v in d.items()})
 
-    # the mode used, per sign joint: an int (one design), or an array (per design and/or per sample)
-    signs_used = params.signs[:, :, None] if sg is None else np.broadcast_to(sg, (plan.n_signs, *sg.shape[1:]))
+    block_rot = ro(out.block_rot)
+    assert block_rot is not None
+    return Result(
+        mech,
+        proxy(req.values),
+        proxy(req.speeds),
+        proxy(req.accels),
+        squeeze(out.assembled),
+        squeeze(out.singular),
+        squeeze(out.condition),
+        MappingProxyType(_signs_used(req)),
+        None if out.forces is None else _frozen_forces(out.forces, squeeze),
+        None if req.poses is None else frozen(req.poses),
+        squeeze(out.z),
+        None if out.v is None else squeeze(out.v),
+        None if out.a is None else squeeze(out.a),
+        ro(out.omega),
+        ro(out.alpha),
+        block_rot,
+        _ground_angle(mech, params, batch),
+    )
+
+
+def _ground_angle(mech: Mechanism, params: Params, batch: bool) -> Any:
+    """The frame's angle (rad): 0 for a one-joint ground, else per design (a column for a batch)."""
+    if len(mech.link("ground").joints) < 2:
+        return 0.0
+    sa, sb = params.bases["ground"]
+    per_design = np.angle(sb - sa)[:, 0]  # radians: link_angle converts to the file unit once
+    return per_design[:, None] if batch else float(per_design[0])
+
+
+def _signs_used(req: Request) -> dict[str, Any]:
+    """The mode used, per sign joint: an int (one design), or an array (per design and/or per sample)."""
+    params, sg, batch = req.params, req.signs, req.poses is not None
+    signs_used = params.signs[:, :, None] if sg is None else np.broadcast_to(sg, (params.plan.n_signs, *sg.shape[1:]))
     sign_map: dict[str, Any] = {}
-    for i, j in enumerate(plan.sign_joints):
+    for i, j in enumerate(params.plan.sign_joints):
         s = np.asarray(signs_used[i]).astype(int)  # (D or 1, n or 1)
         if not batch:
             s = s[0]
@@ -407,25 +524,7 @@ def _result(
         if s.shape[-1] == 1:
             s = s[..., 0]
         sign_map[j] = int(s) if s.ndim == 0 else frozen(s)
-    return Result(
-        mech,
-        MappingProxyType({k: frozen(v) for k, v in values.items()}),
-        MappingProxyType({k: frozen(v) for k, v in speeds.items()}),
-        MappingProxyType({k: frozen(v) for k, v in accels.items()}),
-        squeeze(out.assembled),
-        squeeze(out.singular),
-        squeeze(out.condition),
-        MappingProxyType(sign_map),
-        None if out.forces is None else _frozen_forces(out.forces, squeeze),
-        None if poses is None else frozen(np.asarray(as_poses(mech, poses))),
-        squeeze(out.z),
-        None if out.v is None else squeeze(out.v),
-        None if out.a is None else squeeze(out.a),
-        ro(out.omega),
-        ro(out.alpha),
-        ro(out.block_rot),  # type: ignore[arg-type]
-        ground_angle,
-    )
+    return sign_map
 
 
 def _forces(mech: Mechanism, params: Params, out: _Outputs, sl: slice, speeds: dict[str, np.ndarray]) -> Forces:
