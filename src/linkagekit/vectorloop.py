@@ -46,7 +46,7 @@ from .geometry import NAN_POINT, cross
 from .model import CrankType
 
 if TYPE_CHECKING:
-    from .model import Mechanism
+    from .model import Link, Mechanism
 
 #: where a loop's sine ``sin(theta_a - theta_b)`` is below this, its rates are undefined
 SINGULAR_TOL = 1e-6
@@ -136,7 +136,20 @@ def _point(
     return z0 + r, v0 + 1j * w * r, a0 + (1j * al - w * w) * r
 
 
-def _carry_points(points, base, origin, theta, omega, alpha, z, v, a) -> None:  # type: ignore[no-untyped-def]
+Arrays = dict[str, np.ndarray]
+
+
+def _carry_points(
+    points: tuple[tuple[str, str, complex], ...],
+    base: dict[str, str],
+    origin: np.ndarray,
+    theta: Arrays,
+    omega: Arrays,
+    alpha: Arrays,
+    z: Arrays,
+    v: Arrays,
+    a: Arrays,
+) -> None:
     """Joints off the loops, each ``Z1 e^{i beta}`` from its link's base joint (seed 003's P), in place."""
     zero = np.zeros_like(origin)
     for joint, link, off in points:
@@ -147,7 +160,17 @@ def _carry_points(points, base, origin, theta, omega, alpha, z, v, a) -> None:  
         z[joint], v[joint], a[joint] = _point(z[b], v[b], a[b], off * cis(theta[link]), omega[link], alpha[link])
 
 
-def _finish(theta, omega, alpha, z, v, a, assembled, condition) -> LoopSolution:  # type: ignore[no-untyped-def]
+def _finish(
+    theta: Arrays,
+    omega: Arrays,
+    alpha: Arrays,
+    z: Arrays,
+    v: Arrays,
+    a: Arrays,
+    assembled: np.ndarray,
+    condition: np.ndarray,
+) -> LoopSolution:
+    """The solution, NaN where undefined: rates where singular or not assembled, positions where not assembled."""
     singular = assembled & (np.abs(condition) < SINGULAR_TOL)
     bad = singular | ~assembled
     for d in (omega, alpha):
@@ -275,21 +298,14 @@ class Stephenson:
         J[:, 5, 2], J[:, 5, 5] = 1.0, -1.0
         return J
 
-    def solve(
-        self,
-        theta2: np.ndarray,
-        omega2: np.ndarray | float = 0.0,
-        alpha2: np.ndarray | float = 0.0,
-        newton_iterations: int = 60,
-    ) -> LoopSolution:
-        """Positions (Newton-Raphson) and rates (the 6x6 linear systems) at input angles ``theta2``."""
-        th2 = np.asarray(theta2, float).ravel()
-        n = th2.size
-        w2 = np.broadcast_to(np.asarray(omega2, float), th2.shape)
-        al2 = np.broadcast_to(np.asarray(alpha2, float), th2.shape)
+    def positions(self, th2: np.ndarray, newton_iterations: int = 60) -> tuple[np.ndarray, np.ndarray]:
+        """``q`` = [theta3 .. theta8] (6, n) by Newton-Raphson on eq. (18), NaN where it does not assemble.
+
+        Started from seed 003's fixed-point iteration on each loop, loosely converged; all
+        samples at once on stacked 6x6 matrices.  Also returns ``assembled`` (n,).
+        """
         s1, s2 = self.branches
         ground = self.a * cis(np.asarray(self.theta1)) + 0 * th2
-        # starting guess: seed 003's fixed-point iteration on each loop, loosely converged
         t6 = th2 - self.alpha_
         t7, t8 = fixed_point_loop(self.f * cis(t6), ground, self.g, self.h, s1, tol=1e-4)
         t5 = t8 - self.beta
@@ -307,9 +323,17 @@ class Stephenson:
             q = q + dq
             if np.max(np.abs(dq), initial=0.0) < 1e-15:
                 break
-        q = np.where(assembled, q, np.nan)
+        return np.where(assembled, q, np.nan), assembled
+
+    def rates(
+        self, th2: np.ndarray, w2: np.ndarray, al2: np.ndarray, q: np.ndarray, assembled: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``dq/dt`` (corrected eq. 19), ``d2q/dt2`` (corrected eq. 20), both (6, n), and the condition (n,).
+
+        One matrix ``J`` for both; the identity where the sample is singular or does not assemble.
+        """
+        n = th2.size
         t3, t4, t5, t6, t7, t8 = q
-        # velocity (corrected eq. 19) and acceleration (corrected eq. 20): same matrix J
         J = self.jacobian(np.where(assembled, q, 0.0))
         cond = np.minimum(np.abs(np.sin(t3 - t4)), np.abs(np.sin(t7 - t8)))
         good = assembled & (cond >= SINGULAR_TOL)
@@ -327,37 +351,68 @@ class Stephenson:
         rhs_a = np.zeros((n, 6))
         rhs_a[:, 0], rhs_a[:, 1], rhs_a[:, 2], rhs_a[:, 3], rhs_a[:, 4] = r1.real, cent2.real, r1.imag, cent2.imag, al2
         qdd = np.linalg.solve(J, rhs_a[..., None])[..., 0].T
-        dd3, dd4, dd5, dd6, dd7, dd8 = qdd
+        return qd, qdd, cond
 
-        oa, ob, jq, js, jw, jy, jx, inp, l3, l4, out, l6 = self.names
-        zero = np.zeros(n)
+    def solve(
+        self,
+        theta2: np.ndarray,
+        omega2: np.ndarray | float = 0.0,
+        alpha2: np.ndarray | float = 0.0,
+        newton_iterations: int = 60,
+    ) -> LoopSolution:
+        """Positions (Newton-Raphson) and rates (the 6x6 linear systems) at input angles ``theta2``."""
+        th2 = np.asarray(theta2, float).ravel()
+        w2 = np.broadcast_to(np.asarray(omega2, float), th2.shape)
+        al2 = np.broadcast_to(np.asarray(alpha2, float), th2.shape)
+        q, assembled = self.positions(th2, newton_iterations)
+        qd, qdd, cond = self.rates(th2, w2, al2, q, assembled)
+        # angles, speeds and accelerations of input, c, g, output, d (links named as in `names`)
+        inp, l3, l4, out, l6 = self.names[7:]
+        zero = np.zeros(th2.size)
+        theta = {inp: th2, l3: q[0], l4: q[4], out: q[2], l6: q[1]}
+        omega = {inp: w2 + zero, l3: qd[0], l4: qd[4], out: qd[2], l6: qd[1]}
+        alpha = {inp: al2 + zero, l3: qdd[0], l4: qdd[4], out: qdd[2], l6: qdd[1]}
+        arms = {inp: self.b, l3: self.c, out: self.e, l4: self.g}
+        z, v, a = self._joints(q[3], qd[3], qdd[3], theta, omega, alpha, arms)
+        oa, ob, jq, js = self.names[:4]
+        bases = {inp: oa, l3: jq, l4: js, out: ob, l6: self.names[5]}
+        _carry_points(self.points, bases, z[oa], theta, omega, alpha, z, v, a)
+        return _finish(theta, omega, alpha, z, v, a, assembled, cond)
+
+    def _joints(
+        self,
+        t6: np.ndarray,
+        d6: np.ndarray,
+        dd6: np.ndarray,
+        theta: dict[str, np.ndarray],
+        omega: dict[str, np.ndarray],
+        alpha: dict[str, np.ndarray],
+        arms: dict[str, float],
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """Joint positions, velocities and accelerations from the link angles, arm by arm (seed 003's eq. 15, 24).
+
+        ``t6``, ``d6``, ``dd6``: the input link's second arm ``f`` (to ``S``); ``arms``: the
+        lengths of the arms from each link's base (input ``b``, c, output ``e``, g).
+        """
+        oa, ob, jq, js, jw, jy, jx, inp, l3, l4, out, _l6 = self.names
+        zero = np.zeros(t6.size)
         org = self.origin + zero
+        ground = self.a * cis(np.asarray(self.theta1)) + zero
 
         def arm(length: float, th: np.ndarray, w: np.ndarray, al: np.ndarray) -> tuple[np.ndarray, ...]:
             r = length * cis(th)
             return r, 1j * w * r, (1j * al - w * w) * r
 
-        zq, vq, aq = arm(self.b, th2, w2, al2)
+        zq, vq, aq = arm(arms[inp], theta[inp], omega[inp], alpha[inp])
         zs, vs, as_ = arm(self.f, t6, d6, dd6)
-        zy, vy, ay = arm(self.e, t5, d5, dd5)
-        zg, vg, ag = arm(self.g, t7, d7, dd7)
-        zc, vc, ac = arm(self.c, t3, d3, dd3)
-        z = {
-            oa: org,
-            ob: org + ground,
-            jq: org + zq,
-            js: org + zs,
-            jw: org + zs + zg,
-            jy: org + ground + zy,
-            jx: org + zq + zc,
-        }
+        zy, vy, ay = arm(arms[out], theta[out], omega[out], alpha[out])
+        zg, vg, ag = arm(arms[l4], theta[l4], omega[l4], alpha[l4])
+        zc, vc, ac = arm(arms[l3], theta[l3], omega[l3], alpha[l3])
+        z = {oa: org, ob: org + ground, jq: org + zq, js: org + zs, jw: org + zs + zg, jy: org + ground + zy}
+        z[jx] = org + zq + zc
         v = {oa: zero + 0j, ob: zero + 0j, jq: vq, js: vs, jw: vs + vg, jy: vy, jx: vq + vc}
         a = {oa: zero + 0j, ob: zero + 0j, jq: aq, js: as_, jw: as_ + ag, jy: ay, jx: aq + ac}
-        theta = {inp: th2, l3: t3, l4: t7, out: t5, l6: t4}
-        omega = {inp: w2 + zero, l3: d3, l4: d7, out: d5, l6: d4}
-        alpha = {inp: al2 + zero, l3: dd3, l4: dd7, out: dd5, l6: dd4}
-        _carry_points(self.points, {inp: oa, l3: jq, l4: js, out: ob, l6: jy}, org, theta, omega, alpha, z, v, a)
-        return _finish(theta, omega, alpha, z, v, a, assembled, cond)
+        return z, v, a
 
 
 # --------------------------------------------------------------------------- from a mechanism file
@@ -372,6 +427,131 @@ def _unsupported(mech: Mechanism, why: str) -> MethodNotApplicableError:
     )
 
 
+@dataclass(frozen=True)
+class _Topology:
+    """What both layouts read off a mechanism with one crank driver: links, hinges, the two ground pivots.
+
+    ``hinges[link]`` are the link's joints shared with another link; ``oa`` is the crank's
+    pivot, ``ob`` the other ground pivot; ``theta_in`` the crank's input direction in its shape.
+    """
+
+    mech: Mechanism
+    links: dict[str, Link]
+    hinges: dict[str, list[str]]
+    crank: Link
+    oa: str
+    ob: str
+    theta_in: float
+
+    def other_link(self, joint: str, not_this: str) -> str:
+        """The link at a two-link ``joint`` other than ``not_this``."""
+        return next(k for k in self.mech.links_of(joint) if k != not_this)
+
+    def points(self, refs: dict[str, tuple[str, str]], loop: tuple[str, ...]) -> tuple[tuple[str, str, complex], ...]:
+        """The joints off the loop: ``(joint, link, Z1 e^{i beta})`` from the link's base ``refs[link][0]``.
+
+        ``beta`` is measured from the line base -> ``refs[link][1]``; ground points are offsets from ``oa``.
+        """
+        sg = self.links["ground"].shape
+        out = []
+        for ln, (base, ref) in refs.items():
+            s = self.links[ln].shape
+            for j in self.links[ln].joints:
+                if j in loop:
+                    continue
+                if ln == "ground":
+                    out.append((j, ln, complex(sg[j] - sg[self.oa])))
+                else:
+                    out.append((j, ln, complex((s[j] - s[base]) / (s[ref] - s[base]) * abs(s[ref] - s[base]))))
+        return tuple(out)
+
+
+def _topology(mech: Mechanism) -> _Topology:
+    """Check the common conditions (one crank on a ground pivot, two ground pivots, two links per joint)."""
+    drive = mech.drivers[0].type if len(mech.drivers) == 1 else None
+    if mech.sliders or not isinstance(drive, CrankType):
+        raise _unsupported(mech, "this one has sliders or not exactly one crank driver")
+    links = {ln.name: ln for ln in mech.links}
+    hinges = {ln.name: [j for j in ln.joints if len(mech.links_of(j)) >= 2] for ln in mech.links}
+    if any(len(mech.links_of(j)) > 2 for j in mech.joint_names):
+        raise _unsupported(mech, "a joint joins three or more links")
+    crank = links[mech.drivers[0].link]
+    oa, toward = drive.pivot, drive.toward
+    if oa not in links["ground"].joints:
+        raise _unsupported(mech, "the driver's pivot is not on the ground")
+    others = [j for j in hinges["ground"] if j != oa]
+    if len(others) != 1:
+        raise _unsupported(mech, "the ground must have exactly two pivots")
+    theta_in = float(np.angle(crank.shape[toward] - crank.shape[oa]))
+    return _Topology(mech, links, hinges, crank, oa, others[0], theta_in)
+
+
+def _four_bar(t: _Topology) -> tuple[FourBar, float]:
+    """Seed 003's four-bar: the loop crank, coupler, rocker from the driver's pivot."""
+    crank, oa, ob, pose, sg = t.crank, t.oa, t.ob, t.mech.joints, t.links["ground"].shape
+    ja = next(j for j in t.hinges[crank.name] if j != oa)
+    coupler = t.other_link(ja, crank.name)
+    jb = next(j for j in t.hinges[coupler] if j != ja)
+    rocker = t.other_link(jb, coupler)
+    if ob not in t.links[rocker].joints:
+        raise _unsupported(t.mech, "its four links do not form one loop")
+    refs = {"ground": (oa, ob), crank.name: (oa, ja), coupler: (ja, jb), rocker: (ob, jb)}
+    fb = FourBar(
+        complex(sg[ob] - sg[oa]),
+        crank.length(oa, ja),
+        t.links[coupler].length(ja, jb),
+        t.links[rocker].length(ob, jb),
+        _side(pose[ja], pose[ob], pose[jb]),
+        complex(sg[oa]),
+        t.points(refs, (oa, ob, ja, jb)),
+        (oa, ob, ja, jb, crank.name, coupler, rocker),
+    )
+    return fb, float(np.angle(crank.shape[ja] - crank.shape[oa]) - t.theta_in)
+
+
+def _stephenson(t: _Topology) -> tuple[Stephenson, float]:
+    """Seed 001's Stephenson six-bar: input and output ternaries on the ground, one binary and one dyad between."""
+    crank, oa, ob, links = t.crank, t.oa, t.ob, t.links
+    rocker = t.other_link(ob, "ground")
+    if len(t.hinges[rocker]) != 3:
+        raise _unsupported(t.mech, "the link pivoted at the second ground pivot is not ternary")
+    c_free = [j for j in t.hinges[crank.name] if j != oa]
+    r_free = [j for j in t.hinges[rocker] if j != ob]
+    links_of = t.mech.links_of
+    direct = [(s, w) for s in c_free for w in r_free if set(links_of(s)) & set(links_of(w)) - {crank.name, rocker}]
+    if len(direct) != 1:
+        raise _unsupported(t.mech, "no single binary link joins the input and output links")
+    js, jw = direct[0]
+    jq = next(j for j in c_free if j != js)
+    jy = next(j for j in r_free if j != jw)
+    glink, clink, dlink = t.other_link(js, crank.name), t.other_link(jq, crank.name), t.other_link(jy, rocker)
+    jx = next((j for j in t.hinges[clink] if j != jq), None)
+    if jx is None or jx not in links[dlink].joints:
+        raise _unsupported(t.mech, "the remaining two links do not form a dyad")
+    sc, sr, sg, pose = crank.shape, links[rocker].shape, links["ground"].shape, t.mech.joints
+    gvec = complex(sg[ob] - sg[oa])
+    refs = {"ground": (oa, ob), crank.name: (oa, jq), clink: (jq, jx), glink: (js, jw), rocker: (ob, jy)}
+    refs[dlink] = (jy, jx)
+    st = Stephenson(
+        a=abs(gvec),
+        theta1=float(np.angle(gvec)),
+        b=crank.length(oa, jq),
+        c=links[clink].length(jq, jx),
+        d=links[dlink].length(jy, jx),
+        e=links[rocker].length(ob, jy),
+        f=crank.length(oa, js),
+        g=links[glink].length(js, jw),
+        h=links[rocker].length(ob, jw),
+        alpha_=float(np.angle((sc[jq] - sc[oa]) / (sc[js] - sc[oa]))),
+        beta=float(np.angle((sr[jw] - sr[ob]) / (sr[jy] - sr[ob]))),
+        branches=(_side(pose[js], pose[ob], pose[jw]), _side(pose[jq], pose[jy], pose[jx])),
+        origin=complex(sg[oa]),
+        points=t.points(refs, (oa, ob, jq, js, jw, jy, jx)),
+        names=(oa, ob, jq, js, jw, jy, jx, crank.name, clink, glink, rocker, dlink),
+    )
+    return st, float(np.angle(sc[jq] - sc[oa]) - t.theta_in)
+
+
 def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
     """The vector-loop model of a mechanism, and the offset from its driver input to ``theta2`` (rad).
 
@@ -379,115 +559,9 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
     Joints that are not loop joints (coupler points) are carried as ``Z1 e^{i beta}`` from
     their link's base joint, as seed 003 does for ``P``.
     """
-    drive = mech.drivers[0].type if len(mech.drivers) == 1 else None
-    if mech.sliders or not isinstance(drive, CrankType):
-        raise _unsupported(mech, "this one has sliders or not exactly one crank driver")
-    drv = mech.drivers[0]
-    links = {ln.name: ln for ln in mech.links}
-    hinges = {ln.name: [j for j in ln.joints if len(mech.links_of(j)) >= 2] for ln in mech.links}
-    if any(len(mech.links_of(j)) > 2 for j in mech.joint_names):
-        raise _unsupported(mech, "a joint joins three or more links")
-    ground = links["ground"]
-    crank = links[drv.link]
-    oa, toward = drive.pivot, drive.toward
-    if oa not in ground.joints:
-        raise _unsupported(mech, "the driver's pivot is not on the ground")
-    others = [j for j in hinges["ground"] if j != oa]
-    if len(others) != 1:
-        raise _unsupported(mech, "the ground must have exactly two pivots")
-    ob = others[0]
-    pose = mech.joints
-
-    def other_link(joint: str, not_this: str) -> str:
-        return next(k for k in mech.links_of(joint) if k != not_this)
-
-    def off(link: str, base: str, ref: str, joint: str) -> complex:
-        """``Z1 e^{i beta}`` of `joint` from `base`, beta measured from the line base -> ref."""
-        s = links[link].shape
-        return complex((s[joint] - s[base]) / (s[ref] - s[base]) * abs(s[ref] - s[base]))
-
-    sg = ground.shape
-    gvec = complex(sg[ob] - sg[oa])
-    theta_in = np.angle(crank.shape[toward] - crank.shape[oa])
-    if len(mech.links) == 4 and all(len(h) == 2 for h in hinges.values()):
-        ja = next(j for j in hinges[crank.name] if j != oa)
-        coupler = other_link(ja, crank.name)
-        jb = next(j for j in hinges[coupler] if j != ja)
-        rocker = other_link(jb, coupler)
-        if ob not in links[rocker].joints:
-            raise _unsupported(mech, "its four links do not form one loop")
-        refs = {"ground": (oa, ob), crank.name: (oa, ja), coupler: (ja, jb), rocker: (ob, jb)}
-        pts = tuple(
-            (j, ln, off(ln, *refs[ln], j)) if ln != "ground" else (j, ln, complex(sg[j] - sg[oa]))
-            for ln in refs
-            for j in links[ln].joints
-            if j not in (oa, ob, ja, jb)
-        )
-        fb = FourBar(
-            gvec,
-            crank.length(oa, ja),
-            links[coupler].length(ja, jb),
-            links[rocker].length(ob, jb),
-            _side(pose[ja], pose[ob], pose[jb]),
-            complex(sg[oa]),
-            pts,
-            (oa, ob, ja, jb, crank.name, coupler, rocker),
-        )
-        return fb, float(np.angle(crank.shape[ja] - crank.shape[oa]) - theta_in)
-    if len(mech.links) == 6 and len(hinges[crank.name]) == 3:
-        rocker = other_link(ob, "ground")
-        if len(hinges[rocker]) != 3:
-            raise _unsupported(mech, "the link pivoted at the second ground pivot is not ternary")
-        c_free = [j for j in hinges[crank.name] if j != oa]
-        r_free = [j for j in hinges[rocker] if j != ob]
-        direct = [
-            (s, w)
-            for s in c_free
-            for w in r_free
-            if set(mech.links_of(s)) & set(mech.links_of(w)) - {crank.name, rocker}
-        ]
-        if len(direct) != 1:
-            raise _unsupported(mech, "no single binary link joins the input and output links")
-        js, jw = direct[0]
-        jq = next(j for j in c_free if j != js)
-        jy = next(j for j in r_free if j != jw)
-        glink = other_link(js, crank.name)
-        clink = other_link(jq, crank.name)
-        jx = next((j for j in hinges[clink] if j != jq), None)
-        dlink = other_link(jy, rocker)
-        if jx is None or jx not in links[dlink].joints:
-            raise _unsupported(mech, "the remaining two links do not form a dyad")
-        sc, sr = crank.shape, links[rocker].shape
-        refs = {
-            "ground": (oa, ob),
-            crank.name: (oa, jq),
-            clink: (jq, jx),
-            glink: (js, jw),
-            rocker: (ob, jy),
-            dlink: (jy, jx),
-        }
-        pts = tuple(
-            (j, ln, off(ln, *refs[ln], j)) if ln != "ground" else (j, ln, complex(sg[j] - sg[oa]))
-            for ln in refs
-            for j in links[ln].joints
-            if j not in (oa, ob, jq, js, jw, jy, jx)
-        )
-        st = Stephenson(
-            a=abs(gvec),
-            theta1=float(np.angle(gvec)),
-            b=crank.length(oa, jq),
-            c=links[clink].length(jq, jx),
-            d=links[dlink].length(jy, jx),
-            e=links[rocker].length(ob, jy),
-            f=crank.length(oa, js),
-            g=links[glink].length(js, jw),
-            h=links[rocker].length(ob, jw),
-            alpha_=float(np.angle((sc[jq] - sc[oa]) / (sc[js] - sc[oa]))),
-            beta=float(np.angle((sr[jw] - sr[ob]) / (sr[jy] - sr[ob]))),
-            branches=(_side(pose[js], pose[ob], pose[jw]), _side(pose[jq], pose[jy], pose[jx])),
-            origin=complex(sg[oa]),
-            points=pts,
-            names=(oa, ob, jq, js, jw, jy, jx, crank.name, clink, glink, rocker, dlink),
-        )
-        return st, float(np.angle(sc[jq] - sc[oa]) - theta_in)
+    t = _topology(mech)
+    if len(mech.links) == 4 and all(len(h) == 2 for h in t.hinges.values()):
+        return _four_bar(t)
+    if len(mech.links) == 6 and len(t.hinges[t.crank.name]) == 3:
+        return _stephenson(t)
     raise _unsupported(mech, f"'{mech.name}' is neither")
