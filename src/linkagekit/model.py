@@ -470,6 +470,32 @@ class Mechanism:
 
     Immutable and hashable; two mechanisms are equal when they say the same (``source``,
     the file they came from, is not compared; the order of the joints is).
+
+    Attributes
+    ----------
+    name : str
+        The mechanism's name (the file's ``name``).
+    length_unit, angle_unit : str
+        The file's units (``units.length``, ``units.angle``): every length, point and
+        input value of the file and of a Result is in them.
+    joints : FrozenMap of str to complex
+        The reference pose: each joint's position ``x + iy`` (length unit), in the file's order.
+    links : tuple of Link
+        The links, the frame (``"ground"``) among them, in the file's order.
+    drivers : tuple of Driver
+        The inputs (cranks, slider drivers, cylinders), one per degree of freedom, in the file's order.
+    sliders : tuple of Slider
+        The prismatic joints (a block on a guide), in the file's order.
+    gravity : complex or None
+        The acceleration of gravity (m/s^2, ``gx + i gy``), None when the file gives none.
+    loads : tuple of Load
+        External forces and torques on links.
+    source : str
+        Where the mechanism came from (a file path, or ``"<dict>"``); not compared.
+    description : str or None
+        The file's free-text description.
+    joint_names : tuple of str
+        The joint names in the file's order (the order of a pose array).
     """
 
     name: str
@@ -483,7 +509,6 @@ class Mechanism:
     loads: tuple[Load, ...] = ()
     source: str = field(default="<dict>", compare=False)
     description: str | None = None
-    #: The joint names in the file's order (the order of a pose array).
     joint_names: tuple[str, ...] = field(init=False, repr=False)
     _by_name: FrozenMap[str, Link] = field(init=False, repr=False, compare=False)
 

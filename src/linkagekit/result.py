@@ -98,6 +98,7 @@ class Result:
 
     @property
     def n_samples(self) -> int:
+        """Number of samples of the sweep (the last axis of every array)."""
         return int(self.assembled.shape[-1])
 
     @property
@@ -112,6 +113,7 @@ class Result:
 
     @property
     def has_rates(self) -> bool:
+        """Whether velocities, accelerations and link rates were computed (``analyze(..., rates=True)``)."""
         return self._v is not None
 
     # ---------------------------------------------------------------- points
@@ -129,15 +131,18 @@ class Result:
 
     def point(self, joint: str) -> np.ndarray:
         """Complex positions ``x + iy`` of a joint, shape ``shape``."""
-        return self._z[self._j(joint)]
+        out: np.ndarray = self._z[self._j(joint)]
+        return out
 
     def velocity(self, joint: str) -> np.ndarray:
         """Complex velocity ``vx + i vy`` of a joint (length unit / s)."""
-        return self._rates("v")[self._j(joint)]
+        out: np.ndarray = self._rates("v")[self._j(joint)]
+        return out
 
     def acceleration(self, joint: str) -> np.ndarray:
         """Complex acceleration ``ax + i ay`` of a joint (length unit / s^2)."""
-        return self._rates("a")[self._j(joint)]
+        out: np.ndarray = self._rates("a")[self._j(joint)]
+        return out
 
     @staticmethod
     def _as_xy(z: np.ndarray) -> np.ndarray:
@@ -156,10 +161,14 @@ class Result:
         return self._as_xy(self.acceleration(joint))
 
     def x(self, joint: str) -> np.ndarray:
-        return self.point(joint).real
+        """x coordinates of a joint (length unit), shape ``shape``."""
+        out: np.ndarray = self.point(joint).real
+        return out
 
     def y(self, joint: str) -> np.ndarray:
-        return self.point(joint).imag
+        """y coordinates of a joint (length unit), shape ``shape``."""
+        out: np.ndarray = self.point(joint).imag
+        return out
 
     # ---------------------------------------------------------------- links
     def _link(self, name: str) -> Any:
@@ -261,7 +270,7 @@ class Result:
     def _design_index(self, i: Any) -> int:
         if self.poses is None:
             raise InputError("design(): this result has no design axis (analyze(..., poses=...) makes one)")
-        n = self.poses.shape[0]
+        n = int(self.poses.shape[0])
         if isinstance(i, bool) or not isinstance(i, int | np.integer):
             raise InputError(f"design: expected a whole number from 0 to {n - 1}, got {i!r}")
         if not -n <= i < n:
