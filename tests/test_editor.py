@@ -33,6 +33,7 @@ import re
 import shutil
 import signal
 import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -720,3 +721,94 @@ def test_session_chooses_a_mode_of_a_numerical_group(tmp_path):
     res = lk.analyze(m2, {"crank": [0.0]})
     for j, (x, y) in other["joints"].items():
         assert abs(res.point(j)[0] - complex(x, y)) < 1e-9 * 100, (j, res.point(j)[0], (x, y))
+
+
+# ============================================================================== vanished clients, many clients
+def _requests_in_flight() -> list[threading.Thread]:
+    """The server's request threads still running (socketserver names them after their target)."""
+    return [t for t in threading.enumerate() if "process_request_thread" in t.name and t.is_alive()]
+
+
+def _wait_for_requests(seconds: float = 60.0) -> None:
+    deadline = time.monotonic() + seconds
+    while _requests_in_flight():
+        assert time.monotonic() < deadline, f"requests still running after {seconds} s"
+        time.sleep(0.02)
+
+
+def test_a_client_that_goes_away_is_not_reported(server, capfd):
+    """A client that sends a full solve and resets its connection before the answer: the server
+    fails to write the answer (a reset or broken pipe), says nothing on stderr, and keeps serving."""
+    c = Client(server)
+    body = json.dumps({"doc": server.session.mech.to_dict()}).encode()  # a full sweep: the answer is ~100 kB
+    head = (
+        f"POST /{server.token}/api/solve HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\n"
+        f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n"
+    ).encode()
+    for _ in range(3):
+        s = socket.create_connection(("127.0.0.1", server.port), timeout=10)
+        s.sendall(head + body)
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # close with a reset
+        s.close()
+    _wait_for_requests()
+    c.still_serving()
+    _wait_for_requests()
+    out, err = capfd.readouterr()
+    assert err == "", f"a vanished client was reported on stderr: {err!r}"
+
+
+def test_an_unexpected_error_is_one_line(server, capfd, monkeypatch):
+    """An exception the handler does not expect: one short line on stderr, no traceback; the
+    server keeps serving."""
+
+    def broken(token: str) -> str:
+        raise RuntimeError("the page broke\nwith a second line")
+
+    monkeypatch.setattr(server.session, "page", broken)
+    c = Client(server)
+    with pytest.raises((http.client.HTTPException, ConnectionError)):
+        c.page()
+    _wait_for_requests()
+    monkeypatch.undo()
+    c.still_serving()
+    _wait_for_requests()
+    out, err = capfd.readouterr()
+    lines = err.splitlines()
+    assert len(lines) == 1 and "RuntimeError" in lines[0] and "the page broke" in lines[0], err
+    assert len(lines[0]) <= 200 and "Traceback" not in err, err
+
+
+def test_many_concurrent_connections_are_all_answered(server):
+    """200 clients connect at once (loopback): every one gets its answer, within a bounded time."""
+    n, seconds = 200, 60.0
+    assert server.request_queue_size >= 128
+    start = threading.Barrier(n, timeout=30)
+    answers: list[int] = []
+    failures: list[str] = []
+    lock = threading.Lock()
+
+    def one(i: int) -> None:
+        try:
+            start.wait()
+            conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=seconds)
+            conn.request("GET", f"/{'x' * 24}/", headers={"Connection": "close"})
+            r = conn.getresponse()
+            r.read()
+            conn.close()
+            with lock:
+                answers.append(r.status)
+        except Exception as exc:  # noqa: BLE001 - collected and reported below
+            with lock:
+                failures.append(f"client {i}: {type(exc).__name__}: {exc}")
+
+    t0 = time.monotonic()
+    clients = [threading.Thread(target=one, args=(i,), daemon=True) for i in range(n)]
+    for t in clients:
+        t.start()
+    for t in clients:
+        t.join(max(0.0, seconds - (time.monotonic() - t0)))
+    elapsed = time.monotonic() - t0
+    assert not any(t.is_alive() for t in clients), f"clients still waiting after {elapsed:.1f} s"
+    assert not failures, f"{len(failures)} of {n} failed, e.g. {failures[:3]}"
+    assert answers == [403] * n, sorted(set(answers))
+    Client(server).still_serving()

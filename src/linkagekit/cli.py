@@ -35,7 +35,7 @@ import re
 import shutil
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
 from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten
@@ -220,35 +220,71 @@ def _version() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the command line (it raises instead of exiting; see :func:`main`)."""
-    common: dict[str, Any] = {"allow_abbrev": False}
+    """The argument parser of the command line (it raises instead of exiting; see :func:`main`).
+
+    Each command is one :class:`_Command` of :data:`_COMMANDS`: its summary, its description,
+    the function that declares its arguments and the function that runs it.
+    """
     parser = _Parser(
         formatter_class=argparse.RawDescriptionHelpFormatter,
         prog=PROG,
         description="Analyse planar linkages described in YAML or JSON mechanism files.",
         epilog="Exit status: 0 on success, 2 on a bad file or bad arguments, 1 on anything else.\n"
         f"'{PROG} COMMAND --help' describes a command.",
-        **common,
+        allow_abbrev=False,
     )
     parser.add_argument("--version", action="version", version=_version(), help="print the version and exit")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND")
+    for command in _COMMANDS:
+        p = subparsers.add_parser(
+            command.name, help=command.summary, description=command.description, allow_abbrev=False
+        )
+        command.arguments(p)
+        p.set_defaults(run=command.run)
+    return parser
 
-    def output_option(p: argparse.ArgumentParser) -> None:
+
+class _Command(NamedTuple):
+    """One command of the command line: its name, help, arguments and what runs it."""
+
+    name: str
+    summary: str
+    """Its line in ``linkagekit --help``."""
+    description: str
+    """The paragraph of ``linkagekit NAME --help``."""
+    arguments: Callable[[argparse.ArgumentParser], None]
+    """Declares its arguments, in the order its help lists them."""
+    run: Callable[[argparse.Namespace], int]
+
+
+# Options that several commands share, each declared once.
+def _file_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE", help="mechanism file (YAML or JSON)")
+
+
+def _output_option(p: argparse.ArgumentParser, written: str | None = None) -> None:
+    """``-o OUT``: stdout by default, or (given what is *written*) a file that must be named."""
+    if written is None:
         p.add_argument("-o", "--output", metavar="OUT", help="write to this file instead of stdout")
+    else:
+        p.add_argument("-o", "--output", metavar="OUT", required=True, help=written)
 
-    def file_argument(p: argparse.ArgumentParser) -> None:
-        p.add_argument("file", metavar="FILE", help="mechanism file (YAML or JSON)")
 
-    p = commands.add_parser(
-        "analyze",
-        help="positions, velocities, accelerations (and forces) over a sweep of the inputs",
-        description="Positions, velocities and accelerations (and forces, when the file gives masses, "
-        "gravity or loads) over a sweep of the inputs. Input values are in the file's angle unit "
-        "(length unit for a slider's displacement or a cylinder's length); with several drivers give NAME=... "
-        "per driver.",
-        **common,
+def _format_option(p: argparse.ArgumentParser, *choices: str) -> None:
+    p.add_argument("--format", choices=choices, default="table", help="output format (default: %(default)s)")
+
+
+def _sweep_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--angles",
+        action="append",
+        metavar="START:STOP:STEP",
+        help="the sweep (NAME=START:STOP:STEP per driver; repeatable); default: the file's",
     )
-    file_argument(p)
+
+
+def _analyze_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
     p.add_argument(
         "--angles",
         action="append",
@@ -272,10 +308,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="input acceleration, rad/s² (length unit/s² for a slider or cylinder); NAME=A per driver; "
         "default: the file's",
     )
-    p.add_argument(
-        "--format", choices=("table", "csv", "json"), default="table", help="output format (default: %(default)s)"
-    )
-    output_option(p)
+    _format_option(p, "table", "csv", "json")
+    _output_option(p)
     p.add_argument(
         "--method",
         choices=("natural", "vector-loop", "numerical"),
@@ -290,60 +324,34 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="zero input speed and acceleration: the driver torques that balance gravity and the loads",
     )
-    p.set_defaults(run=_analyze)
 
-    p = commands.add_parser(
-        "modes",
-        help="every assembly mode at one input value",
-        description="Every assembly mode at one input value, with its joint positions.",
-        **common,
-    )
-    file_argument(p)
+
+def _modes_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
     p.add_argument(
         "--at", action="append", required=True, metavar="V", help="the input value (NAME=V per driver; repeatable)"
     )
     p.add_argument("--mirrors", action="store_true", help="also flip each link of three or more joints")
-    p.add_argument("--format", choices=("table", "json"), default="table", help="output format (default: %(default)s)")
-    output_option(p)
-    p.set_defaults(run=_modes)
+    _format_option(p, "table", "json")
+    _output_option(p)
 
-    p = commands.add_parser(
-        "check",
-        help="validate a file: degrees of freedom, solve plan, where it assembles",
-        description="Validate a mechanism file; print its degrees of freedom, solve plan, the input "
-        "range where it assembles and, for a four-bar loop, its Grashof type and transmission angle.",
-        **common,
-    )
-    file_argument(p)
-    p.add_argument("--format", choices=("table", "json"), default="table", help="output format (default: %(default)s)")
-    output_option(p)
-    p.set_defaults(run=_check)
 
-    def sweep_option(p: argparse.ArgumentParser) -> None:
-        p.add_argument(
-            "--angles",
-            action="append",
-            metavar="START:STOP:STEP",
-            help="the sweep (NAME=START:STOP:STEP per driver; repeatable); default: the file's",
-        )
+def _check_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
+    _format_option(p, "table", "json")
+    _output_option(p)
 
-    p = commands.add_parser(
-        "plot",
-        help="draw the mechanism and its coupler curves, its assembly modes, or any quantity",
-        description="Draw the mechanism (hatched ground, pins, links, sliders) with the path of every "
-        "moving joint over the sweep (coupler curves in colour, broken where it does not assemble); "
-        "--modes draws every assembly mode side by side; --quantity plots quantities against the input.",
-        **common,
-    )
-    file_argument(p)
-    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the picture: .png, .svg or .pdf")
+
+def _plot_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
+    _output_option(p, "the picture: .png, .svg or .pdf")
     p.add_argument(
         "--at",
         action="append",
         metavar="V1,V2,...",
         help="draw the mechanism at these inputs (earlier ones faded; NAME=... per driver); default: the pose's",
     )
-    sweep_option(p)
+    _sweep_option(p)
     p.add_argument("--modes", action="store_true", help="every assembly mode at --at (default: the pose's input)")
     p.add_argument("--mirrors", action="store_true", help="with --modes: also flip links of three or more joints")
     p.add_argument(
@@ -354,59 +362,29 @@ def build_parser() -> argparse.ArgumentParser:
         help="plot these columns of 'analyze --format csv' against the input, one plot per option "
         "(e.g. coupler.omega or 'T[crank]'), or a group: " + ", ".join(_QUANTITY_GROUPS),
     )
-    p.set_defaults(run=_plot)
 
-    p = commands.add_parser(
-        "animate",
-        help="an animation of the sweep: GIF, or MP4 with an ffmpeg",
-        description="Animate the mechanism over the sweep, one frame per sample (at least 36). "
-        "MP4 needs an ffmpeg on PATH or pip install 'linkagekit[video]'.",
-        **common,
-    )
-    file_argument(p)
-    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the animation: .gif or .mp4")
-    sweep_option(p)
+
+def _animate_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
+    _output_option(p, "the animation: .gif or .mp4")
+    _sweep_option(p)
     p.add_argument("--frames", metavar="N", help="this many frames, evenly over the sweep")
     p.add_argument("--fps", metavar="F", default="24", help="frames per second (default: %(default)s)")
-    p.set_defaults(run=_animate)
 
-    p = commands.add_parser(
-        "report",
-        help="one self-contained HTML page: the mechanism moving, its curves, plots, checks",
-        description="Write one self-contained HTML page: the mechanism moving under a slider, its "
-        "curves, plots of its rates (and forces), the checks, the solve plan and the file itself.",
-        **common,
-    )
-    file_argument(p)
-    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the page: .html")
-    sweep_option(p)
-    p.set_defaults(run=_report)
 
-    p = commands.add_parser(
-        "edit",
-        help="edit the mechanism in the browser: drag joints, see it re-solved; save the file",
-        description="Serve an editor of FILE on 127.0.0.1 (its URL, with a random token, is the first line "
-        "printed) and open it in the browser. Drag joints, change numbers, add links, choose the assembly "
-        "mode; every picture is solved by linkagekit. Save writes FILE atomically and keeps FILE.bak. "
-        "Stop with Ctrl-C.",
-        **common,
-    )
-    file_argument(p)
+def _report_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
+    _output_option(p, "the page: .html")
+    _sweep_option(p)
+
+
+def _edit_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
     p.add_argument("--port", metavar="N", help="listen on this port (default: a free one)")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser; just print the URL")
-    p.set_defaults(run=_edit)
 
-    p = commands.add_parser(
-        "synthesize",
-        help="find a four-bar or six-bar whose tracer point P passes near target points",
-        description="Dimensional synthesis: read target points (CSV with the header x,y or x,y,input, or an SVG "
-        "path) and write a mechanism file whose tracer point P passes near every target, its driver the link "
-        "'crank'. With an input column (the crank angle at each target, degrees) the tracer must be at each "
-        "target at its own angle, up to one common offset. The crank turns fully and every transmission angle "
-        "stays within [MIN, 180 - MIN]. Differential evolution over whole generations, then a least-squares "
-        "polish; the same --seed gives the same result (unless --seconds stops the run).",
-        **common,
-    )
+
+def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("targets", metavar="TARGET", help="target points: .csv (x,y[,input]) or .svg (its first path)")
     p.add_argument(
         "--topology",
@@ -414,7 +392,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME|FILE",
         help="fourbar (default), watt2, stephenson3, or a mechanism file used as a template (see --free)",
     )
-    p.add_argument("-o", "--output", metavar="OUT", required=True, help="the mechanism file to write: .yaml or .json")
+    _output_option(p, "the mechanism file to write: .yaml or .json")
     p.add_argument("--seconds", metavar="S", default="60", help="time budget (default 60)")
     p.add_argument("--seed", metavar="N", default="0", help="random seed (default 0)")
     p.add_argument(
@@ -443,8 +421,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
     )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
-    p.set_defaults(run=_synthesize)
-    return parser
 
 
 #: --quantity groups: the report's plots, by their short name
@@ -1068,90 +1044,107 @@ def _interval(text: str, option: str) -> tuple[float, float]:
 
 def _synthesize(args: argparse.Namespace) -> int:
     """``linkagekit synthesize``."""
-    import os
-
-    import numpy as np
-
     import linkagekit as lk
 
     from .synthesis.run import synthesize
-    from .synthesis.space import TOPOLOGIES
     from .synthesis.targets import read_targets
 
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    search = _search_options(args)
+    targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
+    topology = _topology(args, targets.unit)
+    with _Search(search["seconds"]) as progress:
+        out = synthesize(targets, topology, **search, progress=progress)
+    lk.save(out.mechanism, args.output)
+    if args.plot:
+        _plot_synthesis(out, targets, args.plot)
+    print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
+    return 0
+
+
+def _search_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of :func:`~linkagekit.synthesis.run.synthesize` that the options give, checked.
+
+    Also ``points`` (the samples along an SVG path), which goes to the targets' reader instead.
+    """
+    import os
+
     seconds = _one_number(args.seconds, "--seconds")
     if not 0 < seconds <= 1e7:
         raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
-    seed = _integer(args.seed, "--seed", 0, 2**32 - 1)
-    min_tr = _one_number(args.min_transmission, "--min-transmission")
-    workers = _integer(args.workers, "--workers", 1, 1024)
-    points = _integer(args.points, "--points", 3, 100_000)
-    restarts = _integer(args.restarts, "--restarts", 1, 10_000)
-    generations = _integer(args.generations, "--generations", 1, 10_000_000)
-    goal = _one_number(args.goal, "--goal")
-    if not 0 <= goal < 1:
+    options: dict[str, Any] = {
+        "seconds": seconds,
+        "seed": _integer(args.seed, "--seed", 0, 2**32 - 1),
+        "min_transmission": _one_number(args.min_transmission, "--min-transmission"),
+        "workers": _integer(args.workers, "--workers", 1, 1024),
+    }
+    options["points"] = _integer(
+        args.points, "--points", 3, 100_000
+    )  # of an SVG path: read_targets's, not synthesize's
+    options["restarts"] = _integer(args.restarts, "--restarts", 1, 10_000)
+    options["generations"] = _integer(args.generations, "--generations", 1, 10_000_000)
+    options["goal"] = _one_number(args.goal, "--goal")
+    if not 0 <= options["goal"] < 1:
         raise InputError(f"--goal: expected a fraction of the targets' diagonal in [0, 1), got {args.goal}")
-    reach = _one_number(args.reach, "--reach")
-    if not 0 < reach <= 100:
+    options["reach"] = _one_number(args.reach, "--reach")
+    if not 0 < options["reach"] <= 100:
         raise InputError(f"--reach: expected a positive number up to 100, got {args.reach}")
-    pivots = None
-    if args.pivots:
-        xy = args.pivots.split(",")
-        if len(xy) != 2:
-            raise InputError(f"--pivots: expected X0:X1,Y0:Y1, got {shorten(repr(args.pivots))}")
-        pivots = (_interval(xy[0], "--pivots"), _interval(xy[1], "--pivots"))
-    lengths = _interval(args.lengths, "--lengths") if args.lengths else None
-    if lengths is not None and lengths[0] < 0:
+    options["pivots"] = _pivots(args.pivots) if args.pivots else None
+    options["lengths"] = _interval(args.lengths, "--lengths") if args.lengths else None
+    if options["lengths"] is not None and options["lengths"][0] < 0:
         raise InputError("--lengths: lengths are not negative")
     if args.checkpoint and os.path.isdir(args.checkpoint):
         raise InputError(f"--checkpoint {shorten(args.checkpoint, 80)}: is a directory")
-    targets = read_targets(args.targets, units=args.units, points=points)
-    topology: Any = args.topology
-    if topology not in TOPOLOGIES:
-        if not os.path.exists(topology):
-            raise InputError(
-                f"--topology: '{shorten(topology)}' is neither a topology ({', '.join(TOPOLOGIES)}) nor a file"
-            )
-        topology = lk.load(topology)
-        if topology.length_unit != targets.unit:
-            raise InputError(
-                f"--topology {shorten(args.topology, 80)}: its length unit is {topology.length_unit}, "
-                f"the targets' is {targets.unit} (--units)"
-            )
-    elif args.free:
-        raise InputError("--free goes with a template file given as --topology")
-    free = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
-    with _Search(seconds) as progress:
-        out = synthesize(
-            targets,
-            topology,
-            min_transmission=min_tr,
-            ordered=args.ordered,
-            lengths=lengths,
-            pivots=pivots,
-            free=free,
-            reach=reach,
-            seed=seed,
-            seconds=seconds,
-            restarts=restarts,
-            generations=generations,
-            goal=goal,
-            workers=workers,
-            scheduler=args.scheduler,
-            checkpoint=args.checkpoint,
-            progress=progress,
-        )
-    lk.save(out.mechanism, args.output)
-    if args.plot:
-        from .viz import draw
+    options["free"] = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
+    options.update(ordered=args.ordered, scheduler=args.scheduler, checkpoint=args.checkpoint)
+    return options
 
-        res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(0.0, 360.0, 721)})
-        fig = draw.synthesis_figure(res, targets.xy, out.errors, closed=targets.closed)
-        draw.save_figure(fig, args.plot, fig.axes[0])
-    print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
-    return 0
+
+def _pivots(text: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """``--pivots X0:X1,Y0:Y1``: the region of the ground pivots."""
+    xy = text.split(",")
+    if len(xy) != 2:
+        raise InputError(f"--pivots: expected X0:X1,Y0:Y1, got {shorten(repr(text))}")
+    return _interval(xy[0], "--pivots"), _interval(xy[1], "--pivots")
+
+
+def _topology(args: argparse.Namespace, unit: str) -> Any:
+    """``--topology``: a topology's name, or the template mechanism its file holds (in the targets' *unit*)."""
+    import os
+
+    import linkagekit as lk
+
+    from .synthesis.space import TOPOLOGIES
+
+    name: str = args.topology
+    if name in TOPOLOGIES:
+        if args.free:
+            raise InputError("--free goes with a template file given as --topology")
+        return name
+    if not os.path.exists(name):
+        raise InputError(f"--topology: '{shorten(name)}' is neither a topology ({', '.join(TOPOLOGIES)}) nor a file")
+    template = lk.load(name)
+    if template.length_unit != unit:
+        raise InputError(
+            f"--topology {shorten(name, 80)}: its length unit is {template.length_unit}, "
+            f"the targets' is {unit} (--units)"
+        )
+    return template
+
+
+def _plot_synthesis(out: Any, targets: Any, path: str) -> None:
+    """``--plot``: the targets on the curve the synthesized mechanism draws over a full turn of its crank."""
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .viz import draw
+
+    res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(0.0, 360.0, 721)})
+    fig = draw.synthesis_figure(res, targets.xy, out.errors, closed=targets.closed)
+    draw.save_figure(fig, path, fig.axes[0])
 
 
 def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
@@ -1260,6 +1253,83 @@ class _progress:
             self.bar.stop()
 
 
+#: every command, in the order ``linkagekit --help`` lists them
+_COMMANDS = (
+    _Command(
+        "analyze",
+        "positions, velocities, accelerations (and forces) over a sweep of the inputs",
+        "Positions, velocities and accelerations (and forces, when the file gives masses, "
+        "gravity or loads) over a sweep of the inputs. Input values are in the file's angle unit "
+        "(length unit for a slider's displacement or a cylinder's length); with several drivers give NAME=... "
+        "per driver.",
+        _analyze_arguments,
+        _analyze,
+    ),
+    _Command(
+        "modes",
+        "every assembly mode at one input value",
+        "Every assembly mode at one input value, with its joint positions.",
+        _modes_arguments,
+        _modes,
+    ),
+    _Command(
+        "check",
+        "validate a file: degrees of freedom, solve plan, where it assembles",
+        "Validate a mechanism file; print its degrees of freedom, solve plan, the input "
+        "range where it assembles and, for a four-bar loop, its Grashof type and transmission angle.",
+        _check_arguments,
+        _check,
+    ),
+    _Command(
+        "plot",
+        "draw the mechanism and its coupler curves, its assembly modes, or any quantity",
+        "Draw the mechanism (hatched ground, pins, links, sliders) with the path of every "
+        "moving joint over the sweep (coupler curves in colour, broken where it does not assemble); "
+        "--modes draws every assembly mode side by side; --quantity plots quantities against the input.",
+        _plot_arguments,
+        _plot,
+    ),
+    _Command(
+        "animate",
+        "an animation of the sweep: GIF, or MP4 with an ffmpeg",
+        "Animate the mechanism over the sweep, one frame per sample (at least 36). "
+        "MP4 needs an ffmpeg on PATH or pip install 'linkagekit[video]'.",
+        _animate_arguments,
+        _animate,
+    ),
+    _Command(
+        "report",
+        "one self-contained HTML page: the mechanism moving, its curves, plots, checks",
+        "Write one self-contained HTML page: the mechanism moving under a slider, its "
+        "curves, plots of its rates (and forces), the checks, the solve plan and the file itself.",
+        _report_arguments,
+        _report,
+    ),
+    _Command(
+        "edit",
+        "edit the mechanism in the browser: drag joints, see it re-solved; save the file",
+        "Serve an editor of FILE on 127.0.0.1 (its URL, with a random token, is the first line "
+        "printed) and open it in the browser. Drag joints, change numbers, add links, choose the assembly "
+        "mode; every picture is solved by linkagekit. Save writes FILE atomically and keeps FILE.bak. "
+        "Stop with Ctrl-C.",
+        _edit_arguments,
+        _edit,
+    ),
+    _Command(
+        "synthesize",
+        "find a four-bar or six-bar whose tracer point P passes near target points",
+        "Dimensional synthesis: read target points (CSV with the header x,y or x,y,input, or an SVG "
+        "path) and write a mechanism file whose tracer point P passes near every target, its driver the link "
+        "'crank'. With an input column (the crank angle at each target, degrees) the tracer must be at each "
+        "target at its own angle, up to one common offset. The crank turns fully and every transmission angle "
+        "stays within [MIN, 180 - MIN]. Differential evolution over whole generations, then a least-squares "
+        "polish; the same --seed gives the same result (unless --seconds stops the run).",
+        _synthesize_arguments,
+        _synthesize,
+    ),
+)
+
+
 # ---------------------------------------------------------------------- entry point
 def _run(argv: list[str]) -> int:
     parser = build_parser()
@@ -1271,9 +1341,8 @@ def _run(argv: list[str]) -> int:
     except _ParserExit as done:
         return done.status
     if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
-        raise InputError(
-            f"give a command: analyze, modes, check, plot, animate, report, edit or synthesize (see '{PROG} --help')"
-        )
+        *others, last = (c.name for c in _COMMANDS)
+        raise InputError(f"give a command: {', '.join(others)} or {last} (see '{PROG} --help')")
     code: int = args.run(args)
     return code
 

@@ -25,7 +25,7 @@ import shutil
 import subprocess
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -33,6 +33,9 @@ from ..errors import InputError, LinkageError
 from ..files import atomic_output
 from ..result import Result
 from .scene import Scene, build_scene
+
+if TYPE_CHECKING:  # pragma: no cover - matplotlib is imported where a picture is made
+    from matplotlib.figure import Figure
 
 #: the fewest frames an animation has (spec: at least 36)
 MIN_FRAMES = 36
@@ -63,6 +66,22 @@ def find_ffmpeg() -> str | None:
         return None
 
 
+class _AggCanvas(Protocol):
+    """The blitting calls of matplotlib's Agg canvas, typed (``backend_agg`` has no annotations)."""
+
+    def draw(self) -> None: ...
+    def copy_from_bbox(self, bbox: Any) -> Any: ...
+    def restore_region(self, region: Any) -> None: ...
+    def buffer_rgba(self) -> memoryview: ...
+
+
+def _agg_canvas(fig: Figure) -> _AggCanvas:
+    """An Agg canvas for *fig*, seen through :class:`_AggCanvas` (mypy checks that it fits)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    return FigureCanvasAgg(fig)
+
+
 class Frames:
     """RGB frames (height, width, 3) of a scene, one per sample; width and height even.
 
@@ -71,7 +90,6 @@ class Frames:
     """
 
     def __init__(self, scene: Scene, size: float = 6.0, dpi: int = 100) -> None:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
         from .draw import Drawing, _aspect, _t
@@ -80,7 +98,7 @@ class Frames:
         w = int(round(size * dpi / 2)) * 2
         h = int(round(size * _aspect(scene) * dpi / 2)) * 2
         fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)
-        self.canvas = FigureCanvasAgg(fig)
+        self.canvas = _agg_canvas(fig)
         self.ax = ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
         fig.suptitle(_t(scene.name or "mechanism"), fontsize=10)
         self.drawing = Drawing(ax, scene, animated=True)
@@ -263,12 +281,38 @@ def animate(
     InputError
         For another suffix or bad numbers; :class:`VideoError` when an MP4 has no ffmpeg.
     """
+    path, fmt = _output(path)
+    _check_options(fmt, fps, size, dpi, progress)
+    ffmpeg = _ffmpeg() if fmt == ".mp4" else None
+    scene = res if isinstance(res, Scene) else build_scene(res)
+    if scene.n > MAX_FRAMES:
+        raise InputError(
+            f"{scene.n} samples make {scene.n} frames, more than an animation takes ({MAX_FRAMES}): "
+            "animate a coarser sweep"
+        )
+    tick = _counter(progress, scene.n)
+    with atomic_output(path) as tmp:
+        images = Frames(scene, size=float(size), dpi=int(dpi))
+        if ffmpeg is None:
+            _write_gif(images, tmp, float(fps), tick)
+        else:
+            _write_mp4(images, tmp, float(fps), tick, ffmpeg)
+    return path
+
+
+def _output(path: str | Path) -> tuple[Path, str]:
+    """The animation's file and its format (``.gif`` or ``.mp4``, by the suffix)."""
     if not isinstance(path, str | os.PathLike):
         raise InputError(f"path: expected a file name ending in .gif or .mp4, got {type(path).__name__}")
     path = Path(path)
     fmt = path.suffix.lower()
     if fmt not in (".gif", ".mp4"):
         raise InputError(f"{path}: the output must end in .gif or .mp4")
+    return path, fmt
+
+
+def _check_options(fmt: str, fps: float, size: float, dpi: int, progress: object) -> None:
+    """Raise an InputError for a number out of its range, or a *progress* that is not a function."""
     top_fps = MAX_GIF_FPS if fmt == ".gif" else 120.0
     for what, v, lo, hi in (("fps", fps, 0.1, top_fps), ("size", size, 1.0, 40.0), ("dpi", dpi, 20, 600)):
         if isinstance(v, bool) or not isinstance(v, numbers.Real) or not lo <= float(v) <= hi:
@@ -276,21 +320,21 @@ def animate(
             raise InputError(f"{what}: expected a number in [{lo:g}, {hi:g}]{extra}, got {v!r}")
     if progress is not None and not callable(progress):
         raise InputError(f"progress: expected a function progress(done, total), got {type(progress).__name__}")
-    ffmpeg = None
-    if fmt == ".mp4":
-        ffmpeg = find_ffmpeg()
-        if ffmpeg is None:
-            raise VideoError(
-                'an MP4 needs ffmpeg: install it (e.g. apt install ffmpeg) or pip install "linkagekit[video]"; '
-                "or write a .gif"
-            )
-    scene = res if isinstance(res, Scene) else build_scene(res)
-    if scene.n > MAX_FRAMES:
-        raise InputError(
-            f"{scene.n} samples make {scene.n} frames, more than an animation takes ({MAX_FRAMES}): "
-            "animate a coarser sweep"
+
+
+def _ffmpeg() -> str:
+    """The ffmpeg an MP4 needs (a VideoError when there is none)."""
+    ffmpeg = find_ffmpeg()
+    if ffmpeg is None:
+        raise VideoError(
+            'an MP4 needs ffmpeg: install it (e.g. apt install ffmpeg) or pip install "linkagekit[video]"; '
+            "or write a .gif"
         )
-    total = scene.n
+    return ffmpeg
+
+
+def _counter(progress: Callable[[int, int], None] | None, total: int) -> Callable[[], None]:
+    """A function to call after each frame: it tells *progress* (if any) how many of *total* are done."""
     done = 0
 
     def tick() -> None:
@@ -299,10 +343,4 @@ def animate(
         if progress is not None:
             progress(done, total)
 
-    with atomic_output(path) as tmp:
-        images = Frames(scene, size=float(size), dpi=int(dpi))
-        if ffmpeg is None:
-            _write_gif(images, tmp, float(fps), tick)
-        else:
-            _write_mp4(images, tmp, float(fps), tick, ffmpeg)
-    return path
+    return tick

@@ -149,89 +149,29 @@ class Drawing:
         size: float | None = None,
     ):
         self.ax, self.scene = ax, scene
-        sc = scene
-        self.pin = 0.012 * (sc.size if size is None else size)
+        self.pin = 0.012 * (scene.size if size is None else size)
         self.static: list[Any] = []
         ax.set_aspect("equal")
-        ax.set_xlim(sc.bounds[0], sc.bounds[2])
-        ax.set_ylim(sc.bounds[1], sc.bounds[3])
+        ax.set_xlim(scene.bounds[0], scene.bounds[2])
+        ax.set_ylim(scene.bounds[1], scene.bounds[3])
         ax.set_axis_off()
         ax.set_facecolor(BACKGROUND)
         if curves:
             self._curves()
         if ground:
             self._ground()
-        # moving artists
-        self.links: list[tuple[Any, Any, tuple[int, ...]]] = []
-        k = 0
-        for ln in sc.links:
-            if ln.kind == "ground":
-                continue
-            if ln.kind == "cylinder":  # a rod over the whole length, a barrel over its first part
-                idx = tuple(sc.index(j) for j in ln.outline)
-                for width, shade in ((2.5, CYLINDER_ROD), (8, CYLINDER_BARREL)):
-                    part = Line2D([], [], color=shade, linewidth=width, solid_capstyle="butt", zorder=3.2)
-                    part.set_animated(animated)
-                    ax.add_line(part)
-                    self.links.append((ln, part, idx))
-                continue
-            color = PALETTE[k % len(PALETTE)]
-            k += 1
-            idx = tuple(sc.index(j) for j in ln.outline)
-            if ln.kind == "plate":
-                art: Any = Polygon(
-                    np.zeros((len(idx), 2)),
-                    closed=True,
-                    facecolor=color,
-                    alpha=0.35,
-                    edgecolor=color,
-                    linewidth=2.5,
-                    joinstyle="round",
-                    zorder=3,
-                    animated=animated,
-                )
-                ax.add_patch(art)
-            elif ln.kind == "block":
-                art = Polygon(
-                    np.zeros((4, 2)),
-                    closed=True,
-                    facecolor=color,
-                    alpha=0.8,
-                    edgecolor="black",
-                    linewidth=1.0,
-                    zorder=4,
-                    animated=animated,
-                )
-                ax.add_patch(art)
-            else:
-                art = Line2D([], [], color=color, linewidth=5, solid_capstyle="round", zorder=3, animated=animated)
-                ax.add_line(art)
-            self.links.append((ln, art, idx))
+        # moving artists, in the order they are added (which one is on top at equal zorder)
+        self.links = self._links(animated)
         self.moving_guides: list[tuple[Any, Line2D]] = []
-        for sl in sc.sliders:
+        for sl in scene.sliders:
             if sl.on != "ground":
                 line = Line2D([], [], color="#444444", linewidth=1.5, zorder=2.5, animated=animated)
                 ax.add_line(line)
                 self.moving_guides.append((sl, line))
-        moving = [i for i, j in enumerate(sc.joints) if j not in sc.ground_joints]
-        self.moving = moving
+        self.moving = [i for i, j in enumerate(scene.joints) if j not in scene.ground_joints]
         self.pins = Line2D([], [], animated=animated, **PIN)
         ax.add_line(self.pins)
-        self.labels: list[tuple[int, Text]] = []
-        if labels:
-            for i in moving:
-                t = ax.text(
-                    0,
-                    0,
-                    _t(sc.joints[i]),
-                    fontsize=8,
-                    zorder=7,
-                    animated=animated,
-                    ha="left",
-                    va="bottom",
-                    visible=False,
-                )
-                self.labels.append((i, t))
+        self.labels: list[tuple[int, Text]] = [(i, self._label(i, animated)) for i in self.moving] if labels else []
         self.note = ax.text(
             0.5,
             0.02,
@@ -244,6 +184,64 @@ class Drawing:
             zorder=8,
             animated=animated,
         )
+
+    # ---------------------------------------------------------------- moving parts
+    def _links(self, animated: bool) -> list[tuple[Any, Any, tuple[int, ...]]]:
+        """Every moving link's artist (two for a cylinder), with the link and its outline's joint indices."""
+        sc = self.scene
+        links: list[tuple[Any, Any, tuple[int, ...]]] = []
+        k = 0
+        for ln in sc.links:
+            if ln.kind == "ground":
+                continue
+            idx = tuple(sc.index(j) for j in ln.outline)
+            if ln.kind == "cylinder":  # a rod over the whole length, a barrel over its first part
+                for width, shade in ((2.5, CYLINDER_ROD), (8, CYLINDER_BARREL)):
+                    part = Line2D([], [], color=shade, linewidth=width, solid_capstyle="butt", zorder=3.2)
+                    part.set_animated(animated)
+                    self.ax.add_line(part)
+                    links.append((ln, part, idx))
+                continue
+            links.append((ln, self._link_artist(ln.kind, PALETTE[k % len(PALETTE)], len(idx), animated), idx))
+            k += 1
+        return links
+
+    def _link_artist(self, kind: str, color: str, joints: int, animated: bool) -> Any:
+        """A link of this *kind* on the Axes: a plate (a polygon of its *joints*), a block, or a bar."""
+        if kind == "plate":
+            return self.ax.add_patch(
+                Polygon(
+                    np.zeros((joints, 2)),
+                    closed=True,
+                    facecolor=color,
+                    alpha=0.35,
+                    edgecolor=color,
+                    linewidth=2.5,
+                    joinstyle="round",
+                    zorder=3,
+                    animated=animated,
+                )
+            )
+        if kind == "block":
+            return self.ax.add_patch(
+                Polygon(
+                    np.zeros((4, 2)),
+                    closed=True,
+                    facecolor=color,
+                    alpha=0.8,
+                    edgecolor="black",
+                    linewidth=1.0,
+                    zorder=4,
+                    animated=animated,
+                )
+            )
+        bar = Line2D([], [], color=color, linewidth=5, solid_capstyle="round", zorder=3, animated=animated)
+        return self.ax.add_line(bar)
+
+    def _label(self, i: int, animated: bool) -> Text:
+        """The name of joint *i*, placed (and shown) by :meth:`update`."""
+        name = _t(self.scene.joints[i])
+        return self.ax.text(0, 0, name, fontsize=8, zorder=7, animated=animated, ha="left", va="bottom", visible=False)
 
     # ---------------------------------------------------------------- static parts
     def _curves(self) -> None:

@@ -363,6 +363,20 @@ def _plots(catalogue: Catalogue) -> tuple[Plot, ...]:
     return tuple(plots)
 
 
+def _bounds(mech: Mechanism, z: np.ndarray, sliders: tuple[SceneSlider, ...]) -> tuple[float, float, float, float]:
+    """``(x0, y0, x1, y1)`` around every joint at every sample, the pose, and the drawn guides, with a margin."""
+    pts = [z[np.isfinite(z)], np.array([mech.joints[j] for j in mech.joint_names])]
+    for s in sliders:
+        o = s.origin[..., 0] + 1j * s.origin[..., 1]
+        d = s.direction[..., 0] + 1j * s.direction[..., 1]
+        pts += [o + s.span[0] * d, o + s.span[1] * d]
+    allp = np.concatenate([np.ravel(p) for p in pts])
+    allp = allp[np.isfinite(allp)]
+    x0, x1, y0, y1 = allp.real.min(), allp.real.max(), allp.imag.min(), allp.imag.max()
+    pad = MARGIN * max(x1 - x0, y1 - y0, 1e-9)
+    return (float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad))
+
+
 def build_scene(res: Result) -> Scene:
     """The scene of one mechanism's solved sweep.
 
@@ -394,17 +408,6 @@ def build_scene(res: Result) -> Scene:
     drivers = tuple(d.name for d in mech.drivers)
     inputs = {d: np.asarray(columns[cat.find(Owner.DRIVER, d, "input").name], float).copy() for d in drivers}
     x_driver = _x_driver(inputs, drivers)
-    # bounds: every joint at every sample, the pose, and the drawn guides
-    pts = [z[np.isfinite(z)], np.array([mech.joints[j] for j in names])]
-    for s in sliders:
-        o = s.origin[..., 0] + 1j * s.origin[..., 1]
-        d = s.direction[..., 0] + 1j * s.direction[..., 1]
-        pts += [o + s.span[0] * d, o + s.span[1] * d]
-    allp = np.concatenate([np.ravel(p) for p in pts])
-    allp = allp[np.isfinite(allp)]
-    x0, x1, y0, y1 = allp.real.min(), allp.real.max(), allp.imag.min(), allp.imag.max()
-    pad = MARGIN * max(x1 - x0, y1 - y0, 1e-9)
-    bounds = (float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad))
     return Scene(
         name=mech.name,
         length_unit=mech.length_unit,
@@ -422,7 +425,7 @@ def build_scene(res: Result) -> Scene:
         coupler_curves=coupler,
         other_paths=tuple(j for j in other if j in moving),
         gaps=_gaps(res.assembled),
-        bounds=bounds,
+        bounds=_bounds(mech, z, sliders),
         columns=columns,
         units=units,
         plots=_plots(cat),

@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import json
 import secrets
+import sys
 import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -40,6 +41,8 @@ COARSE_SAMPLES = 73
 MAX_BODY = 2 << 20
 #: seconds a request may take to arrive
 TIMEOUT = 10.0
+#: how a client that went away shows: it reset or closed its connection, or stopped sending
+VANISHED = (ConnectionError, TimeoutError)
 
 
 class ConflictError(LinkageError):
@@ -342,19 +345,20 @@ class _Handler(BaseHTTPRequestHandler):
         if not isinstance(request, dict):
             self._json(400, {"ok": False, "error": "bad request: expected a JSON object"})
             return
+        self._json(*self._answer(rest, request))
+
+    def _answer(self, call: str, request: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        """The status and JSON answer of a solve or save (written by the caller, outside these excepts)."""
         session = self.server.session
         try:
-            if rest == "api/solve":
-                self._json(200, session.solve(request))
-            else:
-                self._json(200, session.save(request))
+            return 200, session.solve(request) if call == "api/solve" else session.save(request)
         except ConflictError as exc:
-            self._json(409, {"ok": False, "error": one_line(str(exc), 300), "conflict": True})
+            return 409, {"ok": False, "error": one_line(str(exc), 300), "conflict": True}
         except LinkageError as exc:
             # a document that does not solve: the page keeps its last good picture and shows this
-            self._json(200, {"ok": False, "error": one_line(str(exc), 300)})
+            return 200, {"ok": False, "error": one_line(str(exc), 300)}
         except Exception as exc:  # noqa: BLE001 - a request must never take the server down
-            self._json(500, {"ok": False, "error": f"internal error: {type(exc).__name__}: {one_line(str(exc), 200)}"})
+            return 500, {"ok": False, "error": f"internal error: {type(exc).__name__}: {one_line(str(exc), 200)}"}
 
 
 def _no_constant(name: str) -> Any:
@@ -365,7 +369,12 @@ class EditorServer(ThreadingHTTPServer):
     """The editor's HTTP server on 127.0.0.1 (``port`` 0: a free port)."""
 
     daemon_threads = True
+    #: connections the system holds until the server accepts them (socketserver's default is 5: a burst
+    #: of requests beyond it waited for the client's SYN retransmission, a second or more)
+    request_queue_size = 128
     routes = ("", "api/solve", "api/save")
+    #: set once the server stops: a request broken by the shutdown is not reported
+    closing = False
 
     def __init__(self, session: Session, port: int = 0, token: str | None = None) -> None:
         if not isinstance(port, int) or isinstance(port, bool) or not 0 <= port <= 65535:
@@ -379,6 +388,32 @@ class EditorServer(ThreadingHTTPServer):
         self.port = int(self.server_address[1])
         self.hosts = {f"127.0.0.1:{self.port}", f"localhost:{self.port}"}
         self.origins = {f"http://{h}" for h in self.hosts}
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """Report a request that failed: nothing for a client that went away, one line for anything else.
+
+        socketserver's default prints a traceback between dashed lines.  A client that closes its
+        connection before its answer (the page sends a newer request, the tab is closed), one that
+        stops sending (:data:`TIMEOUT`), and a socket error while the server stops are normal here.
+        """
+        exc = sys.exc_info()[1]
+        if isinstance(exc, VANISHED) or (self.closing and isinstance(exc, OSError)):
+            return
+        where = client_address[0] if isinstance(client_address, tuple) and client_address else "a client"
+        print(
+            f"linkagekit edit: a request from {where} failed: {type(exc).__name__}: {one_line(str(exc), 120)}",
+            file=sys.stderr,
+        )
+
+    def shutdown(self) -> None:
+        """Stop :meth:`serve_forever` (from another thread); requests broken by it are not reported."""
+        self.closing = True
+        super().shutdown()
+
+    def server_close(self) -> None:
+        """Close the listening socket; requests broken by it are not reported."""
+        self.closing = True
+        super().server_close()
 
     @property
     def url(self) -> str:

@@ -27,8 +27,9 @@ from .. import __version__
 from ..catalogue import input_units
 from ..errors import InputError
 from ..files import atomic_output
+from ..model import Mechanism
 from ..result import Result
-from ..viz.scene import build_scene
+from ..viz.scene import Scene, build_scene
 
 #: the most samples a page holds (each sample costs about 1 kB for a four-bar with rates)
 MAX_REPORT_SAMPLES = 10_000
@@ -138,69 +139,26 @@ def report_html(
     start : int, optional
         The sample shown first (default: the first that assembles).
     """
-    if not isinstance(res, Result):
-        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
-    if res.n_samples > MAX_REPORT_SAMPLES:
-        raise InputError(
-            f"{res.n_samples} samples, more than a report page holds ({MAX_REPORT_SAMPLES}): report a coarser sweep"
-        )
-    for what, value in (("source", source), ("checks_text", checks_text), ("title", title)):
-        if value is not None and not isinstance(value, str):
-            raise InputError(f"{what}: expected text, got {type(value).__name__}")
+    _check_arguments(res, source, checks_text, title)
     sc = build_scene(res)
     mech = res.mechanism
-    if source is None:
-        import yaml
-
-        source = yaml.safe_dump(mech.to_dict(), sort_keys=False, allow_unicode=True)
-    if checks_text is None:
-        from ..checks import check, check_text
-
-        units = input_units(mech)
-        checks_text = check_text(check(mech).to_dict(), units, mech.name or "mechanism")
+    source = _yaml(mech) if source is None else source
+    checks_text = _checks_text(mech) if checks_text is None else checks_text
     esc = html.escape
-    name = mech.name or "mechanism"
-    ok = np.flatnonzero(sc.assembled)
+    title = title or mech.name or "mechanism"
     if start is None:
+        ok = np.flatnonzero(sc.assembled)
         start = int(ok[0]) if ok.size else 0
-    controls = []
-    for d in sc.drivers:
-        controls.append(
-            f'<label for="lk-in-{esc(d)}">{esc(d)}</label>'
-            f'<input type="range" id="lk-in-{esc(d)}" data-role="input" data-driver="{esc(d)}" '
-            f'min="0" max="{sc.n - 1}" step="1" value="{start}">'
-            f'<output data-role="input-value" data-driver="{esc(d)}"></output>'
-        )
     file_name = "" if mech.source.startswith("<") else Path(mech.source).name
     unit_text = f"lengths in {esc(mech.length_unit)}, angles in {esc(mech.angle_unit)}"
-    body = f"""<!DOCTYPE html>
+    return f"""<!DOCTYPE html>
 <html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="viewport" content="width=device-width, initial-scale=1">
-<meta name="generator" content="linkagekit {esc(__version__)}">
-<title>{esc(title or name)} · linkagekit {"editor" if editor else "report"}</title>
-{'<link rel="icon" href="data:,">' if editor else ""}
-<style>{STYLE}</style>
-</head>
+{_head(title, bool(editor))}
 <body data-name="{esc(Path(file_name).stem or "linkage")}">
-<h1>{esc(title or name)}</h1>
+<h1>{esc(title)}</h1>
 <p class="sub">{esc(file_name)}{" · " if file_name else ""}{unit_text} · {sc.n} samples ·
 linkagekit {esc(__version__)}</p>
-<div class="top">
-<section>
-<svg data-role="mechanism" xmlns="http://www.w3.org/2000/svg" role="img" aria-label="the mechanism"></svg>
-<div class="controls">
-{"".join(controls)}
-</div>
-<p><button type="button" data-action="play">Play</button>
-<button type="button" data-action="csv">Download CSV</button></p>
-<p data-role="message" aria-live="polite"></p>
-<p class="gaps" data-role="gaps"></p>
-{_editor_panel(editor, file_name) if editor else ""}
-</section>
-<section id="lk-plots" aria-label="plots"></section>
-</div>
+{_top(sc, start, editor, file_name)}
 <h2>Checks</h2>
 <pre data-role="checks">{esc(checks_text)}</pre>
 <h2>Mechanism file</h2>
@@ -213,7 +171,76 @@ the page only draws them. The coupler curves are in magenta, the other joint pat
 </body>
 </html>
 """
-    return body
+
+
+def _check_arguments(res: Any, source: Any, checks_text: Any, title: Any) -> None:
+    """Raise an InputError unless *res* is one design's Result a page can hold and the texts are text."""
+    if not isinstance(res, Result):
+        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
+    if res.n_samples > MAX_REPORT_SAMPLES:
+        raise InputError(
+            f"{res.n_samples} samples, more than a report page holds ({MAX_REPORT_SAMPLES}): report a coarser sweep"
+        )
+    for what, value in (("source", source), ("checks_text", checks_text), ("title", title)):
+        if value is not None and not isinstance(value, str):
+            raise InputError(f"{what}: expected text, got {type(value).__name__}")
+
+
+def _yaml(mech: Mechanism) -> str:
+    """The mechanism written as YAML (the page's file when none is given)."""
+    import yaml
+
+    return yaml.safe_dump(mech.to_dict(), sort_keys=False, allow_unicode=True)
+
+
+def _checks_text(mech: Mechanism) -> str:
+    """The text of ``linkagekit check`` for *mech*."""
+    from ..checks import check, check_text
+
+    return check_text(check(mech).to_dict(), input_units(mech), mech.name or "mechanism")
+
+
+def _top(sc: Scene, start: int, editor: dict[str, Any] | None, file_name: str) -> str:
+    """The mechanism, its sliders and buttons (and the editor's panel), and the place of the plots."""
+    return f"""<div class="top">
+<section>
+<svg data-role="mechanism" xmlns="http://www.w3.org/2000/svg" role="img" aria-label="the mechanism"></svg>
+<div class="controls">
+{_input_controls(sc, start)}
+</div>
+<p><button type="button" data-action="play">Play</button>
+<button type="button" data-action="csv">Download CSV</button></p>
+<p data-role="message" aria-live="polite"></p>
+<p class="gaps" data-role="gaps"></p>
+{_editor_panel(editor, file_name) if editor else ""}
+</section>
+<section id="lk-plots" aria-label="plots"></section>
+</div>"""
+
+
+def _head(title: str, editor: bool) -> str:
+    """The page's ``<head>``: its title, its style, and (for the editor) no favicon request."""
+    esc = html.escape
+    return f"""<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="linkagekit {esc(__version__)}">
+<title>{esc(title)} · linkagekit {"editor" if editor else "report"}</title>
+{'<link rel="icon" href="data:,">' if editor else ""}
+<style>{STYLE}</style>
+</head>"""
+
+
+def _input_controls(sc: Scene, start: int) -> str:
+    """A slider over the samples for each driver, at sample *start*, with the output that shows its input."""
+    esc = html.escape
+    return "".join(
+        f'<label for="lk-in-{esc(d)}">{esc(d)}</label>'
+        f'<input type="range" id="lk-in-{esc(d)}" data-role="input" data-driver="{esc(d)}" '
+        f'min="0" max="{sc.n - 1}" step="1" value="{start}">'
+        f'<output data-role="input-value" data-driver="{esc(d)}"></output>'
+        for d in sc.drivers
+    )
 
 
 def write_report(
