@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,7 +55,8 @@ def _inputs(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
 
 
 def _assembled(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
-    return solve(params, _inputs(params, driver, values)).assembled[0]
+    ok: np.ndarray = solve(params, _inputs(params, driver, values)).assembled[0]
+    return ok
 
 
 def _span(mech: Mechanism, driver: int) -> tuple[float, float]:
@@ -363,7 +364,8 @@ class _Quantities:
 
     def out_angle(self, st: _State) -> np.ndarray:
         """Angle (rad) of each loop's rocker link: the direction of its first joint -> its second."""
-        return np.angle(st.z[self.out1] - st.z[self.out0])
+        angle: np.ndarray = np.angle(st.z[self.out1] - st.z[self.out0])
+        return angle
 
 
 @dataclass
@@ -409,38 +411,50 @@ def _sweep(intervals: list[list[float]], cyclic: bool, total: float) -> _Sweep:
     return _Sweep(x, seg, cyclic, total, prev, nxt, px, nx, has_prev, has_next)
 
 
-def _refine(
-    params: Params,
-    driver: int,
-    q: _Quantities,
-    roots: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    mins: tuple[np.ndarray, np.ndarray, np.ndarray],
-) -> tuple[np.ndarray, np.ndarray]:
+@dataclass
+class _Bracket:
+    """One search over an input interval [a, b] of one driver, refined by :func:`_refine`.
+
+    A root of quantity ``row`` of :class:`_Quantities` (its sign at ``a`` is ``sign``;
+    bisection) or, with ``sign`` None, a minimum of it (golden section); found around the
+    dense sample ``sample``.  :func:`_refine` sets ``x``, the refined input value, and
+    :func:`_finish` ``col``, its column in the state at every refined value.
+    """
+
+    a: float
+    b: float
+    row: int
+    sample: int
+    sign: float | None = None
+    x: float = math.nan
+    col: int = -1
+
+
+def _refine(params: Params, driver: int, q: _Quantities, roots: list[_Bracket], mins: list[_Bracket]) -> None:
     """Vectorized bisection (sign changes) and golden-section search (minima), all in one solve per step.
 
-    ``roots`` = (a, b, row, sign at a): a root of quantity ``row`` in [a, b];
-    ``mins`` = (a, b, row): a minimum of quantity ``row`` in [a, b].  Returns the refined
-    abscissae (roots, minima); each bracket shrinks to ~1e-16 of its width's scale.
+    Sets each bracket's ``x``: its interval shrinks to ~1e-16 of its width's scale.  The
+    roots come first in the solve's columns, then the minima, each in the order given.
     """
-    ra, rb, rrow, rsign = (np.array(v, float) for v in roots)
-    ma, mb, mrow = (np.array(v, float) for v in mins)
-    rrow_i, mrow_i = rrow.astype(int), mrow.astype(int)
+    ra, rb = np.array([b.a for b in roots], float), np.array([b.b for b in roots], float)
+    ma, mb = np.array([b.a for b in mins], float), np.array([b.b for b in mins], float)
+    rrow, mrow = np.array([b.row for b in roots], int), np.array([b.row for b in mins], int)
+    rsign = np.array([b.sign for b in roots], float)
     nr, nm = len(ra), len(ma)
-    if nr + nm == 0:
-        return ra, ma
     g = (math.sqrt(5) - 1) / 2
     cols = np.arange(nr + 2 * nm)
-    for _ in range(N_BISECT):
+    for _ in range(N_BISECT if nr + nm else 0):
         mid = 0.5 * (ra + rb)
         c, d = mb - g * (mb - ma), ma + g * (mb - ma)
         vals = q.rows(_state(params, driver, np.concatenate([mid, c, d])))
-        f = vals[np.concatenate([rrow_i, mrow_i, mrow_i]), cols]
+        f = vals[np.concatenate([rrow, mrow, mrow]), cols]
         same = np.sign(f[:nr]) == rsign
         ra, rb = np.where(same, mid, ra), np.where(same, rb, mid)
         fc, fd = f[nr : nr + nm], f[nr + nm :]
         left = (fc < fd) | (np.isnan(fd) & ~np.isnan(fc))
         ma, mb = np.where(left, ma, c), np.where(left, d, mb)
-    return 0.5 * (ra + rb), 0.5 * (ma + mb)
+    for b, x in zip(roots + mins, np.concatenate([0.5 * (ra + rb), 0.5 * (ma + mb)]), strict=True):
+        b.x = float(x)
 
 
 def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
@@ -503,6 +517,264 @@ def _cyc(dv: float, cyclic: bool, period: float) -> float:
     return float(dv - period * round(dv / period)) if cyclic else float(dv)
 
 
+@dataclass
+class _Run:
+    """One driver's dense sweep over where it assembles, and the quantities the checks look at there.
+
+    ``intervals`` where it assembles and ``lo``, ``hi`` its search span (radians or length
+    units); ``factor`` the file unit in those; ``turn`` whether the input is an angle;
+    ``sw.cyclic`` whether it assembles over the whole turn.  ``st`` and ``rows`` the state
+    and :class:`_Quantities` rows at the dense samples ``sw.x``.
+    """
+
+    params: Params
+    driver: int
+    intervals: list[list[float]]
+    factor: float
+    lo: float
+    hi: float
+    turn: bool
+    sw: _Sweep
+    q: _Quantities
+    st: _State
+    rows: np.ndarray
+
+    @property
+    def cyclic(self) -> bool:
+        return self.sw.cyclic
+
+    @property
+    def total(self) -> float:
+        return self.hi - self.lo
+
+    @property
+    def tol_x(self) -> float:
+        """Two refined inputs closer than this are the same point."""
+        return 1e-9 * (1.0 if self.turn else self.total)
+
+    def cyc(self, dv: float) -> float:
+        return _cyc(dv, self.cyclic, self.total)
+
+    def state(self, x: np.ndarray) -> _State:
+        return _state(self.params, self.driver, x)
+
+    def file_value(self, v: float) -> float:
+        """An input in file units (on a full turn, brought into [lo, lo + total) with 0 to round-off at lo)."""
+        if self.cyclic:
+            v = self.lo + float(np.mod(v - self.lo, self.total))
+            if min(abs(v - self.lo), abs(self.lo + self.total - v)) < 1e-13 * self.total:
+                v = self.lo
+        return float(v / self.factor)
+
+
+def _run(
+    mech: Mechanism, params: Params, driver: int, intervals: list[list[float]], loops: list[tuple[int, FourBar]]
+) -> _Run:
+    """Sample one driver densely over ``intervals`` (:func:`_sweep`) and evaluate the checks' quantities there."""
+    d = mech.drivers[driver]
+    lo, hi = _span(mech, driver)
+    total = hi - lo
+    cyclic = d.type.cyclic and len(intervals) == 1 and intervals[0][1] - intervals[0][0] >= total * (1 - 1e-12)
+    sw = _sweep(intervals, cyclic, total)
+    plan = params.plan
+    names = plan.joint_names
+    out_links = []
+    for _, lp in loops:
+        j = mech.link(lp.links[2]).joints
+        out_links.append((names.index(j[0]), names.index(j[1])))
+    known = [(s.k1, s.k2) if isinstance(s, Dyad) else (-1, -1) for s in plan.sign_steps]
+    q = _Quantities([lp for _, lp in loops], plan.n_signs, out_links, known)
+    st = _state(params, driver, sw.x)
+    return _Run(params, driver, intervals, d.input_scale(mech), lo, hi, d.type.cyclic, sw, q, st, q.rows(st))
+
+
+def _limit_brackets(run: _Run, li: int) -> list[_Bracket]:
+    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours."""
+    sw, row = run.sw, run.q.w(li)
+    w = run.rows[row]
+    ia = np.flatnonzero(sw.has_next)
+    wa, wb = w[ia], w[sw.next[ia]]
+    hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
+    return [_Bracket(sw.x[k], sw.nx[k], row, int(k), float(np.sign(w[k]))) for k in ia[hit]]
+
+
+def _around(run: _Run, i: int, row: int, slope: int) -> _Bracket:
+    """A bracket over sample ``i``'s neighbours for a minimum of quantity ``row``.
+
+    A root of ``slope`` (bisection) when that changes sign across them, i.e. a smooth
+    extreme; else a golden-section search on ``row`` itself (an end of the range, or a
+    minimum where ``row`` has a kink).
+    """
+    sw = run.sw
+    sa, sb = np.sign(run.rows[slope, sw.prev[i]]), np.sign(run.rows[slope, sw.next[i]])
+    if sw.has_prev[i] and sw.has_next[i] and sa * sb < 0:
+        return _Bracket(sw.px[i], sw.nx[i], slope, i, float(sa))
+    return _Bracket(sw.px[i], sw.nx[i], row, i)
+
+
+def _extreme_brackets(run: _Run, li: int) -> dict[int, _Bracket]:
+    """Loop ``li``'s transmission angle extremes, +1 the minimum and -1 the maximum (a minimum of -mu)."""
+    out = {}
+    for sgn in (1, -1):
+        f = run.rows[run.q.mu(li, sgn)]
+        if np.isfinite(f).any():
+            out[sgn] = _around(run, int(np.nanargmin(f)), run.q.mu(li, sgn), run.q.dmu(li))
+    return out
+
+
+def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
+    """Each sign step's |determinant| touching 0 inside the range: (sign step, bracket).
+
+    For a circle-circle step that is where the distance s between its known joints has an
+    extremum at r1 + r2 or |r1 - r2|: a simple root of ds; otherwise a minimum of |cond|.
+    """
+    sw, q = run.sw, run.q
+    interior = sw.has_prev & sw.has_next
+    out = []
+    for k in range(q.n_signs):
+        c = run.rows[q.cond(k)]
+        with np.errstate(invalid="ignore"):
+            cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
+        out += [(k, _around(run, int(i), q.cond(k), q.ds(k))) for i in np.flatnonzero(cand)]
+    return out
+
+
+@dataclass
+class _Final:
+    """The state at every refined input (columns ``0 .. ends - 1``) and at the range ends (from ``ends`` on)."""
+
+    state: _State
+    rows: np.ndarray
+    phi: np.ndarray
+    ends: int
+
+
+def _finish(run: _Run, searched: list[_Bracket], ends: list[float]) -> _Final:
+    """One solve at every refined input (setting each bracket's ``col``) and at the range ends."""
+    for col, b in enumerate(searched):
+        b.col = col
+    fin = run.state(np.concatenate([np.array([b.x for b in searched], float), np.array(ends, float)]))
+    return _Final(fin, run.q.rows(fin), run.q.out_angle(fin), len(searched))
+
+
+def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[float, dict[str, Any]]]:
+    """The range ends as dead points, with the sign step (or numerical group) at its limit there."""
+    params = run.params
+    dead = []
+    for m, v in enumerate(ends):
+        col = fin.ends + m
+        margins = fin.state.margin[:, col]
+        k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
+        info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
+        if params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
+            info.update(_group_end(params))
+        elif params.plan.n_signs:
+            info.update(_step_links(params, k, fin.state, col))
+        dead.append((v, info))
+    return dead
+
+
+def _change_dead_points(
+    run: _Run, changes: list[tuple[int, _Bracket]], fin: _Final, ends: list[float]
+) -> list[tuple[float, dict[str, Any]]]:
+    """The change points, each once.
+
+    Candidates sorted by input; a candidate within ``tol_x`` of the one kept before it (or
+    of a range end) is the same point found by another step.
+    """
+    cands = sorted(
+        (b.x, k, b.col)
+        for k, b in changes
+        if fin.state.assembled[b.col] and fin.rows[run.q.cond(k), b.col] < SINGULAR_TOL
+    )
+    if cands and ends:
+        dist = np.abs(np.array([c[0] for c in cands])[:, None] - np.array(ends, float)[None, :])
+        cands = [c for c, bad in zip(cands, dist.min(axis=1) <= run.tol_x, strict=True) if not bad]
+    kept: list[tuple[float, int, int]] = []
+    for c in cands:
+        if not (kept and abs(run.cyc(c[0] - kept[-1][0])) <= run.tol_x):
+            kept.append(c)
+    if run.cyclic and len(kept) > 1 and abs(run.cyc(kept[-1][0] - kept[0][0])) <= run.tol_x:
+        kept.pop()  # the same point, once either side of the turn's start
+    dead = []
+    for v, k, col in kept:
+        info = {"input": run.file_value(v), "kind": "change point"}
+        info.update(_step_links(run.params, k, fin.state, col))
+        dead.append((v, info))
+    return dead
+
+
+class _Limit(NamedTuple):
+    """A limit position: the input (internal units), the rocker's angle (rad), ``"min"``/``"max"``, the dense sample."""
+
+    x: float
+    angle: float
+    extreme: str
+    sample: int
+
+
+def _transmission(run: _Run, li: int, extremes: dict[int, _Bracket], fin: _Final) -> dict[str, Any]:
+    """Min and max of loop ``li``'s transmission angle and where: the refined value when it is no worse."""
+    ta: dict[str, Any] = {}
+    for sgn, b in extremes.items():
+        key, row = ("min" if sgn > 0 else "max"), run.q.mu(li, sgn)
+        best_x, best = run.sw.x[b.sample], run.rows[row, b.sample]
+        if np.isfinite(fin.rows[row, b.col]) and fin.rows[row, b.col] <= best + 1e-12:
+            best_x, best = b.x, fin.rows[row, b.col]
+        ta[key] = float(sgn * best)
+        ta[f"{key}_at"] = run.file_value(float(best_x))
+    return ta
+
+
+def _limits(run: _Run, li: int, brackets: list[_Bracket], fin: _Final) -> list[_Limit]:
+    """Refined roots of the rocker's angular velocity, kept when the root is a true zero, sorted by input."""
+    w_dense = run.rows[run.q.w(li)]
+    scale = float(np.nanmax(np.abs(w_dense))) if np.isfinite(w_dense).any() else 1.0
+    limits: list[_Limit] = []
+    for b in brackets:
+        if not (abs(fin.rows[b.row, b.col]) <= 1e-6 * scale):
+            continue
+        if any(abs(run.cyc(b.x - lim.x)) <= run.tol_x for lim in limits):
+            continue
+        extreme = "max" if b.sign is not None and b.sign > 0 else "min"
+        limits.append(_Limit(b.x, float(fin.phi[li, b.col]), extreme, b.sample))
+    limits.sort(key=lambda t: run.file_value(t.x))
+    return limits
+
+
+def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -> dict[str, Any]:
+    """Whether the rocker turns fully and, if not, its swing over the range (one interval), unwrapped."""
+    phi = run.q.out_angle(run.st)[li]
+    if len(run.intervals) != 1 or not np.isfinite(phi).all():
+        return {}
+    u = np.unwrap(phi)
+    turns = run.cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
+    if turns:
+        return {"rocker_turns_fully": True}
+    cand = [u[lim.sample] + _wrap(lim.angle - phi[lim.sample]) for lim in limits]
+    if not run.cyclic:
+        e_cols = list(range(fin.ends, fin.phi.shape[1]))
+        cand += [u[0] + _wrap(fin.phi[li, c] - phi[0]) for c in e_cols[:1]]
+        cand += [u[-1] + _wrap(fin.phi[li, c] - phi[-1]) for c in e_cols[1:2]]
+    if not cand:
+        cand = [float(np.min(u)), float(np.max(u))]
+    return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
+
+
+def _time_ratio(run: _Run, limits: list[_Limit]) -> dict[str, Any]:
+    """Over a full turn with one limit position each way: the input's travel each way and their ratio."""
+    if not (run.cyclic and len(limits) == 2 and {t.extreme for t in limits} == {"min", "max"}):
+        return {}
+    vmin = next(t.x for t in limits if t.extreme == "min")
+    vmax = next(t.x for t in limits if t.extreme == "max")
+    rising = float(np.mod(vmax - vmin, run.total))
+    falling = run.total - rising
+    return {
+        "strokes": {"rising": rising / run.factor, "falling": falling / run.factor},
+        "time_ratio": max(rising, falling) / min(rising, falling) if min(rising, falling) > 0 else None,
+    }
+
+
 def _driver_checks(
     mech: Mechanism, params: Params, driver: int, intervals: list[list[float]], loops: list[tuple[int, FourBar]]
 ) -> tuple[list[dict[str, Any]], dict[int, dict[str, Any]]]:
@@ -510,228 +782,35 @@ def _driver_checks(
 
     ``intervals`` where it assembles, in radians or length units (:func:`_assembly_intervals`);
     ``loops`` the (index, loop) pairs this driver sweeps.  Returns (dead points, {loop index:
-    facts}), every value in file units.
+    facts}), every value in file units.  Every bracket is refined in one vectorized search
+    (:func:`_refine`), then solved once more (:func:`_finish`).
     """
-    d = mech.drivers[driver]
-    factor = d.input_scale(mech)
     if not intervals:
         return [], {}
-    lo, hi = _span(mech, driver)
-    total = hi - lo
-    cyclic = d.type.cyclic and len(intervals) == 1 and intervals[0][1] - intervals[0][0] >= total * (1 - 1e-12)
-    sw = _sweep(intervals, cyclic, total)
-    x = sw.x
-    plan = params.plan
-    names = plan.joint_names
-    lps = [lp for _, lp in loops]
-    out_links = []
-    for lp in lps:
-        j = mech.link(lp.links[2]).joints
-        out_links.append((names.index(j[0]), names.index(j[1])))
-    known = [(s.k1, s.k2) if isinstance(s, Dyad) else (-1, -1) for s in plan.sign_steps]
-    q = _Quantities(lps, plan.n_signs, out_links, known)
-    st = _state(params, driver, x)
-    rows = q.rows(st)
-
-    # -- limit positions: sign changes of each rocker's angular velocity between neighbours
-    ia = np.flatnonzero(sw.has_next)
-    root_a: list[Any] = []
-    root_b: list[Any] = []
-    root_row: list[Any] = []
-    root_sign: list[Any] = []
-    root_i: list[Any] = []
-    for li in range(q.n):
-        w = rows[q.w(li)]
-        wa, wb = w[ia], w[sw.next[ia]]
-        hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
-        k = ia[hit]
-        root_a.append(x[k])
-        root_b.append(sw.nx[k])
-        root_row.append(np.full(len(k), q.w(li)))
-        root_sign.append(np.sign(w[k]))
-        root_i.append(k)
-    # -- minima: transmission angle min and max per loop, and |cond| touching 0 inside the range
-    min_a: list[Any] = []
-    min_b: list[Any] = []
-    min_row: list[Any] = []
-    min_i: list[Any] = []
-    # the transmission angle's extremes: a root of d mu / d input when it changes sign around the
-    # best sample (a smooth extreme), else a golden-section search (an end of the range, or mu at 0 or 180)
-    ta_tasks: list[tuple[int, int, str, int, int]] = []  # (loop, +1 min / -1 max, kind, task, sample)
-    n_roots = sum(len(r) for r in root_a)
-    for li in range(q.n):
-        dm = rows[q.dmu(li)]
-        for sgn in (1, -1):
-            f = rows[q.mu(li, sgn)]
-            if not np.isfinite(f).any():
-                continue
-            i = int(np.nanargmin(f))
-            sa, sb = np.sign(dm[sw.prev[i]]), np.sign(dm[sw.next[i]])
-            if sw.has_prev[i] and sw.has_next[i] and sa * sb < 0:
-                root_a.append([sw.px[i]])
-                root_b.append([sw.nx[i]])
-                root_row.append([q.dmu(li)])
-                root_sign.append([sa])
-                root_i.append([i])
-                ta_tasks.append((li, sgn, "root", n_roots, i))
-                n_roots += 1
-            else:
-                ta_tasks.append((li, sgn, "min", sum(len(m) for m in min_a), i))
-                min_a.append([sw.px[i]])
-                min_b.append([sw.nx[i]])
-                min_row.append([q.mu(li, sgn)])
-                min_i.append([i])
-    # change points: a sign step's |determinant| touching 0 inside the range.  For a circle-circle
-    # step that is where the distance s between its known joints has an extremum at r1 + r2 or
-    # |r1 - r2|: a simple root of ds (bisection); otherwise a golden-section search on |cond|
-    cp_tasks: list[tuple[int, str, int]] = []  # (sign step, kind, task)
-    interior = sw.has_prev & sw.has_next
-    for k in range(plan.n_signs):
-        c, ds = rows[q.cond(k)], rows[q.ds(k)]
-        with np.errstate(invalid="ignore"):
-            cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
-        for ic in np.flatnonzero(cand):
-            i = int(ic)
-            sa, sb = np.sign(ds[sw.prev[i]]), np.sign(ds[sw.next[i]])
-            if sa * sb < 0:
-                root_a.append([sw.px[i]])
-                root_b.append([sw.nx[i]])
-                root_row.append([q.ds(k)])
-                root_sign.append([sa])
-                root_i.append([i])
-                cp_tasks.append((k, "root", n_roots))
-                n_roots += 1
-            else:
-                cp_tasks.append((k, "min", sum(len(m) for m in min_a)))
-                min_a.append([sw.px[i]])
-                min_b.append([sw.nx[i]])
-                min_row.append([q.cond(k)])
-                min_i.append([i])
-
-    def cat(parts: list[Any]) -> np.ndarray:
-        return np.concatenate([np.asarray(p, float) for p in parts]) if parts else np.zeros(0)
-
-    ri = cat(root_i).astype(int)
-    rrow = cat(root_row).astype(int)
-    rsign = cat(root_sign)
-    mrow = cat(min_row).astype(int)
-    roots, mins = _refine(params, driver, q, (cat(root_a), cat(root_b), rrow, rsign), (cat(min_a), cat(min_b), mrow))
+    run = _run(mech, params, driver, intervals, loops)
+    limits = [_limit_brackets(run, li) for li in range(run.q.n)]
+    extremes = [_extreme_brackets(run, li) for li in range(run.q.n)]
+    changes = _change_point_brackets(run)
+    ordered = [*(b for bs in limits for b in bs), *(b for e in extremes for b in e.values()), *(b for _, b in changes)]
+    roots, mins = [b for b in ordered if b.sign is not None], [b for b in ordered if b.sign is None]
+    _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
-    ends = [] if cyclic else [v for s, e in intervals for v in (s, e) if lo < v < hi or d.type.cyclic]
-    ends_arr = np.array(ends, float)
-    fin = _state(params, driver, np.concatenate([roots, mins, ends_arr]))
-    fvals = q.rows(fin)
-    nr, nm = len(roots), len(mins)
-    cols = np.arange(nr + nm)
-    fval = fvals[np.concatenate([rrow, mrow]), cols] if nr + nm else np.zeros(0)
-    tol_x = 1e-9 * (1.0 if d.type.cyclic else total)
-
-    def file_value(v: float) -> float:
-        if cyclic:
-            v = lo + float(np.mod(v - lo, total))
-            if min(abs(v - lo), abs(lo + total - v)) < 1e-13 * total:  # 0 to round-off
-                v = lo
-        return float(v / factor)
-
-    # dead points
-    dead: list[tuple[float, dict[str, Any]]] = []
-    for m, v in enumerate(ends):
-        col = nr + nm + m
-        margins = fin.margin[:, col]
-        k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
-        info = {"input": float(v / factor), "kind": "end of range"}
-        if plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
-            info.update(_group_end(params))
-        elif plan.n_signs:
-            info.update(_step_links(params, k, fin, col))
-        dead.append((v, info))
-    # change points, each once: candidates sorted by input, a candidate within tol_x of the
-    # one kept before it (or of a range end) is the same point found by another step
-    cands = []
-    for k, kind, task in cp_tasks:
-        col = task if kind == "root" else nr + task
-        v = roots[task] if kind == "root" else mins[task]
-        if fin.assembled[col] and fvals[q.cond(k), col] < SINGULAR_TOL:
-            cands.append((float(v), k, col))
-    cands.sort()
-    if cands and ends:
-        near_end = np.abs(np.array([c[0] for c in cands])[:, None] - ends_arr[None, :]).min(axis=1) <= tol_x
-        cands = [c for c, bad in zip(cands, near_end, strict=True) if not bad]
-    kept: list[tuple[float, int, int]] = []
-    for c in cands:
-        if kept and abs(_cyc(c[0] - kept[-1][0], cyclic, total)) <= tol_x:
-            continue
-        kept.append(c)
-    if cyclic and len(kept) > 1 and abs(_cyc(kept[-1][0] - kept[0][0], cyclic, total)) <= tol_x:
-        kept.pop()  # the same point, once either side of the turn's start
-    for v, k, col in kept:
-        info = {"input": file_value(v), "kind": "change point"}
-        info.update(_step_links(params, k, fin, col))
-        dead.append((v, info))
+    ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
+    fin = _finish(run, roots + mins, ends)
+    dead = _end_dead_points(run, fin, ends) + _change_dead_points(run, changes, fin, ends)
     dead.sort(key=lambda t: t[1]["input"])
-
-    # transmission angle, limit positions, swing and time ratio of each loop
     facts: dict[int, dict[str, Any]] = {}
-    phi_dense = q.out_angle(st)
-    phi_fin = q.out_angle(fin)
-    unit = mech.angle_to_rad
     for li, (index, lp) in enumerate(loops):
         out: dict[str, Any] = {}
-        ta: dict[str, Any] = {}
-        for lj, sgn, kind, task, i in ta_tasks:
-            if lj != li:
-                continue
-            key = "min" if sgn > 0 else "max"
-            row = q.mu(li, sgn)
-            col = task if kind == "root" else nr + task
-            refined_x = roots[task] if kind == "root" else mins[task]
-            best_x, best = x[i], rows[row, i]
-            if np.isfinite(fvals[row, col]) and fvals[row, col] <= best + 1e-12:
-                best_x, best = refined_x, fvals[row, col]
-            ta[key] = float(sgn * best)
-            ta[f"{key}_at"] = file_value(float(best_x))
+        ta = _transmission(run, li, extremes[li], fin)
         if "min" in ta and "max" in ta:
-            ta["joint"] = names[lp.rocker_tip]
-            out["transmission_angle"] = ta
-        # limit positions: refined roots of the rocker's angular velocity, kept when the root is a true zero
-        w_dense = rows[q.w(li)]
-        scale = float(np.nanmax(np.abs(w_dense))) if np.isfinite(w_dense).any() else 1.0
-        limits: list[tuple[float, float, str, int]] = []
-        for r in np.flatnonzero(rrow == q.w(li)):
-            if not (abs(fval[r]) <= 1e-6 * scale):
-                continue
-            v = roots[r]
-            if any(abs(_cyc(v - u, cyclic, total)) <= tol_x for u, *_ in limits):
-                continue
-            limits.append((v, float(phi_fin[li, r]), "max" if rsign[r] > 0 else "min", int(ri[r])))
-        limits.sort(key=lambda t: file_value(t[0]))
+            out["transmission_angle"] = ta | {"joint": params.plan.joint_names[lp.rocker_tip]}
+        lims = _limits(run, li, limits[li], fin)
         out["limit_positions"] = [
-            {"input": file_value(v), "angle": float(_wrap(a) / unit), "extreme": kind} for v, a, kind, _ in limits
+            {"input": run.file_value(t.x), "angle": float(_wrap(t.angle) / mech.angle_to_rad), "extreme": t.extreme}
+            for t in lims
         ]
-        # swing of the rocker over the range (one interval): unwrapped along the samples
-        if len(intervals) == 1:
-            phi = phi_dense[li]
-            if np.isfinite(phi).all():
-                u = np.unwrap(phi)
-                turns = cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
-                out["rocker_turns_fully"] = bool(turns)
-                if not turns:
-                    cand = [u[i] + _wrap(a - phi[i]) for _, a, _, i in limits]
-                    if not cyclic:
-                        e_cols = [nr + nm + m for m in range(len(ends))]
-                        cand += [u[0] + _wrap(phi_fin[li, c] - phi[0]) for c in e_cols[:1]]
-                        cand += [u[-1] + _wrap(phi_fin[li, c] - phi[-1]) for c in e_cols[1:2]]
-                    if not cand:
-                        cand = [float(np.min(u)), float(np.max(u))]
-                    out["swing"] = float((max(cand) - min(cand)) / unit)
-        if cyclic and len(limits) == 2 and {t[2] for t in limits} == {"min", "max"}:
-            vmin = next(t[0] for t in limits if t[2] == "min")
-            vmax = next(t[0] for t in limits if t[2] == "max")
-            rising = float(np.mod(vmax - vmin, total))
-            falling = total - rising
-            out["strokes"] = {"rising": rising / factor, "falling": falling / factor}
-            out["time_ratio"] = max(rising, falling) / min(rising, falling) if min(rising, falling) > 0 else None
-        facts[index] = out
+        facts[index] = out | _swing(run, li, lims, fin, mech.angle_to_rad) | _time_ratio(run, lims)
     return [info for _, info in dead], facts
 
 
@@ -879,7 +958,8 @@ class CheckReport:
         out["fourbars"] = list(self.fourbars)
         if self.dynamics is not None:
             out["dynamics"] = self.dynamics
-        return _finite(out)
+        finite: dict[str, Any] = _finite(out)
+        return finite
 
     def __getitem__(self, key: str) -> Any:
         """Dictionary-style access to :meth:`to_dict` (``report["grashof"]``)."""
