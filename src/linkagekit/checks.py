@@ -981,6 +981,40 @@ def _finite(obj: Any) -> Any:
     return obj
 
 
+def _loop_entry(mech: Mechanism, names: tuple[str, ...], lp: FourBar, facts: dict[str, Any]) -> dict[str, Any]:
+    """An entry of ``CheckReport.fourbars``: joints, lengths, links, Grashof type and input of a loop, and ``facts``."""
+    kind, detail = grashof(lp)
+    entry: dict[str, Any] = {
+        "joints": [names[lp.crank_pivot], names[lp.crank_tip], names[lp.rocker_tip], names[lp.rocker_pivot]],
+        "lengths": {"ground": lp.ground, "crank": lp.crank, "coupler": lp.coupler, "rocker": lp.rocker},
+        "links": {"ground": "ground", "crank": lp.links[0], "coupler": lp.links[1], "rocker": lp.links[2]},
+        "grashof": kind,
+        "grashof_detail": detail,
+        "input": {
+            "link": lp.links[0],
+            "driver": mech.drivers[lp.driver].name if lp.driver is not None else None,
+            "moved_by": lp.moved_by,
+        },
+    }
+    return entry | facts
+
+
+def _first_loop(entries: list[dict[str, Any]]) -> dict[str, Any]:
+    """The first loop's fields of :class:`CheckReport` (``grashof``, ``fourbar``, ...), none without a loop."""
+    if not entries:
+        return {}
+    first = entries[0]
+    out = {
+        "grashof": first["grashof"],
+        "grashof_detail": first["grashof_detail"],
+        "fourbar": {"joints": first["joints"], "lengths": first["lengths"]},
+    }
+    ta = first.get("transmission_angle")
+    if ta:
+        out["transmission_angle"] = {"min": ta["min"], "max": ta["max"]}
+    return out
+
+
 def check(mech: Mechanism) -> CheckReport:
     """Freedom, solve plan, assembly range, dead points, four-bar loops and peak loads of a mechanism.
 
@@ -1002,12 +1036,7 @@ def check(mech: Mechanism) -> CheckReport:
     names = plan.joint_names
     factors = [d.input_scale(mech) for d in mech.drivers]
     internal = [_assembly_intervals(mech, i, params) for i in range(len(mech.drivers))]
-    ranges = {
-        d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
-        for i, d in enumerate(mech.drivers)
-    }
     pose_values = {d.name: float(params.pose_inputs[i, 0] / factors[i]) for i, d in enumerate(mech.drivers)}
-    held_at = {d.name: {k: v for k, v in pose_values.items() if k != d.name} for d in mech.drivers}
     loops = fourbar_loops(mech, params)
     dead: dict[str, list[dict[str, Any]]] = {}
     facts: dict[int, dict[str, Any]] = {}
@@ -1015,31 +1044,7 @@ def check(mech: Mechanism) -> CheckReport:
         mine = [(k, lp) for k, lp in enumerate(loops) if lp.driver == i]
         dead[d.name], f = _driver_checks(mech, params, i, internal[i], mine)
         facts.update(f)
-    entries = []
-    for k, lp in enumerate(loops):
-        kind, detail = grashof(lp)
-        entry: dict[str, Any] = {
-            "joints": [names[lp.crank_pivot], names[lp.crank_tip], names[lp.rocker_tip], names[lp.rocker_pivot]],
-            "lengths": {"ground": lp.ground, "crank": lp.crank, "coupler": lp.coupler, "rocker": lp.rocker},
-            "links": {"ground": "ground", "crank": lp.links[0], "coupler": lp.links[1], "rocker": lp.links[2]},
-            "grashof": kind,
-            "grashof_detail": detail,
-            "input": {
-                "link": lp.links[0],
-                "driver": mech.drivers[lp.driver].name if lp.driver is not None else None,
-                "moved_by": lp.moved_by,
-            },
-        }
-        entry.update(facts.get(k, {}))
-        entries.append(entry)
-    extra: dict[str, Any] = {}
-    if entries:
-        first = entries[0]
-        extra["grashof"], extra["grashof_detail"] = first["grashof"], first["grashof_detail"]
-        extra["fourbar"] = {"joints": first["joints"], "lengths": first["lengths"]}
-        ta = first.get("transmission_angle")
-        if ta:
-            extra["transmission_angle"] = {"min": ta["min"], "max": ta["max"]}
+    entries = [_loop_entry(mech, names, lp, facts.get(k, {})) for k, lp in enumerate(loops)]
     return CheckReport(
         name=mech.name,
         dof=plan.dof,
@@ -1049,22 +1054,43 @@ def check(mech: Mechanism) -> CheckReport:
             j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i]} for i, j in enumerate(plan.sign_joints)
         },
         mirror_links=plan.mirror_links,
-        input_ranges=ranges,
+        input_ranges={
+            d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
+            for i, d in enumerate(mech.drivers)
+        },
         units={"length": mech.length_unit, "angle": mech.angle_unit},
         fourbars=tuple(entries),
         dead_points=dead,
-        held_at=held_at,
+        held_at={d.name: {k: v for k, v in pose_values.items() if k != d.name} for d in mech.drivers},
         input_units={d.name: d.input_unit(mech) for d in mech.drivers},
         dynamics=peak_loads(mech) if mech.has_dynamics else None,
         closed_form_joints=tuple(j for i, j in enumerate(names) if i not in plan.numerical),
         numerical_joints=tuple(names[i] for i in plan.numerical),
-        **extra,
+        **_first_loop(entries),
     )
 
 
 # ---------------------------------------------------------------------- text
 def _num(v: Any, fmt: str = ".6g") -> str:
     return "—" if v is None else format(float(v), fmt)
+
+
+@dataclass(frozen=True)
+class _Text:
+    """How :func:`check_text` writes values: each driver's input unit, the file's angle and length units."""
+
+    units: dict[str, str]
+    angle: str
+    length: str
+
+    def inp(self, driver: str, v: Any) -> str:
+        """``driver = value unit``."""
+        unit = self.units.get(driver, "")
+        return f"{driver} = {_num(v, '.6f')}" + (f" {unit}" if unit else "")
+
+    def where(self, at: Mapping[str, Any]) -> str:
+        """Every driver's input of a sample."""
+        return ", ".join(self.inp(k, v) for k, v in at.items())
 
 
 def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, name: str | None = None) -> str:
@@ -1079,19 +1105,24 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
     name : str, optional
         The name printed first (default: the report's ``name``).
     """
-    units = dict(rep.get("input_units") or {}) | dict(units or {})
-    name = name if name is not None else str(rep.get("name") or "")
-    angle_unit = (rep.get("units") or {}).get("angle", "")
-    length_unit = (rep.get("units") or {}).get("length", "")
-    drivers = list(rep.get("drivers", []))
+    file_units = rep.get("units") or {}
+    fmt = _Text(
+        dict(rep.get("input_units") or {}) | dict(units or {}),
+        file_units.get("angle", ""),
+        file_units.get("length", ""),
+    )
+    loops = _report_loops(rep)
+    lines = [
+        *_head_lines(rep, name if name is not None else str(rep.get("name") or "")),
+        *_range_lines(rep, fmt),
+        *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
+        *_dynamics_lines(rep.get("dynamics"), fmt),
+    ]
+    return "\n".join(lines) + "\n"
 
-    def inp(driver: str, v: Any) -> str:
-        unit = units.get(driver, "")
-        return f"{driver} = {_num(v, '.6f')}" + (f" {unit}" if unit else "")
 
-    def where(at: Mapping[str, Any]) -> str:
-        return ", ".join(inp(k, v) for k, v in at.items())
-
+def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
+    """The first line (freedom, drivers, how it is solved), the solve plan, the pose's signs and mirror links."""
     numerical = list(rep.get("numerical_joints") or [])
     if numerical:
         closed = list(rep.get("closed_form_joints") or [])
@@ -1101,6 +1132,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         )
     else:
         how = f"solved {'in closed form' if rep.get('solvable') == 'closed-form' else rep.get('solvable', '')}."
+    drivers = list(rep.get("drivers", []))
     lines = [
         f"{name}: valid; {rep['dof']} degree(s) of freedom, driven by {', '.join(drivers)}; {how}".rstrip(),
         "Solve plan:",
@@ -1113,104 +1145,133 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         )
     if rep.get("mirror_links"):
         lines.append("Links that can be mirrored: " + ", ".join(rep["mirror_links"]))
+    return lines
+
+
+def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
+    """Each driver's assembly range (with the inputs held at the pose) and its dead points."""
     held = rep.get("held_at") or {}
     dead_points = rep.get("dead_points") or {}
+    lines = []
     for driver, rng in (rep.get("input_ranges") or {}).items():
         text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
-        unit = units.get(driver, "")
+        unit = fmt.units.get(driver, "")
         line = f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else "")
         if held.get(driver):
-            line += " (" + ", ".join(f"{inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
+            line += " (" + ", ".join(f"{fmt.inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
         lines.append(line)
-        if numerical:
+        if rep.get("numerical_joints"):
             lines.append(
                 "  in the pose's mode, by continuation from the pose (ends refined by bisection through the solver); "
                 "other modes: linkagekit modes"
             )
         if driver in dead_points:
-            dps = dead_points[driver]
-            lines.append(f"Dead points of {driver} (where the mechanism locks): " + ("none" if not dps else ""))
-            lines[-1] = lines[-1].rstrip()
-            for dp in dps[:MAX_TEXT_DEAD_POINTS]:
-                detail = f"; {dp['detail']}" if dp.get("detail") else ""
-                lines.append(f"  {inp(driver, dp['input'])}: {dp['kind']}{detail}")
-            if len(dps) > MAX_TEXT_DEAD_POINTS:
-                lines.append(f"  ... and {len(dps) - MAX_TEXT_DEAD_POINTS} more (check --format json lists them all)")
+            lines += _dead_point_lines(driver, dead_points[driver], fmt)
+    return lines
+
+
+def _dead_point_lines(driver: str, dps: list[dict[str, Any]], fmt: _Text) -> list[str]:
+    """A driver's dead points, at most :data:`MAX_TEXT_DEAD_POINTS` of them."""
+    lines = [f"Dead points of {driver} (where the mechanism locks): {'none' if not dps else ''}".rstrip()]
+    for dp in dps[:MAX_TEXT_DEAD_POINTS]:
+        detail = f"; {dp['detail']}" if dp.get("detail") else ""
+        lines.append(f"  {fmt.inp(driver, dp['input'])}: {dp['kind']}{detail}")
+    if len(dps) > MAX_TEXT_DEAD_POINTS:
+        lines.append(f"  ... and {len(dps) - MAX_TEXT_DEAD_POINTS} more (check --format json lists them all)")
+    return lines
+
+
+def _report_loops(rep: Mapping[str, Any]) -> list[Any]:
+    """The report's four-bar loops (of a report without the list, its first loop only)."""
     loops: list[Any] | None = rep.get("fourbars")
-    if loops is None and "grashof" in rep:  # a report without the list: the first loop only
+    if loops is None and "grashof" in rep:
         loops = [dict(rep.get("fourbar") or {}, grashof=rep["grashof"], grashof_detail=rep.get("grashof_detail"))]
         if "transmission_angle" in rep:
             loops[0]["transmission_angle"] = rep["transmission_angle"]
-    loops = loops or []
-    for k, lp in enumerate(loops):
-        tag = f" {k + 1} of {len(loops)}" if len(loops) > 1 else ""
-        lines.append(f"Four-bar loop{tag} {'-'.join(lp.get('joints', []))}: {lp.get('grashof_detail', lp['grashof'])}")
-        ln, lens = lp.get("links") or {}, lp.get("lengths") or {}
-        if lens:
-            lu = f" {length_unit}" if length_unit else ""
-            roles = (("ground", "ground"), ("crank", "input side"), ("coupler", "coupler"), ("rocker", "output side"))
-            parts = [
-                f"{what} {_num(lens.get(role))}{lu}" + (f" ('{ln[role]}')" if role != "ground" and role in ln else "")
-                for role, what in roles
+    return loops or []
+
+
+def _loop_lines(k: int, n: int, lp: Mapping[str, Any], fmt: _Text) -> list[str]:
+    """The ``k``-th of ``n`` four-bar loops: Grashof type, lengths, input, transmission angle, rocker's motion."""
+    tag = f" {k + 1} of {n}" if n > 1 else ""
+    lines = [f"Four-bar loop{tag} {'-'.join(lp.get('joints', []))}: {lp.get('grashof_detail', lp['grashof'])}"]
+    ln, lens = lp.get("links") or {}, lp.get("lengths") or {}
+    if lens:
+        lu = f" {fmt.length}" if fmt.length else ""
+        roles = (("ground", "ground"), ("crank", "input side"), ("coupler", "coupler"), ("rocker", "output side"))
+        parts = [
+            f"{what} {_num(lens.get(role))}{lu}" + (f" ('{ln[role]}')" if role != "ground" and role in ln else "")
+            for role, what in roles
+        ]
+        lines.append("  lengths: " + ", ".join(parts))
+    if lp.get("input"):
+        lines.append(f"  input: link '{lp['input']['link']}', moved by {lp['input']['moved_by']}")
+    driver = (lp.get("input") or {}).get("driver")
+    ta = lp.get("transmission_angle")
+    if ta:
+        text = f"  Transmission angle: min {ta['min']:.4f}°, max {ta['max']:.4f}°"
+        if "min_at" in ta and driver:
+            text += (
+                f" (at {ta.get('joint', '')}; min at {fmt.inp(driver, ta['min_at'])}, "
+                f"max at {fmt.inp(driver, ta['max_at'])})"
+            )
+        lines.append(text)
+    return lines + _rocker_lines(lp, driver, ln.get("rocker", "rocker"), fmt)
+
+
+def _rocker_lines(lp: Mapping[str, Any], driver: str | None, rocker: str, fmt: _Text) -> list[str]:
+    """A loop's limit positions, swing and time ratio (what its driver's sweep found)."""
+    lines = []
+    if "limit_positions" in lp and driver:
+        lims = lp["limit_positions"]
+        if lp.get("rocker_turns_fully"):
+            lines.append(f"  {rocker} turns fully: no limit positions")
+        elif not lims:
+            lines.append(f"  Limit positions of {rocker}: none")
+        else:
+            lines.append(f"  Limit positions of {rocker} (its angular velocity is zero):")
+            lines += [
+                f"    {fmt.inp(driver, lim['input'])}: {rocker} at {_num(lim['angle'], '.6f')} {fmt.angle} "
+                f"({lim['extreme']})"
+                for lim in lims
             ]
-            lines.append("  lengths: " + ", ".join(parts))
-        if lp.get("input"):
-            lines.append(f"  input: link '{lp['input']['link']}', moved by {lp['input']['moved_by']}")
-        driver = (lp.get("input") or {}).get("driver")
-        ta = lp.get("transmission_angle")
-        if ta:
-            text = f"  Transmission angle: min {ta['min']:.4f}°, max {ta['max']:.4f}°"
-            if "min_at" in ta and driver:
-                text += (
-                    f" (at {ta.get('joint', '')}; min at {inp(driver, ta['min_at'])}, "
-                    f"max at {inp(driver, ta['max_at'])})"
-                )
-            lines.append(text)
-        rocker = ln.get("rocker", "rocker")
-        if "limit_positions" in lp and driver:
-            lims = lp["limit_positions"]
-            if lp.get("rocker_turns_fully"):
-                lines.append(f"  {rocker} turns fully: no limit positions")
-            elif not lims:
-                lines.append(f"  Limit positions of {rocker}: none")
-            else:
-                lines.append(f"  Limit positions of {rocker} (its angular velocity is zero):")
-                for lim in lims:
-                    lines.append(
-                        f"    {inp(driver, lim['input'])}: {rocker} at {_num(lim['angle'], '.6f')} {angle_unit} "
-                        f"({lim['extreme']})"
-                    )
-        if lp.get("swing") is not None:
-            lines.append(f"  {rocker} swings {_num(lp['swing'], '.6f')} {angle_unit}")
-        if lp.get("time_ratio") is not None:
-            s = lp["strokes"]
-            unit = units.get(driver or "", "")
-            lines.append(
-                f"  Time ratio {lp['time_ratio']:.6f} at constant input speed ({driver} travels "
-                f"{_num(s['rising'], '.6f')} {unit} while {rocker} rises, "
-                f"{_num(s['falling'], '.6f')} {unit} while it falls)"
-            )
-    dyn = rep.get("dynamics")
-    if dyn:
-        speeds = ", ".join(
-            f"{k} at {_num(v)} {'rad/s' if units.get(k) in ('deg', 'rad') else units.get(k, '') + '/s'}"
-            for k, v in (dyn.get("speeds") or {}).items()
+    if lp.get("swing") is not None:
+        lines.append(f"  {rocker} swings {_num(lp['swing'], '.6f')} {fmt.angle}")
+    if lp.get("time_ratio") is not None:
+        s = lp["strokes"]
+        unit = fmt.units.get(driver or "", "")
+        lines.append(
+            f"  Time ratio {lp['time_ratio']:.6f} at constant input speed ({driver} travels "
+            f"{_num(s['rising'], '.6f')} {unit} while {rocker} rises, "
+            f"{_num(s['falling'], '.6f')} {unit} while it falls)"
         )
-        lines.append(f"Peak loads over the file's sweep ({dyn.get('samples')} samples; {speeds}):")
-        if dyn.get("skipped"):
-            lines.append(f"  not computed: {dyn['skipped']}")
-        for key, what, unit in (("peak_driver_torque", "torque", "N*m"), ("peak_driver_force", "force", "N")):
-            for drv, pk in (dyn.get(key) or {}).items():
-                lines.append(f"  Peak driver {what} of {drv}: {_num(pk['value'])} {unit} at {where(pk['at'])}")
-        bl = dyn.get("peak_bearing_load")
-        if bl:
-            lines.append(
-                f"  Peak bearing load: {_num(bl['value'])} N at joint {bl['joint']} ({bl['by']} on {bl['on']}) "
-                f"at {where(bl['at'])}"
-            )
-        if not dyn.get("skipped") and not bl and not dyn.get("peak_driver_torque") and not dyn.get("peak_driver_force"):
-            lines.append("  none: the mechanism does not assemble (or is singular) at every sample")
-    return "\n".join(lines) + "\n"
+    return lines
+
+
+def _dynamics_lines(dyn: Mapping[str, Any] | None, fmt: _Text) -> list[str]:
+    """The peak driver efforts and bearing load over the file's sweep (nothing without dynamics)."""
+    if not dyn:
+        return []
+    units = fmt.units
+    speeds = ", ".join(
+        f"{k} at {_num(v)} {'rad/s' if units.get(k) in ('deg', 'rad') else units.get(k, '') + '/s'}"
+        for k, v in (dyn.get("speeds") or {}).items()
+    )
+    lines = [f"Peak loads over the file's sweep ({dyn.get('samples')} samples; {speeds}):"]
+    if dyn.get("skipped"):
+        lines.append(f"  not computed: {dyn['skipped']}")
+    for key, what, unit in (("peak_driver_torque", "torque", "N*m"), ("peak_driver_force", "force", "N")):
+        for drv, pk in (dyn.get(key) or {}).items():
+            lines.append(f"  Peak driver {what} of {drv}: {_num(pk['value'])} {unit} at {fmt.where(pk['at'])}")
+    bl = dyn.get("peak_bearing_load")
+    if bl:
+        lines.append(
+            f"  Peak bearing load: {_num(bl['value'])} N at joint {bl['joint']} ({bl['by']} on {bl['on']}) "
+            f"at {fmt.where(bl['at'])}"
+        )
+    if not dyn.get("skipped") and not bl and not dyn.get("peak_driver_torque") and not dyn.get("peak_driver_force"):
+        lines.append("  none: the mechanism does not assemble (or is singular) at every sample")
+    return lines
 
 
 @dataclass(frozen=True)
