@@ -1357,6 +1357,122 @@ class Modes:
         return out
 
 
+def _given_inputs(mech: Mechanism, at: Any) -> dict[str, Any]:
+    """``at`` of :func:`modes` as {driver name: value} (a bare value for a single driver)."""
+    if at is None:
+        return {}
+    if isinstance(at, dict):
+        return dict(at)
+    if len(mech.drivers) == 1:
+        return {mech.drivers[0].name: at}
+    raise InputError(f"at: give a value per driver ({', '.join(d.name for d in mech.drivers)})")
+
+
+def _mode_inputs(mech: Mechanism, params: Params, at: Any) -> tuple[np.ndarray, dict[str, float]]:
+    """The inputs of :func:`modes`: internal units per driver (the pose's where not given) and file units by name."""
+    given = _given_inputs(mech, at)
+    q0 = params.pose_inputs[:, 0].copy()
+    inp = {}
+    for i, d in enumerate(mech.drivers):
+        factor = d.input_scale(mech)
+        if d.name not in given:
+            inp[d.name] = float(q0[i] / factor)
+            continue
+        try:
+            value = float(given.pop(d.name))
+        except (TypeError, ValueError, OverflowError):
+            raise InputError(f"at: '{d.name}' needs one number") from None
+        if not math.isfinite(value) or abs(value) > 1e12:
+            raise InputError(f"at: '{d.name}' must be a finite number of at most 1e12 in magnitude")
+        q0[i] = value * factor
+        inp[d.name] = value  # as given, not through radians and back
+    if given:
+        raise InputError(f"at: no driver named '{next(iter(given))}' (drivers: {', '.join(params.plan.drivers)})")
+    return q0, inp
+
+
+@dataclass(frozen=True)
+class _ModeRows:
+    """The configurations :func:`modes` found, one per row.
+
+    Positions ``z`` (n_joints, R), whether each assembles, the sign (and mirror) combination
+    of each row (``col``), and per numerical group (label, its mode, its mode count).
+    """
+
+    z: np.ndarray
+    assembled: np.ndarray
+    col: np.ndarray
+    notes: tuple[str, ...] = ()
+    groups: tuple[tuple[str, np.ndarray, np.ndarray], ...] = ()
+
+
+def _group_label(params: Params, index: int) -> str:
+    """A numerical group named by its joints (``"J1,J2,J3"``), the ``index``-th step of the plan."""
+    step = params.plan.steps[index]
+    assert isinstance(step, Group)
+    return ",".join(params.plan.joint_names[j] for j in step.joints)
+
+
+def _mode_rows(
+    mech: Mechanism, params: Params, q0: np.ndarray, signs: np.ndarray, flags: np.ndarray | None
+) -> _ModeRows:
+    """Every sign (and mirror) combination solved at ``q0``.
+
+    With numerical groups, every mode of each group for each combination
+    (:func:`linkagekit.groupmodes.enumerate_modes`).
+    """
+    if params.plan.numerical:
+        table = enumerate_modes(mech, params, q0, signs, flags)
+        groups = tuple(
+            (_group_label(params, gi), table.group_mode[g], table.group_count[g]) for g, gi in enumerate(table.groups)
+        )
+        return _ModeRows(table.z, table.assembled, table.column, table.notes, groups)
+    q = np.repeat(q0[:, None, None], signs.shape[1], axis=2)
+    sol = solve(params, q, signs[:, None, :], flags[:, None, :] if flags is not None else None)
+    return _ModeRows(sol.z[:, 0], sol.assembled[0], np.arange(signs.shape[1]))
+
+
+def _reference_rows(
+    params: Params, rows: _ModeRows, signs: np.ndarray, flags: np.ndarray | None, q0: np.ndarray, tol: float
+) -> np.ndarray:
+    """Which rows are the solver's own mode at ``q0``.
+
+    The pose's signs, no mirror, and each numerical group as continued from the pose.
+    """
+    plan, col = params.plan, rows.col
+    reference: np.ndarray = np.all(signs[:, col] == params.signs[:, :1], axis=0)
+    if flags is not None:
+        reference &= ~flags[:, col].any(axis=0)
+    if plan.numerical:
+        cont = solve(params, q0[:, None, None]).z[list(plan.numerical), 0, 0]
+        reference &= np.all(np.abs(rows.z[list(plan.numerical)] - cont[:, None]) <= tol, axis=0)
+    return reference
+
+
+def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
+    """For each row the first row with the same positions (None for the first of each), and how many are distinct.
+
+    Rows are bucketed by positions rounded to 1e-6 of the size, then confirmed within the
+    bucket to ``tol`` (two configurations within tol round alike but for a 1e-3 chance at a
+    rounding boundary, which only splits a duplicate, never merges two modes).
+    """
+    z = rows.z
+    keys = np.round(np.concatenate([z.real, z.imag]) / (1e3 * tol)).T
+    buckets: dict[bytes, list[int]] = {}
+    same: list[int | None] = []
+    distinct = 0
+    for r in range(len(rows.col)):
+        first = None
+        if rows.assembled[r]:
+            bucket = buckets.setdefault(keys[r].tobytes(), [])
+            first = next((f for f in bucket if np.all(np.abs(z[:, f] - z[:, r]) <= tol)), None)
+            if first is None:
+                bucket.append(r)
+                distinct += 1
+        same.append(first)
+    return same, distinct
+
+
 def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     """Every assembly mode (and with ``mirrors`` every mirror image) at one input.
 
@@ -1378,31 +1494,7 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
         raise InputError(f"mirrors: expected True or False, got {type(mirrors).__name__}")
     plan = params.plan
     names = plan.joint_names
-    q0 = params.pose_inputs[:, 0].copy()
-    factors = [d.input_scale(mech) for d in mech.drivers]
-    given: dict[str, Any] = {}
-    if at is not None:
-        if isinstance(at, dict):
-            given = dict(at)
-        elif len(mech.drivers) == 1:
-            given = {mech.drivers[0].name: at}
-        else:
-            raise InputError(f"at: give a value per driver ({', '.join(d.name for d in mech.drivers)})")
-    inp = {}
-    for i, d in enumerate(mech.drivers):
-        if d.name in given:
-            try:
-                value = float(given.pop(d.name))
-            except (TypeError, ValueError, OverflowError):
-                raise InputError(f"at: '{d.name}' needs one number") from None
-            if not math.isfinite(value) or abs(value) > 1e12:
-                raise InputError(f"at: '{d.name}' must be a finite number of at most 1e12 in magnitude")
-            q0[i] = value * factors[i]
-            inp[d.name] = value  # as given, not through radians and back
-        else:
-            inp[d.name] = float(q0[i] / factors[i])
-    if given:
-        raise InputError(f"at: no driver named '{next(iter(given))}' (drivers: {', '.join(plan.drivers)})")
+    q0, inp = _mode_inputs(mech, params, at)
     k, mm = plan.n_signs, plan.n_mirrors if mirrors else 0
     if k + mm > MAX_MODE_SLOTS:
         what = "sign steps and mirror links" if mm else "sign steps"
@@ -1411,55 +1503,28 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
             f"(2^{MAX_MODE_SLOTS}); fix some with analyze(..., signs={{joint: +1 or -1}})"
         )
     combos = all_sign_combinations(k + mm)
-    signs, mirror_flags = combos[:k], combos[k:] < 0
-    n = combos.shape[1]
+    signs, flags = combos[:k], (combos[k:] < 0 if mm else None)
     tol = 1e-9 * mech.length_scale
-    groups: list[tuple[str, np.ndarray, np.ndarray]] = []  # label, mode index and count per row
-    notes: tuple[str, ...] = ()
-    if plan.numerical:  # every mode of each numerical group, for each combination (groupmodes.py)
-        table = enumerate_modes(mech, params, q0, signs, mirror_flags if mm else None)
-        z, assembled, col, notes = table.z, table.assembled, table.column, table.notes
-        for g, gi in enumerate(table.groups):
-            label = ",".join(names[j] for j in plan.steps[gi].joints)  # type: ignore[attr-defined]
-            groups.append((label, table.group_mode[g], table.group_count[g]))
-    else:
-        q = np.repeat(q0[:, None, None], n, axis=2)
-        sol = solve(params, q, signs[:, None, :], mirror_flags[:, None, :] if mm else None)
-        z, assembled, col = sol.z[:, 0], sol.assembled[0], np.arange(n)
-    reference = np.all(signs[:, col] == params.signs[:, :1], axis=0)
-    if mm:
-        reference &= ~mirror_flags[:, col].any(axis=0)
-    if plan.numerical:  # and each group in the mode the solver continues from the pose to this input
-        cont = solve(params, q0[:, None, None]).z[list(plan.numerical), 0, 0]
-        reference &= np.all(np.abs(z[list(plan.numerical)] - cont[:, None]) <= tol, axis=0)
-    out: list[Mode] = []
-    # distinct configurations: bucket by positions rounded to 1e-6 of the size, then confirm
-    # within the bucket to `tol` (two configurations within tol round alike but for a 1e-3 chance
-    # at a rounding boundary, which only splits a duplicate, never merges two modes)
-    keys = np.round(np.concatenate([z.real, z.imag]) / (1e3 * tol)).T
-    buckets: dict[bytes, list[int]] = {}
-    firsts: list[int] = []  # the first combination of each distinct assembled configuration
-    for r in range(len(col)):
-        zc, c = z[:, r], col[r]
-        same = None
-        if assembled[r]:
-            bucket = buckets.setdefault(keys[r].tobytes(), [])
-            same = next((f for f in bucket if np.all(np.abs(z[:, f] - zc) <= tol)), None)
-            if same is None:
-                bucket.append(r)
-                firsts.append(r)
+    rows = _mode_rows(mech, params, q0, signs, flags)
+    reference = _reference_rows(params, rows, signs, flags, q0, tol)
+    same, distinct = _same_as(rows, tol)
+    out = []
+    for r, c in enumerate(rows.col):
+        zc = rows.z[:, r]
         out.append(
             Mode(
                 signs={j: int(signs[i, c]) for i, j in enumerate(plan.sign_joints)},
                 mirrors={ln: int(combos[k + i, c]) for i, ln in enumerate(plan.mirror_links)} if mm else None,
-                assembled=bool(assembled[r]),
+                assembled=bool(rows.assembled[r]),
                 reference=bool(reference[r]),
                 joints={
                     j: ((float(zc[i].real), float(zc[i].imag)) if np.isfinite(zc[i]) else None)
                     for i, j in enumerate(names)
                 },
-                same_as=same,
-                groups={lab: {"index": int(ix[r]), "of": int(cnt[r])} for lab, ix, cnt in groups} if groups else None,
+                same_as=same[r],
+                groups={lab: {"index": int(ix[r]), "of": int(cnt[r])} for lab, ix, cnt in rows.groups}
+                if rows.groups
+                else None,
             )
         )
-    return Modes(inp, tuple(out), len(firsts), notes)
+    return Modes(inp, tuple(out), distinct, rows.notes)
