@@ -30,32 +30,6 @@ import linkagekit as lk
 #: members known to lack their documentation, all in modules owned elsewhere (by module); empty it as
 #: they get one (never extend it: a new public name comes with its docstring)
 KNOWN_MISSING: set[str] = {
-    # linkagekit/checks.py
-    "CheckReport.closed_form_joints",
-    "CheckReport.dead_points",
-    "CheckReport.dof",
-    "CheckReport.drivers",
-    "CheckReport.dynamics",
-    "CheckReport.fourbar",
-    "CheckReport.fourbars",
-    "CheckReport.grashof",
-    "CheckReport.grashof_detail",
-    "CheckReport.held_at",
-    "CheckReport.input_range",
-    "CheckReport.input_ranges",
-    "CheckReport.input_units",
-    "CheckReport.mirror_links",
-    "CheckReport.name",
-    "CheckReport.numerical_joints",
-    "CheckReport.plan",
-    "CheckReport.signs",
-    "CheckReport.transmission_angle",
-    "CheckReport.units",
-    "Modes.distinct",
-    "Modes.input",
-    "Modes.modes",
-    "Modes.notes",
-    "Modes.to_dict",
     # linkagekit/model.py
     "Mechanism.angle_unit",
     "Mechanism.description",
