@@ -894,15 +894,61 @@ def peak_loads(mech: Mechanism) -> dict[str, Any]:
 class CheckReport:
     """What ``linkagekit check`` reports (file units; transmission angles in degrees).
 
-    ``input_range`` is the first driver's entry of ``input_ranges`` (each a list of
-    ``[start, stop]`` intervals where the mechanism assembles, the other drivers held at
-    their pose values, ``held_at``).  ``grashof``, ``fourbar`` and ``transmission_angle``
-    describe the first four-bar loop (None without one); ``fourbars`` lists every loop.
-    ``dead_points`` maps each driver to the input values where the mechanism locks;
-    ``dynamics`` holds the peak loads of a file with masses, gravity or loads.
-    ``numerical_joints`` are the joints placed by numerical groups (Newton continued from
-    the pose), ``closed_form_joints`` the others; with numerical groups ``input_ranges`` is
-    where the pose's mode goes on (by continuation) and ``solvable`` is ``"numerical"``.
+    Every input value is in the file's units of its driver (``input_units``); a report reads
+    like a mapping too (``report["grashof"]``, the keys of :meth:`to_dict`).
+
+    Attributes
+    ----------
+    name : str
+        The mechanism's name.
+    dof : int
+        Its degrees of freedom (the number of drivers it needs).
+    drivers : tuple of str
+        The driver names, in the file's order.
+    plan : tuple of str
+        The solve plan, one numbered step a line (:meth:`Plan.describe`).
+    signs : dict of str to dict
+        For each joint placed by a sign step, the reference pose's ``{"sign": +1 or -1,
+        "rule": what the sign means}``.
+    mirror_links : tuple of str
+        The links of three or more joints whose mirror image is a choice (``modes --mirrors``).
+    input_ranges : dict of str to list of [float, float]
+        For each driver the ``[start, stop]`` intervals where the mechanism assembles, the
+        other drivers held at their pose values (``held_at``); with numerical groups, where
+        the pose's mode goes on (by continuation).  An angle's intervals lie in [0, 360)
+        degrees, one through 0 starting at a negative value (:func:`input_range`).
+    units : dict of str to str
+        The file's ``{"length": unit, "angle": unit}``.
+    grashof, grashof_detail : str or None
+        The Grashof class of the first four-bar loop (:func:`grashof`), and its finer
+        description; None without a loop.
+    fourbar : dict or None
+        The first loop's ``{"joints": [O2, A, B, O4], "lengths": {"ground", "crank",
+        "coupler", "rocker"}}``; None without a loop.
+    transmission_angle : dict of str to float or None
+        The first loop's transmission angle ``{"min", "max"}`` in degrees, when a driver
+        sweeps it.
+    fourbars : tuple of dict
+        Every four-bar loop (:func:`fourbar_loops`): ``joints``, ``lengths``, ``links``,
+        ``grashof``, ``grashof_detail``, ``input`` (its input link, driver and what moves
+        it) and, when one driver sweeps it, ``transmission_angle`` (``min``, ``min_at``,
+        ``max``, ``max_at``, ``joint``), ``limit_positions`` (each ``input``, the rocker's
+        ``angle``, ``extreme``), ``rocker_turns_fully``, ``swing``, and over a full turn
+        ``strokes`` and ``time_ratio``.
+    dead_points : dict of str to list of dict
+        For each driver the input values where the mechanism locks, sorted: each
+        ``{"input", "kind": "end of range" or "change point"}`` with the step at its limit
+        there (``"joint"``, ``"links"``, ``"detail"``; ``"joints"`` for a numerical group).
+    held_at : dict of str to dict of str to float
+        For each driver, the other drivers' pose values it was swept with.
+    input_units : dict of str to str
+        Each driver's input unit (``"deg"``, ``"mm"``, ...).
+    dynamics : dict or None
+        With masses, gravity or loads, the peak loads over the file's sweep
+        (:func:`peak_loads`); else None.
+    closed_form_joints, numerical_joints : tuple of str
+        The joints placed in closed form, and those placed by numerical groups (Newton
+        continued from the pose; then :meth:`to_dict`'s ``solvable`` is ``"numerical"``).
     """
 
     name: str
@@ -927,6 +973,7 @@ class CheckReport:
 
     @property
     def input_range(self) -> list[list[float]]:
+        """The first driver's entry of :attr:`input_ranges`."""
         return self.input_ranges[self.drivers[0]]
 
     def to_dict(self) -> dict[str, Any]:
@@ -1338,7 +1385,22 @@ class Mode:
 
 @dataclass(frozen=True)
 class Modes:
-    """Every assembly mode at one input (``linkagekit modes``); ``input`` in file units."""
+    """Every assembly mode at one input (``linkagekit modes``).
+
+    Attributes
+    ----------
+    input : dict of str to float
+        The input of each driver, in the file's units.
+    modes : tuple of Mode
+        Every sign (and mirror) combination, and with numerical groups every mode of each
+        group for each, in order: assembled or not, the same positions more than once
+        (:attr:`Mode.same_as`).
+    distinct : int
+        How many distinct assembled configurations there are among them.
+    notes : tuple of str
+        The numerical groups whose modes could not be enumerated (only the mode continued
+        from the pose is listed for them).
+    """
 
     input: dict[str, float]
     modes: tuple[Mode, ...]
@@ -1346,6 +1408,7 @@ class Modes:
     notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``linkagekit modes --format json``."""
         out: dict[str, Any] = {
             "format": "linkagekit-modes/1",
             "input": self.input,
