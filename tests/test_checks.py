@@ -551,3 +551,81 @@ def test_grashof_class_decides_whether_the_crank_turns(dims, mode):
         assert len(dead) == 2 * len(rep["input_range"])
         res = lk.analyze(mech, [d["input"] for d in dead])
         assert np.all(res.singular | ~res.assembled)
+
+
+# ----------------------------------------------------------------------------- brackets (checks._Bracket)
+def test_each_bracket_refines_to_its_root_or_minimum():
+    """One vectorized refine takes every bracket of a crank-rocker to the law-of-cosines value.
+
+    The rocker's angular velocity changes sign at the two limit positions (roots, bisection);
+    the transmission angle is smallest with the crank along O2 O4 (theta = 0) and largest
+    opposite (theta = 180 deg), smooth extremes: roots of d mu / d theta.  Inputs to 1e-8 deg.
+    """
+    from linkagekit import checks
+    from linkagekit.api import prepare
+
+    g, a, b, c = 4.0, 1.0, 3.5, 3.0
+    mech = fourbar(g, a, b, c, 50.0)
+    params = prepare(mech)
+    loop = checks.fourbar_loops(mech, params)[0]
+    run = checks._run(mech, params, 0, checks._assembly_intervals(mech, 0, params), [(0, loop)])
+    limits = checks._limit_brackets(run, 0)
+    extremes = checks._extreme_brackets(run, 0)
+    assert [br.row for br in limits] == [run.q.w(0)] * 2 and all(br.sign in (1.0, -1.0) for br in limits)
+    assert set(extremes) == {1, -1} and {br.row for br in extremes.values()} == {run.q.dmu(0)}
+    brackets = limits + list(extremes.values())
+    assert all(br.a < br.b and math.isnan(br.x) for br in brackets)
+    checks._refine(params, 0, run.q, brackets, [])
+    hand = limit_positions_by_hand(g, a, b, c)
+    got = sorted(math.degrees(br.x) % 360.0 for br in limits)
+    assert got == pytest.approx(sorted(theta for theta, _ in hand.values()), abs=DEG)
+    assert wrap(math.degrees(extremes[1].x)) == pytest.approx(0.0, abs=DEG)
+    assert wrap(math.degrees(extremes[-1].x) - 180.0) == pytest.approx(0.0, abs=DEG)
+    # a golden-section search on the same minimum: mu is smooth there, so x is found to ~sqrt(eps)
+    i = extremes[1].sample
+    mins = [checks._Bracket(run.sw.px[i], run.sw.nx[i], run.q.mu(0), i)]
+    checks._refine(params, 0, run.q, [], mins)
+    assert wrap(math.degrees(mins[0].x)) == pytest.approx(0.0, abs=1e-5)
+
+
+# ----------------------------------------------------------------------------- text of a report document
+def test_text_of_a_report_without_the_loop_list():
+    """A document with only the first loop's fields (no ``fourbars``) prints that loop."""
+    rep = {
+        "name": "old",
+        "dof": 1,
+        "drivers": ["crank"],
+        "solvable": "closed-form",
+        "units": {"length": "mm", "angle": "deg"},
+        "grashof": "crank-rocker",
+        "grashof_detail": "crank-rocker (the input turns fully)",
+        "fourbar": {"joints": ["A", "C", "D", "B"], "lengths": {"ground": 4.0, "crank": 1.0}},
+        "transmission_angle": {"min": 24.5, "max": 75.25},
+    }
+    from linkagekit.checks import check_text
+
+    lines = check_text(rep).splitlines()
+    assert lines[0] == "old: valid; 1 degree(s) of freedom, driven by crank; solved in closed form."
+    assert lines[-3:] == [
+        "Four-bar loop A-C-D-B: crank-rocker (the input turns fully)",
+        "  lengths: ground 4 mm, input side 1 mm, coupler — mm, output side — mm",
+        "  Transmission angle: min 24.5000°, max 75.2500°",
+    ]
+
+
+def test_text_lists_at_most_so_many_dead_points():
+    from linkagekit.checks import MAX_TEXT_DEAD_POINTS, check_text
+
+    n = MAX_TEXT_DEAD_POINTS + 6
+    dps = [{"input": 0.5 * k, "kind": "change point", "detail": f"step {k}"} for k in range(n)]
+    rep = {"name": "m", "dof": 1, "drivers": ["s"], "input_ranges": {"s": [[0.0, 20.0]]}, "dead_points": {"s": dps}}
+    lines = check_text(rep, units={"s": "mm"}).splitlines()
+    assert lines[1] == "Solve plan:"
+    assert lines[2] == "Assembles for s in [0.000000, 20.000000] mm"
+    assert lines[3] == "Dead points of s (where the mechanism locks):"
+    assert lines[4] == "  s = 0.000000 mm: change point; step 0"
+    last = MAX_TEXT_DEAD_POINTS - 1
+    assert lines[4 + last] == f"  s = {0.5 * last:.6f} mm: change point; step {last}"
+    assert lines[-1] == "  ... and 6 more (check --format json lists them all)"
+    rep["dead_points"] = {"s": []}
+    assert check_text(rep).splitlines()[-1] == "Dead points of s (where the mechanism locks): none"

@@ -11,8 +11,6 @@ The rule for docstrings:
 * every public data attribute of an exported class (a dataclass field, a class constant such as
   ``exit_code``) is listed in the numpydoc ``Attributes`` section of the class's docstring or of
   the docstring of a linkagekit base class (``name : type`` lines; ``a, b : type`` lists both).
-
-``KNOWN_MISSING`` names the members still without one; it is to be emptied, never extended.
 """
 
 from __future__ import annotations
@@ -26,61 +24,6 @@ from functools import cached_property
 import pytest
 
 import linkagekit as lk
-
-#: members known to lack their documentation, all in modules owned elsewhere (by module); empty it as
-#: they get one (never extend it: a new public name comes with its docstring)
-KNOWN_MISSING: set[str] = {
-    # linkagekit/checks.py
-    "CheckReport.closed_form_joints",
-    "CheckReport.dead_points",
-    "CheckReport.dof",
-    "CheckReport.drivers",
-    "CheckReport.dynamics",
-    "CheckReport.fourbar",
-    "CheckReport.fourbars",
-    "CheckReport.grashof",
-    "CheckReport.grashof_detail",
-    "CheckReport.held_at",
-    "CheckReport.input_range",
-    "CheckReport.input_ranges",
-    "CheckReport.input_units",
-    "CheckReport.mirror_links",
-    "CheckReport.name",
-    "CheckReport.numerical_joints",
-    "CheckReport.plan",
-    "CheckReport.signs",
-    "CheckReport.transmission_angle",
-    "CheckReport.units",
-    "Modes.distinct",
-    "Modes.input",
-    "Modes.modes",
-    "Modes.notes",
-    "Modes.to_dict",
-    # linkagekit/viz/scene.py
-    "Scene.angle_unit",
-    "Scene.assembled",
-    "Scene.bounds",
-    "Scene.catalogue",
-    "Scene.breaks",
-    "Scene.columns",
-    "Scene.coupler_curves",
-    "Scene.drivers",
-    "Scene.gaps",
-    "Scene.ground_joints",
-    "Scene.ground_xy",
-    "Scene.input_units",
-    "Scene.inputs",
-    "Scene.joints",
-    "Scene.length_unit",
-    "Scene.links",
-    "Scene.name",
-    "Scene.other_paths",
-    "Scene.plots",
-    "Scene.sliders",
-    "Scene.units",
-    "Scene.x_driver",
-    "Scene.xy",
-}
 
 
 def _own_doc(obj: object) -> str:
@@ -234,10 +177,4 @@ def test_returned_classes_are_part_of_the_api() -> None:
 
 def test_every_public_name_is_documented() -> None:
     missing = missing_docs()
-    assert missing <= KNOWN_MISSING, f"without a docstring: {sorted(missing - KNOWN_MISSING)}"
-
-
-def test_the_known_missing_list_is_current() -> None:
-    assert not KNOWN_MISSING - missing_docs(), (
-        f"documented now, drop from KNOWN_MISSING: {sorted(KNOWN_MISSING - missing_docs())}"
-    )
+    assert not missing, f"without a docstring: {sorted(missing)}"

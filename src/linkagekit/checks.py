@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,7 +55,8 @@ def _inputs(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
 
 
 def _assembled(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
-    return solve(params, _inputs(params, driver, values)).assembled[0]
+    ok: np.ndarray = solve(params, _inputs(params, driver, values)).assembled[0]
+    return ok
 
 
 def _span(mech: Mechanism, driver: int) -> tuple[float, float]:
@@ -363,7 +364,8 @@ class _Quantities:
 
     def out_angle(self, st: _State) -> np.ndarray:
         """Angle (rad) of each loop's rocker link: the direction of its first joint -> its second."""
-        return np.angle(st.z[self.out1] - st.z[self.out0])
+        angle: np.ndarray = np.angle(st.z[self.out1] - st.z[self.out0])
+        return angle
 
 
 @dataclass
@@ -409,38 +411,50 @@ def _sweep(intervals: list[list[float]], cyclic: bool, total: float) -> _Sweep:
     return _Sweep(x, seg, cyclic, total, prev, nxt, px, nx, has_prev, has_next)
 
 
-def _refine(
-    params: Params,
-    driver: int,
-    q: _Quantities,
-    roots: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    mins: tuple[np.ndarray, np.ndarray, np.ndarray],
-) -> tuple[np.ndarray, np.ndarray]:
+@dataclass
+class _Bracket:
+    """One search over an input interval [a, b] of one driver, refined by :func:`_refine`.
+
+    A root of quantity ``row`` of :class:`_Quantities` (its sign at ``a`` is ``sign``;
+    bisection) or, with ``sign`` None, a minimum of it (golden section); found around the
+    dense sample ``sample``.  :func:`_refine` sets ``x``, the refined input value, and
+    :func:`_finish` ``col``, its column in the state at every refined value.
+    """
+
+    a: float
+    b: float
+    row: int
+    sample: int
+    sign: float | None = None
+    x: float = math.nan
+    col: int = -1
+
+
+def _refine(params: Params, driver: int, q: _Quantities, roots: list[_Bracket], mins: list[_Bracket]) -> None:
     """Vectorized bisection (sign changes) and golden-section search (minima), all in one solve per step.
 
-    ``roots`` = (a, b, row, sign at a): a root of quantity ``row`` in [a, b];
-    ``mins`` = (a, b, row): a minimum of quantity ``row`` in [a, b].  Returns the refined
-    abscissae (roots, minima); each bracket shrinks to ~1e-16 of its width's scale.
+    Sets each bracket's ``x``: its interval shrinks to ~1e-16 of its width's scale.  The
+    roots come first in the solve's columns, then the minima, each in the order given.
     """
-    ra, rb, rrow, rsign = (np.array(v, float) for v in roots)
-    ma, mb, mrow = (np.array(v, float) for v in mins)
-    rrow_i, mrow_i = rrow.astype(int), mrow.astype(int)
+    ra, rb = np.array([b.a for b in roots], float), np.array([b.b for b in roots], float)
+    ma, mb = np.array([b.a for b in mins], float), np.array([b.b for b in mins], float)
+    rrow, mrow = np.array([b.row for b in roots], int), np.array([b.row for b in mins], int)
+    rsign = np.array([b.sign for b in roots], float)
     nr, nm = len(ra), len(ma)
-    if nr + nm == 0:
-        return ra, ma
     g = (math.sqrt(5) - 1) / 2
     cols = np.arange(nr + 2 * nm)
-    for _ in range(N_BISECT):
+    for _ in range(N_BISECT if nr + nm else 0):
         mid = 0.5 * (ra + rb)
         c, d = mb - g * (mb - ma), ma + g * (mb - ma)
         vals = q.rows(_state(params, driver, np.concatenate([mid, c, d])))
-        f = vals[np.concatenate([rrow_i, mrow_i, mrow_i]), cols]
+        f = vals[np.concatenate([rrow, mrow, mrow]), cols]
         same = np.sign(f[:nr]) == rsign
         ra, rb = np.where(same, mid, ra), np.where(same, rb, mid)
         fc, fd = f[nr : nr + nm], f[nr + nm :]
         left = (fc < fd) | (np.isnan(fd) & ~np.isnan(fc))
         ma, mb = np.where(left, ma, c), np.where(left, d, mb)
-    return 0.5 * (ra + rb), 0.5 * (ma + mb)
+    for b, x in zip(roots + mins, np.concatenate([0.5 * (ra + rb), 0.5 * (ma + mb)]), strict=True):
+        b.x = float(x)
 
 
 def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
@@ -503,6 +517,264 @@ def _cyc(dv: float, cyclic: bool, period: float) -> float:
     return float(dv - period * round(dv / period)) if cyclic else float(dv)
 
 
+@dataclass
+class _Run:
+    """One driver's dense sweep over where it assembles, and the quantities the checks look at there.
+
+    ``intervals`` where it assembles and ``lo``, ``hi`` its search span (radians or length
+    units); ``factor`` the file unit in those; ``turn`` whether the input is an angle;
+    ``sw.cyclic`` whether it assembles over the whole turn.  ``st`` and ``rows`` the state
+    and :class:`_Quantities` rows at the dense samples ``sw.x``.
+    """
+
+    params: Params
+    driver: int
+    intervals: list[list[float]]
+    factor: float
+    lo: float
+    hi: float
+    turn: bool
+    sw: _Sweep
+    q: _Quantities
+    st: _State
+    rows: np.ndarray
+
+    @property
+    def cyclic(self) -> bool:
+        return self.sw.cyclic
+
+    @property
+    def total(self) -> float:
+        return self.hi - self.lo
+
+    @property
+    def tol_x(self) -> float:
+        """Two refined inputs closer than this are the same point."""
+        return 1e-9 * (1.0 if self.turn else self.total)
+
+    def cyc(self, dv: float) -> float:
+        return _cyc(dv, self.cyclic, self.total)
+
+    def state(self, x: np.ndarray) -> _State:
+        return _state(self.params, self.driver, x)
+
+    def file_value(self, v: float) -> float:
+        """An input in file units (on a full turn, brought into [lo, lo + total) with 0 to round-off at lo)."""
+        if self.cyclic:
+            v = self.lo + float(np.mod(v - self.lo, self.total))
+            if min(abs(v - self.lo), abs(self.lo + self.total - v)) < 1e-13 * self.total:
+                v = self.lo
+        return float(v / self.factor)
+
+
+def _run(
+    mech: Mechanism, params: Params, driver: int, intervals: list[list[float]], loops: list[tuple[int, FourBar]]
+) -> _Run:
+    """Sample one driver densely over ``intervals`` (:func:`_sweep`) and evaluate the checks' quantities there."""
+    d = mech.drivers[driver]
+    lo, hi = _span(mech, driver)
+    total = hi - lo
+    cyclic = d.type.cyclic and len(intervals) == 1 and intervals[0][1] - intervals[0][0] >= total * (1 - 1e-12)
+    sw = _sweep(intervals, cyclic, total)
+    plan = params.plan
+    names = plan.joint_names
+    out_links = []
+    for _, lp in loops:
+        j = mech.link(lp.links[2]).joints
+        out_links.append((names.index(j[0]), names.index(j[1])))
+    known = [(s.k1, s.k2) if isinstance(s, Dyad) else (-1, -1) for s in plan.sign_steps]
+    q = _Quantities([lp for _, lp in loops], plan.n_signs, out_links, known)
+    st = _state(params, driver, sw.x)
+    return _Run(params, driver, intervals, d.input_scale(mech), lo, hi, d.type.cyclic, sw, q, st, q.rows(st))
+
+
+def _limit_brackets(run: _Run, li: int) -> list[_Bracket]:
+    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours."""
+    sw, row = run.sw, run.q.w(li)
+    w = run.rows[row]
+    ia = np.flatnonzero(sw.has_next)
+    wa, wb = w[ia], w[sw.next[ia]]
+    hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
+    return [_Bracket(sw.x[k], sw.nx[k], row, int(k), float(np.sign(w[k]))) for k in ia[hit]]
+
+
+def _around(run: _Run, i: int, row: int, slope: int) -> _Bracket:
+    """A bracket over sample ``i``'s neighbours for a minimum of quantity ``row``.
+
+    A root of ``slope`` (bisection) when that changes sign across them, i.e. a smooth
+    extreme; else a golden-section search on ``row`` itself (an end of the range, or a
+    minimum where ``row`` has a kink).
+    """
+    sw = run.sw
+    sa, sb = np.sign(run.rows[slope, sw.prev[i]]), np.sign(run.rows[slope, sw.next[i]])
+    if sw.has_prev[i] and sw.has_next[i] and sa * sb < 0:
+        return _Bracket(sw.px[i], sw.nx[i], slope, i, float(sa))
+    return _Bracket(sw.px[i], sw.nx[i], row, i)
+
+
+def _extreme_brackets(run: _Run, li: int) -> dict[int, _Bracket]:
+    """Loop ``li``'s transmission angle extremes, +1 the minimum and -1 the maximum (a minimum of -mu)."""
+    out = {}
+    for sgn in (1, -1):
+        f = run.rows[run.q.mu(li, sgn)]
+        if np.isfinite(f).any():
+            out[sgn] = _around(run, int(np.nanargmin(f)), run.q.mu(li, sgn), run.q.dmu(li))
+    return out
+
+
+def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
+    """Each sign step's |determinant| touching 0 inside the range: (sign step, bracket).
+
+    For a circle-circle step that is where the distance s between its known joints has an
+    extremum at r1 + r2 or |r1 - r2|: a simple root of ds; otherwise a minimum of |cond|.
+    """
+    sw, q = run.sw, run.q
+    interior = sw.has_prev & sw.has_next
+    out = []
+    for k in range(q.n_signs):
+        c = run.rows[q.cond(k)]
+        with np.errstate(invalid="ignore"):
+            cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
+        out += [(k, _around(run, int(i), q.cond(k), q.ds(k))) for i in np.flatnonzero(cand)]
+    return out
+
+
+@dataclass
+class _Final:
+    """The state at every refined input (columns ``0 .. ends - 1``) and at the range ends (from ``ends`` on)."""
+
+    state: _State
+    rows: np.ndarray
+    phi: np.ndarray
+    ends: int
+
+
+def _finish(run: _Run, searched: list[_Bracket], ends: list[float]) -> _Final:
+    """One solve at every refined input (setting each bracket's ``col``) and at the range ends."""
+    for col, b in enumerate(searched):
+        b.col = col
+    fin = run.state(np.concatenate([np.array([b.x for b in searched], float), np.array(ends, float)]))
+    return _Final(fin, run.q.rows(fin), run.q.out_angle(fin), len(searched))
+
+
+def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[float, dict[str, Any]]]:
+    """The range ends as dead points, with the sign step (or numerical group) at its limit there."""
+    params = run.params
+    dead = []
+    for m, v in enumerate(ends):
+        col = fin.ends + m
+        margins = fin.state.margin[:, col]
+        k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
+        info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
+        if params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
+            info.update(_group_end(params))
+        elif params.plan.n_signs:
+            info.update(_step_links(params, k, fin.state, col))
+        dead.append((v, info))
+    return dead
+
+
+def _change_dead_points(
+    run: _Run, changes: list[tuple[int, _Bracket]], fin: _Final, ends: list[float]
+) -> list[tuple[float, dict[str, Any]]]:
+    """The change points, each once.
+
+    Candidates sorted by input; a candidate within ``tol_x`` of the one kept before it (or
+    of a range end) is the same point found by another step.
+    """
+    cands = sorted(
+        (b.x, k, b.col)
+        for k, b in changes
+        if fin.state.assembled[b.col] and fin.rows[run.q.cond(k), b.col] < SINGULAR_TOL
+    )
+    if cands and ends:
+        dist = np.abs(np.array([c[0] for c in cands])[:, None] - np.array(ends, float)[None, :])
+        cands = [c for c, bad in zip(cands, dist.min(axis=1) <= run.tol_x, strict=True) if not bad]
+    kept: list[tuple[float, int, int]] = []
+    for c in cands:
+        if not (kept and abs(run.cyc(c[0] - kept[-1][0])) <= run.tol_x):
+            kept.append(c)
+    if run.cyclic and len(kept) > 1 and abs(run.cyc(kept[-1][0] - kept[0][0])) <= run.tol_x:
+        kept.pop()  # the same point, once either side of the turn's start
+    dead = []
+    for v, k, col in kept:
+        info = {"input": run.file_value(v), "kind": "change point"}
+        info.update(_step_links(run.params, k, fin.state, col))
+        dead.append((v, info))
+    return dead
+
+
+class _Limit(NamedTuple):
+    """A limit position: the input (internal units), the rocker's angle (rad), ``"min"``/``"max"``, the dense sample."""
+
+    x: float
+    angle: float
+    extreme: str
+    sample: int
+
+
+def _transmission(run: _Run, li: int, extremes: dict[int, _Bracket], fin: _Final) -> dict[str, Any]:
+    """Min and max of loop ``li``'s transmission angle and where: the refined value when it is no worse."""
+    ta: dict[str, Any] = {}
+    for sgn, b in extremes.items():
+        key, row = ("min" if sgn > 0 else "max"), run.q.mu(li, sgn)
+        best_x, best = run.sw.x[b.sample], run.rows[row, b.sample]
+        if np.isfinite(fin.rows[row, b.col]) and fin.rows[row, b.col] <= best + 1e-12:
+            best_x, best = b.x, fin.rows[row, b.col]
+        ta[key] = float(sgn * best)
+        ta[f"{key}_at"] = run.file_value(float(best_x))
+    return ta
+
+
+def _limits(run: _Run, li: int, brackets: list[_Bracket], fin: _Final) -> list[_Limit]:
+    """Refined roots of the rocker's angular velocity, kept when the root is a true zero, sorted by input."""
+    w_dense = run.rows[run.q.w(li)]
+    scale = float(np.nanmax(np.abs(w_dense))) if np.isfinite(w_dense).any() else 1.0
+    limits: list[_Limit] = []
+    for b in brackets:
+        if not (abs(fin.rows[b.row, b.col]) <= 1e-6 * scale):
+            continue
+        if any(abs(run.cyc(b.x - lim.x)) <= run.tol_x for lim in limits):
+            continue
+        extreme = "max" if b.sign is not None and b.sign > 0 else "min"
+        limits.append(_Limit(b.x, float(fin.phi[li, b.col]), extreme, b.sample))
+    limits.sort(key=lambda t: run.file_value(t.x))
+    return limits
+
+
+def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -> dict[str, Any]:
+    """Whether the rocker turns fully and, if not, its swing over the range (one interval), unwrapped."""
+    phi = run.q.out_angle(run.st)[li]
+    if len(run.intervals) != 1 or not np.isfinite(phi).all():
+        return {}
+    u = np.unwrap(phi)
+    turns = run.cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
+    if turns:
+        return {"rocker_turns_fully": True}
+    cand = [u[lim.sample] + _wrap(lim.angle - phi[lim.sample]) for lim in limits]
+    if not run.cyclic:
+        e_cols = list(range(fin.ends, fin.phi.shape[1]))
+        cand += [u[0] + _wrap(fin.phi[li, c] - phi[0]) for c in e_cols[:1]]
+        cand += [u[-1] + _wrap(fin.phi[li, c] - phi[-1]) for c in e_cols[1:2]]
+    if not cand:
+        cand = [float(np.min(u)), float(np.max(u))]
+    return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
+
+
+def _time_ratio(run: _Run, limits: list[_Limit]) -> dict[str, Any]:
+    """Over a full turn with one limit position each way: the input's travel each way and their ratio."""
+    if not (run.cyclic and len(limits) == 2 and {t.extreme for t in limits} == {"min", "max"}):
+        return {}
+    vmin = next(t.x for t in limits if t.extreme == "min")
+    vmax = next(t.x for t in limits if t.extreme == "max")
+    rising = float(np.mod(vmax - vmin, run.total))
+    falling = run.total - rising
+    return {
+        "strokes": {"rising": rising / run.factor, "falling": falling / run.factor},
+        "time_ratio": max(rising, falling) / min(rising, falling) if min(rising, falling) > 0 else None,
+    }
+
+
 def _driver_checks(
     mech: Mechanism, params: Params, driver: int, intervals: list[list[float]], loops: list[tuple[int, FourBar]]
 ) -> tuple[list[dict[str, Any]], dict[int, dict[str, Any]]]:
@@ -510,228 +782,35 @@ def _driver_checks(
 
     ``intervals`` where it assembles, in radians or length units (:func:`_assembly_intervals`);
     ``loops`` the (index, loop) pairs this driver sweeps.  Returns (dead points, {loop index:
-    facts}), every value in file units.
+    facts}), every value in file units.  Every bracket is refined in one vectorized search
+    (:func:`_refine`), then solved once more (:func:`_finish`).
     """
-    d = mech.drivers[driver]
-    factor = d.input_scale(mech)
     if not intervals:
         return [], {}
-    lo, hi = _span(mech, driver)
-    total = hi - lo
-    cyclic = d.type.cyclic and len(intervals) == 1 and intervals[0][1] - intervals[0][0] >= total * (1 - 1e-12)
-    sw = _sweep(intervals, cyclic, total)
-    x = sw.x
-    plan = params.plan
-    names = plan.joint_names
-    lps = [lp for _, lp in loops]
-    out_links = []
-    for lp in lps:
-        j = mech.link(lp.links[2]).joints
-        out_links.append((names.index(j[0]), names.index(j[1])))
-    known = [(s.k1, s.k2) if isinstance(s, Dyad) else (-1, -1) for s in plan.sign_steps]
-    q = _Quantities(lps, plan.n_signs, out_links, known)
-    st = _state(params, driver, x)
-    rows = q.rows(st)
-
-    # -- limit positions: sign changes of each rocker's angular velocity between neighbours
-    ia = np.flatnonzero(sw.has_next)
-    root_a: list[Any] = []
-    root_b: list[Any] = []
-    root_row: list[Any] = []
-    root_sign: list[Any] = []
-    root_i: list[Any] = []
-    for li in range(q.n):
-        w = rows[q.w(li)]
-        wa, wb = w[ia], w[sw.next[ia]]
-        hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
-        k = ia[hit]
-        root_a.append(x[k])
-        root_b.append(sw.nx[k])
-        root_row.append(np.full(len(k), q.w(li)))
-        root_sign.append(np.sign(w[k]))
-        root_i.append(k)
-    # -- minima: transmission angle min and max per loop, and |cond| touching 0 inside the range
-    min_a: list[Any] = []
-    min_b: list[Any] = []
-    min_row: list[Any] = []
-    min_i: list[Any] = []
-    # the transmission angle's extremes: a root of d mu / d input when it changes sign around the
-    # best sample (a smooth extreme), else a golden-section search (an end of the range, or mu at 0 or 180)
-    ta_tasks: list[tuple[int, int, str, int, int]] = []  # (loop, +1 min / -1 max, kind, task, sample)
-    n_roots = sum(len(r) for r in root_a)
-    for li in range(q.n):
-        dm = rows[q.dmu(li)]
-        for sgn in (1, -1):
-            f = rows[q.mu(li, sgn)]
-            if not np.isfinite(f).any():
-                continue
-            i = int(np.nanargmin(f))
-            sa, sb = np.sign(dm[sw.prev[i]]), np.sign(dm[sw.next[i]])
-            if sw.has_prev[i] and sw.has_next[i] and sa * sb < 0:
-                root_a.append([sw.px[i]])
-                root_b.append([sw.nx[i]])
-                root_row.append([q.dmu(li)])
-                root_sign.append([sa])
-                root_i.append([i])
-                ta_tasks.append((li, sgn, "root", n_roots, i))
-                n_roots += 1
-            else:
-                ta_tasks.append((li, sgn, "min", sum(len(m) for m in min_a), i))
-                min_a.append([sw.px[i]])
-                min_b.append([sw.nx[i]])
-                min_row.append([q.mu(li, sgn)])
-                min_i.append([i])
-    # change points: a sign step's |determinant| touching 0 inside the range.  For a circle-circle
-    # step that is where the distance s between its known joints has an extremum at r1 + r2 or
-    # |r1 - r2|: a simple root of ds (bisection); otherwise a golden-section search on |cond|
-    cp_tasks: list[tuple[int, str, int]] = []  # (sign step, kind, task)
-    interior = sw.has_prev & sw.has_next
-    for k in range(plan.n_signs):
-        c, ds = rows[q.cond(k)], rows[q.ds(k)]
-        with np.errstate(invalid="ignore"):
-            cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
-        for ic in np.flatnonzero(cand):
-            i = int(ic)
-            sa, sb = np.sign(ds[sw.prev[i]]), np.sign(ds[sw.next[i]])
-            if sa * sb < 0:
-                root_a.append([sw.px[i]])
-                root_b.append([sw.nx[i]])
-                root_row.append([q.ds(k)])
-                root_sign.append([sa])
-                root_i.append([i])
-                cp_tasks.append((k, "root", n_roots))
-                n_roots += 1
-            else:
-                cp_tasks.append((k, "min", sum(len(m) for m in min_a)))
-                min_a.append([sw.px[i]])
-                min_b.append([sw.nx[i]])
-                min_row.append([q.cond(k)])
-                min_i.append([i])
-
-    def cat(parts: list[Any]) -> np.ndarray:
-        return np.concatenate([np.asarray(p, float) for p in parts]) if parts else np.zeros(0)
-
-    ri = cat(root_i).astype(int)
-    rrow = cat(root_row).astype(int)
-    rsign = cat(root_sign)
-    mrow = cat(min_row).astype(int)
-    roots, mins = _refine(params, driver, q, (cat(root_a), cat(root_b), rrow, rsign), (cat(min_a), cat(min_b), mrow))
+    run = _run(mech, params, driver, intervals, loops)
+    limits = [_limit_brackets(run, li) for li in range(run.q.n)]
+    extremes = [_extreme_brackets(run, li) for li in range(run.q.n)]
+    changes = _change_point_brackets(run)
+    ordered = [*(b for bs in limits for b in bs), *(b for e in extremes for b in e.values()), *(b for _, b in changes)]
+    roots, mins = [b for b in ordered if b.sign is not None], [b for b in ordered if b.sign is None]
+    _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
-    ends = [] if cyclic else [v for s, e in intervals for v in (s, e) if lo < v < hi or d.type.cyclic]
-    ends_arr = np.array(ends, float)
-    fin = _state(params, driver, np.concatenate([roots, mins, ends_arr]))
-    fvals = q.rows(fin)
-    nr, nm = len(roots), len(mins)
-    cols = np.arange(nr + nm)
-    fval = fvals[np.concatenate([rrow, mrow]), cols] if nr + nm else np.zeros(0)
-    tol_x = 1e-9 * (1.0 if d.type.cyclic else total)
-
-    def file_value(v: float) -> float:
-        if cyclic:
-            v = lo + float(np.mod(v - lo, total))
-            if min(abs(v - lo), abs(lo + total - v)) < 1e-13 * total:  # 0 to round-off
-                v = lo
-        return float(v / factor)
-
-    # dead points
-    dead: list[tuple[float, dict[str, Any]]] = []
-    for m, v in enumerate(ends):
-        col = nr + nm + m
-        margins = fin.margin[:, col]
-        k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
-        info = {"input": float(v / factor), "kind": "end of range"}
-        if plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
-            info.update(_group_end(params))
-        elif plan.n_signs:
-            info.update(_step_links(params, k, fin, col))
-        dead.append((v, info))
-    # change points, each once: candidates sorted by input, a candidate within tol_x of the
-    # one kept before it (or of a range end) is the same point found by another step
-    cands = []
-    for k, kind, task in cp_tasks:
-        col = task if kind == "root" else nr + task
-        v = roots[task] if kind == "root" else mins[task]
-        if fin.assembled[col] and fvals[q.cond(k), col] < SINGULAR_TOL:
-            cands.append((float(v), k, col))
-    cands.sort()
-    if cands and ends:
-        near_end = np.abs(np.array([c[0] for c in cands])[:, None] - ends_arr[None, :]).min(axis=1) <= tol_x
-        cands = [c for c, bad in zip(cands, near_end, strict=True) if not bad]
-    kept: list[tuple[float, int, int]] = []
-    for c in cands:
-        if kept and abs(_cyc(c[0] - kept[-1][0], cyclic, total)) <= tol_x:
-            continue
-        kept.append(c)
-    if cyclic and len(kept) > 1 and abs(_cyc(kept[-1][0] - kept[0][0], cyclic, total)) <= tol_x:
-        kept.pop()  # the same point, once either side of the turn's start
-    for v, k, col in kept:
-        info = {"input": file_value(v), "kind": "change point"}
-        info.update(_step_links(params, k, fin, col))
-        dead.append((v, info))
+    ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
+    fin = _finish(run, roots + mins, ends)
+    dead = _end_dead_points(run, fin, ends) + _change_dead_points(run, changes, fin, ends)
     dead.sort(key=lambda t: t[1]["input"])
-
-    # transmission angle, limit positions, swing and time ratio of each loop
     facts: dict[int, dict[str, Any]] = {}
-    phi_dense = q.out_angle(st)
-    phi_fin = q.out_angle(fin)
-    unit = mech.angle_to_rad
     for li, (index, lp) in enumerate(loops):
         out: dict[str, Any] = {}
-        ta: dict[str, Any] = {}
-        for lj, sgn, kind, task, i in ta_tasks:
-            if lj != li:
-                continue
-            key = "min" if sgn > 0 else "max"
-            row = q.mu(li, sgn)
-            col = task if kind == "root" else nr + task
-            refined_x = roots[task] if kind == "root" else mins[task]
-            best_x, best = x[i], rows[row, i]
-            if np.isfinite(fvals[row, col]) and fvals[row, col] <= best + 1e-12:
-                best_x, best = refined_x, fvals[row, col]
-            ta[key] = float(sgn * best)
-            ta[f"{key}_at"] = file_value(float(best_x))
+        ta = _transmission(run, li, extremes[li], fin)
         if "min" in ta and "max" in ta:
-            ta["joint"] = names[lp.rocker_tip]
-            out["transmission_angle"] = ta
-        # limit positions: refined roots of the rocker's angular velocity, kept when the root is a true zero
-        w_dense = rows[q.w(li)]
-        scale = float(np.nanmax(np.abs(w_dense))) if np.isfinite(w_dense).any() else 1.0
-        limits: list[tuple[float, float, str, int]] = []
-        for r in np.flatnonzero(rrow == q.w(li)):
-            if not (abs(fval[r]) <= 1e-6 * scale):
-                continue
-            v = roots[r]
-            if any(abs(_cyc(v - u, cyclic, total)) <= tol_x for u, *_ in limits):
-                continue
-            limits.append((v, float(phi_fin[li, r]), "max" if rsign[r] > 0 else "min", int(ri[r])))
-        limits.sort(key=lambda t: file_value(t[0]))
+            out["transmission_angle"] = ta | {"joint": params.plan.joint_names[lp.rocker_tip]}
+        lims = _limits(run, li, limits[li], fin)
         out["limit_positions"] = [
-            {"input": file_value(v), "angle": float(_wrap(a) / unit), "extreme": kind} for v, a, kind, _ in limits
+            {"input": run.file_value(t.x), "angle": float(_wrap(t.angle) / mech.angle_to_rad), "extreme": t.extreme}
+            for t in lims
         ]
-        # swing of the rocker over the range (one interval): unwrapped along the samples
-        if len(intervals) == 1:
-            phi = phi_dense[li]
-            if np.isfinite(phi).all():
-                u = np.unwrap(phi)
-                turns = cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
-                out["rocker_turns_fully"] = bool(turns)
-                if not turns:
-                    cand = [u[i] + _wrap(a - phi[i]) for _, a, _, i in limits]
-                    if not cyclic:
-                        e_cols = [nr + nm + m for m in range(len(ends))]
-                        cand += [u[0] + _wrap(phi_fin[li, c] - phi[0]) for c in e_cols[:1]]
-                        cand += [u[-1] + _wrap(phi_fin[li, c] - phi[-1]) for c in e_cols[1:2]]
-                    if not cand:
-                        cand = [float(np.min(u)), float(np.max(u))]
-                    out["swing"] = float((max(cand) - min(cand)) / unit)
-        if cyclic and len(limits) == 2 and {t[2] for t in limits} == {"min", "max"}:
-            vmin = next(t[0] for t in limits if t[2] == "min")
-            vmax = next(t[0] for t in limits if t[2] == "max")
-            rising = float(np.mod(vmax - vmin, total))
-            falling = total - rising
-            out["strokes"] = {"rising": rising / factor, "falling": falling / factor}
-            out["time_ratio"] = max(rising, falling) / min(rising, falling) if min(rising, falling) > 0 else None
-        facts[index] = out
+        facts[index] = out | _swing(run, li, lims, fin, mech.angle_to_rad) | _time_ratio(run, lims)
     return [info for _, info in dead], facts
 
 
@@ -815,15 +894,61 @@ def peak_loads(mech: Mechanism) -> dict[str, Any]:
 class CheckReport:
     """What ``linkagekit check`` reports (file units; transmission angles in degrees).
 
-    ``input_range`` is the first driver's entry of ``input_ranges`` (each a list of
-    ``[start, stop]`` intervals where the mechanism assembles, the other drivers held at
-    their pose values, ``held_at``).  ``grashof``, ``fourbar`` and ``transmission_angle``
-    describe the first four-bar loop (None without one); ``fourbars`` lists every loop.
-    ``dead_points`` maps each driver to the input values where the mechanism locks;
-    ``dynamics`` holds the peak loads of a file with masses, gravity or loads.
-    ``numerical_joints`` are the joints placed by numerical groups (Newton continued from
-    the pose), ``closed_form_joints`` the others; with numerical groups ``input_ranges`` is
-    where the pose's mode goes on (by continuation) and ``solvable`` is ``"numerical"``.
+    Every input value is in the file's units of its driver (``input_units``); a report reads
+    like a mapping too (``report["grashof"]``, the keys of :meth:`to_dict`).
+
+    Attributes
+    ----------
+    name : str
+        The mechanism's name.
+    dof : int
+        Its degrees of freedom (the number of drivers it needs).
+    drivers : tuple of str
+        The driver names, in the file's order.
+    plan : tuple of str
+        The solve plan, one numbered step a line (:meth:`Plan.describe`).
+    signs : dict of str to dict
+        For each joint placed by a sign step, the reference pose's ``{"sign": +1 or -1,
+        "rule": what the sign means}``.
+    mirror_links : tuple of str
+        The links of three or more joints whose mirror image is a choice (``modes --mirrors``).
+    input_ranges : dict of str to list of [float, float]
+        For each driver the ``[start, stop]`` intervals where the mechanism assembles, the
+        other drivers held at their pose values (``held_at``); with numerical groups, where
+        the pose's mode goes on (by continuation).  An angle's intervals lie in [0, 360)
+        degrees, one through 0 starting at a negative value (:func:`input_range`).
+    units : dict of str to str
+        The file's ``{"length": unit, "angle": unit}``.
+    grashof, grashof_detail : str or None
+        The Grashof class of the first four-bar loop (:func:`grashof`), and its finer
+        description; None without a loop.
+    fourbar : dict or None
+        The first loop's ``{"joints": [O2, A, B, O4], "lengths": {"ground", "crank",
+        "coupler", "rocker"}}``; None without a loop.
+    transmission_angle : dict of str to float or None
+        The first loop's transmission angle ``{"min", "max"}`` in degrees, when a driver
+        sweeps it.
+    fourbars : tuple of dict
+        Every four-bar loop (:func:`fourbar_loops`): ``joints``, ``lengths``, ``links``,
+        ``grashof``, ``grashof_detail``, ``input`` (its input link, driver and what moves
+        it) and, when one driver sweeps it, ``transmission_angle`` (``min``, ``min_at``,
+        ``max``, ``max_at``, ``joint``), ``limit_positions`` (each ``input``, the rocker's
+        ``angle``, ``extreme``), ``rocker_turns_fully``, ``swing``, and over a full turn
+        ``strokes`` and ``time_ratio``.
+    dead_points : dict of str to list of dict
+        For each driver the input values where the mechanism locks, sorted: each
+        ``{"input", "kind": "end of range" or "change point"}`` with the step at its limit
+        there (``"joint"``, ``"links"``, ``"detail"``; ``"joints"`` for a numerical group).
+    held_at : dict of str to dict of str to float
+        For each driver, the other drivers' pose values it was swept with.
+    input_units : dict of str to str
+        Each driver's input unit (``"deg"``, ``"mm"``, ...).
+    dynamics : dict or None
+        With masses, gravity or loads, the peak loads over the file's sweep
+        (:func:`peak_loads`); else None.
+    closed_form_joints, numerical_joints : tuple of str
+        The joints placed in closed form, and those placed by numerical groups (Newton
+        continued from the pose; then :meth:`to_dict`'s ``solvable`` is ``"numerical"``).
     """
 
     name: str
@@ -848,6 +973,7 @@ class CheckReport:
 
     @property
     def input_range(self) -> list[list[float]]:
+        """The first driver's entry of :attr:`input_ranges`."""
         return self.input_ranges[self.drivers[0]]
 
     def to_dict(self) -> dict[str, Any]:
@@ -879,7 +1005,8 @@ class CheckReport:
         out["fourbars"] = list(self.fourbars)
         if self.dynamics is not None:
             out["dynamics"] = self.dynamics
-        return _finite(out)
+        finite: dict[str, Any] = _finite(out)
+        return finite
 
     def __getitem__(self, key: str) -> Any:
         """Dictionary-style access to :meth:`to_dict` (``report["grashof"]``)."""
@@ -899,6 +1026,40 @@ def _finite(obj: Any) -> Any:
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
+
+
+def _loop_entry(mech: Mechanism, names: tuple[str, ...], lp: FourBar, facts: dict[str, Any]) -> dict[str, Any]:
+    """An entry of ``CheckReport.fourbars``: joints, lengths, links, Grashof type and input of a loop, and ``facts``."""
+    kind, detail = grashof(lp)
+    entry: dict[str, Any] = {
+        "joints": [names[lp.crank_pivot], names[lp.crank_tip], names[lp.rocker_tip], names[lp.rocker_pivot]],
+        "lengths": {"ground": lp.ground, "crank": lp.crank, "coupler": lp.coupler, "rocker": lp.rocker},
+        "links": {"ground": "ground", "crank": lp.links[0], "coupler": lp.links[1], "rocker": lp.links[2]},
+        "grashof": kind,
+        "grashof_detail": detail,
+        "input": {
+            "link": lp.links[0],
+            "driver": mech.drivers[lp.driver].name if lp.driver is not None else None,
+            "moved_by": lp.moved_by,
+        },
+    }
+    return entry | facts
+
+
+def _first_loop(entries: list[dict[str, Any]]) -> dict[str, Any]:
+    """The first loop's fields of :class:`CheckReport` (``grashof``, ``fourbar``, ...), none without a loop."""
+    if not entries:
+        return {}
+    first = entries[0]
+    out = {
+        "grashof": first["grashof"],
+        "grashof_detail": first["grashof_detail"],
+        "fourbar": {"joints": first["joints"], "lengths": first["lengths"]},
+    }
+    ta = first.get("transmission_angle")
+    if ta:
+        out["transmission_angle"] = {"min": ta["min"], "max": ta["max"]}
+    return out
 
 
 def check(mech: Mechanism) -> CheckReport:
@@ -922,12 +1083,7 @@ def check(mech: Mechanism) -> CheckReport:
     names = plan.joint_names
     factors = [d.input_scale(mech) for d in mech.drivers]
     internal = [_assembly_intervals(mech, i, params) for i in range(len(mech.drivers))]
-    ranges = {
-        d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
-        for i, d in enumerate(mech.drivers)
-    }
     pose_values = {d.name: float(params.pose_inputs[i, 0] / factors[i]) for i, d in enumerate(mech.drivers)}
-    held_at = {d.name: {k: v for k, v in pose_values.items() if k != d.name} for d in mech.drivers}
     loops = fourbar_loops(mech, params)
     dead: dict[str, list[dict[str, Any]]] = {}
     facts: dict[int, dict[str, Any]] = {}
@@ -935,31 +1091,7 @@ def check(mech: Mechanism) -> CheckReport:
         mine = [(k, lp) for k, lp in enumerate(loops) if lp.driver == i]
         dead[d.name], f = _driver_checks(mech, params, i, internal[i], mine)
         facts.update(f)
-    entries = []
-    for k, lp in enumerate(loops):
-        kind, detail = grashof(lp)
-        entry: dict[str, Any] = {
-            "joints": [names[lp.crank_pivot], names[lp.crank_tip], names[lp.rocker_tip], names[lp.rocker_pivot]],
-            "lengths": {"ground": lp.ground, "crank": lp.crank, "coupler": lp.coupler, "rocker": lp.rocker},
-            "links": {"ground": "ground", "crank": lp.links[0], "coupler": lp.links[1], "rocker": lp.links[2]},
-            "grashof": kind,
-            "grashof_detail": detail,
-            "input": {
-                "link": lp.links[0],
-                "driver": mech.drivers[lp.driver].name if lp.driver is not None else None,
-                "moved_by": lp.moved_by,
-            },
-        }
-        entry.update(facts.get(k, {}))
-        entries.append(entry)
-    extra: dict[str, Any] = {}
-    if entries:
-        first = entries[0]
-        extra["grashof"], extra["grashof_detail"] = first["grashof"], first["grashof_detail"]
-        extra["fourbar"] = {"joints": first["joints"], "lengths": first["lengths"]}
-        ta = first.get("transmission_angle")
-        if ta:
-            extra["transmission_angle"] = {"min": ta["min"], "max": ta["max"]}
+    entries = [_loop_entry(mech, names, lp, facts.get(k, {})) for k, lp in enumerate(loops)]
     return CheckReport(
         name=mech.name,
         dof=plan.dof,
@@ -969,22 +1101,43 @@ def check(mech: Mechanism) -> CheckReport:
             j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i]} for i, j in enumerate(plan.sign_joints)
         },
         mirror_links=plan.mirror_links,
-        input_ranges=ranges,
+        input_ranges={
+            d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
+            for i, d in enumerate(mech.drivers)
+        },
         units={"length": mech.length_unit, "angle": mech.angle_unit},
         fourbars=tuple(entries),
         dead_points=dead,
-        held_at=held_at,
+        held_at={d.name: {k: v for k, v in pose_values.items() if k != d.name} for d in mech.drivers},
         input_units={d.name: d.input_unit(mech) for d in mech.drivers},
         dynamics=peak_loads(mech) if mech.has_dynamics else None,
         closed_form_joints=tuple(j for i, j in enumerate(names) if i not in plan.numerical),
         numerical_joints=tuple(names[i] for i in plan.numerical),
-        **extra,
+        **_first_loop(entries),
     )
 
 
 # ---------------------------------------------------------------------- text
 def _num(v: Any, fmt: str = ".6g") -> str:
     return "—" if v is None else format(float(v), fmt)
+
+
+@dataclass(frozen=True)
+class _Text:
+    """How :func:`check_text` writes values: each driver's input unit, the file's angle and length units."""
+
+    units: dict[str, str]
+    angle: str
+    length: str
+
+    def inp(self, driver: str, v: Any) -> str:
+        """``driver = value unit``."""
+        unit = self.units.get(driver, "")
+        return f"{driver} = {_num(v, '.6f')}" + (f" {unit}" if unit else "")
+
+    def where(self, at: Mapping[str, Any]) -> str:
+        """Every driver's input of a sample."""
+        return ", ".join(self.inp(k, v) for k, v in at.items())
 
 
 def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, name: str | None = None) -> str:
@@ -999,19 +1152,24 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
     name : str, optional
         The name printed first (default: the report's ``name``).
     """
-    units = dict(rep.get("input_units") or {}) | dict(units or {})
-    name = name if name is not None else str(rep.get("name") or "")
-    angle_unit = (rep.get("units") or {}).get("angle", "")
-    length_unit = (rep.get("units") or {}).get("length", "")
-    drivers = list(rep.get("drivers", []))
+    file_units = rep.get("units") or {}
+    fmt = _Text(
+        dict(rep.get("input_units") or {}) | dict(units or {}),
+        file_units.get("angle", ""),
+        file_units.get("length", ""),
+    )
+    loops = _report_loops(rep)
+    lines = [
+        *_head_lines(rep, name if name is not None else str(rep.get("name") or "")),
+        *_range_lines(rep, fmt),
+        *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
+        *_dynamics_lines(rep.get("dynamics"), fmt),
+    ]
+    return "\n".join(lines) + "\n"
 
-    def inp(driver: str, v: Any) -> str:
-        unit = units.get(driver, "")
-        return f"{driver} = {_num(v, '.6f')}" + (f" {unit}" if unit else "")
 
-    def where(at: Mapping[str, Any]) -> str:
-        return ", ".join(inp(k, v) for k, v in at.items())
-
+def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
+    """The first line (freedom, drivers, how it is solved), the solve plan, the pose's signs and mirror links."""
     numerical = list(rep.get("numerical_joints") or [])
     if numerical:
         closed = list(rep.get("closed_form_joints") or [])
@@ -1021,6 +1179,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         )
     else:
         how = f"solved {'in closed form' if rep.get('solvable') == 'closed-form' else rep.get('solvable', '')}."
+    drivers = list(rep.get("drivers", []))
     lines = [
         f"{name}: valid; {rep['dof']} degree(s) of freedom, driven by {', '.join(drivers)}; {how}".rstrip(),
         "Solve plan:",
@@ -1033,104 +1192,133 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         )
     if rep.get("mirror_links"):
         lines.append("Links that can be mirrored: " + ", ".join(rep["mirror_links"]))
+    return lines
+
+
+def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
+    """Each driver's assembly range (with the inputs held at the pose) and its dead points."""
     held = rep.get("held_at") or {}
     dead_points = rep.get("dead_points") or {}
+    lines = []
     for driver, rng in (rep.get("input_ranges") or {}).items():
         text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
-        unit = units.get(driver, "")
+        unit = fmt.units.get(driver, "")
         line = f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else "")
         if held.get(driver):
-            line += " (" + ", ".join(f"{inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
+            line += " (" + ", ".join(f"{fmt.inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
         lines.append(line)
-        if numerical:
+        if rep.get("numerical_joints"):
             lines.append(
                 "  in the pose's mode, by continuation from the pose (ends refined by bisection through the solver); "
                 "other modes: linkagekit modes"
             )
         if driver in dead_points:
-            dps = dead_points[driver]
-            lines.append(f"Dead points of {driver} (where the mechanism locks): " + ("none" if not dps else ""))
-            lines[-1] = lines[-1].rstrip()
-            for dp in dps[:MAX_TEXT_DEAD_POINTS]:
-                detail = f"; {dp['detail']}" if dp.get("detail") else ""
-                lines.append(f"  {inp(driver, dp['input'])}: {dp['kind']}{detail}")
-            if len(dps) > MAX_TEXT_DEAD_POINTS:
-                lines.append(f"  ... and {len(dps) - MAX_TEXT_DEAD_POINTS} more (check --format json lists them all)")
+            lines += _dead_point_lines(driver, dead_points[driver], fmt)
+    return lines
+
+
+def _dead_point_lines(driver: str, dps: list[dict[str, Any]], fmt: _Text) -> list[str]:
+    """A driver's dead points, at most :data:`MAX_TEXT_DEAD_POINTS` of them."""
+    lines = [f"Dead points of {driver} (where the mechanism locks): {'none' if not dps else ''}".rstrip()]
+    for dp in dps[:MAX_TEXT_DEAD_POINTS]:
+        detail = f"; {dp['detail']}" if dp.get("detail") else ""
+        lines.append(f"  {fmt.inp(driver, dp['input'])}: {dp['kind']}{detail}")
+    if len(dps) > MAX_TEXT_DEAD_POINTS:
+        lines.append(f"  ... and {len(dps) - MAX_TEXT_DEAD_POINTS} more (check --format json lists them all)")
+    return lines
+
+
+def _report_loops(rep: Mapping[str, Any]) -> list[Any]:
+    """The report's four-bar loops (of a report without the list, its first loop only)."""
     loops: list[Any] | None = rep.get("fourbars")
-    if loops is None and "grashof" in rep:  # a report without the list: the first loop only
+    if loops is None and "grashof" in rep:
         loops = [dict(rep.get("fourbar") or {}, grashof=rep["grashof"], grashof_detail=rep.get("grashof_detail"))]
         if "transmission_angle" in rep:
             loops[0]["transmission_angle"] = rep["transmission_angle"]
-    loops = loops or []
-    for k, lp in enumerate(loops):
-        tag = f" {k + 1} of {len(loops)}" if len(loops) > 1 else ""
-        lines.append(f"Four-bar loop{tag} {'-'.join(lp.get('joints', []))}: {lp.get('grashof_detail', lp['grashof'])}")
-        ln, lens = lp.get("links") or {}, lp.get("lengths") or {}
-        if lens:
-            lu = f" {length_unit}" if length_unit else ""
-            roles = (("ground", "ground"), ("crank", "input side"), ("coupler", "coupler"), ("rocker", "output side"))
-            parts = [
-                f"{what} {_num(lens.get(role))}{lu}" + (f" ('{ln[role]}')" if role != "ground" and role in ln else "")
-                for role, what in roles
+    return loops or []
+
+
+def _loop_lines(k: int, n: int, lp: Mapping[str, Any], fmt: _Text) -> list[str]:
+    """The ``k``-th of ``n`` four-bar loops: Grashof type, lengths, input, transmission angle, rocker's motion."""
+    tag = f" {k + 1} of {n}" if n > 1 else ""
+    lines = [f"Four-bar loop{tag} {'-'.join(lp.get('joints', []))}: {lp.get('grashof_detail', lp['grashof'])}"]
+    ln, lens = lp.get("links") or {}, lp.get("lengths") or {}
+    if lens:
+        lu = f" {fmt.length}" if fmt.length else ""
+        roles = (("ground", "ground"), ("crank", "input side"), ("coupler", "coupler"), ("rocker", "output side"))
+        parts = [
+            f"{what} {_num(lens.get(role))}{lu}" + (f" ('{ln[role]}')" if role != "ground" and role in ln else "")
+            for role, what in roles
+        ]
+        lines.append("  lengths: " + ", ".join(parts))
+    if lp.get("input"):
+        lines.append(f"  input: link '{lp['input']['link']}', moved by {lp['input']['moved_by']}")
+    driver = (lp.get("input") or {}).get("driver")
+    ta = lp.get("transmission_angle")
+    if ta:
+        text = f"  Transmission angle: min {ta['min']:.4f}°, max {ta['max']:.4f}°"
+        if "min_at" in ta and driver:
+            text += (
+                f" (at {ta.get('joint', '')}; min at {fmt.inp(driver, ta['min_at'])}, "
+                f"max at {fmt.inp(driver, ta['max_at'])})"
+            )
+        lines.append(text)
+    return lines + _rocker_lines(lp, driver, ln.get("rocker", "rocker"), fmt)
+
+
+def _rocker_lines(lp: Mapping[str, Any], driver: str | None, rocker: str, fmt: _Text) -> list[str]:
+    """A loop's limit positions, swing and time ratio (what its driver's sweep found)."""
+    lines = []
+    if "limit_positions" in lp and driver:
+        lims = lp["limit_positions"]
+        if lp.get("rocker_turns_fully"):
+            lines.append(f"  {rocker} turns fully: no limit positions")
+        elif not lims:
+            lines.append(f"  Limit positions of {rocker}: none")
+        else:
+            lines.append(f"  Limit positions of {rocker} (its angular velocity is zero):")
+            lines += [
+                f"    {fmt.inp(driver, lim['input'])}: {rocker} at {_num(lim['angle'], '.6f')} {fmt.angle} "
+                f"({lim['extreme']})"
+                for lim in lims
             ]
-            lines.append("  lengths: " + ", ".join(parts))
-        if lp.get("input"):
-            lines.append(f"  input: link '{lp['input']['link']}', moved by {lp['input']['moved_by']}")
-        driver = (lp.get("input") or {}).get("driver")
-        ta = lp.get("transmission_angle")
-        if ta:
-            text = f"  Transmission angle: min {ta['min']:.4f}°, max {ta['max']:.4f}°"
-            if "min_at" in ta and driver:
-                text += (
-                    f" (at {ta.get('joint', '')}; min at {inp(driver, ta['min_at'])}, "
-                    f"max at {inp(driver, ta['max_at'])})"
-                )
-            lines.append(text)
-        rocker = ln.get("rocker", "rocker")
-        if "limit_positions" in lp and driver:
-            lims = lp["limit_positions"]
-            if lp.get("rocker_turns_fully"):
-                lines.append(f"  {rocker} turns fully: no limit positions")
-            elif not lims:
-                lines.append(f"  Limit positions of {rocker}: none")
-            else:
-                lines.append(f"  Limit positions of {rocker} (its angular velocity is zero):")
-                for lim in lims:
-                    lines.append(
-                        f"    {inp(driver, lim['input'])}: {rocker} at {_num(lim['angle'], '.6f')} {angle_unit} "
-                        f"({lim['extreme']})"
-                    )
-        if lp.get("swing") is not None:
-            lines.append(f"  {rocker} swings {_num(lp['swing'], '.6f')} {angle_unit}")
-        if lp.get("time_ratio") is not None:
-            s = lp["strokes"]
-            unit = units.get(driver or "", "")
-            lines.append(
-                f"  Time ratio {lp['time_ratio']:.6f} at constant input speed ({driver} travels "
-                f"{_num(s['rising'], '.6f')} {unit} while {rocker} rises, "
-                f"{_num(s['falling'], '.6f')} {unit} while it falls)"
-            )
-    dyn = rep.get("dynamics")
-    if dyn:
-        speeds = ", ".join(
-            f"{k} at {_num(v)} {'rad/s' if units.get(k) in ('deg', 'rad') else units.get(k, '') + '/s'}"
-            for k, v in (dyn.get("speeds") or {}).items()
+    if lp.get("swing") is not None:
+        lines.append(f"  {rocker} swings {_num(lp['swing'], '.6f')} {fmt.angle}")
+    if lp.get("time_ratio") is not None:
+        s = lp["strokes"]
+        unit = fmt.units.get(driver or "", "")
+        lines.append(
+            f"  Time ratio {lp['time_ratio']:.6f} at constant input speed ({driver} travels "
+            f"{_num(s['rising'], '.6f')} {unit} while {rocker} rises, "
+            f"{_num(s['falling'], '.6f')} {unit} while it falls)"
         )
-        lines.append(f"Peak loads over the file's sweep ({dyn.get('samples')} samples; {speeds}):")
-        if dyn.get("skipped"):
-            lines.append(f"  not computed: {dyn['skipped']}")
-        for key, what, unit in (("peak_driver_torque", "torque", "N*m"), ("peak_driver_force", "force", "N")):
-            for drv, pk in (dyn.get(key) or {}).items():
-                lines.append(f"  Peak driver {what} of {drv}: {_num(pk['value'])} {unit} at {where(pk['at'])}")
-        bl = dyn.get("peak_bearing_load")
-        if bl:
-            lines.append(
-                f"  Peak bearing load: {_num(bl['value'])} N at joint {bl['joint']} ({bl['by']} on {bl['on']}) "
-                f"at {where(bl['at'])}"
-            )
-        if not dyn.get("skipped") and not bl and not dyn.get("peak_driver_torque") and not dyn.get("peak_driver_force"):
-            lines.append("  none: the mechanism does not assemble (or is singular) at every sample")
-    return "\n".join(lines) + "\n"
+    return lines
+
+
+def _dynamics_lines(dyn: Mapping[str, Any] | None, fmt: _Text) -> list[str]:
+    """The peak driver efforts and bearing load over the file's sweep (nothing without dynamics)."""
+    if not dyn:
+        return []
+    units = fmt.units
+    speeds = ", ".join(
+        f"{k} at {_num(v)} {'rad/s' if units.get(k) in ('deg', 'rad') else units.get(k, '') + '/s'}"
+        for k, v in (dyn.get("speeds") or {}).items()
+    )
+    lines = [f"Peak loads over the file's sweep ({dyn.get('samples')} samples; {speeds}):"]
+    if dyn.get("skipped"):
+        lines.append(f"  not computed: {dyn['skipped']}")
+    for key, what, unit in (("peak_driver_torque", "torque", "N*m"), ("peak_driver_force", "force", "N")):
+        for drv, pk in (dyn.get(key) or {}).items():
+            lines.append(f"  Peak driver {what} of {drv}: {_num(pk['value'])} {unit} at {fmt.where(pk['at'])}")
+    bl = dyn.get("peak_bearing_load")
+    if bl:
+        lines.append(
+            f"  Peak bearing load: {_num(bl['value'])} N at joint {bl['joint']} ({bl['by']} on {bl['on']}) "
+            f"at {fmt.where(bl['at'])}"
+        )
+    if not dyn.get("skipped") and not bl and not dyn.get("peak_driver_torque") and not dyn.get("peak_driver_force"):
+        lines.append("  none: the mechanism does not assemble (or is singular) at every sample")
+    return lines
 
 
 @dataclass(frozen=True)
@@ -1197,7 +1385,22 @@ class Mode:
 
 @dataclass(frozen=True)
 class Modes:
-    """Every assembly mode at one input (``linkagekit modes``); ``input`` in file units."""
+    """Every assembly mode at one input (``linkagekit modes``).
+
+    Attributes
+    ----------
+    input : dict of str to float
+        The input of each driver, in the file's units.
+    modes : tuple of Mode
+        Every sign (and mirror) combination, and with numerical groups every mode of each
+        group for each, in order: assembled or not, the same positions more than once
+        (:attr:`Mode.same_as`).
+    distinct : int
+        How many distinct assembled configurations there are among them.
+    notes : tuple of str
+        The numerical groups whose modes could not be enumerated (only the mode continued
+        from the pose is listed for them).
+    """
 
     input: dict[str, float]
     modes: tuple[Mode, ...]
@@ -1205,6 +1408,7 @@ class Modes:
     notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``linkagekit modes --format json``."""
         out: dict[str, Any] = {
             "format": "linkagekit-modes/1",
             "input": self.input,
@@ -1214,6 +1418,122 @@ class Modes:
         if self.notes:
             out["notes"] = list(self.notes)
         return out
+
+
+def _given_inputs(mech: Mechanism, at: Any) -> dict[str, Any]:
+    """``at`` of :func:`modes` as {driver name: value} (a bare value for a single driver)."""
+    if at is None:
+        return {}
+    if isinstance(at, dict):
+        return dict(at)
+    if len(mech.drivers) == 1:
+        return {mech.drivers[0].name: at}
+    raise InputError(f"at: give a value per driver ({', '.join(d.name for d in mech.drivers)})")
+
+
+def _mode_inputs(mech: Mechanism, params: Params, at: Any) -> tuple[np.ndarray, dict[str, float]]:
+    """The inputs of :func:`modes`: internal units per driver (the pose's where not given) and file units by name."""
+    given = _given_inputs(mech, at)
+    q0 = params.pose_inputs[:, 0].copy()
+    inp = {}
+    for i, d in enumerate(mech.drivers):
+        factor = d.input_scale(mech)
+        if d.name not in given:
+            inp[d.name] = float(q0[i] / factor)
+            continue
+        try:
+            value = float(given.pop(d.name))
+        except (TypeError, ValueError, OverflowError):
+            raise InputError(f"at: '{d.name}' needs one number") from None
+        if not math.isfinite(value) or abs(value) > 1e12:
+            raise InputError(f"at: '{d.name}' must be a finite number of at most 1e12 in magnitude")
+        q0[i] = value * factor
+        inp[d.name] = value  # as given, not through radians and back
+    if given:
+        raise InputError(f"at: no driver named '{next(iter(given))}' (drivers: {', '.join(params.plan.drivers)})")
+    return q0, inp
+
+
+@dataclass(frozen=True)
+class _ModeRows:
+    """The configurations :func:`modes` found, one per row.
+
+    Positions ``z`` (n_joints, R), whether each assembles, the sign (and mirror) combination
+    of each row (``col``), and per numerical group (label, its mode, its mode count).
+    """
+
+    z: np.ndarray
+    assembled: np.ndarray
+    col: np.ndarray
+    notes: tuple[str, ...] = ()
+    groups: tuple[tuple[str, np.ndarray, np.ndarray], ...] = ()
+
+
+def _group_label(params: Params, index: int) -> str:
+    """A numerical group named by its joints (``"J1,J2,J3"``), the ``index``-th step of the plan."""
+    step = params.plan.steps[index]
+    assert isinstance(step, Group)
+    return ",".join(params.plan.joint_names[j] for j in step.joints)
+
+
+def _mode_rows(
+    mech: Mechanism, params: Params, q0: np.ndarray, signs: np.ndarray, flags: np.ndarray | None
+) -> _ModeRows:
+    """Every sign (and mirror) combination solved at ``q0``.
+
+    With numerical groups, every mode of each group for each combination
+    (:func:`linkagekit.groupmodes.enumerate_modes`).
+    """
+    if params.plan.numerical:
+        table = enumerate_modes(mech, params, q0, signs, flags)
+        groups = tuple(
+            (_group_label(params, gi), table.group_mode[g], table.group_count[g]) for g, gi in enumerate(table.groups)
+        )
+        return _ModeRows(table.z, table.assembled, table.column, table.notes, groups)
+    q = np.repeat(q0[:, None, None], signs.shape[1], axis=2)
+    sol = solve(params, q, signs[:, None, :], flags[:, None, :] if flags is not None else None)
+    return _ModeRows(sol.z[:, 0], sol.assembled[0], np.arange(signs.shape[1]))
+
+
+def _reference_rows(
+    params: Params, rows: _ModeRows, signs: np.ndarray, flags: np.ndarray | None, q0: np.ndarray, tol: float
+) -> np.ndarray:
+    """Which rows are the solver's own mode at ``q0``.
+
+    The pose's signs, no mirror, and each numerical group as continued from the pose.
+    """
+    plan, col = params.plan, rows.col
+    reference: np.ndarray = np.all(signs[:, col] == params.signs[:, :1], axis=0)
+    if flags is not None:
+        reference &= ~flags[:, col].any(axis=0)
+    if plan.numerical:
+        cont = solve(params, q0[:, None, None]).z[list(plan.numerical), 0, 0]
+        reference &= np.all(np.abs(rows.z[list(plan.numerical)] - cont[:, None]) <= tol, axis=0)
+    return reference
+
+
+def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
+    """For each row the first row with the same positions (None for the first of each), and how many are distinct.
+
+    Rows are bucketed by positions rounded to 1e-6 of the size, then confirmed within the
+    bucket to ``tol`` (two configurations within tol round alike but for a 1e-3 chance at a
+    rounding boundary, which only splits a duplicate, never merges two modes).
+    """
+    z = rows.z
+    keys = np.round(np.concatenate([z.real, z.imag]) / (1e3 * tol)).T
+    buckets: dict[bytes, list[int]] = {}
+    same: list[int | None] = []
+    distinct = 0
+    for r in range(len(rows.col)):
+        first = None
+        if rows.assembled[r]:
+            bucket = buckets.setdefault(keys[r].tobytes(), [])
+            first = next((f for f in bucket if np.all(np.abs(z[:, f] - z[:, r]) <= tol)), None)
+            if first is None:
+                bucket.append(r)
+                distinct += 1
+        same.append(first)
+    return same, distinct
 
 
 def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
@@ -1237,31 +1557,7 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
         raise InputError(f"mirrors: expected True or False, got {type(mirrors).__name__}")
     plan = params.plan
     names = plan.joint_names
-    q0 = params.pose_inputs[:, 0].copy()
-    factors = [d.input_scale(mech) for d in mech.drivers]
-    given: dict[str, Any] = {}
-    if at is not None:
-        if isinstance(at, dict):
-            given = dict(at)
-        elif len(mech.drivers) == 1:
-            given = {mech.drivers[0].name: at}
-        else:
-            raise InputError(f"at: give a value per driver ({', '.join(d.name for d in mech.drivers)})")
-    inp = {}
-    for i, d in enumerate(mech.drivers):
-        if d.name in given:
-            try:
-                value = float(given.pop(d.name))
-            except (TypeError, ValueError, OverflowError):
-                raise InputError(f"at: '{d.name}' needs one number") from None
-            if not math.isfinite(value) or abs(value) > 1e12:
-                raise InputError(f"at: '{d.name}' must be a finite number of at most 1e12 in magnitude")
-            q0[i] = value * factors[i]
-            inp[d.name] = value  # as given, not through radians and back
-        else:
-            inp[d.name] = float(q0[i] / factors[i])
-    if given:
-        raise InputError(f"at: no driver named '{next(iter(given))}' (drivers: {', '.join(plan.drivers)})")
+    q0, inp = _mode_inputs(mech, params, at)
     k, mm = plan.n_signs, plan.n_mirrors if mirrors else 0
     if k + mm > MAX_MODE_SLOTS:
         what = "sign steps and mirror links" if mm else "sign steps"
@@ -1270,55 +1566,28 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
             f"(2^{MAX_MODE_SLOTS}); fix some with analyze(..., signs={{joint: +1 or -1}})"
         )
     combos = all_sign_combinations(k + mm)
-    signs, mirror_flags = combos[:k], combos[k:] < 0
-    n = combos.shape[1]
+    signs, flags = combos[:k], (combos[k:] < 0 if mm else None)
     tol = 1e-9 * mech.length_scale
-    groups: list[tuple[str, np.ndarray, np.ndarray]] = []  # label, mode index and count per row
-    notes: tuple[str, ...] = ()
-    if plan.numerical:  # every mode of each numerical group, for each combination (groupmodes.py)
-        table = enumerate_modes(mech, params, q0, signs, mirror_flags if mm else None)
-        z, assembled, col, notes = table.z, table.assembled, table.column, table.notes
-        for g, gi in enumerate(table.groups):
-            label = ",".join(names[j] for j in plan.steps[gi].joints)  # type: ignore[attr-defined]
-            groups.append((label, table.group_mode[g], table.group_count[g]))
-    else:
-        q = np.repeat(q0[:, None, None], n, axis=2)
-        sol = solve(params, q, signs[:, None, :], mirror_flags[:, None, :] if mm else None)
-        z, assembled, col = sol.z[:, 0], sol.assembled[0], np.arange(n)
-    reference = np.all(signs[:, col] == params.signs[:, :1], axis=0)
-    if mm:
-        reference &= ~mirror_flags[:, col].any(axis=0)
-    if plan.numerical:  # and each group in the mode the solver continues from the pose to this input
-        cont = solve(params, q0[:, None, None]).z[list(plan.numerical), 0, 0]
-        reference &= np.all(np.abs(z[list(plan.numerical)] - cont[:, None]) <= tol, axis=0)
-    out: list[Mode] = []
-    # distinct configurations: bucket by positions rounded to 1e-6 of the size, then confirm
-    # within the bucket to `tol` (two configurations within tol round alike but for a 1e-3 chance
-    # at a rounding boundary, which only splits a duplicate, never merges two modes)
-    keys = np.round(np.concatenate([z.real, z.imag]) / (1e3 * tol)).T
-    buckets: dict[bytes, list[int]] = {}
-    firsts: list[int] = []  # the first combination of each distinct assembled configuration
-    for r in range(len(col)):
-        zc, c = z[:, r], col[r]
-        same = None
-        if assembled[r]:
-            bucket = buckets.setdefault(keys[r].tobytes(), [])
-            same = next((f for f in bucket if np.all(np.abs(z[:, f] - zc) <= tol)), None)
-            if same is None:
-                bucket.append(r)
-                firsts.append(r)
+    rows = _mode_rows(mech, params, q0, signs, flags)
+    reference = _reference_rows(params, rows, signs, flags, q0, tol)
+    same, distinct = _same_as(rows, tol)
+    out = []
+    for r, c in enumerate(rows.col):
+        zc = rows.z[:, r]
         out.append(
             Mode(
                 signs={j: int(signs[i, c]) for i, j in enumerate(plan.sign_joints)},
                 mirrors={ln: int(combos[k + i, c]) for i, ln in enumerate(plan.mirror_links)} if mm else None,
-                assembled=bool(assembled[r]),
+                assembled=bool(rows.assembled[r]),
                 reference=bool(reference[r]),
                 joints={
                     j: ((float(zc[i].real), float(zc[i].imag)) if np.isfinite(zc[i]) else None)
                     for i, j in enumerate(names)
                 },
-                same_as=same,
-                groups={lab: {"index": int(ix[r]), "of": int(cnt[r])} for lab, ix, cnt in groups} if groups else None,
+                same_as=same[r],
+                groups={lab: {"index": int(ix[r]), "of": int(cnt[r])} for lab, ix, cnt in rows.groups}
+                if rows.groups
+                else None,
             )
         )
-    return Modes(inp, tuple(out), len(firsts), notes)
+    return Modes(inp, tuple(out), distinct, rows.notes)

@@ -93,7 +93,54 @@ class Plot:
 
 @dataclass(frozen=True)
 class Scene:
-    """Everything a drawing of a solved sweep needs, in file units (see the module docstring)."""
+    """Everything a drawing of a solved sweep needs, in file units (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        The mechanism's name.
+    length_unit, angle_unit : str
+        The file's units (every length and input angle here is in them).
+    joints : tuple of str
+        Joint names, in the order of the second axis of :attr:`xy`.
+    ground_joints : tuple of str
+        The joints fixed on the ground.
+    ground_xy : dict of str to (float, float)
+        Where each ground joint sits.
+    links : tuple of SceneLink
+        Every link as drawn (its kind and outline), cylinder drivers included.
+    sliders : tuple of SceneSlider
+        Every slider's guide, per sample.
+    drivers : tuple of str
+        The driver names.
+    input_units : dict of str to str
+        Each driver's input unit (from the output catalogue).
+    inputs : dict of str to ndarray
+        Each driver's input value per sample (file units).
+    xy : ndarray, shape (n, n_joints, 2)
+        Joint positions per sample; NaN where the mechanism does not assemble.
+    assembled : ndarray of bool, shape (n,)
+        Whether each sample assembles.
+    coupler_curves, other_paths : tuple of str
+        The joints whose paths are coupler curves, and the moving joints whose paths are not.
+    gaps : tuple of (int, int)
+        Runs ``[start, stop)`` of samples that do not assemble.
+    bounds : (float, float, float, float)
+        ``(x0, y0, x1, y1)`` of everything drawn over the sweep.
+    columns : dict of str to ndarray
+        Every quantity's values per sample (the catalogue's entries, plotted-only ones included).
+    units : dict of str to str
+        The unit of each of :attr:`columns`.
+    plots : tuple of Plot
+        One plot per plotted catalogue group.
+    x_driver : str
+        The driver the plots run along: the first whose input varies over the sweep.
+    breaks : tuple of int
+        Samples ``i`` whose segment to ``i + 1`` must not be drawn: both assemble, but the
+        mechanism does not assemble somewhere between them (a gap no sample landed in).
+    catalogue : Catalogue
+        What each column is (owner, unit, group, period): the result's output catalogue.
+    """
 
     name: str
     length_unit: str
@@ -115,12 +162,8 @@ class Scene:
     columns: dict[str, np.ndarray] = field(repr=False)
     units: dict[str, str] = field(repr=False)
     plots: tuple[Plot, ...] = ()
-    #: the driver the plots run along: the first whose input varies over the sweep
     x_driver: str = ""
-    #: samples ``i`` whose segment to ``i + 1`` must not be drawn: both assemble, but the
-    #: mechanism does not assemble somewhere between them (a gap no sample landed in)
     breaks: tuple[int, ...] = ()
-    #: what each column is (owner, unit, group, period): the result's output catalogue
     catalogue: Catalogue = field(default=Catalogue(()), repr=False)
 
     @property
