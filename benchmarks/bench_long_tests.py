@@ -6,7 +6,7 @@ here it runs with the search as shipped or with the original number of random ca
 reached and its CPU and wall seconds; a check whose assertion fails prints one ``FAILED name: ...`` line, and
 the script ends with exit status 1 if any did.
 
-    python benchmarks/bench_long_tests.py              # every check (about 10 CPU-minutes)
+    python benchmarks/bench_long_tests.py              # every check (about 4 CPU-minutes)
     python benchmarks/bench_long_tests.py fourbar-1 triads   # the checks whose names start so
 """
 
