@@ -85,10 +85,31 @@ def test_bench_synthesis(capsys):
 def test_bench_recovery(capsys):
     import bench_recovery
 
-    rows = bench_recovery.main(1, seconds=2.0, workers=1)
+    rows = bench_recovery.main(1, seconds=1.0, workers=1)
     out = capsys.readouterr().out
-    assert len(rows) == 3 and "within 0.1 % in 2 s" in out
+    assert len(rows) == 3 and "within 0.1 % in 1 s" in out
     assert all(r[2] >= 0 and r[3] > 0 for r in rows)
+
+
+def test_bench_long_tests(capsys):
+    """The long runs moved out of the suite are all there; one runs (one random triad); a check that does not
+    reach its goal is one FAILED line with its message and makes main return its name (the script exits 1)."""
+    import bench_long_tests
+
+    names = ["fourbar-0", "fourbar-1", "fourbar-2", "watt2", "stephenson3", "forced-numerical", "triads"]
+    assert list(bench_long_tests.checks()) == names
+    assert bench_long_tests.main(["triads"], table=bench_long_tests._group_checks(1, 1)) == []
+    assert "1 random cases" in capsys.readouterr().out
+
+    def short() -> str:
+        raise AssertionError("0.25 > 0.1 % of the diagonal\nmore detail")
+
+    assert bench_long_tests.main(table={"short": short, "fine": lambda: "ok"}) == ["short"]
+    out = capsys.readouterr().out.splitlines()
+    assert "FAILED short: AssertionError: 0.25 > 0.1 % of the diagonal" in out
+    assert out[-1] == "FAILED: 1 of 2 checks held; failed: short"
+    with pytest.raises(SystemExit, match="no check named"):
+        bench_long_tests.main(["nothing"])
 
 
 def test_bench_synthesis_without_pylinkage(capsys, monkeypatch):
@@ -111,7 +132,9 @@ def test_benchmarks_leave_no_module_cache():
         "bench_group",
         "bench_synthesis",
         "bench_recovery",
+        "bench_long_tests",
         "test_synthesis",
+        "test_group",
         "timing",
     ):
         sys.modules.pop(name, None)

@@ -183,9 +183,9 @@ def test_long_sweep_shows_a_subset(capsys):
 def test_long_sweep_table_is_fast(capsys):
     main(["analyze", str(EXAMPLES / "seed000_fourbar.yaml")])  # imports, caches
     capsys.readouterr()
-    t = time.perf_counter()
+    t = time.process_time()  # CPU time: a busy machine does not fail it
     assert main(["analyze", str(EXAMPLES / "seed000_fourbar.yaml")]) == 0
-    assert time.perf_counter() - t < 0.5
+    assert time.process_time() - t < 0.5
     assert "37 of 361" in capsys.readouterr().out
 
 
@@ -394,9 +394,9 @@ def test_analysis_tables_on_synthetic_columns():
     sections = analysis_sections(synthetic_catalogue(cols, units), "demo")
     assert [title for title, _ in sections][:2] == ["demo: joint positions", "joint velocities"]
     assert sections[0][1][0] == ["B.x", "B.y"] and sections[-1][1] == [["T[crank]"]]  # no .fx in tables
-    t = time.perf_counter()
+    t = time.process_time()  # CPU time: a busy machine does not fail it
     text = analysis_tables(cols, units, sections, inputs={"input:crank": "crank"}, width=80)
-    assert time.perf_counter() - t < 0.5
+    assert time.process_time() - t < 0.5
     lines = text.splitlines()
     assert max(map(len, lines)) <= 80
     assert "B.x [mm]" in text and "H.vy [mm/s]" in text and "T[crank] [N·m]" in text and "A.x" not in text

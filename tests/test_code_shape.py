@@ -2,7 +2,9 @@
 
 No function or method in ``src/`` is longer than 60 lines or has a McCabe complexity above
 15.  The complexity is ruff's C901 (``pyproject.toml`` sets its limit, so an editor's ruff
-shows the same); the length is read off the syntax tree here.
+shows the same); the length is read off the syntax tree here.  ``mypy --strict`` passes on
+``src/`` (``pyproject.toml`` sets ``strict``), so the annotations users' type checkers read
+(``py.typed``) are checked.
 """
 
 from __future__ import annotations
@@ -76,3 +78,13 @@ def test_the_complexity_limit_is_15(tmp_path):
             text=True,
         )
         assert proc.returncode == code, (n, proc.stdout, proc.stderr)
+
+
+def test_mypy_strict_passes_on_src(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "mypy", "--strict", "--cache-dir", str(tmp_path), "src"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-1000:]

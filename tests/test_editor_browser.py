@@ -57,7 +57,7 @@ from helpers import leading_comments
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 VIEWPORT = {"width": 1280, "height": 1000}
-IDLE_S = 15.0  # the longest a solve may take to land on the page
+IDLE_S = 60.0  # the longest a solve may take to land on the page (generous: a busy machine must not fail it)
 RELEASE_PX = 0.75  # the dragged joint vs the release point, in CSS px
 CURVE_PX = 0.5  # drawn curves vs the analysed ones, in SVG px
 REL = 1e-9  # positions read back from a pose
@@ -193,7 +193,7 @@ def open_editor(browser, tmp_path):
         page.on("console", lambda msg: msg.type == "error" and ep.errors.append(f"console error: {msg.text}"))
         page.on("pageerror", lambda exc: ep.errors.append(f"page error: {exc}"))
         page.goto(srv.url, wait_until="load")
-        page.wait_for_function("() => window.linkagekit && window.linkagekit.editor", timeout=10_000)
+        page.wait_for_function("() => window.linkagekit && window.linkagekit.editor", timeout=60_000)
         ep.wait_idle("opening")
         return ep
 
@@ -333,7 +333,8 @@ def check_curves(ep: EditorPage, st: dict, m2: Any, what: str) -> None:
         )
 
 
-def wait_until(cond, timeout: float = 5.0) -> bool:
+def wait_until(cond, timeout: float = 30.0) -> bool:
+    """Poll until cond() holds; the limit only catches a hang (generous: a busy machine must not fail it)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if cond():
@@ -621,7 +622,7 @@ def test_save_right_after_a_drag_saves_what_the_page_shows(open_editor):
     ep.page.mouse.up()
     ep.click("[data-action=save]")
     ep.wait_idle("the drag and the save")
-    assert wait_until(lambda: ep.state()["status"] != "Saving...", 10), "still Saving..."
+    assert wait_until(lambda: ep.state()["status"] != "Saving...", 60), "still Saving..."
     st = ep.state()
     shown = lk.Mechanism.from_dict(st["doc"])
     assert file_xy(st)["W"] != file_xy(st0)["W"], "the drag did not land"

@@ -94,9 +94,18 @@ def test_forced_numerical_matches_the_closed_form_in_every_mode(examples, name):
     assert n == len(closed_form_modes(mech, 0.0)) or n >= 2
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["fourbar", "watt2", "stephenson"]))
+#: random linkages of the test (a few: each costs about 1.5 CPU-s); benchmarks/bench_long_tests.py runs more
+RANDOM_LINKAGES = {"seed": st.integers(0, 2**32 - 1), "kind": st.sampled_from(["fourbar", "watt2", "stephenson"])}
+
+
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**RANDOM_LINKAGES)
 def test_forced_numerical_matches_random_linkages(seed, kind):
+    check_forced_numerical_random(seed, kind)
+
+
+def check_forced_numerical_random(seed: int, kind: str) -> None:
+    """A random four-bar, Watt II or Stephenson III forced through Newton matches its closed form in every mode."""
     rng = np.random.default_rng(seed)
     if kind == "fourbar":
         p = random_points(rng, "ABCDP")
@@ -217,9 +226,20 @@ def test_triad_file_is_placed_numerically():
     assert lengths_error(res, mech) < REL
 
 
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 2**32 - 1))
+#: random triads of the test (a few: the reference continuation costs about 1 CPU-s a triad);
+#: benchmarks/bench_long_tests.py runs more
+RANDOM_TRIADS = {"seed": st.integers(0, 2**32 - 1)}
+
+
+@settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**RANDOM_TRIADS)
 def test_random_triads(seed):
+    check_random_triad(seed)
+
+
+def check_random_triad(seed: int) -> None:
+    """A random class-3 triad: its pose at its own input, every length kept, the order of the inputs does not
+    matter, and the branch is the fine reference continuation's."""
     mech = random_triad(seed)
     phi0 = pose_angle(mech)
     inputs = np.concatenate([np.arange(-180.0, 180.0, 2.0), [phi0]])

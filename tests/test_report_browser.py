@@ -56,7 +56,7 @@ import linkagekit as lk
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 VIEWPORT = {"width": 1280, "height": 900}
-SETTLE_S = 1.0  # how long a move may take to show on the page
+SETTLE_S = 10.0  # how long a move may take to show on the page (polled; generous for a busy machine)
 PX_TOL = 0.5  # drawn positions: residual of the fitted transform, in CSS px
 MAX_PAGE_BYTES = 1_000_000
 
@@ -523,8 +523,8 @@ def test_play_button(open_report, name):
     rp.press("Home")
     start = rp.index()
     play.click()
-    moved = wait_for(lambda: rp.index() != start, 1.0)
-    assert moved, f"{name}: one second after clicking play the slider is still at {start}"
+    moved = wait_for(lambda: rp.index() != start, 10.0)  # polled: at once when it plays, 10 s on a busy machine
+    assert moved, f"{name}: ten seconds after clicking play the slider is still at {start}"
     play.click()
     rp.settle()
     a = rp.index()
@@ -551,7 +551,7 @@ def downloaded_csv(browser, report_file):
                 if ctl.count() != 1:
                     got[name] = (None, None, n_plots, f"{ctl.count()} elements with data-action=csv, expected one")
                 else:
-                    with page.expect_download(timeout=5000) as dl:
+                    with page.expect_download(timeout=30_000) as dl:
                         ctl.click()
                     text = Path(dl.value.path()).read_text(encoding="utf-8-sig")
                     rows = list(csv.reader(io.StringIO(text)))
@@ -755,7 +755,7 @@ def test_a_constant_plot_does_not_hang_the_page(browser, tmp_path):
     ctx, page, errors, took = _page_of(browser, tmp_path, mech)
     try:
         assert not errors, errors
-        assert took < 5, took
+        assert took < 20, took  # a hung tick loop never loads; 20 s: a busy machine is not a hang
         got = page.locator('[data-joint="C"]').get_attribute("data-x")
         res = lk.analyze(mech)
         assert got == repr(float(res.xy("C")[0, 0]))
