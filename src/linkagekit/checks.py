@@ -1198,9 +1198,10 @@ class CheckReport:
         For each angle driver the open intervals of the turn where it does not assemble
         (the complement of ``input_ranges``, each starting in [0, 1 turn)).
     warnings : tuple of dict
-        ``kind`` ``"transmission-angle"`` (a loop's minimum ``min`` below ``limit``,
-        :data:`MIN_TRANSMISSION`) or ``"toggle"`` (a driver's peak effort at a sample within
-        ``limit`` degrees, :data:`TOGGLE_ANGLE`, of a toggle; with the peak's fields).
+        ``kind`` ``"transmission-angle"`` (a loop's ``min`` below ``limit``,
+        :data:`MIN_TRANSMISSION`, or its ``max`` above 180 - ``limit``) or ``"toggle"`` (a
+        driver's peak effort at a sample within ``limit`` degrees, :data:`TOGGLE_ANGLE`, of a
+        toggle; with the peak's fields).
     """
 
     name: str
@@ -1434,17 +1435,18 @@ def assembly_gaps(ranges: list[list[float]], angle_to_rad: float) -> list[list[f
 
 
 def _warnings(entries: list[dict[str, Any]], dynamics: Mapping[str, Any] | None) -> list[dict[str, Any]]:
-    """Transmission angles below :data:`MIN_TRANSMISSION`; efforts peaking within :data:`TOGGLE_ANGLE` of a toggle."""
+    """Transmission angles outside [MIN, 180 - MIN] (:data:`MIN_TRANSMISSION`); efforts peaking near a toggle."""
     out = []
     for k, lp in enumerate(entries):
         ta = lp.get("transmission_angle") or {}
-        if ta.get("min") is not None and ta["min"] < MIN_TRANSMISSION:
+        if ta.get("min") is not None and min(ta["min"], 180.0 - ta["max"]) < MIN_TRANSMISSION:
             out.append(
                 {
                     "kind": "transmission-angle",
                     "loop": k,
                     "joints": lp["joints"],
                     "min": ta["min"],
+                    "max": ta["max"],
                     "limit": MIN_TRANSMISSION,
                 }
             )
@@ -1674,15 +1676,15 @@ def _warning_line(w: Mapping[str, Any], fmt: _Text) -> str:
     """One warning of the report, for people."""
     if w["kind"] == "transmission-angle":
         return (
-            f"Warning: the transmission angle of loop {'-'.join(w['joints'])} goes down to {w['min']:.4f}°, "
-            f"below {w['limit']:g}° (the force that drives the output is mostly lost in its bearings there)"
+            f"Warning: the transmission angle of loop {'-'.join(w['joints'])} leaves [{w['limit']:g}°, "
+            f"{180 - w['limit']:g}°] (min {w['min']:.4f}°, max {w['max']:.4f}°): there the coupler pushes the "
+            "output mostly into its bearing"
         )
     tg = w["toggle"]
     what, unit = ("torque", "N*m") if w["effort"] == "peak_driver_torque" else ("force", "N")
-    links = " and ".join(tg.get("links") or []) or "a step"
     return (
         f"Warning: the driver {what} of {w['driver']} peaks at {_num(w['value'])} {unit} at {fmt.where(w['at'])}, "
-        f"{tg['angle']:.4f}° from a toggle ({links} at {tg['joint']}; below {w['limit']:g}°)"
+        f"{tg['angle']:.4f}° (less than {w['limit']:g}°) from the toggle where {tg.get('detail', tg['joint'])}"
     )
 
 
