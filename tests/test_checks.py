@@ -629,3 +629,292 @@ def test_text_lists_at_most_so_many_dead_points():
     assert lines[-1] == "  ... and 6 more (check --format json lists them all)"
     rep["dead_points"] = {"s": []}
     assert check_text(rep).splitlines()[-1] == "Dead points of s (where the mechanism locks): none"
+
+
+# ----------------------------------------------------------------------------- sliders on the frame (issue 23)
+def shaper(d=300.0, r=100.0, lever=600.0, rod=200.0, height=600.0):
+    """A crank-and-slotted-lever shaper (mm): lever pivot O4 = 0, crank pivot O2 = (0, d), crank r; the
+    crank's pin A slides in the lever; the lever's tip L drives the ram C on the line y = height by a rod."""
+    A = complex(r, d)  # the pose: crank at 0 deg
+    L = lever * A / abs(A)
+    C = complex(L.real + math.sqrt(rod**2 - (height - L.imag) ** 2), height)
+    pts = {"O2": 1j * d, "O4": 0j, "A": A, "L": L, "C": C}
+    return lk.Mechanism.from_dict(
+        {
+            "units": {"length": "mm", "angle": "deg"},
+            "joints": {k: [v.real, v.imag] for k, v in pts.items()},
+            "links": {
+                "ground": ["O2", "O4"],
+                "crank": ["O2", "A"],
+                "block": ["A"],
+                "lever": ["O4", "L"],
+                "rod": ["L", "C"],
+                "ram": ["C"],
+            },
+            "sliders": [
+                {"link": "block", "on": "lever", "through": "A", "direction": [A.real, A.imag]},
+                {"link": "ram", "on": "ground", "through": "C", "direction": [1, 0]},
+            ],
+            "drivers": [
+                {"link": "crank", "pivot": "O2", "toward": "A", "angles": {"start": 0, "stop": 360, "step": 1}}
+            ],
+        }
+    )
+
+
+def shaper_ram_x(theta_deg, d=300.0, r=100.0, lever=600.0, rod=200.0, height=600.0):
+    """The ram's x by hand: the lever points at the crank pin; the rod closes the triangle to the ram's line."""
+    t = np.radians(theta_deg)
+    ax, ay = r * np.cos(t), d + r * np.sin(t)
+    phi = np.arctan2(ay, ax)
+    lx, ly = lever * np.cos(phi), lever * np.sin(phi)
+    return lx + np.sqrt(rod**2 - (height - ly) ** 2)
+
+
+def extremes_by_brute_force(f, lo=0.0, hi=360.0):
+    """Crank angles (deg) of the min and max of f: sampled every 0.01 deg, then a bounded scalar search."""
+    from scipy.optimize import minimize_scalar
+
+    th = np.arange(lo, hi, 0.01)
+    x = f(th)
+    out = []
+    for sgn, i in ((1, int(np.argmin(x))), (-1, int(np.argmax(x)))):
+        res = minimize_scalar(
+            lambda t, sgn=sgn: sgn * f(np.array([t]))[0],
+            bounds=(th[i] - 0.02, th[i] + 0.02),
+            method="bounded",
+            options={"xatol": 1e-10},
+        )
+        out.append((res.x % 360.0, f(np.array([res.x]))[0]))
+    return out  # [(angle of min, min), (angle of max, max)]
+
+
+def test_shaper_stroke_and_time_ratio_against_brute_force():
+    """The new user's shaper: 400 mm and 1.55 by the textbook (stroke 2 lever r / d; return stroke over
+    2 acos(r / d) of the crank), and exactly what brute-force sampling of a hand-written closed form gives."""
+    rep = lk.check(shaper()).to_dict()
+    (sl,) = rep["sliders"]
+    assert (sl["slider"], sl["link"], sl["joint"], sl["driver"]) == (1, "ram", "C", "crank")
+    (t_min, x_min), (t_max, x_max) = extremes_by_brute_force(shaper_ram_x)
+    assert sl["stroke"] == pytest.approx(x_max - x_min, abs=1e-6)
+    assert sl["stroke"] == pytest.approx(400.0, abs=2.0)  # by hand: 2 * 600 * 100 / 300
+    rising = (t_max - t_min) % 360.0  # the ram advances (x grows) from its min to its max
+    assert sl["input_travel"]["rising"] == pytest.approx(rising, abs=1e-5)
+    assert sl["time_ratio"] == pytest.approx(max(rising, 360 - rising) / min(rising, 360 - rising), abs=1e-6)
+    by_hand = (180 + 2 * math.degrees(math.asin(1 / 3))) / (180 - 2 * math.degrees(math.asin(1 / 3)))
+    assert sl["time_ratio"] == pytest.approx(1.553, abs=0.005) and by_hand == pytest.approx(1.552, abs=1e-3)
+    lims = {lim["extreme"]: lim for lim in sl["limit_positions"]}
+    assert lims["min"]["input"] == pytest.approx(t_min, abs=1e-5) and lims["max"]["input"] == pytest.approx(
+        t_max, abs=1e-5
+    )
+    x0 = shaper_ram_x(np.array([0.0]))[0]  # positions are measured from the pose's
+    assert lims["max"]["position"] == pytest.approx(x_max - x0, abs=1e-6)
+    text = lk.check(shaper()).text()
+    assert "Slider 1 ('ram' on the frame, joint C), moved by crank: stroke 4" in text
+    assert f"Time ratio {sl['time_ratio']:.6f} at constant input speed" in text
+
+
+def test_whitworth_example_stroke_and_time_ratio(examples):
+    """examples/whitworth_quick_return.yaml: the ram's x sampled through lk.analyze at 0.01 deg and refined."""
+    mech = lk.load(examples / "whitworth_quick_return.yaml")
+    (sl,) = lk.check(mech).to_dict()["sliders"]
+
+    def ram_x(th):
+        return lk.analyze(mech, {"crank": np.atleast_1d(th)}, rates=False, dynamics=False).xy("C")[:, 0]
+
+    (t_min, x_min), (t_max, x_max) = extremes_by_brute_force(ram_x)
+    assert sl["stroke"] == pytest.approx(x_max - x_min, abs=1e-9) and sl["stroke"] == pytest.approx(0.3, abs=1e-9)
+    rising = (t_max - t_min) % 360.0
+    assert sl["time_ratio"] == pytest.approx(max(rising, 360 - rising) / min(rising, 360 - rising), abs=1e-6)
+    assert sl["time_ratio"] == pytest.approx(2.0, abs=1e-9)
+
+
+def test_pressure_angle_of_the_slider_crank(examples):
+    """Slider-crank without offset: the rod's angle to the slide is asin(r sin(theta) / l), largest at
+    theta = 90 and 270 deg (asin(r / l)), zero at the dead centres."""
+    mech = lk.load(examples / "slider_crank.yaml")
+    (sl,) = lk.check(mech).to_dict()["sliders"]
+    r, rod = 0.05, 0.0939414711402797
+    pa = sl["pressure_angle"]
+    assert pa["rod"] == "rod"
+    assert pa["max"] == pytest.approx(math.degrees(math.asin(r / rod)), abs=1e-9)
+    assert min(abs(wrap(pa["max_at"] - 90)), abs(wrap(pa["max_at"] - 270))) < 1e-3
+    assert pa["min"] == pytest.approx(0.0, abs=1e-9)
+    assert sl["stroke"] == pytest.approx(2 * r, abs=1e-12) and sl["time_ratio"] == pytest.approx(1.0, abs=1e-9)
+    assert "Pressure angle (between rod 'rod' and the slide): max 32.1574°" in lk.check(mech).text()
+
+
+def test_a_slider_driver_is_not_a_slider_fact():
+    """A slider whose position is the input has nothing to report (its stroke is the sweep)."""
+    mech = lk.Mechanism.from_dict(
+        {
+            "joints": {"O": [0, 0], "A": [0.03, 0.04], "B": [0.115, 0]},
+            "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B"]},
+            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+            "drivers": [{"slider": 0, "displacements": {"start": -0.01, "stop": 0.01, "step": 0.001}}],
+        }
+    )
+    assert lk.check(mech).to_dict()["sliders"] == []
+
+
+# ----------------------------------------------------------------------------- a loop moved by a rocker
+def circles(p, r1, q, r2, side):
+    """The intersection of circle (p, r1) and circle (q, r2) on side `side` of p -> q."""
+    d = abs(q - p)
+    a = (r1 * r1 - r2 * r2 + d * d) / (2 * d)
+    h = math.sqrt(r1 * r1 - a * a)
+    u = (q - p) / d
+    return p + a * u + side * h * 1j * u
+
+
+def watt_with_grashof_second_loop():
+    """Loop 1: crank 20, coupler 70, rocker 50, ground 60 (a crank-rocker). Loop 2 on the rocker's pivot B:
+    input side |B F| = 10 (the shortest), coupler 35, output 30, ground |B E| = 40: Grashof with its input
+    side shortest, but that input is loop 1's rocker, which only rocks."""
+    A, B, E = 0j, 60 + 0j, 60 - 40j
+    C = 20j
+    D = circles(C, 70, B, 50, 1)
+    F = B + 10 * (D - B) / abs(D - B) * np.exp(1j * math.radians(-120))
+    G = circles(F, 35, E, 30, -1)
+    pts = dict(A=A, B=B, E=E, C=C, D=D, F=F, G=G)
+    return lk.Mechanism.from_dict(
+        {
+            "units": {"length": "mm", "angle": "deg"},
+            "joints": {k: [complex(v).real, complex(v).imag] for k, v in pts.items()},
+            "links": {
+                "ground": ["A", "B", "E"],
+                "crank": ["A", "C"],
+                "coupler1": ["C", "D"],
+                "rocker": ["B", "D", "F"],
+                "coupler2": ["F", "G"],
+                "output": ["E", "G"],
+            },
+            "drivers": [{"link": "crank", "pivot": "A", "toward": "C", "angles": {"start": 0, "stop": 360, "step": 1}}],
+        }
+    )
+
+
+def test_a_loop_moved_by_a_rocker_is_not_called_a_turning_crank():
+    mech = watt_with_grashof_second_loop()
+    rep = lk.check(mech).to_dict()
+    first, second = rep["fourbars"]
+    # by hand: loop 1 is a crank-rocker (20 + 70 < 60 + 50, crank shortest): its rocker swings less than a turn
+    assert first["grashof"] == "crank-rocker" and first["rocker_turns_fully"] is False and first["swing"] < 180
+    assert first["grashof_detail"] == "crank-rocker (the input turns fully)" and first["input_turns_fully"] is True
+    # loop 2: Grashof by its lengths, input side shortest (10 + 40 < 35 + 30); its input is loop 1's rocker
+    assert second["grashof"] == "crank-rocker" and second["input"]["link"] == "rocker"
+    assert second["input_turns_fully"] is False
+    assert "turns fully" not in second["grashof_detail"]
+    assert second["grashof_detail"] == (
+        "crank-rocker by its lengths (the input side is the shortest link); its input link 'rocker' only rocks here"
+    )
+    assert "Four-bar loop 2 of 2 B-F-G-E: crank-rocker by its lengths" in lk.check(mech).text()
+
+
+# ----------------------------------------------------------------------------- ranges through 0
+def test_a_range_through_zero_prints_its_gap():
+    """Non-Grashof g=4, a=3, b=2.5, c=2: it assembles while |A O4| <= b + c, i.e. |theta| <= acos((9 + 16
+    - 20.25) / 24) by the law of cosines: the range runs through 0 and the gap is the rest of the turn."""
+    mech = fourbar_in_range(4.0, 3.0, 2.5, 2.0)
+    rep = lk.check(mech).to_dict()
+    t = math.degrees(math.acos((9 + 16 - 4.5**2) / 24))
+    (rng,), (gap,) = rep["input_range"], rep["assembly_gaps"]["crank"]
+    assert rng == pytest.approx([-t, t], abs=1e-8) and gap == pytest.approx([t, 360 - t], abs=1e-8)
+    line = next(x for x in lk.check(mech).text().splitlines() if x.startswith("Assembles"))
+    assert line == f"Assembles for crank in all but ({t:.6f}, {360 - t:.6f}) deg ([{-t:.6f}, {t:.6f}])"
+
+
+def test_the_issue_range_prints_as_all_but_its_gap():
+    from linkagekit.checks import assembly_gaps, check_text
+
+    rep = {
+        "name": "m",
+        "dof": 1,
+        "drivers": ["crank"],
+        "input_ranges": {"crank": [[-341.593352, 4.792542]]},
+        "assembly_gaps": {"crank": assembly_gaps([[-341.593352, 4.792542]], math.pi / 180)},
+        "input_units": {"crank": "deg"},
+    }
+    (gap,) = rep["assembly_gaps"]["crank"]
+    assert gap == pytest.approx([4.792542, 18.406648], abs=1e-9)
+    assert check_text(rep).splitlines()[2] == (
+        "Assembles for crank in all but (4.792542, 18.406648) deg ([-341.593352, 4.792542])"
+    )
+
+
+# ----------------------------------------------------------------------------- warnings
+def test_warning_when_the_transmission_angle_leaves_20_to_160():
+    """Crank-rocker g=4, a=2.45, b=3.5, c=3: the transmission angle is extreme with the crank along the
+    ground line, |A O4| = g -+ a: mu = acos((b^2 + c^2 - f^2) / (2 b c)), 26.2 and 165.7 deg: warned;
+    a = 2.0 gives 34.8 and 134.6 deg: no warning."""
+    from linkagekit.checks import MIN_TRANSMISSION
+
+    def mu(f, b=3.5, c=3.0):
+        return math.degrees(math.acos((b * b + c * c - f * f) / (2 * b * c)))
+
+    rep = lk.check(fourbar(4.0, 2.45, 3.5, 3.0, 50.0)).to_dict()
+    (w,) = rep["warnings"]
+    assert w["kind"] == "transmission-angle" and w["limit"] == MIN_TRANSMISSION == 20.0
+    assert w["min"] == pytest.approx(mu(4.0 - 2.45), abs=MU) and w["max"] == pytest.approx(mu(4.0 + 2.45), abs=MU)
+    assert (
+        "Warning: the transmission angle of loop O2-A-B-O4 leaves [20°, 160°]"
+        in lk.check(fourbar(4.0, 2.45, 3.5, 3.0, 50.0)).text()
+    )
+    assert lk.check(fourbar(4.0, 2.0, 3.5, 3.0, 50.0)).to_dict()["warnings"] == []
+    assert mu(2.0) > 20 and mu(6.0) < 160
+
+
+def test_min_transmission_is_the_synthesis_default():
+    import inspect
+
+    from linkagekit.checks import MIN_TRANSMISSION
+
+    assert inspect.signature(lk.synthesize).parameters["min_transmission"].default == MIN_TRANSMISSION
+
+
+def cylinder_arm(start):
+    """An arm |O B| = 1 m about O, lifted by a cylinder from C = (2, 0) to B, against a 10 N*m load torque.
+
+    By hand: |B C| = s gives cos(theta) = (5 - s^2) / 4; the cylinder's force F along C -> B balances the
+    torque: F |O B| sin(gamma) = 10, gamma the angle between O B and C B; gamma -> 0 as s -> 1 (in line)."""
+    s0 = 1.8
+    th = math.acos((5 - s0 * s0) / 4)
+    B = complex(math.cos(th), math.sin(th))
+    return lk.Mechanism.from_dict(
+        {
+            "joints": {"O": [0, 0], "C": [2, 0], "B": [B.real, B.imag]},
+            "links": {"ground": ["O", "C"], "arm": ["O", "B"]},
+            "drivers": [
+                {"cylinder": ["C", "B"], "name": "cyl", "lengths": {"start": start, "stop": 2.5, "step": 0.005}}
+            ],
+            "loads": [{"link": "arm", "torque": -10}],
+        }
+    )
+
+
+def test_warning_when_a_driver_force_peaks_next_to_a_toggle():
+    from linkagekit.checks import TOGGLE_ANGLE
+
+    s = 1.005
+    th = math.acos((5 - s * s) / 4)
+    B = complex(math.cos(th), math.sin(th))
+    gamma = math.degrees(math.asin(abs(cross(B - 0, B - 2)) / (abs(B) * abs(B - 2))))
+    rep = lk.check(cylinder_arm(s)).to_dict()
+    peak = rep["dynamics"]["peak_driver_force"]["cyl"]
+    assert peak["at"] == {"cyl": pytest.approx(s, abs=1e-12)}
+    assert abs(peak["value"]) == pytest.approx(10 / math.sin(math.radians(gamma)), rel=1e-9)
+    assert peak["toggle"]["angle"] == pytest.approx(gamma, abs=1e-9) and gamma < TOGGLE_ANGLE
+    assert peak["toggle"]["joint"] == "B"
+    (w,) = rep["warnings"]
+    assert w["kind"] == "toggle" and w["driver"] == "cyl" and w["toggle"]["angle"] == pytest.approx(gamma, abs=1e-9)
+    assert "Warning: the driver force of cyl peaks at" in lk.check(cylinder_arm(s)).text()
+    # NEGATIVE: from s = 1.5 on the smallest angle is far from the toggle: no warning
+    assert lk.check(cylinder_arm(1.5)).to_dict()["warnings"] == []
+
+
+def test_check_json_keeps_every_key_and_adds_the_new_ones(examples, capsys):
+    assert main(["check", str(examples / "whitworth_quick_return.yaml"), "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert {"dof", "input_range", "input_ranges", "dead_points", "fourbars", "held_at", "units"} <= set(doc)
+    assert doc["sliders"][0]["time_ratio"] == pytest.approx(2.0, abs=1e-9)
+    assert doc["warnings"] == [] and doc["assembly_gaps"] == {"crank": []}

@@ -6,7 +6,7 @@ carries in its metadata (``linkagekit:transform`` = ``[sx, tx, sy, ty]``: column
 row = sy y + ty, rows from the top).  Each pixel checker has a NEGATIVE control that proves it
 can fail (shifted transform, blank image, a drawn-in chord, the wrong pose, ...).
 
-Tolerances (pixels at the default 100 dpi):
+Tolerances (pixels at ``--dpi 100``, at which these checks draw; the default is 200):
 
 * curve colour: a pixel within RGB distance 60 of ``CURVE_COLOR`` (at least ~79 % curve colour
   over white; a 1.6 pt line always has fully covered pixels, so the curve's core passes);
@@ -275,7 +275,7 @@ def drawn(outdir):
         tag = key + "_" + "_".join(extra + ((angles,) if angles else ())).replace(":", "-").replace(",", "-")
         if tag not in cache:
             png = outdir / f"{tag}.png"
-            args = ["plot", str(FILES[key]), "-o", str(png), *extra]
+            args = ["plot", str(FILES[key]), "-o", str(png), "--dpi", "100", *extra]
             if angles:
                 args += ["--angles", angles]
             assert main(args) == 0
@@ -426,7 +426,7 @@ def test_at_the_pose_input_draws_the_ground_as_without_at(drawn, key):
 def test_ground_is_drawn_when_the_sweep_never_assembles(outdir):
     """seed003 does not assemble for crank in [0, 80]: the picture still shows the (fixed) ground pivots."""
     png = outdir / "never.png"
-    assert main(["plot", str(FILES["seed003"]), "--angles", "0:80:5", "-o", str(png)]) == 0
+    assert main(["plot", str(FILES["seed003"]), "--angles", "0:80:5", "-o", str(png), "--dpi", "100"]) == 0
     rgb, t = read_png(png)
     mech = lk.load(FILES["seed003"])
     for j in mech.link("ground").joints:
@@ -469,12 +469,13 @@ def test_modes_panels_match_lk_modes(outdir, mirrors, capsys):
 
     # the command line: a non-blank picture
     out = outdir / f"modes_{mirrors}.png"
-    assert main(["plot", "--modes", "--at", "60", str(path), "-o", str(out), *(["--mirrors"] if mirrors else [])]) == 0
+    mirror = ["--mirrors"] if mirrors else []
+    assert main(["plot", "--modes", "--at", "60", str(path), "-o", str(out), "--dpi", "100", *mirror]) == 0
     assert capsys.readouterr().err == ""
     img = np.asarray(Image.open(out).convert("RGB"), float)
     assert (luminance(img) < 100).mean() > 0.002 and (img.min(axis=-1) < 200).mean() > 0.01
 
-    fig = draw.modes_figure(mech, {name: 60.0}, mirrors=mirrors)
+    fig = draw.modes_figure(mech, {name: 60.0}, mirrors=mirrors, dpi=100)
     rgb = render(fig)
     assert rgb.shape == img.shape  # the same figure as the command's
     np.testing.assert_array_equal(rgb, img)
@@ -595,3 +596,105 @@ def test_bad_outputs_exit_2_with_one_line(tmp_path, capsys, args, needle):
     assert needle in lines[0], lines[0]
     assert out == ""
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]  # nothing written
+
+
+# --------------------------------------------------------------------------- the pose off the sweep grid, size, dpi
+def solved_at_pose(mech) -> tuple[dict[str, float], lk.Result]:
+    """Each driver's pose input, read off the file's joints (not from linkagekit), and the solve there."""
+    values = {}
+    for d in mech.drivers:
+        if d.ends is not None:
+            a, b = (mech.joints[j] for j in d.ends)
+            values[d.name] = abs(b - a)
+        else:
+            values[d.name] = pose_input(mech) if len(mech.drivers) == 1 else math.nan
+    res = lk.analyze(mech, {k: [v] for k, v in values.items()})
+    assert bool(res.assembled[0])
+    return values, res
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"), [("slider_crank.yaml", {"crank": 53.130102354156}), ("excavator_boom.yaml", None)]
+)
+def test_default_drawing_is_at_the_poses_own_input_off_the_sweep_grid(outdir, name, expected):
+    """slider_crank's pose is at 53.13 deg (sweep 0:360:1) and the excavator's cylinders at 2.3998 and
+    3.2822 m (sweeps step 0.011 and 0.009 from the stroke's start): neither is a sample of the sweep, and
+    each is drawn where the file puts it, every joint a pin at the solver's position there."""
+    mech = lk.load(EXAMPLES / name)
+    values, sol = solved_at_pose(mech)
+    if expected:
+        assert values == pytest.approx(expected, abs=1e-9)
+    sweep = lk.analyze(mech)
+    for k, v in values.items():
+        assert np.min(np.abs(np.asarray(sweep.inputs[k]) - v)) > 1e-4  # off the grid
+    png = outdir / f"pose_{name}.png"
+    assert main(["plot", str(EXAMPLES / name), "-o", str(png), "--dpi", "100"]) == 0
+    rgb, t = read_png(png)
+    pins = {j: to_px(t, sol.xy(j))[0] for j in mech.joint_names}
+    assert all(is_pin(rgb, c, r) for c, r in pins.values()), {j: ring_at(rgb, c, r) for j, (c, r) in pins.items()}
+    # NEGATIVE: the first sample of the sweep (where it was drawn before) is not what is drawn
+    first = {j: to_px(t, sweep.xy(j)[:1])[0] for j in mech.joint_names}
+    moved = [j for j in mech.joint_names if np.linalg.norm(first[j] - pins[j]) > 10]
+    assert moved and not all(is_pin(rgb, *first[j]) for j in moved)
+
+
+def test_default_picture_is_at_least_1200_px_on_its_long_side(outdir):
+    for name in ("slider_crank.yaml", "excavator_boom.yaml", "jansen_leg.yaml"):
+        png = outdir / f"default_{name}.png"
+        assert main(["plot", str(EXAMPLES / name), "-o", str(png)]) == 0
+        w, h = Image.open(png).size
+        assert w == 1200 and max(w, h) >= 1200, (name, w, h)
+    png = outdir / "default_modes.png"
+    assert (
+        main(["plot", "--modes", "--mirrors", "--at", "60", str(EXAMPLES / "seed004_stephenson1.yaml"), "-o", str(png)])
+        == 0
+    )
+    w, h = Image.open(png).size
+    assert w == 4 * 640  # four panels a row, 3.2 in at 200 dpi each: each panel is readable
+    q = outdir / "default_q.png"
+    assert main(["plot", str(FILES["seed000"]), "-q", "angles", "-q", "coupler.omega", "-o", str(q)]) == 0
+    assert Image.open(q).size[0] == 1200
+
+
+def test_dpi_and_size_set_the_pixels_and_the_transform(outdir):
+    """--size W keeps the drawing's aspect; --size WxH is exact; --dpi scales the picture at a fixed size
+    in inches.  The transform in the PNG scales with them: the same file point lands on the same
+    fraction of the picture."""
+    path = str(EXAMPLES / "slider_crank.yaml")
+    got = {}
+    for tag, extra in {
+        "base": [],
+        "dpi": ["--dpi", "100"],
+        "w": ["--size", "900"],
+        "wh": ["--size", "1000x400"],
+    }.items():
+        png = outdir / f"size_{tag}.png"
+        assert main(["plot", path, "-o", str(png), *extra]) == 0
+        rgb, t = read_png(png)
+        got[tag] = (rgb.shape[1], rgb.shape[0], t)
+    (w0, h0, t0), (w1, h1, t1) = got["base"], got["dpi"]
+    assert (w1, h1) == (w0 // 2, h0 // 2) and t1[0] == pytest.approx(t0[0] / 2, rel=1e-9)
+    w2, h2, t2 = got["w"]
+    assert w2 == 900 and h2 == round(900 * h0 / w0) and t2[0] == pytest.approx(t0[0] * 0.75, rel=1e-9)
+    assert got["wh"][:2] == (1000, 400)
+    # every picture shows the whole mechanism at its pose: each joint's pixel lies inside it
+    _, sol = solved_at_pose(lk.load(EXAMPLES / "slider_crank.yaml"))
+    for w, h, t in got.values():
+        px = to_px(t, np.concatenate([sol.xy(j) for j in sol.mechanism.joint_names]))
+        assert np.all((px > 0) & (px < [w, h])), (w, h, px)
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--dpi", "5"], "--dpi"),
+        (["--size", "12x"], "--size"),
+        (["--size", "0"], "--size"),
+        (["--size", "20000"], "pixels"),
+    ],
+)
+def test_bad_dpi_or_size_is_one_line(tmp_path, capsys, args, needle):
+    code = main(["plot", str(EXAMPLES / "slider_crank.yaml"), "-o", str(tmp_path / "x.png"), *args])
+    err = capsys.readouterr().err
+    assert code == 2 and needle in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.png").exists()

@@ -45,6 +45,10 @@ MAX_MODE_SLOTS = 12
 N_BISECT = 60
 #: a sign step's |determinant| at a sample below which a local minimum is refined as a possible change point
 TOUCH = 0.05
+#: check warns when a four-bar's transmission angle goes below this (degrees; synthesize's --min-transmission default)
+MIN_TRANSMISSION = 20.0
+#: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
+TOGGLE_ANGLE = 10.0
 
 
 def _inputs(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
@@ -306,6 +310,68 @@ def _state(params: Params, driver: int, x: np.ndarray) -> _State:
     return _State(ok, pos.z[:, 0], np.where(singular, np.nan, v), v, cond, pos.margin[:, 0])
 
 
+@dataclass(frozen=True)
+class SliderLine:
+    """A slider whose guide is the frame, as :func:`check` looks at it (its block's joint and the rod pushing it).
+
+    Attributes
+    ----------
+    index : int
+        The slider's index in the file's ``sliders``.
+    link : str
+        The block.
+    joint : int
+        Joint index of ``through``, the block's joint that moves along the line.
+    direction : complex
+        Unit vector of the line (the file's ``direction``).
+    rod : str
+        The two-joint link pinned to the block at ``joint`` (the coupler pushing it), or ``""``.
+    rod_joint : int
+        The rod's other joint, or -1 without a rod.
+    """
+
+    index: int
+    link: str
+    joint: int
+    direction: complex
+    rod: str = ""
+    rod_joint: int = -1
+
+
+def slider_lines(mech: Mechanism) -> list[SliderLine]:
+    """The sliders on the frame whose position is not itself an input (not a slider driver's).
+
+    The rod is the one link of two joints, other than the block, pinned at the block's joint:
+    the force it carries is along it (without masses or loads on it), which makes the
+    pressure angle the angle between the rod and the line of the slide.
+
+    >>> import linkagekit as lk
+    >>> [(s.link, s.rod) for s in slider_lines(lk.load("examples/whitworth_quick_return.yaml"))]
+    [('ram', 'rod')]
+    """
+    names = mech.joint_names
+    driven = {d.slider for d in mech.drivers if d.slider is not None}
+    out = []
+    for i, sl in enumerate(mech.sliders):
+        if sl.on != "ground" or i in driven:
+            continue
+        rods = [ln for ln in mech.links if ln.name not in ("ground", sl.link) and sl.through in ln.joints]
+        rods = [ln for ln in rods if len(ln.joints) == 2]
+        rod = rods[0] if len(rods) == 1 else None
+        other = next((j for j in rod.joints if j != sl.through), None) if rod else None
+        out.append(
+            SliderLine(
+                i,
+                sl.link,
+                names.index(sl.through),
+                sl.direction,
+                rod.name if rod else "",
+                names.index(other) if other else -1,
+            )
+        )
+    return out
+
+
 class _Quantities:
     """The scalar functions of the input the checks look at, as rows of one matrix per state.
 
@@ -317,8 +383,17 @@ class _Quantities:
     """
 
     def __init__(
-        self, loops: list[FourBar], n_signs: int, out_links: list[tuple[int, int]], known: list[tuple[int, int]]
+        self,
+        loops: list[FourBar],
+        n_signs: int,
+        out_links: list[tuple[int, int]],
+        known: list[tuple[int, int]],
+        sliders: list[SliderLine] | None = None,
     ) -> None:
+        self.sliders = list(sliders or [])
+        self.sj = np.array([sl.joint for sl in self.sliders], int)
+        self.srod = np.array([sl.rod_joint for sl in self.sliders], int)
+        self.sdir = np.array([sl.direction for sl in self.sliders], complex)
         self.n = len(loops)
         self.tip = np.array([lp.crank_tip for lp in loops], int)
         self.joint = np.array([lp.rocker_tip for lp in loops], int)
@@ -345,13 +420,37 @@ class _Quantities:
     def ds(self, k: int) -> int:
         return 4 * self.n + self.n_signs + k
 
+    def sv(self, i: int) -> int:
+        """Slider ``i``'s velocity along its line per unit input speed."""
+        return 4 * self.n + 2 * self.n_signs + i
+
+    def pa(self, i: int, sign: int = 1) -> int:
+        """Slider ``i``'s pressure angle (degrees; ``sign`` -1: its negative)."""
+        return 4 * self.n + 2 * self.n_signs + (1 if sign > 0 else 2) * len(self.sliders) + i
+
+    def position(self, st: _State) -> np.ndarray:
+        """(n_sliders, n) each slider's joint along its line, from the origin (file length unit)."""
+        pos: np.ndarray = (st.z[self.sj] * np.conj(self.sdir)[:, None]).real
+        return pos
+
+    def _slider_rows(self, st: _State) -> list[np.ndarray]:
+        if not self.sliders:
+            return []
+        dirs = np.conj(self.sdir)[:, None]
+        along = (st.v[self.sj] * dirs).real
+        rod = st.z[self.sj] - st.z[np.maximum(self.srod, 0)]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            pa = np.degrees(np.arccos(np.minimum(np.abs((rod * dirs).real) / np.abs(rod), 1.0)))
+        pa = np.where(self.srod[:, None] >= 0, pa, np.nan)
+        return [along, pa, -pa]
+
     def rows(self, st: _State) -> np.ndarray:
         d = st.z[self.k2] - st.z[self.k1]
         with np.errstate(invalid="ignore", divide="ignore"):
             ds = (np.conj(d) * (st.vraw[self.k2] - st.vraw[self.k1])).real / np.abs(d)
         ds = np.where(self.dyad[:, None], ds, np.nan)
         if not self.n:
-            return np.concatenate([st.cond, ds])
+            return np.concatenate([st.cond, ds, *self._slider_rows(st)])
         z, v = st.z, st.v
         b, a, o4 = z[self.joint], z[self.tip], z[self.piv]
         arm, bar = b - o4, b - a
@@ -360,7 +459,7 @@ class _Quantities:
             wc = (np.conj(bar) * (v[self.joint] - v[self.tip])).imag / (np.abs(bar) ** 2)
             mu = np.degrees(np.abs(np.angle((o4 - b) / (a - b))))
         mu = np.where(np.isfinite(b), mu, np.nan)
-        return np.concatenate([w, mu, -mu, w - wc, st.cond, ds])
+        return np.concatenate([w, mu, -mu, w - wc, st.cond, ds, *self._slider_rows(st)])
 
     def out_angle(self, st: _State) -> np.ndarray:
         """Angle (rad) of each loop's rocker link: the direction of its first joint -> its second."""
@@ -568,7 +667,12 @@ class _Run:
 
 
 def _run(
-    mech: Mechanism, params: Params, driver: int, intervals: list[list[float]], loops: list[tuple[int, FourBar]]
+    mech: Mechanism,
+    params: Params,
+    driver: int,
+    intervals: list[list[float]],
+    loops: list[tuple[int, FourBar]],
+    sliders: list[SliderLine] | None = None,
 ) -> _Run:
     """Sample one driver densely over ``intervals`` (:func:`_sweep`) and evaluate the checks' quantities there."""
     d = mech.drivers[driver]
@@ -583,7 +687,7 @@ def _run(
         j = mech.link(lp.links[2]).joints
         out_links.append((names.index(j[0]), names.index(j[1])))
     known = [(s.k1, s.k2) if isinstance(s, Dyad) else (-1, -1) for s in plan.sign_steps]
-    q = _Quantities([lp for _, lp in loops], plan.n_signs, out_links, known)
+    q = _Quantities([lp for _, lp in loops], plan.n_signs, out_links, known, sliders)
     st = _state(params, driver, sw.x)
     return _Run(params, driver, intervals, d.input_scale(mech), lo, hi, d.type.cyclic, sw, q, st, q.rows(st))
 
@@ -715,9 +819,14 @@ class _Limit(NamedTuple):
 
 def _transmission(run: _Run, li: int, extremes: dict[int, _Bracket], fin: _Final) -> dict[str, Any]:
     """Min and max of loop ``li``'s transmission angle and where: the refined value when it is no worse."""
+    return _min_max(run, {1: run.q.mu(li, 1), -1: run.q.mu(li, -1)}, extremes, fin)
+
+
+def _min_max(run: _Run, rows: dict[int, int], extremes: dict[int, _Bracket], fin: _Final) -> dict[str, Any]:
+    """``min``, ``max`` and where (``min_at``, ``max_at``) of a quantity: ``rows[1]`` it, ``rows[-1]`` its negative."""
     ta: dict[str, Any] = {}
     for sgn, b in extremes.items():
-        key, row = ("min" if sgn > 0 else "max"), run.q.mu(li, sgn)
+        key, row = ("min" if sgn > 0 else "max"), rows[sgn]
         best_x, best = run.sw.x[b.sample], run.rows[row, b.sample]
         if np.isfinite(fin.rows[row, b.col]) and fin.rows[row, b.col] <= best + 1e-12:
             best_x, best = b.x, fin.rows[row, b.col]
@@ -776,22 +885,35 @@ def _time_ratio(run: _Run, limits: list[_Limit]) -> dict[str, Any]:
 
 
 def _driver_checks(
-    mech: Mechanism, params: Params, driver: int, intervals: list[list[float]], loops: list[tuple[int, FourBar]]
-) -> tuple[list[dict[str, Any]], dict[int, dict[str, Any]]]:
-    """Dead points of one driver's input, and the transmission angle and limit positions of its loops.
+    mech: Mechanism,
+    params: Params,
+    driver: int,
+    intervals: list[list[float]],
+    loops: list[tuple[int, FourBar]],
+    sliders: list[SliderLine] | None = None,
+) -> tuple[list[dict[str, Any]], dict[int, dict[str, Any]], list[dict[str, Any]]]:
+    """Dead points of one driver's input, and the facts of its loops and sliders.
 
     ``intervals`` where it assembles, in radians or length units (:func:`_assembly_intervals`);
-    ``loops`` the (index, loop) pairs this driver sweeps.  Returns (dead points, {loop index:
-    facts}), every value in file units.  Every bracket is refined in one vectorized search
-    (:func:`_refine`), then solved once more (:func:`_finish`).
+    ``loops`` the (index, loop) pairs this driver sweeps, ``sliders`` the sliders on the
+    frame.  Returns (dead points, {loop index: facts}, [slider facts]), every value in file
+    units.  Every bracket is refined in one vectorized search (:func:`_refine`), then solved
+    once more (:func:`_finish`).
     """
     if not intervals:
-        return [], {}
-    run = _run(mech, params, driver, intervals, loops)
+        return [], {}, []
+    run = _run(mech, params, driver, intervals, loops, sliders)
     limits = [_limit_brackets(run, li) for li in range(run.q.n)]
     extremes = [_extreme_brackets(run, li) for li in range(run.q.n)]
+    slides = [_slider_brackets(run, k) for k in range(len(run.q.sliders))]
     changes = _change_point_brackets(run)
-    ordered = [*(b for bs in limits for b in bs), *(b for e in extremes for b in e.values()), *(b for _, b in changes)]
+    ordered = [
+        *(b for bs in limits for b in bs),
+        *(b for e in extremes for b in e.values()),
+        *(b for bs, _ in slides for b in bs),
+        *(b for _, e in slides for b in e.values()),
+        *(b for _, b in changes),
+    ]
     roots, mins = [b for b in ordered if b.sign is not None], [b for b in ordered if b.sign is None]
     _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
@@ -799,19 +921,93 @@ def _driver_checks(
     fin = _finish(run, roots + mins, ends)
     dead = _end_dead_points(run, fin, ends) + _change_dead_points(run, changes, fin, ends)
     dead.sort(key=lambda t: t[1]["input"])
-    facts: dict[int, dict[str, Any]] = {}
-    for li, (index, lp) in enumerate(loops):
-        out: dict[str, Any] = {}
-        ta = _transmission(run, li, extremes[li], fin)
-        if "min" in ta and "max" in ta:
-            out["transmission_angle"] = ta | {"joint": params.plan.joint_names[lp.rocker_tip]}
-        lims = _limits(run, li, limits[li], fin)
-        out["limit_positions"] = [
-            {"input": run.file_value(t.x), "angle": float(_wrap(t.angle) / mech.angle_to_rad), "extreme": t.extreme}
-            for t in lims
-        ]
-        facts[index] = out | _swing(run, li, lims, fin, mech.angle_to_rad) | _time_ratio(run, lims)
-    return [info for _, info in dead], facts
+    facts = {
+        index: _loop_facts(run, mech, li, lp, limits[li], extremes[li], fin) for li, (index, lp) in enumerate(loops)
+    }
+    slider_facts = [_slider_facts(run, mech, k, *slides[k], fin) for k in range(len(run.q.sliders))]
+    return [info for _, info in dead], facts, slider_facts
+
+
+def _loop_facts(
+    run: _Run, mech: Mechanism, li: int, lp: FourBar, limits: list[_Bracket], extremes: dict[int, _Bracket], fin: _Final
+) -> dict[str, Any]:
+    """Transmission angle, limit positions, swing and time ratio of loop ``li``, and whether its input link turns."""
+    out: dict[str, Any] = {}
+    ta = _transmission(run, li, extremes, fin)
+    if "min" in ta and "max" in ta:
+        out["transmission_angle"] = ta | {"joint": run.params.plan.joint_names[lp.rocker_tip]}
+    lims = _limits(run, li, limits, fin)
+    out["limit_positions"] = [
+        {"input": run.file_value(t.x), "angle": float(_wrap(t.angle) / mech.angle_to_rad), "extreme": t.extreme}
+        for t in lims
+    ]
+    turns = _turns_fully(run, np.angle(run.st.z[lp.crank_tip] - run.st.z[lp.crank_pivot]))
+    out["input_turns_fully"] = turns
+    return out | _swing(run, li, lims, fin, mech.angle_to_rad) | _time_ratio(run, lims)
+
+
+def _turns_fully(run: _Run, angle: np.ndarray) -> bool:
+    """Whether a link at ``angle`` (rad, at the dense samples) turns through a full turn over the driver's turn."""
+    if not run.cyclic or not np.isfinite(angle).all():
+        return False
+    u = np.unwrap(angle)
+    return bool(abs(u[-1] - u[0] + _wrap(angle[0] - angle[-1])) > math.pi)
+
+
+def _slider_brackets(run: _Run, k: int) -> tuple[list[_Bracket], dict[int, _Bracket]]:
+    """Slider ``k``'s limit positions (its velocity changes sign) and its pressure angle's extremes."""
+    sw, row = run.sw, run.q.sv(k)
+    v = run.rows[row]
+    ia = np.flatnonzero(sw.has_next)
+    va, vb = v[ia], v[sw.next[ia]]
+    hit = np.isfinite(va) & np.isfinite(vb) & (va != 0) & (np.sign(vb) != np.sign(va))
+    limits = [_Bracket(sw.x[i], sw.nx[i], row, int(i), float(np.sign(v[i]))) for i in ia[hit]]
+    extremes = {}
+    for sgn in (1, -1):
+        f = run.rows[run.q.pa(k, sgn)]
+        if np.isfinite(f).any():
+            i = int(np.nanargmin(f))
+            extremes[sgn] = _Bracket(sw.px[i], sw.nx[i], run.q.pa(k, sgn), i)
+    return limits, extremes
+
+
+def _slider_facts(
+    run: _Run, mech: Mechanism, k: int, limits: list[_Bracket], extremes: dict[int, _Bracket], fin: _Final
+) -> dict[str, Any]:
+    """Slider ``k``'s stroke, limit positions, time ratio and pressure angle over the driver's range.
+
+    Positions are measured along the slider's line from the pose's position (file length unit).
+    """
+    sl, q = run.q.sliders[k], run.q
+    names = run.params.plan.joint_names
+    origin = float((mech.joints[names[sl.joint]] * np.conj(sl.direction)).real)
+    dense, refined = q.position(run.st)[k] - origin, q.position(fin.state)[k] - origin
+    v_dense = run.rows[q.sv(k)]
+    scale = float(np.nanmax(np.abs(v_dense))) if np.isfinite(v_dense).any() else 1.0
+    lims: list[_Limit] = []
+    for b in limits:
+        if abs(fin.rows[b.row, b.col]) <= 1e-6 * scale and not any(abs(run.cyc(b.x - t.x)) <= run.tol_x for t in lims):
+            lims.append(
+                _Limit(b.x, float(refined[b.col]), "max" if b.sign is not None and b.sign > 0 else "min", b.sample)
+            )
+    lims.sort(key=lambda t: run.file_value(t.x))
+    cand = np.concatenate([dense[np.isfinite(dense)], [t.angle for t in lims]])
+    out: dict[str, Any] = {
+        "slider": sl.index,
+        "link": sl.link,
+        "joint": names[sl.joint],
+        "driver": mech.drivers[run.driver].name,
+        "stroke": float(np.ptp(cand)) if cand.size else None,
+        "limit_positions": [{"input": run.file_value(t.x), "position": t.angle, "extreme": t.extreme} for t in lims],
+    }
+    ratio = _time_ratio(run, lims)
+    if ratio:
+        out["input_travel"], out["time_ratio"] = ratio["strokes"], ratio["time_ratio"]
+    if sl.rod:
+        pa = _min_max(run, {1: q.pa(k, 1), -1: q.pa(k, -1)}, extremes, fin)
+        if "max" in pa:
+            out["pressure_angle"] = pa | {"rod": sl.rod}
+    return out
 
 
 def transmission_angle(
@@ -826,7 +1022,7 @@ def transmission_angle(
     driver = fb.driver if fb.driver is not None else 0
     factor = mech.drivers[driver].input_scale(mech)
     intervals = [[s * factor, e * factor] for s, e in ranges]
-    _, facts = _driver_checks(mech, params, driver, intervals, [(0, fb)])
+    _, facts, _ = _driver_checks(mech, params, driver, intervals, [(0, fb)])
     ta = facts.get(0, {}).get("transmission_angle", {})
     return {"min": ta["min"], "max": ta["max"]} if ta else {}
 
@@ -836,13 +1032,14 @@ def transmission_angle(
 MAX_DYNAMICS_SAMPLES = 100_000
 
 
-def peak_loads(mech: Mechanism) -> dict[str, Any]:
+def peak_loads(mech: Mechanism, params: Params | None = None) -> dict[str, Any]:
     """Peak driver torque (force for a slider driver) and peak bearing load over the file's sweep.
 
     Solved by :func:`linkagekit.analyze` on the file's default sweep at the file's input
     speeds and accelerations.  Every peak is the sample of largest magnitude, with the
     input values there (file units); a bearing load is the magnitude of a joint reaction
-    (for a slider, the normal force of the guide on the block), in N.
+    (for a slider, the normal force of the guide on the block), in N.  A driver's peak also
+    carries ``toggle``: how near the mechanism is to a toggle there (:func:`toggle_at`).
     """
     n = mech.drivers[0].sweep.count()
     out: dict[str, Any] = {
@@ -862,31 +1059,70 @@ def peak_loads(mech: Mechanism) -> dict[str, Any]:
     def at(i: int) -> dict[str, float]:
         return {k: float(v[i]) for k, v in inputs.items()}
 
+    params = prepare(mech) if params is None else params
     for key, efforts in (("peak_driver_torque", f.driver_torque), ("peak_driver_force", f.driver_force)):
         peaks = {}
         for name, arr in efforts.items():
             a = np.asarray(arr, float)
             if np.isfinite(a).any():
                 i = int(np.nanargmax(np.abs(a)))
-                peaks[name] = {"value": float(a[i]), "at": at(i)}
+                peaks[name] = {"value": float(a[i]), "at": at(i)} | _toggle_entry(mech, params, at(i))
         if peaks:
             out[key] = peaks
     if f.reactions:
-        mags = np.array([np.asarray(r.magnitude, float) for r in f.reactions])
-        if np.isfinite(mags).any():
-            flat = int(np.nanargmax(mags))
-            k, i = divmod(flat, mags.shape[1])
-            r = f.reactions[k]
-            out["peak_bearing_load"] = {
-                "value": float(mags[k, i]),
-                "joint": r.joint,
-                "on": r.on,
-                "by": r.by,
-                "kind": "slider" if r.moment is not None else "pin",
-                "at": at(i),
-            }
+        out |= _peak_bearing(f.reactions, at)
     out["assembled"] = int(np.sum(res.assembled))
     return out
+
+
+def _peak_bearing(reactions: Any, at: Any) -> dict[str, Any]:
+    """The largest joint reaction over the samples (``peak_bearing_load``), if any is finite."""
+    mags = np.array([np.asarray(r.magnitude, float) for r in reactions])
+    if not np.isfinite(mags).any():
+        return {}
+    k, i = divmod(int(np.nanargmax(mags)), mags.shape[1])
+    r = reactions[k]
+    return {
+        "peak_bearing_load": {
+            "value": float(mags[k, i]),
+            "joint": r.joint,
+            "on": r.on,
+            "by": r.by,
+            "kind": "slider" if r.moment is not None else "pin",
+            "at": at(i),
+        }
+    }
+
+
+def _toggle_entry(mech: Mechanism, params: Params, at: Mapping[str, float]) -> dict[str, Any]:
+    tg = toggle_at(mech, at, params)
+    return {"toggle": tg} if tg else {}
+
+
+def toggle_at(mech: Mechanism, at: Mapping[str, float], params: Params | None = None) -> dict[str, Any] | None:
+    """How near the mechanism is to a toggle at the inputs ``at`` (file units): the worst sign step there.
+
+    Returns ``{"angle", "joint", "links", "detail"}``: ``angle`` (degrees) is the arcsine of
+    the sign step's dimensionless determinant (for two links meeting at a joint, the angle
+    between them, folded to [0, 90]: 0 when they are in line, where the drivers' effort has
+    no bound); the other fields name the step as a dead point does.  None without sign steps
+    or where the mechanism does not assemble.
+    """
+    params = prepare(mech) if params is None else params
+    if not params.plan.n_signs:
+        return None
+    q = np.array([[[float(at[d.name]) * d.input_scale(mech)]] for d in mech.drivers])
+    pos = solve(params, q)
+    if not bool(pos.assembled[0, 0]):
+        return None
+    zero = np.zeros((len(mech.drivers), 1, 1))
+    rt = solve_rates(params, pos, zero, zero, tol=0.0)
+    cond = np.abs(rt.condition[: params.plan.n_signs, 0])
+    k = int(np.nanargmin(cond[:, 0]))
+    v = pos.z[:, 0]
+    st = _State(pos.assembled[0], v, v, v, cond, pos.margin[:, 0])
+    angle = math.degrees(math.asin(min(float(cond[k, 0]), 1.0)))
+    return {"angle": angle} | _step_links(params, k, st, 0)
 
 
 # ---------------------------------------------------------------------- the report
@@ -949,6 +1185,23 @@ class CheckReport:
     closed_form_joints, numerical_joints : tuple of str
         The joints placed in closed form, and those placed by numerical groups (Newton
         continued from the pose; then :meth:`to_dict`'s ``solvable`` is ``"numerical"``).
+    sliders : tuple of dict
+        For each slider on the frame that a driver moves (:func:`slider_lines`), per driver:
+        ``slider`` (its index), ``link``, ``joint``, ``driver``, ``stroke`` (the length of
+        the slide its joint travels over the driver's range), ``limit_positions`` (each
+        ``input``, ``position`` along the line from the pose's, ``extreme``), over a full
+        turn with two limit positions ``input_travel`` (``rising``, ``falling``: the input's
+        travel while the position increases, decreases) and ``time_ratio`` (the larger over
+        the smaller), and with a rod ``pressure_angle`` (``min``, ``max``, ``min_at``,
+        ``max_at``, ``rod``: degrees between the rod and the line of the slide).
+    assembly_gaps : dict of str to list of [float, float]
+        For each angle driver the open intervals of the turn where it does not assemble
+        (the complement of ``input_ranges``, each starting in [0, 1 turn)).
+    warnings : tuple of dict
+        ``kind`` ``"transmission-angle"`` (a loop's ``min`` below ``limit``,
+        :data:`MIN_TRANSMISSION`, or its ``max`` above 180 - ``limit``) or ``"toggle"`` (a
+        driver's peak effort at a sample within ``limit`` degrees, :data:`TOGGLE_ANGLE`, of a
+        toggle; with the peak's fields).
     """
 
     name: str
@@ -970,6 +1223,9 @@ class CheckReport:
     dynamics: dict[str, Any] | None = None
     closed_form_joints: tuple[str, ...] = ()
     numerical_joints: tuple[str, ...] = ()
+    sliders: tuple[dict[str, Any], ...] = ()
+    assembly_gaps: dict[str, list[list[float]]] = field(default_factory=dict)
+    warnings: tuple[dict[str, Any], ...] = ()
 
     @property
     def input_range(self) -> list[list[float]]:
@@ -1005,6 +1261,9 @@ class CheckReport:
         out["fourbars"] = list(self.fourbars)
         if self.dynamics is not None:
             out["dynamics"] = self.dynamics
+        out["sliders"] = list(self.sliders)
+        out["assembly_gaps"] = self.assembly_gaps
+        out["warnings"] = list(self.warnings)
         finite: dict[str, Any] = _finite(out)
         return finite
 
@@ -1031,6 +1290,8 @@ def _finite(obj: Any) -> Any:
 def _loop_entry(mech: Mechanism, names: tuple[str, ...], lp: FourBar, facts: dict[str, Any]) -> dict[str, Any]:
     """An entry of ``CheckReport.fourbars``: joints, lengths, links, Grashof type and input of a loop, and ``facts``."""
     kind, detail = grashof(lp)
+    if lp.links[0] not in {d.link for d in mech.drivers} and "input_turns_fully" in facts:
+        detail = _moved_loop_detail(lp, kind, detail, facts["input_turns_fully"])
     entry: dict[str, Any] = {
         "joints": [names[lp.crank_pivot], names[lp.crank_tip], names[lp.rocker_tip], names[lp.rocker_pivot]],
         "lengths": {"ground": lp.ground, "crank": lp.crank, "coupler": lp.coupler, "rocker": lp.rocker},
@@ -1044,6 +1305,24 @@ def _loop_entry(mech: Mechanism, names: tuple[str, ...], lp: FourBar, facts: dic
         },
     }
     return entry | facts
+
+
+def _moved_loop_detail(lp: FourBar, kind: str, detail: str, turns: bool) -> str:
+    """The Grashof description of a loop whose input link is moved by the rest of the mechanism, not a driver.
+
+    Its lengths say what its input side could do; what it does is what the mechanism makes it
+    do: ``turns`` whether it turns fully over the driver's sweep.
+    """
+    by_lengths = {
+        "crank": "crank-rocker by its lengths (the input side is the shortest link)",
+        "rocker": "rocker-crank by its lengths (the output side is the shortest link)",
+        "ground": "double crank by its lengths (the ground is the shortest link)",
+    }
+    lengths = {"ground": lp.ground, "crank": lp.crank, "coupler": lp.coupler, "rocker": lp.rocker}
+    shortest = min(lengths, key=lambda k: lengths[k])
+    base = by_lengths.get(shortest, detail) if kind in ("crank-rocker", "double-crank") else detail
+    motion = "turns fully" if turns else "only rocks"
+    return f"{base}; its input link '{lp.links[0]}' {motion} here"
 
 
 def _first_loop(entries: list[dict[str, Any]]) -> dict[str, Any]:
@@ -1085,13 +1364,13 @@ def check(mech: Mechanism) -> CheckReport:
     internal = [_assembly_intervals(mech, i, params) for i in range(len(mech.drivers))]
     pose_values = {d.name: float(params.pose_inputs[i, 0] / factors[i]) for i, d in enumerate(mech.drivers)}
     loops = fourbar_loops(mech, params)
-    dead: dict[str, list[dict[str, Any]]] = {}
-    facts: dict[int, dict[str, Any]] = {}
-    for i, d in enumerate(mech.drivers):
-        mine = [(k, lp) for k, lp in enumerate(loops) if lp.driver == i]
-        dead[d.name], f = _driver_checks(mech, params, i, internal[i], mine)
-        facts.update(f)
+    dead, facts, sliders = _sweep_drivers(mech, params, internal, loops)
     entries = [_loop_entry(mech, names, lp, facts.get(k, {})) for k, lp in enumerate(loops)]
+    ranges = {
+        d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
+        for i, d in enumerate(mech.drivers)
+    }
+    dynamics = peak_loads(mech, params) if mech.has_dynamics else None
     return CheckReport(
         name=mech.name,
         dof=plan.dof,
@@ -1101,20 +1380,82 @@ def check(mech: Mechanism) -> CheckReport:
             j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i]} for i, j in enumerate(plan.sign_joints)
         },
         mirror_links=plan.mirror_links,
-        input_ranges={
-            d.name: [[float(s / factors[i]), float(e / factors[i])] for s, e in internal[i]]
-            for i, d in enumerate(mech.drivers)
-        },
+        input_ranges=ranges,
         units={"length": mech.length_unit, "angle": mech.angle_unit},
         fourbars=tuple(entries),
         dead_points=dead,
         held_at={d.name: {k: v for k, v in pose_values.items() if k != d.name} for d in mech.drivers},
         input_units={d.name: d.input_unit(mech) for d in mech.drivers},
-        dynamics=peak_loads(mech) if mech.has_dynamics else None,
+        dynamics=dynamics,
         closed_form_joints=tuple(j for i, j in enumerate(names) if i not in plan.numerical),
         numerical_joints=tuple(names[i] for i in plan.numerical),
+        sliders=tuple(sliders),
+        assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
+        warnings=tuple(_warnings(entries, dynamics)),
         **_first_loop(entries),
     )
+
+
+def _sweep_drivers(
+    mech: Mechanism, params: Params, internal: list[list[list[float]]], loops: list[FourBar]
+) -> tuple[dict[str, list[dict[str, Any]]], dict[int, dict[str, Any]], list[dict[str, Any]]]:
+    """Each driver's sweep (:func:`_driver_checks`): dead points, loop facts, and the sliders it moves."""
+    lines = slider_lines(mech)
+    dead: dict[str, list[dict[str, Any]]] = {}
+    facts: dict[int, dict[str, Any]] = {}
+    sliders: list[dict[str, Any]] = []
+    for i, d in enumerate(mech.drivers):
+        mine = [(k, lp) for k, lp in enumerate(loops) if lp.driver == i]
+        dead[d.name], f, sf = _driver_checks(mech, params, i, internal[i], mine, lines)
+        facts.update(f)
+        sliders += [x for x in sf if x["stroke"] is not None and x["stroke"] > 1e-12]
+    return dead, facts, sliders
+
+
+def assembly_gaps(ranges: list[list[float]], angle_to_rad: float) -> list[list[float]]:
+    """Where an angle driver does not assemble: the open intervals between its ``ranges``, on the turn.
+
+    ``ranges`` as :func:`input_range` gives them (file units); each gap starts in [0, 1 turn).
+
+    >>> assembly_gaps([[-341.593352, 4.792542]], math.pi / 180)
+    [[4.792542, 18.406648]]
+    >>> assembly_gaps([[0.0, 360.0]], math.pi / 180), assembly_gaps([], math.pi / 180)
+    ([], [[0.0, 360.0]])
+    """
+    turn = 2 * math.pi / angle_to_rad
+    if not ranges:
+        return [[0.0, turn]]
+    spans = sorted(ranges)
+    gaps = []
+    for (_, end), (start, _) in zip(spans, [*spans[1:], [spans[0][0] + turn, 0.0]], strict=True):
+        if start - end > 1e-9 * turn:
+            a = math.fmod(end, turn) + (turn if end < 0 else 0.0)
+            gaps.append([round(a, 12), round(a + start - end, 12)])
+    return sorted(gaps)
+
+
+def _warnings(entries: list[dict[str, Any]], dynamics: Mapping[str, Any] | None) -> list[dict[str, Any]]:
+    """Transmission angles outside [MIN, 180 - MIN] (:data:`MIN_TRANSMISSION`); efforts peaking near a toggle."""
+    out = []
+    for k, lp in enumerate(entries):
+        ta = lp.get("transmission_angle") or {}
+        if ta.get("min") is not None and min(ta["min"], 180.0 - ta["max"]) < MIN_TRANSMISSION:
+            out.append(
+                {
+                    "kind": "transmission-angle",
+                    "loop": k,
+                    "joints": lp["joints"],
+                    "min": ta["min"],
+                    "max": ta["max"],
+                    "limit": MIN_TRANSMISSION,
+                }
+            )
+    for key in ("peak_driver_torque", "peak_driver_force"):
+        for name, pk in ((dynamics or {}).get(key) or {}).items():
+            tg = pk.get("toggle")
+            if tg and tg["angle"] < TOGGLE_ANGLE:
+                out.append({"kind": "toggle", "driver": name, "effort": key, "limit": TOGGLE_ANGLE} | pk)
+    return out
 
 
 # ---------------------------------------------------------------------- text
@@ -1163,7 +1504,9 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *_head_lines(rep, name if name is not None else str(rep.get("name") or "")),
         *_range_lines(rep, fmt),
         *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
+        *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
+        *(_warning_line(w, fmt) for w in rep.get("warnings") or []),
     ]
     return "\n".join(lines) + "\n"
 
@@ -1200,10 +1543,14 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
     held = rep.get("held_at") or {}
     dead_points = rep.get("dead_points") or {}
     lines = []
+    gaps = rep.get("assembly_gaps") or {}
     for driver, rng in (rep.get("input_ranges") or {}).items():
         text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
         unit = fmt.units.get(driver, "")
         line = f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else "")
+        if gaps.get(driver) and any(a < 0 for a, _ in rng):  # a range through 0: its gap reads best
+            but = ", ".join(f"({a:.6f}, {b:.6f})" for a, b in gaps[driver])
+            line = f"Assembles for {driver} in all but {but}" + (f" {unit}" if unit else "") + f" ({text})"
         if held.get(driver):
             line += " (" + ", ".join(f"{fmt.inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
         lines.append(line)
@@ -1293,6 +1640,52 @@ def _rocker_lines(lp: Mapping[str, Any], driver: str | None, rocker: str, fmt: _
             f"{_num(s['falling'], '.6f')} {unit} while it falls)"
         )
     return lines
+
+
+def _slider_lines_text(sl: Mapping[str, Any], fmt: _Text) -> list[str]:
+    """A slider on the frame: stroke, limit positions, time ratio, pressure angle (what its driver's sweep found)."""
+    driver, link, lu = sl["driver"], sl["link"], f" {fmt.length}" if fmt.length else ""
+    lines = [
+        f"Slider {sl['slider']} ('{link}' on the frame, joint {sl['joint']}), moved by {driver}: "
+        f"stroke {_num(sl['stroke'], '.6f')}{lu}"
+    ]
+    lims = sl.get("limit_positions") or []
+    if lims:
+        lines.append(f"  Limit positions of {link} (its velocity is zero; position along its line from the pose's):")
+        lines += [
+            f"    {fmt.inp(driver, lim['input'])}: {link} at {_num(lim['position'], '.6f')}{lu} ({lim['extreme']})"
+            for lim in lims
+        ]
+    if sl.get("time_ratio") is not None:
+        t, unit = sl["input_travel"], fmt.units.get(driver, "")
+        lines.append(
+            f"  Time ratio {sl['time_ratio']:.6f} at constant input speed ({driver} travels "
+            f"{_num(t['rising'], '.6f')} {unit} while {link} advances, {_num(t['falling'], '.6f')} {unit} "
+            "while it returns)"
+        )
+    pa = sl.get("pressure_angle")
+    if pa:
+        lines.append(
+            f"  Pressure angle (between rod '{pa['rod']}' and the slide): max {pa['max']:.4f}° at "
+            f"{fmt.inp(driver, pa['max_at'])}, min {pa['min']:.4f}° at {fmt.inp(driver, pa['min_at'])}"
+        )
+    return lines
+
+
+def _warning_line(w: Mapping[str, Any], fmt: _Text) -> str:
+    """One warning of the report, for people."""
+    if w["kind"] == "transmission-angle":
+        return (
+            f"Warning: the transmission angle of loop {'-'.join(w['joints'])} leaves [{w['limit']:g}°, "
+            f"{180 - w['limit']:g}°] (min {w['min']:.4f}°, max {w['max']:.4f}°): there the coupler pushes the "
+            "output mostly into its bearing"
+        )
+    tg = w["toggle"]
+    what, unit = ("torque", "N*m") if w["effort"] == "peak_driver_torque" else ("force", "N")
+    return (
+        f"Warning: the driver {what} of {w['driver']} peaks at {_num(w['value'])} {unit} at {fmt.where(w['at'])}, "
+        f"{tg['angle']:.4f}° (less than {w['limit']:g}°) from the toggle where {tg.get('detail', tg['joint'])}"
+    )
 
 
 def _dynamics_lines(dyn: Mapping[str, Any] | None, fmt: _Text) -> list[str]:

@@ -355,6 +355,18 @@ def _plot_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--modes", action="store_true", help="every assembly mode at --at (default: the pose's input)")
     p.add_argument("--mirrors", action="store_true", help="with --modes: also flip links of three or more joints")
     p.add_argument(
+        "--size",
+        metavar="W[xH]",
+        help="the picture's size in pixels: W wide (the height follows the drawing), or W x H exactly "
+        "(default: 1200 px wide, 640 px a panel with --modes)",
+    )
+    p.add_argument(
+        "--dpi",
+        metavar="N",
+        help="pixels per inch (default: 200): text and lines are sized in points, so a larger N draws them "
+        "larger in a picture of the same --size",
+    )
+    p.add_argument(
         "--quantity",
         "-q",
         action="append",
@@ -437,6 +449,47 @@ def _frames(text: str) -> int:
     if not 2 <= n <= MAX_FRAMES:
         raise InputError(f"--frames: expected 2 to {MAX_FRAMES} frames, got {n}")
     return n
+
+
+#: plot --dpi: the range taken (the default is the drawing's, ``viz.draw.DPI``)
+MIN_DPI, MAX_DPI = 10.0, 1200.0
+#: plot --size: each side in pixels, and the most pixels of one picture
+MIN_SIDE, MAX_SIDE, MAX_PIXELS = 16, 20_000, 100_000_000
+
+
+def _dpi(text: str | None) -> dict[str, float]:
+    """``plot --dpi``: ``{"dpi": pixels per inch}``, or nothing for the drawing's default.
+
+    >>> _dpi(None), _dpi("96")
+    ({}, {'dpi': 96.0})
+    """
+    if text is None:
+        return {}
+    v = _one_number(text, "--dpi")
+    if not MIN_DPI <= v <= MAX_DPI:
+        raise InputError(f"--dpi: expected {MIN_DPI:g} to {MAX_DPI:g} pixels per inch, got {shorten(text)}")
+    return {"dpi": v}
+
+
+def _size(text: str | None) -> tuple[int, int | None] | None:
+    """``plot --size W[xH]``: (width, height or None) in pixels, or None for the default size.
+
+    >>> _size("1600"), _size("1600x900"), _size(None)
+    ((1600, None), (1600, 900), None)
+    """
+    if text is None:
+        return None
+    parts = text.lower().replace("×", "x").split("x")
+    if len(parts) > 2 or not all(p.strip().isdigit() for p in parts):
+        raise InputError(
+            f"--size: expected W or WxH in whole pixels (e.g. 1600 or 1600x900), got {shorten(repr(text))}"
+        )
+    sides = [int(p) for p in parts]
+    if not all(MIN_SIDE <= v <= MAX_SIDE for v in sides):
+        raise InputError(f"--size: each side must be {MIN_SIDE} to {MAX_SIDE} pixels, got {shorten(text)}")
+    if len(sides) == 2 and sides[0] * sides[1] > MAX_PIXELS:
+        raise InputError(f"--size: at most {MAX_PIXELS:,} pixels in all, got {shorten(text)}")
+    return (sides[0], sides[1] if len(sides) == 2 else None)
 
 
 def _fps(text: str) -> float:
@@ -897,6 +950,7 @@ def _plot(args: argparse.Namespace) -> int:
     from .viz import draw
 
     _suffix(args.output, (".png", ".svg", ".pdf"))
+    picture: dict[str, Any] = {"pixels": _size(args.size), **_dpi(args.dpi)}
     mech = lk.load(args.file)
     if args.modes and args.quantity:
         raise InputError("--modes and --quantity: give one of them")
@@ -913,7 +967,8 @@ def _plot(args: argparse.Namespace) -> int:
             if any(len(v) != 1 for v in given.values()):
                 raise InputError("--at: one value per driver with --modes")
             at = {k: v[0] for k, v in given.items()}
-        fig = draw.modes_figure(mech, at, mirrors=args.mirrors)
+        fig = draw.modes_figure(mech, at, mirrors=args.mirrors, **picture)
+        _check_pixels(fig)
         draw.save_figure(fig, args.output)
         return 0
     res = lk.analyze(mech, _sweep(mech, args.angles))
@@ -922,15 +977,27 @@ def _plot(args: argparse.Namespace) -> int:
 
         scene = build_scene(res)
         groups = [_quantities(res.catalogue, item) for item in args.quantity]
-        fig = draw.quantities_figure(scene, groups)
+        fig = draw.quantities_figure(scene, groups, **picture)
+        _check_pixels(fig)
         draw.save_figure(fig, args.output)
         return 0
     poses = None
     if args.at:
         poses = lk.analyze(mech, {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()})
-    fig = draw.mechanism_figure(res, poses)
+    fig = draw.mechanism_figure(res, poses, **picture)
+    _check_pixels(fig)
     draw.save_figure(fig, args.output, fig.axes[0])
     return 0
+
+
+def _check_pixels(fig: Any) -> None:
+    """Refuse a picture of more than :data:`MAX_PIXELS` pixels (a large --dpi, or --size W on a tall drawing)."""
+    w, h = (float(v) * fig.dpi for v in fig.get_size_inches())
+    if w * h > MAX_PIXELS or max(w, h) > MAX_SIDE:
+        raise InputError(
+            f"the picture would be {w:.0f} x {h:.0f} pixels, more than {MAX_SIDE} a side or {MAX_PIXELS:,} in all: "
+            "give a smaller --size or --dpi"
+        )
 
 
 def _quantities(catalogue: Catalogue, item: str) -> list[str]:

@@ -53,6 +53,27 @@ BACKGROUND = "#ffffff"
 MAX_MODE_PANELS = 64
 #: PNG metadata key holding the map from file units to pixels (see :func:`save_figure`)
 TRANSFORM_KEY = "linkagekit:transform"
+#: pixels per inch of a figure: a 6-inch drawing is 1200 px wide (text and lines are sized in points)
+DPI = 200.0
+
+
+def figure_inches(
+    width: float, height: float, dpi: float = DPI, pixels: tuple[int, int | None] | None = None
+) -> tuple[float, float]:
+    """The size in inches of a figure whose natural size is ``width`` x ``height`` inches.
+
+    ``pixels`` (``(W, H)`` or ``(W, None)``) asks for an exact size in pixels at ``dpi``:
+    ``W`` x ``H``, or ``W`` wide with the natural aspect.  Without it, the natural size.
+
+    >>> figure_inches(6.0, 3.0, 200.0, (1000, None))
+    (5.0, 2.5)
+    >>> figure_inches(6.0, 3.0, 100.0, (800, 600))
+    (8.0, 6.0)
+    """
+    if pixels is None:
+        return width, height
+    w, h = pixels
+    return w / dpi, (h / dpi if h is not None else w / dpi * height / width)
 
 
 def _t(text: str) -> str:
@@ -409,24 +430,34 @@ def plot_quantities(ax: Axes, res: Result | Scene, names: Sequence[str]) -> Axes
     return ax
 
 
-def mechanism_figure(res: Result, poses: Result | None = None, size: float = 6.0) -> Figure:
+def mechanism_figure(
+    res: Result,
+    poses: Result | None = None,
+    size: float = 6.0,
+    dpi: float = DPI,
+    pixels: tuple[int, int | None] | None = None,
+) -> Figure:
     """A figure of the mechanism with the paths of its joints over the sweep ``res``.
 
     The mechanism is drawn at each sample of ``poses`` (a result at a few inputs; earlier
-    ones faded), or at the reference pose's input when it is in the sweep (else the first
-    sample that assembles).
+    ones faded), by default at the reference pose's own input, whether or not the sweep
+    passes through it (else, where the pose's input does not assemble, at the first sample
+    that does).  ``size`` is the width in inches, ``dpi`` the pixels per inch, ``pixels``
+    an exact size (:func:`figure_inches`).
     """
     sc = build_scene(res)
+    if poses is None:
+        poses = _at_pose(res.mechanism)
     pose_scene = build_scene(poses) if poses is not None else None
     bounds = sc.bounds
     if pose_scene is not None:
         b = pose_scene.bounds
         bounds = (min(bounds[0], b[0]), min(bounds[1], b[1]), max(bounds[2], b[2]), max(bounds[3], b[3]))
-    fig = Figure(figsize=(size, size * _aspect(sc)), dpi=100)
+    fig = Figure(figsize=figure_inches(size, size * _aspect(sc), dpi, pixels), dpi=dpi)
     ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
     Drawing(ax, sc, labels=False, curves=True)  # the curves (and the ground)
     if pose_scene is None:
-        shown, indices = sc, [_pose_sample(res, sc)]
+        shown, indices = sc, [_sample(sc, None)]
     else:
         shown, indices = pose_scene, list(range(pose_scene.n))
     for k, i in enumerate(indices):
@@ -492,15 +523,25 @@ def synthesis_figure(
     return fig
 
 
-def _pose_sample(res: Result, sc: Scene) -> int:
-    """The sample at the reference pose's input (nearest, when it assembles there), else the first assembled."""
-    mech = res.mechanism
-    z = np.stack([res.point(j) for j in mech.joint_names], axis=-1)
-    pose = np.array([mech.joints[j] for j in mech.joint_names])
-    with np.errstate(invalid="ignore"):
-        err = np.abs(z - pose).max(axis=-1)
-    near = np.flatnonzero(err <= 1e-6 * sc.size)  # NaN compares False
-    return int(near[0]) if near.size else _sample(sc, None)
+def pose_inputs(mech: Any) -> dict[str, float]:
+    """Each driver's input at the reference pose, in file units.
+
+    >>> import linkagekit as lk
+    >>> {k: round(v, 4) for k, v in pose_inputs(lk.load("examples/slider_crank.yaml")).items()}
+    {'crank': 53.1301}
+    """
+    from ..api import prepare
+
+    params = prepare(mech)
+    return {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
+
+
+def _at_pose(mech: Any) -> Result | None:
+    """The mechanism solved at its pose's own inputs (positions only), or None where it does not assemble there."""
+    from ..api import analyze
+
+    res = analyze(mech, {k: [v] for k, v in pose_inputs(mech).items()}, rates=False, dynamics=False)
+    return res if bool(np.all(res.assembled)) else None
 
 
 def _aspect(sc: Scene) -> float:
@@ -508,11 +549,20 @@ def _aspect(sc: Scene) -> float:
     return float(np.clip((y1 - y0) / max(x1 - x0, 1e-12), 0.4, 1.6))
 
 
-def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float = 3.2) -> Figure:
+def modes_figure(
+    mech: Any,
+    at: Any = None,
+    mirrors: bool = False,
+    size: float = 3.2,
+    dpi: float = DPI,
+    pixels: tuple[int, int | None] | None = None,
+) -> Figure:
     """Every distinct assembly mode at one input, side by side (as in the figures of seeds 000 and 004).
 
     Each panel is the mechanism in one mode (positions from :func:`linkagekit.modes`),
     titled with its signs (and a numerical group's mode index); the file's own mode is marked ``(pose)``.
+    Each panel is ``size`` inches wide (so the figure grows with the number of panels, up to
+    four a row), ``dpi`` pixels per inch; ``pixels`` an exact size of the whole figure.
     """
     from ..checks import modes as find_modes
 
@@ -532,7 +582,7 @@ def modes_figure(mech: Any, at: Any = None, mirrors: bool = False, size: float =
     cols = min(len(shown), 4)
     rows = math.ceil(len(shown) / cols)
     sc = _static_scene(mech, xy, found.input)
-    fig = Figure(figsize=(size * cols, size * rows * _aspect(sc) + 0.5), dpi=100)
+    fig = Figure(figsize=figure_inches(size * cols, size * rows * _aspect(sc) + 0.5, dpi, pixels), dpi=dpi)
     axes = fig.subplots(rows, cols, squeeze=False)
     for k, ax in enumerate(axes.ravel()):
         if k >= len(shown):
@@ -610,10 +660,19 @@ def _static_scene(mech: Any, xy: np.ndarray, inputs: dict[str, float]) -> Scene:
     )
 
 
-def quantities_figure(res: Result | Scene, groups: Sequence[Sequence[str]], size: float = 6.0) -> Figure:
-    """One plot per group of quantities (column names), stacked, against the first driver's input."""
+def quantities_figure(
+    res: Result | Scene,
+    groups: Sequence[Sequence[str]],
+    size: float = 6.0,
+    dpi: float = DPI,
+    pixels: tuple[int, int | None] | None = None,
+) -> Figure:
+    """One plot per group of quantities (column names), stacked, against the first driver's input.
+
+    ``size`` is the width in inches, ``dpi`` the pixels per inch, ``pixels`` an exact size (:func:`figure_inches`).
+    """
     sc = _scene(res)
-    fig = Figure(figsize=(size, 2.6 * len(groups) + 0.4), dpi=100)
+    fig = Figure(figsize=figure_inches(size, 2.6 * len(groups) + 0.4, dpi, pixels), dpi=dpi)
     axes = fig.subplots(len(groups), 1, squeeze=False)[:, 0]
     for ax, names in zip(axes, groups, strict=True):
         plot_quantities(ax, sc, names)
