@@ -1212,6 +1212,26 @@ CORPUS_CASES = {
     "yaml 1.2 numbers": Case("yaml12_numbers.yaml", ["analyze", "{}", "--at", "0", *J], codes=(0,)),
     "json with BOM": Case("bom.json", ["analyze", "{}", "--at", "0", *J], codes=(0,)),
     "yaml with BOM": Case("bom.yaml", ["analyze", "{}", "--at", "0", *J], codes=(0,)),
+    # issue 23: the numerical walk's reach, files that are not regular files, names, --angles counts
+    "class-3 group at 1e11 deg": Case(
+        None,
+        ["analyze", str(EXAMPLES / "triad_six_modes.yaml"), "--at", "1e11", *J],
+        codes=(0,),
+        out='"assembled": [false]',
+    ),
+    "class-3 group at 1e5 deg": Case(
+        None,
+        ["analyze", str(EXAMPLES / "triad_six_modes.yaml"), "--at", "1e5", *J],
+        codes=(0,),
+        out='"assembled": [false]',
+    ),
+    "/dev/zero as a mechanism file": Case(None, ["check", "/dev/zero", *J], expect=("not a regular file",)),
+    "right-to-left override in the name": Case(
+        "rtl_name.yaml", ["check", "{}"], expect=("name: a name with control characters (U+202E)",)
+    ),
+    "angles 0:100000:1 is 100001 samples": Case(
+        None, ["analyze", FOURBAR, "--angles", "0:100000:1", *J], expect=("100001 samples",), forbid=("e+05",)
+    ),
 }
 
 

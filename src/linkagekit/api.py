@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError, LinkageError
+from .errors import InputError, LinkageError, shorten
 from .forces import Forces, Kinematics, solve_forces
 from .model import Mechanism
 from .params import Body, LoadParams, Params, as_poses, compile
@@ -58,6 +58,7 @@ def prepare(mech: Mechanism, poses: ArrayLike | None = None, numerical: bool = F
         raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
     if poses is None:
         return _prepared(mech, numerical)
+    _real_poses(poses)
     return compile(mech, as_poses(mech, poses), make_plan(mech, numerical))
 
 
@@ -68,18 +69,43 @@ def _prepared(mech: Mechanism, numerical: bool = False) -> Params:
 
 
 # ---------------------------------------------------------------------- argument checks
-def _as_array(value: ArrayLike, what: str) -> np.ndarray:
+def _real_any(value: ArrayLike, what: str) -> np.ndarray:
+    """``value`` as an array as given (an ndarray is not copied), refused when complex.
+
+    Complex values would lose their imaginary part silently in a conversion to float.
+    """
     try:
-        arr = np.atleast_1d(np.asarray(value, dtype=float))
+        arr = np.asarray(value)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"{what}: expected numbers, got {value!r}") from None
+        raise InputError(f"{what}: expected numbers, got {shorten(repr(value))}") from None
+    if arr.dtype.kind == "c":
+        raise InputError(f"{what}: expected real numbers, got complex values")
+    return arr
+
+
+def _real(value: ArrayLike, what: str) -> np.ndarray:
+    """``value`` as a non-empty 1-D real array as given: nothing is converted or allocated yet."""
+    arr = np.atleast_1d(_real_any(value, what))
     if arr.ndim != 1:
         raise InputError(f"{what}: expected a 1-D array of values")
     if arr.size == 0:
         raise InputError(f"{what}: no values given")
-    if not np.all(np.isfinite(arr)) or np.any(np.abs(arr) > MAX_ABS):
-        raise InputError(f"{what}: values must be finite numbers of at most {MAX_ABS:g} in magnitude")
     return arr
+
+
+def _finite(arr: np.ndarray, what: str) -> np.ndarray:
+    """``arr`` (from :func:`_real`, its size checked) as finite floats of at most ``MAX_ABS`` in magnitude."""
+    try:
+        out = np.asarray(arr, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{what}: expected numbers, got {shorten(repr(arr))}") from None
+    if not np.all(np.isfinite(out)) or np.any(np.abs(out) > MAX_ABS):
+        raise InputError(f"{what}: values must be finite numbers of at most {MAX_ABS:g} in magnitude")
+    return out
+
+
+def _as_array(value: ArrayLike, what: str) -> np.ndarray:
+    return _finite(_real(value, what), what)
 
 
 def _per_driver(mech: Mechanism, given: Mapping[str, ArrayLike] | ArrayLike | None, what: str) -> dict[str, Any]:
@@ -99,10 +125,10 @@ def _per_driver(mech: Mechanism, given: Mapping[str, ArrayLike] | ArrayLike | No
 
 
 def _rate(value: ArrayLike, n: int, what: str) -> np.ndarray:
-    arr = _as_array(value, what)
+    arr = _real(value, what)
     if len(arr) not in (1, n):
         raise InputError(f"{what}: {len(arr)} values for {n} samples")
-    return np.broadcast_to(arr, (n,)).astype(float)
+    return np.broadcast_to(_finite(arr, what), (n,)).astype(float)
 
 
 def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, default: np.ndarray) -> np.ndarray:
@@ -123,10 +149,11 @@ def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, default
             except (TypeError, ValueError, OverflowError):
                 raise InputError(f"{what}: '{key}' needs a number, got {v!r}") from None
         return arr
+    raw = _real_any(value, what)
     try:
-        arr = np.asarray(value, dtype=float)
+        arr = np.asarray(raw, dtype=float)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"{what}: expected numbers, got {value!r}") from None
+        raise InputError(f"{what}: expected numbers, got {shorten(repr(value))}") from None
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim != 2 or arr.shape[0] != k or arr.shape[1] not in (1, n):
@@ -194,13 +221,28 @@ def _check_kinds(mech: Mechanism, o: Options) -> None:
 
 
 def _given_inputs(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None) -> tuple[dict[str, Any], int]:
-    """The inputs given per driver (1-D arrays), and the number of samples (the file's sweep's when none is given)."""
-    given = {k: _as_array(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
+    """The inputs given per driver (1-D arrays, as given), and the number of samples (default: the file's sweep's).
+
+    Nothing is converted here: :func:`request` checks the result's size first, then the values.
+    """
+    given = {k: _real(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
     n = max((len(v) for v in given.values()), default=0)
     for k, v in given.items():
         if len(v) not in (1, n):
             raise InputError(f"inputs: driver '{k}' has {len(v)} values but another has {n}; give equal lengths")
     return given, n if n else mech.drivers[0].sweep.count()
+
+
+def _real_poses(poses: ArrayLike | None) -> None:
+    """Refuse complex poses (their imaginary part would be dropped); the rest is checked by ``as_poses``."""
+    if poses is None:
+        return
+    try:
+        kind = np.asarray(poses).dtype.kind
+    except (TypeError, ValueError, OverflowError):  # not an array of numbers: as_poses says so
+        return
+    if kind == "c":
+        raise InputError("poses: expected real coordinates (n_designs, n_joints, 2), got complex values")
 
 
 def _n_designs(mech: Mechanism, poses: ArrayLike | None, n: int, rates: bool) -> int:
@@ -283,8 +325,10 @@ def _modes(params: Params, o: Options, n: int) -> tuple[np.ndarray | None, np.nd
 def request(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None, o: Options) -> Request:
     """Check and normalise the arguments of :func:`analyze` (each error names its argument)."""
     _check_kinds(mech, o)
+    _real_poses(o.poses)
     given, n = _given_inputs(mech, inputs)
-    D = _n_designs(mech, o.poses, n, o.rates)
+    D = _n_designs(mech, o.poses, n, o.rates)  # the size first: nothing of that size is built before
+    given = {k: _finite(v, f"inputs[{k}]") for k, v in given.items()}
     poses = None if o.poses is None else as_poses(mech, o.poses)
     params = prepare(mech, poses, numerical=o.method == "numerical")
     values, q = _input_values(mech, params, given, n, D, poses is not None)
@@ -397,6 +441,7 @@ def analyze_chunks(
     bounded by the chunk (``designs`` designs per chunk; default: about 2^17 design-samples
     with rates, 2^20 positions only) whatever the number of designs.
     """
+    _real_poses(poses)
     arr = as_poses(mech, poses)
     if designs is None:
         n = mech.drivers[0].sweep.count()

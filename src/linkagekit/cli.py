@@ -140,13 +140,14 @@ def _range(text: str, what: str) -> np.ndarray:
     start, stop, step = (_one_number(p, what) for p in parts)
     if step == 0 or (stop - start) * step < 0:
         raise InputError(f"{what}: STEP must be non-zero and go from START toward STOP, got {shorten(repr(text))}")
-    count = (stop - start) / step
-    if count > MAX_SAMPLES:
+    steps = (stop - start) / step  # may overflow to inf: counted only when not far above the limit
+    n = math.floor(steps * (1 + 1e-12) + 1e-9) + 1 if steps <= 10 * MAX_SAMPLES else None
+    if n is None or n > MAX_SAMPLES:
+        many = f"over {10 * MAX_SAMPLES}" if n is None else str(n)
         raise InputError(
-            f"{what}: {count:.3g} samples, more than the command line takes ({MAX_SAMPLES}); "
+            f"{what}: {many} samples, more than the command line takes ({MAX_SAMPLES}); "
             "use a coarser STEP, or the Python API (lk.analyze_chunks) for more"
         )
-    n = math.floor(count * (1 + 1e-12) + 1e-9) + 1
     return start + step * np.arange(n)
 
 
@@ -855,7 +856,7 @@ def _analyze(args: argparse.Namespace) -> int:
     inputs = _inputs(mech, args.at, args.angles)
     if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
         raise InputError(
-            f"{args.file}: the file's sweep has {mech.drivers[0].sweep.count():.3g} samples, more than the "
+            f"{args.file}: the file's sweep has {mech.drivers[0].sweep.count()} samples, more than the "
             f"command line takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
         )
     res = lk.analyze(
@@ -935,7 +936,7 @@ def _sweep(mech: Mechanism, angles: list[str] | None) -> dict[str, np.ndarray] |
     inputs = _inputs(mech, None, angles)
     if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
         raise InputError(
-            f"the file's sweep has {mech.drivers[0].sweep.count():.3g} samples, more than the command line "
+            f"the file's sweep has {mech.drivers[0].sweep.count()} samples, more than the command line "
             f"takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
         )
     return inputs

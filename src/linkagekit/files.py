@@ -29,7 +29,7 @@ import os
 import re
 import secrets
 import stat
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from functools import cache
 from pathlib import Path
 from typing import Any, Literal
@@ -243,13 +243,69 @@ def _path(path: Any, what: str) -> Path:
     return Path(path)
 
 
+def read_regular_file(p: Path, limit: int, what: str, fail: Callable[[str], LinkageError]) -> bytes:
+    """At most ``limit + 1`` bytes of the regular file ``p``, or ``fail(message)`` raised.
+
+    The file is opened without blocking (a FIFO does not wait for a writer) and checked to be
+    a regular file before anything is read: a directory, a device (``/dev/zero``), a FIFO or a
+    socket is refused by name. At most ``limit + 1`` bytes are read, so the caller can tell a
+    file over its limit (even one that grows while it is read) without holding more.
+
+    >>> read_regular_file(Path("/dev/zero"), 10, "mechanism file", InputError)
+    Traceback (most recent call last):
+    ...
+    linkagekit.errors.InputError: not a regular file (a character device): not a mechanism file
+    """
+    try:
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    except FileNotFoundError:
+        raise fail("no such file") from None
+    except IsADirectoryError:
+        raise fail(f"is a directory, not a {what}") from None
+    except OSError as exc:
+        raise fail(f"cannot read: {exc.strerror or exc}") from None
+    except ValueError as exc:  # e.g. a path the system cannot represent
+        raise fail(f"not a usable path: {exc}") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        if stat.S_ISDIR(mode):
+            raise fail(f"is a directory, not a {what}")
+        raise fail(f"not a regular file ({_file_kind(mode)}): not a {what}")
+    with os.fdopen(fd, "rb") as f:
+        with contextlib.suppress(OSError, AttributeError):
+            os.set_blocking(fd, True)
+        try:
+            return f.read(limit + 1)
+        except OSError as exc:
+            raise fail(f"cannot read: {exc.strerror or exc}") from None
+
+
+def _file_kind(mode: int) -> str:
+    """What a file that is not a regular file is: a character device, a FIFO, ..."""
+    for test, name in (
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return name
+    return "a special file"
+
+
+def _mib(n: int) -> str:
+    """A byte count as the limits table writes it: ``4 MiB``."""
+    return f"{n / 2**20:g} MiB"
+
+
 def load(path: str | Path) -> Mechanism:
     """Read a mechanism file (YAML, or JSON when the suffix is ``.json``).  Reading never executes anything.
 
     Parameters
     ----------
     path : str or Path
-        The file.
+        The file: a regular file of at most :data:`MAX_FILE_BYTES` bytes.
 
     Returns
     -------
@@ -262,23 +318,19 @@ def load(path: str | Path) -> Mechanism:
         With a message naming the file and the offending key.
     """
     p = _path(path, "load")
+
+    def fail(message: str) -> MechanismFileError:
+        return MechanismFileError(f"{p}: {message}")
+
+    data = read_regular_file(p, MAX_FILE_BYTES, "mechanism file", fail)
+    if len(data) > MAX_FILE_BYTES:
+        raise fail(f"more than {MAX_FILE_BYTES} bytes ({_mib(MAX_FILE_BYTES)}), more than a mechanism file may have")
     try:
-        size = p.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise MechanismFileError(f"{p}: {size} bytes, more than a mechanism file may have ({MAX_FILE_BYTES})")
-        text = p.read_text(encoding="utf-8-sig")  # a byte-order mark is dropped, in JSON as in YAML
-    except FileNotFoundError:
-        raise MechanismFileError(f"{p}: no such file") from None
-    except IsADirectoryError:
-        raise MechanismFileError(f"{p}: is a directory, not a mechanism file") from None
+        text = data.decode("utf-8-sig")  # a byte-order mark is dropped, in JSON as in YAML
     except UnicodeDecodeError as exc:
-        raise MechanismFileError(f"{p}: not UTF-8 text (byte {exc.start})") from None
-    except OSError as exc:
-        raise MechanismFileError(f"{p}: cannot read: {exc.strerror or exc}") from None
-    except ValueError as exc:  # e.g. a NUL byte in the path
-        raise MechanismFileError(f"{shorten(str(p))}: not a usable path: {exc}") from None
-    data = _json_data(text, str(p)) if p.suffix.lower() == ".json" else _yaml_data(text, str(p))
-    return Mechanism.from_dict(data, source=str(p))
+        raise fail(f"not UTF-8 text (byte {exc.start})") from None
+    parsed = _json_data(text, str(p)) if p.suffix.lower() == ".json" else _yaml_data(text, str(p))
+    return Mechanism.from_dict(parsed, source=str(p))
 
 
 # ---------------------------------------------------------------------- writing

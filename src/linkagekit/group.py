@@ -80,6 +80,11 @@ RESTARTS = 16
 COARSE_SAMPLES = 256
 #: ... with at least this stride
 COARSE_STRIDE_MIN = 4
+#: the walk goes at most this many turns of an angle driver from the pose's input (3600 sub-steps of
+#: 1 degree, a few CPU-seconds): a sample farther away is not reached (NaN, not assembled)
+WALK_TURNS = 10
+#: ... in radians
+WALK_REACH = 2 * np.pi * WALK_TURNS
 
 
 @dataclass(frozen=True)
@@ -229,7 +234,7 @@ class Group(Step):
         K_all = z[list(self.known)] if self.known else np.zeros((0, D, n), complex)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
-        for half in _walks(k, D, n):
+        for half in _walks(k, D, n, self.angular):
             state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
             if len(half) < 4 * COARSE_STRIDE_MIN:
                 self._walk(half, state, K_all, out, ref_sign, conv0, nums, dn)
@@ -505,15 +510,24 @@ def _take(dn: Nums, cols: np.ndarray) -> Nums:
     return tuple(L[cols] for L in lengths), tuple(tuple(r[cols] for r in rho) for rho in rhos)
 
 
-def _walks(k: Kin, D: int, n: int) -> list[np.ndarray]:
+def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.ndarray]:
     """The sample indices in walking order: from the pose's input up, then from it down.
 
     The samples are sorted by the driver input that varies most (the first design's inputs),
     measured from the pose's input as given (not modulo a turn: a class-3 group may come back
     in another mode after a full turn of its crank, and the walk follows the motion); inputs
-    equal to the pose's go up. Over a
+    equal to the pose's go up. When that driver is an angle (``angular``), samples more than
+    ``WALK_REACH`` from the pose's input are left out: never walked to, they stay NaN (not
+    reached), so the walk's length is bounded whatever the inputs. Over a
     design axis every design walks in this one order from its own pose (the first
     sub-step reaches the nearest sample by homotopy), so the walk stays continuous per design.
+
+    >>> import numpy as np
+    >>> from linkagekit.steps import Kin
+    >>> q = np.radians([[[10.0, -20.0, 5.0, 7200.0, -7200.0]]])
+    >>> k = Kin(np.zeros((0, 1, 5), complex), {}, np.zeros((0, 1, 5)), q, None, None, 0.0, np.zeros((1, 1)))
+    >>> [w.tolist() for w in _walks(k, 1, 5, (True,))]
+    [[2, 0], [1]]
     """
     if k.q.shape[0] == 0 or n == 0:
         return [np.arange(n)]
@@ -522,6 +536,8 @@ def _walks(k: Kin, D: int, n: int) -> list[np.ndarray]:
     d = int(np.argmax(np.ptp(q, axis=1)))
     key = q[d] - q0[d]
     order = np.argsort(key, kind="stable")
+    if d < len(angular) and angular[d]:
+        order = order[np.abs(key[order]) <= WALK_REACH]
     up = order[key[order] >= 0]
     down = order[key[order] < 0][::-1]
     return [w for w in (up, down) if len(w)]

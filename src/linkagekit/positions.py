@@ -33,7 +33,7 @@ import numpy as np
 
 from .errors import MechanismFileError
 from .geometry import ASSEMBLY_RTOL, NAN_POINT
-from .group import Group
+from .group import WALK_REACH, Group
 from .params import Params, all_sign_combinations
 from .steps import Kin
 
@@ -188,8 +188,10 @@ def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     """The inputs with the samples the numerical walk needs added: (inputs, columns of the given ones).
 
     Along the driver that moves most, from the pose's input to every sample, at most ``WALK_STEP``
-    apart; the other drivers are interpolated along it. None when nothing needs adding, or when
-    the inputs carry a design axis.
+    apart; the other drivers are interpolated along it. An angle sample more than
+    :data:`linkagekit.group.WALK_REACH` from the pose's input gets no added samples (the walk
+    never goes there: it is not reached), so at most ``2 WALK_REACH / WALK_STEP`` are added.
+    None when nothing needs adding, or when the inputs carry a design axis.
     """
     n = q.shape[-1]
     if q.ndim != 3 or q.shape[1] != 1 or n == 0 or q.shape[0] == 0:
@@ -197,15 +199,19 @@ def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     q0 = params.pose_inputs[:, 0]
     key = np.concatenate([q0[:, None], q[:, 0, :]], axis=1)  # the pose's input first
     d = int(np.argmax(np.ptp(key, axis=1)))
-    x = key[d]
     angular = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
-    step = WALK_STEP if d < len(angular) and angular[d] else max(float(np.ptp(x)) / 360.0, 1e-300)
+    if d < len(angular) and angular[d]:
+        key = key[:, np.abs(key[d] - key[d, 0]) <= WALK_REACH]  # the samples the walk goes to
+        step = WALK_STEP
+    else:
+        step = max(float(np.ptp(key[d])) / 360.0, 1e-300)
+    x = key[d]
     order = np.unique(x)
     added = [
         np.linspace(a, b, int(np.ceil((b - a) / step)) + 1)[1:-1] for a, b in zip(order[:-1], order[1:], strict=True)
     ]
     extra = np.concatenate(added) if added else np.zeros(0)
-    if not len(extra) or len(extra) > 64 * n + 100_000:
+    if not len(extra):
         return None
     srt = np.argsort(x, kind="stable")
     rows = [extra if i == d else np.interp(extra, x[srt], key[i][srt]) for i in range(q.shape[0])]

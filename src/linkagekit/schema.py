@@ -48,6 +48,26 @@ def _name(value: Any) -> str:
     return value
 
 
+def _text(value: Any, what: str, allowed: str = "") -> str:
+    """Text a terminal may print as it is: no control or format character (U+202E, ESC, ...) but ``allowed``."""
+    if not isinstance(value, str):
+        raise ValueError(f"expected text, got {shorten(repr(value))}")
+    bad = next((c for c in value if not c.isprintable() and c not in allowed), None)
+    if bad is not None:
+        raise ValueError(f"{what} with control characters (U+{ord(bad):04X}): {shorten(repr(value))}")
+    return value
+
+
+def _title(value: Any) -> str:
+    """The mechanism's name: printable text, as joint names are (it is printed in titles)."""
+    return _text(value, "a name")
+
+
+def _description(value: Any) -> str:
+    """The free-text description: printable text over lines (newlines and tabs allowed)."""
+    return _text(value, "a description", "\n\t")
+
+
 def _index(value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise ValueError(f"expected a whole number (an index), got {shorten(repr(value))}")
@@ -58,6 +78,8 @@ Number = Annotated[float, BeforeValidator(_number)]
 Point = tuple[Number, Number]
 Name = Annotated[str, BeforeValidator(_name)]
 Index = Annotated[int, BeforeValidator(_index)]
+Title = Annotated[str, BeforeValidator(_title)]
+Description = Annotated[str, BeforeValidator(_description)]
 JointList = Annotated[list[Name], Field(min_length=1)]
 
 
@@ -115,8 +137,8 @@ class LoadSpec(_Strict):
 
 class FileSpec(_Strict):
     format: Literal["linkagekit/1"] = "linkagekit/1"
-    name: str = ""
-    description: str | None = None
+    name: Title = ""
+    description: Description | None = None
     units: UnitsSpec = UnitsSpec()
     joints: dict[Name, Point] = Field(min_length=1, max_length=MAX_JOINTS)
     links: dict[Name, JointList | LinkSpec] = Field(min_length=1, max_length=MAX_LINKS)

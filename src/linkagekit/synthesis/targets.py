@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, one_line, shorten
+from ..files import read_regular_file
 from ..units import LENGTH_UNITS
 
 #: the largest target file read, in bytes
@@ -372,18 +373,13 @@ def _check_points(points: Any, source: str) -> int:
 
 
 def _read_text(p: Path, name: str) -> str:
-    """The file's text (UTF-8, a byte-order mark dropped), or one clear error."""
-    try:
-        with p.open("rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
-    except FileNotFoundError:
-        raise _error(name, "no such file") from None
-    except IsADirectoryError:
-        raise _error(name, "is a directory, not a target file") from None
-    except OSError as exc:
-        raise _error(name, f"cannot read: {exc.strerror or exc}") from None
-    except ValueError as exc:  # e.g. a path the system cannot represent
-        raise _error(name, f"not a usable path: {exc}") from None
+    """The file's text (UTF-8, a byte-order mark dropped), or one clear error.
+
+    Read as a mechanism file is (:func:`linkagekit.files.read_regular_file`): a regular file
+    only (a FIFO, a device such as ``/dev/zero`` or a directory is refused before anything is
+    read), at most :data:`MAX_FILE_BYTES` bytes.
+    """
+    data = read_regular_file(p, MAX_FILE_BYTES, "target file", lambda message: _error(name, message))
     if len(data) > MAX_FILE_BYTES:
         raise _error(name, f"more than {MAX_FILE_BYTES} bytes (10 MB), more than a target file may have")
     if not data.strip():

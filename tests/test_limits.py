@@ -1,0 +1,312 @@
+"""Limits that keep hostile or extreme input from hanging or exhausting the machine (issue 23, items 1-3).
+
+* the numerical walk of a group goes at most ``group.WALK_TURNS`` turns of an angle driver
+  from the pose's input: a sample farther away is not reached (NaN, not assembled), in a
+  bounded CPU time, and a sample inside the reach is solved as before;
+* files are read through a regular-file check and a byte limit (``/dev/zero``, a FIFO, a
+  file over the limit: one line naming the file, never a hang or a memory error);
+* the Python API refuses complex values and checks sizes before converting anything; the
+  command line's ``--angles`` counts samples (not steps) against its limit.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+import linkagekit as lk
+from linkagekit.api import prepare
+from linkagekit.group import WALK_REACH, WALK_TURNS
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+TRIAD = ROOT / "examples" / "triad_six_modes.yaml"
+FOURBAR = ROOT / "examples" / "seed000_fourbar.yaml"
+
+#: CPU seconds a call may take before it counts as unbounded (generous: catches only the unbounded walk)
+CPU_BUDGET = 20.0
+
+
+def cpu(fn):
+    """(fn(), CPU seconds it took)."""
+    t = time.process_time()
+    out = fn()
+    return out, time.process_time() - t
+
+
+# ---------------------------------------------------------------------- 1. the numerical walk
+def test_walk_reach_is_ten_turns():
+    assert WALK_TURNS == 10
+    assert abs(WALK_REACH - 2 * math.pi * 10) <= 1e-12
+
+
+@pytest.mark.parametrize("at", [1e11, -1e11, 1e5, 1e12])
+def test_far_input_of_a_class3_group_is_not_reached_in_bounded_time(at):
+    """Before: 1e11 deg was a MemoryError (745 GiB of walk samples) and 1e5 deg took minutes."""
+    mech = lk.load(TRIAD)
+    res, spent = cpu(lambda: lk.analyze(mech, np.array([at, -30.0])))
+    assert res.assembled.tolist() == [False, True]
+    assert np.all(np.isnan(res.x("J1")[:1])) and np.all(np.isfinite(res.x("J1")[1:]))
+    assert spent < CPU_BUDGET
+
+
+def test_far_input_through_the_command_line_is_flagged(capsys):
+    from linkagekit.cli import main
+
+    assert main(["analyze", str(TRIAD), "--at", "1e11", "--format", "json"]) == 0
+    import json
+
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["assembled"] == [False]
+
+
+def test_walk_reach_boundary_numerical_fourbar():
+    """A crank-rocker forced onto the numerical group: inside the reach it agrees with the closed form
+    (1e-9 of its size) however many turns away; just outside, the sample is not reached."""
+    mech = lk.load(FOURBAR)
+    x0 = float(np.degrees(prepare(mech).pose_inputs[0, 0]))
+    reach = math.degrees(WALK_REACH)
+    inside = x0 + np.array([reach - 0.5, -reach + 0.5, 17.0, reach - 200.3])
+    outside = x0 + np.array([reach + 0.5, -reach - 0.5, 1e11])
+    x = np.concatenate([inside, outside])
+    num, spent = cpu(lambda: lk.analyze(mech, x, method="numerical", rates=False))
+    closed = lk.analyze(mech, x, rates=False)
+    assert closed.assembled.all()
+    assert num.assembled.tolist() == [True] * len(inside) + [False] * len(outside)
+    size = max(abs(p) for p in mech.joints.values())
+    for j in mech.joints:
+        got = num.x(j)[: len(inside)] + 1j * num.y(j)[: len(inside)]
+        want = closed.x(j)[: len(inside)] + 1j * closed.y(j)[: len(inside)]
+        assert np.max(np.abs(got - want)) <= 1e-9 * size, j
+    assert spent < CPU_BUDGET
+
+
+# ---------------------------------------------------------------------- 2. reading files
+def _hang_guard(seconds: float = 20.0):
+    """A SIGALRM that turns a hang into a failure (a FIFO opened for reading blocks for ever without care)."""
+    import contextlib
+    import signal
+
+    @contextlib.contextmanager
+    def guard():
+        def fire(signum, frame):
+            raise TimeoutError("no answer: the reader blocked")
+
+        old = signal.signal(signal.SIGALRM, fire)
+        signal.setitimer(signal.ITIMER_REAL, seconds)
+        try:
+            yield
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, old)
+
+    return guard()
+
+
+def _read_mechanism(path) -> str:
+    from linkagekit.errors import MechanismFileError
+
+    with _hang_guard(), pytest.raises(MechanismFileError) as exc:
+        lk.load(path)
+    return str(exc.value)
+
+
+def _read_targets(path) -> str:
+    from linkagekit.errors import InputError
+
+    with _hang_guard(), pytest.raises(InputError) as exc:
+        lk.read_targets(path)
+    return str(exc.value)
+
+
+@pytest.mark.skipif(not __import__("os").path.exists("/dev/zero"), reason="needs /dev/zero")
+def test_dev_zero_is_refused_before_reading():
+    """Before: read until memory ran out (internal error)."""
+    (msg_m, spent_m), (msg_t, spent_t) = (
+        cpu(lambda: _read_mechanism("/dev/zero")),
+        cpu(lambda: _read_targets("/dev/zero")),
+    )
+    assert msg_m == "/dev/zero: not a regular file (a character device): not a mechanism file"
+    assert msg_t == "/dev/zero: not a regular file (a character device): not a target file"
+    assert spent_m < 1.0 and spent_t < 1.0
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="needs FIFOs")
+@pytest.mark.parametrize("name", ["m.yaml", "t.csv"])
+def test_fifo_is_refused_without_waiting(tmp_path, name):
+    """Before: open() of a FIFO with no writer blocked for ever."""
+    import os
+
+    fifo = tmp_path / name
+    os.mkfifo(fifo)
+    msg = _read_mechanism(fifo) if name == "m.yaml" else _read_targets(fifo)
+    kind = "mechanism" if name == "m.yaml" else "target"
+    assert msg == f"{fifo}: not a regular file (a FIFO): not a {kind} file"
+
+
+def test_too_large_mechanism_file_says_so(tmp_path):
+    """Before: 'not a usable path' (the size error was caught as a ValueError)."""
+    from linkagekit.files import MAX_FILE_BYTES
+
+    big = tmp_path / "big.yaml"
+    big.write_bytes(b"#" * (MAX_FILE_BYTES + 1))
+    assert _read_mechanism(big) == f"{big}: more than 4194304 bytes (4 MiB), more than a mechanism file may have"
+    ok = tmp_path / "ok.yaml"  # exactly at the limit: read (and then refused for what it holds, not its size)
+    ok.write_bytes(b"#" * MAX_FILE_BYTES)
+    assert "bytes" not in _read_mechanism(ok)
+
+
+def test_cli_names_the_file_and_exits_2(tmp_path, capsys):
+    import os
+
+    from linkagekit.cli import main
+
+    fifo = tmp_path / "pipe.yaml"
+    os.mkfifo(fifo)
+    with _hang_guard():
+        assert main(["check", str(fifo)]) == 2
+        assert main(["check", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err == [
+        f"linkagekit: error: {fifo}: not a regular file (a FIFO): not a mechanism file",
+        f"linkagekit: error: {tmp_path}: is a directory, not a mechanism file",
+    ]
+
+
+def _with(key: str, value) -> dict:
+    import yaml
+
+    data = yaml.safe_load(FOURBAR.read_text(encoding="utf-8"))
+    data[key] = value
+    return data
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "code"),
+    [
+        ("name", "evil\u202etxt.exe", "U+202E"),
+        ("name", "clear\x1b[2Jscreen", "U+001B"),
+        ("name", "two\nlines", "U+000A"),
+        ("name", "zero\u200bwidth", "U+200B"),
+        ("description", "right-to-left \u202e mark", "U+202E"),
+        ("description", "bell \x07", "U+0007"),
+    ],
+)
+def test_mechanism_name_and_description_refuse_control_characters(key, value, code):
+    """Before: the name was printed raw to the terminal (joint names were already refused)."""
+    from linkagekit.errors import MechanismFileError
+
+    with pytest.raises(MechanismFileError) as exc:
+        lk.Mechanism.from_dict(_with(key, value), source="m.yaml")
+    msg = str(exc.value)
+    assert msg.startswith(f"m.yaml: {key}: a {'name' if key == 'name' else 'description'} with control characters")
+    assert code in msg and msg.isprintable()
+
+
+def test_joint_names_are_refused_alike():
+    from linkagekit.errors import MechanismFileError
+
+    data = _with("name", "ok")
+    data["joints"]["A\u202e"] = data["joints"].pop("A")
+    with pytest.raises(MechanismFileError, match="a name with control characters"):
+        lk.Mechanism.from_dict(data, source="m.yaml")
+
+
+def test_printable_names_and_multiline_descriptions_are_kept():
+    m = lk.Mechanism.from_dict(_with("description", "line one\n\tline two é ü 中"), source="m.yaml")
+    assert m.description == "line one\n\tline two é ü 中"
+    m = lk.Mechanism.from_dict(_with("name", "Vierfach-Gelenk ü (t = +1) 中"), source="m.yaml")
+    assert m.name == "Vierfach-Gelenk ü (t = +1) 中"
+
+
+# ---------------------------------------------------------------------- 3. the API and the command line
+def _pose(mech) -> np.ndarray:
+    return np.array([[p.real, p.imag] for p in mech.joints.values()])[None]
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"poses": "complex"},
+        {"inputs": np.array([10.0 + 1e-3j])},
+        {"inputs": {"crank": [10.0, 20.0 + 0j]}},
+        {"inputs": [0.0, 1.0], "speed": np.array([1.0 + 2j])},
+        {"inputs": [0.0], "acceleration": [3j]},
+        {"inputs": [0.0], "signs": np.array([1.0 + 1j, 1.0])},
+    ],
+)
+def test_complex_values_are_refused(kwargs):
+    """Before: the imaginary part was dropped silently (poses) or with a ComplexWarning."""
+    from linkagekit.errors import InputError
+
+    mech = lk.load(FOURBAR)
+    kw = dict(kwargs)
+    if kw.get("poses") == "complex":
+        kw["poses"] = _pose(mech) + 1j
+    inputs = kw.pop("inputs", None)
+    with pytest.raises(InputError, match="expected real .*, got complex values"):
+        lk.analyze(mech, inputs, **kw)
+    if "poses" in kw:
+        with pytest.raises(InputError, match="got complex values"):
+            next(lk.analyze_chunks(mech, None, poses=kw["poses"]))
+
+
+@pytest.mark.parametrize("dtype", [float, np.int64, np.float32, bool])
+def test_sizes_are_checked_before_converting(dtype):
+    """Before: MemoryError (the float conversion and isfinite of 10^11 values) before the size check."""
+    from linkagekit.errors import InputError
+
+    mech = lk.load(FOURBAR)
+    huge = np.broadcast_to(np.ones((), dtype), (10**11,))
+    (_, spent) = cpu(lambda: pytest.raises(InputError, lk.analyze, mech, {"crank": huge}))
+    with pytest.raises(InputError, match=r"100000000000 samples\), more than linkagekit.api.MAX_RESULT_BYTES"):
+        lk.analyze(mech, {"crank": huge})
+    with pytest.raises(InputError, match=r"speed\[crank\]: 100000000000 values for 2 samples"):
+        lk.analyze(mech, [0.0, 1.0], speed=huge)
+    assert spent < 1.0
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("0:100000:1", "100001 samples, more than the command line takes (100000)"),
+        ("0:1000000:1", "1000001 samples, more than the command line takes (100000)"),
+        ("0:1e12:1e-3", "over 1000000 samples, more than the command line takes (100000)"),
+        ("0:1:1e-300", "over 1000000 samples, more than the command line takes (100000)"),
+    ],
+)
+def test_angles_count_samples_against_the_limit(text, message):
+    """Before: 0:100000:1 (100,001 samples) was accepted, and refusals printed counts as 1e+05."""
+    from linkagekit.cli import _range
+    from linkagekit.errors import InputError
+
+    with pytest.raises(InputError) as exc:
+        _range(text, "--angles")
+    assert str(exc.value).startswith(f"--angles: {message}")
+
+
+def test_angles_at_the_limit_are_accepted():
+    from linkagekit.cli import MAX_SAMPLES, _range
+
+    x = _range("0:99999:1", "--angles")
+    assert len(x) == MAX_SAMPLES and x[0] == 0.0 and x[-1] == 99999.0
+    assert _range("0:360:0.5", "--angles").tolist() == [0.5 * i for i in range(721)]
+
+
+def test_file_sweep_over_the_limit_prints_a_whole_number(tmp_path, capsys):
+    from linkagekit.cli import main
+
+    f = tmp_path / "long.yaml"
+    f.write_text(
+        FOURBAR.read_text(encoding="utf-8").replace(
+            "angles: {start: 0, stop: 360, step: 1}", "angles: {start: 0, stop: 100000, step: 1}"
+        ),
+        encoding="utf-8",
+    )
+    assert "stop: 100000" in f.read_text(encoding="utf-8")
+    assert main(["analyze", str(f)]) == 2
+    assert main(["plot", str(f), "-o", str(tmp_path / "p.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("the file's sweep has 100001 samples, more than the command line takes (100000)") == 2
