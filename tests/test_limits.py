@@ -310,3 +310,21 @@ def test_file_sweep_over_the_limit_prints_a_whole_number(tmp_path, capsys):
     assert main(["plot", str(f), "-o", str(tmp_path / "p.png")]) == 2
     err = capsys.readouterr().err
     assert err.count("the file's sweep has 100001 samples, more than the command line takes (100000)") == 2
+
+
+def test_report_reads_the_source_again_under_the_same_guard(tmp_path):
+    """The page shows the file's text, read again after loading: a FIFO or device there gives None at once."""
+    import os
+
+    from linkagekit.cli import _source_text
+
+    src = tmp_path / "m.yaml"
+    src.write_text("name: x\n", encoding="utf-8")
+    assert _source_text(str(src)) == "name: x\n"
+    fifo = tmp_path / "fifo.yaml"
+    os.mkfifo(fifo)
+    assert _source_text(str(fifo)) is None  # does not wait for a writer
+    assert _source_text("/dev/zero") is None  # not read at all
+    big = tmp_path / "big.yaml"
+    big.write_bytes(b"#" * ((4 << 20) + 1))
+    assert _source_text(str(big)) is None

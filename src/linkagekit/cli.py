@@ -1062,13 +1062,26 @@ def _report(args: argparse.Namespace) -> int:
     _suffix(args.output, (".html", ".htm"))
     mech = lk.load(args.file)
     res = lk.analyze(mech, _sweep(mech, args.angles))
-    try:
-        with open(args.file, encoding="utf-8-sig") as fh:
-            source = fh.read()
-    except (OSError, UnicodeDecodeError):  # it was read a moment ago; show it as saved instead
-        source = None
-    write_report(res, args.output, source=source)
+    write_report(res, args.output, source=_source_text(args.file))
     return 0
+
+
+def _source_text(path: str) -> str | None:
+    """The file's text as it stands, read under the same guard as :func:`linkagekit.load`.
+
+    None when it cannot be read now (it was read a moment ago): the page then shows the
+    mechanism as saved instead of the file.
+    """
+    from pathlib import Path
+
+    from .errors import InputError
+    from .files import MAX_FILE_BYTES, read_regular_file
+
+    try:
+        data = read_regular_file(Path(path), MAX_FILE_BYTES, "mechanism file", InputError)
+        return None if len(data) > MAX_FILE_BYTES else data.decode("utf-8-sig")
+    except (InputError, UnicodeDecodeError):
+        return None
 
 
 def _edit(args: argparse.Namespace) -> int:
