@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
-from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten
+from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten, shorten_path
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
     import numpy as np
@@ -928,7 +928,7 @@ def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
 
     ext = os.path.splitext(path)[1].lower()
     if ext not in allowed:
-        raise InputError(f"{option} {shorten(path, 80)}: expected a file ending in {', '.join(allowed)}")
+        raise InputError(f"{option} {shorten_path(path, 80)}: expected a file ending in {', '.join(allowed)}")
 
 
 def _sweep(mech: Mechanism, angles: list[str] | None) -> dict[str, np.ndarray] | None:
@@ -1205,7 +1205,8 @@ def _topology(args: argparse.Namespace, unit: str) -> Any:
             raise InputError("--free goes with a template file given as --topology")
         return name
     if not os.path.exists(name):
-        raise InputError(f"--topology: '{shorten(name)}' is neither a topology ({', '.join(TOPOLOGIES)}) nor a file")
+        known = ", ".join(TOPOLOGIES)
+        raise InputError(f"--topology: '{shorten_path(name)}' is neither a topology ({known}) nor a file")
     template = lk.load(name)
     if template.length_unit != unit:
         raise InputError(

@@ -24,6 +24,16 @@ def shorten(text: str, limit: int = MAX_QUOTE) -> str:
     return clean if len(clean) <= limit else clean[: limit - 1] + "…"
 
 
+def shorten_path(path: str, limit: int = MAX_QUOTE) -> str:
+    r"""A file path for a message, cut at its start so that its file name stays readable.
+
+    >>> shorten_path("/a/very/long/directory/name/target.yaml", 20)
+    '…ry/name/target.yaml'
+    """
+    clean = shorten(path, len(str(path)) * 4 + 1)  # escaped, not cut
+    return clean if len(clean) <= limit else "…" + clean[len(clean) - limit + 1 :]
+
+
 def one_line(message: str, limit: int = MAX_MESSAGE) -> str:
     """A message as one printable line of at most ``limit`` characters."""
     return shorten(" ".join(str(message).split("\n")), limit)
