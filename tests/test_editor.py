@@ -812,3 +812,119 @@ def test_many_concurrent_connections_are_all_answered(server):
     assert not failures, f"{len(failures)} of {n} failed, e.g. {failures[:3]}"
     assert answers == [403] * n, sorted(set(answers))
     Client(server).still_serving()
+
+
+# ============================================================================== issue 23: the editor under faults
+def _serve(session: Session, **kw) -> EditorServer:
+    srv = EditorServer(session, 0, **kw)
+    threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True).start()
+    return srv
+
+
+def _stop(srv: EditorServer) -> None:
+    srv.shutdown()
+    srv.server_close()
+
+
+def test_two_drivers_with_sweeps_of_different_lengths_open(tmp_path):
+    """A valid two-driver file whose second crank is swept 0..0 (one sample against 361): every
+    command opens it (lk.analyze holds that driver at its pose value), and so does the editor."""
+    path = tmp_path / "fivebar.yaml"
+    text = (EXAMPLES / "fivebar_two_drivers.yaml").read_text(encoding="utf-8")
+    path.write_text(text.replace("angles: {start: -60, stop: 300, step: 1}", "angles: {start: 0, stop: 0, step: 1}"))
+    session = Session(path)
+    res = lk.analyze(session.mech)
+    page = session.page("t" * 24)
+    assert 'data-role="mechanism"' in page
+    answer = session.solve({"doc": session.mech.to_dict()})
+    assert answer["ok"] is True
+    cols = answer["scene"]["columns"]
+    assert len(cols["input:crank1"]) == res.n == 361
+    assert answer["pose_index"] == 120 and cols["input:crank1"][120] == 120.0  # the pose's own input
+    assert res.inputs["crank2"] == pytest.approx([60.0] * 361, abs=1e-9)  # held at the pose's value
+    assert cols["input:crank2"] == pytest.approx([60.0] * 361, abs=1e-9)
+
+
+@pytest.mark.parametrize("body", ["[" * 5000 + "]" * 5000, '{"a":' * 500 + "1" + "}" * 500])
+def test_deeply_nested_json_is_refused_in_one_line(server, capfd, body):
+    """JSON nested past the parser's recursion limit, or past MAX_JSON_DEPTH: 400 with one line,
+    no traceback, and the server keeps serving."""
+    c = Client(server)
+    status, headers, data = c.request("POST", f"/{c.token}/api/solve", body)
+    doc = json_error(status, headers, data, "deep JSON")
+    assert status == 400 and "nested deeper than" in doc["error"], doc
+    c.still_serving()
+    _wait_for_requests()
+    assert capfd.readouterr().err == ""
+
+
+def _long_triad_doc(session: Session) -> dict:
+    doc = session.mech.to_dict()
+    doc["drivers"][0]["angles"] = {"start": 0, "stop": 3600, "step": 0.36}  # 10,001 samples of a class-3 group
+    return doc
+
+
+def test_a_solve_over_its_budget_is_stopped_with_a_message(tmp_path, capfd):
+    """A 10,000-sample sweep of the class-3 triad (minutes of walking) against a budget of 0.5 s:
+    answered 503 with a message naming the budget, after about the budget (CPU time bounded),
+    and the server then answers the next request."""
+    session = Session(copy_example(tmp_path, "triad_six_modes.yaml"))
+    srv = _serve(session, solve_seconds=0.5)
+    try:
+        c = Client(srv)
+        cpu0 = time.process_time()
+        status, headers, data = c.solve({"doc": _long_triad_doc(session)})
+        cpu = time.process_time() - cpu0
+        doc = json_error(status, headers, data, "a long solve")
+        assert status == 503 and doc.get("stopped") is True and "0.5 s" in doc["error"], doc
+        assert cpu < 5.0, f"the stopped solve used {cpu:.1f} CPU-s"
+        assert srv.watch.stopped["budget"] == 1
+        srv.watch.seconds = 60.0
+        status, _, data = c.solve({"doc": session.mech.to_dict(), "coarse": True})
+        assert status == 200 and json.loads(data)["ok"] is True
+    finally:
+        _stop(srv)
+    _wait_for_requests()
+    assert capfd.readouterr().err == ""
+
+
+def test_a_solve_whose_client_left_is_stopped(tmp_path, capfd):
+    """The same long solve, its client closing the connection 0.2 s after sending it (a closed
+    tab): the watch stops it (long before the 60 s budget), nothing is written to stderr, and
+    the request's thread ends."""
+    session = Session(copy_example(tmp_path, "triad_six_modes.yaml"))
+    srv = _serve(session, solve_seconds=60.0)
+    try:
+        body = json.dumps({"doc": _long_triad_doc(session)}).encode()
+        s = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
+        s.sendall(
+            f"POST /{srv.token}/api/solve HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n"
+            f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n".encode()
+            + body
+        )
+        time.sleep(0.2)
+        s.close()
+        _wait_for_requests(30.0)  # hangs for minutes without the watch
+        assert srv.watch.stopped == {"budget": 0, "gone": 1}
+    finally:
+        _stop(srv)
+    assert capfd.readouterr().err == ""
+
+
+def test_the_watch_never_stops_a_finished_solve(tmp_path):
+    """Many quick solves under a tiny budget race the watch: each is either answered or stopped
+    (503), and a stop is never raised later in the thread (the server keeps answering)."""
+    session = Session(copy_example(tmp_path))
+    srv = _serve(session, solve_seconds=0.02)
+    try:
+        c = Client(srv)
+        doc = session.mech.to_dict()
+        seen = set()
+        for _ in range(30):
+            status, _, data = c.solve({"doc": doc, "coarse": True})
+            seen.add(status)
+            assert status in (200, 503), data[:200]
+        srv.watch.seconds = 30.0
+        c.still_serving()
+    finally:
+        _stop(srv)

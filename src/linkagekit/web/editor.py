@@ -18,11 +18,18 @@ backup, and refuses when the file changed on disk since it was opened or last sa
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import hashlib
 import json
 import secrets
+import select
+import socket
 import sys
 import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Literal
@@ -33,7 +40,7 @@ import numpy as np
 from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
 from ..files import atomic_output, dumps, load
-from ..model import Mechanism
+from ..model import Driver, Mechanism
 
 #: samples of the coarse sweep solved while a joint is dragged
 COARSE_SAMPLES = 73
@@ -43,6 +50,12 @@ MAX_BODY = 2 << 20
 TIMEOUT = 10.0
 #: how a client that went away shows: it reset or closed its connection, or stopped sending
 VANISHED = (ConnectionError, TimeoutError)
+#: seconds one solve (or the page) may compute before it is stopped and answered with a message
+SOLVE_SECONDS = 30.0
+#: seconds between two looks of the watch at the solves under way (deadline passed? client gone?)
+WATCH_INTERVAL = 0.05
+#: levels of JSON nesting a request may have (a mechanism document needs about 5)
+MAX_JSON_DEPTH = 64
 
 
 class ConflictError(LinkageError):
@@ -54,6 +67,9 @@ class ConflictError(LinkageError):
 def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np.ndarray], int]:
     """The file's sweep (or ``n`` samples evenly over it), with the reference pose's input in it.
 
+    As in :func:`linkagekit.analyze`, a driver whose sweep has another number of samples than
+    the first driver's stays at its pose value.
+
     Returns the inputs by driver and the index of the pose's sample, so that the page can
     show the pose itself: a dragged joint stays under the pointer.
     """
@@ -64,9 +80,13 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     pose = {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
     count = mech.drivers[0].sweep.count()
     n = n or (count if count <= MAX_REPORT_SAMPLES - 1 else MAX_REPORT_SAMPLES - 1)
-    base = {
-        d.name: d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n) for d in mech.drivers
-    }
+
+    def along(d: Driver) -> np.ndarray:
+        if d.sweep.count() != count:  # as lk.analyze: a sweep of another length stays at the pose's value
+            return np.full(n, pose[d.name])
+        return d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n)
+
+    base = {d.name: along(d) for d in mech.drivers}
     first = mech.drivers[0].name
     x = base[first]
     near = np.flatnonzero(np.all([np.abs(base[k] - v) <= 1e-12 * max(1.0, abs(v)) for k, v in pose.items()], axis=0))
@@ -250,6 +270,96 @@ class Session:
         return report_html(res, source=self.text, checks_text=first.get("checks"), editor=state, start=index)
 
 
+class SolveStopped(BaseException):
+    """Raised inside a solve's thread by :class:`Watch`: its time budget is spent, or its client left.
+
+    A ``BaseException``, so that no ``except Exception`` of the solver can swallow it; the
+    request handler catches it (and only it).
+    """
+
+
+@dataclass
+class _Solve:
+    """One solve under way: the thread computing it, its client's socket, its deadline."""
+
+    thread_id: int
+    sock: socket.socket
+    deadline: float
+    #: why it was stopped ("budget" or "gone"), once the watch has stopped it
+    reason: str | None = None
+
+
+def _raise_in(thread_id: int, exc: type[BaseException] | None) -> None:
+    """Have ``exc`` raised in thread ``thread_id`` at its next bytecode (``None``: cancel a pending one)."""
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread_id), ctypes.py_object(exc) if exc else None)
+
+
+def client_gone(sock: socket.socket) -> bool:
+    """True when the peer of ``sock`` has closed or reset its connection (nothing is consumed)."""
+    try:
+        if hasattr(select, "poll"):
+            poller = select.poll()
+            poller.register(sock.fileno(), select.POLLIN)
+            readable = bool(poller.poll(0))
+        else:  # pragma: no cover - Windows
+            readable = bool(select.select([sock], [], [], 0)[0])
+        return readable and sock.recv(1, socket.MSG_PEEK) == b""
+    except (OSError, ValueError):
+        return True
+
+
+class Watch:
+    """The solves under way, each stopped at its deadline or as soon as its client has gone.
+
+    The numerical walk of a class-3 group is a Python loop over samples, so a solve is stopped
+    between two steps of it: :class:`SolveStopped` is raised in the solve's thread (CPython's
+    ``PyThreadState_SetAsyncExc``), which unwinds it like any exception.  The solver itself
+    knows nothing of this.  One daemon thread looks every :data:`WATCH_INTERVAL` seconds.
+
+    Parameters
+    ----------
+    seconds : float
+        The time budget of one solve (wall clock).
+    """
+
+    def __init__(self, seconds: float = SOLVE_SECONDS) -> None:
+        self.seconds = float(seconds)
+        self.lock = threading.Lock()
+        self.solves: dict[int, _Solve] = {}
+        self.thread: threading.Thread | None = None
+        self.stopped = {"budget": 0, "gone": 0}
+
+    @contextlib.contextmanager
+    def solving(self, sock: socket.socket) -> Iterator[_Solve]:
+        """Watch the solve that runs in this block; :class:`SolveStopped` may be raised anywhere in it."""
+        solve = _Solve(threading.get_ident(), sock, time.monotonic() + self.seconds)
+        with self.lock:
+            self.solves[solve.thread_id] = solve
+            if self.thread is None:
+                self.thread = threading.Thread(target=self._run, name="linkagekit-edit-watch", daemon=True)
+                self.thread.start()
+        try:
+            yield solve
+        finally:
+            with self.lock:
+                self.solves.pop(solve.thread_id, None)
+                if solve.reason is not None:
+                    _raise_in(solve.thread_id, None)  # sent as the solve finished: not raised after it
+
+    def _run(self) -> None:
+        while True:
+            time.sleep(WATCH_INTERVAL)
+            now = time.monotonic()
+            with self.lock:
+                for solve in list(self.solves.values()):
+                    reason = "budget" if now > solve.deadline else "gone" if client_gone(solve.sock) else None
+                    if reason is not None:  # stopped once: it leaves the watch at once
+                        solve.reason = reason
+                        self.stopped[reason] += 1
+                        del self.solves[solve.thread_id]
+                        _raise_in(solve.thread_id, SolveStopped)
+
+
 class _Handler(BaseHTTPRequestHandler):
     """One request: check where it comes from and what it asks, then answer it in JSON (or the page)."""
 
@@ -313,11 +423,31 @@ class _Handler(BaseHTTPRequestHandler):
             self._json(405, {"ok": False, "error": "use POST"})
             return
         try:
-            page = self.server.session.page(self.server.token)
+            with self.server.watch.solving(self.connection) as solve:
+                page = self.server.session.page(self.server.token)
+        except SolveStopped:
+            self._stopped(solve)
+            return
         except LinkageError as exc:
             self._json(500, {"ok": False, "error": one_line(str(exc), 300)})
             return
         self._send(200, page.encode("utf-8"), "text/html; charset=utf-8")
+
+    def _stopped(self, solve: _Solve) -> None:
+        """Answer a solve the watch stopped: a message when its budget ran out, nothing when its client left."""
+        if solve.reason == "gone":
+            self.close_connection = True
+            return
+        seconds = self.server.watch.seconds
+        self._json(
+            503,
+            {
+                "ok": False,
+                "stopped": True,
+                "error": f"stopped after {seconds:g} s, the editor's time budget for one solve: "
+                "sweep fewer samples (a larger step or a shorter range) and try again",
+            },
+        )
 
     def do_POST(self) -> None:  # noqa: N802 - http.server's name
         rest = self._allowed()
@@ -337,15 +467,20 @@ class _Handler(BaseHTTPRequestHandler):
         if not 0 <= length <= MAX_BODY:
             self._json(413, {"ok": False, "error": f"a request of at most {MAX_BODY} bytes"})
             return
+        request = _parse(self.rfile.read(length))
+        if isinstance(request, str):
+            self._json(400, {"ok": False, "error": request})
+            return
+        if rest == "api/save":  # never stopped half-way: a save is short, and writes
+            self._json(*self._answer(rest, request))
+            return
         try:
-            request = json.loads(self.rfile.read(length).decode("utf-8"), parse_constant=_no_constant)
-        except (ValueError, UnicodeDecodeError) as exc:
-            self._json(400, {"ok": False, "error": f"bad JSON: {one_line(str(exc), 120)}"})
+            with self.server.watch.solving(self.connection) as solve:
+                answer = self._answer(rest, request)
+        except SolveStopped:
+            self._stopped(solve)
             return
-        if not isinstance(request, dict):
-            self._json(400, {"ok": False, "error": "bad request: expected a JSON object"})
-            return
-        self._json(*self._answer(rest, request))
+        self._json(*answer)
 
     def _answer(self, call: str, request: dict[str, Any]) -> tuple[int, dict[str, Any]]:
         """The status and JSON answer of a solve or save (written by the caller, outside these excepts)."""
@@ -359,6 +494,36 @@ class _Handler(BaseHTTPRequestHandler):
             return 200, {"ok": False, "error": one_line(str(exc), 300)}
         except Exception as exc:  # noqa: BLE001 - a request must never take the server down
             return 500, {"ok": False, "error": f"internal error: {type(exc).__name__}: {one_line(str(exc), 200)}"}
+
+
+def json_depth(value: Any) -> int:
+    """The nesting depth of parsed JSON (a scalar: 0), without recursion.
+
+    >>> json_depth({"a": [1, {"b": []}]})
+    3
+    """
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict | list):
+            deepest = max(deepest, depth + 1)
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
+def _parse(body: bytes) -> dict[str, Any] | str:
+    """A request body's JSON object, or the message (a ``str``) saying why it is refused."""
+    try:
+        request = json.loads(body.decode("utf-8"), parse_constant=_no_constant)
+    except (ValueError, UnicodeDecodeError) as exc:
+        return f"bad JSON: {one_line(str(exc), 120)}"
+    except RecursionError:  # the parser's own limit (about 1000 levels)
+        return f"bad JSON: nested deeper than {MAX_JSON_DEPTH} levels"
+    if json_depth(request) > MAX_JSON_DEPTH:
+        return f"bad JSON: nested deeper than {MAX_JSON_DEPTH} levels"
+    if not isinstance(request, dict):
+        return "bad request: expected a JSON object"
+    return request
 
 
 def _no_constant(name: str) -> Any:
@@ -376,10 +541,13 @@ class EditorServer(ThreadingHTTPServer):
     #: set once the server stops: a request broken by the shutdown is not reported
     closing = False
 
-    def __init__(self, session: Session, port: int = 0, token: str | None = None) -> None:
+    def __init__(
+        self, session: Session, port: int = 0, token: str | None = None, solve_seconds: float = SOLVE_SECONDS
+    ) -> None:
         if not isinstance(port, int) or isinstance(port, bool) or not 0 <= port <= 65535:
             raise InputError(f"--port: expected 0 to 65535, got {port!r}")
         self.session = session
+        self.watch = Watch(solve_seconds)
         self.token = token or secrets.token_urlsafe(24)
         try:
             super().__init__(("127.0.0.1", port), _Handler)
