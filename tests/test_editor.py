@@ -928,3 +928,48 @@ def test_the_watch_never_stops_a_finished_solve(tmp_path):
         c.still_serving()
     finally:
         _stop(srv)
+
+
+def test_save_through_a_symlink_replaces_the_real_file(tmp_path):
+    """FILE is a symbolic link to a file in another directory: saving (the editor's save and
+    lk.save) replaces the real file, the link stays a link to it, and no temporary is left."""
+    real = copy_example(tmp_path, sub="real")
+    link = tmp_path / "work" / SEED000
+    link.parent.mkdir()
+    link.symlink_to(real)
+    session = Session(link)
+    doc = session.mech.to_dict()
+    doc["name"] = "through the link"
+    session.save({"doc": doc, "base": session.base})
+    assert link.is_symlink() and os.readlink(link) == str(real)
+    assert lk.load(real).name == "through the link"
+    lk.save(lk.load(real), link)
+    assert link.is_symlink() and lk.load(real).name == "through the link"
+    left = {p.name for p in (tmp_path / "real").iterdir()} | {p.name for p in (tmp_path / "work").iterdir()}
+    assert left == {SEED000, SEED000 + ".bak"}, left
+
+
+def test_stray_temporaries_are_removed_at_start_and_nothing_else(tmp_path):
+    """What a save killed half-way leaves (.FILE.<12 hex>.tmp, .FILE.bak.<12 hex>.tmp) is removed
+    when the editor opens FILE; names that only look alike, other files' temporaries, and a link
+    named like a temporary stay."""
+    path = copy_example(tmp_path)
+    d = path.parent
+    ours = [f".{SEED000}.0123456789ab.tmp", f".{SEED000}.bak.a1b2c3d4e5f6.tmp"]
+    others = [
+        f".{SEED000}.0123456789AB.tmp",  # not our (lower-case) hex
+        f".{SEED000}.0123456789a.tmp",  # 11 digits
+        f".{SEED000}.0123456789ab.tmp.keep",
+        ".other.yaml.0123456789ab.tmp",
+        f"{SEED000}.0123456789ab.tmp",  # not hidden
+    ]
+    for name in ours + others:
+        (d / name).write_text("partial")
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    (d / f".{SEED000}.ffffffffffff.tmp").symlink_to(victim)
+    Session(path)
+    left = {p.name for p in d.iterdir()}
+    assert not set(ours) & left
+    assert set(others) | {SEED000, f".{SEED000}.ffffffffffff.tmp"} == left
+    assert victim.read_text() == "keep me"

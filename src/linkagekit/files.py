@@ -439,16 +439,57 @@ def _write_atomic(p: Path, text: str) -> None:
         os.fsync(f.fileno())
 
 
+#: random bytes in the name of a temporary file of :func:`atomic_output` (twice as many hex digits)
+_TMP_BYTES = 6
+
+
+def stray_temporaries(path: str | Path) -> list[Path]:
+    """The temporary files :func:`atomic_output` may have left beside ``path`` (and its ``.bak``).
+
+    Only regular files (not links) named exactly ``.NAME.<12 hex digits>.tmp`` or
+    ``.NAME.bak.<12 hex digits>.tmp``, beside ``path`` and, for a symbolic link, beside the
+    file it points to: what a process killed during a save leaves.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     d = pathlib.Path(tmp)
+    ...     for name in (".m.yaml.0123456789ab.tmp", ".m.yaml.bak.0123456789ab.tmp", ".m.yaml.x.tmp", "m.yaml"):
+    ...         _ = (d / name).write_text("")
+    ...     sorted(p.name for p in stray_temporaries(d / "m.yaml"))
+    ['.m.yaml.0123456789ab.tmp', '.m.yaml.bak.0123456789ab.tmp']
+    """
+    p = Path(path)
+    found: list[Path] = []
+    for q in dict.fromkeys([p, Path(os.path.realpath(p))]):
+        rx = re.compile(rf"^\.{re.escape(q.name)}(?:\.bak)?\.[0-9a-f]{{{2 * _TMP_BYTES}}}\.tmp$")
+        try:
+            names = os.listdir(q.parent)
+        except OSError:
+            continue
+        for name in names:
+            cand = q.parent / name
+            with contextlib.suppress(OSError):
+                if rx.match(name) and stat.S_ISREG(os.lstat(cand).st_mode) and cand not in found:
+                    found.append(cand)
+    return found
+
+
 @contextlib.contextmanager
 def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iterator[Path]:
     """A temporary path beside ``p`` to write; on success it replaces ``p`` in one step.
 
     The old file stays whole until the new one is complete; the new file keeps the old
-    one's permissions (or the umask's).  On failure the temporary file is removed; an
-    ``OSError`` becomes ``error`` naming ``p``.
+    one's permissions (or the umask's).  A symbolic link is followed: the file it points
+    to is replaced (the temporary file is written beside it) and the link stays a link.
+    On failure the temporary file is removed; an ``OSError`` becomes ``error`` naming
+    ``p``.  A temporary file left by a killed process is named as :func:`stray_temporaries`
+    finds it.
     """
     p = Path(p)
-    tmp = p.with_name(f".{p.name}.{secrets.token_hex(6)}.tmp")
+    p = Path(os.path.realpath(p)) if p.is_symlink() else p
+    tmp = p.with_name(f".{p.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
     done = False
     try:
         try:

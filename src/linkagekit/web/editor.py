@@ -13,7 +13,13 @@ one page and three JSON calls under a random token, and refuses (403) a request 
 token, with a ``Host`` other than the loopback address, from another ``Origin``, or for any
 other path.  Only the opened file (and its ``.bak`` backup) is ever written: ``save``
 writes a temporary file and renames it over the old one, after copying the old one to the
-backup, and refuses when the file changed on disk since it was opened or last saved.
+backup, and refuses when the file changed on disk since it was opened or last saved.  A
+symbolic link is followed (the file it points to is replaced, the link stays); the temporary
+files a save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed
+when the editor starts.
+
+Each solve (and the page) runs under a :class:`Watch`: past its time budget it is stopped and
+answered 503 with a message; when its client has gone (a closed tab) it is stopped at once.
 """
 
 from __future__ import annotations
@@ -39,7 +45,7 @@ import numpy as np
 
 from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
-from ..files import atomic_output, dumps, load
+from ..files import atomic_output, dumps, load, stray_temporaries
 from ..model import Driver, Mechanism
 
 #: samples of the coarse sweep solved while a joint is dragged
@@ -126,6 +132,9 @@ class Session:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.mech = load(self.path)  # a bad file: MechanismFileError, exit 2, before anything serves
+        for stray in stray_temporaries(self.path):  # left by an editor killed during a save
+            with contextlib.suppress(OSError):
+                stray.unlink()
         data = self.path.read_bytes()
         self.base = _hash(data)
         self.text = data.decode("utf-8-sig", errors="replace")
