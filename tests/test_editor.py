@@ -973,3 +973,67 @@ def test_stray_temporaries_are_removed_at_start_and_nothing_else(tmp_path):
     assert not set(ours) & left
     assert set(others) | {SEED000, f".{SEED000}.ffffffffffff.tmp"} == left
     assert victim.read_text() == "keep me"
+
+
+def _dragged(session: Session, joint: str, dx: float, dy: float, coarse: bool = False) -> dict:
+    """The answer to a drag as the page sends it: the drawn pose at the pose's sample, ``joint`` moved."""
+    doc = session.mech.to_dict()
+    first = session.solve({"doc": doc, "coarse": True})
+    at = joints_at(first["scene"], first["pose_index"])
+    pose = {j: list(xy) for j, xy in at.items()}
+    pose[joint] = [pose[joint][0] + dx, pose[joint][1] + dy]
+    return session.solve({"doc": doc, "pose": pose, "moved": [joint], "coarse": coarse})
+
+
+@pytest.mark.parametrize("moved", [True, False])
+def test_save_after_a_drag_changes_only_what_the_drag_changed(tmp_path, moved):
+    """The five-bar's tracer P dragged (the page's drawn pose: the solver's numbers, e.g.
+    -14.999999999999991 for -15), then saved: the file differs from the original in exactly
+    two lines: P's coordinates, and link1's lengths, which lose the two pairs through P and keep
+    C-E: 60.  Every other line, its flow style and its integers (30, not 30.0) stay as written.
+    Without 'moved' the server finds the moved joint itself."""
+    path = copy_example(tmp_path, "fivebar_two_drivers.yaml")
+    original = path.read_text(encoding="utf-8").splitlines()
+    session = Session(path)
+    doc = session.mech.to_dict()
+    first = session.solve({"doc": doc, "coarse": True})
+    at = joints_at(first["scene"], first["pose_index"])
+    assert at["C"] != (-15.0, 25.9807621135332)  # the drawn pose is the solver's rounding of the file's
+    pose = {j: list(xy) for j, xy in at.items()}
+    pose["P"] = [16.5, 89.25]
+    request = {"doc": doc, "pose": pose} | ({"moved": ["P"]} if moved else {})
+    answer = session.solve(request)
+    assert answer["ok"], answer
+    session.save({"doc": answer["doc"], "base": session.base})
+    saved = path.read_text(encoding="utf-8").splitlines()
+    changed = [(a, b) for a, b in zip(original, saved, strict=True) if a != b]
+    assert changed == [
+        ("  P: [16.1807300401858, 88.6526224191045]", "  P: [16.5, 89.25]"),
+        (
+            "  link1: {joints: [C, E, P], lengths: {C-E: 60, E-P: 20, C-P: 70}}",
+            "  link1: {joints: [C, E, P], lengths: {C-E: 60}}",
+        ),
+    ], changed
+
+
+def test_save_keeps_block_style_and_a_drag_keeps_exact_numbers(tmp_path):
+    """A file written in block style stays in block style where it was; a number such as -7.8
+    that the drag did not touch is written -7.8 (not the solver's -7.799999999999999); the crank
+    pin C dragged: its coordinates change and the crank's given length goes (read off the pose)."""
+    path = tmp_path / "block.yaml"
+    path.write_text(
+        "format: linkagekit/1\nname: block\nunits:\n  length: mm\n  angle: deg\njoints:\n  A: [0, 0]\n"
+        "  B: [-7.1, 0.3]\n  C: [1.86, 2.48]\n  D: [-6.1, 4.7]\n  E: [-7.8, 6.1]\nlinks:\n  ground: [A, B]\n"
+        "  crank:\n    joints: [A, C]\n    lengths:\n      A-C: 3.1\n  coupler: [C, D]\n  rocker: [B, D, E]\n"
+        "drivers:\n  - link: crank\n    pivot: A\n    toward: C\n    angles: {start: 0, stop: 360, step: 5}\n",
+        encoding="utf-8",
+    )
+    before = path.read_text(encoding="utf-8").splitlines()
+    session = Session(path)
+    answer = _dragged(session, "C", 0.25, -0.125)
+    assert answer["ok"], answer
+    session.save({"doc": answer["doc"], "base": session.base})
+    after = path.read_text(encoding="utf-8").splitlines()
+    c = answer["doc"]["joints"]["C"]
+    assert [a for a in after if a not in before] == [f"  C: [{c[0]!r}, {c[1]!r}]"]
+    assert [b for b in before if b not in after] == ["  C: [1.86, 2.48]", "    lengths:", "      A-C: 3.1"]

@@ -321,14 +321,29 @@ def save(mech: Mechanism, path: str | Path) -> Path:
     return p
 
 
-def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml") -> str:
+def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | None = None) -> str:
     """The text of a mechanism file, YAML (readable: block style, points as flow lists) or JSON.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        The mechanism.
+    fmt : {"yaml", "json"}
+        The format.
+    like : str, optional
+        The YAML text of the file this one replaces: each mapping and list found at the same
+        place in it keeps its style there (flow ``{...}``/``[...]`` or block), and a number it
+        wrote as an integer stays one while its value is a whole number.  Other comments
+        than the file's first lines are not kept.  Ignored for JSON, or when it does not parse.
 
     Examples
     --------
     >>> from linkagekit.files import dumps, load
-    >>> print(dumps(load("examples/seed000_fourbar.yaml")).splitlines()[2])
+    >>> m = load("examples/seed000_fourbar.yaml")
+    >>> print(dumps(m).splitlines()[2])
     units: {length: cm, angle: deg}
+    >>> print(dumps(m, like="units:\\n  length: cm\\n  angle: deg\\n").splitlines()[2:5])
+    ['units:', '  length: cm', '  angle: deg']
     """
     data = mech.to_dict()
     if fmt == "json":
@@ -337,8 +352,14 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml") -> str:
         raise MechanismFileError(f"unknown mechanism file format '{fmt}' (yaml or json)")
     import yaml
 
+    styled = _styled(data)
+    if like is not None:
+        try:
+            styled = _like(styled, _yaml_node(like, "the file replaced"))
+        except LinkageError:
+            pass  # a file that does not parse has no style to keep
     text: str = yaml.dump(
-        _styled(data),
+        styled,
         Dumper=_dumper_class(),
         sort_keys=False,
         default_flow_style=False,
@@ -369,6 +390,34 @@ class _FlowList(list[Any]):
 
 class _FlowDict(dict[str, Any]):
     """A mapping written in YAML flow style: ``{start: 0.0, stop: 360.0, step: 1.0}``."""
+
+
+class _BlockList(list[Any]):
+    """A list written in YAML block style (one ``- item`` a line)."""
+
+
+class _BlockDict(dict[str, Any]):
+    """A mapping written in YAML block style (one ``key: value`` a line)."""
+
+
+def _like(value: Any, node: Any) -> Any:
+    """``value`` styled as ``node``, the same place in the file it replaces (None: as it is).
+
+    A mapping or list takes the node's flow or block style; a whole float where the file
+    wrote an integer is written as that integer (it reads back equal).
+    """
+    import yaml
+
+    if isinstance(node, yaml.MappingNode) and isinstance(value, dict):
+        old = {k.value: v for k, v in node.value if isinstance(k, yaml.ScalarNode)}
+        return (_FlowDict if node.flow_style else _BlockDict)({k: _like(v, old.get(k)) for k, v in value.items()})
+    if isinstance(node, yaml.SequenceNode) and isinstance(value, list):
+        items = [_like(v, node.value[i] if i < len(node.value) else None) for i, v in enumerate(value)]
+        return (_FlowList if node.flow_style else _BlockList)(items)
+    whole = isinstance(value, float) and value.is_integer() and abs(value) < 2.0**53
+    if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:int" and whole:
+        return int(value)
+    return value
 
 
 def _styled(d: dict[str, Any]) -> dict[str, Any]:
@@ -425,8 +474,16 @@ def _dumper_class() -> type[Any]:
             return dumper.represent_scalar("tag:yaml.org,2002:str", data, style="|")
         return dumper.represent_str(data)
 
+    def block_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
+        return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=False)
+
+    def block_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
+        return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=False)
+
     _Dumper.add_representer(_FlowList, flow_list)
     _Dumper.add_representer(_FlowDict, flow_dict)
+    _Dumper.add_representer(_BlockList, block_list)
+    _Dumper.add_representer(_BlockDict, block_dict)
     _Dumper.add_representer(str, text)
     return _Dumper
 

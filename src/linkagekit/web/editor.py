@@ -103,6 +103,53 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     return {name: np.insert(v, k, pose[name]) for name, v in base.items()}, k
 
 
+#: a joint of a new pose this close to its place in the document (relative to the mechanism's size)
+#: has not moved: it keeps the document's exact numbers
+SAME_PLACE = 1e-9
+
+
+def posed(mech: Mechanism, pose: Any, moved: Any = None) -> Mechanism:
+    """``mech`` with the reference pose ``pose`` (joint -> [x, y]), as after a drag of the ``moved`` joints.
+
+    Every dimension is read off the new pose (:meth:`Mechanism.with_pose`), except what the
+    drag cannot have changed, which keeps the document's exact numbers: a joint not moved
+    that is where the document has it keeps its coordinates (not the solver's rounding of
+    them), a given length between two joints not moved stays given, and a link whose joints
+    all kept their place keeps its centre of gravity.  ``moved`` (a list of joint names)
+    defaults to the joints whose place differs from the document's.
+
+    Examples
+    --------
+    >>> from linkagekit.files import load
+    >>> m = load("examples/fivebar_two_drivers.yaml")
+    >>> new = posed(m, {"P": [16.0, 89.0]}, ["P"])
+    >>> new.link("crank1").lengths["A-C"], dict(new.link("link1").lengths)
+    (30.0, {'C-E': 60.0})
+    """
+    if not isinstance(pose, dict):
+        raise InputError("'pose' must map joint names to [x, y]")
+    tol = SAME_PLACE * mech.length_scale
+    here = {j: [z.real, z.imag] for j, z in mech.joints.items()}
+    placed = mech.with_pose({j: pose.get(j, here[j]) for j in mech.joints}).joints  # checks the pose
+    if moved is None:
+        moved = [j for j in mech.joints if abs(placed[j] - mech.joints[j]) > tol]
+    if not isinstance(moved, list) or not all(isinstance(j, str) for j in moved):
+        raise InputError("'moved' must list joint names")
+    still = {j for j in mech.joints if j not in moved and abs(placed[j] - mech.joints[j]) <= tol}
+    doc = mech.with_pose({j: here[j] if j in still else [z.real, z.imag] for j, z in placed.items()}).to_dict()
+    old = mech.to_dict()["links"]
+    for ln in mech.links:
+        kept = {k: v for k, v in ln.lengths.items() if not set(k.split("-")) & set(moved)}
+        entry = doc["links"][ln.name]
+        if isinstance(entry, list) and kept:
+            entry = doc["links"][ln.name] = {"joints": entry}
+        if kept:
+            entry["lengths"] = kept
+        if ln.cg_pose is not None and set(ln.joints) <= still:
+            entry["cg"] = old[ln.name]["cg"]
+    return Mechanism.from_dict(doc, source=mech.source)
+
+
 def _hash(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -177,10 +224,7 @@ class Session:
                 )
             pose = {j: list(xy) for j, xy in match[0]["joints"].items()}
         if pose is not None:
-            if not isinstance(pose, dict):
-                raise InputError("'pose' must map joint names to [x, y]")
-            full = {j: pose.get(j, [z.real, z.imag]) for j, z in mech.joints.items()}
-            mech = mech.with_pose(full)
+            mech = posed(mech, pose, request.get("moved"))
         if request.get("modes_only"):
             return {"ok": True, **self._modes(mech, request.get("at"))}
         coarse = bool(request.get("coarse"))
@@ -243,7 +287,7 @@ class Session:
                     f"{self.path.name} changed on disk since it was opened or saved here: not overwritten "
                     "(reload the page to edit the file as it is now)"
                 )
-            body = dumps(mech, self.fmt)
+            body = dumps(mech, self.fmt, like=old.decode("utf-8-sig", errors="replace"))
             head = _leading_comments(old.decode("utf-8-sig", errors="replace")) if self.fmt == "yaml" else ""
             text = head + body
             with atomic_output(self.backup) as tmp:
@@ -509,7 +553,7 @@ def json_depth(value: Any) -> int:
     """The nesting depth of parsed JSON (a scalar: 0), without recursion.
 
     >>> json_depth({"a": [1, {"b": []}]})
-    3
+    4
     """
     deepest, stack = 0, [(value, 0)]
     while stack:
