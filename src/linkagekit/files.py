@@ -354,10 +354,8 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | No
 
     styled = _styled(data)
     if like is not None:
-        try:
+        with contextlib.suppress(LinkageError):  # a file that does not parse has no style to keep
             styled = _like(styled, _yaml_node(like, "the file replaced"))
-        except LinkageError:
-            pass  # a file that does not parse has no style to keep
     text: str = yaml.dump(
         styled,
         Dumper=_dumper_class(),
