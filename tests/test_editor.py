@@ -41,6 +41,7 @@ import time
 import urllib.request
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import linkagekit as lk
@@ -1037,3 +1038,49 @@ def test_save_keeps_block_style_and_a_drag_keeps_exact_numbers(tmp_path):
     c = answer["doc"]["joints"]["C"]
     assert [a for a in after if a not in before] == [f"  C: [{c[0]!r}, {c[1]!r}]"]
     assert [b for b in before if b not in after] == ["  C: [1.86, 2.48]", "    lengths:", "      A-C: 3.1"]
+
+
+def test_a_class3_drag_computes_the_exact_range_once_per_release(tmp_path, monkeypatch):
+    """Dragging a joint of the class-3 triad: the coarse moves never compute the exact assembly
+    range (the continuation behind the curves' breaks, 72 % of a move's cost before), and after
+    the first move they walk only the stretch of the coarse grid that assembled, with a margin
+    (fewer samples, the same positions there); the release computes the range once (checks and
+    breaks share it)."""
+    import linkagekit.checks as checks_mod
+    from linkagekit.web.editor import COARSE_SAMPLES, WINDOW_MARGIN
+
+    calls = []
+    real = checks_mod.continuation_intervals
+    monkeypatch.setattr(checks_mod, "continuation_intervals", lambda *a, **k: calls.append(1) or real(*a, **k))
+    session = Session(copy_example(tmp_path, "triad_six_modes.yaml"))
+    doc = session.mech.to_dict()
+    first = session.solve({"doc": doc, "coarse": True})
+    at = joints_at(first["scene"], first["pose_index"])
+    pose = {j: list(xy) for j, xy in at.items()}
+    answers = []
+    cpu0 = time.process_time()
+    for k in range(4):
+        pose["J1"] = [pose["J1"][0] + 0.01 * k, pose["J1"][1]]
+        answers.append(session.solve({"doc": doc, "pose": pose, "moved": ["J1"], "coarse": True}))
+    cpu = time.process_time() - cpu0
+    assert calls == [], "a coarse move computed the exact assembly range"
+    full_n = len(answers[0]["scene"]["columns"]["assembled"])
+    assert full_n >= COARSE_SAMPLES
+    later = [a["scene"]["columns"]["assembled"] for a in answers[1:]]
+    assert all(sum(a) >= 10 and len(a) <= sum(a) + 2 * WINDOW_MARGIN + 1 for a in later), [len(a) for a in later]
+    assert answers[-1]["scene"]["breaks"] == []
+    # the windowed move gives the same positions as the whole coarse grid at its samples
+    from linkagekit.web.editor import sweep_with_pose
+
+    last = answers[-1]
+    m = lk.Mechanism.from_dict(last["doc"])
+    grid = sweep_with_pose(m, COARSE_SAMPLES)[0]["crank"]
+    whole = lk.analyze(m, {"crank": grid})
+    shown = np.array(last["scene"]["columns"]["input:crank"], float)
+    k = np.searchsorted(grid, shown)
+    assert np.array_equal(grid[k], shown)
+    got = np.array([np.nan if v is None else v for v in last["scene"]["columns"]["J2.x"]], float)
+    assert np.allclose(whole.xy("J2")[k, 0], got, rtol=0, atol=1e-9 * m.length_scale, equal_nan=True)
+    assert cpu < 30.0, f"4 coarse moves took {cpu:.1f} CPU-s"  # generous: only catches the old cost times ten
+    full = session.solve({"doc": doc, "pose": pose, "moved": ["J1"]})
+    assert full["ok"] and len(calls) == 1, f"the release computed the exact range {len(calls)} times"

@@ -47,9 +47,14 @@ from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
 from ..files import atomic_output, dumps, load, stray_temporaries
 from ..model import Driver, Mechanism
+from ..result import Result
 
 #: samples of the coarse sweep solved while a joint is dragged
 COARSE_SAMPLES = 73
+#: samples of the coarse grid a class-3 drag's sweep reaches past where the previous move assembled
+WINDOW_MARGIN = 2
+#: drags whose coarse windows are remembered
+MAX_WINDOWS = 16
 #: the largest request body the server reads
 MAX_BODY = 2 << 20
 #: seconds a request may take to arrive
@@ -188,21 +193,48 @@ class Session:
         self.fmt: Literal["yaml", "json"] = "json" if self.path.suffix.lower() == ".json" else "yaml"
         self.backup = self.path.with_name(self.path.name + ".bak")
         self.lock = threading.Lock()
+        #: the coarse-grid samples each recent drag solves (see :meth:`_coarse`), oldest first
+        self.windows: dict[str, tuple[int, int]] = {}
 
     # ---------------------------------------------------------------- solving
     def solve(self, request: dict[str, Any]) -> dict[str, Any]:
-        """The answer to ``{"doc", "pose"?, "coarse"?, "at"?}``: the new document and its scene.
+        """The answer to ``{"doc", "pose"?, "moved"?, "coarse"?, "at"?}``: the new document and its scene.
 
         ``pose`` maps joint names to new positions (file units): the mechanism takes them as
-        its reference pose, every dimension read off it (:meth:`Mechanism.with_pose`).
-        ``coarse`` asks for :data:`COARSE_SAMPLES` samples over the sweep, no forces and no
-        checks; otherwise the file's sweep with forces, the text of ``check`` and the
-        assembly modes at input ``at`` (a mapping of driver to value).
+        its reference pose (:func:`posed`: every dimension read off it but those the
+        ``moved`` joints cannot have changed).  ``coarse`` asks for :data:`COARSE_SAMPLES`
+        samples over the sweep, no forces, no checks and no exact curve breaks; for a
+        numerical (class-3) group only over the stretch where the previous coarse answer of
+        the same drag assembled (:meth:`_coarse`).  Otherwise the file's sweep with forces,
+        the text of ``check`` and the assembly modes at input ``at`` (driver -> value).
         """
         from ..api import analyze
         from ..checks import check, check_text
         from ..viz.scene import build_scene
 
+        mech = self._mechanism(request)
+        if request.get("modes_only"):
+            return {"ok": True, **self._modes(mech, request.get("at"))}
+        out: dict[str, Any] = {"ok": True, "doc": mech.to_dict()}
+        if request.get("coarse"):
+            res, out["pose_index"] = self._coarse(mech, request)
+            out["scene"] = build_scene(res, exact_breaks=False).to_dict()
+        else:
+            inputs, out["pose_index"] = sweep_with_pose(mech)
+            res = analyze(mech, inputs, dynamics=mech.has_dynamics)
+            report = check(mech)  # its assembly range also gives the curves' breaks: computed once
+            out["scene"] = build_scene(res, input_range=report.input_range).to_dict()
+            out["checks"] = check_text(report.to_dict(), input_units(mech), mech.name or self.path.name)
+            out.update(self._modes(mech, request.get("at")))
+        out["lengths"] = {
+            ln.name: {f"{a}-{b}": ln.length(a, b) for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]}
+            for ln in mech.links
+            if ln.name != "ground" and len(ln.joints) >= 2
+        }
+        return out
+
+    def _mechanism(self, request: dict[str, Any]) -> Mechanism:
+        """The request's mechanism: its ``doc``, at the ``pose`` (or in the assembly ``mode``) it asks for."""
         doc = request.get("doc")
         if not isinstance(doc, dict):
             raise InputError("the request has no mechanism document ('doc')")
@@ -223,29 +255,36 @@ class Session:
                     or f"the mode {wanted} does not assemble at {listed.get('modes_at')}: move the input first"
                 )
             pose = {j: list(xy) for j, xy in match[0]["joints"].items()}
-        if pose is not None:
-            mech = posed(mech, pose, request.get("moved"))
-        if request.get("modes_only"):
-            return {"ok": True, **self._modes(mech, request.get("at"))}
-        coarse = bool(request.get("coarse"))
-        inputs, index = sweep_with_pose(mech, COARSE_SAMPLES if coarse else None)
-        res = analyze(mech, inputs, dynamics=not coarse and mech.has_dynamics)
-        out: dict[str, Any] = {
-            "ok": True,
-            "doc": mech.to_dict(),
-            "scene": build_scene(res).to_dict(),
-            "pose_index": index,
-            "lengths": {
-                ln.name: {f"{a}-{b}": ln.length(a, b) for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]}
-                for ln in mech.links
-                if ln.name != "ground" and len(ln.joints) >= 2
-            },
-        }
-        if not coarse:
-            units = input_units(mech)
-            out["checks"] = check_text(check(mech).to_dict(), units, mech.name or self.path.name)
-            out.update(self._modes(mech, request.get("at")))
-        return out
+        return mech if pose is None else posed(mech, pose, request.get("moved"))
+
+    def _coarse(self, mech: Mechanism, request: dict[str, Any]) -> tuple[Result, int]:
+        """A drag's coarse sweep, solved, and the index of the pose's sample in it.
+
+        The numerical walk of a class-3 group costs about as much per sample that does not
+        assemble as per sample that does, and a drag changes the assembly range little from
+        one move to the next: so each move of one drag (the same ``doc`` and ``moved``) solves
+        only the samples of the coarse grid from :data:`WINDOW_MARGIN` before the first to
+        :data:`WINDOW_MARGIN` after the last that assembled at the previous move (all of them
+        at the first move, or when none assembled).  The release solves the whole sweep.
+        """
+        from ..api import analyze, prepare
+
+        inputs, index = sweep_with_pose(mech, COARSE_SAMPLES)
+        if not prepare(mech).plan.numerical:
+            return analyze(mech, inputs, dynamics=False), index
+        key = _hash(json.dumps([request.get("doc"), request.get("moved")], sort_keys=True).encode())
+        n = len(inputs[mech.drivers[0].name])
+        lo, hi = self.windows.get(key, (0, n - 1))
+        lo, hi = min(lo, index), min(max(hi, index), n - 1)
+        res = analyze(mech, {k: v[lo : hi + 1] for k, v in inputs.items()}, dynamics=False)
+        ok = np.flatnonzero(res.assembled)
+        with self.lock:
+            self.windows.pop(key, None)
+            if ok.size:
+                self.windows[key] = (max(0, lo + int(ok[0]) - WINDOW_MARGIN), lo + int(ok[-1]) + WINDOW_MARGIN)
+            while len(self.windows) > MAX_WINDOWS:
+                self.windows.pop(next(iter(self.windows)))
+        return res, index - lo
 
     @staticmethod
     def _modes(mech: Mechanism, at: Any) -> dict[str, Any]:
