@@ -47,7 +47,7 @@ import pytest
 import linkagekit as lk
 from helpers import leading_comments
 from linkagekit.errors import LinkageError
-from linkagekit.web.editor import ConflictError, EditorServer, Session
+from linkagekit.web.editor import ConflictError, EditorServer, Session, posed
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
@@ -200,8 +200,16 @@ def test_session_solve_with_pose_moves_the_reference_pose(tmp_path, coarse):
     assert m2.joints["D"] == complex(*new_d)
     for j in ("A", "B", "C", "P"):
         assert m2.joints[j] == mech.joints[j], j
-    want = m2.with_pose({j: [z.real, z.imag] for j, z in mech.joints.items()} | {"D": new_d})
-    assert m2 == want, "the answer's document is Mechanism.with_pose of the drawn configuration"
+    drawn = {j: [z.real, z.imag] for j, z in mech.joints.items()} | {"D": new_d}
+    want = m2.with_pose(drawn)
+    # Mechanism.with_pose of the drawn configuration, but for the given lengths that the drag of D cannot
+    # have changed (issue 23): those between two other joints stay exactly as given
+    for ln in mech.links:
+        kept = {k: v for k, v in ln.lengths.items() if "D" not in k.split("-")}
+        assert dict(m2.link(ln.name).lengths) == kept, (ln.name, m2.link(ln.name).lengths, kept)
+        assert m2.link(ln.name).joints == want.link(ln.name).joints
+    assert m2.with_pose(drawn) == want and m2.joints == want.joints
+    assert m2 == posed(mech, drawn, ["D"]), "the answer's document is the drawn configuration, given lengths kept"
     cd = abs(complex(*new_d) - mech.joints["C"])
     assert close(out["lengths"]["coupler"]["C-D"], cd, 5), (out["lengths"], cd)
     sc, i = out["scene"], out["pose_index"]

@@ -428,10 +428,8 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     res : Result
         From :func:`linkagekit.analyze` for one design (``res.design(i)`` for one of a batch).
     exact_breaks : bool
-        Find the :attr:`Scene.breaks` from the exact assembly range (for a class-3 group, a
-        continuation that costs more than a coarse sweep).  False: no breaks (curves are
-        still lifted at the samples that do not assemble), as the editor draws while a joint
-        is dragged.
+        False: no :attr:`Scene.breaks` (curves lifted only where samples do not assemble), as
+        the editor draws while a joint is dragged: the exact range of a class-3 group is costly.
     input_range : list of [float, float], optional
         The first driver's :func:`linkagekit.checks.input_range`, when it is known already.
 
@@ -447,7 +445,6 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     mech = res.mechanism
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
-    xy = np.stack([z.real, z.imag], axis=-1)
     ground_joints = mech.link("ground").joints
     coupler, other = path_kinds(mech)
     moving = [j for j in names if j not in ground_joints]
@@ -470,7 +467,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         drivers=drivers,
         input_units=input_units(mech),
         inputs=inputs,
-        xy=xy,
+        xy=np.stack([z.real, z.imag], axis=-1),
         assembled=np.asarray(res.assembled, bool).copy(),
         coupler_curves=coupler,
         other_paths=tuple(j for j in other if j in moving),
