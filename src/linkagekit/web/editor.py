@@ -51,8 +51,10 @@ from ..result import Result
 
 #: samples of the coarse sweep solved while a joint is dragged
 COARSE_SAMPLES = 73
-#: samples of the coarse grid a class-3 drag's sweep reaches past where the previous move assembled
+#: samples of the coarse grid a class-3 drag's sweep reaches, every PROBE_EVERY-th move, past where
+#: the previous move assembled (see Session._coarse)
 WINDOW_MARGIN = 2
+PROBE_EVERY = 5
 #: drags whose coarse windows are remembered
 MAX_WINDOWS = 16
 #: the largest request body the server reads
@@ -194,7 +196,7 @@ class Session:
         self.backup = self.path.with_name(self.path.name + ".bak")
         self.lock = threading.Lock()
         #: the coarse-grid samples each recent drag solves (see :meth:`_coarse`), oldest first
-        self.windows: dict[str, tuple[int, int]] = {}
+        self.windows: dict[str, tuple[int, int, int]] = {}
 
     # ---------------------------------------------------------------- solving
     def solve(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -260,12 +262,14 @@ class Session:
     def _coarse(self, mech: Mechanism, request: dict[str, Any]) -> tuple[Result, int]:
         """A drag's coarse sweep, solved, and the index of the pose's sample in it.
 
-        The numerical walk of a class-3 group costs about as much per sample that does not
-        assemble as per sample that does, and a drag changes the assembly range little from
-        one move to the next: so each move of one drag (the same ``doc`` and ``moved``) solves
-        only the samples of the coarse grid from :data:`WINDOW_MARGIN` before the first to
-        :data:`WINDOW_MARGIN` after the last that assembled at the previous move (all of them
-        at the first move, or when none assembled).  The release solves the whole sweep.
+        The numerical walk of a class-3 group costs more at a sample that does not assemble
+        (Newton fails, the step is halved ten times) than at one that does, and a drag changes
+        the assembly range little from one move to the next: so the moves of one drag (the
+        same ``doc`` and ``moved``) solve only the samples of the coarse grid that assembled
+        at the previous move; every :data:`PROBE_EVERY`-th move reaches :data:`WINDOW_MARGIN`
+        samples further on both sides, to follow a range that grows.  The first move solves
+        the whole grid, as does a move after one where nothing assembled; the release solves
+        the whole sweep.
         """
         from ..api import analyze, prepare
 
@@ -274,14 +278,15 @@ class Session:
             return analyze(mech, inputs, dynamics=False), index
         key = _hash(json.dumps([request.get("doc"), request.get("moved")], sort_keys=True).encode())
         n = len(inputs[mech.drivers[0].name])
-        lo, hi = self.windows.get(key, (0, n - 1))
-        lo, hi = min(lo, index), min(max(hi, index), n - 1)
+        lo, hi, moves = self.windows.get(key, (0, n - 1, 0))
+        reach = WINDOW_MARGIN if moves % PROBE_EVERY == 0 else 0
+        lo, hi = max(0, min(lo, index) - reach), min(max(hi, index) + reach, n - 1)
         res = analyze(mech, {k: v[lo : hi + 1] for k, v in inputs.items()}, dynamics=False)
         ok = np.flatnonzero(res.assembled)
         with self.lock:
             self.windows.pop(key, None)
             if ok.size:
-                self.windows[key] = (max(0, lo + int(ok[0]) - WINDOW_MARGIN), lo + int(ok[-1]) + WINDOW_MARGIN)
+                self.windows[key] = (lo + int(ok[0]), lo + int(ok[-1]), moves + 1)
             while len(self.windows) > MAX_WINDOWS:
                 self.windows.pop(next(iter(self.windows)))
         return res, index - lo
