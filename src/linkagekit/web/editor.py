@@ -632,8 +632,10 @@ class EditorServer(ThreadingHTTPServer):
 
     daemon_threads = True
     #: connections the system holds until the server accepts them (socketserver's default is 5: a burst
-    #: of requests beyond it waited for the client's SYN retransmission, a second or more)
-    request_queue_size = 128
+    #: of requests beyond it waited for the client's SYN retransmission, a second or more; with 128, 500
+    #: clients at once while solves hold the interpreter lost 150 connections, reset: Linux's SYN cookies
+    #: admit a connection the full queue then drops).  The system caps it (net.core.somaxconn).
+    request_queue_size = 1024
     routes = ("", "api/solve", "api/save")
     #: set once the server stops: a request broken by the shutdown is not reported
     closing = False
@@ -686,10 +688,12 @@ class EditorServer(ThreadingHTTPServer):
         return f"http://127.0.0.1:{self.port}/{self.token}/"
 
 
-def serve(path: str | Path, port: int = 0, open_browser: bool = True, ready: Any = None) -> None:
+def serve(
+    path: str | Path, port: int = 0, open_browser: bool = True, ready: Any = None, solve_seconds: float = SOLVE_SECONDS
+) -> None:
     """Serve the editor of ``path`` until interrupted; print its URL first (spec section 2)."""
     session = Session(path)
-    server = EditorServer(session, port)
+    server = EditorServer(session, port, solve_seconds=solve_seconds)
     print(server.url, flush=True)
     if ready is not None:
         ready(server)
