@@ -1092,3 +1092,79 @@ def test_a_class3_drag_computes_the_exact_range_once_per_release(tmp_path, monke
     assert cpu < 30.0, f"4 coarse moves took {cpu:.1f} CPU-s"  # generous: only catches the old cost times ten
     full = session.solve({"doc": doc, "pose": pose, "moved": ["J1"]})
     assert full["ok"] and len(calls) == 1, f"the release computed the exact range {len(calls)} times"
+
+
+def test_kill_9_during_saves_loses_nothing_and_leaves_nothing(tmp_path):
+    """`linkagekit edit` killed (SIGKILL) three times while a client saves back and forth: FILE and
+    FILE.bak always load, every start removes what a kill left, and after a last start and a
+    normal stop the directory holds FILE and FILE.bak only, with nothing on stderr.
+    (benchmarks/attack_editor.py does this 50 times.)"""
+    path = copy_example(tmp_path)
+    doc = lk.load(path).to_dict()
+    docs = [doc | {"name": "A"}, doc | {"name": "B"}]
+
+    def start() -> tuple[subprocess.Popen, int, str]:
+        proc = cli("edit", str(path), "--no-browser", "--port", "0")
+        m = URL_RE.match(proc.stdout.readline().strip())
+        assert m, proc
+        return proc, int(m.group(1)), m.group(2)
+
+    for k in range(3):
+        proc, port, token = start()
+        assert not [p for p in path.parent.iterdir() if p.name.endswith(".tmp")], "a temporary survived a start"
+        done = threading.Event()
+
+        def saves(port: int = port, token: str = token, done: threading.Event = done) -> None:
+            i = 0
+            while not done.is_set():
+                base = hashlib.sha256(path.read_bytes()).hexdigest()
+                try:
+                    c = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+                    c.request(
+                        "POST",
+                        f"/{token}/api/save",
+                        json.dumps({"doc": docs[i % 2], "base": base}),
+                        {"Content-Type": "application/json"},
+                    )
+                    c.getresponse().read()
+                except (OSError, http.client.HTTPException):
+                    return
+                i += 1
+
+        t = threading.Thread(target=saves, daemon=True)
+        t.start()
+        time.sleep(0.1 + 0.05 * k)
+        proc.kill()
+        proc.communicate(timeout=30)
+        done.set()
+        t.join(15)
+        assert lk.load(path).name in {"A", "B", doc.get("name")}
+        backup = path.with_name(path.name + ".bak")
+        assert not backup.exists() or lk.load(backup).joints == lk.load(path).joints
+    proc, _, _ = start()
+    proc.send_signal(signal.SIGINT)
+    code, out, err = finish(proc)
+    assert code == 0 and err.strip() == "linkagekit: editor stopped", err  # the normal goodbye, no traceback
+    assert sorted(p.name for p in path.parent.iterdir()) == [SEED000, SEED000 + ".bak"]
+
+
+def test_slow_connections_do_not_block_the_editor(server, monkeypatch):
+    """20 connections that send their request line one byte at a time: a normal request is
+    answered meanwhile, and the server drops each slow one after its request timeout (0.5 s
+    here, TIMEOUT in use)."""
+    from linkagekit.web import editor
+
+    monkeypatch.setattr(editor._Handler, "timeout", 0.5)
+    socks = [socket.create_connection(("127.0.0.1", server.port), timeout=10) for _ in range(20)]
+    for s in socks:
+        s.sendall(b"G")
+    Client(server).still_serving()
+    dropped = 0
+    for s in socks:
+        s.settimeout(10)
+        try:
+            dropped += s.recv(1) == b""
+        except ConnectionResetError:
+            dropped += 1
+        s.close()
+    assert dropped == 20
