@@ -41,12 +41,13 @@ import time
 import urllib.request
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import linkagekit as lk
 from helpers import leading_comments
 from linkagekit.errors import LinkageError
-from linkagekit.web.editor import ConflictError, EditorServer, Session
+from linkagekit.web.editor import ConflictError, EditorServer, Session, posed
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
@@ -199,8 +200,16 @@ def test_session_solve_with_pose_moves_the_reference_pose(tmp_path, coarse):
     assert m2.joints["D"] == complex(*new_d)
     for j in ("A", "B", "C", "P"):
         assert m2.joints[j] == mech.joints[j], j
-    want = m2.with_pose({j: [z.real, z.imag] for j, z in mech.joints.items()} | {"D": new_d})
-    assert m2 == want, "the answer's document is Mechanism.with_pose of the drawn configuration"
+    drawn = {j: [z.real, z.imag] for j, z in mech.joints.items()} | {"D": new_d}
+    want = m2.with_pose(drawn)
+    # Mechanism.with_pose of the drawn configuration, but for the given lengths that the drag of D cannot
+    # have changed (issue 23): those between two other joints stay exactly as given
+    for ln in mech.links:
+        kept = {k: v for k, v in ln.lengths.items() if "D" not in k.split("-")}
+        assert dict(m2.link(ln.name).lengths) == kept, (ln.name, m2.link(ln.name).lengths, kept)
+        assert m2.link(ln.name).joints == want.link(ln.name).joints
+    assert m2.with_pose(drawn) == want and m2.joints == want.joints
+    assert m2 == posed(mech, drawn, ["D"]), "the answer's document is the drawn configuration, given lengths kept"
     cd = abs(complex(*new_d) - mech.joints["C"])
     assert close(out["lengths"]["coupler"]["C-D"], cd, 5), (out["lengths"], cd)
     sc, i = out["scene"], out["pose_index"]
@@ -812,3 +821,350 @@ def test_many_concurrent_connections_are_all_answered(server):
     assert not failures, f"{len(failures)} of {n} failed, e.g. {failures[:3]}"
     assert answers == [403] * n, sorted(set(answers))
     Client(server).still_serving()
+
+
+# ============================================================================== issue 23: the editor under faults
+def _serve(session: Session, **kw) -> EditorServer:
+    srv = EditorServer(session, 0, **kw)
+    threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True).start()
+    return srv
+
+
+def _stop(srv: EditorServer) -> None:
+    srv.shutdown()
+    srv.server_close()
+
+
+def test_two_drivers_with_sweeps_of_different_lengths_open(tmp_path):
+    """A valid two-driver file whose second crank is swept 0..0 (one sample against 361): every
+    command opens it (lk.analyze holds that driver at its pose value), and so does the editor."""
+    path = tmp_path / "fivebar.yaml"
+    text = (EXAMPLES / "fivebar_two_drivers.yaml").read_text(encoding="utf-8")
+    path.write_text(text.replace("angles: {start: -60, stop: 300, step: 1}", "angles: {start: 0, stop: 0, step: 1}"))
+    session = Session(path)
+    res = lk.analyze(session.mech)
+    page = session.page("t" * 24)
+    assert 'data-role="mechanism"' in page
+    answer = session.solve({"doc": session.mech.to_dict()})
+    assert answer["ok"] is True
+    cols = answer["scene"]["columns"]
+    assert len(cols["input:crank1"]) == res.n == 361
+    assert answer["pose_index"] == 120 and cols["input:crank1"][120] == 120.0  # the pose's own input
+    assert res.inputs["crank2"] == pytest.approx([60.0] * 361, abs=1e-9)  # held at the pose's value
+    assert cols["input:crank2"] == pytest.approx([60.0] * 361, abs=1e-9)
+
+
+@pytest.mark.parametrize("body", ["[" * 5000 + "]" * 5000, '{"a":' * 500 + "1" + "}" * 500])
+def test_deeply_nested_json_is_refused_in_one_line(server, capfd, body):
+    """JSON nested past the parser's recursion limit, or past MAX_JSON_DEPTH: 400 with one line,
+    no traceback, and the server keeps serving."""
+    c = Client(server)
+    status, headers, data = c.request("POST", f"/{c.token}/api/solve", body)
+    doc = json_error(status, headers, data, "deep JSON")
+    assert status == 400 and "nested deeper than" in doc["error"], doc
+    c.still_serving()
+    _wait_for_requests()
+    assert capfd.readouterr().err == ""
+
+
+def _long_triad_doc(session: Session) -> dict:
+    doc = session.mech.to_dict()
+    doc["drivers"][0]["angles"] = {"start": 0, "stop": 3600, "step": 0.36}  # 10,001 samples of a class-3 group
+    return doc
+
+
+def test_a_solve_over_its_budget_is_stopped_with_a_message(tmp_path, capfd):
+    """A 10,000-sample sweep of the class-3 triad (minutes of walking) against a budget of 0.5 s:
+    answered 503 with a message naming the budget, after about the budget (CPU time bounded),
+    and the server then answers the next request."""
+    session = Session(copy_example(tmp_path, "triad_six_modes.yaml"))
+    srv = _serve(session, solve_seconds=0.5)
+    try:
+        c = Client(srv)
+        cpu0 = time.process_time()
+        status, headers, data = c.solve({"doc": _long_triad_doc(session)})
+        cpu = time.process_time() - cpu0
+        doc = json_error(status, headers, data, "a long solve")
+        assert status == 503 and doc.get("stopped") is True and "0.5 s" in doc["error"], doc
+        assert cpu < 5.0, f"the stopped solve used {cpu:.1f} CPU-s"
+        assert srv.watch.stopped["budget"] == 1
+        srv.watch.seconds = 60.0
+        status, _, data = c.solve({"doc": session.mech.to_dict(), "coarse": True})
+        assert status == 200 and json.loads(data)["ok"] is True
+    finally:
+        _stop(srv)
+    _wait_for_requests()
+    assert capfd.readouterr().err == ""
+
+
+def test_a_solve_whose_client_left_is_stopped(tmp_path, capfd):
+    """The same long solve, its client closing the connection 0.2 s after sending it (a closed
+    tab): the watch stops it (long before the 60 s budget), nothing is written to stderr, and
+    the request's thread ends."""
+    session = Session(copy_example(tmp_path, "triad_six_modes.yaml"))
+    srv = _serve(session, solve_seconds=60.0)
+    try:
+        body = json.dumps({"doc": _long_triad_doc(session)}).encode()
+        s = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
+        s.sendall(
+            f"POST /{srv.token}/api/solve HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n"
+            f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n".encode()
+            + body
+        )
+        time.sleep(0.2)
+        s.close()
+        _wait_for_requests(30.0)  # hangs for minutes without the watch
+        assert srv.watch.stopped == {"budget": 0, "gone": 1}
+    finally:
+        _stop(srv)
+    assert capfd.readouterr().err == ""
+
+
+def test_the_watch_never_stops_a_finished_solve(tmp_path):
+    """Many quick solves under a tiny budget race the watch: each is either answered or stopped
+    (503), and a stop is never raised later in the thread (the server keeps answering)."""
+    session = Session(copy_example(tmp_path))
+    srv = _serve(session, solve_seconds=0.02)
+    try:
+        c = Client(srv)
+        doc = session.mech.to_dict()
+        seen = set()
+        for _ in range(30):
+            status, _, data = c.solve({"doc": doc, "coarse": True})
+            seen.add(status)
+            assert status in (200, 503), data[:200]
+        srv.watch.seconds = 30.0
+        c.still_serving()
+    finally:
+        _stop(srv)
+
+
+def test_save_through_a_symlink_replaces_the_real_file(tmp_path):
+    """FILE is a symbolic link to a file in another directory: saving (the editor's save and
+    lk.save) replaces the real file, the link stays a link to it, and no temporary is left."""
+    real = copy_example(tmp_path, sub="real")
+    link = tmp_path / "work" / SEED000
+    link.parent.mkdir()
+    link.symlink_to(real)
+    session = Session(link)
+    doc = session.mech.to_dict()
+    doc["name"] = "through the link"
+    session.save({"doc": doc, "base": session.base})
+    assert link.is_symlink() and os.readlink(link) == str(real)
+    assert lk.load(real).name == "through the link"
+    lk.save(lk.load(real), link)
+    assert link.is_symlink() and lk.load(real).name == "through the link"
+    left = {p.name for p in (tmp_path / "real").iterdir()} | {p.name for p in (tmp_path / "work").iterdir()}
+    assert left == {SEED000, SEED000 + ".bak"}, left
+
+
+def test_stray_temporaries_are_removed_at_start_and_nothing_else(tmp_path):
+    """What a save killed half-way leaves (.FILE.<12 hex>.tmp, .FILE.bak.<12 hex>.tmp) is removed
+    when the editor opens FILE; names that only look alike, other files' temporaries, and a link
+    named like a temporary stay."""
+    path = copy_example(tmp_path)
+    d = path.parent
+    ours = [f".{SEED000}.0123456789ab.tmp", f".{SEED000}.bak.a1b2c3d4e5f6.tmp"]
+    others = [
+        f".{SEED000}.0123456789AB.tmp",  # not our (lower-case) hex
+        f".{SEED000}.0123456789a.tmp",  # 11 digits
+        f".{SEED000}.0123456789ab.tmp.keep",
+        ".other.yaml.0123456789ab.tmp",
+        f"{SEED000}.0123456789ab.tmp",  # not hidden
+    ]
+    for name in ours + others:
+        (d / name).write_text("partial")
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    (d / f".{SEED000}.ffffffffffff.tmp").symlink_to(victim)
+    Session(path)
+    left = {p.name for p in d.iterdir()}
+    assert not set(ours) & left
+    assert set(others) | {SEED000, f".{SEED000}.ffffffffffff.tmp"} == left
+    assert victim.read_text() == "keep me"
+
+
+def _dragged(session: Session, joint: str, dx: float, dy: float, coarse: bool = False) -> dict:
+    """The answer to a drag as the page sends it: the drawn pose at the pose's sample, ``joint`` moved."""
+    doc = session.mech.to_dict()
+    first = session.solve({"doc": doc, "coarse": True})
+    at = joints_at(first["scene"], first["pose_index"])
+    pose = {j: list(xy) for j, xy in at.items()}
+    pose[joint] = [pose[joint][0] + dx, pose[joint][1] + dy]
+    return session.solve({"doc": doc, "pose": pose, "moved": [joint], "coarse": coarse})
+
+
+@pytest.mark.parametrize("moved", [True, False])
+def test_save_after_a_drag_changes_only_what_the_drag_changed(tmp_path, moved):
+    """The five-bar's tracer P dragged (the page's drawn pose: the solver's numbers, e.g.
+    -14.999999999999991 for -15), then saved: the file differs from the original in exactly
+    two lines: P's coordinates, and link1's lengths, which lose the two pairs through P and keep
+    C-E: 60.  Every other line, its flow style and its integers (30, not 30.0) stay as written.
+    Without 'moved' the server finds the moved joint itself."""
+    path = copy_example(tmp_path, "fivebar_two_drivers.yaml")
+    original = path.read_text(encoding="utf-8").splitlines()
+    session = Session(path)
+    doc = session.mech.to_dict()
+    first = session.solve({"doc": doc, "coarse": True})
+    at = joints_at(first["scene"], first["pose_index"])
+    assert at["C"] != (-15.0, 25.9807621135332)  # the drawn pose is the solver's rounding of the file's
+    pose = {j: list(xy) for j, xy in at.items()}
+    pose["P"] = [16.5, 89.25]
+    request = {"doc": doc, "pose": pose} | ({"moved": ["P"]} if moved else {})
+    answer = session.solve(request)
+    assert answer["ok"], answer
+    session.save({"doc": answer["doc"], "base": session.base})
+    saved = path.read_text(encoding="utf-8").splitlines()
+    changed = [(a, b) for a, b in zip(original, saved, strict=True) if a != b]
+    assert changed == [
+        ("  P: [16.1807300401858, 88.6526224191045]", "  P: [16.5, 89.25]"),
+        (
+            "  link1: {joints: [C, E, P], lengths: {C-E: 60, E-P: 20, C-P: 70}}",
+            "  link1: {joints: [C, E, P], lengths: {C-E: 60}}",
+        ),
+    ], changed
+
+
+def test_save_keeps_block_style_and_a_drag_keeps_exact_numbers(tmp_path):
+    """A file written in block style stays in block style where it was; a number such as -7.8
+    that the drag did not touch is written -7.8 (not the solver's -7.799999999999999); the crank
+    pin C dragged: its coordinates change and the crank's given length goes (read off the pose)."""
+    path = tmp_path / "block.yaml"
+    path.write_text(
+        "format: linkagekit/1\nname: block\nunits:\n  length: mm\n  angle: deg\njoints:\n  A: [0, 0]\n"
+        "  B: [-7.1, 0.3]\n  C: [1.86, 2.48]\n  D: [-6.1, 4.7]\n  E: [-7.8, 6.1]\nlinks:\n  ground: [A, B]\n"
+        "  crank:\n    joints: [A, C]\n    lengths:\n      A-C: 3.1\n  coupler: [C, D]\n  rocker: [B, D, E]\n"
+        "drivers:\n  - link: crank\n    pivot: A\n    toward: C\n    angles: {start: 0, stop: 360, step: 5}\n",
+        encoding="utf-8",
+    )
+    before = path.read_text(encoding="utf-8").splitlines()
+    session = Session(path)
+    answer = _dragged(session, "C", 0.25, -0.125)
+    assert answer["ok"], answer
+    session.save({"doc": answer["doc"], "base": session.base})
+    after = path.read_text(encoding="utf-8").splitlines()
+    c = answer["doc"]["joints"]["C"]
+    assert [a for a in after if a not in before] == [f"  C: [{c[0]!r}, {c[1]!r}]"]
+    assert [b for b in before if b not in after] == ["  C: [1.86, 2.48]", "    lengths:", "      A-C: 3.1"]
+
+
+def test_a_class3_drag_computes_the_exact_range_once_per_release(tmp_path, monkeypatch):
+    """Dragging a joint of the class-3 triad: the coarse moves never compute the exact assembly
+    range (the continuation behind the curves' breaks, 72 % of a move's cost before), and after
+    the first move they walk only the stretch of the coarse grid that assembled, with a margin
+    (fewer samples, the same positions there); the release computes the range once (checks and
+    breaks share it)."""
+    import linkagekit.checks as checks_mod
+    from linkagekit.web.editor import COARSE_SAMPLES, WINDOW_MARGIN
+
+    calls = []
+    real = checks_mod.continuation_intervals
+    monkeypatch.setattr(checks_mod, "continuation_intervals", lambda *a, **k: calls.append(1) or real(*a, **k))
+    session = Session(copy_example(tmp_path, "triad_six_modes.yaml"))
+    doc = session.mech.to_dict()
+    first = session.solve({"doc": doc, "coarse": True})
+    at = joints_at(first["scene"], first["pose_index"])
+    pose = {j: list(xy) for j, xy in at.items()}
+    answers = []
+    cpu0 = time.process_time()
+    for k in range(4):
+        pose["J1"] = [pose["J1"][0] + 0.01 * k, pose["J1"][1]]
+        answers.append(session.solve({"doc": doc, "pose": pose, "moved": ["J1"], "coarse": True}))
+    cpu = time.process_time() - cpu0
+    assert calls == [], "a coarse move computed the exact assembly range"
+    full_n = len(answers[0]["scene"]["columns"]["assembled"])
+    assert full_n >= COARSE_SAMPLES
+    later = [a["scene"]["columns"]["assembled"] for a in answers[1:]]
+    assert all(sum(a) >= 10 and len(a) <= sum(a) + 2 * WINDOW_MARGIN + 1 for a in later), [len(a) for a in later]
+    assert answers[-1]["scene"]["breaks"] == []
+    # the windowed move gives the same positions as the whole coarse grid at its samples
+    from linkagekit.web.editor import sweep_with_pose
+
+    last = answers[-1]
+    m = lk.Mechanism.from_dict(last["doc"])
+    grid = sweep_with_pose(m, COARSE_SAMPLES)[0]["crank"]
+    whole = lk.analyze(m, {"crank": grid})
+    shown = np.array(last["scene"]["columns"]["input:crank"], float)
+    k = np.searchsorted(grid, shown)
+    assert np.array_equal(grid[k], shown)
+    got = np.array([np.nan if v is None else v for v in last["scene"]["columns"]["J2.x"]], float)
+    assert np.allclose(whole.xy("J2")[k, 0], got, rtol=0, atol=1e-9 * m.length_scale, equal_nan=True)
+    assert cpu < 30.0, f"4 coarse moves took {cpu:.1f} CPU-s"  # generous: only catches the old cost times ten
+    full = session.solve({"doc": doc, "pose": pose, "moved": ["J1"]})
+    assert full["ok"] and len(calls) == 1, f"the release computed the exact range {len(calls)} times"
+
+
+def test_kill_9_during_saves_loses_nothing_and_leaves_nothing(tmp_path):
+    """`linkagekit edit` killed (SIGKILL) three times while a client saves back and forth: FILE and
+    FILE.bak always load, every start removes what a kill left, and after a last start and a
+    normal stop the directory holds FILE and FILE.bak only, with nothing on stderr.
+    (benchmarks/attack_editor.py does this 50 times.)"""
+    path = copy_example(tmp_path)
+    doc = lk.load(path).to_dict()
+    docs = [doc | {"name": "A"}, doc | {"name": "B"}]
+
+    def start() -> tuple[subprocess.Popen, int, str]:
+        proc = cli("edit", str(path), "--no-browser", "--port", "0")
+        m = URL_RE.match(proc.stdout.readline().strip())
+        assert m, proc
+        return proc, int(m.group(1)), m.group(2)
+
+    for k in range(3):
+        proc, port, token = start()
+        assert not [p for p in path.parent.iterdir() if p.name.endswith(".tmp")], "a temporary survived a start"
+        done = threading.Event()
+
+        def saves(port: int = port, token: str = token, done: threading.Event = done) -> None:
+            i = 0
+            while not done.is_set():
+                base = hashlib.sha256(path.read_bytes()).hexdigest()
+                try:
+                    c = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+                    c.request(
+                        "POST",
+                        f"/{token}/api/save",
+                        json.dumps({"doc": docs[i % 2], "base": base}),
+                        {"Content-Type": "application/json"},
+                    )
+                    c.getresponse().read()
+                except (OSError, http.client.HTTPException):
+                    return
+                i += 1
+
+        t = threading.Thread(target=saves, daemon=True)
+        t.start()
+        time.sleep(0.1 + 0.05 * k)
+        proc.kill()
+        proc.communicate(timeout=30)
+        done.set()
+        t.join(15)
+        assert lk.load(path).name in {"A", "B", doc.get("name")}
+        backup = path.with_name(path.name + ".bak")
+        assert not backup.exists() or lk.load(backup).joints == lk.load(path).joints
+    proc, _, _ = start()
+    proc.send_signal(signal.SIGINT)
+    code, out, err = finish(proc)
+    assert code == 0 and err.strip() == "linkagekit: editor stopped", err  # the normal goodbye, no traceback
+    assert sorted(p.name for p in path.parent.iterdir()) == [SEED000, SEED000 + ".bak"]
+
+
+def test_slow_connections_do_not_block_the_editor(server, monkeypatch):
+    """20 connections that send their request line one byte at a time: a normal request is
+    answered meanwhile, and the server drops each slow one after its request timeout (0.5 s
+    here, TIMEOUT in use)."""
+    from linkagekit.web import editor
+
+    monkeypatch.setattr(editor._Handler, "timeout", 0.5)
+    socks = [socket.create_connection(("127.0.0.1", server.port), timeout=10) for _ in range(20)]
+    for s in socks:
+        s.sendall(b"G")
+    Client(server).still_serving()
+    dropped = 0
+    for s in socks:
+        s.settimeout(10)
+        try:
+            dropped += s.recv(1) == b""
+        except ConnectionResetError:
+            dropped += 1
+        s.close()
+    assert dropped == 20

@@ -53,6 +53,7 @@ import pytest
 
 import linkagekit as lk
 from helpers import leading_comments
+from linkagekit.web.editor import posed
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
@@ -440,9 +441,20 @@ def test_drag_sets_the_reference_pose_and_save_writes_it(open_editor, name, join
     for j in m2.joint_names:  # the document's reference pose is the drawn configuration
         z = m2.joints[j]
         assert close(z.real, pose[j][0], size) and close(z.imag, pose[j][1], size), (j, z, pose[j])
-    assert m2 == mech0.with_pose({j: [m2.joints[j].real, m2.joints[j].imag] for j in m2.joint_names}), (
-        "the document is Mechanism.with_pose of its own joints"
+    # the document is Mechanism.with_pose of its own joints, but for what the drag cannot have changed
+    # (issue 23): a given length between two joints not dragged stays exactly as given
+    assert m2 == posed(mech0, {j: [m2.joints[j].real, m2.joints[j].imag] for j in m2.joint_names}, [joint]), (
+        "the document is the drawn configuration with the untouched given lengths"
     )
+    for ln in mech0.links:
+        kept = {k: v for k, v in ln.lengths.items() if joint not in k.split("-")}
+        assert {k: m2.link(ln.name).lengths.get(k) for k in kept} == kept, (ln.name, kept, m2.link(ln.name).lengths)
+    # the view is kept: the released joint is drawn where the pointer let it go, at the same scale
+    got = by_name(st1)[joint]
+    assert math.hypot(got["u"] - target[0], got["v"] - target[1]) < 1.0, (
+        f"{name}: after the release, {joint} is drawn at ({got['u']:.2f}, {got['v']:.2f}), released at {target}"
+    )
+    assert st1["scale"] == st0["scale"] and st1["viewBox"] == st0["viewBox"], (st0["viewBox"], st1["viewBox"])
     check_curves(ep, st1, m2, f"after dragging {joint}")
     assert not st1["undo"] and st1["redo"], "after a drag: Undo enabled, Redo disabled"
     # save

@@ -373,14 +373,29 @@ def save(mech: Mechanism, path: str | Path) -> Path:
     return p
 
 
-def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml") -> str:
+def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | None = None) -> str:
     """The text of a mechanism file, YAML (readable: block style, points as flow lists) or JSON.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        The mechanism.
+    fmt : {"yaml", "json"}
+        The format.
+    like : str, optional
+        The YAML text of the file this one replaces: each mapping and list found at the same
+        place in it keeps its style there (flow ``{...}``/``[...]`` or block), and a number it
+        wrote as an integer stays one while its value is a whole number.  Other comments
+        than the file's first lines are not kept.  Ignored for JSON, or when it does not parse.
 
     Examples
     --------
     >>> from linkagekit.files import dumps, load
-    >>> print(dumps(load("examples/seed000_fourbar.yaml")).splitlines()[2])
+    >>> m = load("examples/seed000_fourbar.yaml")
+    >>> print(dumps(m).splitlines()[2])
     units: {length: cm, angle: deg}
+    >>> print(dumps(m, like="units:\\n  length: cm\\n  angle: deg\\n").splitlines()[2:5])
+    ['units:', '  length: cm', '  angle: deg']
     """
     data = mech.to_dict()
     if fmt == "json":
@@ -389,8 +404,12 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml") -> str:
         raise MechanismFileError(f"unknown mechanism file format '{fmt}' (yaml or json)")
     import yaml
 
+    styled = _styled(data)
+    if like is not None:
+        with contextlib.suppress(LinkageError):  # a file that does not parse has no style to keep
+            styled = _like(styled, _yaml_node(like, "the file replaced"))
     text: str = yaml.dump(
-        _styled(data),
+        styled,
         Dumper=_dumper_class(),
         sort_keys=False,
         default_flow_style=False,
@@ -421,6 +440,34 @@ class _FlowList(list[Any]):
 
 class _FlowDict(dict[str, Any]):
     """A mapping written in YAML flow style: ``{start: 0.0, stop: 360.0, step: 1.0}``."""
+
+
+class _BlockList(list[Any]):
+    """A list written in YAML block style (one ``- item`` a line)."""
+
+
+class _BlockDict(dict[str, Any]):
+    """A mapping written in YAML block style (one ``key: value`` a line)."""
+
+
+def _like(value: Any, node: Any) -> Any:
+    """``value`` styled as ``node``, the same place in the file it replaces (None: as it is).
+
+    A mapping or list takes the node's flow or block style; a whole float where the file
+    wrote an integer is written as that integer (it reads back equal).
+    """
+    import yaml
+
+    if isinstance(node, yaml.MappingNode) and isinstance(value, dict):
+        old = {k.value: v for k, v in node.value if isinstance(k, yaml.ScalarNode)}
+        return (_FlowDict if node.flow_style else _BlockDict)({k: _like(v, old.get(k)) for k, v in value.items()})
+    if isinstance(node, yaml.SequenceNode) and isinstance(value, list):
+        items = [_like(v, node.value[i] if i < len(node.value) else None) for i, v in enumerate(value)]
+        return (_FlowList if node.flow_style else _BlockList)(items)
+    whole = isinstance(value, float) and value.is_integer() and abs(value) < 2.0**53
+    if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:int" and whole:
+        return int(value)
+    return value
 
 
 def _styled(d: dict[str, Any]) -> dict[str, Any]:
@@ -477,8 +524,16 @@ def _dumper_class() -> type[Any]:
             return dumper.represent_scalar("tag:yaml.org,2002:str", data, style="|")
         return dumper.represent_str(data)
 
+    def block_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
+        return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=False)
+
+    def block_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
+        return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=False)
+
     _Dumper.add_representer(_FlowList, flow_list)
     _Dumper.add_representer(_FlowDict, flow_dict)
+    _Dumper.add_representer(_BlockList, block_list)
+    _Dumper.add_representer(_BlockDict, block_dict)
     _Dumper.add_representer(str, text)
     return _Dumper
 
@@ -491,16 +546,57 @@ def _write_atomic(p: Path, text: str) -> None:
         os.fsync(f.fileno())
 
 
+#: random bytes in the name of a temporary file of :func:`atomic_output` (twice as many hex digits)
+_TMP_BYTES = 6
+
+
+def stray_temporaries(path: str | Path) -> list[Path]:
+    """The temporary files :func:`atomic_output` may have left beside ``path`` (and its ``.bak``).
+
+    Only regular files (not links) named exactly ``.NAME.<12 hex digits>.tmp`` or
+    ``.NAME.bak.<12 hex digits>.tmp``, beside ``path`` and, for a symbolic link, beside the
+    file it points to: what a process killed during a save leaves.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     d = pathlib.Path(tmp)
+    ...     for name in (".m.yaml.0123456789ab.tmp", ".m.yaml.bak.0123456789ab.tmp", ".m.yaml.x.tmp", "m.yaml"):
+    ...         _ = (d / name).write_text("")
+    ...     sorted(p.name for p in stray_temporaries(d / "m.yaml"))
+    ['.m.yaml.0123456789ab.tmp', '.m.yaml.bak.0123456789ab.tmp']
+    """
+    p = Path(path)
+    found: list[Path] = []
+    for q in dict.fromkeys([p, Path(os.path.realpath(p))]):
+        rx = re.compile(rf"^\.{re.escape(q.name)}(?:\.bak)?\.[0-9a-f]{{{2 * _TMP_BYTES}}}\.tmp$")
+        try:
+            names = os.listdir(q.parent)
+        except OSError:
+            continue
+        for name in names:
+            cand = q.parent / name
+            with contextlib.suppress(OSError):
+                if rx.match(name) and stat.S_ISREG(os.lstat(cand).st_mode) and cand not in found:
+                    found.append(cand)
+    return found
+
+
 @contextlib.contextmanager
 def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iterator[Path]:
     """A temporary path beside ``p`` to write; on success it replaces ``p`` in one step.
 
     The old file stays whole until the new one is complete; the new file keeps the old
-    one's permissions (or the umask's).  On failure the temporary file is removed; an
-    ``OSError`` becomes ``error`` naming ``p``.
+    one's permissions (or the umask's).  A symbolic link is followed: the file it points
+    to is replaced (the temporary file is written beside it) and the link stays a link.
+    On failure the temporary file is removed; an ``OSError`` becomes ``error`` naming
+    ``p``.  A temporary file left by a killed process is named as :func:`stray_temporaries`
+    finds it.
     """
     p = Path(p)
-    tmp = p.with_name(f".{p.name}.{secrets.token_hex(6)}.tmp")
+    p = Path(os.path.realpath(p)) if p.is_symlink() else p
+    tmp = p.with_name(f".{p.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
     done = False
     try:
         try:

@@ -366,19 +366,19 @@ def _x_driver(inputs: dict[str, np.ndarray], drivers: tuple[str, ...]) -> str:
     return next((d for d in drivers if np.ptp(inputs[d]) > 0), drivers[0])
 
 
-def _breaks(res: Result, x: np.ndarray) -> tuple[int, ...]:
+def _breaks(res: Result, x: np.ndarray, known: list[list[float]] | None = None) -> tuple[int, ...]:
     """Segments between two assembled samples that cross a stretch where the mechanism does not assemble.
 
     Only for one driver: its assembly intervals (:func:`linkagekit.checks.input_range`,
-    boundaries exact to ~1e-12) are compared with each segment; an angle's intervals repeat
-    every turn.
+    boundaries exact to ~1e-12, or ``known`` when they were computed already) are compared
+    with each segment; an angle's intervals repeat every turn.
     """
     mech = res.mechanism
     if len(mech.drivers) != 1 or res.n < 2:
         return ()
     from ..checks import input_range
 
-    ranges = np.array(input_range(mech, 0), float).reshape(-1, 2)
+    ranges = np.array(input_range(mech, 0) if known is None else known, float).reshape(-1, 2)
     both = res.assembled[:-1] & res.assembled[1:]
     if not both.any():
         return ()
@@ -420,13 +420,18 @@ def _bounds(mech: Mechanism, z: np.ndarray, sliders: tuple[SceneSlider, ...]) ->
     return (float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad))
 
 
-def build_scene(res: Result) -> Scene:
+def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[float]] | None = None) -> Scene:
     """The scene of one mechanism's solved sweep.
 
     Parameters
     ----------
     res : Result
         From :func:`linkagekit.analyze` for one design (``res.design(i)`` for one of a batch).
+    exact_breaks : bool
+        False: no :attr:`Scene.breaks` (curves lifted only where samples do not assemble), as
+        the editor draws while a joint is dragged: the exact range of a class-3 group is costly.
+    input_range : list of [float, float], optional
+        The first driver's :func:`linkagekit.checks.input_range`, when it is known already.
 
     Raises
     ------
@@ -440,7 +445,6 @@ def build_scene(res: Result) -> Scene:
     mech = res.mechanism
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
-    xy = np.stack([z.real, z.imag], axis=-1)
     ground_joints = mech.link("ground").joints
     coupler, other = path_kinds(mech)
     moving = [j for j in names if j not in ground_joints]
@@ -463,7 +467,7 @@ def build_scene(res: Result) -> Scene:
         drivers=drivers,
         input_units=input_units(mech),
         inputs=inputs,
-        xy=xy,
+        xy=np.stack([z.real, z.imag], axis=-1),
         assembled=np.asarray(res.assembled, bool).copy(),
         coupler_curves=coupler,
         other_paths=tuple(j for j in other if j in moving),
@@ -473,6 +477,6 @@ def build_scene(res: Result) -> Scene:
         units=units,
         plots=_plots(cat),
         x_driver=x_driver,
-        breaks=_breaks(res, inputs[drivers[0]]),
+        breaks=_breaks(res, inputs[drivers[0]], input_range) if exact_breaks else (),
         catalogue=cat,
     )

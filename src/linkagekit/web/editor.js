@@ -74,7 +74,7 @@
     if (!r.ok) { setError(r.error || "could not solve"); if (job.done) job.done(false); return; }
     doc = r.doc;
     if (!(drag && !job.body.coarse)) {   // a drag under way draws its own coarse answers
-      lk.load(r.scene, job.body.coarse ? view : null);
+      lk.load(r.scene, job.body.coarse ? view : keptView(r.scene));
       lk.show(r.pose_index);
     }
     setError("");
@@ -84,6 +84,20 @@
       requestAnimationFrame(function () { timing.push(performance.now() - t0); });
     }
     if (job.done) job.done(true);
+  }
+
+  /* the view stays as it is across edits (a released joint stays under the pointer); it is
+   * fitted again only when asked (Fit view) or when the mechanism no longer lies in it */
+  function keptView(scene) {
+    if (!lk.viewer) return null;
+    var v = lk.viewer.view(), xs = [], ys = [];
+    scene.joints.forEach(function (j) {
+      xs.push(lk.column(scene, "joint", j, "x")); ys.push(lk.column(scene, "joint", j, "y"));
+    });
+    var ex = lk.extent(xs), ey = lk.extent(ys);
+    if (!(ex[0] <= ex[1] && ey[0] <= ey[1])) return v;   // nothing assembles: nothing to fit
+    var x0 = -v.tx / v.s, x1 = (v.W - v.tx) / v.s, y0 = (v.ty - v.H) / v.s, y1 = v.ty / v.s;
+    return ex[0] >= x0 && ex[1] <= x1 && ey[0] >= y0 && ey[1] <= y1 ? v : null;
   }
 
   /* things to do once no solve is in flight or waiting (a save clicked during a solve) */
@@ -155,7 +169,10 @@
     view = lk.viewer.view();
     // a drag pressed before the previous edit is answered builds on that edit's pose
     var start = outstanding ? clone(outstanding.body.pose) : displayedPose();
-    drag = {joint: t.getAttribute("data-joint"), pose: start, doc: clone(doc), moved: false};
+    // the joints moved by the user since drag.doc: the server keeps every other number of the document
+    var joints = outstanding ? outstanding.body.moved.slice() : [];
+    if (joints.indexOf(t.getAttribute("data-joint")) < 0) joints.push(t.getAttribute("data-joint"));
+    drag = {joint: t.getAttribute("data-joint"), pose: start, doc: clone(doc), moved: false, joints: joints};
     generation++;
   });
   svg.addEventListener("pointermove", function (e) {
@@ -164,7 +181,7 @@
     var p = svgPoint(e);
     drag.pose[drag.joint] = p;
     drag.moved = true;
-    solve({doc: drag.doc, pose: drag.pose, coarse: true, t0: t0});
+    solve({doc: drag.doc, pose: drag.pose, moved: drag.joints, coarse: true, t0: t0});
   });
   function release(e) {
     if (!drag) return;
@@ -174,7 +191,7 @@
     d.pose[d.joint] = svgPoint(e);
     generation++;           // coarse answers still on the way are not drawn over the full one
     pending = null;
-    outstanding = solve({doc: d.doc, pose: d.pose, at: atNow()}, function (ok) {
+    outstanding = solve({doc: d.doc, pose: d.pose, moved: d.joints, at: atNow()}, function (ok) {
       if (ok) commit(doc);
       else { view = null; }
     });
@@ -252,6 +269,14 @@
     });
     svg.appendChild(g);
   }
+  var fitButton = document.createElement("button");
+  fitButton.type = "button"; fitButton.textContent = "Fit view"; fitButton.setAttribute("data-action", "fit");
+  fitButton.title = "fit the drawing to the mechanism (the view is otherwise kept across edits)";
+  q("[data-action=ground]").insertAdjacentElement("afterend", fitButton);
+  fitButton.addEventListener("click", function () {
+    var i = lk.current();
+    lk.load(lk.scene, null); lk.show(i); drawDraft();
+  });
   q("[data-action=add-link]").addEventListener("click", function () { setMode(mode === "link" ? null : "link"); });
   q("[data-action=ground]").addEventListener("click", function () { setMode(mode === "ground" ? null : "ground"); });
   function clickedJoint(t) {

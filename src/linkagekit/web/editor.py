@@ -13,16 +13,29 @@ one page and three JSON calls under a random token, and refuses (403) a request 
 token, with a ``Host`` other than the loopback address, from another ``Origin``, or for any
 other path.  Only the opened file (and its ``.bak`` backup) is ever written: ``save``
 writes a temporary file and renames it over the old one, after copying the old one to the
-backup, and refuses when the file changed on disk since it was opened or last saved.
+backup, and refuses when the file changed on disk since it was opened or last saved.  A
+symbolic link is followed (the file it points to is replaced, the link stays); the temporary
+files a save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed
+when the editor starts.
+
+Each solve (and the page) runs under a :class:`Watch`: past its time budget it is stopped and
+answered 503 with a message; when its client has gone (a closed tab) it is stopped at once.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import hashlib
 import json
 import secrets
+import select
+import socket
 import sys
 import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Literal
@@ -32,17 +45,30 @@ import numpy as np
 
 from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
-from ..files import atomic_output, dumps, load
-from ..model import Mechanism
+from ..files import atomic_output, dumps, load, stray_temporaries
+from ..model import Driver, Mechanism
+from ..result import Result
 
 #: samples of the coarse sweep solved while a joint is dragged
 COARSE_SAMPLES = 73
+#: samples of the coarse grid a class-3 drag's sweep reaches, every PROBE_EVERY-th move, past where
+#: the previous move assembled (see Session._coarse)
+WINDOW_MARGIN = 2
+PROBE_EVERY = 5
+#: drags whose coarse windows are remembered
+MAX_WINDOWS = 16
 #: the largest request body the server reads
 MAX_BODY = 2 << 20
 #: seconds a request may take to arrive
 TIMEOUT = 10.0
 #: how a client that went away shows: it reset or closed its connection, or stopped sending
 VANISHED = (ConnectionError, TimeoutError)
+#: seconds one solve (or the page) may compute before it is stopped and answered with a message
+SOLVE_SECONDS = 30.0
+#: seconds between two looks of the watch at the solves under way (deadline passed? client gone?)
+WATCH_INTERVAL = 0.05
+#: levels of JSON nesting a request may have (a mechanism document needs about 5)
+MAX_JSON_DEPTH = 64
 
 
 class ConflictError(LinkageError):
@@ -54,6 +80,9 @@ class ConflictError(LinkageError):
 def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np.ndarray], int]:
     """The file's sweep (or ``n`` samples evenly over it), with the reference pose's input in it.
 
+    As in :func:`linkagekit.analyze`, a driver whose sweep has another number of samples than
+    the first driver's stays at its pose value.
+
     Returns the inputs by driver and the index of the pose's sample, so that the page can
     show the pose itself: a dragged joint stays under the pointer.
     """
@@ -64,9 +93,13 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     pose = {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
     count = mech.drivers[0].sweep.count()
     n = n or (count if count <= MAX_REPORT_SAMPLES - 1 else MAX_REPORT_SAMPLES - 1)
-    base = {
-        d.name: d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n) for d in mech.drivers
-    }
+
+    def along(d: Driver) -> np.ndarray:
+        if d.sweep.count() != count:  # as lk.analyze: a sweep of another length stays at the pose's value
+            return np.full(n, pose[d.name])
+        return d.sweep.values() if n == count else np.linspace(d.sweep.start, d.sweep.stop, n)
+
+    base = {d.name: along(d) for d in mech.drivers}
     first = mech.drivers[0].name
     x = base[first]
     near = np.flatnonzero(np.all([np.abs(base[k] - v) <= 1e-12 * max(1.0, abs(v)) for k, v in pose.items()], axis=0))
@@ -75,6 +108,53 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     ascending = x.size < 2 or x[-1] >= x[0]
     k = int(np.searchsorted(x, pose[first])) if ascending else int(x.size - np.searchsorted(x[::-1], pose[first]))
     return {name: np.insert(v, k, pose[name]) for name, v in base.items()}, k
+
+
+#: a joint of a new pose this close to its place in the document (relative to the mechanism's size)
+#: has not moved: it keeps the document's exact numbers
+SAME_PLACE = 1e-9
+
+
+def posed(mech: Mechanism, pose: Any, moved: Any = None) -> Mechanism:
+    """``mech`` with the reference pose ``pose`` (joint -> [x, y]), as after a drag of the ``moved`` joints.
+
+    Every dimension is read off the new pose (:meth:`Mechanism.with_pose`), except what the
+    drag cannot have changed, which keeps the document's exact numbers: a joint not moved
+    that is where the document has it keeps its coordinates (not the solver's rounding of
+    them), a given length between two joints not moved stays given, and a link whose joints
+    all kept their place keeps its centre of gravity.  ``moved`` (a list of joint names)
+    defaults to the joints whose place differs from the document's.
+
+    Examples
+    --------
+    >>> from linkagekit.files import load
+    >>> m = load("examples/fivebar_two_drivers.yaml")
+    >>> new = posed(m, {"P": [16.0, 89.0]}, ["P"])
+    >>> new.link("crank1").lengths["A-C"], dict(new.link("link1").lengths)
+    (30.0, {'C-E': 60.0})
+    """
+    if not isinstance(pose, dict):
+        raise InputError("'pose' must map joint names to [x, y]")
+    tol = SAME_PLACE * mech.length_scale
+    here = {j: [z.real, z.imag] for j, z in mech.joints.items()}
+    placed = mech.with_pose({j: pose.get(j, here[j]) for j in mech.joints}).joints  # checks the pose
+    if moved is None:
+        moved = [j for j in mech.joints if abs(placed[j] - mech.joints[j]) > tol]
+    if not isinstance(moved, list) or not all(isinstance(j, str) for j in moved):
+        raise InputError("'moved' must list joint names")
+    still = {j for j in mech.joints if j not in moved and abs(placed[j] - mech.joints[j]) <= tol}
+    doc = mech.with_pose({j: here[j] if j in still else [z.real, z.imag] for j, z in placed.items()}).to_dict()
+    old = mech.to_dict()["links"]
+    for ln in mech.links:
+        kept = {k: v for k, v in ln.lengths.items() if not set(k.split("-")) & set(moved)}
+        entry = doc["links"][ln.name]
+        if isinstance(entry, list) and kept:
+            entry = doc["links"][ln.name] = {"joints": entry}
+        if kept:
+            entry["lengths"] = kept
+        if ln.cg_pose is not None and set(ln.joints) <= still:
+            entry["cg"] = old[ln.name]["cg"]
+    return Mechanism.from_dict(doc, source=mech.source)
 
 
 def _hash(data: bytes) -> str:
@@ -106,27 +186,57 @@ class Session:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.mech = load(self.path)  # a bad file: MechanismFileError, exit 2, before anything serves
+        for stray in stray_temporaries(self.path):  # left by an editor killed during a save
+            with contextlib.suppress(OSError):
+                stray.unlink()
         data = self.path.read_bytes()
         self.base = _hash(data)
         self.text = data.decode("utf-8-sig", errors="replace")
         self.fmt: Literal["yaml", "json"] = "json" if self.path.suffix.lower() == ".json" else "yaml"
         self.backup = self.path.with_name(self.path.name + ".bak")
         self.lock = threading.Lock()
+        #: the coarse-grid samples each recent drag solves (see :meth:`_coarse`), oldest first
+        self.windows: dict[str, tuple[int, int, int]] = {}
 
     # ---------------------------------------------------------------- solving
     def solve(self, request: dict[str, Any]) -> dict[str, Any]:
-        """The answer to ``{"doc", "pose"?, "coarse"?, "at"?}``: the new document and its scene.
+        """The answer to ``{"doc", "pose"?, "moved"?, "coarse"?, "at"?}``: the new document and its scene.
 
         ``pose`` maps joint names to new positions (file units): the mechanism takes them as
-        its reference pose, every dimension read off it (:meth:`Mechanism.with_pose`).
-        ``coarse`` asks for :data:`COARSE_SAMPLES` samples over the sweep, no forces and no
-        checks; otherwise the file's sweep with forces, the text of ``check`` and the
-        assembly modes at input ``at`` (a mapping of driver to value).
+        its reference pose (:func:`posed`: every dimension read off it but those the
+        ``moved`` joints cannot have changed).  ``coarse`` asks for :data:`COARSE_SAMPLES`
+        samples over the sweep, no forces, no checks and no exact curve breaks; for a
+        numerical (class-3) group only over the stretch where the previous coarse answer of
+        the same drag assembled (:meth:`_coarse`).  Otherwise the file's sweep with forces,
+        the text of ``check`` and the assembly modes at input ``at`` (driver -> value).
         """
         from ..api import analyze
         from ..checks import check, check_text
         from ..viz.scene import build_scene
 
+        mech = self._mechanism(request)
+        if request.get("modes_only"):
+            return {"ok": True, **self._modes(mech, request.get("at"))}
+        out: dict[str, Any] = {"ok": True, "doc": mech.to_dict()}
+        if request.get("coarse"):
+            res, out["pose_index"] = self._coarse(mech, request)
+            out["scene"] = build_scene(res, exact_breaks=False).to_dict()
+        else:
+            inputs, out["pose_index"] = sweep_with_pose(mech)
+            res = analyze(mech, inputs, dynamics=mech.has_dynamics)
+            report = check(mech)  # its assembly range also gives the curves' breaks: computed once
+            out["scene"] = build_scene(res, input_range=report.input_range).to_dict()
+            out["checks"] = check_text(report.to_dict(), input_units(mech), mech.name or self.path.name)
+            out.update(self._modes(mech, request.get("at")))
+        out["lengths"] = {
+            ln.name: {f"{a}-{b}": ln.length(a, b) for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]}
+            for ln in mech.links
+            if ln.name != "ground" and len(ln.joints) >= 2
+        }
+        return out
+
+    def _mechanism(self, request: dict[str, Any]) -> Mechanism:
+        """The request's mechanism: its ``doc``, at the ``pose`` (or in the assembly ``mode``) it asks for."""
         doc = request.get("doc")
         if not isinstance(doc, dict):
             raise InputError("the request has no mechanism document ('doc')")
@@ -147,32 +257,39 @@ class Session:
                     or f"the mode {wanted} does not assemble at {listed.get('modes_at')}: move the input first"
                 )
             pose = {j: list(xy) for j, xy in match[0]["joints"].items()}
-        if pose is not None:
-            if not isinstance(pose, dict):
-                raise InputError("'pose' must map joint names to [x, y]")
-            full = {j: pose.get(j, [z.real, z.imag]) for j, z in mech.joints.items()}
-            mech = mech.with_pose(full)
-        if request.get("modes_only"):
-            return {"ok": True, **self._modes(mech, request.get("at"))}
-        coarse = bool(request.get("coarse"))
-        inputs, index = sweep_with_pose(mech, COARSE_SAMPLES if coarse else None)
-        res = analyze(mech, inputs, dynamics=not coarse and mech.has_dynamics)
-        out: dict[str, Any] = {
-            "ok": True,
-            "doc": mech.to_dict(),
-            "scene": build_scene(res).to_dict(),
-            "pose_index": index,
-            "lengths": {
-                ln.name: {f"{a}-{b}": ln.length(a, b) for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]}
-                for ln in mech.links
-                if ln.name != "ground" and len(ln.joints) >= 2
-            },
-        }
-        if not coarse:
-            units = input_units(mech)
-            out["checks"] = check_text(check(mech).to_dict(), units, mech.name or self.path.name)
-            out.update(self._modes(mech, request.get("at")))
-        return out
+        return mech if pose is None else posed(mech, pose, request.get("moved"))
+
+    def _coarse(self, mech: Mechanism, request: dict[str, Any]) -> tuple[Result, int]:
+        """A drag's coarse sweep, solved, and the index of the pose's sample in it.
+
+        The numerical walk of a class-3 group costs more at a sample that does not assemble
+        (Newton fails, the step is halved ten times) than at one that does, and a drag changes
+        the assembly range little from one move to the next: so the moves of one drag (the
+        same ``doc`` and ``moved``) solve only the samples of the coarse grid that assembled
+        at the previous move; every :data:`PROBE_EVERY`-th move reaches :data:`WINDOW_MARGIN`
+        samples further on both sides, to follow a range that grows.  The first move solves
+        the whole grid, as does a move after one where nothing assembled; the release solves
+        the whole sweep.
+        """
+        from ..api import analyze, prepare
+
+        inputs, index = sweep_with_pose(mech, COARSE_SAMPLES)
+        if not prepare(mech).plan.numerical:
+            return analyze(mech, inputs, dynamics=False), index
+        key = _hash(json.dumps([request.get("doc"), request.get("moved")], sort_keys=True).encode())
+        n = len(inputs[mech.drivers[0].name])
+        lo, hi, moves = self.windows.get(key, (0, n - 1, 0))
+        reach = WINDOW_MARGIN if moves % PROBE_EVERY == 0 else 0
+        lo, hi = max(0, min(lo, index) - reach), min(max(hi, index) + reach, n - 1)
+        res = analyze(mech, {k: v[lo : hi + 1] for k, v in inputs.items()}, dynamics=False)
+        ok = np.flatnonzero(res.assembled)
+        with self.lock:
+            self.windows.pop(key, None)
+            if ok.size:
+                self.windows[key] = (lo + int(ok[0]), lo + int(ok[-1]), moves + 1)
+            while len(self.windows) > MAX_WINDOWS:
+                self.windows.pop(next(iter(self.windows)))
+        return res, index - lo
 
     @staticmethod
     def _modes(mech: Mechanism, at: Any) -> dict[str, Any]:
@@ -214,7 +331,7 @@ class Session:
                     f"{self.path.name} changed on disk since it was opened or saved here: not overwritten "
                     "(reload the page to edit the file as it is now)"
                 )
-            body = dumps(mech, self.fmt)
+            body = dumps(mech, self.fmt, like=old.decode("utf-8-sig", errors="replace"))
             head = _leading_comments(old.decode("utf-8-sig", errors="replace")) if self.fmt == "yaml" else ""
             text = head + body
             with atomic_output(self.backup) as tmp:
@@ -248,6 +365,96 @@ class Session:
             "answer": {k: v for k, v in first.items() if k != "scene"},
         }
         return report_html(res, source=self.text, checks_text=first.get("checks"), editor=state, start=index)
+
+
+class SolveStopped(BaseException):
+    """Raised inside a solve's thread by :class:`Watch`: its time budget is spent, or its client left.
+
+    A ``BaseException``, so that no ``except Exception`` of the solver can swallow it; the
+    request handler catches it (and only it).
+    """
+
+
+@dataclass
+class _Solve:
+    """One solve under way: the thread computing it, its client's socket, its deadline."""
+
+    thread_id: int
+    sock: socket.socket
+    deadline: float
+    #: why it was stopped ("budget" or "gone"), once the watch has stopped it
+    reason: str | None = None
+
+
+def _raise_in(thread_id: int, exc: type[BaseException] | None) -> None:
+    """Have ``exc`` raised in thread ``thread_id`` at its next bytecode (``None``: cancel a pending one)."""
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread_id), ctypes.py_object(exc) if exc else None)
+
+
+def client_gone(sock: socket.socket) -> bool:
+    """True when the peer of ``sock`` has closed or reset its connection (nothing is consumed)."""
+    try:
+        if hasattr(select, "poll"):
+            poller = select.poll()
+            poller.register(sock.fileno(), select.POLLIN)
+            readable = bool(poller.poll(0))
+        else:  # pragma: no cover - Windows
+            readable = bool(select.select([sock], [], [], 0)[0])
+        return readable and sock.recv(1, socket.MSG_PEEK) == b""
+    except (OSError, ValueError):
+        return True
+
+
+class Watch:
+    """The solves under way, each stopped at its deadline or as soon as its client has gone.
+
+    The numerical walk of a class-3 group is a Python loop over samples, so a solve is stopped
+    between two steps of it: :class:`SolveStopped` is raised in the solve's thread (CPython's
+    ``PyThreadState_SetAsyncExc``), which unwinds it like any exception.  The solver itself
+    knows nothing of this.  One daemon thread looks every :data:`WATCH_INTERVAL` seconds.
+
+    Parameters
+    ----------
+    seconds : float
+        The time budget of one solve (wall clock).
+    """
+
+    def __init__(self, seconds: float = SOLVE_SECONDS) -> None:
+        self.seconds = float(seconds)
+        self.lock = threading.Lock()
+        self.solves: dict[int, _Solve] = {}
+        self.thread: threading.Thread | None = None
+        self.stopped = {"budget": 0, "gone": 0}
+
+    @contextlib.contextmanager
+    def solving(self, sock: socket.socket) -> Iterator[_Solve]:
+        """Watch the solve that runs in this block; :class:`SolveStopped` may be raised anywhere in it."""
+        solve = _Solve(threading.get_ident(), sock, time.monotonic() + self.seconds)
+        with self.lock:
+            self.solves[solve.thread_id] = solve
+            if self.thread is None:
+                self.thread = threading.Thread(target=self._run, name="linkagekit-edit-watch", daemon=True)
+                self.thread.start()
+        try:
+            yield solve
+        finally:
+            with self.lock:
+                self.solves.pop(solve.thread_id, None)
+                if solve.reason is not None:
+                    _raise_in(solve.thread_id, None)  # sent as the solve finished: not raised after it
+
+    def _run(self) -> None:
+        while True:
+            time.sleep(WATCH_INTERVAL)
+            now = time.monotonic()
+            with self.lock:
+                for solve in list(self.solves.values()):
+                    reason = "budget" if now > solve.deadline else "gone" if client_gone(solve.sock) else None
+                    if reason is not None:  # stopped once: it leaves the watch at once
+                        solve.reason = reason
+                        self.stopped[reason] += 1
+                        del self.solves[solve.thread_id]
+                        _raise_in(solve.thread_id, SolveStopped)
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -313,11 +520,31 @@ class _Handler(BaseHTTPRequestHandler):
             self._json(405, {"ok": False, "error": "use POST"})
             return
         try:
-            page = self.server.session.page(self.server.token)
+            with self.server.watch.solving(self.connection) as solve:
+                page = self.server.session.page(self.server.token)
+        except SolveStopped:
+            self._stopped(solve)
+            return
         except LinkageError as exc:
             self._json(500, {"ok": False, "error": one_line(str(exc), 300)})
             return
         self._send(200, page.encode("utf-8"), "text/html; charset=utf-8")
+
+    def _stopped(self, solve: _Solve) -> None:
+        """Answer a solve the watch stopped: a message when its budget ran out, nothing when its client left."""
+        if solve.reason == "gone":
+            self.close_connection = True
+            return
+        seconds = self.server.watch.seconds
+        self._json(
+            503,
+            {
+                "ok": False,
+                "stopped": True,
+                "error": f"stopped after {seconds:g} s, the editor's time budget for one solve: "
+                "sweep fewer samples (a larger step or a shorter range) and try again",
+            },
+        )
 
     def do_POST(self) -> None:  # noqa: N802 - http.server's name
         rest = self._allowed()
@@ -337,15 +564,20 @@ class _Handler(BaseHTTPRequestHandler):
         if not 0 <= length <= MAX_BODY:
             self._json(413, {"ok": False, "error": f"a request of at most {MAX_BODY} bytes"})
             return
+        request = _parse(self.rfile.read(length))
+        if isinstance(request, str):
+            self._json(400, {"ok": False, "error": request})
+            return
+        if rest == "api/save":  # never stopped half-way: a save is short, and writes
+            self._json(*self._answer(rest, request))
+            return
         try:
-            request = json.loads(self.rfile.read(length).decode("utf-8"), parse_constant=_no_constant)
-        except (ValueError, UnicodeDecodeError) as exc:
-            self._json(400, {"ok": False, "error": f"bad JSON: {one_line(str(exc), 120)}"})
+            with self.server.watch.solving(self.connection) as solve:
+                answer = self._answer(rest, request)
+        except SolveStopped:
+            self._stopped(solve)
             return
-        if not isinstance(request, dict):
-            self._json(400, {"ok": False, "error": "bad request: expected a JSON object"})
-            return
-        self._json(*self._answer(rest, request))
+        self._json(*answer)
 
     def _answer(self, call: str, request: dict[str, Any]) -> tuple[int, dict[str, Any]]:
         """The status and JSON answer of a solve or save (written by the caller, outside these excepts)."""
@@ -361,6 +593,36 @@ class _Handler(BaseHTTPRequestHandler):
             return 500, {"ok": False, "error": f"internal error: {type(exc).__name__}: {one_line(str(exc), 200)}"}
 
 
+def json_depth(value: Any) -> int:
+    """The nesting depth of parsed JSON (a scalar: 0), without recursion.
+
+    >>> json_depth({"a": [1, {"b": []}]})
+    4
+    """
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict | list):
+            deepest = max(deepest, depth + 1)
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
+def _parse(body: bytes) -> dict[str, Any] | str:
+    """A request body's JSON object, or the message (a ``str``) saying why it is refused."""
+    try:
+        request = json.loads(body.decode("utf-8"), parse_constant=_no_constant)
+    except (ValueError, UnicodeDecodeError) as exc:
+        return f"bad JSON: {one_line(str(exc), 120)}"
+    except RecursionError:  # the parser's own limit (about 1000 levels)
+        return f"bad JSON: nested deeper than {MAX_JSON_DEPTH} levels"
+    if json_depth(request) > MAX_JSON_DEPTH:
+        return f"bad JSON: nested deeper than {MAX_JSON_DEPTH} levels"
+    if not isinstance(request, dict):
+        return "bad request: expected a JSON object"
+    return request
+
+
 def _no_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a number JSON allows")
 
@@ -370,16 +632,21 @@ class EditorServer(ThreadingHTTPServer):
 
     daemon_threads = True
     #: connections the system holds until the server accepts them (socketserver's default is 5: a burst
-    #: of requests beyond it waited for the client's SYN retransmission, a second or more)
-    request_queue_size = 128
+    #: of requests beyond it waited for the client's SYN retransmission, a second or more; with 128, 500
+    #: clients at once while solves hold the interpreter lost 150 connections, reset: Linux's SYN cookies
+    #: admit a connection the full queue then drops).  The system caps it (net.core.somaxconn).
+    request_queue_size = 1024
     routes = ("", "api/solve", "api/save")
     #: set once the server stops: a request broken by the shutdown is not reported
     closing = False
 
-    def __init__(self, session: Session, port: int = 0, token: str | None = None) -> None:
+    def __init__(
+        self, session: Session, port: int = 0, token: str | None = None, solve_seconds: float = SOLVE_SECONDS
+    ) -> None:
         if not isinstance(port, int) or isinstance(port, bool) or not 0 <= port <= 65535:
             raise InputError(f"--port: expected 0 to 65535, got {port!r}")
         self.session = session
+        self.watch = Watch(solve_seconds)
         self.token = token or secrets.token_urlsafe(24)
         try:
             super().__init__(("127.0.0.1", port), _Handler)
@@ -421,10 +688,12 @@ class EditorServer(ThreadingHTTPServer):
         return f"http://127.0.0.1:{self.port}/{self.token}/"
 
 
-def serve(path: str | Path, port: int = 0, open_browser: bool = True, ready: Any = None) -> None:
+def serve(
+    path: str | Path, port: int = 0, open_browser: bool = True, ready: Any = None, solve_seconds: float = SOLVE_SECONDS
+) -> None:
     """Serve the editor of ``path`` until interrupted; print its URL first (spec section 2)."""
     session = Session(path)
-    server = EditorServer(session, port)
+    server = EditorServer(session, port, solve_seconds=solve_seconds)
     print(server.url, flush=True)
     if ready is not None:
         ready(server)
