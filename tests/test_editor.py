@@ -1168,3 +1168,28 @@ def test_slow_connections_do_not_block_the_editor(server, monkeypatch):
             dropped += 1
         s.close()
     assert dropped == 20
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf", "1e9", "abc"])
+def test_cli_refuses_a_bad_solve_budget_in_one_line(tmp_path, value):
+    path = copy_example(tmp_path)
+    proc = cli("edit", str(path), "--no-browser", "--solve-seconds", value)
+    code, out, err = finish(proc, 30)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "--solve-seconds" in err, (code, err)
+
+
+def test_cli_passes_its_solve_budget_to_the_server(tmp_path, monkeypatch):
+    from linkagekit import cli as cli_module
+    from linkagekit.web import editor as editor_module
+
+    seen: dict[str, float] = {}
+
+    def fake_serve(path, port=0, open_browser=True, solve_seconds=0.0):
+        seen["budget"] = solve_seconds
+
+    monkeypatch.setattr(editor_module, "serve", fake_serve)
+    path = copy_example(tmp_path)
+    assert cli_module.main(["edit", str(path), "--no-browser", "--solve-seconds", "2.5"]) == 0
+    assert seen == {"budget": 2.5}
+    assert cli_module.main(["edit", str(path), "--no-browser"]) == 0
+    assert seen == {"budget": editor_module.SOLVE_SECONDS}

@@ -395,6 +395,12 @@ def _edit_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
     p.add_argument("--port", metavar="N", help="listen on this port (default: a free one)")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser; just print the URL")
+    p.add_argument(
+        "--solve-seconds",
+        metavar="S",
+        default=None,
+        help="stop a solve that runs longer than S seconds and say so on the page (default 30)",
+    )
 
 
 def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
@@ -1086,7 +1092,7 @@ def _source_text(path: str) -> str | None:
 
 def _edit(args: argparse.Namespace) -> int:
     """``linkagekit edit``: serve until interrupted (Ctrl-C ends it with status 0)."""
-    from .web.editor import serve
+    from .web.editor import SOLVE_SECONDS, serve
 
     port = 0
     if args.port is not None:
@@ -1096,8 +1102,11 @@ def _edit(args: argparse.Namespace) -> int:
             raise InputError(f"--port: expected a whole number, got {shorten(repr(args.port))}") from None
         if not 0 <= port <= 65535:
             raise InputError(f"--port: expected 0 to 65535, got {port}")
+    budget = SOLVE_SECONDS if args.solve_seconds is None else _one_number(args.solve_seconds, "--solve-seconds")
+    if not 0 < budget <= 86400:
+        raise InputError(f"--solve-seconds: expected a time from 0 to 86400 s, got {args.solve_seconds}")
     try:
-        serve(args.file, port=port, open_browser=not args.no_browser)
+        serve(args.file, port=port, open_browser=not args.no_browser, solve_seconds=budget)
     except KeyboardInterrupt:
         print(f"{PROG}: editor stopped", file=sys.stderr)
     return 0
