@@ -1281,9 +1281,9 @@ class _Search:
     @staticmethod
     def best(p: Any) -> str:
         """The best design so far, as the progress shows it."""
-        if p.best_error == p.best_error:  # not NaN: a search is finished
-            return f"{100 * p.best_error:.3g} %" if math.isfinite(p.best_error) else "none feasible"
-        return f"cost {p.best_cost:.3g}"  # the first search's mean squared error (relative), until it is polished
+        if p.best_error != p.best_error:  # NaN: no search is finished (polished) yet
+            return f"(not yet measured; cost {p.best_cost:.3g})"
+        return f"{100 * p.best_error:.3g} %" if math.isfinite(p.best_error) else "none feasible"
 
     def update(self, p: Any) -> None:
         import time
@@ -1292,12 +1292,12 @@ class _Search:
             self.bar.update(
                 self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
             )
-            self.bar.update(self.task, best=self.best(p))
+            self.bar.update(self.task, best=self.best(p))  # the bar's column says "best error"
         elif time.monotonic() - self.last >= self.every:
             self.last = time.monotonic()
             print(
-                f"{PROG}: synthesize: search {p.restart + 1}, generation {p.generation}, best {self.best(p)}"
-                f" (max error / targets' diagonal), {p.evaluations} designs, {p.elapsed:.0f} of {self.seconds:g} s",
+                f"{PROG}: synthesize: search {p.restart + 1}, generation {p.generation}, best max error {self.best(p)}"
+                f" of the targets' diagonal, {p.evaluations} designs, {p.elapsed:.0f} of {self.seconds:g} s",
                 file=sys.stderr,
                 flush=True,
             )

@@ -494,6 +494,10 @@ class DESearch(Search):
         out.update(scale=float(sv.scale), nfev=int(sv._nfev), rng=sv.random_number_generator.bit_generator.state)
         return out
 
+    def shapes(self) -> dict[str, tuple[tuple[int, ...], tuple[int, ...]]]:
+        shapes = {k: np.shape(getattr(self.solver, k)) for k in _SOLVER_STATE}
+        return {k: (v, v) for k, v in shapes.items()}
+
     def restore(self, saved: dict[str, Any]) -> None:
         sv = self.solver
         for k in _SOLVER_STATE:
