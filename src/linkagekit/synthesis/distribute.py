@@ -211,16 +211,13 @@ class Evaluator:
         """The futures' results; ``WorkersLost`` after ``NO_WORKER_WAIT`` seconds without a worker or a scheduler."""
         import time
 
-        from distributed import wait
-
-        wait_for: Any = wait  # distributed leaves wait unannotated
         alone = None
         while True:
-            try:
-                wait_for(futures, timeout=DASK_POLL)
-                return list(self._client.gather(futures))
-            except TimeoutError:
-                pass
+            end = time.monotonic() + DASK_POLL
+            while time.monotonic() < end:
+                if all(f.done() for f in futures):  # finished, failed or cancelled: gather says which
+                    return list(self._client.gather(futures))
+                time.sleep(0.002)
             if self._client.status != "running":
                 raise WorkersLost("lost the Dask scheduler")
             if self._client.scheduler_info().get("workers"):
