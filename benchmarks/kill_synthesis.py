@@ -88,9 +88,13 @@ def killed_runs(d: Path, kills: int, rng: random.Random, span: float) -> dict:
     ck = d / "ck.npz"
     args = [*COMMAND, "-o", "killed.yaml", "--checkpoint", "ck.npz"]
     ages, steps, positions = [], [], []
-    for _ in range(kills):
+    attempts = 0
+    while len(ages) < kills:
+        attempts += 1
+        if attempts > 3 * kills:
+            raise SystemExit(f"only {len(ages)} kills in {attempts} attempts: the run keeps ending first")
         p = cli(args, d)
-        delay = rng.uniform(1.0, max(1.5, span))
+        delay = rng.uniform(0.5, max(1.0, span / 5))  # 15 kills spread over about one run
         t_end = time.monotonic() + delay
         last_mtime = None
         while time.monotonic() < t_end and p.poll() is None:
@@ -102,8 +106,10 @@ def killed_runs(d: Path, kills: int, rng: random.Random, span: float) -> dict:
                 steps.append(m - last_mtime)
             last_mtime = m
             time.sleep(0.002)
-        if p.poll() is not None:
-            raise SystemExit(f"the run ended before its kill (status {p.returncode}): {p.stderr.read()}")
+        if p.poll() is not None:  # it ended before its kill: the kills are spread too thin
+            if p.returncode != 0:
+                raise SystemExit(f"a run failed (status {p.returncode}): {p.stderr.read()}")
+            raise SystemExit("the run ended before all its kills; use more kills or a longer run")
         p.send_signal(signal.SIGKILL)
         killed_at = time.time()
         p.communicate()

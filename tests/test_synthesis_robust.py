@@ -387,8 +387,9 @@ def test_progress_lines_when_stderr_is_not_a_terminal_and_the_file_records_targe
     assert code == 0, captured.err
     lines = captured.err.splitlines()
     assert len(lines) >= 6 and all(line.startswith("linkagekit: synthesize: search ") for line in lines)
+    assert "best cost " in lines[0] and "(no search polished yet)" in lines[0]
     assert lines[-1].startswith("linkagekit: synthesize: search 2, generation 0, best max error ")
-    assert lines[-1].endswith(" s") and " % of the targets' diagonal, " in lines[-1]
+    assert lines[-1].endswith(" of 60 s") and " % of the targets' diagonal, " in lines[-1]
     assert "\x1b" not in captured.err and "\r" not in captured.err  # plain text, no terminal codes
     mech = lk.load(out)
     assert mech.length_unit == "cm" and " cm (" in mech.name  # the name's error carries its unit

@@ -1282,8 +1282,10 @@ class _Search:
     def best(p: Any) -> str:
         """The best design so far, as the progress shows it."""
         if p.best_error != p.best_error:  # NaN: no search is finished (polished) yet
-            return f"(not yet measured; cost {p.best_cost:.3g})"
-        return f"{100 * p.best_error:.3g} %" if math.isfinite(p.best_error) else "none feasible"
+            return f"cost {p.best_cost:.3g} (no search polished yet)"
+        if not math.isfinite(p.best_error):
+            return "max error: no design meets the constraints yet"
+        return f"max error {100 * p.best_error:.3g} % of the targets' diagonal"
 
     def update(self, p: Any) -> None:
         import time
@@ -1292,12 +1294,12 @@ class _Search:
             self.bar.update(
                 self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
             )
-            self.bar.update(self.task, best=self.best(p))  # the bar's column says "best error"
+            self.bar.update(self.task, best=self.best(p).removeprefix("max error "))  # its column: "best error"
         elif time.monotonic() - self.last >= self.every:
             self.last = time.monotonic()
             print(
-                f"{PROG}: synthesize: search {p.restart + 1}, generation {p.generation}, best max error {self.best(p)}"
-                f" of the targets' diagonal, {p.evaluations} designs, {p.elapsed:.0f} of {self.seconds:g} s",
+                f"{PROG}: synthesize: search {p.restart + 1}, generation {p.generation}, best {self.best(p)}, "
+                f"{p.evaluations} designs, {p.elapsed:.0f} of {self.seconds:g} s",
                 file=sys.stderr,
                 flush=True,
             )

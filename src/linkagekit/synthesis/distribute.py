@@ -130,6 +130,7 @@ class Evaluator:
         self.workers = workers
         keep_freed_memory()
         self._pool: Any = None
+        self._handlers: list[tuple[Any, int]] = []  # Dask's log handlers and their levels, while quiet
         self._client: Any = None
         self._remote: Any = None
         if scheduler is not None:
@@ -138,6 +139,7 @@ class Evaluator:
             except ImportError:
                 raise InputError("--scheduler needs Dask: pip install 'dask[distributed]'") from None
             _check_address(scheduler)
+            self._quiet_dask()
             try:
                 connect: Any = Client  # distributed leaves Client.__init__ unannotated
                 self._client = connect(scheduler, timeout=10, set_as_default=False)
@@ -150,6 +152,20 @@ class Evaluator:
             self.parts = workers
         else:
             self.parts = 1
+
+    def _quiet_dask(self) -> None:
+        """Dask's own log off while this client runs: a lost scheduler is one line of ours, not its traceback.
+
+        Dask logs through handlers on the ``distributed`` logger (its children propagate to them
+        whatever their own level), so those handlers' levels are raised, and restored by :meth:`close`.
+        """
+        import logging
+
+        names = [n for n in logging.root.manager.loggerDict if n == "distributed" or n.startswith("distributed.")]
+        handlers = {h for n in names for h in logging.getLogger(n).handlers}
+        self._handlers = [(h, h.level) for h in handlers]
+        for h, _ in self._handlers:
+            h.setLevel(logging.CRITICAL + 1)
 
     def _new_pool(self) -> Any:
         """A pool of ``workers`` local processes, each with the problems installed."""
@@ -234,6 +250,9 @@ class Evaluator:
         if self._client is not None:
             self._client.close()
             self._client = None
+        for h, level in self._handlers:
+            h.setLevel(level)
+        self._handlers = []
 
     def __enter__(self) -> Evaluator:
         return self

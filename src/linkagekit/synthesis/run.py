@@ -169,18 +169,15 @@ def synthesize(
     Parameters
     ----------
     targets : array_like, (m, 2) or complex (m,)
-        The points, in ``unit``. An object with ``xy``, ``inputs`` and ``unit`` attributes
-        (:class:`~linkagekit.synthesis.targets.Targets`) is taken as it is.
+        The points, in ``units``. A :class:`~linkagekit.synthesis.targets.Targets` is taken as it is.
     topology : str or Mechanism
         One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move within
         the targets' neighbourhood, all by default; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
     units : str
-        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's; the
-        name :func:`~linkagekit.synthesis.targets.read_targets` uses. ``unit=``, its name before
-        0.x, still works and warns (:class:`DeprecationWarning`); any other unknown keyword is a
-        :class:`TypeError`.
+        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's, as in
+        ``read_targets``. ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
         Without timing, meet the targets in their order along the curve.
     min_transmission : float
@@ -198,9 +195,8 @@ def synthesize(
     progress : callable, optional
         Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
     """
-    units = _units(units, old)
     source = getattr(targets, "source", None)
-    targets, inputs, units = _unpack(targets, inputs, units)
+    targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
     return finish(problem, optimize(problem, settings, progress), source)
