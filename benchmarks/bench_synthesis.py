@@ -260,7 +260,7 @@ def objective_ns(mech, poses, repeat):
     from linkagekit.synthesis.run import make_problem
 
     targets = lk.analyze(mech, {"crank": np.arange(0.0, 360.0, 30.0)}).xy("P")
-    problem = make_problem(targets, "fourbar", unit="cm", samples=N_SAMPLES)
+    problem = make_problem(targets, "fourbar", units="cm", samples=N_SAMPLES)
     sp = problem.space
     X = np.stack([np.concatenate([p[mech.joint_names.index(j)] for j in sp.free]) for p in poses])
     t = best_of(lambda: evaluate(problem, X), repeat)

@@ -57,7 +57,7 @@ def test_distance_equals_brute_force():
     mech = lk.load(SEED000)
     rng = np.random.default_rng(3)
     T = np.array([[4.0, 2.0], [6.0, 3.0], [2.5, 0.5]]) + rng.normal(0, 0.3, (3, 2))
-    pb = make_problem(T, "fourbar", unit="cm", min_transmission=0)
+    pb = make_problem(T, "fourbar", units="cm", min_transmission=0)
     x = pb.space.vector(mech)
     e = evaluate(pb, x[None], refine=4, samples=360)
     brute = curve_distance(mech, T)
@@ -65,7 +65,7 @@ def test_distance_equals_brute_force():
     np.testing.assert_allclose(e.errors[0], brute, rtol=0, atol=1e-7)
     # a target on the curve is at distance ~0, and refinement is what gets it there from 2 degree samples
     P = lk.analyze(mech, {"crank": [123.4]}).xy("P")[0]
-    pb2 = make_problem(np.vstack([P, T[:2]]), "fourbar", unit="cm", min_transmission=0)
+    pb2 = make_problem(np.vstack([P, T[:2]]), "fourbar", units="cm", min_transmission=0)
     coarse = evaluate(pb2, x[None], refine=0, samples=180).errors[0, 0]
     fine = evaluate(pb2, x[None], refine=3, samples=180).errors[0, 0]
     assert coarse > 1e-4 and fine < 1e-10
@@ -75,7 +75,7 @@ def test_timed_error_is_the_distance_at_the_input():
     mech = lk.load(SEED000)
     deg = np.array([10.0, 100.0, 250.0])
     T = lk.analyze(mech, {"crank": deg + 30.0}).xy("P")  # the targets' inputs are 30 degrees behind the crank's
-    pb = make_problem(T, "fourbar", inputs=deg, unit="cm")
+    pb = make_problem(T, "fourbar", inputs=deg, units="cm")
     pose = lk.analyze(mech, {"crank": [40.0]})  # the mechanism at the first target's input + 30
     at = mech.with_pose({j: pose.xy(j)[0] for j in mech.joint_names})
     x = pb.space.vector(at)
@@ -91,7 +91,7 @@ def test_timed_error_is_the_distance_at_the_input():
 def test_feasibility_is_penalised_continuously():
     """Along a path from a crank-rocker to designs whose crank cannot turn, the cost has no jump."""
     mech = lk.load(SEED000)
-    pb = make_problem(np.array([[4.0, 2.0], [6.0, 3.0], [2.5, 0.5]]), "fourbar", unit="cm")
+    pb = make_problem(np.array([[4.0, 2.0], [6.0, 3.0], [2.5, 0.5]]), "fourbar", units="cm")
     x = pb.space.vector(mech)
     direction = np.zeros_like(x)
     direction[4] = 1.0  # C moves away from A: the crank grows until it cannot turn
@@ -137,7 +137,7 @@ def test_ordered_assignment_is_the_best_monotone_one(m, n, seed):
 
 def test_chunking_does_not_change_a_score():
     """A design's score does not depend on the batch it is in (what makes processes and Dask give the same result)."""
-    pb = make_problem(np.array([[4.0, 2.0], [6.0, 3.0], [2.5, 0.5], [3.0, 3.0]]), "fourbar", unit="cm")
+    pb = make_problem(np.array([[4.0, 2.0], [6.0, 3.0], [2.5, 0.5], [3.0, 3.0]]), "fourbar", units="cm")
     lo, hi = pb.bounds
     X = np.random.default_rng(0).uniform(lo, hi, (301, len(lo)))
     whole = evaluate(pb, X).cost
@@ -227,7 +227,7 @@ def test_polish_converges_from_near_a_known_design(topology, seed, which, timed)
     deg = np.arange(0.0, 360.0, 30.0)
     mech = _posed_at(random_designs(topology, which + 1, seed=seed)[which], 7.0)
     T = lk.analyze(mech, {"crank": deg + 7.0}).xy("P")
-    pb = make_problem(T, topology, unit="m", inputs=deg if timed else None)
+    pb = make_problem(T, topology, units="m", inputs=deg if timed else None)
     x = pb.space.vector(mech)
     lo, hi = pb.bounds
     assert evaluate(pb, x[None], refine=3).cost[0] < 1e-24  # the known design is exact
@@ -254,7 +254,7 @@ def test_recovers_with_prescribed_timing():
 
 def test_same_seed_same_design_and_another_seed_another_search():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
-    kw = dict(unit="cm", restarts=1, generations=40, goal=0.0)
+    kw = dict(units="cm", restarts=1, generations=40, goal=0.0)
     a = synthesize(T, "fourbar", seed=4, **kw)
     b = synthesize(T, "fourbar", seed=4, **kw)
     c = synthesize(T, "fourbar", seed=5, **kw)
@@ -264,7 +264,7 @@ def test_same_seed_same_design_and_another_seed_another_search():
 
 def test_workers_give_the_same_result():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
-    pb = make_problem(T, "fourbar", unit="cm")
+    pb = make_problem(T, "fourbar", units="cm")
     s = Settings(seed=2, restarts=1, generations=25, goal=0.0)
     one = optimize(pb, s)
     two = optimize(pb, Settings(seed=2, restarts=1, generations=25, goal=0.0, workers=2))

@@ -95,6 +95,11 @@ def assert_one_line_error(code: int, err: str, *fragments: str) -> None:
         assert f in err, (f, err)
 
 
+def not_progress(stderr: str) -> list[str]:
+    """The lines of ``stderr`` that are not the plain progress lines a run prints every few seconds off a terminal."""
+    return [line for line in stderr.splitlines() if not line.startswith("linkagekit: synthesize: search ")]
+
+
 def parse_table(stdout: str) -> tuple[list[str], np.ndarray]:
     """The printed table of targets: (header cells, values), up to the first blank line."""
     lines = stdout.split("\n")
@@ -202,7 +207,7 @@ def dask_cluster():
 def test_writes_a_mechanism_and_an_error_table_that_an_independent_measure_confirms(work, base_run):
     T = read_csv(work / "t.csv")
     L = diagonal(T)
-    assert base_run.stderr == ""
+    assert not_progress(base_run.stderr) == []
     mech = lk.load(work / "base.yaml")
     assert "P" in mech.joint_names
     assert [d.name for d in mech.drivers] == ["crank"]
@@ -273,7 +278,7 @@ def test_same_seed_gives_the_same_file(work, base_run, capsys):
     code, out, err = run_main(
         ["synthesize", str(work / "t.csv"), "-o", str(work / "again.yaml"), "--seed", "1", *SMALL], capsys
     )
-    assert code == 0 and err == "", err
+    assert code == 0 and not_progress(err) == [], err
     assert (work / "again.yaml").read_bytes() == (work / "base.yaml").read_bytes()
     assert without_clock(out) == without_clock(base_run.stdout)
 

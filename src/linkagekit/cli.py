@@ -1134,8 +1134,14 @@ def _interval(text: str, option: str) -> tuple[float, float]:
 
 def _synthesize(args: argparse.Namespace) -> int:
     """``linkagekit synthesize``."""
+    import dataclasses
+    import time
+
+    t0 = time.monotonic()
+
     import linkagekit as lk
 
+    from .synthesis.distribute import WorkersLost
     from .synthesis.run import synthesize
     from .synthesis.targets import read_targets
 
@@ -1144,14 +1150,75 @@ def _synthesize(args: argparse.Namespace) -> int:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
+    targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
     topology = _topology(args, targets.unit)
-    with _Search(search["seconds"]) as progress:
-        out = synthesize(targets, topology, **search, progress=progress)
-    lk.save(out.mechanism, args.output)
+    budget = search["seconds"]
+    search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)  # the command's start counts too
+    try:
+        with _Search(budget) as progress:
+            out = synthesize(targets, topology, **search, progress=progress)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted; {_synthesize_resume(args)}", file=sys.stderr)
+        return 1
+    except WorkersLost as e:
+        raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
+    described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
+    lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
     if args.plot:
         _plot_synthesis(out, targets, args.plot)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     return 0
+
+
+def _synthesize_resume(args: argparse.Namespace) -> str:
+    """How to go on after a run that stopped before its end."""
+    if args.checkpoint:
+        return f"the search is saved in {shorten(args.checkpoint, 80)}: the same command resumes it"
+    return "nothing was saved (with --checkpoint FILE the same command resumes a run)"
+
+
+def _synthesize_source(path: str) -> str:
+    """The targets' file as the written mechanism records it: its name and the start of its SHA-256."""
+    import hashlib
+    import os
+
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:  # read a moment ago (a regular file within read_targets' limit)
+        digest.update(f.read(1 << 26))
+    return f"{os.path.basename(path)}, sha256 {digest.hexdigest()[:16]}"
+
+
+#: the options of ``synthesize`` that decide its result (those that say where it runs or writes do not)
+_SYNTHESIZE_DECIDING = (
+    "topology",
+    "units",
+    "seed",
+    "seconds",
+    "restarts",
+    "generations",
+    "goal",
+    "min_transmission",
+    "reach",
+    "points",
+    "free",
+    "pivots",
+    "lengths",
+)
+
+
+def _synthesize_command(args: argparse.Namespace) -> str:
+    """The command that gives this result again, from the targets' directory (every deciding option spelt out)."""
+    import os
+    import shlex
+
+    words = [PROG, "synthesize", os.path.basename(args.targets)]
+    for name in _SYNTHESIZE_DECIDING:
+        value = getattr(args, name)
+        if value is not None:
+            words += ["--" + name.replace("_", "-"), str(value)]
+    if args.ordered:
+        words.append("--ordered")
+    return " ".join(shlex.quote(w) for w in words)
 
 
 def _search_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -1271,12 +1338,15 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
 
 
 class _Search:
-    """The synthesis progress bar on stderr (a terminal only): search, generation, best error so far."""
+    """The synthesis progress on stderr: a bar on a terminal, else a plain line every ``every`` seconds."""
+
+    every = 5.0
 
     def __init__(self, seconds: float) -> None:
         self.seconds = seconds
         self.bar: Any = None
         self.task: Any = None
+        self.last = -math.inf  # time.monotonic() of the last plain line
 
     def __enter__(self) -> Callable[[Any], None]:
         if sys.stderr.isatty():
@@ -1293,15 +1363,37 @@ class _Search:
             )
             self.bar.start()
             self.task = self.bar.add_task("synthesis", total=self.seconds, restart=1, generation=0, best="-")
+        else:
+            import time
+
+            self.last = time.monotonic()  # the first line after ``every`` seconds
         return self.update
 
+    @staticmethod
+    def best(p: Any) -> str:
+        """The best design so far, as the progress shows it."""
+        if p.best_error != p.best_error:  # NaN: no search is finished (polished) yet
+            return f"cost {p.best_cost:.3g} (no search polished yet)"
+        if not math.isfinite(p.best_error):
+            return "max error: no design meets the constraints yet"
+        return f"max error {100 * p.best_error:.3g} % of the targets' diagonal"
+
     def update(self, p: Any) -> None:
-        if self.bar is None:
-            return
-        best = f"{100 * p.best_error:.3g} %" if p.best_error == p.best_error else f"cost {p.best_cost:.3g}"
-        self.bar.update(
-            self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation, best=best
-        )
+        import time
+
+        if self.bar is not None:
+            self.bar.update(
+                self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
+            )
+            self.bar.update(self.task, best=self.best(p).removeprefix("max error "))  # its column: "best error"
+        elif time.monotonic() - self.last >= self.every:
+            self.last = time.monotonic()
+            print(
+                f"{PROG}: synthesize: search {p.restart + 1}, generation {p.generation}, best {self.best(p)}, "
+                f"{p.evaluations} designs, {p.elapsed:.0f} of {self.seconds:g} s",
+                file=sys.stderr,
+                flush=True,
+            )
 
     def __exit__(self, *exc: object) -> None:
         if self.bar is not None:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, LinkageError
 from .objective import Problem, evaluate
 
 #: the problems a worker process evaluates (set once per process by the pool's initializer)
@@ -66,7 +66,11 @@ def keep_freed_memory() -> None:
 
 
 def _install(problems: tuple[Problem, ...]) -> None:
+    """A local worker process's start: Ctrl-C is the parent's to handle (no traceback per worker), its problems."""
     global _PROBLEMS
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     keep_freed_memory()
     _PROBLEMS = problems
 
@@ -93,6 +97,18 @@ def _check_address(address: str) -> None:
         raise InputError(f"--scheduler: '{address}': only tcp:// and tls:// scheduler addresses are supported")
 
 
+class WorkersLost(LinkageError):
+    """The processes or the cluster that evaluate a generation are gone for good (the run cannot go on)."""
+
+    exit_code = 1
+
+
+#: a generation is sent again this many times when workers die under it
+RETRIES = 3
+#: seconds a Dask cluster may go without any worker before the run stops; between looks at it
+NO_WORKER_WAIT, DASK_POLL = 60.0, 1.0
+
+
 class Evaluator:
     """Scores of a generation, ``cost(X)``, evaluated where asked.
 
@@ -114,6 +130,7 @@ class Evaluator:
         self.workers = workers
         keep_freed_memory()
         self._pool: Any = None
+        self._handlers: list[tuple[Any, int]] = []  # Dask's log handlers and their levels, while quiet
         self._client: Any = None
         self._remote: Any = None
         if scheduler is not None:
@@ -122,6 +139,7 @@ class Evaluator:
             except ImportError:
                 raise InputError("--scheduler needs Dask: pip install 'dask[distributed]'") from None
             _check_address(scheduler)
+            self._quiet_dask()
             try:
                 connect: Any = Client  # distributed leaves Client.__init__ unannotated
                 self._client = connect(scheduler, timeout=10, set_as_default=False)
@@ -130,17 +148,35 @@ class Evaluator:
             self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]
             self.parts = max(1, sum(self._client.nthreads().values()))
         elif workers > 1:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-
-            # fork where there is one: a script that calls synthesize() needs no `if __name__ == "__main__"`
-            # guard (spawn re-imports the main module); the workers only evaluate NumPy over arrays
-            methods = multiprocessing.get_all_start_methods()
-            ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-            self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_install, initargs=(self.problems,))
+            self._pool = self._new_pool()
             self.parts = workers
         else:
             self.parts = 1
+
+    def _quiet_dask(self) -> None:
+        """Dask's own log off while this client runs: a lost scheduler is one line of ours, not its traceback.
+
+        Dask logs through handlers on the ``distributed`` logger (its children propagate to them
+        whatever their own level), so those handlers' levels are raised, and restored by :meth:`close`.
+        """
+        import logging
+
+        names = [n for n in logging.root.manager.loggerDict if n == "distributed" or n.startswith("distributed.")]
+        handlers = {h for n in names for h in logging.getLogger(n).handlers}
+        self._handlers = [(h, h.level) for h in handlers]
+        for h, _ in self._handlers:
+            h.setLevel(logging.CRITICAL + 1)
+
+    def _new_pool(self) -> Any:
+        """A pool of ``workers`` local processes, each with the problems installed."""
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        # fork where there is one: a script that calls synthesize() needs no `if __name__ == "__main__"`
+        # guard (spawn re-imports the main module); the workers only evaluate NumPy over arrays
+        methods = multiprocessing.get_all_start_methods()
+        ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+        return ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_install, initargs=(self.problems,))
 
     @property
     def where(self) -> str:
@@ -152,13 +188,60 @@ class Evaluator:
         """The cost of every design of ``X`` (N, dim) in problem ``which``."""
         parts = chunks(np.asarray(X, float), self.parts)
         if self._client is not None:
-            futures = self._client.map(_cost_of, [self._remote[which]] * len(parts), parts, pure=False)
-            got = self._client.gather(futures)
+            got = self._on_cluster(which, parts)
         elif self._pool is not None:
-            got = list(self._pool.map(_cost_here, [which] * len(parts), parts))
+            got = self._on_pool(which, parts)
         else:
             got = [_cost_of(self.problems[which], p) for p in parts]
         return np.concatenate(got)
+
+    def _on_pool(self, which: int, parts: list[np.ndarray]) -> list[np.ndarray]:
+        """The chunks' costs on the local pool; a pool that lost a process is replaced and the chunks sent again."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        for _ in range(RETRIES + 1):
+            try:
+                return list(self._pool.map(_cost_here, [which] * len(parts), parts))
+            except BrokenProcessPool:
+                self._pool.shutdown(wait=True, cancel_futures=True)
+                self._pool = self._new_pool()
+        raise WorkersLost(f"the local worker processes died {RETRIES + 1} times during one generation")
+
+    def _on_cluster(self, which: int, parts: list[np.ndarray]) -> list[np.ndarray]:
+        """The chunks' costs on the Dask cluster; chunks lost with their workers are sent again while it is up."""
+        from concurrent.futures import CancelledError  # what distributed raises for a future cancelled
+
+        from distributed import KilledWorker
+
+        for _ in range(RETRIES + 1):
+            try:
+                futures = self._client.map(_cost_of, [self._remote[which]] * len(parts), parts, pure=False)
+                return list(self._wait(futures))
+            except KilledWorker:  # the chunk's workers died under it: again, on the workers there are
+                self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]
+            except (OSError, TimeoutError, CancelledError) as e:
+                raise WorkersLost(f"lost the Dask scheduler ({type(e).__name__})") from None
+        raise WorkersLost(f"the Dask workers died {RETRIES + 1} times during one generation")
+
+    def _wait(self, futures: list[Any]) -> list[np.ndarray]:
+        """The futures' results; ``WorkersLost`` after ``NO_WORKER_WAIT`` seconds without a worker or a scheduler."""
+        import time
+
+        alone = None
+        while True:
+            end = time.monotonic() + DASK_POLL
+            while time.monotonic() < end:
+                if all(f.done() for f in futures):  # finished, failed or cancelled: gather says which
+                    return list(self._client.gather(futures))
+                time.sleep(0.002)
+            if self._client.status != "running":
+                raise WorkersLost("lost the Dask scheduler")
+            if self._client.scheduler_info().get("workers"):
+                alone = None
+            elif alone is None:
+                alone = time.monotonic()
+            elif time.monotonic() - alone > NO_WORKER_WAIT:
+                raise WorkersLost(f"no Dask worker for {NO_WORKER_WAIT:.0f} s")
 
     def close(self) -> None:
         if self._pool is not None:
@@ -167,6 +250,9 @@ class Evaluator:
         if self._client is not None:
             self._client.close()
             self._client = None
+        for h, level in self._handlers:
+            h.setLevel(level)
+        self._handlers = []
 
     def __enter__(self) -> Evaluator:
         return self

@@ -198,6 +198,35 @@ def evaluate(
     return Evaluation(*(np.concatenate([getattr(p, f) for p in parts]) for f in Evaluation.__dataclass_fields__))
 
 
+#: samples of the crank turn and Newton steps of the check that measures a result (every 0.1 degree)
+CHECK_SAMPLES, CHECK_REFINE = 3600, 4
+
+
+def check(problem: Problem, X: np.ndarray) -> Evaluation:
+    """The evaluation a result is reported by: ``CHECK_SAMPLES`` samples, nearest points refined, no margin."""
+    return evaluate(problem, X, refine=CHECK_REFINE, samples=CHECK_SAMPLES, margin=0.0)
+
+
+def measure(problem: Problem, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(max error / L, cost)`` of designs ``X`` (N, dim) by :func:`check`: the measure a result is printed by.
+
+    The max error is ``inf`` for a design that breaks a constraint or misses a target.
+    """
+    e = check(problem, X)
+    ok = np.all(np.isfinite(e.errors), axis=1) & (e.violation == 0)
+    err = np.max(np.where(np.isfinite(e.errors), e.errors, 0.0), axis=1) / problem.scale
+    return np.where(ok, err, np.inf), e.cost
+
+
+def best_index(max_error: np.ndarray, cost: np.ndarray) -> int:
+    """The best design: the smallest max error among the feasible, then the lowest cost (none feasible: cost).
+
+    >>> best_index(np.array([0.03, 0.02, np.inf]), np.array([1e-4, 2e-4, 1e-5]))
+    1
+    """
+    return int(np.lexsort((np.asarray(cost, float), np.asarray(max_error, float)))[0])
+
+
 def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: float) -> Evaluation:
     sp = problem.space
     N = len(X)

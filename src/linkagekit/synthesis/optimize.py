@@ -43,10 +43,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, LinkageError
+from ..errors import InputError, LinkageError, shorten
 from ..geometry import FloatArray
 from .distribute import Evaluator
-from .objective import PENALTY, Problem, evaluate
+from .objective import PENALTY, Problem, best_index, evaluate, measure
 
 #: designs polished per restart
 POLISHED = 5
@@ -56,7 +56,7 @@ POLISH_NFEV = 100
 FINAL_POLISH = 2000
 #: the solver's fields that change from generation to generation (all else follows from its arguments)
 _SOLVER_STATE = ("population", "population_energies", "_random_population_index", "feasible", "constraint_violation")
-CHECKPOINT_VERSION = 3  # 3: CMA-ES population and polish changed, so earlier checkpoints cannot continue
+CHECKPOINT_VERSION = 4  # 4: the polish is saved and the best is chosen by max error; 3: CMA-ES changed
 #: the search a restart runs, as a function of its cost: (designs, dim) -> (designs,)
 Cost = Callable[[np.ndarray], np.ndarray]
 
@@ -167,15 +167,17 @@ def optimize(
     settings: Settings,
     progress: Callable[[Progress], None] | None = None,
 ) -> Outcome:
-    """Search ``problem`` as ``settings`` say; returns the best design found."""
-    run = _Run.begin(problem, settings, progress)
+    """Search ``problem`` as ``settings`` say; returns the best design found (by :func:`objective.measure`)."""
     # With the order asked for, every other search scores without it (cheaper, and a fit found without the
     # order may well be in order); the polish and the choice of the best always use the problem itself.
     variants = (problem, replace(problem, ordered=False)) if problem.ordered else (problem,)
-    with Evaluator(variants, settings.workers, settings.scheduler) as ev:
-        while run.restart < settings.restarts:
-            if run.search_once(ev, variants):
-                break
+    run = _Run.begin(problem, settings, progress, len(variants))
+    if run.finished is None:  # a finished checkpoint's result is just written again
+        with Evaluator(variants, settings.workers, settings.scheduler) as ev:
+            run.search(ev, variants)
+        run.finished = run.stopped_by
+        if settings.checkpoint:
+            run.save()
     return run.outcome()
 
 
@@ -188,6 +190,7 @@ class _Run:
     progress: Callable[[Progress], None] | None
     start: float
     seeds: list[np.random.SeedSequence]
+    n_variants: int = 1
     state: dict[str, Any] | None = None  # a checkpoint's, until its unfinished search is restored
     done: list[dict[str, Any]] = field(default_factory=list)  # the finished restarts
     restart: int = 0
@@ -195,31 +198,67 @@ class _Run:
     evaluations: int = 0
     elapsed0: float = 0.0  # the checkpointed runs' time
     stopped_by: str = "restarts"
-    reserve: float = 0.0  # seconds kept for the polish after a search's last generation
+    finished: str | None = None  # what stopped the run, once it is over
+    polished: list[np.ndarray] | None = None  # the polish under way: the candidates polished so far
+    polish_time: float = 0.0  # seconds of the longest whole polish of a search so far
+    generation_time: float = 0.0  # seconds of the last generation
 
     @classmethod
-    def begin(cls, problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> _Run:
+    def begin(
+        cls, problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None, n_variants: int = 1
+    ) -> _Run:
         """A new run, or the checkpoint's when there is one."""
-        start = time.monotonic()
-        run = cls(problem, settings, progress, start, np.random.SeedSequence(settings.seed).spawn(settings.restarts))
-        state = _load(settings, problem) if settings.checkpoint else None
+        seeds = np.random.SeedSequence(settings.seed).spawn(settings.restarts)
+        run = cls(problem, settings, progress, time.monotonic(), seeds, n_variants)
+        state = _load(settings, problem, run.template) if settings.checkpoint else None
         if state is not None:
             run.state, run.done, run.restart = state, state["done"], state["restart"]
             run.generation, run.evaluations, run.elapsed0 = state["generation"], state["evaluations"], state["elapsed"]
-        if any(d["max_error"] <= settings.goal for d in run.done):
+            run.finished = state["stopped_by"]
+            run.stopped_by = run.finished or run.stopped_by
+        if run.finished is None and any(d["max_error"] <= settings.goal for d in run.done):
             run.stopped_by, run.restart = "goal", settings.restarts
         return run
+
+    def template(self, restart: int) -> Search:
+        """The search of ``restart`` as it starts (what a checkpoint of it must match)."""
+        return _search(restart, self.n_variants, self.problem, self.settings, self.seeds[restart], _no_cost)
 
     def clock(self) -> float:
         """Seconds of the run, the checkpointed ones included."""
         return self.elapsed0 + time.monotonic() - self.start
 
+    def deadline(self) -> float:
+        """The end of the time budget, as a ``time.monotonic()`` value."""
+        return self.start + self.settings.seconds - self.elapsed0
+
+    def reserve(self) -> float:
+        """Seconds a search leaves when it stops on the clock: its polish and the best design's last polish."""
+        return 2.0 * self.polish_time if self.polish_time > 0 else 0.1 * self.settings.seconds
+
+    def best(self) -> int:
+        """The best finished restart: the smallest max error among the feasible (:func:`objective.best_index`)."""
+        return best_index(np.array([d["max_error"] for d in self.done]), np.array([d["cost"] for d in self.done]))
+
     def best_so_far(self) -> tuple[float, float]:
         """Cost and max error / L of the best finished restart (inf, NaN before the first)."""
         if not self.done:
             return np.inf, np.nan
-        d = min(self.done, key=lambda d: d["cost"])
+        d = self.done[self.best()]
         return d["cost"], d["max_error"]
+
+    def search(self, ev: Evaluator, variants: tuple[Problem, ...]) -> None:
+        """Restarts until the goal, the last one or the clock, then the best polished longer; time left: more."""
+        while True:
+            while self.restart < self.settings.restarts and not self.search_once(ev, variants):
+                pass
+            if self.stopped_by == "goal":
+                return
+            self.deepen()
+            more = self.clock() + self.reserve() + 5 * self.generation_time < self.settings.seconds
+            if self.restart >= self.settings.restarts or not more:
+                return
+            self.stopped_by = "restarts"  # the last polish ended early: the time left goes to another search
 
     def search_once(self, ev: Evaluator, variants: tuple[Problem, ...]) -> bool:
         """Restart ``self.restart``: its search, then its polish; True when the run is to stop."""
@@ -229,65 +268,120 @@ class _Run:
             return ev.cost(X, which)
 
         search = _search(self.restart, len(variants), self.problem, self.settings, self.seeds[self.restart], cost)
-        designs, out_of_time = self._generations(search, self._resume(search))
-        t0 = self.clock()
-        x, c, err = _polish(self.problem, *search.candidates())
-        self.reserve = max(self.reserve, 2.0 * (self.clock() - t0))  # this polish and the last, longer one
-        self.done.append({"x": x, "cost": c, "max_error": err, "generations": self.generation, "designs": designs})
+        designs, out_of_time = self._resume(search)
+        if self.polished is None:  # still searching
+            designs, out_of_time = self._generations(search, designs)
+            self.polished = []
+        x, c, err = self._polish(search, designs, out_of_time)
+        self.done.append(
+            {"x": x, "cost": c, "max_error": err, "generations": self.generation, "designs": designs, "deep": False}
+        )
         self.evaluations += designs
         self.restart += 1
         self.generation = 0
+        self.polished = None
         if self.settings.checkpoint:
-            _save(self.settings, self.problem, self.restart, 0, self.evaluations, self.clock(), None, self.done)
-        if self.progress is not None:
-            self.progress(Progress(self.restart, 0, *self.best_so_far(), self.evaluations, self.clock()))
+            self.save()
+        self.report()
         if err <= self.settings.goal:
             self.stopped_by = "goal"
-        elif out_of_time or self.clock() + self.reserve > self.settings.seconds:
+        elif out_of_time or self.clock() + self.reserve() > self.settings.seconds:
             self.stopped_by = "time"
         else:
             return False
         return True
 
-    def _resume(self, search: Search) -> int:
-        """The designs ``search`` has scored already: a checkpoint's unfinished search's, else none."""
-        designs = 0
+    def report(self, designs: int = 0, best: float = np.inf) -> None:
+        """Tell the progress callback where the run is."""
+        if self.progress is not None:
+            cost, err = self.best_so_far()
+            n = self.evaluations + designs
+            self.progress(Progress(self.restart, self.generation, min(cost, best), err, n, self.clock()))
+
+    def _resume(self, search: Search) -> tuple[int, bool]:
+        """A checkpoint's unfinished search restored: (the designs it has scored, out of time); else (0, False)."""
+        designs, out_of_time = 0, False
         if self.state is not None and self.state.get("solver") is not None:
-            search.restore(self.state["solver"])
+            try:
+                search.restore(self.state["solver"])
+            except (ValueError, TypeError, KeyError, IndexError, OverflowError) as e:
+                raise InputError(f"{self.settings.checkpoint}: not a readable linkagekit checkpoint ({e})") from None
             self.evaluations = sum(d["designs"] for d in self.done)  # the finished searches'; the rest is this one's
             designs = self.state["evaluations"] - self.evaluations
+            self.polished, out_of_time = self.state["polished"], self.state["out_of_time"]
         self.state = None
-        return designs
+        return designs, out_of_time
 
     def _generations(self, search: Search, designs: int) -> tuple[int, bool]:
         """Generations until ``search`` is finished or the time is up: (designs scored, out of time)."""
-        settings = self.settings
         while not search.finished(self.generation):
+            t0 = time.monotonic()
             designs += search.step()
             self.generation += 1
-            best_cost, best_err = self.best_so_far()
-            n_eval = self.evaluations + designs
-            if self.progress is not None:
-                best = min(best_cost, search.best)
-                self.progress(Progress(self.restart, self.generation, best, best_err, n_eval, self.clock()))
-            if settings.checkpoint:
-                state = search.capture()
-                _save(settings, self.problem, self.restart, self.generation, n_eval, self.clock(), state, self.done)
-            if self.clock() + self.reserve > settings.seconds:  # leave time to polish within the budget
+            self.generation_time = time.monotonic() - t0
+            self.report(designs, search.best)
+            if self.settings.checkpoint:
+                self.save(search.capture(), designs)
+            if self.clock() + self.reserve() > self.settings.seconds:  # leave time to polish within the budget
                 return designs, True
         return designs, False
 
-    def outcome(self) -> Outcome:
-        """The best design, polished once more when it misses the goal, and the run's account."""
-        best = min(self.done, key=lambda d: d["cost"])
+    def _polish(self, search: Search, designs: int, out_of_time: bool) -> tuple[np.ndarray, float, float]:
+        """The best of the ``POLISHED`` best distinct candidates, each polished both ways, one by one (checkpointed).
+
+        The best is chosen by the printed measure (:func:`objective.measure`): the least-squares
+        polish lowers the cost (the mean squared error), the result is the smallest max error.
+        """
+        assert self.polished is not None
+        t0, fresh = self.clock(), not self.polished
+        picked = _picked(self.problem, *search.candidates())
+        tasks = [(p, m) for p in picked for m in _both_methods(self.problem)]
+        for p, m in tasks[len(self.polished) :]:
+            self.polished.append(polish(self.problem, p, POLISH_NFEV, self.deadline(), m))
+            if self.settings.checkpoint:
+                self.save(search.capture(), designs, out_of_time)
+            self.report(designs, search.best)
+        if fresh and time.monotonic() < self.deadline():  # a whole polish, not one cut by the clock
+            self.polish_time = max(self.polish_time, self.clock() - t0)
+        cands = np.array(self.polished + picked)
+        err, cost = measure(self.problem, cands)
+        k = best_index(err, cost)
+        return cands[k], float(cost[k]), float(err[k])
+
+    def deepen(self) -> None:
+        """The best design polished once more, longer, by both methods (unless it meets the goal or was already)."""
+        k = self.best()
+        best = self.done[k]
+        if best["deep"] or best["max_error"] <= self.settings.goal:
+            return
         x = np.asarray(best["x"], float)
-        if best["max_error"] > self.settings.goal:  # a last, longer polish of the best design, by both methods
-            until = self.start + max(self.settings.seconds - self.elapsed0, 0.0)
-            deep = [polish(self.problem, x, FINAL_POLISH, until, m) for m in _both_methods(self.problem)]
-            e = evaluate(self.problem, np.array([x, *deep]), refine=3)
-            k = int(np.argmin(e.cost))
-            if k > 0:
-                best = {**best, "x": deep[k - 1], "cost": float(e.cost[k])}
+        deep = [polish(self.problem, x, FINAL_POLISH, self.deadline(), m) for m in _both_methods(self.problem)]
+        cands = np.array([x, *deep])
+        err, cost = measure(self.problem, cands)
+        j = best_index(err, cost)
+        self.done[k] = {**best, "x": cands[j], "cost": float(cost[j]), "max_error": float(err[j]), "deep": True}
+        if self.settings.checkpoint:
+            self.save()
+
+    def save(self, solver: dict[str, Any] | None = None, designs: int = 0, out_of_time: bool = False) -> None:
+        """Write the checkpoint: the finished restarts, the search under way (``solver``) and its polish."""
+        polish = None
+        if solver is not None and self.polished is not None:
+            polish = {"out_of_time": out_of_time, "count": len(self.polished)}
+        header: dict[str, Any] = {
+            "restart": self.restart,
+            "generation": self.generation,
+            "evaluations": self.evaluations + designs,
+            "elapsed": self.clock(),
+            "stopped_by": self.finished,
+            "polish": polish,
+        }
+        arrays = {f"polish_{i}": x for i, x in enumerate(self.polished or [])} if polish else {}
+        _save(self.settings, self.problem, header, solver, self.done, arrays)
+
+    def outcome(self) -> Outcome:
+        """The best design (by the printed measure) and the run's account."""
+        best = self.done[self.best()]
         return Outcome(
             np.asarray(best["x"], float),
             float(best["cost"]),
@@ -298,6 +392,10 @@ class _Run:
             self.stopped_by,
             [(float(d["cost"]), float(d["max_error"])) for d in self.done],
         )
+
+
+def _no_cost(X: np.ndarray) -> np.ndarray:
+    raise AssertionError("a template search is never stepped")
 
 
 # ---------------------------------------------------------------------- the two searches
@@ -341,6 +439,10 @@ class Search:
 
     def restore(self, saved: dict[str, Any]) -> None:
         raise NotImplementedError
+
+    def shapes(self) -> dict[str, tuple[tuple[int, ...], tuple[int, ...]]]:
+        """The arrays of :meth:`capture`: name -> (smallest shape, largest shape) a checkpoint may hold."""
+        return {k: (v.shape, v.shape) for k, v in self.capture().items() if isinstance(v, np.ndarray)}
 
 
 class DESearch(Search):
@@ -391,6 +493,10 @@ class DESearch(Search):
         out: dict[str, Any] = {k: np.array(getattr(sv, k)) for k in _SOLVER_STATE}
         out.update(scale=float(sv.scale), nfev=int(sv._nfev), rng=sv.random_number_generator.bit_generator.state)
         return out
+
+    def shapes(self) -> dict[str, tuple[tuple[int, ...], tuple[int, ...]]]:
+        shapes = {k: np.shape(getattr(self.solver, k)) for k in _SOLVER_STATE}
+        return {k: (v, v) for k, v in shapes.items()}
 
     def restore(self, saved: dict[str, Any]) -> None:
         sv = self.solver
@@ -447,6 +553,11 @@ class CMASearch(Search):
 
     def restore(self, saved: dict[str, Any]) -> None:
         self.es.restore(saved)
+
+    def shapes(self) -> dict[str, tuple[tuple[int, ...], tuple[int, ...]]]:
+        es, out = self.es, super().shapes()  # the history and the last generation start empty
+        out.update(history=((0,), (es.history_length,)), last_X=((0, es.n), (es.lam, es.n)), last_f=((0,), (es.lam,)))
+        return out
 
 
 # ---------------------------------------------------------------------- polish
@@ -518,51 +629,49 @@ class _OutOfTime(Exception):
     """The polish's deadline passed."""
 
 
-def _polish(problem: Problem, X: np.ndarray, energies: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """The best of the ``POLISHED`` best distinct candidates, each polished both ways: (x, cost, max error / L)."""
+def _picked(problem: Problem, X: np.ndarray, energies: np.ndarray) -> list[np.ndarray]:
+    """The ``POLISHED`` best distinct candidates, best first."""
     picked: list[np.ndarray] = []
     for i in np.argsort(energies, kind="stable"):
         if len(picked) == POLISHED:
             break
         if all(np.max(np.abs(X[i] - p)) > 1e-9 * problem.scale for p in picked):
             picked.append(X[i])
-    methods = _both_methods(problem)
-    cands = np.array([polish(problem, p, POLISH_NFEV, method=m) for p in picked for m in methods] + picked)
-    e = evaluate(problem, cands, refine=3)
-    k = int(np.argmin(e.cost))
-    err = np.nanmax(e.errors[k]) / problem.scale if np.all(np.isfinite(e.errors[k])) else np.inf
-    return cands[k], float(e.cost[k]), float(err if e.violation[k] == 0 else np.inf)
+    return picked
 
 
 # ---------------------------------------------------------------------- checkpoints
+#: the largest checkpoint file read, and the longest JSON header (characters)
+MAX_CHECKPOINT_BYTES, MAX_HEADER_CHARS = 1 << 30, 1 << 22
+#: what ends a run, as a checkpoint records it
+STOPS = ("goal", "restarts", "time")
+
+
+class _Refused(ValueError):
+    """A checkpoint that is readable but does not hold what this run needs (the message says what)."""
+
+
 def _save(
     settings: Settings,
     problem: Problem,
-    restart: int,
-    generation: int,
-    evaluations: int,
-    elapsed: float,
+    header: dict[str, Any],
     solver: dict[str, Any] | None,
     done: list[dict[str, Any]],
+    arrays: dict[str, np.ndarray],
 ) -> None:
+    """Write the checkpoint atomically: ``header``'s numbers, the finished restarts, the search under way."""
     assert settings.checkpoint is not None
     path = Path(settings.checkpoint)
-    header: dict[str, Any] = {
+    header = {
         "format": f"linkagekit-checkpoint/{CHECKPOINT_VERSION}",
         "version": CHECKPOINT_VERSION,
         "problem": problem.fingerprint(),
         "settings": settings.key(),
-        "restart": restart,
-        "generation": generation,
-        "evaluations": evaluations,
-        "elapsed": elapsed,
-        "done": [
-            {"cost": d["cost"], "max_error": d["max_error"], "generations": d["generations"], "designs": d["designs"]}
-            for d in done
-        ],
+        **header,
+        "done": [{k: d[k] for k in ("cost", "max_error", "generations", "designs", "deep")} for d in done],
         "solver": None,
     }
-    arrays: dict[str, np.ndarray] = {f"done_x_{i}": np.asarray(d["x"], float) for i, d in enumerate(done)}
+    arrays = {**arrays, **{f"done_x_{i}": np.asarray(d["x"], float) for i, d in enumerate(done)}}
     if solver is not None:  # the search's arrays into the file's arrays, its numbers into the header
         names = [k for k, v in solver.items() if isinstance(v, np.ndarray)]
         header["solver"] = {**{k: v for k, v in solver.items() if k not in names}, "arrays": names}
@@ -585,46 +694,182 @@ def _temporary(path: Path) -> Path:
     return path.with_name(f".{path.name}.tmp")
 
 
-def _load(settings: Settings, problem: Problem) -> dict[str, Any] | None:
-    """The saved state, or None when the file does not exist yet."""
+def _load(settings: Settings, problem: Problem, template: Callable[[int], Search]) -> dict[str, Any] | None:
+    """The saved state, or None when the file does not exist yet.
+
+    Nothing is allocated before it is known to fit: the file must be a regular file of at most
+    ``MAX_CHECKPOINT_BYTES``; every array's ``.npy`` header (shape and type) is read from its zip
+    member and compared with what this run's search holds (``template(restart)``) before the
+    array itself is read; the header's numbers are checked against the settings.
+    """
+    import stat
     import zipfile
+    import zlib
 
     assert settings.checkpoint is not None
     path = Path(settings.checkpoint)
     _temporary(path).unlink(missing_ok=True)  # left by a run killed while writing; the checkpoint itself is whole
-    if not path.exists():
-        return None
     try:
-        with np.load(path, allow_pickle=False) as z:
-            header = json.loads(str(z["header"]))
-            arrays = {k: z[k] for k in z.files if k != "header"}
-        earlier = {f"linkagekit-checkpoint/{v}": v for v in range(1, CHECKPOINT_VERSION)}
-        if isinstance(header, dict) and header.get("format") in earlier:
-            v = earlier[header["format"]]
-            raise ValueError(f"written by an earlier linkagekit (format {v}, another search); delete it to start anew")
-        if not isinstance(header, dict) or header.get("format") != f"linkagekit-checkpoint/{CHECKPOINT_VERSION}":
-            raise ValueError("not a linkagekit checkpoint")
-        done = [
-            {**d, "x": arrays[f"done_x_{i}"], "cost": float(d["cost"]), "max_error": float(d["max_error"])}
-            for i, d in enumerate(header["done"])
-        ]
-        solver = None
-        if header["solver"] is not None:
-            solver = dict(header["solver"])
-            solver.update({k: arrays[f"solver_{k}"] for k in solver.pop("arrays")})
-        fingerprint, key = header["problem"], header["settings"]
-        state = {
-            "restart": int(header["restart"]),
-            "generation": int(header["generation"]),
-            "evaluations": int(header["evaluations"]),
-            "elapsed": float(header["elapsed"]),
-            "done": done,
-            "solver": solver,
-        }
-    except (OSError, EOFError, ValueError, KeyError, TypeError, AttributeError, zipfile.BadZipFile) as e:
+        st = path.stat()
+    except FileNotFoundError:
+        return None
+    except OSError as e:
+        raise InputError(f"{path}: cannot read the checkpoint ({e.strerror or e})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(f"{path}: not a checkpoint (not a regular file)")
+    if st.st_size > MAX_CHECKPOINT_BYTES:
+        raise InputError(f"{path}: not a checkpoint ({st.st_size} bytes, more than any checkpoint)")
+    try:
+        with zipfile.ZipFile(path) as zf:
+            header = _header(zf)
+            _check_owner(path, header, settings, problem)
+            state = _state(header, settings)
+            arrays = _arrays(zf, _expected(state, problem, template))
+    except _Refused as e:
+        raise InputError(f"{path}: not a usable linkagekit checkpoint ({e})") from None
+    except zipfile.BadZipFile:
+        raise InputError(f"{path}: not a linkagekit checkpoint (not a .npz archive)") from None
+    except (OSError, EOFError, ValueError, KeyError, TypeError, zlib.error, NotImplementedError, RecursionError) as e:
         raise InputError(f"{path}: not a readable linkagekit checkpoint ({type(e).__name__}: {e})") from None
-    if fingerprint != problem.fingerprint():
+    return _with_arrays(state, arrays)
+
+
+def _header(zf: Any) -> dict[str, Any]:
+    """The checkpoint's JSON header (its format checked), read once its size is known to be bounded."""
+    if "header.npy" not in zf.namelist():
+        raise _Refused("no header")
+    _, shape, dtype = _npy_header(zf, "header")
+    if shape != () or dtype.kind != "U" or dtype.itemsize > 4 * MAX_HEADER_CHARS:
+        raise _Refused(f"a header of type {dtype} and shape {shape}")
+    with zf.open("header.npy") as f:
+        header = json.loads(str(np.lib.format.read_array(f, allow_pickle=False)))
+    earlier = {f"linkagekit-checkpoint/{v}": v for v in range(1, CHECKPOINT_VERSION)}
+    if isinstance(header, dict) and header.get("format") in earlier:
+        v = earlier[header["format"]]
+        raise _Refused(f"written by an earlier linkagekit (format {v}, another search); delete it to start anew")
+    if not isinstance(header, dict) or header.get("format") != f"linkagekit-checkpoint/{CHECKPOINT_VERSION}":
+        raise _Refused("not a linkagekit checkpoint")
+    return header
+
+
+def _check_owner(path: Path, header: dict[str, Any], settings: Settings, problem: Problem) -> None:
+    if header.get("problem") != problem.fingerprint():
         raise InputError(f"{path}: this checkpoint belongs to another problem (other targets, topology or options)")
-    if key != settings.key():
-        raise InputError(f"{path}: this checkpoint was made with other settings: {key}")
+    if header.get("settings") != settings.key():
+        raise InputError(f"{path}: this checkpoint was made with other settings: {shorten(str(header['settings']))}")
+
+
+def _number(value: Any, name: str, lo: float, hi: float, kind: type = int) -> Any:
+    """``value`` as a ``kind`` within ``[lo, hi]``, else refused naming ``name``."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and (kind is float or value == int(value))
+    if not ok or not lo <= value <= hi:
+        raise _Refused(f"{name} {shorten(repr(value))} is not a {kind.__name__} in [{lo}, {hi}]")
+    return kind(value)
+
+
+def _state(header: dict[str, Any], settings: Settings) -> dict[str, Any]:
+    """The header's numbers, each checked against the settings (the arrays come later)."""
+    restarts = settings.restarts
+    done = header["done"]
+    if not isinstance(done, list) or len(done) > restarts:
+        raise _Refused(f"'done' is not a list of at most {restarts} searches")
+    state = {
+        "restart": _number(header["restart"], "restart", len(done), len(done)),
+        "generation": _number(header["generation"], "generation", 0, 1e15),
+        "evaluations": _number(header["evaluations"], "evaluations", 0, 1e18),
+        "elapsed": _number(header["elapsed"], "elapsed", 0.0, 1e12, float),
+        "done": [_done(d, i) for i, d in enumerate(done)],
+        "stopped_by": header["stopped_by"],
+        "solver": header["solver"],
+        "polish": header["polish"],
+    }
+    if state["stopped_by"] is not None and state["stopped_by"] not in STOPS:
+        raise _Refused(f"stopped_by {shorten(repr(state['stopped_by']))}")
+    solver, polish = state["solver"], state["polish"]
+    if solver is not None and (state["restart"] >= restarts or not isinstance(solver, dict)):
+        raise _Refused("a search under way after the last one")
+    if solver is not None and not (isinstance(solver.get("arrays"), list) and len(solver["arrays"]) <= 64):
+        raise _Refused("the search's arrays are not listed")
+    if polish is not None and (solver is None or not isinstance(polish, dict)):
+        raise _Refused("a polish without its search")
+    if polish is not None:
+        polish["count"] = _number(polish.get("count"), "polish count", 0, 2 * POLISHED)
+        polish["out_of_time"] = bool(polish.get("out_of_time"))
+    return state
+
+
+def _done(d: Any, i: int) -> dict[str, Any]:
+    """One finished restart of the header, checked."""
+    if not isinstance(d, dict):
+        raise _Refused(f"done[{i}] is not a mapping")
+    return {
+        "cost": _number(d["cost"], f"done[{i}].cost", 0.0, np.inf, float),
+        "max_error": _number(d["max_error"], f"done[{i}].max_error", 0.0, np.inf, float),
+        "generations": _number(d["generations"], f"done[{i}].generations", 0, 1e15),
+        "designs": _number(d["designs"], f"done[{i}].designs", 0, 1e18),
+        "deep": bool(d.get("deep")),
+    }
+
+
+def _expected(state: dict[str, Any], problem: Problem, template: Callable[[int], Search]) -> dict[str, Any]:
+    """Every array the checkpoint must hold: name -> (smallest shape, largest shape) of numbers."""
+    dim = (len(problem.bounds[0]),)
+    out: dict[str, Any] = {f"done_x_{i}": (dim, dim) for i in range(len(state["done"]))}
+    if state["polish"] is not None:
+        out.update({f"polish_{i}": (dim, dim) for i in range(state["polish"]["count"])})
+    if state["solver"] is not None:
+        shapes = template(state["restart"]).shapes()
+        listed = state["solver"]["arrays"]
+        if sorted(map(str, listed)) != sorted(shapes):
+            raise _Refused(f"the search's arrays {shorten(str(listed))}, expected {sorted(shapes)}")
+        out.update({f"solver_{k}": v for k, v in shapes.items()})
+    return out
+
+
+def _npy_header(zf: Any, name: str) -> tuple[Any, tuple[int, ...], np.dtype[Any]]:
+    """The zip member of array ``name``, and its shape and type, read from its ``.npy`` header only."""
+    info = zf.getinfo(f"{name}.npy")
+    with zf.open(info) as f:
+        version = np.lib.format.read_magic(f)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(f)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(f)
+        else:
+            raise _Refused(f"array {name}: .npy format {version}")
+    return info, tuple(shape), dtype
+
+
+def _arrays(zf: Any, expected: dict[str, Any]) -> dict[str, np.ndarray]:
+    """The arrays ``expected`` names, each read only once its header shows the shape and type expected."""
+    members = {n.removesuffix(".npy") for n in zf.namelist()} - {"header"}
+    if members != set(expected):
+        raise _Refused(f"arrays {shorten(str(sorted(members - set(expected)) or sorted(set(expected) - members)))}")
+    out = {}
+    for name, (lo, hi) in expected.items():
+        info, shape, dtype = _npy_header(zf, name)
+        fits = len(shape) == len(lo) and all(a <= s <= b for a, s, b in zip(lo, shape, hi, strict=True))
+        if not fits or dtype.kind not in "fiub" or dtype.itemsize > 8:
+            raise _Refused(f"array {name} of type {dtype} and shape {shape}, expected numbers of shape {hi}")
+        if info.file_size > int(np.prod(shape)) * dtype.itemsize + 65536:
+            raise _Refused(f"array {name}: {info.file_size} bytes for shape {shape}")
+        with zf.open(info) as f:
+            out[name] = np.lib.format.read_array(f, allow_pickle=False)
+    return out
+
+
+def _with_arrays(state: dict[str, Any], arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    """The state of the header with its arrays put in place."""
+    for i, d in enumerate(state["done"]):
+        d["x"] = np.asarray(arrays[f"done_x_{i}"], float)
+    polish = state.pop("polish")
+    state["polished"] = None
+    state["out_of_time"] = False
+    if polish is not None:
+        state["polished"] = [np.asarray(arrays[f"polish_{i}"], float) for i in range(polish["count"])]
+        state["out_of_time"] = polish["out_of_time"]
+    if state["solver"] is not None:
+        solver = dict(state["solver"])
+        solver.update({k: arrays[f"solver_{k}"] for k in solver.pop("arrays")})
+        state["solver"] = solver
     return state

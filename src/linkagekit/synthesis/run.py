@@ -9,7 +9,7 @@ A four-bar whose coupler point passes through five points of a known coupler cur
 >>> from linkagekit.synthesis.run import synthesize
 >>> mech = lk.load("examples/seed000_fourbar.yaml")
 >>> P = lk.analyze(mech, {"crank": [0, 60, 140, 220, 300]}).xy("P")
->>> out = synthesize(P, topology="fourbar", unit="cm", seed=1, restarts=2, generations=150)
+>>> out = synthesize(P, topology="fourbar", units="cm", seed=1, restarts=2, generations=150)
 >>> out.max_error < 1e-3 * out.diagonal, out.mechanism.drivers[0].name
 (True, 'crank')
 """
@@ -17,21 +17,19 @@ A four-bar whose coupler point passes through five points of a known coupler cur
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import InputError
-from .objective import Problem, evaluate
+from .objective import Problem, check
 from .optimize import Outcome, Progress, Settings, optimize
 from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
 
 if TYPE_CHECKING:
     from ..model import Mechanism
 
-#: samples of the crank turn when the result is checked (every 0.1 degree)
-CHECK_SAMPLES = 3600
 #: the tracer's box at the pose: this fraction of the targets' diagonal around the first target
 TRACER_BOX = 0.05
 
@@ -92,7 +90,7 @@ def make_problem(
     targets: Any,
     topology: str | Mechanism = "fourbar",
     inputs: Sequence[float] | None = None,
-    unit: str = "m",
+    units: str = "m",
     ordered: bool = False,
     min_transmission: float = 20.0,
     lengths: tuple[float, float] | None = None,
@@ -100,8 +98,14 @@ def make_problem(
     free: Sequence[str] | Mapping[str, Any] | None = None,
     reach: float = 1.0,
     samples: int = 180,
+    **old: Any,
 ) -> Problem:
-    """The :class:`Problem` of ``targets`` ((m, 2) array or complex (m,)) in a topology or a template."""
+    """The :class:`Problem` of ``targets`` ((m, 2) array or complex (m,)) in a topology or a template.
+
+    ``units`` is the targets' length unit (``unit=``, its former name, still works with a
+    :class:`DeprecationWarning`).
+    """
+    units = _units(units, old)
     t = np.asarray(targets)
     if np.iscomplexobj(t):
         z = t.reshape(-1)
@@ -125,7 +129,7 @@ def make_problem(
     if isinstance(topology, str):
         first = np.array([z[0].real, z[0].imag])
         box = (first - TRACER_BOX * size, first + TRACER_BOX * size)
-        space = builtin_space(topology, center, size, unit, reach, box, pivots)
+        space = builtin_space(topology, center, size, units, reach, box, pivots)
     else:
         space = template_space(topology, free or [j for j in topology.joint_names], center, size, reach)
     th = None
@@ -141,7 +145,7 @@ def synthesize(
     topology: str | Mechanism = "fourbar",
     *,
     inputs: Sequence[float] | None = None,
-    unit: str = "m",
+    units: str = "m",
     ordered: bool = False,
     min_transmission: float = 20.0,
     lengths: tuple[float, float] | None = None,
@@ -158,21 +162,22 @@ def synthesize(
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
+    **old: Any,
 ) -> Synthesis:
     """Find a mechanism whose tracer point passes near every target.
 
     Parameters
     ----------
     targets : array_like, (m, 2) or complex (m,)
-        The points, in ``unit``. An object with ``xy``, ``inputs`` and ``unit`` attributes
-        (:class:`~linkagekit.synthesis.targets.Targets`) is taken as it is.
+        The points, in ``units``. A :class:`~linkagekit.synthesis.targets.Targets` is taken as it is.
     topology : str or Mechanism
         One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move within
         the targets' neighbourhood, all by default; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
-    unit : str
-        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's.
+    units : str
+        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's, as in
+        ``read_targets``. ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
         Without timing, meet the targets in their order along the curve.
     min_transmission : float
@@ -190,10 +195,24 @@ def synthesize(
     progress : callable, optional
         Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
     """
-    targets, inputs, unit = _unpack(targets, inputs, unit)
-    problem = make_problem(targets, topology, inputs, unit, ordered, min_transmission, lengths, pivots, free, reach)
+    source = getattr(targets, "source", None)
+    targets, inputs, units = _unpack(targets, inputs, _units(units, old))
+    problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
-    return finish(problem, optimize(problem, settings, progress))
+    return finish(problem, optimize(problem, settings, progress), source)
+
+
+def _units(units: str, old: dict[str, Any]) -> str:
+    """``units``, or the deprecated ``unit=`` among the other keywords ``old`` (anything else: TypeError)."""
+    unknown = set(old) - {"unit"}
+    if unknown:
+        raise TypeError(f"unexpected keyword argument {sorted(unknown)[0]!r}")
+    if "unit" in old:
+        import warnings
+
+        warnings.warn("synthesize(unit=...) is now units=... (as in read_targets)", DeprecationWarning, stacklevel=3)
+        return str(old["unit"])
+    return units
 
 
 def _unpack(targets: Any, inputs: Sequence[float] | None, unit: str) -> tuple[Any, Sequence[float] | None, str]:
@@ -208,18 +227,23 @@ def _unpack(targets: Any, inputs: Sequence[float] | None, unit: str) -> tuple[An
     return targets, inputs, unit
 
 
-def finish(problem: Problem, outcome: Outcome) -> Synthesis:
-    """The :class:`Synthesis` of the best design: checked densely, as a mechanism."""
+def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Synthesis:
+    """The :class:`Synthesis` of the best design: checked densely, as a mechanism.
+
+    The mechanism's ``name`` gives its max error with its unit; its ``description`` records the
+    targets (``source``: where they came from), the errors and the search.
+    """
     x = outcome.x
-    e = evaluate(problem, x[None], refine=4, samples=CHECK_SAMPLES, margin=0.0)
+    e = check(problem, x[None])
     err = e.errors[0]
     offset = float(np.degrees(problem.offset(x)[0])) if problem.timed else None
-    max_err = float(np.max(err)) if np.all(np.isfinite(err)) else float("nan")
+    unit = problem.space.template.length_unit
     name = f"synthesised {problem.space.topology}"
+    max_err = float(np.max(err)) if np.all(np.isfinite(err)) else float("nan")
     if np.isfinite(max_err):
-        name += f": max error {max_err:.4g} ({100 * max_err / problem.scale:.3g} % of the targets' diagonal)"
+        name += f": max error {max_err:.4g} {unit} ({100 * max_err / problem.scale:.3g} % of the targets' diagonal)"
     mech = problem.space.mechanism(x, name)
-    return Synthesis(
+    out = Synthesis(
         mech,
         x,
         err,
@@ -230,6 +254,39 @@ def finish(problem: Problem, outcome: Outcome) -> Synthesis:
         float(e.transmission[0]),
         outcome,
     )
+    return replace(out, mechanism=replace(mech, description=describe(out, problem, source)))
 
 
-__all__ = ["TOPOLOGIES", "Synthesis", "make_problem", "synthesize"]
+#: targets listed one by one in a description, at most
+DESCRIBED_TARGETS = 100
+
+
+def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str:
+    """The ``description`` of a synthesised mechanism: its targets, its errors (with units), the search."""
+    unit = problem.space.template.length_unit
+    m, o = len(out.errors), out.outcome
+    lines = [f"Synthesised by linkagekit from {m} target points" + (f" ({source})" if source else "") + "."]
+    lines.append(
+        f"max error {out.max_error:.6g} {unit} ({100 * out.max_error / out.diagonal:.4g} % of the targets' "
+        f"diagonal {out.diagonal:.6g} {unit}), rms {out.rms_error:.6g} {unit}"
+    )
+    if out.offset is not None:
+        lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    lines.append(
+        f"smallest transmission angle {out.min_transmission:.4g} deg" + ("" if out.feasible else ", INFEASIBLE")
+    )
+    lines.append(
+        f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs; stopped by {o.stopped_by}"
+    )
+    if m <= DESCRIBED_TARGETS:
+        lines.append(
+            f"targets: x [{unit}], y [{unit}]" + (", input [deg]" if problem.timed else "") + f", error [{unit}]"
+        )
+        z, th = problem.targets, problem.inputs
+        for i in range(m):
+            row = [z[i].real, z[i].imag] + ([np.degrees(th[i])] if th is not None else []) + [out.errors[i]]
+            lines.append("  " + ", ".join(f"{float(v):.9g}" for v in row))
+    return "\n".join(lines)
+
+
+__all__ = ["TOPOLOGIES", "Synthesis", "describe", "make_problem", "synthesize"]
