@@ -57,6 +57,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..checks import MIN_TRANSMISSION
 from ..errors import InputError
 from ..geometry import ComplexArray, FloatArray, abs2
 from ..params import Params
@@ -103,7 +104,7 @@ class Problem:
     targets: np.ndarray
     inputs: np.ndarray | None = None
     ordered: bool = False
-    min_transmission: float = 20.0
+    min_transmission: float = MIN_TRANSMISSION
     lengths: tuple[float, float] | None = None
     samples: int = 180
 

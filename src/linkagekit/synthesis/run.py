@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..checks import MIN_TRANSMISSION
 from ..errors import InputError
 from .objective import Problem, check
 from .optimize import Outcome, Progress, Settings, optimize
@@ -92,7 +93,7 @@ def make_problem(
     inputs: Sequence[float] | None = None,
     units: str = "m",
     ordered: bool = False,
-    min_transmission: float = 20.0,
+    min_transmission: float = MIN_TRANSMISSION,
     lengths: tuple[float, float] | None = None,
     pivots: tuple[tuple[float, float], tuple[float, float]] | None = None,
     free: Sequence[str] | Mapping[str, Any] | None = None,
@@ -147,7 +148,7 @@ def synthesize(
     inputs: Sequence[float] | None = None,
     units: str = "m",
     ordered: bool = False,
-    min_transmission: float = 20.0,
+    min_transmission: float = MIN_TRANSMISSION,
     lengths: tuple[float, float] | None = None,
     pivots: tuple[tuple[float, float], tuple[float, float]] | None = None,
     free: Sequence[str] | Mapping[str, Any] | None = None,
