@@ -159,8 +159,12 @@ def one(example: str, joint: str, radius: float, goal: float, steps: int, interv
     }
 
 
-def main(steps: int = 200, interval: float = 16.0) -> list[dict]:
-    """Every case of :data:`CASES`; exits with status 1 when a median misses its goal."""
+def main(steps: int = 200, interval: float = 16.0, enforce: bool = True) -> list[dict]:
+    """Every case of :data:`CASES`; exits with status 1 when a median misses its goal.
+
+    ``enforce=False`` (the suite's smoke test: a few steps on a possibly busy machine) prints
+    the same lines, goals included, but does not exit.
+    """
     if not Path(CHROMIUM).exists():
         raise SystemExit(f"{CHROMIUM} not found: install Debian's chromium to run this benchmark")
     print(f"(wall-clock timings: on a shared or busy machine they are longer; {os.cpu_count()} CPUs here)")
@@ -168,7 +172,7 @@ def main(steps: int = 200, interval: float = 16.0) -> list[dict]:
     missed = [r for r in out if not r["median_ms"] < r["goal_ms"]]
     for r in missed:
         print(f"GOAL MISSED: {r['example']}: median {r['median_ms']:.1f} ms, goal under {r['goal_ms']:g} ms")
-    if missed:
+    if missed and enforce:
         raise SystemExit(1)
     return out
 

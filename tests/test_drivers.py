@@ -139,6 +139,13 @@ def test_compatibility_views(mechs):
 # ------------------------------------------------------------------ the source
 
 
+def _is_dtype(node: ast.expr) -> bool:
+    """``dtype`` or ``x.dtype``: a NumPy dtype's one-letter ``kind``, not a driver's."""
+    return (isinstance(node, ast.Name) and node.id == "dtype") or (
+        isinstance(node, ast.Attribute) and node.attr == "dtype"
+    )
+
+
 def kind_compares(path: Path) -> int:
     """Comparisons of some ``X.kind`` with a string literal (``ln.kind``, a scene link's drawing kind, aside)."""
     n = 0
@@ -152,6 +159,7 @@ def kind_compares(path: Path) -> int:
             if isinstance(o, ast.Attribute)
             and o.attr == "kind"
             and not (isinstance(o.value, ast.Name) and o.value.id == "ln")
+            and not _is_dtype(o.value)
         ]
         if kinds and any(isinstance(o, ast.Constant) and isinstance(o.value, str) for o in operands):
             n += 1
@@ -166,7 +174,10 @@ def test_no_module_decides_on_the_kind_string():
 
 def test_kind_compares_finds_them(tmp_path):
     path = tmp_path / "probe.py"
-    path.write_text("d.kind == 'angle'\nx = mech.drivers[0].kind != 'slider'\nln.kind == 'plate'\n")
+    path.write_text(
+        "d.kind == 'angle'\nx = mech.drivers[0].kind != 'slider'\nln.kind == 'plate'\n"
+        "a.dtype.kind == 'c'\ndtype.kind != 'U'\n"
+    )
     assert kind_compares(path) == 2
 
 
