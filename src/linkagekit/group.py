@@ -126,6 +126,20 @@ class _Chain:
     edges: tuple[tuple[int, int, int], ...]  # (link, p, q): its joints at positions p and q of ``slots``
 
 
+@dataclass(frozen=True)
+class _Arrays:
+    """A group's numbers per column as arrays: lengths (n_links, B), rhos (n_lin, B), Newton's tolerance
+    per row (n_eq, B) and the (constant) linear rows of the Jacobian (B, n_eq, 2m)."""
+
+    L: FloatArray
+    R: np.ndarray
+    tol: FloatArray
+    J_lin: FloatArray
+
+    def take(self, cols: np.ndarray) -> _Arrays:
+        return _Arrays(self.L[:, cols], self.R[:, cols], self.tol[:, cols], self.J_lin[cols])
+
+
 @dataclass
 class _Walk:
     """What every step of a walk reads: the knowns at every sample and the pose's numbers, and ``out``."""
@@ -137,6 +151,7 @@ class _Walk:
     nums: Nums
     dn: Nums  # the numbers per design (lengths, rhos)
     size: FloatArray  # (D,) the group's mean link length
+    arrays: _Arrays  # the numbers per design as Newton reads them
 
 
 @dataclass(frozen=True)
@@ -275,6 +290,11 @@ class Group(Step):
 
         return tuple(take(L) for L in lengths), tuple(tuple(take(r) for r in rho) for rho in rhos)
 
+    def _arrays(self, nums: Nums, B: int) -> _Arrays:
+        """The numbers ``nums`` of ``B`` columns as Newton reads them."""
+        L, R = self._stack(nums, B)
+        return _Arrays(L, R, NEWTON_TOL * self._scale(L), self._lin_jacobian(R, len(self.joints)))
+
     def newton(
         self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -284,23 +304,25 @@ class Group(Step):
         most ``iters`` steps; only the columns still iterating are computed (a column whose
         step is not finite is NaN from the next step on: it is dropped, NaN).
         """
-        m, B = U.shape
-        L, R = self._stack(nums, B)
-        tol = NEWTON_TOL * self._scale(L)
-        J_lin = self._lin_jacobian(R, m)
+        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters)
+
+    def _newton(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`newton` with the numbers as arrays."""
         U = U.copy()
-        conv = np.zeros(B, bool)
-        act = np.arange(B)
+        conv = np.zeros(U.shape[1], bool)
+        act = np.arange(U.shape[1])
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([U[:, act], K[:, act]]) if len(K) else U[:, act]
-                res = self._res(P, L[:, act], R[:, act])
-                ok = np.all(np.abs(res) <= tol[:, act], axis=0)
+                res = self._res(P, ar.L[:, act], ar.R[:, act])
+                ok = np.all(np.abs(res) <= ar.tol[:, act], axis=0)
                 conv[act[ok]] = True
                 act = act[~ok]
                 if it == iters or not len(act):
                     break
-                dx = _newton_step(self._jac(P[:, ~ok], J_lin[act]), res[:, ~ok])
+                dx = _newton_step(self._jac(P[:, ~ok], ar.J_lin[act]), res[:, ~ok])
                 U[:, act] = U[:, act] + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
                 live = np.all(np.isfinite(U[:, act]), axis=0)
                 if not live.all():  # the next step makes the column NaN, and it stays NaN
@@ -308,7 +330,7 @@ class Group(Step):
                         U[:, act[~live]] = NAN_POINT
                     act = act[live]
             P = np.concatenate([U, K]) if len(K) else U
-            J = self._jac(P, J_lin)
+            J = self._jac(P, ar.J_lin)
             det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
             conv &= np.isfinite(det) & (det != 0)
         return U, conv, np.sign(det)
@@ -390,7 +412,7 @@ class Group(Step):
         lo, hi, mg = self._reach(dn, D)
         ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
         ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
-        w = _Walk(K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, dn, _size(dn))
+        w = _Walk(K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, dn, _size(dn), self._arrays(dn, D))
         for half in _walks(k, D, n, self.angular):
             state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
             if len(half) < 4 * COARSE_STRIDE_MIN:
@@ -420,6 +442,7 @@ class Group(Step):
         state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         w: _Walk,
         snaps: list[tuple[np.ndarray, ...]] | None = None,
+        ahead: _Ahead | None = None,
     ) -> np.ndarray:
         """Walk ``samples`` in order from ``state`` (U, knowns, previous U, fresh), updated in place.
 
@@ -431,7 +454,7 @@ class Group(Step):
         U, Kc, U_prev, fresh = state  # fresh: the last sample walked was solved (sub-steps allowed)
         D = U.shape[1]
         clean = np.zeros((D, len(samples)), bool)
-        ahead = _Ahead(D)
+        ahead = _Ahead(D) if ahead is None else ahead
         for i, s in enumerate(samples):
             if snaps is not None:
                 snaps.append(tuple(x.copy() for x in state))
@@ -459,7 +482,7 @@ class Group(Step):
         """A continuation step to knowns ``K`` from ``U`` (with the linear predictor from ``U_prev``): (U, accepted)."""
         guess = 2 * U - U_prev  # linear predictor along the walk
         guess = np.where(np.isfinite(guess), guess, U)
-        U_new, conv, sg = self.newton(guess, K, _take(w.dn, designs))
+        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
         acc = conv & (sg == w.ref[designs]) & np.all(np.isfinite(U_new), axis=0)
         acc &= np.max(np.abs(U_new - U), axis=0) <= STEP_LIMIT * w.size[designs]  # small steps: the nearest root
         return U_new, acc
@@ -556,10 +579,41 @@ class Group(Step):
             for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
                 if i not in redo and bad_samples.intersection(half[a + 1 : b].tolist()):
                     redo.append(i)
-        for i in sorted(redo):
-            a, b = lo[i], hi[i]
-            U, Kc, U_prev, fresh = (x.copy() for x in snaps[i])
-            self._walk(half[a + 1 : b], (U, Kc, U_prev, fresh), w)
+        segments = [(half[lo[i] + 1 : hi[i]], tuple(x.copy() for x in snaps[i])) for i in sorted(redo)]
+        while segments:  # in batches of at most about AHEAD_COLUMNS lost (design, sample) columns
+            sizes = np.cumsum([np.sum(~state[3]) * len(samples) for samples, state in segments])
+            k = max(1, int(np.searchsorted(sizes, AHEAD_COLUMNS, side="right")))
+            batch, segments = segments[:k], segments[k:]
+            for (samples, state), ahead in zip(batch, self._ahead_of(batch, w), strict=True):
+                self._walk(samples, state, w, ahead=ahead)  # type: ignore[arg-type]
+
+    def _ahead_of(self, segments: list[tuple[np.ndarray, tuple[np.ndarray, ...]]], w: _Walk) -> list[_Ahead]:
+        """Look-aheads for walks of ``segments`` (samples, starting state): their lost designs' steps, at once.
+
+        A design lost at the start of a segment (in a gap, every segment starts so, from one same
+        state) gets its steps over the whole segment from one batch of :meth:`_lost_step`.
+        """
+        m, D = w.out.shape[:2]
+        cols = []
+        for samples, (U, _, U_prev, fresh) in segments:
+            need = np.flatnonzero(~fresh)
+            d, s = np.repeat(need, len(samples)), np.tile(samples, len(need))
+            cols.append((need, d, s, U[:, d], U_prev[:, d]))
+        d, s = np.concatenate([c[1] for c in cols]), np.concatenate([c[2] for c in cols])
+        U0, U1 = np.concatenate([c[3] for c in cols], axis=1), np.concatenate([c[4] for c in cols], axis=1)
+        Uw, acc, lost = np.full((m, len(d)), NAN_POINT), np.zeros(len(d), bool), np.zeros(len(d), bool)
+        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
+        if len(run):
+            Uw[:, run], acc[run], lost[run] = self._lost_step(U0[:, run], U1[:, run], w.K[:, d[run], s[run]], d[run], w)
+        out, start = [], 0
+        for (samples, _), (need, *_) in zip(segments, cols, strict=True):
+            ahead, n = _Ahead(D), len(need) * len(samples)
+            if len(need):
+                sl = slice(start, start + n)
+                ahead.add(0, need, Uw[:, sl], acc[sl], lost[sl], len(samples))
+            out.append(ahead)
+            start += n
+        return out
 
     def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
         """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
@@ -567,7 +621,7 @@ class Group(Step):
         can = np.flatnonzero(w.ok[c, r])  # the others cannot converge
         if len(can):
             r, c, g, bound = r[can], c[can], g[:, can], bound[can]
-            sol, conv, sg = self.newton(g, w.K[:, c, r], _take(w.dn, c))
+            sol, conv, sg = self._newton(g, w.K[:, c, r], w.arrays.take(c))
             # accepted: converged, with the pose's sign, near the interpolation (not another branch)
             near = np.max(np.abs(sol - g), axis=0)
             good = conv & (sg == w.ref[c]) & np.all(np.isfinite(sol), axis=0) & (near <= bound)
@@ -587,6 +641,7 @@ class Group(Step):
         dn = self._design_nums(nums, designs)
         size = _size(dn)
         reach = self._reach(dn, len(designs))
+        ar = self._arrays(dn, len(designs))
         B = U.shape[1]
         Uc, t, dt = U.copy(), np.zeros(B), np.full(B, 0.5)
         alive = np.ones(B, bool)
@@ -601,7 +656,7 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self.newton(Uc[:, a], K_t[:, can], _take(dn, a))
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
                 ok[can] = conv & (sg == ref[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
@@ -820,8 +875,13 @@ class _Ahead:
         if len(run):
             dr = d[run]
             Uw[:, run], acc[run], lost[run] = group._lost_step(U[:, dr], U_prev[:, dr], w.K[:, dr, s[run]], dr, w)
-        self.windows.append((i, Uw.reshape(m, len(need), c), acc.reshape(len(need), c), lost.reshape(len(need), c)))
-        self.which[need], self.col[need], self.until[need] = len(self.windows) - 1, np.arange(len(need)), i + c
+        self.add(i, need, Uw, acc, lost, c)
+
+    def add(self, i: int, need: np.ndarray, Uw: np.ndarray, acc: np.ndarray, lost: np.ndarray, c: int) -> None:
+        """The steps of designs ``need`` over ``c`` samples from the ``i``-th (flat, design-major)."""
+        k = len(need)
+        self.windows.append((i, Uw.reshape(-1, k, c), acc.reshape(k, c), lost.reshape(k, c)))
+        self.which[need], self.col[need], self.until[need] = len(self.windows) - 1, np.arange(k), i + c
         self.streak[need] += 1
 
     def forget(self, acc: np.ndarray) -> None:
