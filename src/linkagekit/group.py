@@ -46,6 +46,29 @@ a gap it does not guess: its samples stay flagged until the walk reaches them by
 continuation (from the pose's other side, or never; ``modes`` lists every mode there). So
 the sweep never changes mode silently. Results do not depend on the order of the inputs.
 
+Cost, at the same results
+-------------------------
+Three things make a walk cheaper without changing a single accepted sample or a bit of
+its position (each Newton column is computed by the same operations whatever else is in
+its batch, so batching is exact):
+
+* Newton iterates only the columns still iterating (a converged column is frozen, as
+  before; a column gone NaN stays NaN), with the residual and Jacobian built from index
+  arrays and the Jacobian's constant linear rows built once.
+* *Chains.* Along any chain of link edges between two held joints (two joints of one
+  link, ``|w_p - w_q| L`` apart with ``w`` = 0, 1, ``rho_k``), the held joints are at most
+  the sum of the edges apart and at least twice the longest minus the sum. A configuration
+  Newton accepts keeps every edge to about ``1e-12`` of its link, so where the held joints
+  break a chain's bounds by more than ``CHAIN_MARGIN`` (``1e-8``) of its lengths no Newton
+  can converge: the sample is failed at once (no Newton, sub-steps or restarts), as it
+  would have been after all of them. This is the gap of a dyad (two circles that do not
+  meet).
+* *Look-ahead.* After a failure, a design's next steps all start from the same state (its
+  last good solution and the predictor before it) until one is accepted, so they do not
+  depend on each other: they are solved in one batch over a window of the next samples
+  (8, doubling to 256) and read from there (:class:`_Ahead`). The segments a two-level
+  walk walks again start, in a gap, from one same state: their steps come from one batch.
+
 Rates
 -----
 Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J_k a_k -
