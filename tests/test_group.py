@@ -336,3 +336,85 @@ def test_triads_over_the_design_axis_equal_single_solves():
         for j in base.joint_names:
             assert np.max(np.abs(batch.point(j)[d][ok] - one.point(j)[ok])) <= 1e-10 * scale_of(base), (d, j)
             assert np.max(np.abs(batch.velocity(j)[d][ok] - one.velocity(j)[ok])) <= 1e-8 * scale_of(base), (d, j)
+
+
+# ----------------------------------------------------------------------------- cost, at the same results
+def forced_fourbar(seed: int) -> lk.Mechanism:
+    rng = np.random.default_rng(seed)
+    p = random_points(rng, "ABCDP")
+    return lk.Mechanism.from_dict(fourbar_dict(p["A"], p["B"], p["C"], p["D"], p["P"]))
+
+
+def designs_with_gaps() -> tuple[lk.Mechanism, np.ndarray]:
+    """Five perturbed triads (a design axis), each with a gap over the sweep below."""
+    base = random_triad(1)
+    rng = np.random.default_rng(3)
+    return base, base.pose_array()[None] + rng.normal(0, 0.3, (5, len(base.joint_names), 2))
+
+
+def walks() -> list[lk.Result]:
+    """Walks through gaps: a forced four-bar (its dyad restarts after the gap), triads, a design axis."""
+    wide = {"crank": np.arange(-400.0, 400.0, 2.0)}
+    base, poses = designs_with_gaps()
+    return [
+        lk.analyze(forced_fourbar(0), {"crank": np.arange(0.0, 360.0, 10.0)}, method="numerical", rates=False),
+        lk.analyze(random_triad(1), wide, rates=False),
+        lk.analyze(base, {"crank": np.arange(-180.0, 180.0, 3.0)}, poses=poses, rates=False),
+    ]
+
+
+def test_the_shortcuts_change_no_sample_and_no_bit(monkeypatch):
+    """Chain bounds and look-ahead batches (docs/method.md, "Cost, at the same results") give exactly the walk
+    solved one step at a time: the same assembled samples and bit-identical positions."""
+    from linkagekit import group
+
+    fast = walks()
+    assert all(0.05 < r.assembled.mean() < 0.95 for r in fast)  # every case walks through gaps
+    monkeypatch.setattr(group.Group, "_possible", lambda self, K, reach: np.ones(K.shape[1:], bool))
+    monkeypatch.setattr(group, "AHEAD_FIRST", 1)
+    monkeypatch.setattr(group, "AHEAD_MOST", 1)
+    monkeypatch.setattr(group.Group, "_ahead_of", lambda self, seg, w: [group._Ahead(w.out.shape[1]) for _ in seg])
+    for a, b in zip(fast, walks(), strict=True):
+        assert np.array_equal(a.assembled, b.assembled)
+        assert np.array_equal(points(a), points(b), equal_nan=True)
+
+
+def test_a_dyads_gap_costs_no_newton(monkeypatch):
+    """Where a forced four-bar's dyad cannot close (its chain is too short), no Newton runs: before, each sample
+    of the gap cost 16 iterations and 17 restarts of 64 (about 20,000 linear solves for this sweep)."""
+    solves = []
+    solve = np.linalg.solve
+    monkeypatch.setattr(np.linalg, "solve", lambda *a, **k: solves.append(1) or solve(*a, **k))
+    res = lk.analyze(forced_fourbar(0), {"crank": np.arange(0.0, 360.0, 5.0)}, method="numerical", rates=False)
+    assert 0.3 < res.assembled.mean() < 0.5  # a gap, and the branch found again after it
+    assert len(solves) < 1000, len(solves)  # measured 170
+
+
+@pytest.mark.parametrize("seed", [1, 4, 5])
+def test_chains_never_rule_out_an_assembled_sample(seed):
+    """The chain bounds hold at every sample the group assembles, and rule out part of a dyad's gap.
+
+    The held joints are computed here: ground joints stay, the crank's pin turns about its pivot.
+    """
+    from linkagekit.api import prepare
+    from linkagekit.group import Group
+
+    for mech, method in ((random_triad(seed), "natural"), (forced_fourbar(seed), "numerical")):
+        drv = mech.drivers[0]
+        x = np.arange(-360.0, 360.0, 1.0)
+        res = lk.analyze(mech, {drv.name: x}, method=method, rates=False)
+        params = prepare(mech, numerical=method == "numerical")
+        names = params.plan.joint_names
+        pivot, pin = mech.joints[drv.pivot], mech.joints[drv.toward]
+        turn = np.exp(1j * (np.radians(x) - np.angle(pin - pivot)))
+        z = np.array([pivot + (pin - pivot) * turn if j == drv.toward else mech.joints[j] + 0 * turn for j in names])
+        ruled_out = 0
+        for step, nums in zip(params.plan.steps, params.steps, strict=True):
+            if isinstance(step, Group):
+                dn = step._design_nums(nums, np.zeros(len(x), int))
+                ok = step._possible(z[list(step.known)], step._reach(dn, len(x)))
+                assert ok[res.assembled].all(), (seed, method)
+                ruled_out += int(np.sum(~ok))
+        assert ruled_out > 0 or res.assembled.all() or method == "natural"
+        if method == "numerical":
+            assert ruled_out == np.sum(~res.assembled)  # a four-bar's only gap: its dyad's circles do not meet

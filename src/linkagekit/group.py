@@ -46,6 +46,29 @@ a gap it does not guess: its samples stay flagged until the walk reaches them by
 continuation (from the pose's other side, or never; ``modes`` lists every mode there). So
 the sweep never changes mode silently. Results do not depend on the order of the inputs.
 
+Cost, at the same results
+-------------------------
+Three things make a walk cheaper without changing a single accepted sample or a bit of
+its position (each Newton column is computed by the same operations whatever else is in
+its batch, so batching is exact):
+
+* Newton iterates only the columns still iterating (a converged column is frozen, as
+  before; a column gone NaN stays NaN), with the residual and Jacobian built from index
+  arrays and the Jacobian's constant linear rows built once.
+* *Chains.* Along any chain of link edges between two held joints (two joints of one
+  link, ``|w_p - w_q| L`` apart with ``w`` = 0, 1, ``rho_k``), the held joints are at most
+  the sum of the edges apart and at least twice the longest minus the sum. A configuration
+  Newton accepts keeps every edge to about ``1e-12`` of its link, so where the held joints
+  break a chain's bounds by more than ``CHAIN_MARGIN`` (``1e-8``) of its lengths no Newton
+  can converge: the sample is failed at once (no Newton, sub-steps or restarts), as it
+  would have been after all of them. This is the gap of a dyad (two circles that do not
+  meet).
+* *Look-ahead.* After a failure, a design's next steps all start from the same state (its
+  last good solution and the predictor before it) until one is accepted, so they do not
+  depend on each other: they are solved in one batch over a window of the next samples
+  (8, doubling to 256) and read from there (:class:`_Ahead`). The segments a two-level
+  walk walks again start, in a gap, from one same state: their steps come from one batch.
+
 Rates
 -----
 Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J_k a_k -
@@ -57,7 +80,8 @@ distance rows divided by ``2 L`` (so every row has unit scale) over its largest.
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -85,6 +109,15 @@ COARSE_STRIDE_MIN = 4
 WALK_TURNS = 10
 #: ... in radians
 WALK_REACH = 2 * np.pi * WALK_TURNS
+#: a chain of link edges rules a sample out only beyond this margin (relative to its lengths): far
+#: above what Newton's tolerance and rounding allow a converged configuration
+CHAIN_MARGIN = 1e-8
+#: at most this many chains between held joints are checked (and this many search steps to find them)
+MAX_CHAINS, MAX_CHAIN_SEARCH = 64, 4096
+#: a lost design's steps are solved ahead over this many samples at first, doubling up to the most ...
+AHEAD_FIRST, AHEAD_MOST = 8, 256
+#: ... and this many (design, sample) columns in one batch
+AHEAD_COLUMNS = 2048
 
 
 @dataclass(frozen=True)
@@ -94,6 +127,54 @@ class GroupLink:
     name: str
     slots: tuple[int, ...]  # slot of j0, j1, j2, ... (slots < n_unknown are unknowns)
     joints: tuple[int, ...]  # the same joints as plan indices
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """Where a group's equations sit: per link a distance row, then two rows per further joint."""
+
+    a: np.ndarray  # (n_links,) the slot of each link's j0
+    b: np.ndarray  # (n_links,) ... of its j1
+    dist: np.ndarray  # (n_links,) the row of its distance equation
+    link: np.ndarray  # (n_lin,) the link of each further joint (in row order)
+    k: np.ndarray  # (n_lin,) the further joint's slot
+    lin: np.ndarray  # (n_lin,) the row of its real part (the imaginary part is the next row)
+
+
+@dataclass(frozen=True)
+class _Chain:
+    """A chain of link edges from one held joint to another through the group's joints."""
+
+    ends: tuple[int, int]  # the two held joints (indices into ``known``)
+    edges: tuple[tuple[int, int, int], ...]  # (link, p, q): its joints at positions p and q of ``slots``
+
+
+@dataclass(frozen=True)
+class _Arrays:
+    """A group's numbers per column as arrays: lengths (n_links, B), rhos (n_lin, B), Newton's tolerance
+    per row (n_eq, B) and the (constant) linear rows of the Jacobian (B, n_eq, 2m)."""
+
+    L: FloatArray
+    R: np.ndarray
+    tol: FloatArray
+    J_lin: FloatArray
+
+    def take(self, cols: np.ndarray) -> _Arrays:
+        return _Arrays(self.L[:, cols], self.R[:, cols], self.tol[:, cols], self.J_lin[cols])
+
+
+@dataclass
+class _Walk:
+    """What every step of a walk reads: the knowns at every sample and the pose's numbers, and ``out``."""
+
+    K: np.ndarray  # (k, D, n) the known joints
+    ok: np.ndarray  # (D, n) the knowns are finite, the pose solved, and no chain rules the sample out
+    out: np.ndarray  # (m, D, n) the group's joints, written as they are accepted
+    ref: np.ndarray  # (D,) the pose's determinant sign
+    nums: Nums
+    dn: Nums  # the numbers per design (lengths, rhos)
+    size: FloatArray  # (D,) the group's mean link length
+    arrays: _Arrays  # the numbers per design as Newton reads them
 
 
 @dataclass(frozen=True)
@@ -135,42 +216,92 @@ class Group(Step):
         return 2 * len(self.joints)
 
     # ------------------------------------------------------------------ the system
-    def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
-        """Residuals (B, n_eq) and their scales, for slot positions ``P`` (n_slots, B) complex."""
-        lengths, rhos = nums[0], nums[1]
-        rows, scales = [], []
-        for gl, L, rho in zip(self.links, lengths, rhos, strict=True):
-            L = np.ravel(L) if np.ndim(L) else L
-            e = P[gl.slots[1]] - P[gl.slots[0]]
-            rows.append(e.real * e.real + e.imag * e.imag - L * L)
-            scales.append(L * L + 0 * e.real)
-            for sk, r in zip(gl.slots[2:], rho, strict=True):
-                c = P[sk] - P[gl.slots[0]] - np.ravel(r) * e
-                rows += [c.real, c.imag]
-                scales += [L + 0 * e.real, L + 0 * e.real]
-        return np.stack(rows, axis=-1), np.stack(scales, axis=-1)
-
-    def jacobian(self, P: np.ndarray, nums: Nums, n_slots: int) -> np.ndarray:
-        """d residual / d [x, y] of every slot: (B, n_eq, 2 n_slots)."""
-        rhos = nums[1]
-        B = P.shape[1]
-        J = np.zeros((B, self.n_eq, 2 * n_slots))
+    @cached_property
+    def _rows(self) -> _Rows:
+        a, b, dist, link, k, lin = [], [], [], [], [], []
         row = 0
-        for gl, rho in zip(self.links, rhos, strict=True):
-            a, b = gl.slots[0], gl.slots[1]
-            e = P[b] - P[a]
-            J[:, row, 2 * b], J[:, row, 2 * b + 1] = 2 * e.real, 2 * e.imag
-            J[:, row, 2 * a], J[:, row, 2 * a + 1] = -2 * e.real, -2 * e.imag
+        for i, gl in enumerate(self.links):
+            a.append(gl.slots[0])
+            b.append(gl.slots[1])
+            dist.append(row)
             row += 1
-            for sk, r in zip(gl.slots[2:], rho, strict=True):
-                r = np.ravel(r) * np.ones(B)
-                for slot, c in ((sk, np.ones(B, complex)), (a, r - 1.0), (b, -r)):
+            for sk in gl.slots[2:]:
+                link.append(i)
+                k.append(sk)
+                lin.append(row)
+                row += 2
+        return _Rows(*(np.array(x, dtype=np.intp) for x in (a, b, dist, link, k, lin)))
+
+    def _stack(self, nums: Nums, B: int) -> tuple[FloatArray, np.ndarray]:
+        """Design numbers as arrays: lengths (n_links, B) and the further joints' rhos (n_lin, B), in row order."""
+        L = np.array([np.broadcast_to(np.ravel(x), (B,)) for x in nums[0]], float).reshape(len(self.links), B)
+        rhos = [np.broadcast_to(np.ravel(r), (B,)) for rho in nums[1] for r in rho]
+        R = np.array(rhos, complex) if rhos else np.zeros((0, B), complex)
+        return L, R
+
+    def _res(self, P: np.ndarray, L: FloatArray, R: np.ndarray) -> FloatArray:
+        """Residuals (n_eq, B) of slot positions ``P`` (n_slots, B) with lengths ``L`` and rhos ``R``."""
+        rw = self._rows
+        e = P[rw.b] - P[rw.a]
+        res = np.empty((self.n_eq, P.shape[1]))
+        res[rw.dist] = e.real * e.real + e.imag * e.imag - L * L
+        if len(rw.k):
+            c = P[rw.k] - P[rw.a[rw.link]] - R * e[rw.link]
+            res[rw.lin], res[rw.lin + 1] = c.real, c.imag
+        return res
+
+    def _scale(self, L: FloatArray) -> FloatArray:
+        """The scale of every residual (n_eq, B): ``L^2`` on a distance row, ``L`` on a linear row."""
+        rw = self._rows
+        scale = np.empty((self.n_eq, L.shape[1]))
+        scale[rw.dist] = L * L
+        scale[rw.lin] = scale[rw.lin + 1] = L[rw.link]
+        return scale
+
+    def _lin_jacobian(self, R: np.ndarray, n_cols: int) -> FloatArray:
+        """The linear rows of the Jacobian (constant) on the slots below ``n_cols``: (B, n_eq, 2 n_cols)."""
+        rw = self._rows
+        B = R.shape[1]
+        J = np.zeros((B, self.n_eq, 2 * n_cols))
+        for i, row in enumerate(rw.lin):
+            r = R[i] * np.ones(B)
+            a, b = rw.a[rw.link[i]], rw.b[rw.link[i]]
+            for slot, c in ((rw.k[i], np.ones(B, complex)), (a, r - 1.0), (b, -r)):
+                if slot < n_cols:
                     J[:, row, 2 * slot] += c.real
                     J[:, row, 2 * slot + 1] -= c.imag
                     J[:, row + 1, 2 * slot] += c.imag
                     J[:, row + 1, 2 * slot + 1] += c.real
-                row += 2
         return J
+
+    def _jac(self, P: np.ndarray, J_lin: FloatArray) -> FloatArray:
+        """The Jacobian at ``P`` on the slots of ``J_lin`` (its linear rows): the distance rows added."""
+        rw = self._rows
+        n_cols = J_lin.shape[2] // 2
+        J = J_lin.copy()
+        e = P[rw.b] - P[rw.a]
+        for s, f in ((rw.b, 2), (rw.a, -2)):
+            on = s < n_cols
+            rows, cols = rw.dist[on], 2 * s[on]
+            J[:, rows, cols] = (f * e.real[on]).T
+            J[:, rows, cols + 1] = (f * e.imag[on]).T
+        return J
+
+    def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals (B, n_eq) and their scales, for slot positions ``P`` (n_slots, B) complex."""
+        L, R = self._stack(nums, P.shape[1])
+        rw = self._rows
+        zero = 0 * (P[rw.b] - P[rw.a]).real  # NaN scales where a link is not finite
+        scale = self._scale(L)
+        scale[rw.dist] += zero
+        scale[rw.lin] += zero[rw.link]
+        scale[rw.lin + 1] += zero[rw.link]
+        return self._res(P, L, R).T, scale.T
+
+    def jacobian(self, P: np.ndarray, nums: Nums, n_slots: int) -> np.ndarray:
+        """d residual / d [x, y] of every slot: (B, n_eq, 2 n_slots)."""
+        _, R = self._stack(nums, P.shape[1])
+        return self._jac(P, self._lin_jacobian(R, n_slots))
 
     def _design_nums(self, nums: Nums, d: np.ndarray) -> Nums:
         """The numbers of the designs ``d`` (a design index per batch row), flat."""
@@ -182,45 +313,113 @@ class Group(Step):
 
         return tuple(take(L) for L in lengths), tuple(tuple(take(r) for r in rho) for rho in rhos)
 
+    def _arrays(self, nums: Nums, B: int) -> _Arrays:
+        """The numbers ``nums`` of ``B`` columns as Newton reads them."""
+        L, R = self._stack(nums, B)
+        return _Arrays(L, R, NEWTON_TOL * self._scale(L), self._lin_jacobian(R, len(self.joints)))
+
     def newton(
         self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Newton from ``U`` (m, B) with knowns ``K`` (k, B): (solution, converged, det sign)."""
-        m = len(self.joints)
+        """Newton from ``U`` (m, B) with knowns ``K`` (k, B): (solution, converged, det sign).
+
+        Each column is iterated until its residual passes (then it is left as it is), for at
+        most ``iters`` steps; only the columns still iterating are computed (a column whose
+        step is not finite is NaN from the next step on: it is dropped, NaN).
+        """
+        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters)
+
+    def _newton(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`newton` with the numbers as arrays."""
         U = U.copy()
-        B = U.shape[1]
-        conv = np.zeros(B, bool)
-        sign = np.zeros(B)
+        conv = np.zeros(U.shape[1], bool)
+        act = np.arange(U.shape[1])
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            for _ in range(iters):
-                P = np.concatenate([U, K]) if len(K) else U
-                res, scale = self.residual(P, nums)
-                ok = np.all(np.abs(res) <= NEWTON_TOL * scale, axis=1)
-                if ok.all():
-                    conv = ok
+            for it in range(iters + 1):
+                P = np.concatenate([U[:, act], K[:, act]]) if len(K) else U[:, act]
+                res = self._res(P, ar.L[:, act], ar.R[:, act])
+                ok = np.all(np.abs(res) <= ar.tol[:, act], axis=0)
+                conv[act[ok]] = True
+                act = act[~ok]
+                if it == iters or not len(act):
                     break
-                J = self.jacobian(P, nums, m + len(K))[:, :, : 2 * m]
-                good = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(res), axis=1)
-                dx = np.full((B, 2 * m), np.nan)
-                if good.any():
-                    try:
-                        dx[good] = np.linalg.solve(J[good], -res[good][..., None])[..., 0]
-                    except np.linalg.LinAlgError:
-                        for i in np.flatnonzero(good):  # rare: a singular matrix in the batch
-                            with contextlib.suppress(np.linalg.LinAlgError):
-                                dx[i] = np.linalg.solve(J[i], -res[i])
-                dx[ok] = 0.0
-                U = U + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
-            else:
-                P = np.concatenate([U, K]) if len(K) else U
-                res, scale = self.residual(P, nums)
-                conv = np.all(np.abs(res) <= NEWTON_TOL * scale, axis=1)
+                dx = _newton_step(self._jac(P[:, ~ok], ar.J_lin[act]), res[:, ~ok])
+                U[:, act] = U[:, act] + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+                live = np.all(np.isfinite(U[:, act]), axis=0)
+                if not live.all():  # the next step makes the column NaN, and it stays NaN
+                    if it + 1 < iters:
+                        U[:, act[~live]] = NAN_POINT
+                    act = act[live]
             P = np.concatenate([U, K]) if len(K) else U
-            J = self.jacobian(P, nums, m + len(K))[:, :, : 2 * m]
+            J = self._jac(P, ar.J_lin)
             det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
-            sign = np.sign(det)
             conv &= np.isfinite(det) & (det != 0)
-        return U, conv, sign
+        return U, conv, np.sign(det)
+
+    # ------------------------------------------------------------------ chains between held joints
+    @cached_property
+    def _chains(self) -> tuple[_Chain, ...]:
+        """Chains of link edges between two held joints through the group's joints (simple paths, a few)."""
+        m = len(self.joints)
+        adj: dict[int, list[tuple[int, tuple[int, int, int]]]] = {}
+        for i, gl in enumerate(self.links):
+            for p, sp in enumerate(gl.slots):
+                adj.setdefault(sp, []).extend((sq, (i, p, q)) for q, sq in enumerate(gl.slots) if q != p)
+        chains: list[_Chain] = []
+        budget = [MAX_CHAIN_SEARCH]
+
+        def extend(node: int, start: int, edges: tuple[tuple[int, int, int], ...], seen: frozenset[int]) -> None:
+            for nxt, edge in adj.get(node, []):
+                budget[0] -= 1
+                if len(chains) >= MAX_CHAINS or budget[0] < 0:
+                    return
+                if nxt >= m and nxt > start:
+                    chains.append(_Chain((start - m, nxt - m), (*edges, edge)))
+                elif nxt < m and nxt not in seen:
+                    extend(nxt, start, (*edges, edge), seen | {nxt})
+
+        for start in range(m, m + len(self.known)):
+            extend(start, start, (), frozenset())
+        return tuple(chains)
+
+    def _reach(self, dn: Nums, B: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Per chain and design, the distances its two held joints can be apart: (low, high, margin), (n_chains, B).
+
+        Along a chain of edges of lengths ``l_i`` (two joints of one link, ``|w_p - w_q| L`` with
+        ``w`` = 0, 1, rho_k for j0, j1, jk), the ends are between ``2 max l - sum l`` and ``sum l``
+        apart. A configuration Newton accepts keeps every edge to about 1e-12 of the link, so
+        beyond ``CHAIN_MARGIN`` of the chain's lengths there is none.
+        """
+        L, _ = self._stack(dn, B)
+        one = np.ones(B, complex)
+        w = [[0 * one, one, *(np.broadcast_to(np.ravel(r), (B,)) for r in rho)] for rho in dn[1]]
+        out = np.zeros((3, len(self._chains), B))
+        with np.errstate(invalid="ignore", over="ignore"):
+            for c, ch in enumerate(self._chains):
+                lens = np.array([np.abs(w[i][p] - w[i][q]) * L[i] for i, p, q in ch.edges])
+                total = np.sum(lens, axis=0)
+                out[:, c] = (
+                    2 * np.max(lens, axis=0) - total,
+                    total,
+                    CHAIN_MARGIN * (total + np.sum(L[[e[0] for e in ch.edges]], axis=0)),
+                )
+        return out[0], out[1], out[2]
+
+    def _possible(self, K: np.ndarray, reach: tuple[FloatArray, FloatArray, FloatArray]) -> np.ndarray:
+        """False where a chain proves Newton cannot converge: its held joints ``K`` (k, ...) too far apart or too near.
+
+        ``reach`` broadcasts against ``K``'s trailing axes.
+        """
+        if not self._chains:
+            return np.ones(K.shape[1:], bool)
+        ends = np.array([ch.ends for ch in self._chains])
+        d = np.abs(K[ends[:, 1]] - K[ends[:, 0]])
+        lo, hi, mg = reach
+        with np.errstate(invalid="ignore"):
+            out: np.ndarray = ~np.any((d > hi + mg) | (d < lo - mg), axis=0)
+        return out
 
     # ------------------------------------------------------------------ positions
     def place(self, k: Kin, nums: Nums) -> None:
@@ -230,14 +429,17 @@ class Group(Step):
         zu0 = np.broadcast_to(nums[3][:, :, 0], (m, D))
         zk0 = np.broadcast_to(nums[4][:, :, 0], (len(self.known), D))
         dn = self._design_nums(nums, np.arange(D))
-        out = np.full((m, D, n), NAN_POINT)
         K_all = z[list(self.known)] if self.known else np.zeros((0, D, n), complex)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
+        lo, hi, mg = self._reach(dn, D)
+        ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
+        ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
+        w = _Walk(K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, dn, _size(dn), self._arrays(dn, D))
         for half in _walks(k, D, n, self.angular):
             state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
             if len(half) < 4 * COARSE_STRIDE_MIN:
-                self._walk(half, state, K_all, out, ref_sign, conv0, nums, dn)
+                self._walk(half, state, w)
                 continue
             # two levels: walk every stride-th sample; then the samples between two walked ones
             # together, each from the interpolation of its two neighbours' solutions
@@ -245,15 +447,12 @@ class Group(Step):
             ends = np.arange(stride - 1, len(half), stride)
             if ends[-1] != len(half) - 1:
                 ends = np.append(ends, len(half) - 1)
-            snaps, clean = [], []
-            for e in ends:
-                snaps.append((state[0].copy(), state[1].copy(), state[2].copy(), state[3].copy()))
-                direct = self._walk(half[e : e + 1], state, K_all, out, ref_sign, conv0, nums, dn)
-                clean.append(direct)
-            lo = np.concatenate([[-1], ends[:-1]])
-            self._fill(half, lo, ends, snaps, clean, start, K_all, out, ref_sign, conv0, nums, dn)
+            snaps: list[tuple[np.ndarray, ...]] = []
+            clean = self._walk(half[ends], state, w, snaps)
+            lo_end = np.concatenate([[-1], ends[:-1]])
+            self._fill(half, lo_end, ends, snaps, clean, start, w)
         for i, j in enumerate(self.joints):
-            z[j] = out[i]
+            z[j] = w.out[i]
         if self.keep_rotation:
             bases = dict(zip((gl.name for gl in self.links), nums[2], strict=True))
             for gl in self.links:
@@ -264,70 +463,109 @@ class Group(Step):
         self,
         samples: np.ndarray,
         state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        K_all: np.ndarray,
-        out: np.ndarray,
-        ref_sign: np.ndarray,
-        conv0: np.ndarray,
-        nums: Nums,
-        dn: Nums,
+        w: _Walk,
+        snaps: list[tuple[np.ndarray, ...]] | None = None,
+        ahead: _Ahead | None = None,
     ) -> np.ndarray:
         """Walk ``samples`` in order from ``state`` (U, knowns, previous U, fresh), updated in place.
 
-        Returns, per design, whether every sample was accepted by a plain continuation step
-        (no restart after a gap, no failure).
+        Returns, per design and sample, whether the sample was accepted by a plain continuation
+        step (no restart after a gap, no failure), (D, len(samples)). With ``snaps``, the state
+        before each sample is appended to it. A design whose last sample failed (not fresh)
+        takes its next steps from the look-ahead (:class:`_Ahead`): the same steps, solved at once.
         """
         U, Kc, U_prev, fresh = state  # fresh: the last sample walked was solved (sub-steps allowed)
-        size = _size(dn)
-        clean = np.ones(U.shape[1], bool)
-        for s in samples:
-            K_t = K_all[:, :, s]
-            target_ok = np.all(np.isfinite(K_t), axis=0) & conv0
-            guess = 2 * U - U_prev  # linear predictor along the walk
-            guess = np.where(np.isfinite(guess), guess, U)
-            U_new, conv, sg = self.newton(guess, K_t, dn)
-            acc = conv & (sg == ref_sign) & target_ok & np.all(np.isfinite(U_new), axis=0)
-            acc &= np.max(np.abs(U_new - U), axis=0) <= STEP_LIMIT * size  # small steps: the nearest root
-            todo = ~acc & target_ok & fresh
-            lost = ~acc & target_ok & ~fresh
-            if todo.any():  # step halving: move the knowns from the last good state in 2^h steps
-                idx = np.flatnonzero(todo)
-                U_h = self._halving(U[:, idx], Kc[:, idx], K_t[:, idx], ref_sign[idx], nums, idx)
-                done = np.all(np.isfinite(U_h), axis=0)
-                U_new[:, idx[done]] = U_h[:, done]
-                acc[idx[done]] = True
-                lost[idx[~done]] = True
-            if lost.any():
-                clean[lost] = False
-            if lost.any() and self.dyad_like:  # not reachable from the last good sample: the only root of the sign
-                idx = np.flatnonzero(lost)
-                U_r = self._restart(U[:, idx], K_t[:, idx], ref_sign[idx], nums, idx)
-                found = np.all(np.isfinite(U_r), axis=0)
-                U_new[:, idx[found]] = U_r[:, found]
-                acc[idx[found]] = True
+        D = U.shape[1]
+        clean = np.zeros((D, len(samples)), bool)
+        ahead = _Ahead(D) if ahead is None else ahead
+        for i, s in enumerate(samples):
+            if snaps is not None:
+                snaps.append(tuple(x.copy() for x in state))
+            K_t = w.K[:, :, s]
+            U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(D, bool), np.zeros(D, bool)
+            now = np.flatnonzero(w.ok[:, s] & fresh)
+            if len(now):
+                U_new[:, now], acc[now], lost[now] = self._fresh_step(U[:, now], U_prev[:, now], Kc[:, now], now, s, w)
+            later = np.flatnonzero(w.ok[:, s] & ~fresh)
+            if len(later):
+                U_new[:, later], acc[later], lost[later] = ahead.get(self, i, later, samples, U, U_prev, w)
+            clean[:, i] = acc & ~lost
             fresh[:] = acc  # sub-steps only from a sample solved just before; after a gap, restarts (dyads)
-            clean &= acc
-            out[:, acc, s] = U_new[:, acc]
-            U_prev[:, acc] = U[:, acc]
-            if lost.any():  # no predictor across a gap: the next step starts from the restart's solution
-                U_prev[:, lost & acc] = U_new[:, lost & acc]
+            ahead.forget(acc)
+            w.out[:, acc, s] = U_new[:, acc]
+            # no predictor across a gap: the next step starts from the restart's solution
+            U_prev[:, acc] = np.where(lost, U_new, U)[:, acc]
             U[:, acc] = U_new[:, acc]
             Kc[:, acc] = K_t[:, acc]
         return clean
+
+    def _plain(
+        self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A continuation step to knowns ``K`` from ``U`` (with the linear predictor from ``U_prev``): (U, accepted)."""
+        guess = 2 * U - U_prev  # linear predictor along the walk
+        guess = np.where(np.isfinite(guess), guess, U)
+        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
+        acc = conv & (sg == w.ref[designs]) & np.all(np.isfinite(U_new), axis=0)
+        acc &= np.max(np.abs(U_new - U), axis=0) <= STEP_LIMIT * w.size[designs]  # small steps: the nearest root
+        return U_new, acc
+
+    def _fresh_step(
+        self, U: np.ndarray, U_prev: np.ndarray, Kc: np.ndarray, designs: np.ndarray, s: int, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Sample ``s`` from a sample solved just before: a step, else sub-steps, else (dyads) restarts.
+
+        Returns (U, accepted, lost): lost when neither the step nor the sub-steps got there.
+        """
+        K = w.K[:, designs, s]
+        U_new, acc = self._plain(U, U_prev, K, designs, w)
+        todo = np.flatnonzero(~acc)
+        if len(todo):  # step halving: move the knowns from the last good state in 2^h steps
+            U_h = self._halving(U[:, todo], Kc[:, todo], K[:, todo], w.ref[designs[todo]], w.nums, designs[todo])
+            done = np.all(np.isfinite(U_h), axis=0)
+            U_new[:, todo[done]] = U_h[:, done]
+            acc[todo[done]] = True
+        lost = ~acc
+        self._restart_lost(U, K, designs, w, U_new, acc, lost)
+        return U_new, acc, lost
+
+    def _lost_step(
+        self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A sample after one that failed: a step, else (dyads) restarts. Returns (U, accepted, lost)."""
+        U_new, acc = self._plain(U, U_prev, K, designs, w)
+        lost = ~acc
+        self._restart_lost(U, K, designs, w, U_new, acc, lost)
+        return U_new, acc, lost
+
+    def _restart_lost(
+        self,
+        U: np.ndarray,
+        K: np.ndarray,
+        designs: np.ndarray,
+        w: _Walk,
+        U_new: np.ndarray,
+        acc: np.ndarray,
+        lost: np.ndarray,
+    ) -> None:
+        """For a dyad-like group: the ``lost`` columns restarted (:meth:`_restart`), ``U_new`` and ``acc`` updated."""
+        if not (lost.any() and self.dyad_like):  # not reachable from the last good sample: the only root of the sign
+            return
+        idx = np.flatnonzero(lost)
+        U_r = self._restart(U[:, idx], K[:, idx], w.ref[designs[idx]], w.nums, designs[idx])
+        found = np.all(np.isfinite(U_r), axis=0)
+        U_new[:, idx[found]] = U_r[:, found]
+        acc[idx[found]] = True
 
     def _fill(
         self,
         half: np.ndarray,
         lo: np.ndarray,
         hi: np.ndarray,
-        snaps: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
-        clean: list[np.ndarray],
+        snaps: list[tuple[np.ndarray, ...]],
+        clean: np.ndarray,
         start: np.ndarray,
-        K_all: np.ndarray,
-        out: np.ndarray,
-        ref_sign: np.ndarray,
-        conv0: np.ndarray,
-        nums: Nums,
-        dn: Nums,
+        w: _Walk,
     ) -> None:
         """The samples between walked ones: all at once where both ends are good, else walked.
 
@@ -338,6 +576,7 @@ class Group(Step):
         state the walk had at ``a``.
         """
         m, D = start.shape
+        out = w.out
         rows, cols, guess, bound, redo = [], [], [], [], []
         for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
             inner = half[a + 1 : b]
@@ -345,7 +584,7 @@ class Group(Step):
                 continue
             Ua = start if a < 0 else out[:, :, half[a]]
             Ub = out[:, :, half[b]]
-            both = clean[i] & np.all(np.isfinite(Ua), axis=0) & np.all(np.isfinite(Ub), axis=0)
+            both = clean[:, i] & np.all(np.isfinite(Ua), axis=0) & np.all(np.isfinite(Ub), axis=0)
             if not both.all():
                 redo.append(i)
                 continue
@@ -358,19 +597,60 @@ class Group(Step):
             bound.append(np.tile(reach, len(inner)))
         if rows:
             r, c, g = np.concatenate(rows), np.concatenate(cols), np.concatenate(guess, axis=1)
-            sol, conv, sg = self.newton(g, K_all[:, c, r], _take(dn, c))
-            # accepted: converged, with the pose's sign, near the interpolation (not another branch)
-            near = np.max(np.abs(sol - g), axis=0)
-            ok = conv & (sg == ref_sign[c]) & np.all(np.isfinite(sol), axis=0) & (near <= np.concatenate(bound))
-            out[:, c[ok], r[ok]] = sol[:, ok]
+            ok = self._fill_batch(r, c, g, np.concatenate(bound), w)
             bad_samples = set(r[~ok].tolist())
             for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
                 if i not in redo and bad_samples.intersection(half[a + 1 : b].tolist()):
                     redo.append(i)
-        for i in sorted(redo):
-            a, b = lo[i], hi[i]
-            U, Kc, U_prev, fresh = (x.copy() for x in snaps[i])
-            self._walk(half[a + 1 : b], (U, Kc, U_prev, fresh), K_all, out, ref_sign, conv0, nums, dn)
+        segments = [(half[lo[i] + 1 : hi[i]], tuple(x.copy() for x in snaps[i])) for i in sorted(redo)]
+        while segments:  # in batches of at most about AHEAD_COLUMNS lost (design, sample) columns
+            sizes = np.cumsum([np.sum(~state[3]) * len(samples) for samples, state in segments])
+            k = max(1, int(np.searchsorted(sizes, AHEAD_COLUMNS, side="right")))
+            batch, segments = segments[:k], segments[k:]
+            for (samples, state), ahead in zip(batch, self._ahead_of(batch, w), strict=True):
+                self._walk(samples, state, w, ahead=ahead)  # type: ignore[arg-type]
+
+    def _ahead_of(self, segments: list[tuple[np.ndarray, tuple[np.ndarray, ...]]], w: _Walk) -> list[_Ahead]:
+        """Look-aheads for walks of ``segments`` (samples, starting state): their lost designs' steps, at once.
+
+        A design lost at the start of a segment (in a gap, every segment starts so, from one same
+        state) gets its steps over the whole segment from one batch of :meth:`_lost_step`.
+        """
+        m, D = w.out.shape[:2]
+        cols = []
+        for samples, (U, _, U_prev, fresh) in segments:
+            need = np.flatnonzero(~fresh)
+            d, s = np.repeat(need, len(samples)), np.tile(samples, len(need))
+            cols.append((need, d, s, U[:, d], U_prev[:, d]))
+        d, s = np.concatenate([c[1] for c in cols]), np.concatenate([c[2] for c in cols])
+        U0, U1 = np.concatenate([c[3] for c in cols], axis=1), np.concatenate([c[4] for c in cols], axis=1)
+        Uw, acc, lost = np.full((m, len(d)), NAN_POINT), np.zeros(len(d), bool), np.zeros(len(d), bool)
+        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
+        if len(run):
+            Uw[:, run], acc[run], lost[run] = self._lost_step(U0[:, run], U1[:, run], w.K[:, d[run], s[run]], d[run], w)
+        out, start = [], 0
+        for (samples, _), (need, *_) in zip(segments, cols, strict=True):
+            ahead, n = _Ahead(D), len(need) * len(samples)
+            if len(need):
+                sl = slice(start, start + n)
+                ahead.add(0, need, Uw[:, sl], acc[sl], lost[sl], len(samples))
+            out.append(ahead)
+            start += n
+        return out
+
+    def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
+        """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
+        ok = np.zeros(len(r), bool)
+        can = np.flatnonzero(w.ok[c, r])  # the others cannot converge
+        if len(can):
+            r, c, g, bound = r[can], c[can], g[:, can], bound[can]
+            sol, conv, sg = self._newton(g, w.K[:, c, r], w.arrays.take(c))
+            # accepted: converged, with the pose's sign, near the interpolation (not another branch)
+            near = np.max(np.abs(sol - g), axis=0)
+            good = conv & (sg == w.ref[c]) & np.all(np.isfinite(sol), axis=0) & (near <= bound)
+            w.out[:, c[good], r[good]] = sol[:, good]
+            ok[can] = good
+        return ok
 
     def _halving(
         self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray
@@ -379,10 +659,12 @@ class Group(Step):
 
         Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
         is accepted (the tests of a continuation step) doubles the next one, a step that is
-        not is halved.
+        not is halved. A step to knowns a chain rules out fails without Newton.
         """
         dn = self._design_nums(nums, designs)
         size = _size(dn)
+        reach = self._reach(dn, len(designs))
+        ar = self._arrays(dn, len(designs))
         B = U.shape[1]
         Uc, t, dt = U.copy(), np.zeros(B), np.full(B, 0.5)
         alive = np.ones(B, bool)
@@ -393,10 +675,16 @@ class Group(Step):
                 break
             tt = np.minimum(t[act] + dt[act], 1.0)
             K_t = (1 - tt) * K0[:, act] + tt * K1[:, act]
-            Un, conv, sg = self.newton(Uc[:, act], K_t, _take(dn, act))
-            ok = conv & (sg == ref[act]) & (np.max(np.abs(Un - Uc[:, act]), axis=0) <= STEP_LIMIT * size[act])
+            ok = np.zeros(len(act), bool)
+            can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
+            if len(can):
+                a = act[can]
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
+                ok[can] = conv & (sg == ref[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
+                good_can = can[ok[can]]
+                Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]
-            Uc[:, good], t[good] = Un[:, ok], tt[ok]
+            t[good] = tt[ok]
             dt[good] = np.minimum(2 * dt[good], 1.0)
             dt[bad] /= 2
             alive[bad[dt[bad] < smallest]] = False
@@ -541,3 +829,85 @@ def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.nd
     up = order[key[order] >= 0]
     down = order[key[order] < 0][::-1]
     return [w for w in (up, down) if len(w)]
+
+
+def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
+    """Newton's steps ``dx`` (B, 2m): ``J dx = -res`` (``res`` (n_eq, B)); NaN where not finite or singular."""
+    r = res.T
+    good = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(r), axis=1)
+    dx = np.full((len(r), J.shape[2]), np.nan)
+    if good.any():
+        try:
+            dx[good] = np.linalg.solve(J[good], -r[good][..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            for i in np.flatnonzero(good):  # rare: a singular matrix in the batch
+                with contextlib.suppress(np.linalg.LinAlgError):
+                    dx[i] = np.linalg.solve(J[i], -r[i])
+    return dx
+
+
+@dataclass
+class _Ahead:
+    """The steps of the designs a walk has lost, solved ahead.
+
+    A design whose last sample failed starts every next sample from the same state (its last
+    good solution, with the predictor from the one before), so its next steps do not depend
+    on each other until one is accepted: they are solved together over a window of the next
+    samples (:data:`AHEAD_FIRST` long, doubling while the design stays lost, up to
+    :data:`AHEAD_MOST`), exactly as one by one, and read from there. An accepted design is
+    forgotten (its state has moved on).
+    """
+
+    D: int
+    windows: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.until = np.zeros(self.D, np.intp)  # the first sample position past the design's window
+        self.which = np.zeros(self.D, np.intp)  # its window (first position, U (m, k, c), accepted, lost)
+        self.col = np.zeros(self.D, np.intp)  # its column there
+        self.streak = np.zeros(self.D, np.intp)  # windows since the design was lost
+
+    def get(
+        self, group: Group, i: int, cols: np.ndarray, samples: np.ndarray, U: np.ndarray, U_prev: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The step of the lost designs ``cols`` at the walk's ``i``-th sample: (U, accepted, lost)."""
+        need = cols[self.until[cols] <= i]
+        if len(need):
+            self._solve(group, i, need, samples, U, U_prev, w)
+        U_new = np.empty((U.shape[0], len(cols)), complex)
+        acc, lost = np.zeros(len(cols), bool), np.zeros(len(cols), bool)
+        for wid in np.unique(self.which[cols]):
+            sel = np.flatnonzero(self.which[cols] == wid)
+            first, Uw, aw, lw = self.windows[wid]
+            cc = self.col[cols[sel]]
+            U_new[:, sel], acc[sel], lost[sel] = Uw[:, cc, i - first], aw[cc, i - first], lw[cc, i - first]
+        return U_new, acc, lost
+
+    def _solve(
+        self, group: Group, i: int, need: np.ndarray, samples: np.ndarray, U: np.ndarray, U_prev: np.ndarray, w: _Walk
+    ) -> None:
+        """A window for the designs ``need``, from the walk's ``i``-th sample."""
+        c = AHEAD_FIRST << int(np.max(self.streak[need]))
+        c = int(min(len(samples) - i, c, AHEAD_MOST, max(1, AHEAD_COLUMNS // len(need))))
+        d = np.repeat(need, c)
+        s = samples[i + np.tile(np.arange(c), len(need))]
+        m = U.shape[0]
+        Uw = np.full((m, len(d)), NAN_POINT)
+        acc, lost = np.zeros(len(d), bool), np.zeros(len(d), bool)
+        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
+        if len(run):
+            dr = d[run]
+            Uw[:, run], acc[run], lost[run] = group._lost_step(U[:, dr], U_prev[:, dr], w.K[:, dr, s[run]], dr, w)
+        self.add(i, need, Uw, acc, lost, c)
+
+    def add(self, i: int, need: np.ndarray, Uw: np.ndarray, acc: np.ndarray, lost: np.ndarray, c: int) -> None:
+        """The steps of designs ``need`` over ``c`` samples from the ``i``-th (flat, design-major)."""
+        k = len(need)
+        self.windows.append((i, Uw.reshape(-1, k, c), acc.reshape(k, c), lost.reshape(k, c)))
+        self.which[need], self.col[need], self.until[need] = len(self.windows) - 1, np.arange(k), i + c
+        self.streak[need] += 1
+
+    def forget(self, acc: np.ndarray) -> None:
+        """The designs ``acc`` were accepted: their windows are out of date."""
+        self.until[acc] = 0
+        self.streak[acc] = 0
