@@ -450,3 +450,18 @@ def test_model_import_is_light() -> None:
     code = "import linkagekit.model, sys; print('pydantic' in sys.modules, 'yaml' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "False"], out.stdout + out.stderr
+
+
+def test_a_file_without_a_name_is_saved_without_one(tmp_path):
+    """Saving (lk.save, the editor) adds no ``name: ''`` to a file that had no name; one with a name keeps it."""
+    text = Path("examples/seed000_fourbar.yaml").read_text(encoding="utf-8")
+    lines = [ln for ln in text.splitlines() if not ln.startswith("name:")]
+    src = tmp_path / "anon.yaml"
+    src.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    mech = load(src)
+    assert mech.name == "" and "name" not in mech.to_dict()
+    out = tmp_path / "saved.yaml"
+    save(mech, out)
+    assert "name:" not in out.read_text(encoding="utf-8") and load(out).name == ""
+    named = load("examples/seed000_fourbar.yaml")
+    assert named.to_dict()["name"] == named.name != ""

@@ -541,7 +541,9 @@ class Mechanism:
         Floats are Python floats (which ``repr``, JSON and YAML write back exactly); points
         (joints, ``cg``, a load's ``at``) are in the reference pose frame, as the file gave them.
         """
-        out: dict[str, Any] = {"format": FORMAT, "name": self.name}
+        out: dict[str, Any] = {"format": FORMAT}
+        if self.name:  # a file without a name is saved without one
+            out["name"] = self.name
         if self.description is not None:
             out["description"] = self.description
         out["units"] = {"length": self.length_unit, "angle": self.angle_unit}
