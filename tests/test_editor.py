@@ -1193,3 +1193,22 @@ def test_cli_passes_its_solve_budget_to_the_server(tmp_path, monkeypatch):
     assert seen == {"budget": 2.5}
     assert cli_module.main(["edit", str(path), "--no-browser"]) == 0
     assert seen == {"budget": editor_module.SOLVE_SECONDS}
+
+
+def test_a_drag_drops_the_given_length_of_a_joint_whose_name_has_a_dash():
+    """``lengths: {A-C-1: 2}`` names joints A and C-1: dragging C-1 drops that length (the drag sets it)."""
+    doc = {
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"A": [0, 0], "B": [4, 0], "C-1": [2, 0], "D": [3.5, 2]},
+        "links": {
+            "ground": ["A", "B"],
+            "crank": {"joints": ["A", "C-1"], "lengths": {"A-C-1": 2}},
+            "coupler": ["C-1", "D"],
+            "rocker": ["B", "D"],
+        },
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C-1", "angles": {"start": 0, "stop": 360, "step": 10}}],
+    }
+    mech = lk.Mechanism.from_dict(doc)
+    moved = posed(mech, {"C-1": [3, 0]}, ["C-1"])
+    assert dict(moved.link("crank").lengths) == {}
+    assert abs(moved.link("crank").length("A", "C-1") - 3.0) < 1e-12

@@ -1053,7 +1053,14 @@ def _sweep(sw: SweepSpec, key: str, fail: Fail) -> Sweep:
     return Sweep(sw.start, sw.stop, sw.step)
 
 
-def _parse_pair(key: str, link: tuple[str, ...]) -> tuple[str, str] | None:
+def parse_pair(key: str, link: tuple[str, ...]) -> tuple[str, str] | None:
+    """The two joints of ``link`` that a ``lengths`` key ``"A-B"`` names (None: not two of them).
+
+    Joint names may contain ``-``: every split point is tried.
+
+    >>> parse_pair("A-C-1", ("A", "C-1")), parse_pair("A-B", ("A", "C"))
+    (('A', 'C-1'), None)
+    """
     parts = key.split("-")
     if len(parts) == 2 and parts[0] in link and parts[1] in link and parts[0] != parts[1]:
         return parts[0], parts[1]
@@ -1074,7 +1081,7 @@ def _shape(lname: str, ls: LinkSpec, pose: dict[str, complex], fail: Fail, scale
     js = tuple(ls.joints)
     given: dict[frozenset[str], float] = {}
     for k, v in (ls.lengths or {}).items():
-        pair = _parse_pair(k, js)
+        pair = parse_pair(k, js)
         if pair is None:
             raise fail(f"links.{lname}.lengths.{k}", f"expected 'X-Y' with X and Y two joints of link '{lname}'")
         if v <= 0:

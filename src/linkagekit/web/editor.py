@@ -46,7 +46,7 @@ import numpy as np
 from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
 from ..files import atomic_output, dumps, load, stray_temporaries
-from ..model import Driver, Mechanism
+from ..model import Driver, Mechanism, parse_pair
 from ..result import Result
 
 #: samples of the coarse sweep solved while a joint is dragged
@@ -146,7 +146,7 @@ def posed(mech: Mechanism, pose: Any, moved: Any = None) -> Mechanism:
     doc = mech.with_pose({j: here[j] if j in still else [z.real, z.imag] for j, z in placed.items()}).to_dict()
     old = mech.to_dict()["links"]
     for ln in mech.links:
-        kept = {k: v for k, v in ln.lengths.items() if not set(k.split("-")) & set(moved)}
+        kept = {k: v for k, v in ln.lengths.items() if not set(parse_pair(k, ln.joints) or ()) & set(moved)}
         entry = doc["links"][ln.name]
         if isinstance(entry, list) and kept:
             entry = doc["links"][ln.name] = {"joints": entry}
