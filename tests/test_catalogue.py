@@ -18,6 +18,8 @@ import csv
 import io
 import json
 import re
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -358,3 +360,61 @@ def test_page_csv_is_analyze_csv_and_plots_are_the_catalogue(browser, files, nam
     assert downloaded == want
     plots = [{"title": g.title, "legend": [q.name for q in qs]} for g in Group if g.plotted and (qs := cat.of_group(g))]
     assert got["plots"] == plots
+
+
+MIXED = """
+format: linkagekit/1
+name: mixed drivers
+units: {length: m, angle: deg}
+joints: {O: [0, 0], A: [0.1, 0], E: [0.3, 0.15], B: [0.5, 0]}
+links:
+  ground: [O]
+  crank: {joints: [O, A], mass: 0.5, cg: [0.05, 0], inertia: 0.001}
+  rod1: {joints: [A, E], mass: 0.3, cg: [0.2, 0.075], inertia: 0.001}
+  rod2: {joints: [E, B], mass: 0.3, cg: [0.4, 0.075], inertia: 0.001}
+  block: {joints: [B], mass: 0.4, cg: [0.5, 0], inertia: 0.001}
+sliders: [{link: block, on: ground, through: B, direction: [1, 0]}]
+drivers:
+  - {slider: 0, displacements: {start: -0.02, stop: 0.02, step: 0.01}, speed: 0.1}
+  - {link: crank, pivot: O, toward: A, angles: {start: 0, stop: 40, step: 10}, speed: 2}
+gravity: [0, -9.81]
+"""
+
+
+def test_driver_efforts_come_torques_first_whatever_the_drivers_order(tmp_path):
+    """Every ``T[...]`` column before every ``F[...]`` one (as before the catalogue), even when a
+    slider driver is listed before a crank: CSV, pandas and the forces table keep their order."""
+    path = tmp_path / "mixed.yaml"
+    path.write_text(MIXED, encoding="utf-8")
+    res = lk.analyze(lk.load(path))
+    efforts = [q.name for q in res.catalogue.table if q.kind.owner is Owner.DRIVER and q.kind.component != "input"]
+    assert efforts == ["T[crank]", "F[block]"]
+    assert [k for k in res.columns() if k in efforts] == efforts
+    assert set(res.forces.driver_torque) == {"crank"} and set(res.forces.driver_force) == {"block"}
+
+
+def test_two_quantities_with_one_column_name_are_a_file_error(tmp_path):
+    """A joint ``input:a`` and a crank link (so driver) ``a.x`` would both give ``input:a.x``: one line, exit 2."""
+    mech = lk.load(Path(__file__).resolve().parents[1] / "examples" / "seed000_fourbar.yaml")
+    doc = mech.to_dict()
+    doc["joints"] = {("input:a" if j == "P" else j): p for j, p in doc["joints"].items()}
+    doc["links"] = {
+        ("a.x" if name == "crank" else name): [
+            ("input:a" if j == "P" else j) for j in (v["joints"] if isinstance(v, dict) else v)
+        ]
+        for name, v in doc["links"].items()
+    }
+    for d in doc["drivers"]:
+        d["link"] = "a.x"
+    clash = lk.Mechanism.from_dict(doc, source="clash.yaml")
+    with pytest.raises(
+        lk.MechanismFileError,
+        match=r"clash.yaml: the driver 'a.x' and the joint 'input:a' .* column 'input:a.x': rename one",
+    ):
+        lk.analyze(clash)
+    path = tmp_path / "clash.yaml"
+    lk.save(clash, path)
+    proc = subprocess.run(
+        [sys.executable, "-m", "linkagekit.cli", "analyze", str(path)], capture_output=True, text=True
+    )
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1 and "rename one" in proc.stderr

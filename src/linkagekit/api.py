@@ -525,7 +525,7 @@ def _result(req: Request, out: _Outputs) -> Result:
 
     block_rot = ro(out.block_rot)
     assert block_rot is not None
-    return Result(
+    res = Result(
         mech,
         proxy(req.values),
         proxy(req.speeds),
@@ -544,6 +544,8 @@ def _result(req: Request, out: _Outputs) -> Result:
         block_rot,
         _ground_angle(mech, params, batch),
     )
+    res.catalogue  # noqa: B018 - built once here: two quantities with one column name are refused now
+    return res
 
 
 def _ground_angle(mech: Mechanism, params: Params, batch: bool) -> Any:

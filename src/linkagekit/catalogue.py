@@ -33,9 +33,9 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from enum import Enum
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, assert_never
 
-from .errors import UnknownNameError, shorten
+from .errors import MechanismFileError, UnknownNameError, shorten
 from .units import UnitKind
 
 if TYPE_CHECKING:
@@ -161,6 +161,9 @@ class Kind:
         The values are angles modulo a turn (plots break the line at a wrap).
     table : bool
         In :meth:`Result.columns` (CSV, JSON, pandas, tables); False: plotted only.
+    apart : bool
+        Its quantities come after every quantity of the kinds before it, even those of the same
+        owner kind (the driver forces after all driver torques), instead of owner by owner.
     """
 
     owner: Owner
@@ -175,6 +178,7 @@ class Kind:
     applies: Callable[[Mechanism, OwnerRef], bool] | None = None
     wraps: bool = False
     table: bool = True
+    apart: bool = False
 
 
 @dataclass(frozen=True)
@@ -299,7 +303,7 @@ KINDS: tuple[Kind, ...] = (
     Kind(Owner.DRIVER, "torque", "T[{}]", UnitKind.TORQUE, Group.DRIVER_TORQUES, Section.FORCES,
          ("driver_torque", _O), lambda r, q: r.forces.driver_torque[q.owner_name], Needs.FORCES, _angle_driver),
     Kind(Owner.DRIVER, "force", "F[{}]", UnitKind.FORCE, Group.DRIVER_FORCES, Section.FORCES, ("driver_force", _O),
-         lambda r, q: r.forces.driver_force[q.owner_name], Needs.FORCES, _push_driver),
+         lambda r, q: r.forces.driver_force[q.owner_name], Needs.FORCES, _push_driver, apart=True),
     Kind(Owner.MECHANISM, "input_power", "input_power", UnitKind.POWER, Group.INPUT_POWER, Section.FORCES,
          ("input_power",), lambda r, q: r.forces.input_power, Needs.FORCES),
     Kind(Owner.MECHANISM, "shaking_fx", "shaking.fx", UnitKind.FORCE, Group.SHAKING, None, ("shaking_force", "fx"),
@@ -361,23 +365,27 @@ class Catalogue:
 
 def _owners(mech: Mechanism, owner: Owner, reactions: Sequence[ReactionKey]) -> list[OwnerRef]:
     """Every owner of one kind, in the mechanism's order (a reaction's: the forces layout's)."""
-    if owner is Owner.JOINT:
-        ground = set(mech.link("ground").joints)
-        return [OwnerRef(j, i, j in ground) for i, j in enumerate(mech.joint_names)]
-    if owner is Owner.LINK:
-        return [OwnerRef(ln.name, i, ln.name == "ground") for i, ln in enumerate(mech.links)]
-    if owner is Owner.DRIVER:
-        return [OwnerRef(d.name, i, False) for i, d in enumerate(mech.drivers)]
-    if owner is Owner.REACTION:
-        return [OwnerRef(r.tag, i, False, r) for i, r in enumerate(reactions)]
-    return [OwnerRef("", 0, False)]
+    match owner:
+        case Owner.JOINT:
+            ground = set(mech.link("ground").joints)
+            return [OwnerRef(j, i, j in ground) for i, j in enumerate(mech.joint_names)]
+        case Owner.LINK:
+            return [OwnerRef(ln.name, i, ln.name == "ground") for i, ln in enumerate(mech.links)]
+        case Owner.DRIVER:
+            return [OwnerRef(d.name, i, False) for i, d in enumerate(mech.drivers)]
+        case Owner.REACTION:
+            return [OwnerRef(r.tag, i, False, r) for i, r in enumerate(reactions)]
+        case Owner.MECHANISM:
+            return [OwnerRef("", 0, False)]
+        case _:
+            assert_never(owner)
 
 
 def _blocks(kinds: Sequence[Kind]) -> list[list[Kind]]:
-    """Runs of consecutive kinds with one owner kind (their quantities go owner by owner)."""
+    """Runs of consecutive kinds with one owner kind (their quantities go owner by owner), a kind ``apart`` alone."""
     out: list[list[Kind]] = []
     for k in kinds:
-        if out and out[-1][0].owner is k.owner:
+        if out and out[-1][0].owner is k.owner and not k.apart:
             out[-1].append(k)
         else:
             out.append([k])
@@ -409,4 +417,18 @@ def build(
                         column, k, o.name, o.index, unit, unit.symbol(lu, au), o.on_ground, turn if k.wraps else None
                     )
                 )
+    _refuse_clashes(mech, out)
     return Catalogue(tuple(out))
+
+
+def _refuse_clashes(mech: Mechanism, quantities: Sequence[Quantity]) -> None:
+    """One column name for two quantities (a joint ``input:a`` and a link ``a.x``...) is a file error."""
+    seen: dict[str, Quantity] = {}
+    for q in quantities:
+        first = seen.setdefault(q.name, q)
+        if first is not q:
+            raise MechanismFileError(
+                f"{mech.source}: the {first.kind.owner.value} {shorten(repr(first.owner_name))} and the "
+                f"{q.kind.owner.value} {shorten(repr(q.owner_name))} would both give the column "
+                f"{shorten(repr(q.name))}: rename one of them"
+            )

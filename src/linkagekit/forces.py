@@ -47,6 +47,7 @@ from .geometry import cross
 from .model import CrankType, CylinderType, SliderType
 from .params import Body, LoadParams
 from .rates import LinkMotion
+from .units import UnitKind
 
 if TYPE_CHECKING:
     from .model import Driver, Mechanism
@@ -443,7 +444,7 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
     for u in cols:
         if isinstance(u, DriverEffort):
             effort = x[:, u.col]
-            (torque if isinstance(u.driver.type, CrankType) else push)[u.driver.name] = effort
+            (torque if u.driver.type.effort is UnitKind.TORQUE else push)[u.driver.name] = effort
             frame += u.on_frame(effort, fr)
         else:
             reactions.append(u.reaction(x, fr))
