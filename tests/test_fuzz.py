@@ -1227,7 +1227,7 @@ CORPUS_CASES = {
     ),
     "/dev/zero as a mechanism file": Case(None, ["check", "/dev/zero", *J], expect=("not a regular file",)),
     "right-to-left override in the name": Case(
-        "rtl_name.yaml", ["check", "{}"], expect=("name: a name with control characters (U+202E)",)
+        "rtl_name.yaml", ["check", "{}"], expect=("name: a name with control or format characters (U+202E)",)
     ),
     "angles 0:100000:1 is 100001 samples": Case(
         None, ["analyze", FOURBAR, "--angles", "0:100000:1", *J], expect=("100001 samples",), forbid=("e+05",)

@@ -201,7 +201,9 @@ def test_mechanism_name_and_description_refuse_control_characters(key, value, co
     with pytest.raises(MechanismFileError) as exc:
         lk.Mechanism.from_dict(_with(key, value), source="m.yaml")
     msg = str(exc.value)
-    assert msg.startswith(f"m.yaml: {key}: a {'name' if key == 'name' else 'description'} with control characters")
+    assert msg.startswith(
+        f"m.yaml: {key}: a {'name' if key == 'name' else 'description'} with control or format characters"
+    )
     assert code in msg and msg.isprintable()
 
 
@@ -210,7 +212,7 @@ def test_joint_names_are_refused_alike():
 
     data = _with("name", "ok")
     data["joints"]["A\u202e"] = data["joints"].pop("A")
-    with pytest.raises(MechanismFileError, match="a name with control characters"):
+    with pytest.raises(MechanismFileError, match="a name with control or format characters"):
         lk.Mechanism.from_dict(data, source="m.yaml")
 
 
@@ -328,3 +330,13 @@ def test_report_reads_the_source_again_under_the_same_guard(tmp_path):
     big = tmp_path / "big.yaml"
     big.write_bytes(b"#" * ((4 << 20) + 1))
     assert _source_text(str(big)) is None
+
+
+@pytest.mark.parametrize(
+    "value", ["12", ["0", "90"], np.array(["1"]), [None], np.array(["2026-01-01"], dtype="datetime64[D]")]
+)
+def test_inputs_that_are_not_numbers_are_refused(value):
+    """A string that reads as a number is still not one: the input is refused in one line, never parsed."""
+    mech = lk.load("examples/seed000_fourbar.yaml")
+    with pytest.raises(lk.InputError, match="expected numbers"):
+        lk.analyze(mech, {"crank": value})

@@ -80,6 +80,8 @@ def _real_any(value: ArrayLike, what: str) -> np.ndarray:
         raise InputError(f"{what}: expected numbers, got {shorten(repr(value))}") from None
     if arr.dtype.kind == "c":
         raise InputError(f"{what}: expected real numbers, got complex values")
+    if arr.dtype.kind not in "biuf":  # text, dates, objects: not numbers, even when they read as one
+        raise InputError(f"{what}: expected numbers, got {shorten(repr(value))}")
     return arr
 
 

@@ -568,7 +568,7 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
         s = float(abs(st.z[step.k1, col] - st.z[step.k2, col]))
         how = "stretched" if abs(s - (r1 + r2)) <= abs(s - abs(r1 - r2)) else "folded"
         out["links"] = list(step.links)
-        out["detail"] = f"{step.links[0]} and {step.links[1]} in line at {names[step.joint]} ({how})"
+        out["detail"] = f"{step.links[0]} and {step.links[1]} are in line at {names[step.joint]} ({how})"
     elif isinstance(step, CircleLine):
         out["links"] = [step.link, step.block]
         out["detail"] = f"{step.link} square to the line of slider {step.slider} at {names[step.joint]}"

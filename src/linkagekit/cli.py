@@ -359,7 +359,7 @@ def _plot_arguments(p: argparse.ArgumentParser) -> None:
         "--size",
         metavar="W[xH]",
         help="the picture's size in pixels: W wide (the height follows the drawing), or W x H exactly "
-        "(default: 1200 px wide, 640 px a panel with --modes)",
+        "(default: 6 inches at --dpi, 1200 px wide at the default 200, 640 px a panel with --modes)",
     )
     p.add_argument(
         "--dpi",
@@ -1104,7 +1104,7 @@ def _edit(args: argparse.Namespace) -> int:
             raise InputError(f"--port: expected 0 to 65535, got {port}")
     budget = SOLVE_SECONDS if args.solve_seconds is None else _one_number(args.solve_seconds, "--solve-seconds")
     if not 0 < budget <= 86400:
-        raise InputError(f"--solve-seconds: expected a time from 0 to 86400 s, got {args.solve_seconds}")
+        raise InputError(f"--solve-seconds: expected a time over 0 and at most 86400 s, got {args.solve_seconds}")
     try:
         serve(args.file, port=port, open_browser=not args.no_browser, solve_seconds=budget)
     except KeyboardInterrupt:

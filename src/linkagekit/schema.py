@@ -44,7 +44,7 @@ def _name(value: Any) -> str:
     if len(value) > MAX_NAME:
         raise ValueError(f"a name of {len(value)} characters (at most {MAX_NAME}): {shorten(value, 20)!r}")
     if not value.isprintable():
-        raise ValueError(f"a name with control characters: {shorten(repr(value))}")
+        raise ValueError(f"a name with control or format characters: {shorten(repr(value))}")
     return value
 
 
@@ -54,7 +54,7 @@ def _text(value: Any, what: str, allowed: str = "") -> str:
         raise ValueError(f"expected text, got {shorten(repr(value))}")
     bad = next((c for c in value if not c.isprintable() and c not in allowed), None)
     if bad is not None:
-        raise ValueError(f"{what} with control characters (U+{ord(bad):04X}): {shorten(repr(value))}")
+        raise ValueError(f"{what} with control or format characters (U+{ord(bad):04X}): {shorten(repr(value))}")
     return value
 
 

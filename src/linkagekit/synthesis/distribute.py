@@ -220,7 +220,9 @@ class Evaluator:
             except KilledWorker:  # the chunk's workers died under it: again, on the workers there are
                 self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]
             except (OSError, TimeoutError, CancelledError) as e:
-                raise WorkersLost(f"lost the Dask scheduler ({type(e).__name__})") from None
+                raise WorkersLost(
+                    f"lost the Dask cluster: its scheduler or every worker ({type(e).__name__})"
+                ) from None
         raise WorkersLost(f"the Dask workers died {RETRIES + 1} times during one generation")
 
     def _wait(self, futures: list[Any]) -> list[np.ndarray]:

@@ -763,7 +763,8 @@ def _number(value: Any, name: str, lo: float, hi: float, kind: type = int) -> An
     """``value`` as a ``kind`` within ``[lo, hi]``, else refused naming ``name``."""
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and (kind is float or value == int(value))
     if not ok or not lo <= value <= hi:
-        raise _Refused(f"{name} {shorten(repr(value))} is not a {kind.__name__} in [{lo}, {hi}]")
+        what = "a whole number" if kind is int else "a number"
+        raise _Refused(f"{name} {shorten(repr(value))} is not {what} in [{lo}, {hi}]")
     return kind(value)
 
 
