@@ -6,7 +6,8 @@ The contract checked for every case:
   (``--format json`` parses, with no NaN/Infinity), or exits 2 with exactly one line on stderr:
   ``linkagekit: error: ...``, at most 300 characters, no control characters; exit 1 only for a
   valid mechanism that needs the numerical solver ("no triangulation order"); never
-  ``internal error``, never a traceback, never a warning on stderr, never ESC on stdout;
+  ``internal error``, never a traceback, never a warning on stderr, never ESC on stdout; with
+  exit 0, stderr holds nothing but ``linkagekit: note: ...`` lines (at most 300 characters each);
 * every case ends within ``LINKAGEKIT_FUZZ_TIMEOUT`` CPU-seconds (default 10; CPU time, so a busy machine
   does not fail it; a case that blocks without computing fails after ten times that on the clock): a hang fails;
 * the Python API returns, or raises a :class:`linkagekit.errors.LinkageError`; positions it
@@ -170,7 +171,8 @@ def contract_violation(o: Outcome, fmt: str = "json") -> str | None:
     if "\x1b" in o.out:
         return "ESC on stdout"
     if o.code == 0:
-        if o.err:
+        notes = o.err.splitlines()
+        if not all(n.startswith("linkagekit: note: ") and len(n) <= MAX_LINE and n.isprintable() for n in notes):
             return f"STDERR with exit 0: {o.err[:150]!r}"
         if fmt == "json" and "-o" not in o.argv:
             try:

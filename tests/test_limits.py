@@ -340,3 +340,21 @@ def test_inputs_that_are_not_numbers_are_refused(value):
     mech = lk.load("examples/seed000_fourbar.yaml")
     with pytest.raises(lk.InputError, match="expected numbers"):
         lk.analyze(mech, {"crank": value})
+
+
+def test_analyze_says_when_samples_lie_beyond_the_walk(capsys):
+    """A sample beyond the numerical walk's reach is not assembled, and the command says why (stderr);
+    a sample within reach, or a mechanism without a numerical group, gets no such note."""
+    from linkagekit import cli
+
+    assert cli.main(["analyze", "examples/triad_six_modes.yaml", "--at", "1e11,60,-5000", "--format", "csv"]) == 0
+    out, err = capsys.readouterr()
+    assert out.splitlines()[1].startswith("100000000000.0,false") and out.splitlines()[2].startswith("60.0,true")
+    assert err.strip().splitlines() == [
+        "linkagekit: note: 2 sample(s) lie more than 10 turns of a crank from the pose's input: the numerical "
+        "group is not followed that far, so they are shown as not assembled"
+    ]
+    assert cli.main(["analyze", "examples/triad_six_modes.yaml", "--at", "60", "--format", "csv"]) == 0
+    assert capsys.readouterr().err == ""
+    assert cli.main(["analyze", "examples/seed000_fourbar.yaml", "--at", "1e11", "--format", "csv"]) == 0
+    assert capsys.readouterr().err == ""
