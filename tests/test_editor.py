@@ -897,6 +897,26 @@ def test_a_solve_over_its_budget_is_stopped_with_a_message(tmp_path, capfd):
     assert capfd.readouterr().err == ""
 
 
+def test_a_page_over_its_budget_is_a_readable_page_and_one_line(tmp_path, capfd):
+    """A file whose own sweep takes longer than the budget: the page is a short HTML page that
+    says what to do (not JSON in the browser), and the terminal gets the same in one line."""
+    path = copy_example(tmp_path, "triad_six_modes.yaml")
+    long_doc = _long_triad_doc(Session(path))
+    lk.save(lk.Mechanism.from_dict(long_doc), path)
+    srv = _serve(Session(path), solve_seconds=0.5)
+    try:
+        c = Client(srv)
+        status, headers, data = c.request("GET", f"/{c.token}/")
+        assert status == 503 and headers.get("Content-Type", "").startswith("text/html"), (status, headers)
+        text = data.decode()
+        assert "solve budget (0.5 s)" in text and "--solve-seconds" in text and "<p>" in text
+    finally:
+        _stop(srv)
+    _wait_for_requests()
+    err = capfd.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("linkagekit: the page took longer than the editor's solve budget"), err
+
+
 def test_a_solve_whose_client_left_is_stopped(tmp_path, capfd):
     """The same long solve, its client closing the connection 0.2 s after sending it (a closed
     tab): the watch stops it (long before the 60 s budget), nothing is written to stderr, and

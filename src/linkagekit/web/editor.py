@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import hashlib
+import html
 import json
 import secrets
 import select
@@ -523,12 +524,26 @@ class _Handler(BaseHTTPRequestHandler):
             with self.server.watch.solving(self.connection) as solve:
                 page = self.server.session.page(self.server.token)
         except SolveStopped:
-            self._stopped(solve)
+            self._page_stopped(solve)
             return
         except LinkageError as exc:
             self._json(500, {"ok": False, "error": one_line(str(exc), 300)})
             return
         self._send(200, page.encode("utf-8"), "text/html; charset=utf-8")
+
+    def _page_stopped(self, solve: _Solve) -> None:
+        """The page itself ran out of time: a readable page and one line in the terminal, not JSON."""
+        if solve.reason == "gone":
+            self.close_connection = True
+            return
+        seconds = self.server.watch.seconds
+        message = (
+            f"the page took longer than the editor's solve budget ({seconds:g} s): give the file's drivers "
+            "a coarser sweep (a larger step or a shorter range), or start the editor with a larger --solve-seconds"
+        )
+        print(f"linkagekit: {message}", file=sys.stderr, flush=True)
+        body = f"<!DOCTYPE html><title>linkagekit editor</title><p>{html.escape(message)}</p>"
+        self._send(503, body.encode("utf-8"), "text/html; charset=utf-8")
 
     def _stopped(self, solve: _Solve) -> None:
         """Answer a solve the watch stopped: a message when its budget ran out, nothing when its client left."""
