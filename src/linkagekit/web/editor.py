@@ -524,33 +524,32 @@ class _Handler(BaseHTTPRequestHandler):
             with self.server.watch.solving(self.connection) as solve:
                 page = self.server.session.page(self.server.token)
         except SolveStopped:
-            self._page_stopped(solve)
+            self._stopped(solve, page=True)
             return
         except LinkageError as exc:
             self._json(500, {"ok": False, "error": one_line(str(exc), 300)})
             return
         self._send(200, page.encode("utf-8"), "text/html; charset=utf-8")
 
-    def _page_stopped(self, solve: _Solve) -> None:
-        """The page itself ran out of time: a readable page and one line in the terminal, not JSON."""
-        if solve.reason == "gone":
-            self.close_connection = True
-            return
-        seconds = self.server.watch.seconds
-        message = (
-            f"the page took longer than the editor's solve budget ({seconds:g} s): give the file's drivers "
-            "a coarser sweep (a larger step or a shorter range), or start the editor with a larger --solve-seconds"
-        )
-        print(f"linkagekit: {message}", file=sys.stderr, flush=True)
-        body = f"<!DOCTYPE html><title>linkagekit editor</title><p>{html.escape(message)}</p>"
-        self._send(503, body.encode("utf-8"), "text/html; charset=utf-8")
+    def _stopped(self, solve: _Solve, page: bool = False) -> None:
+        """Answer a solve the watch stopped: nothing when its client left, else a message naming the budget.
 
-    def _stopped(self, solve: _Solve) -> None:
-        """Answer a solve the watch stopped: a message when its budget ran out, nothing when its client left."""
+        A solve request gets JSON; the page itself (``page``) a short HTML page, and the same
+        message as one line in the terminal, since nothing else would show it.
+        """
         if solve.reason == "gone":
             self.close_connection = True
             return
         seconds = self.server.watch.seconds
+        if page:
+            message = (
+                f"the page took longer than the editor's solve budget ({seconds:g} s): give the file's drivers "
+                "a coarser sweep (a larger step or a shorter range), or start the editor with a larger --solve-seconds"
+            )
+            print(f"linkagekit: {message}", file=sys.stderr, flush=True)
+            body = f"<!DOCTYPE html><title>linkagekit editor</title><p>{html.escape(message)}</p>"
+            self._send(503, body.encode("utf-8"), "text/html; charset=utf-8")
+            return
         self._json(
             503,
             {
