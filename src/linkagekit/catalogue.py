@@ -39,7 +39,7 @@ from .errors import MechanismFileError, UnknownNameError, shorten
 from .units import UnitKind
 
 if TYPE_CHECKING:
-    from .model import Driver, Mechanism
+    from .model import Mechanism
 
 
 class Owner(Enum):
@@ -147,7 +147,7 @@ class Kind:
     pattern : str
         The column name, ``{}`` standing for the owner's name (a reaction's ``J:by>on``).
     unit : UnitKind or None
-        None: the driver's input unit (:func:`driver_unit`).
+        None: the driver's input unit (its type's ``input_kind``).
     group, section : Group, Section or None
         The plot group; the ``analyze`` table (None: in CSV/JSON only).
     json : tuple of str
@@ -231,17 +231,9 @@ class Quantity:
         }
 
 
-def driver_unit(mech: Mechanism, driver: Driver) -> UnitKind:
-    """The unit of a driver's input: an angle for a turned link, a length for a slider or a cylinder.
-
-    Declared by the driver's type (:attr:`~linkagekit.model.CrankType.input_kind`).
-    """
-    return driver.type.input_kind
-
-
 def input_units(mech: Mechanism) -> dict[str, str]:
     """Each driver's input unit as the file writes it (``{"crank": "deg"}``)."""
-    return {d.name: driver_unit(mech, d).symbol(mech.length_unit, mech.angle_unit) for d in mech.drivers}
+    return {d.name: d.input_unit(mech) for d in mech.drivers}
 
 
 def _angle_driver(mech: Mechanism, owner: OwnerRef) -> bool:
@@ -410,7 +402,7 @@ def build(
             for k in block:
                 if k.applies is not None and not k.applies(mech, o):
                     continue
-                unit = k.unit if k.unit is not None else driver_unit(mech, mech.drivers[o.index])
+                unit = k.unit if k.unit is not None else mech.drivers[o.index].type.input_kind
                 column = k.pattern.replace("{}", o.name)
                 out.append(
                     Quantity(
