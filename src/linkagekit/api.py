@@ -62,6 +62,17 @@ def prepare(mech: Mechanism, poses: ArrayLike | None = None, numerical: bool = F
     return compile(mech, as_poses(mech, poses), make_plan(mech, numerical))
 
 
+def pose_inputs(mech: Mechanism) -> dict[str, float]:
+    """Each driver's input at the reference pose, in file units.
+
+    >>> import linkagekit as lk
+    >>> {k: round(v, 4) for k, v in pose_inputs(lk.load("examples/slider_crank.yaml")).items()}
+    {'crank': 53.1301}
+    """
+    params = prepare(mech)
+    return {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
+
+
 @lru_cache(maxsize=64)
 def _prepared(mech: Mechanism, numerical: bool = False) -> Params:
     """One mechanism's parameters in its reference mode, cached (mechanisms are immutable; the arrays read-only)."""

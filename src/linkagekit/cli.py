@@ -900,22 +900,17 @@ def _note_beyond_reach(res: Any, numerical: bool) -> None:
     import numpy as np
 
     from .api import prepare
-    from .group import WALK_REACH, Group
+    from .group import WALK_TURNS
+    from .positions import beyond_reach
 
     mech = res.mechanism
     params = prepare(mech, numerical=numerical)
-    if not any(isinstance(st, Group) for st in params.plan.steps):
-        return
-    far = np.zeros(res.shape, dtype=bool)
-    for i, d in enumerate(mech.drivers):
-        if d.type.cyclic:
-            x = np.broadcast_to(res.inputs[d.name], res.shape) * d.input_scale(mech)
-            far |= np.abs(x - float(params.pose_inputs[i, 0])) > WALK_REACH
+    q = np.array([np.broadcast_to(res.inputs[d.name], res.shape) * d.input_scale(mech) for d in mech.drivers])
+    far = beyond_reach(params, q)
     count = int(np.sum(far & ~np.asarray(res.assembled)))
     if count:
-        turns = round(WALK_REACH / (2 * math.pi))
         print(
-            f"{PROG}: note: {count} sample(s) lie more than {turns} turns of a crank from the pose's input: "
+            f"{PROG}: note: {count} sample(s) lie more than {WALK_TURNS} turns of a crank from the pose's input: "
             "the numerical group is not followed that far, so they are shown as not assembled",
             file=sys.stderr,
         )

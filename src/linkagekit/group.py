@@ -172,9 +172,9 @@ class _Walk:
     out: np.ndarray  # (m, D, n) the group's joints, written as they are accepted
     ref: np.ndarray  # (D,) the pose's determinant sign
     nums: Nums
-    dn: Nums  # the numbers per design (lengths, rhos)
     size: FloatArray  # (D,) the group's mean link length
     arrays: _Arrays  # the numbers per design as Newton reads them
+    reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
 
 
 @dataclass(frozen=True)
@@ -435,7 +435,9 @@ class Group(Step):
         lo, hi, mg = self._reach(dn, D)
         ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
         ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
-        w = _Walk(K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, dn, _size(dn), self._arrays(dn, D))
+        w = _Walk(
+            K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, _size(dn), self._arrays(dn, D), (lo, hi, mg)
+        )
         for half in _walks(k, D, n, self.angular):
             state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
             if len(half) < 4 * COARSE_STRIDE_MIN:
@@ -521,7 +523,7 @@ class Group(Step):
         U_new, acc = self._plain(U, U_prev, K, designs, w)
         todo = np.flatnonzero(~acc)
         if len(todo):  # step halving: move the knowns from the last good state in 2^h steps
-            U_h = self._halving(U[:, todo], Kc[:, todo], K[:, todo], w.ref[designs[todo]], w.nums, designs[todo])
+            U_h = self._halving(U[:, todo], Kc[:, todo], K[:, todo], w, designs[todo])
             done = np.all(np.isfinite(U_h), axis=0)
             U_new[:, todo[done]] = U_h[:, done]
             acc[todo[done]] = True
@@ -652,19 +654,15 @@ class Group(Step):
             ok[can] = good
         return ok
 
-    def _halving(
-        self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray
-    ) -> np.ndarray:
+    def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
         """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
 
         Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
         is accepted (the tests of a continuation step) doubles the next one, a step that is
         not is halved. A step to knowns a chain rules out fails without Newton.
         """
-        dn = self._design_nums(nums, designs)
-        size = _size(dn)
-        reach = self._reach(dn, len(designs))
-        ar = self._arrays(dn, len(designs))
+        ref, size, ar = w.ref[designs], w.size[designs], w.arrays.take(designs)
+        reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
         Uc, t, dt = U.copy(), np.zeros(B), np.full(B, 0.5)
         alive = np.ones(B, bool)

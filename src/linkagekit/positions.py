@@ -184,6 +184,26 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
 WALK_STEP = np.radians(1.0)
 
 
+def _walk_driver(params: Params, key: np.ndarray) -> tuple[int, bool]:
+    """The driver the walk follows (the one that moves most over ``key``, the pose's input first) and
+    whether it is an angle (then the walk goes at most ``WALK_REACH`` from the pose's input)."""
+    d = int(np.argmax(np.ptp(key, axis=1)))
+    angular = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
+    return d, d < len(angular) and bool(angular[d])
+
+
+def beyond_reach(params: Params, q: np.ndarray) -> np.ndarray:
+    """Which samples of inputs ``q`` ``(n_drivers, n)`` (solver units) the numerical walk never goes to.
+
+    All False for a plan without a numerical group, or when the walk follows a length.
+    """
+    if not any(isinstance(st, Group) for st in params.plan.steps):
+        return np.zeros(q.shape[-1], dtype=bool)
+    key = np.concatenate([params.pose_inputs[:, :1], q], axis=1)
+    d, angle = _walk_driver(params, key)
+    return np.abs(q[d] - key[d, 0]) > WALK_REACH if angle else np.zeros(q.shape[-1], dtype=bool)
+
+
 def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The inputs with the samples the numerical walk needs added: (inputs, columns of the given ones).
 
@@ -198,9 +218,8 @@ def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         return None
     q0 = params.pose_inputs[:, 0]
     key = np.concatenate([q0[:, None], q[:, 0, :]], axis=1)  # the pose's input first
-    d = int(np.argmax(np.ptp(key, axis=1)))
-    angular = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
-    if d < len(angular) and angular[d]:
+    d, angle = _walk_driver(params, key)
+    if angle:
         key = key[:, np.abs(key[d] - key[d, 0]) <= WALK_REACH]  # the samples the walk goes to
         step = WALK_STEP
     else:

@@ -523,22 +523,9 @@ def synthesis_figure(
     return fig
 
 
-def pose_inputs(mech: Any) -> dict[str, float]:
-    """Each driver's input at the reference pose, in file units.
-
-    >>> import linkagekit as lk
-    >>> {k: round(v, 4) for k, v in pose_inputs(lk.load("examples/slider_crank.yaml")).items()}
-    {'crank': 53.1301}
-    """
-    from ..api import prepare
-
-    params = prepare(mech)
-    return {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
-
-
 def _at_pose(mech: Any) -> Result | None:
     """The mechanism solved at its pose's own inputs (positions only), or None where it does not assemble there."""
-    from ..api import analyze
+    from ..api import analyze, pose_inputs
 
     res = analyze(mech, {k: [v] for k, v in pose_inputs(mech).items()}, rates=False, dynamics=False)
     return res if bool(np.all(res.assembled)) else None

@@ -87,11 +87,10 @@ def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np
     Returns the inputs by driver and the index of the pose's sample, so that the page can
     show the pose itself: a dragged joint stays under the pointer.
     """
-    from ..api import prepare
+    from ..api import pose_inputs
     from .report import MAX_REPORT_SAMPLES
 
-    params = prepare(mech)
-    pose = {d.name: float(params.pose_inputs[i, 0] / d.input_scale(mech)) for i, d in enumerate(mech.drivers)}
+    pose = pose_inputs(mech)
     count = mech.drivers[0].sweep.count()
     n = n or (count if count <= MAX_REPORT_SAMPLES - 1 else MAX_REPORT_SAMPLES - 1)
 
@@ -332,8 +331,9 @@ class Session:
                     f"{self.path.name} changed on disk since it was opened or saved here: not overwritten "
                     "(reload the page to edit the file as it is now)"
                 )
-            body = dumps(mech, self.fmt, like=old.decode("utf-8-sig", errors="replace"))
-            head = _leading_comments(old.decode("utf-8-sig", errors="replace")) if self.fmt == "yaml" else ""
+            old_text = old.decode("utf-8-sig", errors="replace")
+            body = dumps(mech, self.fmt, like=old_text)
+            head = _leading_comments(old_text) if self.fmt == "yaml" else ""
             text = head + body
             with atomic_output(self.backup) as tmp:
                 tmp.write_bytes(old)
