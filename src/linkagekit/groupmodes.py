@@ -290,11 +290,7 @@ def group_condition(st: Group, nums: Nums, z: np.ndarray) -> np.ndarray:
     P = np.concatenate([z[list(st.joints)], z[list(st.known)]]) if st.known else z[list(st.joints)]
     dn = st._design_nums(nums, np.zeros(z.shape[1], int))
     J = st.jacobian(P, dn, m + len(st.known))[:, :, : 2 * m]
-    scale = np.ones(J.shape[:2])
-    row = 0
-    for gl, L in zip(st.links, dn[0], strict=True):
-        scale[:, row] = 1.0 / (2 * L)
-        row += 1 + 2 * (len(gl.slots) - 2)
+    scale = st.row_scale(dn, J.shape[0])
     J = np.where(np.isfinite(J), J * scale[:, :, None], 0.0)
     s = np.linalg.svd(J, compute_uv=False)
     with np.errstate(invalid="ignore", divide="ignore"):
