@@ -481,7 +481,8 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
     m = len(st.joints)
     unknown = [names[j] for j in st.joints]
     known = [names[j] for j in st.known]
-    binary = [gl for gl in st.links if len(gl.slots) == 2]
+    sliding = {name for gs in st.sliders for name in (gs.carrier, gs.other)}
+    binary = [gl for gl in st.links if len(gl.slots) == 2 and gl.name not in sliding]
     drives = [gl for gl in binary if sum(s >= m for s in gl.slots) == 1]
     for dl in drives:
         for cl in binary:
@@ -520,7 +521,11 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
 
 
 def _cut_mechanism(mech: Mechanism, st: Group, names: tuple[str, ...], drive: str, cut: str) -> Mechanism | None:
-    """The group without link ``cut``, its known joints on the ground, link ``drive`` driven (None if invalid)."""
+    """The group without link ``cut``, its known joints on the ground, link ``drive`` driven (None if invalid).
+
+    The group's sliders come along with their sides: a side that is not a link of the group
+    (a block of one joint, or a placed link carrying a line) is added as it is.
+    """
     known = [names[j] for j in st.known]
     used = {names[j] for j in (*st.joints, *st.known)}
     dl = mech.link(drive)
@@ -532,6 +537,14 @@ def _cut_mechanism(mech: Mechanism, st: Group, names: tuple[str, ...], drive: st
             continue
         ln = mech.link(gl.name)
         links[gl.name] = {"joints": list(ln.joints), "lengths": dict(ln.lengths)} if ln.lengths else list(ln.joints)
+    sliders = []
+    for gs in st.sliders:
+        s = mech.sliders[gs.slider]
+        for side in (s.on, s.link):
+            if side not in links:
+                links[side] = list(mech.link(side).joints)
+        d = s.direction
+        sliders.append({"link": s.link, "on": s.on, "through": names[gs.point_joint], "direction": [d.real, d.imag]})
     doc = {
         "format": FORMAT,
         "name": f"group {', '.join(names[j] for j in st.joints)} cut at '{cut}', '{drive}' driven",
@@ -539,6 +552,7 @@ def _cut_mechanism(mech: Mechanism, st: Group, names: tuple[str, ...], drive: st
         "joints": {j: [mech.joints[j].real, mech.joints[j].imag] for j in mech.joint_names if j in used},
         "links": links,
         "drivers": [{"link": drive, "pivot": pivot, "toward": toward}],
+        **({"sliders": sliders} if sliders else {}),
     }
     try:
         return Mechanism.from_dict(doc, source=f"{mech.source} (group cut)")
