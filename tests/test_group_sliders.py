@@ -109,7 +109,7 @@ def test_triad_with_a_slider_leg_rates_against_finite_differences():
     res = lk.analyze(mech, {"crank": q}, speed=w, acceleration=al)
     d = res.to_dict()["joints"]
     for j in "DEF":
-        x = lambda qq: lk.analyze(mech, {"crank": qq}, rates=False).xy(j)  # noqa: E731
+        x = lambda qq, j=j: lk.analyze(mech, {"crank": qq}, rates=False).xy(j)  # noqa: E731
         xp, x0, xm = x(q + h), x(q), x(q - h)
         dq, dq2 = np.radians(h), np.radians(h2)
         v_fd = (xp - xm) / (2 * dq) * w  # d/dt = w d/dq

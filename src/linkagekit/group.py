@@ -247,10 +247,11 @@ class Group(Step):
     def _slider_numbers(self, src: Source) -> list[tuple[np.ndarray, ...]]:
         """Per slider ``(rho, dhat, c, ell)``: its line ``A + rho e`` along ``dhat e`` (``A``, ``e``: the carrier's
         first joint and base, or 0 and 1 for the ground), its lock ``e_o = c e`` and the locked side's length."""
-        out = []
+        out: list[tuple[np.ndarray, ...]] = []
         for gs in self.sliders:
             d = src.direction(gs.slider)
-            s0, base = 0j, 1.0 + 0j
+            s0: Any = 0j
+            base: Any = 1.0 + 0j
             if gs.frame_joints is not None:
                 s0 = src.shape(gs.carrier, gs.frame_joints[0])
                 base = src.shape(gs.carrier, gs.frame_joints[1]) - s0

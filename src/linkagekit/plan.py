@@ -153,6 +153,7 @@ class _SliderSpec(NamedTuple):
         """The joints its equations read."""
         return (*(self.frame or ()), self.point, *(self.lock or ()))
 
+
 #: A step that reads a sign, with the joints it makes known, the links whose rotation it makes known, its label.
 SignStep = tuple[Step, set[str], set[str], str]
 
@@ -459,7 +460,9 @@ class _Planner:
         mech, known = self.mech, self.known
         unknown = [j for j in mech.joints if j not in known]
         driven = {mech.drivers[di].link for di, _ in self.drives}
-        free = [(ln, set(ln.joints)) for ln in mech.links if ln.name not in self.placed | driven and len(ln.joints) >= 2]
+        free = [
+            (ln, set(ln.joints)) for ln in mech.links if ln.name not in self.placed | driven and len(ln.joints) >= 2
+        ]
         sliders = [(si, s) for si, s in enumerate(mech.sliders) if s.link not in driven and s.on not in driven]
         sizes = range(1, len(unknown) + 1) if len(unknown) <= MAX_GROUP_SEARCH else [len(unknown)]
         for size in sizes:
@@ -529,9 +532,16 @@ class _Planner:
 
         group_sliders = tuple(
             GroupSlider(
-                g.slider, g.carrier, pair(g.frame, slots), pair(g.frame, idx), slots[g.point], idx[g.point], g.other,
-                pair(g.lock, slots), pair(g.lock, idx),
-            )  # fmt: skip
+                g.slider,
+                g.carrier,
+                pair(g.frame, slots),
+                pair(g.frame, idx),
+                slots[g.point],
+                idx[g.point],
+                g.other,
+                pair(g.lock, slots),
+                pair(g.lock, idx),
+            )
             for g in sliders
         )
         cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
