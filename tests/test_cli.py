@@ -196,8 +196,11 @@ sliders:
   - {link: block, on: ground, through: F, direction: [1, 0]}
 drivers: [{link: crank, pivot: A, toward: C}]
 """
-    code, out, _ = run(["check", write(tmp_path, text)], capsys)
-    assert code == 0 and "numerically for D, E, F" in out and "slider 0 ('block' on 'ground')" in out
+    code, out, _ = run(["analyze", write(tmp_path, text), "--at", "45,60", "--format", "json"], capsys)
+    joints = json.loads(out)["joints"]
+    assert (
+        code == 0 and joints["F"]["x"][0] == pytest.approx(3.5, abs=1e-12) and joints["F"]["y"][1] == pytest.approx(6)
+    )
 
 
 def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):

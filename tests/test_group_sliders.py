@@ -17,7 +17,11 @@ Checked against computations written here, none of which shares code with linkag
   1e-10 of the size, velocities and accelerations (the comparison of tests/test_group.py);
 * a triad with a slider leg built to have four real modes at one input: ``lk.modes`` lists
   all four, equal to a dense search (a 90 x 90 grid of Newton starts over the two angles
-  above, deduplicated) to 1e-9 of the size, and two at another input.
+  above, deduplicated) to 1e-9 of the size, and two at another input;
+* samples within 1e-4 degree of both ends of the range (singular positions where two modes
+  meet) stay on the pose's branch (the scipy continuation in 0.02-degree steps, 1e-7);
+* designs over the design axis equal their single solves (1e-10); the crank's torque from
+  the kinetostatics equals the power balance of the links' motion (1e-9 relative).
 """
 
 from __future__ import annotations
@@ -62,19 +66,22 @@ def loop(p: dict[str, complex], theta: float, x: np.ndarray) -> tuple[np.ndarray
 
 
 def continuation(mech: lk.Mechanism, thetas_deg: np.ndarray, step: float = 0.25) -> np.ndarray:
-    """D, E, F at each input, continued from the pose in small steps with scipy (NaN where it fails)."""
+    """D, E, F at each input, continued from the pose in small steps with scipy (NaN past where it fails).
+
+    The targets are walked in order away from the pose's input, each half from the pose.
+    """
     p = joints_of(mech)
-    t0 = np.degrees(np.angle(p["C"] - p["A"]))
+    t0 = float(np.degrees(np.angle(p["C"] - p["A"])))
     out = np.full((3, len(thetas_deg)), np.nan + 0j)
-    for i, t in enumerate(thetas_deg):
-        x = np.array([np.angle(p["D"] - p["C"]), 0.0])
-        path = np.linspace(t0, t, max(2, int(abs(t - t0) / step) + 2))
-        for tt in path:
-            sol = root(lambda y, tt=tt: loop(p, np.radians(tt), y)[0], x, tol=1e-14)
-            if np.max(np.abs(loop(p, np.radians(tt), sol.x)[0])) > 1e-11 or np.max(np.abs(sol.x - x)) > 0.2:
-                break
-            x = sol.x
-        else:
+    for side in (1, -1):
+        x, t = np.array([np.angle(p["D"] - p["C"]), 0.0]), t0
+        for i in sorted(np.flatnonzero(side * (thetas_deg - t0) >= 0), key=lambda i: side * thetas_deg[i]):
+            for tt in np.linspace(t, thetas_deg[i], max(2, int(abs(thetas_deg[i] - t) / step) + 2)):
+                sol = root(lambda y, tt=tt: loop(p, np.radians(tt), y)[0], x, tol=1e-14)
+                if np.max(np.abs(loop(p, np.radians(tt), sol.x)[0])) > 1e-11 or np.max(np.abs(sol.x - x)) > 0.2:
+                    return out
+                x = sol.x
+            t = thetas_deg[i]
             out[:, i] = loop(p, np.radians(t), x)[1:]
     return out
 
@@ -194,3 +201,71 @@ def test_slider_triad_modes_are_all_listed():
         found = [np.array([complex(*mo.joints[j]) for j in "DEF"]) for mo in got.modes if mo.assembled]
         for r in ref:
             assert min(np.max(np.abs(f - r)) for f in found) <= 1e-9 * 8
+
+
+def test_no_branch_jump_near_a_singular_position_of_a_slider_group():
+    """Samples within 0.01 degree of both ends of the slider triad's range (where the pose's mode
+    turns back into the other one) stay on the pose's branch: the fine continuation's, never the
+    other mode that meets it there; beyond the ends they are not assembled."""
+    mech = lk.Mechanism.from_dict(TRIAD)
+    lo, hi = 44.6445, 90.135  # within 1e-4 degree of the ends `check` reports (44.644445, 90.135105)
+    inputs = np.array([hi, 60.0, lo, lo - 0.01, hi + 0.01, hi - 0.3, lo + 0.3, 50.0])
+    res = lk.analyze(mech, {"crank": inputs})
+    assert res.assembled.tolist() == [True, True, True, False, False, True, True, True]
+    assert np.all(np.isnan(continuation(mech, np.array([lo - 0.01, hi + 0.01]), step=0.02)))  # beyond the ends
+    ok = res.assembled
+    ref = continuation(mech, inputs[ok], step=0.02)
+    got = np.array([res.xy(j)[ok, 0] + 1j * res.xy(j)[ok, 1] for j in "DEF"])
+    assert np.all(np.isfinite(ref)) and np.max(np.abs(got - ref)) <= 1e-7 * 6
+    near = np.flatnonzero(np.isin(inputs, [lo, hi]))
+    assert np.all(res.condition[near] < 0.05 * np.nanmax(res.condition))
+
+
+def test_slider_triads_over_the_design_axis_equal_single_solves():
+    """Three slider-triad designs in one call (poses=...) give each design's own single solve (1e-10)."""
+    base = lk.Mechanism.from_dict(TRIAD)
+    rng = np.random.default_rng(5)
+    poses = base.pose_array()[None] + rng.normal(0, 0.3, (3, len(base.joint_names), 2))
+    inputs = {"crank": np.arange(30.0, 100.0, 5.0)}
+    batch = lk.analyze(base, inputs, poses=poses)
+    for d in range(3):
+        one = lk.analyze(base.with_pose(poses[d]), inputs)
+        assert np.array_equal(batch.assembled[d], one.assembled), d
+        ok = one.assembled
+        assert ok.sum() >= 5
+        for j in base.joint_names:
+            assert np.max(np.abs(batch.xy(j)[d][ok] - one.xy(j)[ok])) <= 1e-10 * 6, (d, j)
+            assert np.max(np.abs(batch.velocity(j)[d][ok] - one.velocity(j)[ok])) <= 1e-8 * 6, (d, j)
+
+
+def test_driver_torque_of_a_slider_group_by_power_balance():
+    """Kinetostatics through a slider group: the crank's torque times its speed equals the rate of
+    change of kinetic and potential energy, sum m a.v + I alpha omega - m g.v over the links
+    (velocities from the results, cgs carried rigidly), to 1e-9 relative."""
+    doc = {**TRIAD, "gravity": [0, -9.81]}
+    mass = {"crank": (1.0, 0.5 + 0.5j, 0.1), "l1": (1.0, 1.5 + 2.5j, 0.1), "l2": (1.0, 5.5 + 2j, 0.1)}
+    mass |= {"block": (2.0, 3.5 + 6j, 0.1), "tri": (3.0, 3.5 + 4.6j, 0.5)}
+    doc["links"] = {n: js if n not in mass else {"joints": js, "mass": mass[n][0], "cg": [mass[n][1].real,
+                    mass[n][1].imag], "inertia": mass[n][2]} for n, js in TRIAD["links"].items()}  # fmt: skip
+    mech = lk.Mechanism.from_dict(doc)
+    w, al = 2.0, 0.5
+    res = lk.analyze(mech, {"crank": [50.0, 60.0, 70.0]}, speed=w, acceleration=al)
+    d = res.to_dict()
+    p = joints_of(mech)
+    z = {j: np.array(d["joints"][j]["x"]) + 1j * np.array(d["joints"][j]["y"]) for j in p}
+    v = {j: np.array(d["joints"][j]["vx"]) + 1j * np.array(d["joints"][j]["vy"]) for j in p}
+    a = {j: np.array(d["joints"][j]["ax"]) + 1j * np.array(d["joints"][j]["ay"]) for j in p}
+    power = np.zeros(3)
+    for name, (m, cg, inertia) in mass.items():
+        j0 = TRIAD["links"][name][0]
+        om, alpha = (np.array(d["links"][name][k]) for k in ("omega", "alpha")) if name != "block" else (0.0, 0.0)
+        turn = (z["E"] - z["D"]) / (p["E"] - p["D"]) if name == "tri" else None
+        if name in ("crank", "l1", "l2"):
+            j1 = TRIAD["links"][name][1]
+            turn = (z[j1] - z[j0]) / (p[j1] - p[j0])
+        r = (cg - p[j0]) * (turn if turn is not None else 1.0)
+        vc = v[j0] + 1j * om * r
+        ac = a[j0] + (1j * alpha - om**2) * r
+        power += m * (ac * np.conj(vc)).real + inertia * alpha * om - m * (-9.81j * np.conj(vc)).real
+    torque = np.array(d["driver_torque"]["crank"])
+    assert np.max(np.abs(torque * w - power)) <= 1e-9 * np.max(np.abs(power))
