@@ -21,6 +21,31 @@ analytic: a distance row has ``2 (z_a - z_b)`` (as ``[x, y]``) on ``a`` and its 
 ``rho_k - 1`` on ``j0``, ``-rho_k`` on ``j1``; ``c`` acting on ``[x, y]`` is ``[[Re c,
 -Im c], [Im c, Re c]]``).
 
+Sliders
+-------
+A slider whose two sides are the ground, links of the group or placed links adds rows after
+the links' (:class:`GroupSlider`). Its *carrier* (the ground, or a side with two joints
+``c0``, ``c1``) carries the line; the other side's first joint ``k`` stays on the line
+through its reference position along the slider's direction ``d`` in the carrier's frame.
+With ``e = z_c1 - z_c0`` and ``A = z_c0`` (the ground: ``e = 1``, ``A = 0``), ``rho = (p_k -
+s_c0) / (s_c1 - s_c0)``, ``dhat = d / (s_c1 - s_c0)`` (the ground: ``rho = p_k``, ``dhat =
+d``), ``w = z_k - A - rho e`` and ``u = dhat e`` (the line's unit direction):
+
+* line row ``Im(w conj(u)) = 0``;
+* lock row ``Im(e_o conj(c e)) = 0`` when the other side has two joints ``o0``, ``o1`` too
+  (``e_o = z_o1 - z_o0``, ``c = (s_o1 - s_o0) / (s_c1 - s_c0)``, the ground: ``c = s_o1 -
+  s_o0``): its rotation is the carrier's (the two distance rows fix the lengths, so one row
+  fixes the angle).
+
+Gradients, written as a complex ``G`` with ``d row = Re G dx + Im G dy`` (``Im(a dz)`` has
+``G = i conj(a)``, ``Im(g conj(dz))`` has ``G = -i g``): the line row has ``i u`` on ``k``,
+``i conj(rho - 1) u + i w conj(dhat)`` on ``c0``, ``-i conj(rho) u - i w conj(dhat)`` on
+``c1``; the lock row ``i c e`` on ``o1`` (negated on ``o0``) and ``-i e_o conj(c)`` on ``c1``
+(negated on ``c0``); the ground has no columns. Both rows are bilinear, so their acceleration
+terms are ``gamma = 2 Im(w' conj(u'))`` and ``2 Im(e_o' conj(c e'))`` (``w' = v_k - v_A - rho
+e'``, ``u' = dhat e'``, ``e' = v_c1 - v_c0``; zero on the ground). Scales: the group's mean
+link length on a line row, ``|s_o1 - s_o0|^2`` on a lock row.
+
 Continuation
 ------------
 Newton converges to the root nearest its start, which may belong to another assembly
@@ -72,9 +97,10 @@ its batch, so batching is exact):
 Rates
 -----
 Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J_k a_k -
-gamma``, ``gamma = 2 |v_a - v_b|^2`` for a distance row, 0 for a linear row. The
-conditioning reported with the rates is the smallest singular value of ``J_u`` with its
-distance rows divided by ``2 L`` (so every row has unit scale) over its largest.
+gamma``, ``gamma = 2 |v_a - v_b|^2`` for a distance row, 0 for a linear row (and the
+sliders' above). The conditioning reported with the rates is the smallest singular value of
+``J_u`` with its distance rows divided by ``2 L`` and its lock rows by ``|s_o1 - s_o0|`` (so
+every row has unit scale) over its largest.
 """
 
 from __future__ import annotations

@@ -49,6 +49,15 @@ branch stops and restarts assembling inside one cell).  Modes missed would be wi
 compare the result with an independent dense search on random triads and with a triad of
 six modes known by its sextic.
 
+**Groups with sliders.** The group's sliders come into the cut mechanism with their sides
+(a block of one joint on a line becomes a circle-line step there, a block of two joints is
+carried with its guide), and links that are sides of a slider are neither cut nor driven. The
+argument above is unchanged: the cut mechanism's branches are continuous in ``theta`` and a
+mode of the group is a root of ``f`` on one of them, so the same guarantee holds. A group
+whose line is carried by a link placed before it cannot be cut so (that link would share two
+joints with the cut mechanism's ground), nor can a group with no two binary links that are
+no slider's sides: it is listed in its continued mode only, with a note.
+
 The modes of the whole mechanism combine these with the closed-form sign combinations:
 the steps before a group give its known joints for each combination, the group's modes
 are enumerated for each distinct set of known joints, and the solve goes on downstream
