@@ -17,7 +17,8 @@ Checked against computations written here, none of which shares code with linkag
   1e-10 of the size, velocities and accelerations (the comparison of tests/test_group.py);
 * a triad with a slider leg built to have four real modes at one input: ``lk.modes`` lists
   all four, equal to a dense search (a 90 x 90 grid of Newton starts over the two angles
-  above, deduplicated) to 1e-9 of the size, and two at another input;
+  above, deduplicated) to 1e-9 of the size, and two at another input; likewise with the
+  slider's line carried by the (moving) crank instead of the ground;
 * samples within 1e-4 degree of both ends of the range (singular positions where two modes
   meet) stay on the pose's branch (the scipy continuation in 0.02-degree steps, 1e-7);
 * designs over the design axis equal their single solves (1e-10); the crank's torque from
@@ -56,16 +57,20 @@ def joints_of(mech: lk.Mechanism) -> dict[str, complex]:
     return {n: complex(mech.joints[n]) for n in mech.joint_names}
 
 
-def loop(p: dict[str, complex], theta: float, x: np.ndarray) -> tuple[np.ndarray, complex, complex, complex]:
-    """The triad's own loop equations in (alpha, phi): D on l1's circle about C, the ternary turned by phi."""
+def loop(
+    p: dict[str, complex], theta: float, x: np.ndarray, moving: bool = False
+) -> tuple[np.ndarray, complex, complex, complex]:
+    """The triad's own loop equations in (alpha, phi): D on l1's circle about C, the ternary turned by phi,
+    F on the horizontal line through its pose (``moving``: that line turned with the crank about A = 0)."""
     C = p["A"] + abs(p["C"] - p["A"]) * np.exp(1j * theta)
     D = C + abs(p["D"] - p["C"]) * np.exp(1j * x[0])
     r = np.exp(1j * x[1])
     E, F = D + r * (p["E"] - p["D"]), D + r * (p["F"] - p["D"])
-    return np.array([abs(E - p["B"]) - abs(p["E"] - p["B"]), F.imag - p["F"].imag]), D, E, F
+    turn = (C - p["A"]) / (p["C"] - p["A"]) if moving else 1.0
+    return np.array([abs(E - p["B"]) - abs(p["E"] - p["B"]), ((F - turn * p["F"]) * np.conj(turn)).imag]), D, E, F
 
 
-def continuation(mech: lk.Mechanism, thetas_deg: np.ndarray, step: float = 0.25) -> np.ndarray:
+def continuation(mech: lk.Mechanism, thetas_deg: np.ndarray, step: float = 0.25, moving: bool = False) -> np.ndarray:
     """D, E, F at each input, continued from the pose in small steps with scipy (NaN past where it fails).
 
     The targets are walked in order away from the pose's input, each half from the pose.
@@ -77,12 +82,12 @@ def continuation(mech: lk.Mechanism, thetas_deg: np.ndarray, step: float = 0.25)
         x, t = np.array([np.angle(p["D"] - p["C"]), 0.0]), t0
         for i in sorted(np.flatnonzero(side * (thetas_deg - t0) >= 0), key=lambda i: side * thetas_deg[i]):
             for tt in np.linspace(t, thetas_deg[i], max(2, int(abs(thetas_deg[i] - t) / step) + 2)):
-                sol = root(lambda y, tt=tt: loop(p, np.radians(tt), y)[0], x, tol=1e-14)
-                if np.max(np.abs(loop(p, np.radians(tt), sol.x)[0])) > 1e-11 or np.max(np.abs(sol.x - x)) > 0.2:
+                sol = root(lambda y, tt=tt: loop(p, np.radians(tt), y, moving)[0], x, tol=1e-14)
+                if np.max(np.abs(loop(p, np.radians(tt), sol.x, moving)[0])) > 1e-11 or np.max(np.abs(sol.x - x)) > 0.2:
                     return out
                 x = sol.x
             t = thetas_deg[i]
-            out[:, i] = loop(p, np.radians(t), x)[1:]
+            out[:, i] = loop(p, np.radians(t), x, moving)[1:]
     return out
 
 
@@ -171,18 +176,18 @@ def test_forced_numerical_slider_linkages_equal_the_closed_form_in_every_mode(do
     assert compare_numerical(mech, doc["links"]["block"][0]) == 2
 
 
-def dense_modes(p: dict[str, complex], theta: float) -> list[np.ndarray]:
+def dense_modes(p: dict[str, complex], theta: float, moving: bool = False) -> list[np.ndarray]:
     """Every (D, E, F) of the slider triad at one input: Newton on the loop equations from a 90 x 90 grid."""
     a, b = np.meshgrid(*(np.linspace(0, 2 * np.pi, 90, endpoint=False),) * 2)
     x = np.stack([a.ravel(), b.ravel()])
     h = 1e-7
     with np.errstate(all="ignore"):
         for _ in range(40):
-            f = loop(p, theta, x)[0]
-            J = np.array([(loop(p, theta, x + h * e[:, None])[0] - f) / h for e in np.eye(2)])  # (2 vars, 2 eq, n)
+            f = loop(p, theta, x, moving)[0]
+            J = np.array([(loop(p, theta, x + h * e[:, None], moving)[0] - f) / h for e in np.eye(2)])  # (var, eq, n)
             det = J[0, 0] * J[1, 1] - J[1, 0] * J[0, 1]
             x = x - np.stack([J[1, 1] * f[0] - J[1, 0] * f[1], -J[0, 1] * f[0] + J[0, 0] * f[1]]) / det
-        f, D, E, F = loop(p, theta, x)
+        f, D, E, F = loop(p, theta, x, moving)
     ok = np.all(np.abs(f) < 1e-10, axis=0)
     out: list[np.ndarray] = []
     for zz in np.array([D, E, F]).T[ok]:
@@ -191,11 +196,20 @@ def dense_modes(p: dict[str, complex], theta: float) -> list[np.ndarray]:
     return out
 
 
-def test_slider_triad_modes_are_all_listed():
-    mech = mech_of(TRIAD, **FOUR)
+#: the slider triad with its line carried by the crank (a link placed before the group) instead of the ground
+MOVING = TRIAD | {
+    "joints": {**TRIAD["joints"], "H": [1.5, 3.0]},
+    "links": {**TRIAD["links"], "crank": ["A", "C", "H"]},
+    "sliders": [{"link": "block", "on": "crank", "through": "F", "direction": [1, 0]}],
+}
+
+
+@pytest.mark.parametrize(("doc", "counts"), [(TRIAD, ((60.0, 4), (150.0, 2))), (MOVING, ((60.0, 4), (240.0, 2)))])
+def test_slider_triad_modes_are_all_listed(doc, counts):
+    mech = mech_of(doc, **FOUR)
     p = joints_of(mech)
-    for at, n in ((60.0, 4), (150.0, 2)):
-        ref = dense_modes(p, np.radians(at))
+    for at, n in counts:
+        ref = dense_modes(p, np.radians(at), doc is MOVING)
         got = lk.modes(mech, at=at)
         assert len(ref) == n and got.distinct == n
         found = [np.array([complex(*mo.joints[j]) for j in "DEF"]) for mo in got.modes if mo.assembled]
@@ -269,3 +283,23 @@ def test_driver_torque_of_a_slider_group_by_power_balance():
         power += m * (ac * np.conj(vc)).real + inertia * alpha * om - m * (-9.81j * np.conj(vc)).real
     torque = np.array(d["driver_torque"]["crank"])
     assert np.max(np.abs(torque * w - power)) <= 1e-9 * np.max(np.abs(power))
+
+
+def test_slider_line_carried_by_a_moving_link():
+    """The slider triad's line carried by the crank: the sweep equals the scipy continuation (1e-7 of the
+    size), keeps every link and the line (1e-10), and gives the pose back at its input."""
+    mech = lk.Mechanism.from_dict(MOVING)
+    q = np.array([45.0, 30.0, 0.0, -30.0, -60.0])
+    res = lk.analyze(mech, {"crank": q})
+    ok = res.assembled
+    assert ok.sum() >= 3 and ok[0]
+    got = np.array([res.xy(j)[ok, 0] + 1j * res.xy(j)[ok, 1] for j in "DEF"])
+    ref = continuation(mech, q[ok], moving=True)
+    assert np.all(np.isfinite(ref)) and np.max(np.abs(got - ref)) <= 1e-7 * 6
+    p = joints_of(mech)
+    z = {j: res.xy(j)[ok, 0] + 1j * res.xy(j)[ok, 1] for j in "ACDEF"}
+    turn = (z["C"] - z["A"]) / (p["C"] - p["A"])
+    assert np.max(np.abs(((z["F"] - turn * p["F"]) * np.conj(turn)).imag)) <= 1e-10
+    for a, b in (("C", "D"), ("D", "E"), ("E", "F"), ("D", "F")):
+        assert np.max(np.abs(np.abs(z[a] - z[b]) - abs(p[a] - p[b]))) <= 1e-10
+    assert np.max(np.abs(got[:, 0] - np.array([p["D"], p["E"], p["F"]]))) <= 1e-12
