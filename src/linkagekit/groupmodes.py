@@ -81,7 +81,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -551,7 +551,7 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
 
 def _frame(
     mech: Mechanism, st: Group, names: tuple[str, ...]
-) -> tuple[str, tuple[int, int, complex, complex]] | None | bool:
+) -> tuple[str, tuple[int, int, complex, complex]] | None | Literal[False]:
     """The placed link carrying a slider's line, with its frame (see :attr:`Reduction.frame`); None if there is
     none, False if there are several or it is a slider's block (then no cut mechanism is written)."""
     inner = {gl.name for gl in st.links}
