@@ -35,9 +35,10 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from enum import Enum
 from functools import lru_cache
 from itertools import combinations
-from typing import TYPE_CHECKING, Any, NamedTuple, assert_never
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple, assert_never
 
 from .errors import MechanismFileError, NotSolvableError
 from .group import Group, GroupLink, GroupSlider
@@ -136,6 +137,15 @@ def make_plan(mech: Mechanism, numerical: bool = False) -> Plan:
     if mech.dof != len(mech.drivers):  # pragma: no cover - the model already refuses it
         raise MechanismFileError(f"{mech.source}: drivers: {len(mech.drivers)} driver(s) for {mech.dof} freedom(s)")
     return _Planner(mech, numerical).plan()
+
+
+class _Side(Enum):
+    """What a side of a slider can be to a candidate numerical group."""
+
+    GROUND = "the ground: a fixed line"
+    FRAME = "a link of two joints or more, of the group or placed: it can carry the line"
+    POINT = "a link of one joint whose rotation is not known: its joint can be the point on the line"
+    TURNED = "a link of one joint whose rotation is known: a constraint the group cannot write"
 
 
 class _SliderSpec(NamedTuple):
@@ -473,46 +483,53 @@ class _Planner:
                 if not links:
                     continue
                 names = {ln.name for ln in links}
-                found = (self._group_slider(si, s, inside, reach, names) for si, s in sliders)
-                gsl = [g for g in found if g is not None]
+                found = [self._group_slider(si, s, inside, reach, names) for si, s in sliders]
+                if False in found:
+                    continue
+                gsl = [g for g in found if g]
                 if sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl) == 2 * size:
                     return self._group(subset, links, gsl)
         return None
 
     def _group_slider(
         self, si: int, s: Slider, inside: set[str], reach: set[str], names: set[str]
-    ) -> _SliderSpec | None:
-        """How slider ``si`` constrains the candidate group ``inside`` (links ``names``), or None when it does not.
+    ) -> _SliderSpec | None | Literal[False]:
+        """How slider ``si`` constrains the candidate group ``inside`` (links ``names``).
 
         Its *carrier* carries the line: the ground, or a side with two joints in the group or
         placed. The other side's first joint is the point on the line; when that side has two
-        joints too, its rotation is locked to the carrier's (2 equations, else 1). Two sides
-        of one joint each fix nothing by themselves (left to the closed-form steps).
+        joints too, its rotation is locked to the carrier's (2 equations, else 1). None when
+        it does not constrain the group (a side not all in it, or two sides of one joint each:
+        those fix nothing by themselves and are left to the closed-form steps); False when it
+        does in a way the group cannot write (a side of one joint whose rotation is known): the
+        candidate is not a group.
         """
         kinds = {side: self._side(side, reach, names) for side in (s.on, s.link)}
         if None in kinds.values():
             return None
-        carrier = next((side for side in (s.on, s.link) if kinds[side] in ("ground", "frame")), None)
+        if _Side.TURNED in kinds.values():
+            return False if any(set(self.links[n].joints) & inside for n in kinds if n != GROUND) else None
+        carrier = next((side for side in (s.on, s.link) if kinds[side] in (_Side.GROUND, _Side.FRAME)), None)
         other = s.link if carrier == s.on else s.on
-        if carrier is None or kinds[other] == "ground":
+        if carrier is None or kinds[other] is _Side.GROUND:
             return None
         cj, oj = self.links[carrier].joints, self.links[other].joints
-        frame = (cj[0], cj[1]) if kinds[carrier] == "frame" else None
-        lock = (oj[0], oj[1]) if kinds[other] == "frame" else None
+        frame = (cj[0], cj[1]) if kinds[carrier] is _Side.FRAME else None
+        lock = (oj[0], oj[1]) if kinds[other] is _Side.FRAME else None
         spec = _SliderSpec(si, carrier, frame, other, oj[0], lock)
         return spec if set(spec.joints) & inside else None
 
-    def _side(self, name: str, reach: set[str], names: set[str]) -> str | None:
-        """What link ``name`` can be to a slider of a candidate group: "ground", "frame" (two joints, a link of
-        the group or placed), "point" (one joint), or None (not all its joints in ``reach``)."""
+    def _side(self, name: str, reach: set[str], names: set[str]) -> _Side | None:
+        """What link ``name`` can be to a slider of a candidate group (:class:`_Side`), or None (not all its
+        joints in ``reach``, or a link of two joints that is neither in the group nor placed)."""
         if name == GROUND:
-            return "ground"
+            return _Side.GROUND
         js = self.links[name].joints
         if not set(js) <= reach:
             return None
         if len(js) >= 2:
-            return "frame" if name in names or name in self.placed else None
-        return "point"
+            return _Side.FRAME if name in names or name in self.placed else None
+        return _Side.TURNED if name in self.rot_known else _Side.POINT
 
     def _group(self, subset: tuple[str, ...], links: list[Link], sliders: list[_SliderSpec]) -> Group:
         """The numerical group placing the joints ``subset`` by the rigidity of ``links`` and by ``sliders``."""
