@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
+from linkagekit.checks import input_range
 from linkagekit.errors import LinkageError, MechanismFileError
 from linkagekit.plan import make_plan
 
@@ -155,6 +156,10 @@ def test_bucket_linkage_example_files():
     assert "2. G = circle(F) x circle(K, actuator length of slider 0" in make_plan(sl2).describe()
     rc, rs2 = both(cyl, sl2, names2, {"bucket_cylinder": lengths})
     assert_same(cyl, names2, rc, rs2, inside)
+    # the assembly range: the stroke, both ways (each end exact to 1e-9)
+    (lo, hi), (ulo, uhi) = input_range(cyl)[0], input_range(sl)[0]
+    assert len(input_range(sl)) == 1 and abs(lo - 2.15) <= 1e-9 and abs(hi - 2.9) <= 1e-9
+    assert abs(ulo + 0.35) <= 1e-9 and abs(uhi - 0.4) <= 1e-9
     # the file's default sweeps: the whole stroke, the same samples
     da, db = lk.analyze(cyl), lk.analyze(sl)
     assert da.assembled.all() and db.assembled.all() and da.n == db.n == 101
@@ -252,6 +257,10 @@ def test_stroke_of_a_slider_driver_on_the_frame():
     u = np.array([-0.03, -0.02, -0.01, 0.0, 0.01, 0.011])
     res = lk.analyze(mech, {name: u})
     np.testing.assert_array_equal(res.assembled, [False, True, True, True, True, False])
+    rep = lk.check(mech).to_dict()
+    assert np.allclose(rep["input_range"], [[-0.02, 0.01]], rtol=0, atol=1e-9)
+    ends = [(p["kind"], p["detail"]) for p in rep["dead_points"][name]]
+    assert ends == [("end of range", f"slider driver '{name}' at the end of its stroke ({e})") for e in ("min", "max")]
     free = lk.Mechanism.from_dict({**d, "drivers": [{"slider": k}]})
     ref = lk.analyze(free, {name: u})
     inside = res.assembled

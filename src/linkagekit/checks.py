@@ -35,7 +35,7 @@ from .model import CrankType, Mechanism
 from .params import Params, all_sign_combinations
 from .positions import solve
 from .rates import SINGULAR_TOL, solve_rates
-from .steps import ActuatorDyad, CircleLine, CylinderDyad, CylinderLine, Dyad
+from .steps import ActuatorDyad, CircleLine, CylinderDyad, CylinderLine, Dyad, SliderDrive
 
 N_COARSE = 7200
 #: dead points the text of check lists per driver (the JSON has them all)
@@ -780,12 +780,33 @@ def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[fl
         margins = fin.state.margin[:, col]
         k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
         info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
-        if params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
+        if (stroke_end := _slide_stroke_end(run, v)) is not None:
+            info.update(stroke_end)
+        elif params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
             info.update(_group_end(params))
         elif params.plan.n_signs:
             info.update(_step_links(params, k, fin.state, col))
         dead.append((v, info))
     return dead
+
+
+def _slide_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
+    """A block pushed along a placed guide at an end of its driver's stroke there (None: not such an end)."""
+    plan = run.params.plan
+    found = [
+        (st, nums)
+        for st, nums in zip(plan.steps, run.params.steps, strict=True)
+        if isinstance(st, SliderDrive) and st.driver == run.driver
+    ]
+    if not found:
+        return None
+    step, nums = found[0]
+    lo, hi = float(nums[3][0, 0]), float(nums[4][0, 0])
+    if not (math.isfinite(lo) and math.isfinite(hi)) or min(abs(v - lo), abs(v - hi)) > 1e-9 * max(-lo, hi):
+        return None
+    end = "min" if abs(v - lo) <= abs(v - hi) else "max"
+    detail = f"slider driver '{plan.drivers[run.driver]}' at the end of its stroke ({end})"
+    return {"links": [step.block], "detail": detail}
 
 
 def _change_dead_points(
