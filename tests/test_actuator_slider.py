@@ -166,27 +166,64 @@ def test_bucket_linkage_example_files():
     assert np.max(np.abs(da.forces.driver_force["bucket_cylinder"] - db.forces.driver_force["bucket_rod"])) <= 1e-6
 
 
-def test_driver_force_by_virtual_work():
-    """Slider form: F du/dt = d(kinetic energy)/dt - power of gravity and loads, from the kinematics alone."""
-    mech = lk.load("examples/excavator_bucket_slider.yaml")
+@pytest.mark.parametrize("variant", ["file", "heavy", "heavy offset"])
+def test_driver_force_by_virtual_work(variant):
+    """Slider form: F du/dt = d(kinetic energy)/dt - power of gravity and loads, from the kinematics alone.
+
+    Also with a barrel and a rod of their own mass and inertia, and with the slide's line off the pins.
+    """
+    d = lk.load("examples/excavator_bucket_slider.yaml").to_dict()
+    if "heavy" in variant:
+        d["links"]["bucket_barrel"] = {"joints": ["K", "KH"], "mass": 60.0, "cg": [1.2, 0.95], "inertia": 20.0}
+        d["links"]["bucket_rod"] = {"joints": ["G", "GR"], "mass": 30.0, "cg": [2.1, 0.72], "inertia": 3.0}
+    if "offset" in variant:
+        d["sliders"][0]["direction"] = [np.cos(np.radians(-12.0)), np.sin(np.radians(-12.0))]
+    mech = lk.Mechanism.from_dict(d)
     u = np.linspace(-0.35, 0.4, 31)
     rng = np.random.default_rng(3)
     du, ddu = rng.uniform(0.05, 0.3, u.size), rng.uniform(-0.5, 0.5, u.size)
     res = lk.analyze(mech, {"bucket_rod": u}, speed={"bucket_rod": du}, acceleration={"bucket_rod": ddu})
-    g = complex(*mech.to_dict()["gravity"])
+    g = complex(*d["gravity"])
     power = np.zeros(u.size)
     for ln in mech.links:
         if ln.mass == 0:
             continue
+        pin, w, al = _body_rates(mech, res, ln.name, u, du, ddu)
         a, b = ln.joints[:2]
-        rho = (ln.cg_pose - mech.joints[a]) / (mech.joints[b] - mech.joints[a])
-        vg = res.velocity(a) + rho * (res.velocity(b) - res.velocity(a))
-        ag = res.acceleration(a) + rho * (res.acceleration(b) - res.acceleration(a))
-        power += ln.mass * np.real(np.conj(vg) * (ag - g)) + ln.inertia * res.omega(ln.name) * res.alpha(ln.name)
+        rho = (ln.cg_pose - mech.joints[a]) / (mech.joints[b] - mech.joints[a])  # cg on the line a -> b
+        r = res.point(a) + rho * (res.point(b) - res.point(a)) - res.point(pin)
+        vg = res.velocity(pin) + 1j * w * r
+        ag = res.acceleration(pin) + (1j * al - w * w) * r
+        power += ln.mass * np.real(np.conj(vg) * (ag - g)) + ln.inertia * w * al
     for ld in mech.loads:
         power -= np.real(np.conj(ld.force) * res.velocity(ld.at_joint))
     force = res.forces.driver_force["bucket_rod"]
     assert np.max(np.abs(force * du - power)) <= 1e-9 * np.max(np.abs(force * du))
+
+
+def _body_rates(mech, res, link, u, du, ddu):
+    """(a joint, w, alpha) of a link, from joint rates that no rotation of a step carried.
+
+    The four-bar's links from their first two joints (placed by circles); the barrel and the rod
+    (whose other joints are carried with the barrel's rates) from their pins K, G: they turn as the
+    line K -> G less the turn of rel(u) = rel0 + u d in the barrel's frame,
+    d arg(rel)/du = Im(d / rel), d^2 arg(rel)/du^2 = -Im((d / rel)^2).
+    """
+    if link not in ("bucket_barrel", "bucket_rod"):
+        a, b = mech.link(link).joints[:2]
+        c = (res.velocity(b) - res.velocity(a)) / (res.point(b) - res.point(a))
+        return (
+            a,
+            np.imag(c),
+            np.imag((res.acceleration(b) - res.acceleration(a)) / (res.point(b) - res.point(a)) - c * c),
+        )
+    dd = res.point("G") - res.point("K")
+    c = res.velocity("G") / dd
+    w_line, al_line = np.imag(c), np.imag(res.acceleration("G") / dd - c * c)
+    e = mech.sliders[0].direction
+    q = e / (mech.joints["G"] - mech.joints["K"] + u * e)
+    w_rel, al_rel = np.imag(q) * du, np.imag(q) * ddu - np.imag(q * q) * du * du
+    return ("K" if link == "bucket_barrel" else "G"), w_line - w_rel, al_line - al_rel
 
 
 def test_unfixable_actuator_is_refused_with_a_clear_message(tmp_path):
