@@ -108,6 +108,9 @@ def assert_same(cyl: lk.Mechanism, names: dict[str, tuple[str, float, str, str]]
         b = fs.reaction(r.joint, r.on, r.by)
         assert np.max(np.abs(r.force[inside] - b[inside])) <= TOL * scale, r.joint
     np.testing.assert_allclose(fs.input_power[inside], fc.input_power[inside], rtol=0, atol=TOL * scale)
+    # what the frame feels: the cylinder's end on the frame is the barrel's (or rod's) pin reaction there
+    assert np.max(np.abs(fs.shaking_force[inside] - fc.shaking_force[inside])) <= TOL * scale
+    assert np.max(np.abs(fs.shaking_moment[inside] - fc.shaking_moment[inside])) <= TOL * scale * size
     for cname, (rod, _, barrel, at_b) in names.items():  # the actuator pushes as the cylinder: F along A -> B at B
         a, b = next(d.type.ends for d in cyl.drivers if d.name == cname)
         body = next(ln.name for ln in cyl.links if b in ln.joints)
