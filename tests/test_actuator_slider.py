@@ -163,6 +163,19 @@ def test_bucket_linkage_example_files():
     (lo, hi), (ulo, uhi) = input_range(cyl)[0], input_range(sl)[0]
     assert len(input_range(sl)) == 1 and abs(lo - 2.15) <= 1e-9 and abs(hi - 2.9) <= 1e-9
     assert abs(ulo + 0.35) <= 1e-9 and abs(uhi - 0.4) <= 1e-9
+
+    # a batch of poses (the file's and one moved by (1, 2) m): each design as the cylinder form's
+    def poses(mech):
+        pose = np.array([[mech.joints[j].real, mech.joints[j].imag] for j in mech.joint_names])
+        return np.stack([pose, pose + [1.0, 2.0]])
+
+    ba = lk.analyze(sl, {"bucket_rod": lengths - 2.5}, poses=poses(sl))
+    bc = lk.analyze(cyl, {"bucket_cylinder": lengths}, poses=poses(cyl))
+    np.testing.assert_array_equal(ba.assembled, np.stack([inside, inside]))
+    np.testing.assert_array_equal(bc.assembled, ba.assembled)
+    assert np.nanmax(np.abs(ba.point("P") - bc.point("P"))) <= TOL * cyl.length_scale
+    dfa, dfc = ba.forces.driver_force["bucket_rod"], bc.forces.driver_force["bucket_cylinder"]
+    assert np.nanmax(np.abs(dfa - dfc)) <= TOL * np.nanmax(np.abs(dfc))
     # the file's default sweeps: the whole stroke, the same samples
     da, db = lk.analyze(cyl), lk.analyze(sl)
     assert da.assembled.all() and db.assembled.all() and da.n == db.n == 101
