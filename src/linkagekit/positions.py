@@ -80,6 +80,7 @@ def solve(
     eps: float = ASSEMBLY_RTOL,
     out: np.ndarray | None = None,
     _dense: bool = False,
+    continuous: bool = False,
 ) -> Positions:
     """Positions of every joint for every design and input sample.
 
@@ -95,6 +96,10 @@ def solve(
         True flips the link of three or more joints of that index; default: none.
     out : ndarray, complex, shape (n_joints, D, n), optional
         Where to write the positions.
+    continuous : bool
+        Numerical groups follow their branch through change points (a sign change of their
+        Jacobian's determinant is accepted where the motion is smooth); the sign steps take
+        ``signs`` as given (:mod:`linkagekit.branch` chooses them).
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
@@ -104,7 +109,7 @@ def solve(
             qd, keep = dense
             m = qd.shape[-1]
             sd, md = _dense_choice(signs, len(keep), m), _dense_choice(mirrors, len(keep), m)
-            full = solve(params, qd, sd, md, eps, _dense=True)
+            full = solve(params, qd, sd, md, eps, _dense=True, continuous=continuous)
             got = _take_samples(full, keep)
             if out is not None:
                 out[...] = got.z
@@ -119,7 +124,7 @@ def solve(
     missing = plan.unwritten
     if missing:  # a joint no step writes is NaN, never uninitialised memory
         z[list(missing)] = NAN_POINT
-    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs)
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)

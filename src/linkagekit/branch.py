@@ -1,0 +1,294 @@
+"""Following a branch through change points: the sign of every sign step, sample by sample, along a path.
+
+By default every sign step keeps the sign read off the reference pose.  At a *change point*
+two assembly modes meet (a parallelogram's flat position: the dyad's two circles touch, or
+their centres pass through each other) and the fixed sign switches from one mode to the
+other there: the joint's position is continuous but its velocity jumps (or, when the
+centres pass through each other, the position jumps).  Following the branch continuously
+means flipping the sign there, so that the motion goes on smoothly.
+
+:func:`follow` decides it along a path given in order (a simulation calls it with its time
+steps); :func:`along_sweep` builds the path of a sweep (from the pose's input up to the
+largest input and down to the smallest, through every requested input and a fixed grid)
+and calls it.  The work is vectorized over samples and designs and sequential only over
+the sign steps (a step's candidates depend on the signs chosen before it).  Derivation:
+``docs/method.md``, "Following a branch through change points".
+
+Examples
+--------
+>>> import numpy as np, linkagekit as lk
+>>> from linkagekit.api import prepare
+>>> mech = lk.load("examples/seed003_ex22.yaml")  # a parallelogram, pose at 30 deg
+>>> br = along_sweep(prepare(mech), np.radians([[[0.0, 90.0, 270.0, 400.0]]]), (True,))
+>>> br.signs[0, 0].tolist()  # the pose's +1 until the flat position at 180 deg, then -1, +1 again after 360
+[1.0, 1.0, -1.0, 1.0]
+>>> [round(float(np.degrees(x)), 6) for x in br.points[0][2]]
+[180.0, 360.0]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .params import Params
+from .positions import WALK_STEP, solve
+from .rates import solve_rates
+from .steps import Pivot, Step, is_sign_step
+
+#: a flip is taken only where the smooth candidate's trapezoid defect is below this share of the kept one's
+RHO = 0.125
+#: the step's relative assembly margin must come within this of zero between the two samples (a real meeting)
+CHANGE_TOL = 1e-9
+#: golden-section iterations locating the meeting (the interval shrinks by 0.618 each: 1 degree to 1e-12 rad)
+GOLDEN_ITERATIONS = 48
+#: consecutive good samples further apart than this many grid steps are never bridged (a gap in the range)
+MAX_GAP_STEPS = 3.0
+
+BRANCHES = ("pose", "continuous")
+
+__all__ = ["BRANCHES", "Branch", "along_sweep", "follow"]
+
+
+@dataclass(frozen=True)
+class Branch:
+    """Signs along a path, and the change points crossed.
+
+    Attributes
+    ----------
+    signs : ndarray, shape (n_signs, D, n)
+        +1/-1 per sign step, design and sample.
+    points : list of (step, design, input) arrays
+        The change points crossed: the index of the sign step (in ``plan.sign_joints``),
+        the design, and the path driver's input there (solver units), sorted by input.
+    driver : int
+        The driver the path follows (the one that moves most).
+    """
+
+    signs: np.ndarray
+    points: tuple[np.ndarray, np.ndarray, np.ndarray]
+    driver: int = 0
+
+
+def _state(step: Step, pos: object, rt: object, i: int) -> tuple[np.ndarray, np.ndarray]:
+    """What sign step ``step`` places, (m, D, n) complex, and its rate: its joint, or (a pivot) its guide's rotation."""
+    if isinstance(step, Pivot):
+        rot = pos.rot[step.on]  # type: ignore[attr-defined]
+        om = rt.omega[step.on]  # type: ignore[attr-defined]
+        return rot[None], (1j * om * rot)[None]
+    j = list(step.writes())
+    return pos.z[j], rt.v[j]  # type: ignore[attr-defined]
+
+
+def _previous_good(good: np.ndarray) -> np.ndarray:
+    """For each sample, the index of the last good sample before it (-1: none), (D, n)."""
+    n = good.shape[-1]
+    idx = np.where(good, np.arange(n), -1)
+    last = np.maximum.accumulate(idx, axis=-1)
+    return np.concatenate([np.full((good.shape[0], 1), -1), last[:, :-1]], axis=-1)
+
+
+def _defect(Xa: np.ndarray, Va: np.ndarray, Xb: np.ndarray, Vb: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    """The trapezoid rule's defect ``max |X_b - X_a - (V_a + V_b) dt / 2|`` over the step's points: O(dt^3) on a smooth motion."""
+    return np.max(np.abs(Xb - Xa - 0.5 * (Va + Vb) * dt), axis=0)
+
+
+def _candidates(params: Params, q: np.ndarray, S: np.ndarray, i: int, w_in: np.ndarray, continuous: bool) -> list:
+    """Step ``i``'s state with sign +1 and -1 at every sample (earlier steps as decided): [(X, V, margin)] * 2."""
+    out = []
+    for sigma in (1.0, -1.0):
+        Si = S.copy()
+        Si[i] = sigma
+        pos = solve(params, q, Si, continuous=continuous)
+        rt = solve_rates(params, pos, w_in, np.zeros_like(w_in))
+        X, V = _state(params.plan.steps[_sign_steps(params)[i]], pos, rt, i)
+        out.append((X, V, pos.margin[i]))
+    return out
+
+
+def _sign_steps(params: Params) -> list[int]:
+    """The plan indices of the sign steps, in the order of their sign slots."""
+    idx = [k for k, st in enumerate(params.plan.steps) if is_sign_step(st)]
+    return sorted(idx, key=lambda k: params.plan.steps[k].sign)  # type: ignore[attr-defined, no-any-return]
+
+
+def _smooth_flips(cands: list, t: np.ndarray, max_gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where flipping the sign is the smooth continuation from the last good sample: (flip (D, n), prev (D, n)).
+
+    Both ways must agree (from +1 the smooth next is -1, and from -1 it is +1, as where two
+    branches cross), and the kept sign must have a real defect (not rounding).
+    """
+    (Xp, Vp, mg), (Xm, Vm, _) = cands
+    good = (mg >= 0) & np.all(np.isfinite(Vp) & np.isfinite(Vm) & np.isfinite(Xp) & np.isfinite(Xm), axis=0)
+    prev = _previous_good(good)
+    a = np.maximum(prev, 0)
+
+    def at(x: np.ndarray) -> np.ndarray:
+        return np.take_along_axis(x, np.broadcast_to(a, x.shape), axis=-1)
+
+    dt = t - np.take_along_axis(np.broadcast_to(t, a.shape), a, axis=-1)
+    keep_p = _defect(at(Xp), at(Vp), Xp, Vp, dt)
+    keep_m = _defect(at(Xm), at(Vm), Xm, Vm, dt)
+    flip_p = _defect(at(Xp), at(Vp), Xm, Vm, dt)
+    flip_m = _defect(at(Xm), at(Vm), Xp, Vp, dt)
+    scale = np.max(np.abs(at(Vp)) + np.abs(Vp), axis=0) * np.abs(dt)
+    real = np.minimum(keep_p, keep_m) > 1e-9 * scale
+    flip = good & (prev >= 0) & (np.abs(dt) <= max_gap) & real
+    flip &= (flip_p < RHO * keep_p) & (flip_m < RHO * keep_m)
+    return flip, prev
+
+
+def _signs_between(S: np.ndarray, E: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray, tt: np.ndarray) -> np.ndarray:
+    """The signs at path parameter ``tt`` between samples ``a`` and ``b`` of designs ``d``: (n_signs, C).
+
+    A step whose last crossing (``E``, forward-filled) lies at or before ``tt`` has the sign of ``b``, else of ``a``.
+    """
+    return np.where(tt >= E[:, d, b], S[:, d, b], S[:, d, a])
+
+
+def _meetings(
+    params: Params, q: np.ndarray, t: np.ndarray, S: np.ndarray, E: np.ndarray, i: int, cand: np.ndarray, continuous: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Whether step ``i``'s two modes really meet between each candidate's samples, and where (path parameter).
+
+    ``cand`` (3, C): design, sample a, sample b.  The step's assembly margin is minimised over
+    ``[t_a, t_b]`` by golden section (each iteration one solve of all candidates, with the
+    signs of the earlier steps as they hold there); a meeting is a minimum within
+    ``CHANGE_TOL`` of zero (a gap, where it is negative beyond that, or a near miss, is none).
+    """
+    d, a, b = cand
+    ta, tb = t[np.minimum(d, t.shape[0] - 1), a], t[np.minimum(d, t.shape[0] - 1), b]
+    sub = params.take(d)
+    qd = np.broadcast_to(q, (q.shape[0], S.shape[1], q.shape[-1]))
+
+    def margin(tt: np.ndarray) -> np.ndarray:
+        f = np.where(tb > ta, (tt - ta) / np.where(tb > ta, tb - ta, 1.0), 0.0)
+        qq = (1 - f) * qd[:, d, a] + f * qd[:, d, b]
+        sg = _signs_between(S, E, d, a, b, tt)
+        m = solve(sub, qq[:, :, None], sg[:, :, None], continuous=continuous).margin[i, :, 0]
+        return np.where(np.isfinite(m), m, np.inf)
+
+    g = (np.sqrt(5.0) - 1) / 2
+    lo, hi = ta.copy(), tb.copy()
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = margin(x1), margin(x2)
+    for _ in range(GOLDEN_ITERATIONS):
+        left = f1 <= f2
+        hi = np.where(left, x2, hi)
+        lo = np.where(left, lo, x1)
+        x2n = np.where(left, x1, lo + g * (hi - lo))
+        x1n = np.where(left, hi - g * (hi - lo), x2)
+        fnew = margin(np.where(left, x1n, x2n))
+        f1, f2 = np.where(left, fnew, f2), np.where(left, f1, fnew)
+        x1, x2 = x1n, x2n
+    best = np.where(f1 <= f2, x1, x2)
+    return np.abs(np.minimum(f1, f2)) <= CHANGE_TOL, best
+
+
+def follow(
+    params: Params,
+    q: np.ndarray,
+    t: np.ndarray,
+    start: np.ndarray | None = None,
+    max_gap: float = np.inf,
+    continuous: bool = True,
+) -> Branch:
+    """The signs along a path given in order, each sign flipped where its step crosses a change point.
+
+    Parameters
+    ----------
+    params : Params
+    q : ndarray, shape (n_drivers, D or 1, n)
+        The inputs along the path, in the order the mechanism goes through them (solver units).
+    t : ndarray, shape (D or 1, n)
+        The path parameter, non-decreasing (e.g. the input of the driver that moves, or time).
+    start : ndarray, shape (n_signs, D), optional
+        The signs at the first sample; default: each design's pose's.
+    max_gap : float
+        Two good samples further apart in ``t`` are not bridged (the motion cannot pass a gap).
+    continuous : bool
+        Numerical groups, too, follow their branch (:mod:`linkagekit.group`).
+
+    Returns
+    -------
+    Branch
+        ``signs`` (n_signs, D, n); ``points`` the change points crossed, as path parameters.
+    """
+    plan = params.plan
+    D, n = params.n_designs, q.shape[-1]
+    S = np.empty((plan.n_signs, D, n))
+    S[...] = (params.signs if start is None else np.asarray(start, float))[:, :, None]
+    E = np.full(S.shape, -np.inf)
+    t = np.broadcast_to(np.asarray(t, float), (D, n))
+    dq = np.diff(q, axis=-1)
+    dt = np.diff(t, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(dt != 0, dq / np.where(dt != 0, dt, 1.0), 0.0)
+    w_in = np.concatenate([slope[..., :1], slope], axis=-1)  # dq/dt at each sample (from the interval before)
+    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for i in range(plan.n_signs):
+        cands = _candidates(params, q, S, i, w_in, continuous)
+        flip, prev = _smooth_flips(cands, t, max_gap)
+        if flip.any():
+            d, b = np.nonzero(flip)
+            real, where = _meetings(params, q, t, S, E, i, np.array([d, prev[d, b], b]), continuous)
+            flip[d[~real], b[~real]] = False
+            E[i, d[real], b[real]] = where[real]
+            E[i] = np.maximum.accumulate(E[i], axis=-1)
+            found.append((np.full(int(real.sum()), i), d[real], where[real]))
+        S[i] = S[i, :, :1] * np.cumprod(np.where(flip, -1.0, 1.0), axis=-1)
+    return Branch(S, _joined(found))
+
+
+def _joined(found: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lists of (steps, designs, inputs) arrays joined into three arrays."""
+    if not found:
+        return np.zeros(0, int), np.zeros(0, int), np.zeros(0)
+    s, d, x = (np.concatenate(z) for z in zip(*found, strict=True))
+    return s, d, x
+
+
+def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], continuous: bool = True) -> Branch:
+    """The signs at requested inputs ``q`` (n_drivers, D or 1, n), following the branch from each design's pose.
+
+    The path runs along the driver that moves most, from the pose's input (its value as read
+    off the pose, unwrapped: an angle of 400 deg is a turn and 40 deg further than 0) up to
+    the largest requested input and down to the smallest, through every requested input and
+    the multiples of ``WALK_STEP`` (of 1/360 of the span for a length) in between, so the
+    signs at an input do not depend on which other inputs are asked.  The other drivers
+    move along it as they do between the requested samples.  ``points`` are in the path
+    driver's input.
+    """
+    D, n = params.n_designs, q.shape[-1]
+    x0 = params.pose_inputs  # (n_drivers, D)
+    span = np.ptp(np.concatenate([q.reshape(q.shape[0], -1), x0], axis=1), axis=1)
+    d = int(np.argmax(span))
+    if span[d] == 0 or params.plan.n_signs == 0:
+        return Branch(np.repeat(params.signs[:, :, None], n, axis=2), _joined([]), d)
+    step = WALK_STEP if d < len(angular) and angular[d] else float(span[d]) / 360.0
+    x = q[d, 0]
+    lo, hi = min(x.min(), x0[d].min()), max(x.max(), x0[d].max())
+    grid = np.arange(np.floor(lo / step), np.ceil(hi / step) + 1) * step
+    u = np.unique(np.concatenate([x, grid[(grid > lo) & (grid < hi)]]))
+    srt = np.argsort(x, kind="stable")
+    signs = np.empty((params.plan.n_signs, D, n))
+    points: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for way in (1.0, -1.0):
+        uu = u if way > 0 else u[::-1]
+        tpath = np.concatenate([x0[d][:, None], np.where(way * uu >= way * x0[d][:, None], uu, x0[d][:, None])], axis=1)
+        qp = np.empty((q.shape[0], D, len(uu) + 1))
+        for k in range(q.shape[0]):  # the other drivers: held, or moved as between the requested samples
+            held = np.ptp(q[k], axis=-1).max() == 0
+            qp[k] = q[k][:, :1] if held else np.interp(tpath, x[srt], q[k, 0][srt])
+            qp[k][:, 0] = x0[k]
+        qp[d] = tpath
+        br = follow(params, qp, way * tpath, max_gap=MAX_GAP_STEPS * step, continuous=continuous)
+        pos = 1 + np.searchsorted(u, x) if way > 0 else len(u) - np.searchsorted(u, x)
+        mine = (way * x[None, :] >= way * x0[d][:, None]) if way > 0 else (x[None, :] < x0[d][:, None])
+        signs[...] = np.where(mine[None], br.signs[:, :, pos], signs)
+        s, dd, where = br.points
+        points.append((s, dd, way * where))
+    s, dd, where = _joined(points)
+    order = np.lexsort((s, where, dd))
+    return Branch(signs, (s[order], dd[order], where[order]), d)
