@@ -387,6 +387,7 @@ def solve_request(req: Request) -> Result:
             sg, continuous = cut(req.signs), req.branch == "continuous"
             if continuous:
                 sg = along_sweep(p, cut(req.q), tuple(d.type.cyclic for d in req.mech.drivers)).signs  # type: ignore[arg-type]
+                assert out.signs is not None
                 out.signs[:, sl] = sg
             pos = solve(p, cut(req.q), sg, cut(req.mirrors), out=out.z[:, sl], continuous=continuous)  # type: ignore[arg-type]
             if out.v is not None and out.a is not None:
@@ -436,28 +437,21 @@ def analyze(
         assembly mode off its own pose, exactly as a file without ``lengths`` would; masses,
         inertias, loads and slider directions are the mechanism's (centres of gravity and
         load points keep their place relative to each link's first two joints).
-    rates : bool
-        False: positions only (faster, smaller).
-    dynamics : bool
-        False: no forces even when the mechanism has masses or loads.
+    rates, dynamics : bool
+        False: positions only (faster, smaller); no forces even when the mechanism has masses or loads.
     method : {"natural", "vector-loop", "numerical"}
         ``"natural"`` (default): successive triangulation in natural coordinates, with
         numerical groups only where no closed-form step applies.
         ``"vector-loop"``: the independent link-angle formulation of seeds 003/001
         (:mod:`linkagekit.vectorloop`), four-bars and Stephenson six-bars, one design.
         ``"numerical"``: numerical groups (Newton, continued from the pose) wherever they
-        apply, even where circle-circle steps could place the joints: a cross-check; the
-        assembly mode is the pose's.
+        apply, even where circle-circle steps could: a cross-check.
     static : bool
         Zero speed and acceleration for every driver: the forces are then the static ones
         that balance gravity and the loads (not to be combined with ``speed``/``acceleration``).
     branch : {"pose", "continuous"}
-        ``"pose"`` (default): every sign step keeps the reference pose's sign at every input.
-        ``"continuous"``: the branch is followed through change points (where two assembly
-        modes meet, as a parallelogram's flat position), along the inputs from the pose's
-        input up to the largest and down to the smallest (unwrapped: 400 deg is 40 deg past
-        a full turn); ``Result.signs`` then holds the sign per sample.  Numerical groups
-        follow their branch too.  Not with ``signs`` or ``method="vector-loop"``.
+        ``"pose"`` (default): the pose's signs at every input; ``"continuous"``: followed through
+        change points from the pose's input (:mod:`linkagekit.branch`), ``Result.signs`` per sample.
 
     Returns
     -------
@@ -501,7 +495,9 @@ def analyze_chunks(
 class _Outputs:
     """The arrays of a Result over (designs, samples), allocated once and filled chunk by chunk."""
 
-    def __init__(self, mech: Mechanism, plan: Plan, D: int, n: int, rates: bool, per_sample_signs: bool = False) -> None:
+    def __init__(
+        self, mech: Mechanism, plan: Plan, D: int, n: int, rates: bool, per_sample_signs: bool = False
+    ) -> None:
         J = len(plan.joint_names)
         self.signs = np.empty((plan.n_signs, D, n)) if per_sample_signs else None  # the continuous branch's
         self.mech = mech

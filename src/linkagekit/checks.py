@@ -1541,7 +1541,9 @@ def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text) -> list[st
         return []
     at = ", ".join(f"{cp['joint']} at {fmt.inp(cp['driver'], cp['input'])}" for cp in cps[:MAX_TEXT_DEAD_POINTS])
     more = f" and {len(cps) - MAX_TEXT_DEAD_POINTS} more" if len(cps) > MAX_TEXT_DEAD_POINTS else ""
-    return [f"Change points crossed along the sweep (analyze --branch continuous goes on smoothly through them): {at}{more}"]
+    return [
+        f"Change points crossed along the sweep (analyze --branch continuous goes on smoothly through them): {at}{more}"
+    ]
 
 
 def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:

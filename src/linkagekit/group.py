@@ -179,7 +179,8 @@ class _Walk:
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
-        return (sg == self.ref[designs]) | self.any_sign
+        ok: np.ndarray = (sg == self.ref[designs]) | self.any_sign
+        return ok
 
 
 @dataclass(frozen=True)
@@ -441,7 +442,14 @@ class Group(Step):
         ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
         ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
         w = _Walk(
-            K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, _size(dn), self._arrays(dn, D), (lo, hi, mg),
+            K_all,
+            ok,
+            np.full((m, D, n), NAN_POINT),
+            ref_sign,
+            nums,
+            _size(dn),
+            self._arrays(dn, D),
+            (lo, hi, mg),
             k.continuous,
         )
         for half in _walks(k, D, n, self.angular):
@@ -684,7 +692,9 @@ class Group(Step):
             if len(can):
                 a = act[can]
                 Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
-                ok[can] = conv & w.sign_ok(sg, designs[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
+                ok[can] = (
+                    conv & w.sign_ok(sg, designs[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
+                )
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]
