@@ -33,10 +33,11 @@ def parallelogram(ground=4.0, crank=1.0, at=60.0):
     return lk.Mechanism.from_dict(fourbar_dict(A, B, C, D, C + 0.5 + 0.7j))
 
 
-def double_parallelogram(at=50.0):
-    A1, A2, A3 = 0j, 3 + 0j, 5 + 0j
+def double_parallelogram(at=50.0, spans=(3.0, 2.0)):
+    """Three parallel cranks of 1 on a line, two couplers; spans (1, 1): the IFToMM double four-bar (five 1 m bars)."""
+    A1, A2, A3 = 0j, complex(spans[0]), complex(sum(spans))
     C1 = np.exp(1j * np.radians(at))
-    pts = dict(A1=A1, A2=A2, A3=A3, C1=C1, C2=C1 + 3, C3=C1 + 5)
+    pts = dict(A1=A1, A2=A2, A3=A3, C1=C1, C2=C1 + A2, C3=C1 + A3)
     return lk.Mechanism.from_dict(
         {
             "format": "linkagekit/1",
@@ -113,10 +114,13 @@ def test_four_bar_parallelograms_stay_parallelograms(name, mech):
     assert s.shape == DEG.shape and set(np.unique(s)) == {-1, 1}
 
 
-def test_double_parallelogram_stays_parallel():
-    mech = double_parallelogram()
+@pytest.mark.parametrize("spans", [(3.0, 2.0), (1.0, 1.0)])
+def test_double_parallelogram_stays_parallel(spans):
+    mech = double_parallelogram(90.0 if spans == (1.0, 1.0) else 50.0, spans)
     res = lk.analyze(mech, DEG, speed=1.0, branch="continuous")
-    assert res.assembled.all()
+    # the double rhombus's first crank lies on the ground at 0, 360, 720 deg: C1 on A2, C2 on A3 (undefined)
+    expect = np.isin(DEG, [0.0, 360.0, 720.0]) if spans == (1.0, 1.0) else np.zeros(len(DEG), bool)
+    assert np.array_equal(~res.assembled, expect)
     # exactly at a flat position the second dyad's circles touch and the rounding of its discriminant
     # (1e-16) becomes sqrt(1e-16) in its position, in either mode (the default there is the same number)
     flat = DEG % 180 == 0
@@ -182,3 +186,18 @@ def test_bad_branch_in_python():
         lk.analyze(parallelogram(), [0.0], branch="smooth")
     with pytest.raises(lk.LinkageError, match="branch"):
         lk.analyze(parallelogram(), [0.0], branch="continuous", signs={"D": 1})
+
+
+def test_batch_follows_each_designs_branch():
+    one = parallelogram()
+    pose = np.array([[one.joints[j].real, one.joints[j].imag] for j in one.joint_names])
+    bent = pose.copy()
+    bent[one.joint_names.index("D")] += [0.3, 0.2]  # no parallelogram: no change point
+    poses = np.stack([pose, 2.0 * pose, bent])
+    res = lk.analyze(one, DEG, poses=poses, branch="continuous", rates=False)
+    for k, p in enumerate(poses):
+        single = lk.Mechanism.from_dict(one.to_dict() | {"joints": dict(zip(one.joint_names, p.tolist(), strict=True))})
+        alone = lk.analyze(single, DEG, branch="continuous", rates=False)
+        assert np.array_equal(res.xy("D")[k], alone.xy("D"), equal_nan=True)
+        assert np.array_equal(res.signs["D"][k], alone.signs["D"])
+    assert len(set(res.signs["D"][0])) == 2 and len(set(res.signs["D"][2])) == 1

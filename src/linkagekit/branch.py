@@ -29,7 +29,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -40,8 +40,10 @@ from .steps import Pivot, Step, is_sign_step
 
 #: a flip is taken only where the smooth candidate's trapezoid defect is below this share of the kept one's
 RHO = 0.125
-#: the step's relative assembly margin must come within this of zero between the two samples (a real meeting)
-CHANGE_TOL = 1e-9
+#: the step's relative assembly margin must come within this of zero between the two samples (a real meeting);
+#: a meeting is resolved to about the square root of rounding (1e-8), and worse after an earlier one
+#: (a double rhombus's second dyad, placed from a joint found from coincident circles, gets to 1e-8)
+CHANGE_TOL = 1e-6
 #: golden-section iterations locating the meeting (the interval shrinks by 0.618 each: 1 degree to 1e-12 rad)
 GOLDEN_ITERATIONS = 48
 #: consecutive good samples further apart than this many grid steps are never bridged (a gap in the range)
@@ -112,15 +114,19 @@ def _candidates(
         Si[i] = sigma
         pos = solve(params, q, Si, continuous=continuous)
         rt = solve_rates(params, pos, w_in, np.zeros_like(w_in))
-        X, V = _state(params.plan.steps[_sign_steps(params)[i]], pos, rt, i)
+        X, V = _state(params.plan.steps[-1], pos, rt, i)
         out.append((X, V, pos.margin[i]))
     return out
 
 
-def _sign_steps(params: Params) -> list[int]:
-    """The plan indices of the sign steps, in the order of their sign slots."""
-    idx = [k for k, st in enumerate(params.plan.steps) if is_sign_step(st)]
-    return sorted(idx, key=lambda k: params.plan.steps[k].sign)  # type: ignore[attr-defined]
+def _upto(params: Params, i: int) -> Params:
+    """``params`` with the plan cut after sign step ``i``: what it places does not depend on the later steps.
+
+    (A later step that does not assemble, or is singular, would make the whole sample NaN.)
+    """
+    k = [n for n, st in enumerate(params.plan.steps) if is_sign_step(st)][i]
+    plan = replace(params.plan, steps=params.plan.steps[: k + 1])
+    return replace(params, plan=plan, steps=params.steps[: k + 1])
 
 
 def _smooth_flips(cands: list[Candidate], t: np.ndarray, max_gap: float) -> tuple[np.ndarray, np.ndarray]:
@@ -262,11 +268,12 @@ def follow(
     w_in = np.concatenate([slope[..., :1], slope], axis=-1)  # dq/dt at each sample (from the interval before)
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for i in range(plan.n_signs):
-        cands = _candidates(params, q, S, i, w_in, continuous)
+        sub = _upto(params, i)
+        cands = _candidates(sub, q, S, i, w_in, continuous)
         flip, prev = _smooth_flips(cands, t, max_gap)
         if flip.any():
             d, b = np.nonzero(flip)
-            real, where = _meetings(params, q, t, S, E, i, np.array([d, prev[d, b], b]), continuous)
+            real, where = _meetings(sub, q, t, S, E, i, np.array([d, prev[d, b], b]), continuous)
             flip[d[~real], b[~real]] = False
             E[i, d[real], b[real]] = where[real]
             E[i] = np.maximum.accumulate(E[i], axis=-1)
