@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from helpers import fourbar_dict, xy
+from helpers import by_cosines, fourbar_dict, xy
+from linkagekit.api import prepare
+from linkagekit.checks import change_points_crossed
 from linkagekit.cli import main
 
 DEG = np.arange(0.0, 721.0, 1.0)
@@ -201,3 +203,39 @@ def test_batch_follows_each_designs_branch():
         assert np.array_equal(res.xy("D")[k], alone.xy("D"), equal_nan=True)
         assert np.array_equal(res.signs["D"][k], alone.signs["D"])
     assert len(set(res.signs["D"][0])) == 2 and len(set(res.signs["D"][2])) == 1
+
+
+@pytest.mark.parametrize("rocker", [1.001, 0.999, 1 + 1e-7, 1 - 1e-7])
+def test_near_parallelograms_keep_the_default(rocker):
+    """Two modes that come near but do not meet (or lock just short of meeting): no change point, the default."""
+    A, B, C = 0j, 4 + 0j, np.exp(1j * np.radians(60))
+    D = complex(by_cosines(C, B, 4.0, rocker, 1))
+    mech = lk.Mechanism.from_dict(fourbar_dict(A, B, C, D, C + 0.5 + 0.7j))
+    a, b = lk.analyze(mech, DEG, branch="continuous"), lk.analyze(mech, DEG)
+    assert all(np.array_equal(a.xy(j), b.xy(j), equal_nan=True) for j in mech.joint_names)
+    assert lk.check(mech)["change_points"] == []
+
+
+def test_isosceles_slider_crank_goes_through_its_pivot():
+    """Crank = rod = 1, no offset: the block is at 2 cos(theta) on one branch and at the pivot on the other.
+
+    The circle about A (radius 1) and the slider's line touch where A is at (0, +-1): theta = 90 and 270 deg.
+    """
+    th = np.radians(40.0)
+    a = np.exp(1j * th)
+    mech = lk.Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "joints": {"O": [0, 0], "A": [a.real, a.imag], "B": [2 * np.cos(th), 0]},
+            "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B"]},
+            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        }
+    )
+    res = lk.analyze(mech, DEG, branch="continuous")
+    assert np.max(np.abs(res.xy("B")[:, 0] - 2 * np.cos(np.radians(DEG)))) < 1e-12
+    default = lk.analyze(mech, DEG)
+    assert np.max(np.abs(default.xy("B")[:, 0] - 2 * np.cos(np.radians(DEG)))) > 1.0
+    got = change_points_crossed(mech, prepare(mech))  # what check lists (check's other parts take a second here)
+    assert [cp["joint"] for cp in got] == ["B", "B"]
+    assert [cp["input"] for cp in got] == pytest.approx([90.0, 270.0], abs=1e-6)

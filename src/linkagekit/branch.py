@@ -34,11 +34,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .params import Params
-from .positions import WALK_STEP, solve
+from .positions import WALK_STEP, Positions, solve
 from .rates import solve_rates
 from .steps import Pivot, Step, is_sign_step
 
-#: a flip is taken only where the smooth candidate's trapezoid defect is below this share of the kept one's
+#: at a meeting, a flip is taken only where the flipped sign's defect (:func:`_defect`) is below
+#: this share of the kept one's
 RHO = 0.125
 #: the step's relative assembly margin must come within this of zero between the two samples (a real meeting);
 #: a meeting is resolved to about the square root of rounding (1e-8), and worse after an earlier one
@@ -93,11 +94,12 @@ def _previous_good(good: np.ndarray) -> np.ndarray:
 
 
 def _defect(Xa: np.ndarray, Va: np.ndarray, Xb: np.ndarray, Vb: np.ndarray, dt: np.ndarray) -> np.ndarray:
-    """The trapezoid rule's defect ``max |X_b - X_a - (V_a + V_b) dt / 2|`` over the step's points.
+    """How far the motion from ``a`` to ``b`` is from smooth: ``max |X_b - X_a - V_a dt| + max |V_b - V_a| |dt|``.
 
-    O(dt^3) on a smooth motion; O(dt |jump of V|) across a kink.
+    ``O(dt^2)`` (times the acceleration) on a smooth motion; at least ``|jump of V| |dt|``
+    across a kink anywhere between (and the jump itself where the position jumps).
     """
-    d: np.ndarray = np.max(np.abs(Xb - Xa - 0.5 * (Va + Vb) * dt), axis=0)
+    d: np.ndarray = np.max(np.abs(Xb - Xa - Va * dt), axis=0) + np.max(np.abs(Vb - Va), axis=0) * np.abs(dt)
     return d
 
 
@@ -151,7 +153,7 @@ def _smooth_flips(cands: list[Candidate], t: np.ndarray, max_gap: float) -> tupl
     scale = np.max(np.abs(at(Vp)) + np.abs(Vp), axis=0) * np.abs(dt)
     real = np.minimum(keep_p, keep_m) > 1e-9 * scale
     flip = good & (prev >= 0) & (np.abs(dt) <= max_gap) & real
-    flip &= (flip_p < RHO * keep_p) & (flip_m < RHO * keep_m)
+    flip &= (flip_p < keep_p) & (flip_m < keep_m)  # a candidate: the meeting itself decides (_meetings)
     return flip, prev
 
 
@@ -165,50 +167,86 @@ def _signs_between(
     return np.where(tt >= E[:, d, b], S[:, d, b], S[:, d, a])
 
 
-def _meetings(
-    params: Params,
-    q: np.ndarray,
-    t: np.ndarray,
-    S: np.ndarray,
-    E: np.ndarray,
-    i: int,
-    cand: np.ndarray,
-    continuous: bool,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Whether step ``i``'s two modes really meet between each candidate's samples, and where (path parameter).
+@dataclass(frozen=True)
+class _Between:
+    """Step ``i`` between samples ``a`` and ``b`` of designs ``d`` (one column per candidate): solved anywhere there."""
 
-    ``cand`` (3, C): design, sample a, sample b.  The step's assembly margin is minimised over
-    ``[t_a, t_b]`` by golden section (each iteration one solve of all candidates, with the
-    signs of the earlier steps as they hold there); a meeting is a minimum within
-    ``CHANGE_TOL`` of zero (a gap, where it is negative beyond that, or a near miss, is none).
-    """
-    d, a, b = cand
-    ta, tb = t[np.minimum(d, t.shape[0] - 1), a], t[np.minimum(d, t.shape[0] - 1), b]
-    sub = params.take(d)
-    qd = np.broadcast_to(q, (q.shape[0], S.shape[1], q.shape[-1]))
+    params: Params  # one design per candidate
+    q: np.ndarray  # (n_drivers, D, n)
+    S: np.ndarray  # (n_signs, D, n) the signs so far
+    E: np.ndarray  # (n_signs, D, n) where each step's last flip was (path parameter, forward-filled)
+    i: int
+    d: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    ta: np.ndarray
+    tb: np.ndarray
+    continuous: bool
 
-    def margin(tt: np.ndarray) -> np.ndarray:
-        f = np.where(tb > ta, (tt - ta) / np.where(tb > ta, tb - ta, 1.0), 0.0)
-        qq = (1 - f) * qd[:, d, a] + f * qd[:, d, b]
-        sg = _signs_between(S, E, d, a, b, tt)
-        m = solve(sub, qq[:, :, None], sg[:, :, None], continuous=continuous).margin[i, :, 0]
+    def _solve(self, tt: np.ndarray, own: np.ndarray | None = None) -> tuple[Positions, np.ndarray]:
+        """Positions at path parameter ``tt`` (step ``i`` with sign ``own``, default as at ``a``), and dq/dt."""
+        span = np.where(self.tb > self.ta, self.tb - self.ta, 1.0)
+        f = np.where(self.tb > self.ta, (tt - self.ta) / span, 0.0)
+        qa, qb = self.q[:, self.d, self.a], self.q[:, self.d, self.b]
+        sg = np.where(tt >= self.E[:, self.d, self.b], self.S[:, self.d, self.b], self.S[:, self.d, self.a])
+        if own is not None:
+            sg[self.i] = own
+        pos = solve(self.params, ((1 - f) * qa + f * qb)[:, :, None], sg[:, :, None], continuous=self.continuous)
+        return pos, ((qb - qa) / span)[:, :, None]
+
+    def margin(self, tt: np.ndarray) -> np.ndarray:
+        """Step ``i``'s relative assembly margin at ``tt`` (inf where an earlier step fails)."""
+        m = self._solve(tt)[0].margin[self.i, :, 0]
         return np.where(np.isfinite(m), m, np.inf)
 
+    def state(self, tt: np.ndarray, own: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Step ``i``'s points and their rates d/dt at ``tt``, (m, C) each."""
+        pos, w = self._solve(tt, own)
+        rt = solve_rates(self.params, pos, w, np.zeros_like(w))
+        X, V = _state(self.params.plan.steps[-1], pos, rt, self.i)
+        return X[..., 0], V[..., 0]
+
+
+def _golden(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The minimum of ``f`` on ``[lo, hi]`` (each column its own interval) by golden section: (where, value)."""
     g = (np.sqrt(5.0) - 1) / 2
-    lo, hi = ta.copy(), tb.copy()
+    lo, hi = lo.copy(), hi.copy()
     x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
-    f1, f2 = margin(x1), margin(x2)
+    f1, f2 = f(x1), f(x2)
     for _ in range(GOLDEN_ITERATIONS):
         left = f1 <= f2
         hi = np.where(left, x2, hi)
         lo = np.where(left, lo, x1)
         x2n = np.where(left, x1, lo + g * (hi - lo))
         x1n = np.where(left, hi - g * (hi - lo), x2)
-        fnew = margin(np.where(left, x1n, x2n))
+        fnew = f(np.where(left, x1n, x2n))
         f1, f2 = np.where(left, fnew, f2), np.where(left, f1, fnew)
         x1, x2 = x1n, x2n
-    best, low = np.where(f1 <= f2, x1, x2), np.minimum(f1, f2)
-    return np.abs(low) <= CHANGE_TOL, _vertex(margin, best, low, 1e-3 * (tb - ta))
+    return np.where(f1 <= f2, x1, x2), np.minimum(f1, f2)
+
+
+def _meetings(btw: _Between, probe: float) -> tuple[np.ndarray, np.ndarray]:
+    """Whether step ``i``'s sign flips between each candidate's samples, and where (path parameter).
+
+    The step's assembly margin is minimised over ``[t_a, t_b]`` (golden section, then a
+    parabola's vertex); the two modes meet where it comes within ``CHANGE_TOL`` of zero (a
+    gap deeper than that, or a near miss, is no meeting).  At a meeting the sign flips when,
+    ``probe`` before and after it, the flipped sign continues the motion smoothly and the kept
+    one does not (the test of :func:`_defect`, now at the meeting itself, so
+    that it does not depend on where the samples fall).
+    """
+    best, low = _golden(btw.margin, btw.ta, btw.tb)
+    where = _vertex(btw.margin, best, low, 1e-3 * (btw.tb - btw.ta))
+    h = np.minimum(probe, 0.5 * np.minimum(where - btw.ta, btw.tb - where))
+    one = np.ones_like(where)
+    before = [btw.state(where - h, sigma * one) for sigma in (1.0, -1.0)]
+    after = [btw.state(where + h, sigma * one) for sigma in (1.0, -1.0)]
+    smooth = np.ones(len(where), bool)
+    for k in (0, 1):  # from either sign (the sign at a may already have flipped earlier along the path)
+        keep = _defect(*before[k], *after[k], 2 * h)
+        flip = _defect(*before[k], *after[1 - k], 2 * h)
+        smooth &= np.isfinite(flip) & (flip < RHO * np.where(np.isfinite(keep), keep, np.inf))
+    return (np.abs(low) <= CHANGE_TOL) & smooth, where
 
 
 def _vertex(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, fx: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -233,6 +271,7 @@ def follow(
     start: np.ndarray | None = None,
     max_gap: float = np.inf,
     continuous: bool = True,
+    probe: float = 1e-5,
 ) -> Branch:
     """The signs along a path given in order, each sign flipped where its step crosses a change point.
 
@@ -249,6 +288,8 @@ def follow(
         Two good samples further apart in ``t`` are not bridged (the motion cannot pass a gap).
     continuous : bool
         Numerical groups, too, follow their branch (:mod:`linkagekit.group`).
+    probe : float
+        How far before and after a meeting (in ``t``) the motion is compared on both signs.
 
     Returns
     -------
@@ -261,6 +302,7 @@ def follow(
     S[...] = (params.signs if start is None else np.asarray(start, float))[:, :, None]
     E = np.full(S.shape, -np.inf)
     t = np.broadcast_to(np.asarray(t, float), (D, n))
+    q_all = np.broadcast_to(q, (q.shape[0], D, n))
     dq = np.diff(q, axis=-1)
     dt = np.diff(t, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -273,7 +315,9 @@ def follow(
         flip, prev = _smooth_flips(cands, t, max_gap)
         if flip.any():
             d, b = np.nonzero(flip)
-            real, where = _meetings(sub, q, t, S, E, i, np.array([d, prev[d, b], b]), continuous)
+            a = prev[d, b]
+            btw = _Between(sub.take(d), q_all, S, E, i, d, a, b, t[d, a], t[d, b], continuous)
+            real, where = _meetings(btw, probe)
             flip[d[~real], b[~real]] = False
             E[i, d[real], b[real]] = where[real]
             E[i] = np.maximum.accumulate(E[i], axis=-1)
@@ -324,7 +368,7 @@ def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], contin
             qp[k] = q[k][:, :1] if held else np.interp(tpath, x[srt], q[k, 0][srt])
             qp[k][:, 0] = x0[k]
         qp[d] = tpath
-        br = follow(params, qp, way * tpath, max_gap=MAX_GAP_STEPS * step, continuous=continuous)
+        br = follow(params, qp, way * tpath, max_gap=MAX_GAP_STEPS * step, continuous=continuous, probe=1e-3 * step)
         pos = 1 + np.searchsorted(u, x) if way > 0 else len(u) - np.searchsorted(u, x)
         mine = (way * x[None, :] >= way * x0[d][:, None]) if way > 0 else (x[None, :] < x0[d][:, None])
         signs[...] = np.where(mine[None], br.signs[:, :, pos], signs)
