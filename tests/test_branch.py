@@ -239,3 +239,24 @@ def test_isosceles_slider_crank_goes_through_its_pivot():
     got = change_points_crossed(mech, prepare(mech))  # what check lists (check's other parts take a second here)
     assert [cp["joint"] for cp in got] == ["B", "B"]
     assert [cp["input"] for cp in got] == pytest.approx([90.0, 270.0], abs=1e-6)
+
+
+def test_follow_step_by_step_as_a_simulation_would():
+    """A simulation calls follow with its last sample and the next, carrying the signs: the same signs as a sweep."""
+    from linkagekit.branch import along_sweep, follow
+
+    params = prepare(double_parallelogram(90.0, (1.0, 1.0)))  # the IFToMM double four-bar: five 1 m bars
+    rng = np.random.default_rng(7)
+    q = np.radians(90.0) + np.cumsum(np.r_[0.0, rng.uniform(0.001, 0.12, 200)])  # uneven steps, about 2 turns
+    signs, crossed = [params.signs[:, 0]], 0
+    for k in range(len(q) - 1):
+        br = follow(params, q[None, None, k : k + 2], q[None, k : k + 2], start=signs[-1][:, None])
+        signs.append(br.signs[:, 0, 1])
+        crossed += len(br.points[0])
+    stepwise = np.array(signs).T
+    sweep = along_sweep(params, q[None, None], (True,)).signs[:, 0]
+    ok = np.abs(np.sin(q)) > 1e-6  # samples on a change point carry either sign
+    assert np.array_equal(stepwise[:, ok], sweep[:, ok])
+    # a change point every half turn (crank along the ground: 180, 360, ... deg), for both dyads
+    half_turns = int(np.floor(q[-1] / np.pi))
+    assert half_turns >= 3 and crossed == 2 * half_turns
