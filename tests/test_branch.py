@@ -260,3 +260,18 @@ def test_follow_step_by_step_as_a_simulation_would():
     # a change point every half turn (crank along the ground: 180, 360, ... deg), for both dyads
     half_turns = int(np.floor(q[-1] / np.pi))
     assert half_turns >= 3 and crossed == 2 * half_turns
+
+
+def test_batch_in_blocks_and_a_path_too_long(monkeypatch):
+    import linkagekit.branch as branch
+
+    mech = parallelogram()
+    pose = np.array([[mech.joints[j].real, mech.joints[j].imag] for j in mech.joint_names])
+    poses = np.stack([pose * (1 + 0.1 * k) for k in range(5)])
+    whole = lk.analyze(mech, DEG, poses=poses, branch="continuous", rates=False)
+    monkeypatch.setattr(branch, "BLOCK", 3000)  # two designs' paths per block
+    blocks = lk.analyze(mech, DEG, poses=poses, branch="continuous", rates=False)
+    assert np.array_equal(whole.xy("D"), blocks.xy("D"), equal_nan=True)
+    assert np.array_equal(whole.signs["D"], blocks.signs["D"])
+    with pytest.raises(lk.LinkageError, match="MAX_PATH"):
+        lk.analyze(mech, [0.0, 1e6], branch="continuous")

@@ -33,6 +33,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .errors import InputError
 from .params import Params
 from .positions import WALK_STEP, Positions, solve
 from .rates import solve_rates
@@ -49,6 +50,11 @@ CHANGE_TOL = 1e-6
 GOLDEN_ITERATIONS = 48
 #: consecutive good samples further apart than this many grid steps are never bridged (a gap in the range)
 MAX_GAP_STEPS = 3.0
+
+#: the longest path one call follows (samples per design: about 550 turns at 1 degree)
+MAX_PATH = 200_000
+#: design-samples of path solved at once (bounds the working memory of a batch)
+BLOCK = 1 << 18
 
 BRANCHES = ("pose", "continuous")
 
@@ -343,7 +349,8 @@ def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], contin
     the multiples of ``WALK_STEP`` (of 1/360 of the span for a length) in between, so the
     signs at an input do not depend on which other inputs are asked.  The other drivers
     move along it as they do between the requested samples.  ``points`` are in the path
-    driver's input.
+    driver's input.  Designs go through in blocks of about ``BLOCK`` design-samples of path;
+    a path longer than ``MAX_PATH`` samples is refused.
     """
     D, n = params.n_designs, q.shape[-1]
     x0 = params.pose_inputs  # (n_drivers, D)
@@ -354,8 +361,28 @@ def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], contin
     step = WALK_STEP if d < len(angular) and angular[d] else float(span[d]) / 360.0
     x = q[d, 0]
     lo, hi = min(x.min(), x0[d].min()), max(x.max(), x0[d].max())
+    if (hi - lo) / step > MAX_PATH:
+        raise InputError(
+            f"branch 'continuous': the inputs and the pose's input span {(hi - lo) / step:.0f} steps of the path "
+            f"it follows, more than linkagekit.branch.MAX_PATH ({MAX_PATH}); ask for a smaller span"
+        )
     grid = np.arange(np.floor(lo / step), np.ceil(hi / step) + 1) * step
     u = np.unique(np.concatenate([x, grid[(grid > lo) & (grid < hi)]]))
+    per = max(1, BLOCK // (2 * len(u) + 2))
+    parts = []
+    for start in range(0, D, per):  # blocks of designs: the path is longer than the samples asked
+        sl = slice(start, min(start + per, D))
+        parts.append(_along(params.take(sl), q[:, sl] if q.shape[1] > 1 else q, d, u, step, continuous))
+    signs = np.concatenate([p.signs for p in parts], axis=1)
+    found = [(p.points[0], p.points[1] + k * per, p.points[2]) for k, p in enumerate(parts)]
+    return Branch(signs, _joined(found), d)
+
+
+def _along(params: Params, q: np.ndarray, d: int, u: np.ndarray, step: float, continuous: bool) -> Branch:
+    """:func:`along_sweep` for one block of designs, the path's values ``u`` (ascending) given."""
+    D, n = params.n_designs, q.shape[-1]
+    x0 = params.pose_inputs
+    x = q[d, 0]
     srt = np.argsort(x, kind="stable")
     signs = np.empty((params.plan.n_signs, D, n))
     points: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
