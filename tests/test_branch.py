@@ -275,3 +275,16 @@ def test_batch_in_blocks_and_a_path_too_long(monkeypatch):
     assert np.array_equal(whole.signs["D"], blocks.signs["D"])
     with pytest.raises(lk.LinkageError, match="MAX_PATH"):
         lk.analyze(mech, [0.0, 1e6], branch="continuous")
+
+
+def test_numerical_groups_follow_the_double_rhombus():
+    """IFToMM's double four-bar solved by Newton groups: a smooth change of the determinant's sign is accepted."""
+    mech = double_parallelogram(90.0, (1.0, 1.0))
+    deg = np.arange(-30.0, 400.0, 2.0)
+    res = lk.analyze(mech, deg, method="numerical", branch="continuous", rates=False)
+    assert res.assembled.all()
+    far = np.abs(((deg + 90) % 180) - 90) > 1  # Newton is slow at the flat positions themselves
+    c1, c2, c3 = (z(res, n) for n in ("C1", "C2", "C3"))
+    assert np.max(np.maximum(np.abs((c2 - c1).imag), np.abs((c3 - c2).imag))[far]) < 1e-10
+    default = lk.analyze(mech, deg, method="numerical", rates=False)
+    assert np.nanmax(np.abs((z(default, "C2") - z(default, "C1")).imag)) > 0.5
