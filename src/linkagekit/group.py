@@ -242,6 +242,12 @@ class _Walk:
     size: FloatArray  # (D,) the group's mean link length
     arrays: _Arrays  # the numbers per design as Newton reads them
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
+    any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
+
+    def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
+        """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
+        ok: np.ndarray = (sg == self.ref[designs]) | self.any_sign
+        return ok
 
 
 @dataclass(frozen=True)
@@ -610,7 +616,15 @@ class Group(Step):
         ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
         ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
         w = _Walk(
-            K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, _size(dn), self._arrays(dn, D), (lo, hi, mg)
+            K_all,
+            ok,
+            np.full((m, D, n), NAN_POINT),
+            ref_sign,
+            nums,
+            _size(dn),
+            self._arrays(dn, D),
+            (lo, hi, mg),
+            k.continuous,
         )
         for half in _walks(k, D, n, self.angular):
             state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
@@ -682,7 +696,7 @@ class Group(Step):
         guess = 2 * U - U_prev  # linear predictor along the walk
         guess = np.where(np.isfinite(guess), guess, U)
         U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
-        acc = conv & (sg == w.ref[designs]) & np.all(np.isfinite(U_new), axis=0)
+        acc = conv & w.sign_ok(sg, designs) & np.all(np.isfinite(U_new), axis=0)
         acc &= np.max(np.abs(U_new - U), axis=0) <= STEP_LIMIT * w.size[designs]  # small steps: the nearest root
         return U_new, acc
 
@@ -823,7 +837,7 @@ class Group(Step):
             sol, conv, sg = self._newton(g, w.K[:, c, r], w.arrays.take(c))
             # accepted: converged, with the pose's sign, near the interpolation (not another branch)
             near = np.max(np.abs(sol - g), axis=0)
-            good = conv & (sg == w.ref[c]) & np.all(np.isfinite(sol), axis=0) & (near <= bound)
+            good = conv & w.sign_ok(sg, c) & np.all(np.isfinite(sol), axis=0) & (near <= bound)
             w.out[:, c[good], r[good]] = sol[:, good]
             ok[can] = good
         return ok
@@ -835,7 +849,7 @@ class Group(Step):
         is accepted (the tests of a continuation step) doubles the next one, a step that is
         not is halved. A step to knowns a chain rules out fails without Newton.
         """
-        ref, size, ar = w.ref[designs], w.size[designs], w.arrays.take(designs)
+        size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
         Uc, t, dt = U.copy(), np.zeros(B), np.full(B, 0.5)
@@ -852,7 +866,9 @@ class Group(Step):
             if len(can):
                 a = act[can]
                 Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
-                ok[can] = conv & (sg == ref[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
+                ok[can] = (
+                    conv & w.sign_ok(sg, designs[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
+                )
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]

@@ -80,6 +80,7 @@ def solve(
     eps: float = ASSEMBLY_RTOL,
     out: np.ndarray | None = None,
     _dense: bool = False,
+    continuous: bool = False,
 ) -> Positions:
     """Positions of every joint for every design and input sample.
 
@@ -95,21 +96,16 @@ def solve(
         True flips the link of three or more joints of that index; default: none.
     out : ndarray, complex, shape (n_joints, D, n), optional
         Where to write the positions.
+    continuous : bool
+        Numerical groups follow their branch through change points (a sign change of their
+        Jacobian's determinant is accepted where the motion is smooth); the sign steps take
+        ``signs`` as given (:mod:`linkagekit.branch` chooses them).
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
-    if plan.numerical and not _dense:
-        dense = _walk_inputs(params, q)
-        if dense is not None:  # the numerical group walks along the inputs, not across gaps between them
-            qd, keep = dense
-            m = qd.shape[-1]
-            sd, md = _dense_choice(signs, len(keep), m), _dense_choice(mirrors, len(keep), m)
-            full = solve(params, qd, sd, md, eps, _dense=True)
-            got = _take_samples(full, keep)
-            if out is not None:
-                out[...] = got.z
-                got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
-            return got
+    dense = _walk_inputs(params, q) if plan.numerical and not _dense else None
+    if dense is not None:  # the numerical group walks along the inputs, not across gaps between them
+        return _solve_dense(params, dense, signs, mirrors, eps, out, continuous)
     sg = params.signs[:, :, None] if signs is None else np.asarray(signs, float)
     mr = np.zeros((plan.n_mirrors, 1, 1), bool) if mirrors is None else np.asarray(mirrors, bool)
     D = params.n_designs
@@ -119,7 +115,7 @@ def solve(
     missing = plan.unwritten
     if missing:  # a joint no step writes is NaN, never uninitialised memory
         z[list(missing)] = NAN_POINT
-    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs)
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -236,6 +232,26 @@ def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     rows = [extra if i == d else np.interp(extra, x[srt], key[i][srt]) for i in range(q.shape[0])]
     dense = np.concatenate([q[:, 0, :], np.array(rows)], axis=1)[:, None, :]
     return dense, np.arange(n)
+
+
+def _solve_dense(
+    params: Params,
+    dense: tuple[np.ndarray, np.ndarray],
+    signs: np.ndarray | None,
+    mirrors: np.ndarray | None,
+    eps: float,
+    out: np.ndarray | None,
+    continuous: bool,
+) -> Positions:
+    """:func:`solve` at the inputs with the walk's samples added (``dense``), the given samples taken back."""
+    qd, keep = dense
+    m = qd.shape[-1]
+    sd, md = _dense_choice(signs, len(keep), m), _dense_choice(mirrors, len(keep), m)
+    got = _take_samples(solve(params, qd, sd, md, eps, _dense=True, continuous=continuous), keep)
+    if out is not None:
+        out[...] = got.z
+        got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
+    return got
 
 
 def _dense_choice(arr: np.ndarray | None, n: int, n_total: int) -> np.ndarray | None:
