@@ -93,12 +93,12 @@ def test_kinetostatics_of_the_simulated_motion_needs_the_applied_torque():
 
 
 def test_a_crank_with_spring_damper_and_flywheel_follows_the_hand_written_equation():
-    l, r, m, ig, fly, k, L0, c, g = 0.3, 0.15, 2.0, 0.02, 0.01, 200.0, 0.2, 0.5, 9.81
+    arm, r, m, ig, fly, k, L0, c, g = 0.3, 0.15, 2.0, 0.02, 0.01, 200.0, 0.2, 0.5, 9.81
     S = np.array([0.0, 0.5])
     doc = {
         "format": "linkagekit/1",
         "units": {"length": "m", "angle": "deg"},
-        "joints": {"O": [0, 0], "A": [l, 0], "S": S.tolist()},
+        "joints": {"O": [0, 0], "A": [arm, 0], "S": S.tolist()},
         "links": {"ground": ["O", "S"], "crank": {"joints": ["O", "A"], "mass": m, "cg": [r, 0], "inertia": ig}},
         "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
         "gravity": [0, -g],
@@ -111,8 +111,8 @@ def test_a_crank_with_spring_damper_and_flywheel_follows_the_hand_written_equati
 
     def rhs(_t, y):
         q, w = y
-        A = l * np.array([math.cos(q), math.sin(q)])
-        dA = l * np.array([-math.sin(q), math.cos(q)])
+        A = arm * np.array([math.cos(q), math.sin(q)])
+        dA = arm * np.array([-math.sin(q), math.cos(q)])
         L = np.linalg.norm(A - S)
         dL = (A - S) @ dA / L
         Q = -m * g * r * math.cos(q) - k * (L - L0) * dL - c * dL * dL * w + 0.7

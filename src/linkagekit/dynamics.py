@@ -415,11 +415,10 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
     if red.period is None:
-        t, y, stopped = _with_events(red, rhs, times, y0)
+        t, y, stop = _with_events(red, rhs, times, y0)
     else:
-        t, y, stopped = times, _dop853(rhs, times, y0), None
-    if stopped is not None:
-        stopped = _toggle_message(md, 0, *stopped)
+        t, y, stop = times, _dop853(rhs, times, y0), None
+    stopped = None if stop is None else _toggle_message(md, 0, *stop)
     q, w = y
     qdd = red.accel(q, w, law(w))
     signs = red.signs(md.params, q) if md.params.plan.n_signs else None
@@ -597,8 +596,8 @@ def _laws(md: _Model, torque: Any, motor: Any) -> tuple[TorqueLaw, ...]:
 
 def _start_speeds(md: _Model, speed: Any) -> np.ndarray:
     sp = _by_driver(md.mech, speed, "speed")
-    out: np.ndarray = np.array([_number(sp.get(d.name, 0.0), f"speed[{d.name}]") for d in md.mech.drivers])
-    return out * md.scale
+    out: np.ndarray = np.array([_number(sp.get(d.name, 0.0), f"speed[{d.name}]") for d in md.mech.drivers]) * md.scale
+    return out
 
 
 # ---------------------------------------------------------------------- simulate
