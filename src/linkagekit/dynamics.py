@@ -55,6 +55,9 @@ RTOL = 1e-12
 ATOL = 1e-12
 #: grid points of the one-driver table (over a turn, or over the assembly range)
 POINTS = 16384
+#: the periodic table starts this share of a grid step before the pose's input (the golden ratio's part: a grid
+#: point never lands exactly on a change point at a rational fraction of a turn from the pose)
+SHIFT = (math.sqrt(5.0) - 1.0) / 2.0
 #: the most output times one simulation gives
 MAX_TIMES = 1_000_000
 
@@ -245,7 +248,7 @@ class Reduced:
         q = np.asarray(q, float)
         if self.period is None:
             return q
-        return self.q0 + np.mod(q - self.q0, self.period)
+        return self.q_range[0] + np.mod(q - self.q_range[0], self.period)
 
     def _rows(self, q: ArrayLike) -> np.ndarray:
         return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
@@ -297,7 +300,9 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
     ranges = input_range(mech, 0)
     full = d.type.cyclic and any(hi - lo >= 2 * math.pi / to_si * (1 - 1e-12) for lo, hi in ranges)
     if full:
-        return x0 + np.linspace(0.0, 2 * math.pi * turns, turns * points + 1), 2 * math.pi * turns
+        n = turns * points
+        h = 2 * math.pi * turns / n  # shifted by an irrational part of a step: no grid point on a change point
+        return x0 - SHIFT * h + h * np.arange(n + 1), 2 * math.pi * turns
     for lo, hi in ranges:
         span = (hi - lo) * to_si
         shift = 0.0
@@ -316,7 +321,7 @@ def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, 
     Y, dY = _table_rows(md, _motion(md, q, signs, np.ones_like(q)))  # unit SI speed: J and J' = dJ/dq
     bad = ~np.all(np.isfinite(Y) & np.isfinite(dY), axis=0)
     if bad.any():
-        delta = 1e-6 * (x[1] - x[0])
+        delta = 0.25 * (x[1] - x[0])  # well off the singular position (the rates solver is NaN within 1e-6 of it)
         one = np.ones((1, int(bad.sum())))
         sides = [_table_rows(md, _motion(md, q[:, bad] + s * delta / md.scale[0], signs[:, bad], one)) for s in (-1, 1)]
         Y[:, bad] = 0.5 * (sides[0][0] + sides[1][0])
@@ -388,7 +393,7 @@ class _Run:
 def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
     """The state derivative ``(w, q'')`` of the tabulated model, in plain floats (microseconds a call)."""
     cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
-    q_ref, period = red.q0, red.period
+    q_ref, period = x0, red.period
     T0, W0 = law.T0, law.W0
 
     def rhs(_t: float, y: Any) -> list[float]:
