@@ -80,14 +80,14 @@ distance rows divided by ``2 L`` (so every row has unit scale) over its largest.
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from .geometry import NAN_POINT, FloatArray, link_rates
-from .steps import Kin, Nums, Rate, Source, Step
+from .steps import Kin, Nums, Rate, Source, Step, WalkGrid
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
 NEWTON_TOL = 1e-12
@@ -100,24 +100,17 @@ MAX_HALVINGS = 10
 STEP_LIMIT = 0.25
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
-#: long walks go in two levels: about this many samples walked one by one, the rest filled in at once
-COARSE_SAMPLES = 256
-#: ... with at least this stride
-COARSE_STRIDE_MIN = 4
-#: the walk goes at most this many turns of an angle driver from the pose's input (3600 sub-steps of
-#: 1 degree, a few CPU-seconds): a sample farther away is not reached (NaN, not assembled)
-WALK_TURNS = 10
-#: ... in radians
-WALK_REACH = 2 * np.pi * WALK_TURNS
+#: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ...
+GRID_STEP = np.radians(3.0)
+#: ... and of a length driver's, times the group's mean link length
+GRID_STEP_LENGTH = 1 / 32
+#: a length driver's grid goes at most this many steps either way from the pose's input
+GRID_MOST = 4096
 #: a chain of link edges rules a sample out only beyond this margin (relative to its lengths): far
 #: above what Newton's tolerance and rounding allow a converged configuration
 CHAIN_MARGIN = 1e-8
 #: at most this many chains between held joints are checked (and this many search steps to find them)
 MAX_CHAINS, MAX_CHAIN_SEARCH = 64, 4096
-#: a lost design's steps are solved ahead over this many samples at first, doubling up to the most ...
-AHEAD_FIRST, AHEAD_MOST = 8, 256
-#: ... and this many (design, sample) columns in one batch
-AHEAD_COLUMNS = 2048
 
 
 @dataclass(frozen=True)
@@ -175,6 +168,7 @@ class _Walk:
     size: FloatArray  # (D,) the group's mean link length
     arrays: _Arrays  # the numbers per design as Newton reads them
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
+    K0: np.ndarray  # (k, D) the known joints the start was solved with
 
 
 @dataclass(frozen=True)
@@ -436,23 +430,15 @@ class Group(Step):
         ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
         ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
         w = _Walk(
-            K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, _size(dn), self._arrays(dn, D), (lo, hi, mg)
+            K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, _size(dn), self._arrays(dn, D), (lo, hi, mg), zk0
         )
-        for half in _walks(k, D, n, self.angular):
-            state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
-            if len(half) < 4 * COARSE_STRIDE_MIN:
-                self._walk(half, state, w)
-                continue
-            # two levels: walk every stride-th sample; then the samples between two walked ones
-            # together, each from the interpolation of its two neighbours' solutions
-            stride = max(COARSE_STRIDE_MIN, len(half) // COARSE_SAMPLES)
-            ends = np.arange(stride - 1, len(half), stride)
-            if ends[-1] != len(half) - 1:
-                ends = np.append(ends, len(half) - 1)
-            snaps: list[tuple[np.ndarray, ...]] = []
-            clean = self._walk(half[ends], state, w, snaps)
-            lo_end = np.concatenate([[-1], ends[:-1]])
-            self._fill(half, lo_end, ends, snaps, clean, start, w)
+        g = k.grid
+        if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
+            c, s = np.nonzero(ok)
+            self._from_state(start[:, c], zk0[:, c], start[:, c], c, s, w)
+        else:
+            places = self._walk_grid(g, k, start, w)
+            self._solve_samples(g, places, start, w)
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
         if self.keep_rotation:
@@ -461,45 +447,171 @@ class Group(Step):
                 if gl.name in self.keep_rotation:
                     k.rot[gl.name] = (z[gl.joints[1]] - z[gl.joints[0]]) / bases[gl.name]
 
-    def _walk(
-        self,
-        samples: np.ndarray,
-        state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        w: _Walk,
-        snaps: list[tuple[np.ndarray, ...]] | None = None,
-        ahead: _Ahead | None = None,
-    ) -> np.ndarray:
-        """Walk ``samples`` in order from ``state`` (U, knowns, previous U, fresh), updated in place.
+    # ------------------------------------------------------------------ the walk over the grid
+    def _walk_grid(self, g: WalkGrid, k: Kin, start: np.ndarray, w: _Walk) -> np.ndarray:
+        """Walk the grid from the pose as far as the samples need; each sample's place on it, (D, n_given).
 
-        Returns, per design and sample, whether the sample was accepted by a plain continuation
-        step (no restart after a gap, no failure), (D, len(samples)). With ``snaps``, the state
-        before each sample is appended to it. A design whose last sample failed (not fresh)
-        takes its next steps from the look-ahead (:class:`_Ahead`): the same steps, solved at once.
+        The two legs (up and down from the pose's input) step together, one Newton batch per
+        grid step for every design. A class-3 leg stops where a step fails; a dyad-like leg
+        goes on (restarting after a gap). A sample's place (in grid steps from the pose's
+        input) is, for an angle, the representative of its direction nearest the pose's input
+        when a leg reaches it, else the other one (a turn the other way) when the other leg
+        does (a second walk, as far as those need); NaN where neither is reached.
         """
-        U, Kc, U_prev, fresh = state  # fresh: the last sample walked was solved (sub-steps allowed)
-        D = U.shape[1]
-        clean = np.zeros((D, len(samples)), bool)
-        ahead = _Ahead(D) if ahead is None else ahead
-        for i, s in enumerate(samples):
-            if snaps is not None:
-                snaps.append(tuple(x.copy() for x in state))
-            K_t = w.K[:, :, s]
-            U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(D, bool), np.zeros(D, bool)
-            now = np.flatnonzero(w.ok[:, s] & fresh)
-            if len(now):
-                U_new[:, now], acc[now], lost[now] = self._fresh_step(U[:, now], U_prev[:, now], Kc[:, now], now, s, w)
-            later = np.flatnonzero(w.ok[:, s] & ~fresh)
-            if len(later):
-                U_new[:, later], acc[later], lost[later] = ahead.get(self, i, later, samples, U, U_prev, w)
-            clean[:, i] = acc & ~lost
-            fresh[:] = acc  # sub-steps only from a sample solved just before; after a gap, restarts (dyads)
-            ahead.forget(acc)
-            w.out[:, acc, s] = U_new[:, acc]
-            # no predictor across a gap: the next step starts from the restart's solution
-            U_prev[:, acc] = np.where(lost, U_new, U)[:, acc]
-            U[:, acc] = U_new[:, acc]
-            Kc[:, acc] = K_t[:, acc]
-        return clean
+        D = start.shape[1]
+        u = np.broadcast_to(k.q[g.driver, :, : g.n_given], (D, g.n_given))
+        x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
+        near, other = grid_places(u, x0, g.step, g.cyclic)
+        c0 = int(np.searchsorted(g.index, 0))
+        origin = self._origin(start, k, g.n_given + c0, w)
+        legs = (_Leg.new(origin, w, g, c0, 1), _Leg.new(origin, w, g, c0, -1))
+        self._walk_legs(legs, near, w, g)
+        covered = legs[0].covers(near, c0) | legs[1].covers(near, c0)
+        if g.cyclic and not self.dyad_like and not covered.all():
+            alt = np.where(covered, np.nan, other)
+            self._walk_legs(legs, alt, w, g)
+            use = ~covered & (legs[0].covers(alt, c0) | legs[1].covers(alt, c0))
+            return np.where(covered, near, np.where(use, alt, np.nan))
+        return np.where(covered, near, np.nan)
+
+    def _origin(self, start: np.ndarray, k: Kin, col: int, w: _Walk) -> np.ndarray:
+        """The grid's origin (the pose's input, column ``col``) solved from the group's start, written to ``out``.
+
+        The start is the pose, solved with its own known joints: at the pose's input Newton
+        returns it as it is. (A start given at another input, as :mod:`linkagekit.groupmodes`
+        gives a mode, is carried there by sub-steps.)
+        """
+        D = start.shape[1]
+        d = np.arange(D)
+        U, acc = self._plain(start, start, w.K[:, :, col], d, w)
+        todo = np.flatnonzero(~acc & np.all(np.isfinite(start), axis=0) & w.ok[:, col])
+        if len(todo):
+            U[:, todo] = self._halving(start[:, todo], w.K0[:, todo], w.K[:, todo, col], w, todo)
+            acc[todo] = np.all(np.isfinite(U[:, todo]), axis=0)
+        U = np.where(acc & w.ok[:, col], U, NAN_POINT)
+        w.out[:, :, col] = U
+        return U
+
+    def _walk_legs(self, legs: tuple[_Leg, _Leg], places: np.ndarray, w: _Walk, g: WalkGrid) -> None:
+        """Step both legs, all designs at once, until each covers the ``places`` (D, n) on its side or stops."""
+        c0 = int(np.searchsorted(g.index, 0))
+        with np.errstate(invalid="ignore"):
+            far_up = np.nanmax(np.where(places >= 0, np.ceil(places), 0), axis=1, initial=0)
+            far_dn = np.nanmin(np.where(places < 0, np.floor(places), 0), axis=1, initial=0)
+        limits = (np.minimum(c0 + far_up, len(g.index) - 1), np.maximum(c0 + far_dn, 0))
+        while True:
+            steps = [leg.due(lim) for leg, lim in zip(legs, limits, strict=True)]
+            if not any(len(d) for d in steps):
+                return
+            d = np.concatenate(steps)
+            s = g.n_given + np.concatenate([leg.pos[x] + leg.sign for leg, x in zip(legs, steps, strict=True)])
+            U, U_prev, Kc, fresh = (
+                np.concatenate([getattr(leg, f)[..., x] for leg, x in zip(legs, steps, strict=True)], axis=-1)
+                for f in ("U", "U_prev", "Kc", "fresh")
+            )
+            U_new, acc, lost = self._grid_step(U, U_prev, Kc, fresh, d, s, w)
+            w.out[:, d[acc], s[acc]] = U_new[:, acc]
+            first = 0
+            for leg, x in zip(legs, steps, strict=True):
+                sl = slice(first, first + len(x))
+                leg.advance(x, U_new[:, sl], acc[sl], lost[sl], w.K[:, x, s[sl]], self.dyad_like)
+                first += len(x)
+
+    def _grid_step(
+        self,
+        U: np.ndarray,
+        U_prev: np.ndarray,
+        Kc: np.ndarray,
+        fresh: np.ndarray,
+        d: np.ndarray,
+        s: np.ndarray,
+        w: _Walk,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One grid step of designs ``d`` to columns ``s``: (U, accepted, lost).
+
+        From a solved step: a continuation step, else sub-steps; after a failure (dyad-like legs
+        only) a plain step; lost when these fail; then, for a dyad-like group, restarts.
+        """
+        U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(len(d), bool), np.ones(len(d), bool)
+        can = np.flatnonzero(w.ok[d, s])  # the others cannot converge
+        if len(can):
+            cd, cs = d[can], s[can]
+            K = w.K[:, cd, cs]
+            Un, a = self._plain(U[:, can], U_prev[:, can], K, cd, w)
+            todo = np.flatnonzero(~a & fresh[can])
+            if len(todo):  # step halving: move the knowns from the last good state in 2^h steps
+                U_h = self._halving(U[:, can[todo]], Kc[:, can[todo]], K[:, todo], w, cd[todo])
+                done = np.all(np.isfinite(U_h), axis=0)
+                Un[:, todo[done]], a[todo[done]] = U_h[:, done], True
+            lost[can] = ~a
+            self._restart_lost(U[:, can], K, cd, w, Un, a, ~a)
+            U_new[:, can], acc[can] = Un, a
+        return U_new, acc, lost
+
+    # ------------------------------------------------------------------ the samples, at once
+    def _solve_samples(self, g: WalkGrid, places: np.ndarray, start: np.ndarray, w: _Walk) -> None:
+        """Every sample from its grid cell: Newton from the interpolation of the cell's solutions, at once.
+
+        Accepted with the tests of a continuation step (:meth:`_accept`), within half the
+        cell's move of the interpolation; the others are reached by sub-steps from the cell's
+        end nearer the pose (or its other end), all at once; a place outside the walk is NaN.
+        """
+        c0 = int(np.searchsorted(g.index, 0))
+        c, s = np.nonzero(np.isfinite(places) & w.ok[:, : g.n_given])
+        P = places[c, s]
+        lo = np.floor(P).astype(np.intp)
+        t = P - lo
+        a = c0 + lo
+        b = np.where(t > 0, a + 1, a)
+        G = len(g.index)
+        Ug = w.out[:, :, g.n_given :]
+
+        def sol(col: np.ndarray, cc: np.ndarray = c) -> np.ndarray:
+            inside = (col >= 0) & (col < G)
+            return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
+
+        Ua, Ub, Um, Up = sol(a), sol(b), sol(a - 1), sol(b + 1)
+        guess = _interpolate(Um, Ua, Ub, Up, t)
+        with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0))
+        done = np.zeros(len(c), bool)
+        if len(with_guess):
+            i = with_guess
+            bound = 0.5 * np.max(np.abs(Ub[:, i] - Ua[:, i]), axis=0) + 1e-9 * np.max(np.abs(Ua[:, i]), axis=0)
+            done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound, w)
+        rest = np.flatnonzero(~done)
+        if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
+            near = np.where(P[rest] >= 0, a[rest], b[rest])
+            far = np.where(P[rest] >= 0, b[rest], a[rest])
+            cr = c[rest]
+            frm = np.where(np.all(np.isfinite(sol(near, cr)), axis=0), near, far)
+            frm = np.clip(frm, 0, G - 1)
+            U0 = Ug[:, cr, frm]
+            centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
+            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
+
+    def _from_state(
+        self, U0: np.ndarray, K0: np.ndarray, centre: np.ndarray, c: np.ndarray, s: np.ndarray, w: _Walk
+    ) -> None:
+        """Samples ``s`` of designs ``c`` reached by sub-steps from ``(U0, K0)``; a dyad-like group restarts
+        about ``centre`` where they fail."""
+        K1 = w.K[:, c, s]
+        U = np.full((U0.shape[0], len(c)), NAN_POINT)
+        live = np.flatnonzero(np.all(np.isfinite(U0), axis=0) & w.ok[c, s])
+        if len(live):
+            U[:, live] = self._halving(U0[:, live], K0[:, live], K1[:, live], w, c[live])
+        acc = np.all(np.isfinite(U), axis=0)
+        self._restart_lost(centre, K1, c, w, U, acc, ~acc & w.ok[c, s])
+        w.out[:, c[acc], s[acc]] = U[:, acc]
+
+    def _accept(
+        self, sol: np.ndarray, conv: np.ndarray, sign: np.ndarray, start: np.ndarray, bound: np.ndarray, ref: np.ndarray
+    ) -> np.ndarray:
+        """Whether Newton's ``sol`` from ``start`` is the branch's: converged, with the pose's determinant sign
+        ``ref`` (a sign change is a passage through a singular position, never silent), and no joint farther
+        than ``bound`` from where it started (over a small step Newton's root is the branch's, not another of
+        one sign)."""
+        near = np.max(np.abs(sol - start), axis=0) <= bound
+        return conv & (sign == ref) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
 
     def _plain(
         self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
@@ -508,37 +620,7 @@ class Group(Step):
         guess = 2 * U - U_prev  # linear predictor along the walk
         guess = np.where(np.isfinite(guess), guess, U)
         U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
-        acc = conv & (sg == w.ref[designs]) & np.all(np.isfinite(U_new), axis=0)
-        acc &= np.max(np.abs(U_new - U), axis=0) <= STEP_LIMIT * w.size[designs]  # small steps: the nearest root
-        return U_new, acc
-
-    def _fresh_step(
-        self, U: np.ndarray, U_prev: np.ndarray, Kc: np.ndarray, designs: np.ndarray, s: int, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Sample ``s`` from a sample solved just before: a step, else sub-steps, else (dyads) restarts.
-
-        Returns (U, accepted, lost): lost when neither the step nor the sub-steps got there.
-        """
-        K = w.K[:, designs, s]
-        U_new, acc = self._plain(U, U_prev, K, designs, w)
-        todo = np.flatnonzero(~acc)
-        if len(todo):  # step halving: move the knowns from the last good state in 2^h steps
-            U_h = self._halving(U[:, todo], Kc[:, todo], K[:, todo], w, designs[todo])
-            done = np.all(np.isfinite(U_h), axis=0)
-            U_new[:, todo[done]] = U_h[:, done]
-            acc[todo[done]] = True
-        lost = ~acc
-        self._restart_lost(U, K, designs, w, U_new, acc, lost)
-        return U_new, acc, lost
-
-    def _lost_step(
-        self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """A sample after one that failed: a step, else (dyads) restarts. Returns (U, accepted, lost)."""
-        U_new, acc = self._plain(U, U_prev, K, designs, w)
-        lost = ~acc
-        self._restart_lost(U, K, designs, w, U_new, acc, lost)
-        return U_new, acc, lost
+        return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w.ref[designs])
 
     def _restart_lost(
         self,
@@ -559,87 +641,6 @@ class Group(Step):
         U_new[:, idx[found]] = U_r[:, found]
         acc[idx[found]] = True
 
-    def _fill(
-        self,
-        half: np.ndarray,
-        lo: np.ndarray,
-        hi: np.ndarray,
-        snaps: list[tuple[np.ndarray, ...]],
-        clean: np.ndarray,
-        start: np.ndarray,
-        w: _Walk,
-    ) -> None:
-        """The samples between walked ones: all at once where both ends are good, else walked.
-
-        A sample between two walked samples ``a`` and ``b`` (both reached by plain
-        continuation steps) starts Newton from the linear interpolation of their solutions;
-        it is accepted when Newton converges with the pose's determinant sign within half
-        the distance from ``a`` to ``b`` of that start. Everything else is walked, from the
-        state the walk had at ``a``.
-        """
-        m, D = start.shape
-        out = w.out
-        rows, cols, guess, bound, redo = [], [], [], [], []
-        for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
-            inner = half[a + 1 : b]
-            if not len(inner):
-                continue
-            Ua = start if a < 0 else out[:, :, half[a]]
-            Ub = out[:, :, half[b]]
-            both = clean[:, i] & np.all(np.isfinite(Ua), axis=0) & np.all(np.isfinite(Ub), axis=0)
-            if not both.all():
-                redo.append(i)
-                continue
-            t = (np.arange(1, b - a) / (b - a))[:, None, None]  # (len, 1, 1)
-            g = (1 - t) * Ua[None] + t * Ub[None]  # (len, m, D)
-            rows.append(np.repeat(inner, D))
-            cols.append(np.tile(np.arange(D), len(inner)))
-            guess.append(g.transpose(1, 0, 2).reshape(m, -1))
-            reach = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)  # (D,)
-            bound.append(np.tile(reach, len(inner)))
-        if rows:
-            r, c, g = np.concatenate(rows), np.concatenate(cols), np.concatenate(guess, axis=1)
-            ok = self._fill_batch(r, c, g, np.concatenate(bound), w)
-            bad_samples = set(r[~ok].tolist())
-            for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
-                if i not in redo and bad_samples.intersection(half[a + 1 : b].tolist()):
-                    redo.append(i)
-        segments = [(half[lo[i] + 1 : hi[i]], tuple(x.copy() for x in snaps[i])) for i in sorted(redo)]
-        while segments:  # in batches of at most about AHEAD_COLUMNS lost (design, sample) columns
-            sizes = np.cumsum([np.sum(~state[3]) * len(samples) for samples, state in segments])
-            k = max(1, int(np.searchsorted(sizes, AHEAD_COLUMNS, side="right")))
-            batch, segments = segments[:k], segments[k:]
-            for (samples, state), ahead in zip(batch, self._ahead_of(batch, w), strict=True):
-                self._walk(samples, state, w, ahead=ahead)  # type: ignore[arg-type]
-
-    def _ahead_of(self, segments: list[tuple[np.ndarray, tuple[np.ndarray, ...]]], w: _Walk) -> list[_Ahead]:
-        """Look-aheads for walks of ``segments`` (samples, starting state): their lost designs' steps, at once.
-
-        A design lost at the start of a segment (in a gap, every segment starts so, from one same
-        state) gets its steps over the whole segment from one batch of :meth:`_lost_step`.
-        """
-        m, D = w.out.shape[:2]
-        cols = []
-        for samples, (U, _, U_prev, fresh) in segments:
-            need = np.flatnonzero(~fresh)
-            d, s = np.repeat(need, len(samples)), np.tile(samples, len(need))
-            cols.append((need, d, s, U[:, d], U_prev[:, d]))
-        d, s = np.concatenate([c[1] for c in cols]), np.concatenate([c[2] for c in cols])
-        U0, U1 = np.concatenate([c[3] for c in cols], axis=1), np.concatenate([c[4] for c in cols], axis=1)
-        Uw, acc, lost = np.full((m, len(d)), NAN_POINT), np.zeros(len(d), bool), np.zeros(len(d), bool)
-        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
-        if len(run):
-            Uw[:, run], acc[run], lost[run] = self._lost_step(U0[:, run], U1[:, run], w.K[:, d[run], s[run]], d[run], w)
-        out, start = [], 0
-        for (samples, _), (need, *_) in zip(segments, cols, strict=True):
-            ahead, n = _Ahead(D), len(need) * len(samples)
-            if len(need):
-                sl = slice(start, start + n)
-                ahead.add(0, need, Uw[:, sl], acc[sl], lost[sl], len(samples))
-            out.append(ahead)
-            start += n
-        return out
-
     def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
         """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
         ok = np.zeros(len(r), bool)
@@ -647,9 +648,7 @@ class Group(Step):
         if len(can):
             r, c, g, bound = r[can], c[can], g[:, can], bound[can]
             sol, conv, sg = self._newton(g, w.K[:, c, r], w.arrays.take(c))
-            # accepted: converged, with the pose's sign, near the interpolation (not another branch)
-            near = np.max(np.abs(sol - g), axis=0)
-            good = conv & (sg == w.ref[c]) & np.all(np.isfinite(sol), axis=0) & (near <= bound)
+            good = self._accept(sol, conv, sg, g, bound, w.ref[c])
             w.out[:, c[good], r[good]] = sol[:, good]
             ok[can] = good
         return ok
@@ -678,7 +677,7 @@ class Group(Step):
             if len(can):
                 a = act[can]
                 Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
-                ok[can] = conv & (sg == ref[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
+                ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], ref[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]
@@ -796,39 +795,6 @@ def _take(dn: Nums, cols: np.ndarray) -> Nums:
     return tuple(L[cols] for L in lengths), tuple(tuple(r[cols] for r in rho) for rho in rhos)
 
 
-def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.ndarray]:
-    """The sample indices in walking order: from the pose's input up, then from it down.
-
-    The samples are sorted by the driver input that varies most (the first design's inputs),
-    measured from the pose's input as given (not modulo a turn: a class-3 group may come back
-    in another mode after a full turn of its crank, and the walk follows the motion); inputs
-    equal to the pose's go up. When that driver is an angle (``angular``), samples more than
-    ``WALK_REACH`` from the pose's input are left out: never walked to, they stay NaN (not
-    reached), so the walk's length is bounded whatever the inputs. Over a
-    design axis every design walks in this one order from its own pose (the first
-    sub-step reaches the nearest sample by homotopy), so the walk stays continuous per design.
-
-    >>> import numpy as np
-    >>> from linkagekit.steps import Kin
-    >>> q = np.radians([[[10.0, -20.0, 5.0, 7200.0, -7200.0]]])
-    >>> k = Kin(np.zeros((0, 1, 5), complex), {}, np.zeros((0, 1, 5)), q, None, None, 0.0, np.zeros((1, 1)))
-    >>> [w.tolist() for w in _walks(k, 1, 5, (True,))]
-    [[2, 0], [1]]
-    """
-    if k.q.shape[0] == 0 or n == 0:
-        return [np.arange(n)]
-    q = np.broadcast_to(k.q, (k.q.shape[0], max(k.q.shape[1], 1), n))[:, 0, :]
-    q0 = k.q0[:, 0] if k.q0 is not None else q[:, 0]
-    d = int(np.argmax(np.ptp(q, axis=1)))
-    key = q[d] - q0[d]
-    order = np.argsort(key, kind="stable")
-    if d < len(angular) and angular[d]:
-        order = order[np.abs(key[order]) <= WALK_REACH]
-    up = order[key[order] >= 0]
-    down = order[key[order] < 0][::-1]
-    return [w for w in (up, down) if len(w)]
-
-
 def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
     """Newton's steps ``dx`` (B, 2m): ``J dx = -res`` (``res`` (n_eq, B)); NaN where not finite or singular."""
     r = res.T
@@ -845,67 +811,74 @@ def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
 
 
 @dataclass
-class _Ahead:
-    """The steps of the designs a walk has lost, solved ahead.
+class _Leg:
+    """One leg of the grid walk (up or down from the pose's input), per design."""
 
-    A design whose last sample failed starts every next sample from the same state (its last
-    good solution, with the predictor from the one before), so its next steps do not depend
-    on each other until one is accepted: they are solved together over a window of the next
-    samples (:data:`AHEAD_FIRST` long, doubling while the design stays lost, up to
-    :data:`AHEAD_MOST`), exactly as one by one, and read from there. An accepted design is
-    forgotten (its state has moved on).
-    """
+    sign: int  # +1 up, -1 down the grid
+    pos: np.ndarray  # (D,) the last grid column stepped to (solved, or where the leg stopped)
+    U: np.ndarray  # (m, D) the last solution
+    U_prev: np.ndarray  # (m, D) the one before (the predictor's)
+    Kc: np.ndarray  # (k, D) the knowns of the last solution
+    fresh: np.ndarray  # (D,) the last step was solved (sub-steps allowed from it)
+    alive: np.ndarray  # (D,) the leg goes on (a class-3 group's leg stops where a step fails)
 
-    D: int
-    windows: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
+    @classmethod
+    def new(cls, start: np.ndarray, w: _Walk, g: WalkGrid, c0: int, sign: int) -> _Leg:
+        D = start.shape[1]
+        alive = np.all(np.isfinite(start), axis=0)
+        K = w.K[:, :, g.n_given + c0].copy()
+        return cls(sign, np.full(D, c0), start.copy(), np.full_like(start, NAN_POINT), K, alive.copy(), alive)
 
-    def __post_init__(self) -> None:
-        self.until = np.zeros(self.D, np.intp)  # the first sample position past the design's window
-        self.which = np.zeros(self.D, np.intp)  # its window (first position, U (m, k, c), accepted, lost)
-        self.col = np.zeros(self.D, np.intp)  # its column there
-        self.streak = np.zeros(self.D, np.intp)  # windows since the design was lost
+    def due(self, limit: np.ndarray) -> np.ndarray:
+        """The designs whose next step is not past ``limit`` (a grid column per design)."""
+        return np.flatnonzero(self.alive & ((self.pos + self.sign - limit) * self.sign <= 0))
 
-    def get(
-        self, group: Group, i: int, cols: np.ndarray, samples: np.ndarray, U: np.ndarray, U_prev: np.ndarray, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The step of the lost designs ``cols`` at the walk's ``i``-th sample: (U, accepted, lost)."""
-        need = cols[self.until[cols] <= i]
-        if len(need):
-            self._solve(group, i, need, samples, U, U_prev, w)
-        U_new = np.empty((U.shape[0], len(cols)), complex)
-        acc, lost = np.zeros(len(cols), bool), np.zeros(len(cols), bool)
-        for wid in np.unique(self.which[cols]):
-            sel = np.flatnonzero(self.which[cols] == wid)
-            first, Uw, aw, lw = self.windows[wid]
-            cc = self.col[cols[sel]]
-            U_new[:, sel], acc[sel], lost[sel] = Uw[:, cc, i - first], aw[cc, i - first], lw[cc, i - first]
-        return U_new, acc, lost
-
-    def _solve(
-        self, group: Group, i: int, need: np.ndarray, samples: np.ndarray, U: np.ndarray, U_prev: np.ndarray, w: _Walk
+    def advance(
+        self, x: np.ndarray, U: np.ndarray, acc: np.ndarray, lost: np.ndarray, K: np.ndarray, dyad_like: bool
     ) -> None:
-        """A window for the designs ``need``, from the walk's ``i``-th sample."""
-        c = AHEAD_FIRST << int(np.max(self.streak[need]))
-        c = int(min(len(samples) - i, c, AHEAD_MOST, max(1, AHEAD_COLUMNS // len(need))))
-        d = np.repeat(need, c)
-        s = samples[i + np.tile(np.arange(c), len(need))]
-        m = U.shape[0]
-        Uw = np.full((m, len(d)), NAN_POINT)
-        acc, lost = np.zeros(len(d), bool), np.zeros(len(d), bool)
-        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
-        if len(run):
-            dr = d[run]
-            Uw[:, run], acc[run], lost[run] = group._lost_step(U[:, dr], U_prev[:, dr], w.K[:, dr, s[run]], dr, w)
-        self.add(i, need, Uw, acc, lost, c)
+        """Designs ``x`` stepped to their next column: solved ``U`` where ``acc`` (``lost``: after restarts)."""
+        self.pos[x] += self.sign
+        good = x[acc]
+        # no predictor across a gap or a restart: the next step starts from the solution
+        self.U_prev[:, good] = np.where(lost[acc] | ~self.fresh[good], U[:, acc], self.U[:, good])
+        self.U[:, good], self.Kc[:, good] = U[:, acc], K[:, acc]
+        self.fresh[x] = acc
+        if not dyad_like:  # a class-3 group does not guess after a gap: the leg ends here
+            self.alive[x[~acc]] = False
 
-    def add(self, i: int, need: np.ndarray, Uw: np.ndarray, acc: np.ndarray, lost: np.ndarray, c: int) -> None:
-        """The steps of designs ``need`` over ``c`` samples from the ``i``-th (flat, design-major)."""
-        k = len(need)
-        self.windows.append((i, Uw.reshape(-1, k, c), acc.reshape(k, c), lost.reshape(k, c)))
-        self.which[need], self.col[need], self.until[need] = len(self.windows) - 1, np.arange(k), i + c
-        self.streak[need] += 1
+    def covers(self, places: np.ndarray, c0: int) -> np.ndarray:
+        """Which ``places`` (D, n), in grid steps from the pose's input, lie on this leg's side up to where it got."""
+        got = (self.pos - c0)[:, None]
+        with np.errstate(invalid="ignore"):
+            if self.sign > 0:
+                return (places >= 0) & (places <= got)
+            return (places < 0) & (places >= got)
 
-    def forget(self, acc: np.ndarray) -> None:
-        """The designs ``acc`` were accepted: their windows are out of date."""
-        self.until[acc] = 0
-        self.streak[acc] = 0
+
+def grid_places(u: np.ndarray, x0: np.ndarray, step: np.ndarray, cyclic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Where inputs ``u`` (D, n) lie on the walk's grid, in steps from the pose's input ``x0`` (D,): (near, other).
+
+    For an angle (``cyclic``) ``u`` is a direction: ``near`` is its representative nearest the
+    pose's input (in half a turn below it to half a turn above), ``other`` the one a turn the
+    other way; for a length ``near`` is ``u``'s place and ``other`` NaN.
+
+    >>> import numpy as np
+    >>> near, other = grid_places(np.radians([[30.0, 390.0, -300.0, 200.0]]), np.zeros(1), np.radians([3.0]), True)
+    >>> np.round(near, 9).tolist(), np.round(other, 9).tolist()
+    ([[10.0, 10.0, 20.0, -53.333333333]], [[-110.0, -110.0, -100.0, 66.666666667]])
+    """
+    P = (np.asarray(u, float) - x0[:, None]) / step[:, None]
+    if not cyclic:
+        return P, np.full_like(P, np.nan)
+    turn = 2 * np.pi / step[:, None]
+    near = P - turn * np.floor(P / turn + 0.5)
+    return near, np.where(near >= 0, near - turn, near + turn)
+
+
+def _interpolate(Um: np.ndarray, Ua: np.ndarray, Ub: np.ndarray, Up: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """A sample's start at ``t`` in [0, 1) of its cell ``a``-``b``: cubic through the solutions at the cell's ends
+    and their outer neighbours (``Um``, ``Up``) where all four are known, else linear; NaN without both ends."""
+    cubic = (-t * (t - 1) * (t - 2) / 6, (t + 1) * (t - 1) * (t - 2) / 2, -(t + 1) * t * (t - 2) / 2)
+    c3 = cubic[0] * Um + cubic[1] * Ua + cubic[2] * Ub + ((t + 1) * t * (t - 1) / 6) * Up
+    linear = (1 - t) * Ua + t * Ub
+    return np.where(np.all(np.isfinite(c3), axis=0), c3, linear)  # type: ignore[no-any-return]
