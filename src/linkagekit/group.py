@@ -93,6 +93,14 @@ from .steps import Kin, Nums, Rate, Source, Step, WalkGrid
 NEWTON_TOL = 1e-12
 #: Newton iterations per attempt
 NEWTON_ITER = 16
+#: Newton iterations of a sub-step (it starts from a solution a small step away: a sub-step that needs
+#: more is halved, so a sub-step past the end of the range costs this many, not NEWTON_ITER)
+SUBSTEP_ITER = 6
+#: a group's conditioning below this is computed by an SVD (above, from the eigenvalues of J^T J: within
+#: 1e-16 / COND_EXACT^2 relative of it)
+COND_EXACT = 1e-3
+#: samples solved at once in chunks of this many (their arrays stay in the cache)
+FILL_CHUNK = 2048
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
@@ -493,59 +501,83 @@ class Group(Step):
         return U
 
     def _walk_legs(self, legs: tuple[_Leg, _Leg], places: np.ndarray, w: _Walk, g: WalkGrid) -> None:
-        """Step both legs, all designs at once, until each covers the ``places`` (D, n) on its side or stops."""
+        """Step both legs, all designs at once, until each covers the ``places`` (D, n) on its side or stops.
+
+        A step that fails waits (pending) while the other designs go on; the waiting steps are
+        then retried in sub-steps all at once (one batch however many grid steps they failed at).
+        """
         c0 = int(np.searchsorted(g.index, 0))
         with np.errstate(invalid="ignore"):
-            far_up = np.nanmax(np.where(places >= 0, np.ceil(places), 0), axis=1, initial=0)
-            far_dn = np.nanmin(np.where(places < 0, np.floor(places), 0), axis=1, initial=0)
+            # to the cell's end nearer the pose: the last cell of a leg is extrapolated (no step past the end)
+            far_up = np.nanmax(np.where(places >= 0, np.floor(places), 0), axis=1, initial=0)
+            far_dn = np.nanmin(np.where(places < 0, np.ceil(places), 0), axis=1, initial=0)
         limits = (np.minimum(c0 + far_up, len(g.index) - 1), np.maximum(c0 + far_dn, 0))
         while True:
             steps = [leg.due(lim) for leg, lim in zip(legs, limits, strict=True)]
-            if not any(len(d) for d in steps):
-                return
+            waiting = not any(len(x) for x in steps)
+            if waiting:
+                steps = [np.flatnonzero(leg.pending) for leg in legs]
+                if not any(len(x) for x in steps):
+                    return
             d = np.concatenate(steps)
             s = g.n_given + np.concatenate([leg.pos[x] + leg.sign for leg, x in zip(legs, steps, strict=True)])
-            U, U_prev, Kc, fresh = (
+            U, U_prev, U_prev2, Kc, fresh = (
                 np.concatenate([getattr(leg, f)[..., x] for leg, x in zip(legs, steps, strict=True)], axis=-1)
-                for f in ("U", "U_prev", "Kc", "fresh")
+                for f in ("U", "U_prev", "U_prev2", "Kc", "fresh")
             )
-            U_new, acc, lost = self._grid_step(U, U_prev, Kc, fresh, d, s, w)
+            if waiting:
+                U_new, acc, lost = self._substeps(U, Kc, d, s, w)
+                pend = np.zeros(len(d), bool)
+            else:
+                U_new, acc, lost, pend = self._grid_step(U, np.stack([U_prev, U_prev2]), fresh, d, s, w)
             w.out[:, d[acc], s[acc]] = U_new[:, acc]
             first = 0
             for leg, x in zip(legs, steps, strict=True):
                 sl = slice(first, first + len(x))
-                leg.advance(x, U_new[:, sl], acc[sl], lost[sl], w.K[:, x, s[sl]], self.dyad_like)
+                leg.pending[x] = pend[sl]
+                now = ~pend[sl]
+                leg.advance(
+                    x[now],
+                    U_new[:, sl][:, now],
+                    acc[sl][now],
+                    lost[sl][now],
+                    w.K[:, x[now], s[sl][now]],
+                    self.dyad_like,
+                )
                 first += len(x)
 
     def _grid_step(
-        self,
-        U: np.ndarray,
-        U_prev: np.ndarray,
-        Kc: np.ndarray,
-        fresh: np.ndarray,
-        d: np.ndarray,
-        s: np.ndarray,
-        w: _Walk,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One grid step of designs ``d`` to columns ``s``: (U, accepted, lost).
+        self, U: np.ndarray, before: np.ndarray, fresh: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One grid step of designs ``d`` to columns ``s`` by a continuation step: (U, accepted, lost, pending).
 
-        From a solved step: a continuation step, else sub-steps; after a failure (dyad-like legs
-        only) a plain step; lost when these fail; then, for a dyad-like group, restarts.
+        Pending: a step from a solved one that failed, to be retried in sub-steps
+        (:meth:`_substeps`). After a failure (dyad-like legs only) there are no sub-steps:
+        lost, and restarted.
         """
         U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(len(d), bool), np.ones(len(d), bool)
+        pend = np.zeros(len(d), bool)
         can = np.flatnonzero(w.ok[d, s])  # the others cannot converge
         if len(can):
-            cd, cs = d[can], s[can]
-            K = w.K[:, cd, cs]
-            Un, a = self._plain(U[:, can], U_prev[:, can], K, cd, w)
-            todo = np.flatnonzero(~a & fresh[can])
-            if len(todo):  # step halving: move the knowns from the last good state in 2^h steps
-                U_h = self._halving(U[:, can[todo]], Kc[:, can[todo]], K[:, todo], w, cd[todo])
-                done = np.all(np.isfinite(U_h), axis=0)
-                Un[:, todo[done]], a[todo[done]] = U_h[:, done], True
+            cd = d[can]
+            K = w.K[:, cd, s[can]]
+            Un, a = self._plain(U[:, can], before[0][:, can], K, cd, w, before[1][:, can])
+            pend[can] = ~a & fresh[can]
             lost[can] = ~a
-            self._restart_lost(U[:, can], K, cd, w, Un, a, ~a)
+            self._restart_lost(U[:, can], K, cd, w, Un, a, ~a & ~fresh[can])
             U_new[:, can], acc[can] = Un, a
+        return U_new, acc, lost, pend
+
+    def _substeps(
+        self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Grid steps that failed, retried by step halving from the last good state: (U, accepted, lost);
+        for a dyad-like group, restarts where that fails too."""
+        K = w.K[:, d, s]
+        U_new = self._halving(U, Kc, K, w, d)
+        acc = np.all(np.isfinite(U_new), axis=0)
+        lost = ~acc
+        self._restart_lost(U, K, d, w, U_new, acc, lost & w.ok[d, s])
         return U_new, acc, lost
 
     # ------------------------------------------------------------------ the samples, at once
@@ -570,14 +602,20 @@ class Group(Step):
             inside = (col >= 0) & (col < G)
             return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
 
-        Ua, Ub, Um, Up = sol(a), sol(b), sol(a - 1), sol(b + 1)
-        guess = _interpolate(Um, Ua, Ub, Up, t)
-        with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0))
+        V = self._grid_slopes(g, w)
+        Ua, Ub = sol(a), sol(b)
+        guess = _hermite(Ua, V[:, c, a], Ub, V[:, c, b], t)
+        bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
+        other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
+        if len(other):
+            ao, bo, co = a[other], b[other], c[other]
+            nodes = (sol(x, co) for x in (ao - 2, ao - 1, ao, bo, bo + 1, bo + 2))
+            guess[:, other], bound[other] = _cell_guess(*nodes, t[other])
+        with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0) & np.isfinite(bound))
         done = np.zeros(len(c), bool)
         if len(with_guess):
             i = with_guess
-            bound = 0.5 * np.max(np.abs(Ub[:, i] - Ua[:, i]), axis=0) + 1e-9 * np.max(np.abs(Ua[:, i]), axis=0)
-            done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound, w)
+            done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w)
         rest = np.flatnonzero(~done)
         if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
             near = np.where(P[rest] >= 0, a[rest], b[rest])
@@ -588,6 +626,35 @@ class Group(Step):
             U0 = Ug[:, cr, frm]
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
             self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
+
+    def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
+        """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
+
+        ``J_u dU = -J_k dK``, the knowns' motion per step ``dK`` from the grid's own knowns by a
+        central difference of fourth order (second at the grid's ends): the solutions are
+        interpolated by cubic Hermite (:func:`_hermite`), far closer than from values alone.
+        """
+        m, D = w.out.shape[:2]
+        Ug, Kg = w.out[:, :, g.n_given :], w.K[:, :, g.n_given :]
+        G = Ug.shape[2]
+        dK = np.full_like(Kg, NAN_POINT)
+        if G >= 3:
+            dK[:, :, 1:-1] = (Kg[:, :, 2:] - Kg[:, :, :-2]) / 2
+        if G >= 5:
+            dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
+        V = np.full((m, D, G), NAN_POINT)
+        d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
+        if not len(d) or not len(self.known):
+            return V
+        P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + len(self.known))
+        dk = dK[:, d, j]
+        vk = np.stack([dk.real, dk.imag], axis=-1).transpose(1, 0, 2).reshape(len(d), -1)
+        rhs = -np.einsum("bij,bj->bi", J[:, :, 2 * m :], vk)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            du = _newton_step(J[:, :, : 2 * m], -rhs.T)
+        V[:, d, j] = (du[:, 0::2] + 1j * du[:, 1::2]).T
+        return V
 
     def _from_state(
         self, U0: np.ndarray, K0: np.ndarray, centre: np.ndarray, c: np.ndarray, s: np.ndarray, w: _Walk
@@ -614,11 +681,24 @@ class Group(Step):
         return conv & (sign == ref) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
 
     def _plain(
-        self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
+        self,
+        U: np.ndarray,
+        U_prev: np.ndarray,
+        K: np.ndarray,
+        designs: np.ndarray,
+        w: _Walk,
+        U_prev2: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """A continuation step to knowns ``K`` from ``U`` (with the linear predictor from ``U_prev``): (U, accepted)."""
-        guess = 2 * U - U_prev  # linear predictor along the walk
+        """A continuation step to knowns ``K`` from ``U``: (U, accepted).
+
+        Newton starts from the predictor along the walk: quadratic through ``U_prev2``,
+        ``U_prev`` and ``U`` (equal steps), else linear through the last two, else ``U``.
+        """
+        guess = 2 * U - U_prev
         guess = np.where(np.isfinite(guess), guess, U)
+        if U_prev2 is not None:
+            quad = 3 * U - 3 * U_prev + U_prev2
+            guess = np.where(np.isfinite(quad), quad, guess)
         U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
         return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w.ref[designs])
 
@@ -645,12 +725,13 @@ class Group(Step):
         """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
         ok = np.zeros(len(r), bool)
         can = np.flatnonzero(w.ok[c, r])  # the others cannot converge
-        if len(can):
-            r, c, g, bound = r[can], c[can], g[:, can], bound[can]
-            sol, conv, sg = self._newton(g, w.K[:, c, r], w.arrays.take(c))
-            good = self._accept(sol, conv, sg, g, bound, w.ref[c])
-            w.out[:, c[good], r[good]] = sol[:, good]
-            ok[can] = good
+        for first in range(0, len(can), FILL_CHUNK):  # in chunks that stay in the cache
+            i = can[first : first + FILL_CHUNK]
+            ri, ci, gi = r[i], c[i], g[:, i]
+            sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci))
+            good = self._accept(sol, conv, sg, gi, bound[i], w.ref[ci])
+            w.out[:, ci[good], ri[good]] = sol[:, good]
+            ok[i] = good
         return ok
 
     def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
@@ -676,7 +757,7 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], ref[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
@@ -769,9 +850,17 @@ class Group(Step):
         for gl, L in zip(self.links, lengths, strict=True):
             scale[:, row] = 1.0 / (2 * L)
             row += 1 + 2 * (len(gl.slots) - 2)
-        s = np.linalg.svd(Ju * scale[:, :, None], compute_uv=False)
+        Js = Ju * scale[:, :, None]
+        # the singular values squared are the eigenvalues of Js^T Js (half the cost of an SVD); their
+        # rounding is about 1e-16 of the largest, so below COND_EXACT the ratio is taken from the SVD
+        ev = np.linalg.eigvalsh(np.einsum("bki,bkj->bij", Js, Js))
         with np.errstate(invalid="ignore", divide="ignore"):
-            return s[:, -1] / s[:, 0]
+            cond = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
+            low = np.flatnonzero(~(cond >= COND_EXACT))
+            if len(low):
+                sv = np.linalg.svd(Js[low], compute_uv=False)
+                cond[low] = sv[:, -1] / sv[:, 0]
+        return cond
 
     # ------------------------------------------------------------------ description
     def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
@@ -818,20 +907,23 @@ class _Leg:
     pos: np.ndarray  # (D,) the last grid column stepped to (solved, or where the leg stopped)
     U: np.ndarray  # (m, D) the last solution
     U_prev: np.ndarray  # (m, D) the one before (the predictor's)
+    U_prev2: np.ndarray  # (m, D) and the one before that
     Kc: np.ndarray  # (k, D) the knowns of the last solution
     fresh: np.ndarray  # (D,) the last step was solved (sub-steps allowed from it)
     alive: np.ndarray  # (D,) the leg goes on (a class-3 group's leg stops where a step fails)
+    pending: np.ndarray  # (D,) its next step failed and waits for sub-steps
 
     @classmethod
     def new(cls, start: np.ndarray, w: _Walk, g: WalkGrid, c0: int, sign: int) -> _Leg:
         D = start.shape[1]
         alive = np.all(np.isfinite(start), axis=0)
         K = w.K[:, :, g.n_given + c0].copy()
-        return cls(sign, np.full(D, c0), start.copy(), np.full_like(start, NAN_POINT), K, alive.copy(), alive)
+        nan = np.full_like(start, NAN_POINT)
+        return cls(sign, np.full(D, c0), start.copy(), nan, nan.copy(), K, alive.copy(), alive, np.zeros(D, bool))
 
     def due(self, limit: np.ndarray) -> np.ndarray:
         """The designs whose next step is not past ``limit`` (a grid column per design)."""
-        return np.flatnonzero(self.alive & ((self.pos + self.sign - limit) * self.sign <= 0))
+        return np.flatnonzero(self.alive & ~self.pending & ((self.pos + self.sign - limit) * self.sign <= 0))
 
     def advance(
         self, x: np.ndarray, U: np.ndarray, acc: np.ndarray, lost: np.ndarray, K: np.ndarray, dyad_like: bool
@@ -840,15 +932,21 @@ class _Leg:
         self.pos[x] += self.sign
         good = x[acc]
         # no predictor across a gap or a restart: the next step starts from the solution
-        self.U_prev[:, good] = np.where(lost[acc] | ~self.fresh[good], U[:, acc], self.U[:, good])
+        reset = lost[acc] | ~self.fresh[good]
+        self.U_prev2[:, good] = np.where(reset, U[:, acc], self.U_prev[:, good])
+        self.U_prev[:, good] = np.where(reset, U[:, acc], self.U[:, good])
         self.U[:, good], self.Kc[:, good] = U[:, acc], K[:, acc]
         self.fresh[x] = acc
         if not dyad_like:  # a class-3 group does not guess after a gap: the leg ends here
             self.alive[x[~acc]] = False
 
     def covers(self, places: np.ndarray, c0: int) -> np.ndarray:
-        """Which ``places`` (D, n), in grid steps from the pose's input, lie on this leg's side up to where it got."""
-        got = (self.pos - c0)[:, None]
+        """Which ``places`` (D, n), in grid steps from the pose's input, lie on this leg's side up to where it got.
+
+        A leg that stopped covers up to the column where its step failed; one that goes on, the
+        cell past its last column too.
+        """
+        got = (self.pos - c0 + np.where(self.alive, self.sign, 0))[:, None]
         with np.errstate(invalid="ignore"):
             if self.sign > 0:
                 return (places >= 0) & (places <= got)
@@ -875,10 +973,35 @@ def grid_places(u: np.ndarray, x0: np.ndarray, step: np.ndarray, cyclic: bool) -
     return near, np.where(near >= 0, near - turn, near + turn)
 
 
-def _interpolate(Um: np.ndarray, Ua: np.ndarray, Ub: np.ndarray, Up: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """A sample's start at ``t`` in [0, 1) of its cell ``a``-``b``: cubic through the solutions at the cell's ends
-    and their outer neighbours (``Um``, ``Up``) where all four are known, else linear; NaN without both ends."""
-    cubic = (-t * (t - 1) * (t - 2) / 6, (t + 1) * (t - 1) * (t - 2) / 2, -(t + 1) * t * (t - 2) / 2)
-    c3 = cubic[0] * Um + cubic[1] * Ua + cubic[2] * Ub + ((t + 1) * t * (t - 1) / 6) * Up
-    linear = (1 - t) * Ua + t * Ub
-    return np.where(np.all(np.isfinite(c3), axis=0), c3, linear)  # type: ignore[no-any-return]
+def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Cubic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with motions per cell ``Va``, ``Vb``."""
+    t2, t3 = t * t, t * t * t
+    return (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
+
+
+def _cell_guess(
+    Umm: np.ndarray, Um: np.ndarray, Ua: np.ndarray, Ub: np.ndarray, Up: np.ndarray, Upp: np.ndarray, t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A sample's start at ``t`` in [0, 1) of its cell ``a``-``b`` from the grid's solutions, and how far from it
+    Newton may go (half the cell's move): (guess (m, N), bound (N,)); NaN where there is none.
+
+    Both ends solved: cubic through them and their outer neighbours (``Um``, ``Up``) where all
+    four are, else linear. One end only (the cell where a leg stopped): quadratic extrapolation
+    from that end and the two solutions before it.
+    """
+    cubic = -t * (t - 1) * (t - 2) / 6 * Um + (t + 1) * (t - 1) * (t - 2) / 2 * Ua
+    cubic += -(t + 1) * t * (t - 2) / 2 * Ub + (t + 1) * t * (t - 1) / 6 * Up
+    inside = np.where(np.all(np.isfinite(cubic), axis=0), cubic, (1 - t) * Ua + t * Ub)
+    r = 1 - t  # from b towards a
+
+    def beyond(U0: np.ndarray, U1: np.ndarray, U2: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Quadratic through U2, U1, U0 at -2, -1, 0, at x."""
+        return (x + 1) * (x + 2) / 2 * U0 - x * (x + 2) * U1 + x * (x + 1) / 2 * U2
+
+    up, down = beyond(Ua, Um, Umm, t), beyond(Ub, Up, Upp, r)
+    fin = [np.all(np.isfinite(U), axis=0) for U in (Ua, Ub)]
+    guess = np.where(fin[0] & fin[1], inside, np.where(fin[0], up, down))
+    move = np.where(fin[0] & fin[1], Ub - Ua, np.where(fin[0], Ua - Um, Ub - Up))
+    with np.errstate(invalid="ignore"):
+        bound = 0.5 * np.max(np.abs(move), axis=0) + 1e-9 * np.max(np.abs(np.where(fin[0], Ua, Ub)), axis=0)
+    return guess, bound
