@@ -21,53 +21,56 @@ analytic: a distance row has ``2 (z_a - z_b)`` (as ``[x, y]``) on ``a`` and its 
 ``rho_k - 1`` on ``j0``, ``-rho_k`` on ``j1``; ``c`` acting on ``[x, y]`` is ``[[Re c,
 -Im c], [Im c, Re c]]``).
 
-Continuation
-------------
+Continuation on a fixed grid
+----------------------------
 Newton converges to the root nearest its start, which may belong to another assembly
-mode. So the sweep is solved in order from the reference pose outwards: the samples are
-sorted by the input that moves, split at the pose's input, and each half is walked away
-from the pose, every sample started from the last one solved (with a linear predictor
-from the two before it). A step is accepted only when Newton converges (residual below
-``NEWTON_TOL`` relative), the Jacobian's determinant keeps its sign (a sign change is a
-passage through a singular position: a change of mode, never silent) and no joint moves
-more than ``STEP_LIMIT`` times the group's mean link length (a class-3 group has up to
-three roots of one sign; over a small step Newton's root is the branch's). A step that
-fails is retried, from a sample solved just before, in adaptive sub-steps (halved on
-failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known joints linearly
-from the last solved sample to the target (a homotopy in the group's boundary: each
-known joint moves alone, so the path is well defined). A sample still not reached is
-flagged (NaN, not assembled) and the walk goes on from the last good sample. Where the
-walk cannot reach a sample from the last good one (after a gap where the group does not
-assemble), Newton is restarted from ``RESTARTS`` points scattered about the last good
-configuration and about the held joints, for a group with one root per sign (a dyad,
-with joints riding rigidly on its links: exactly the closed form's rule, one solution per
-sign); the walk resumes there. A class-3 group can have three roots of one sign, so after
-a gap it does not guess: its samples stay flagged until the walk reaches them by
-continuation (from the pose's other side, or never; ``modes`` lists every mode there). So
-the sweep never changes mode silently. Results do not depend on the order of the inputs.
+mode, so the mode is defined by continuation from the pose. The walk follows a fixed grid
+of the driver that moves (:class:`linkagekit.steps.WalkGrid`, appended to the samples by
+:func:`linkagekit.positions.solve`): the pose's input plus whole steps of ``GRID_STEP``
+(``GRID_STEP_LENGTH`` of the group's mean link length for a length), in two legs, up and
+down from the pose's input, both legs of every design in one Newton batch per grid step,
+each started from a quadratic predictor. The grid does not depend on the inputs asked; they
+only say how far the legs go. A step is accepted (:meth:`Group._accept`, the one place that
+decides) only when Newton converges (residual below ``NEWTON_TOL`` relative), the
+Jacobian's determinant keeps the pose's sign (a sign change is a passage through a singular
+position: a change of mode, never silent) and no joint moves more than ``STEP_LIMIT`` times
+the group's mean link length (a class-3 group has up to three roots of one sign; over a
+small step Newton's root is the branch's). A step that fails waits while the other designs
+go on; the waiting steps are then retried together in adaptive sub-steps (halved on
+failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known
+joints linearly between the grid points (a homotopy in the group's boundary: each known
+joint moves alone, so the path is well defined). A class-3 leg that still fails stops:
+after a gap it does not guess (it has up to three roots of one sign; ``modes`` lists every
+mode there). A dyad-like group (one root per sign) goes on past a gap, Newton restarted
+from ``RESTARTS`` points scattered about the last good configuration and about the held
+joints; the walk resumes on the unique root of the pose's sign (the closed form's rule).
+
+Every sample is then solved at once: from its cell of the grid, Newton starts at the
+cubic Hermite interpolation of the cell's two solutions and their motions (from the
+Jacobian, :meth:`Group._grid_slopes`), accepted by the same test within half the cell's
+move; the rare rejects are reached by sub-steps from the cell's end nearer the pose, all at
+once. A sample outside the walked range is flagged at once (NaN, not assembled). The pose
+is given back at its input (the grid's origin starts at the pose, exact). A sample's answer
+depends only on its input and the grid: not on the order of the inputs, nor on which others
+are asked. **A crank's input is a direction**: an angle input u is placed on the grid at its
+representative in half a turn either side of the pose's input, or, where a class-3 leg
+stopped before it, at the one a turn the other way (:func:`grid_places`); so u and u + 360 k
+answer alike. A group that comes back in another configuration after a turn keeps, for each
+direction, the configuration reached by turning less than half a turn from the pose.
 
 Cost, at the same results
 -------------------------
-Three things make a walk cheaper without changing a single accepted sample or a bit of
-its position (each Newton column is computed by the same operations whatever else is in
-its batch, so batching is exact):
-
-* Newton iterates only the columns still iterating (a converged column is frozen, as
-  before; a column gone NaN stays NaN), with the residual and Jacobian built from index
-  arrays and the Jacobian's constant linear rows built once.
-* *Chains.* Along any chain of link edges between two held joints (two joints of one
-  link, ``|w_p - w_q| L`` apart with ``w`` = 0, 1, ``rho_k``), the held joints are at most
-  the sum of the edges apart and at least twice the longest minus the sum. A configuration
-  Newton accepts keeps every edge to about ``1e-12`` of its link, so where the held joints
-  break a chain's bounds by more than ``CHAIN_MARGIN`` (``1e-8``) of its lengths no Newton
-  can converge: the sample is failed at once (no Newton, sub-steps or restarts), as it
-  would have been after all of them. This is the gap of a dyad (two circles that do not
-  meet).
-* *Look-ahead.* After a failure, a design's next steps all start from the same state (its
-  last good solution and the predictor before it) until one is accepted, so they do not
-  depend on each other: they are solved in one batch over a window of the next samples
-  (8, doubling to 256) and read from there (:class:`_Ahead`). The segments a two-level
-  walk walks again start, in a gap, from one same state: their steps come from one batch.
+Newton iterates only the columns still iterating (a converged column is frozen; a column
+gone NaN stays NaN), with the residual and Jacobian built from index arrays and the
+Jacobian's constant linear rows built once; each Newton column is computed by the same
+operations whatever else is in its batch, so batching is exact. *Chains.* Along any chain of
+link edges between two held joints (two joints of one link, ``|w_p - w_q| L`` apart with
+``w`` = 0, 1, ``rho_k``), the held joints are at most the sum of the edges apart and at least
+twice the longest minus the sum. A configuration Newton accepts keeps every edge to about
+``1e-12`` of its link, so where the held joints break a chain's bounds by more than
+``CHAIN_MARGIN`` (``1e-8``) of its lengths no Newton can converge: the grid step or sample is
+failed at once (no Newton, sub-steps or restarts), as it would have been after all of them.
+This is the gap of a dyad (two circles that do not meet).
 
 Rates
 -----
