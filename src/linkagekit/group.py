@@ -612,8 +612,8 @@ class Group(Step):
         other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
         if len(other):
             ao, bo, co = a[other], b[other], c[other]
-            nodes = (sol(x, co) for x in (ao - 2, ao - 1, ao, bo, bo + 1, bo + 2))
-            guess[:, other], bound[other] = _cell_guess(*nodes, t[other])
+            Umm, Um, Uao, Ubo, Up, Upp = (sol(x, co) for x in (ao - 2, ao - 1, ao, bo, bo + 1, bo + 2))
+            guess[:, other], bound[other] = _cell_guess(Umm, Um, Uao, Ubo, Up, Upp, t[other])
         with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0) & np.isfinite(bound))
         done = np.zeros(len(c), bool)
         if len(with_guess):
@@ -979,7 +979,8 @@ def grid_places(u: np.ndarray, x0: np.ndarray, step: np.ndarray, cyclic: bool) -
 def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Cubic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with motions per cell ``Va``, ``Vb``."""
     t2, t3 = t * t, t * t * t
-    return (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
+    out: np.ndarray = (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
+    return out
 
 
 def _cell_guess(
@@ -999,7 +1000,8 @@ def _cell_guess(
 
     def beyond(U0: np.ndarray, U1: np.ndarray, U2: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Quadratic through U2, U1, U0 at -2, -1, 0, at x."""
-        return (x + 1) * (x + 2) / 2 * U0 - x * (x + 2) * U1 + x * (x + 1) / 2 * U2
+        out: np.ndarray = (x + 1) * (x + 2) / 2 * U0 - x * (x + 2) * U1 + x * (x + 1) / 2 * U2
+        return out
 
     up, down = beyond(Ua, Um, Umm, t), beyond(Ub, Up, Upp, r)
     fin = [np.all(np.isfinite(U), axis=0) for U in (Ua, Ub)]
