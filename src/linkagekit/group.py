@@ -856,7 +856,7 @@ class Group(Step):
         Js = Ju * scale[:, :, None]
         # the singular values squared are the eigenvalues of Js^T Js (half the cost of an SVD); their
         # rounding is about 1e-16 of the largest, so below COND_EXACT the ratio is taken from the SVD
-        ev = np.linalg.eigvalsh(np.einsum("bki,bkj->bij", Js, Js))
+        ev = np.linalg.eigvalsh(Js.transpose(0, 2, 1) @ Js)
         with np.errstate(invalid="ignore", divide="ignore"):
             cond = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
             low = np.flatnonzero(~(cond >= COND_EXACT))
