@@ -325,6 +325,14 @@ def _analyze_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="zero input speed and acceleration: the driver torques that balance gravity and the loads",
     )
+    p.add_argument(
+        "--branch",
+        choices=("pose", "continuous"),
+        default="pose",
+        help="pose: every joint keeps the reference pose's assembly sign; continuous: follow the branch "
+        "through change points (a parallelogram stays a parallelogram) from the pose's input up and down "
+        "(default: %(default)s)",
+    )
 
 
 def _modes_arguments(p: argparse.ArgumentParser) -> None:
@@ -872,6 +880,7 @@ def _analyze(args: argparse.Namespace) -> int:
         acceleration=_rates(mech, args.acceleration, "--acceleration"),
         method=args.method,
         static=args.static,
+        branch=args.branch,
     )
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)

@@ -247,6 +247,12 @@ class _Walk:
     arrays: _Arrays  # the numbers per design as Newton reads them
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
     K0: np.ndarray  # (k, D) the known joints the start was solved with
+    any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
+
+    def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
+        """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
+        ok: np.ndarray = (sg == self.ref[designs]) | self.any_sign
+        return ok
 
 
 @dataclass(frozen=True)
@@ -615,7 +621,16 @@ class Group(Step):
         ok = np.all(np.isfinite(K_all), axis=0) & conv0[:, None]
         ok &= self._possible(K_all, (lo[..., None], hi[..., None], mg[..., None]))
         w = _Walk(
-            K_all, ok, np.full((m, D, n), NAN_POINT), ref_sign, nums, _size(dn), self._arrays(dn, D), (lo, hi, mg), zk0
+            K_all,
+            ok,
+            np.full((m, D, n), NAN_POINT),
+            ref_sign,
+            nums,
+            _size(dn),
+            self._arrays(dn, D),
+            (lo, hi, mg),
+            zk0,
+            k.continuous,
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -848,14 +863,21 @@ class Group(Step):
         w.out[:, c[acc], s[acc]] = U[:, acc]
 
     def _accept(
-        self, sol: np.ndarray, conv: np.ndarray, sign: np.ndarray, start: np.ndarray, bound: np.ndarray, ref: np.ndarray
+        self,
+        sol: np.ndarray,
+        conv: np.ndarray,
+        sign: np.ndarray,
+        start: np.ndarray,
+        bound: np.ndarray,
+        w: _Walk,
+        designs: np.ndarray,
     ) -> np.ndarray:
-        """Whether Newton's ``sol`` from ``start`` is the branch's: converged, with the pose's determinant sign
-        ``ref`` (a sign change is a passage through a singular position, never silent), and no joint farther
-        than ``bound`` from where it started (over a small step Newton's root is the branch's, not another of
-        one sign)."""
+        """Whether Newton's ``sol`` from ``start`` (columns of ``designs``) is the branch's: converged, with the
+        pose's determinant sign (a sign change is a passage through a singular position, never silent; following
+        the branch continuously, :meth:`_Walk.sign_ok`, any sign), and no joint farther than ``bound`` from where
+        it started (over a small step Newton's root is the branch's, not another of one sign)."""
         near = np.max(np.abs(sol - start), axis=0) <= bound
-        return conv & (sign == ref) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
+        return conv & w.sign_ok(sign, designs) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
 
     def _plain(
         self,
@@ -877,7 +899,7 @@ class Group(Step):
             quad = 3 * U - 3 * U_prev + U_prev2
             guess = np.where(np.isfinite(quad), quad, guess)
         U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
-        return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w.ref[designs])
+        return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w, designs)
 
     def _restart_lost(
         self,
@@ -906,7 +928,7 @@ class Group(Step):
             i = can[first : first + FILL_CHUNK]
             ri, ci, gi = r[i], c[i], g[:, i]
             sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci))
-            good = self._accept(sol, conv, sg, gi, bound[i], w.ref[ci])
+            good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
             w.out[:, ci[good], ri[good]] = sol[:, good]
             ok[i] = good
         return ok
@@ -918,7 +940,7 @@ class Group(Step):
         is accepted (the tests of a continuation step) doubles the next one, a step that is
         not is halved. A step to knowns a chain rules out fails without Newton.
         """
-        ref, size, ar = w.ref[designs], w.size[designs], w.arrays.take(designs)
+        size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
         Uc, t, dt = U.copy(), np.zeros(B), np.full(B, 0.5)
@@ -935,7 +957,7 @@ class Group(Step):
             if len(can):
                 a = act[can]
                 Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
-                ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], ref[a])
+                ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]

@@ -80,6 +80,7 @@ def solve(
     eps: float = ASSEMBLY_RTOL,
     out: np.ndarray | None = None,
     grid: WalkGrid | None = None,
+    continuous: bool = False,
 ) -> Positions:
     """Positions of every joint for every design and input sample.
 
@@ -97,11 +98,15 @@ def solve(
         Where to write the positions.
     grid : WalkGrid, optional
         Set by this function itself: ``q``'s last columns are the grid a numerical group walks.
+    continuous : bool
+        Numerical groups follow their branch through change points (a sign change of their
+        Jacobian's determinant is accepted where the motion is smooth); the sign steps take
+        ``signs`` as given (:mod:`linkagekit.branch` chooses them).
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
     if plan.numerical and grid is None:
-        got = _solve_on_grid(params, q, signs, mirrors, eps, out)
+        got = _solve_on_grid(params, q, signs, mirrors, eps, out, continuous)
         if got is not None:
             return got
     sg = params.signs[:, :, None] if signs is None else np.asarray(signs, float)
@@ -113,7 +118,9 @@ def solve(
     missing = plan.unwritten
     if missing:  # a joint no step writes is NaN, never uninitialised memory
         z[list(missing)] = NAN_POINT
-    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, grid)
+    k = Kin(
+        z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous, grid
+    )
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -172,6 +179,12 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
     return replace(params, signs=signs)
 
 
+#: paths that follow the inputs (:mod:`linkagekit.branch`) pass through inputs at most this far apart
+#: (radians): a sub-step between two samples moves the known joints along a chord, which must not skip a
+#: turning point of the motion
+WALK_STEP = np.radians(1.0)
+
+
 def _solve_on_grid(
     params: Params,
     q: np.ndarray,
@@ -179,6 +192,7 @@ def _solve_on_grid(
     mirrors: np.ndarray | None,
     eps: float,
     out: np.ndarray | None,
+    continuous: bool = False,
 ) -> Positions | None:
     """:func:`solve` with the grid the numerical group walks appended to the samples (:func:`_walk_grid`), and
     the samples taken back; None without a grid (no driver, or no sample)."""
@@ -187,7 +201,9 @@ def _solve_on_grid(
         return None
     qg, grid = walk
     n, m = q.shape[-1], qg.shape[-1]
-    full = solve(params, qg, _dense_choice(signs, n, m), _dense_choice(mirrors, n, m), eps, grid=grid)
+    full = solve(
+        params, qg, _dense_choice(signs, n, m), _dense_choice(mirrors, n, m), eps, grid=grid, continuous=continuous
+    )
     got = _take_samples(full, np.arange(n))
     if out is not None:
         out[...] = got.z

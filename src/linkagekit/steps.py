@@ -76,6 +76,7 @@ class Kin:
     mirrors: np.ndarray
     eps: float
     q0: np.ndarray | None = None  # (n_drivers, D) driver values at the pose (numerical groups walk from it)
+    continuous: bool = False  # numerical groups follow their branch through change points (linkagekit.branch)
     grid: WalkGrid | None = None  # the fixed inputs numerical groups walk (columns of q after the given samples)
 
 
