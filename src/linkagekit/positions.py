@@ -105,10 +105,9 @@ def solve(
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
-    if plan.numerical and grid is None:
-        got = _solve_on_grid(params, q, signs, mirrors, eps, out, continuous)
-        if got is not None:
-            return got
+    got = _solve_on_grid(params, q, signs, mirrors, eps, out, continuous) if plan.numerical and grid is None else None
+    if got is not None:
+        return got
     sg = params.signs[:, :, None] if signs is None else np.asarray(signs, float)
     mr = np.zeros((plan.n_mirrors, 1, 1), bool) if mirrors is None else np.asarray(mirrors, bool)
     D = params.n_designs
