@@ -663,7 +663,7 @@ class Group(Step):
         x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
         near, other = grid_places(u, x0, g.step, g.cyclic)
         c0 = int(np.searchsorted(g.index, 0))
-        origin = self._origin(start, k, g.n_given + c0, w)
+        origin = self._origin(start, g.n_given + c0, w)
         legs = (_Leg.new(origin, w, g, c0, 1), _Leg.new(origin, w, g, c0, -1))
         self._walk_legs(legs, near, w, g)
         covered = legs[0].covers(near, c0) | legs[1].covers(near, c0)
@@ -674,7 +674,7 @@ class Group(Step):
             return np.where(covered, near, np.where(use, alt, np.nan))
         return np.where(covered, near, np.nan)
 
-    def _origin(self, start: np.ndarray, k: Kin, col: int, w: _Walk) -> np.ndarray:
+    def _origin(self, start: np.ndarray, col: int, w: _Walk) -> np.ndarray:
         """The grid's origin (the pose's input, column ``col``) solved from the group's start, written to ``out``.
 
         The start is the pose, solved with its own known joints: at the pose's input Newton
