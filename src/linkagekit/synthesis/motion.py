@@ -101,7 +101,12 @@ class MotionPoses:
 
 
 def motion_poses(
-    x: FloatArray, y: FloatArray, angle: FloatArray, inputs: FloatArray | None = None, closed: bool = False
+    x: FloatArray,
+    y: FloatArray,
+    angle: FloatArray,
+    inputs: FloatArray | None = None,
+    closed: bool = False,
+    source: str = "poses",
 ) -> MotionPoses:
     """Checked, normalised poses from coordinates and angles (radians); ``inputs`` in radians.
 
@@ -111,28 +116,65 @@ def motion_poses(
     """
     x, y, angle = (np.asarray(v, float).reshape(-1) for v in (x, y, angle))
     if not len(x) == len(y) == len(angle):
-        raise InputError("poses: x, y and angle need one value per pose")
+        raise InputError(f"{source}: x, y and angle need one value per pose")
     if len(x) < 3:
-        raise InputError(f"poses: {len(x)} poses; at least 3 are needed")
+        raise InputError(f"{source}: {len(x)} poses; at least 3 are needed")
     if not np.all(np.isfinite(np.concatenate([x, y, angle]))):
-        raise InputError("poses: every x, y and angle must be a finite number")
+        raise InputError(f"{source}: every x, y and angle must be a finite number")
     z = x + 1j * y
     lo, hi = complex(x.min(), y.min()), complex(x.max(), y.max())
     scale = float(abs(hi - lo))
     if scale <= 0:
-        raise InputError("poses: the pose points span no distance")
+        raise InputError(f"{source}: the pose points span no distance")
     center = (lo + hi) / 2
     d = (z - center) / scale
     gap = np.abs(d[:, None] - d[None]) + np.abs(np.angle(cis(angle[:, None] - angle[None])))
     i, j = np.nonzero(np.triu(gap <= SAME_POSE, 1))
     if len(i):
-        raise InputError(f"poses: pose {j[0] + 1} repeats pose {i[0] + 1}")
+        raise InputError(f"{source}: pose {j[0] + 1} repeats pose {i[0] + 1}")
     th = None
     if inputs is not None:
         th = np.asarray(inputs, float).reshape(-1)
         if th.shape != x.shape or not np.all(np.isfinite(th)):
-            raise InputError("poses: one finite input angle per pose is needed")
+            raise InputError(f"{source}: one finite input angle per pose is needed")
     return MotionPoses(d, angle, center, scale, th, closed)
+
+
+@dataclass(frozen=True)
+class PoseFile:
+    """Poses read from a CSV file: ``poses`` (m, 3) ``x, y, angle`` (degrees), ``inputs`` (degrees) or None."""
+
+    poses: FloatArray
+    inputs: FloatArray | None
+    closed: bool
+    source: str
+
+
+#: the largest |angle| (degrees) a pose file may give
+MAX_ANGLE = 360.0
+
+
+def read_poses(path: str) -> PoseFile:
+    """Poses from a CSV file with the header ``x,y,angle`` or ``x,y,angle,input`` (spec section 6).
+
+    The motion is closed when the last pose repeats the first (the repeat is dropped). Bad
+    input (fewer than 3 poses, a value not a finite number, an angle beyond 360 degrees, two
+    equal poses) raises :class:`~linkagekit.errors.InputError` with one line naming the file.
+    """
+    from .targets import read_table
+
+    cols, table = read_table(path, [("x", "y", "angle"), ("x", "y", "angle", "input")], "pose")
+    P = table[:, [cols.index(c) for c in ("x", "y", "angle")]]
+    ins = table[:, cols.index("input")] if "input" in cols else None
+    bad = np.flatnonzero(np.abs(P[:, 2]) > MAX_ANGLE)
+    if len(bad):
+        raise InputError(f"{path}: pose {bad[0] + 1}: angle {P[bad[0], 2]:g} is out of range [-360, 360] degrees")
+    closed = len(P) > 3 and bool(np.all(P[-1, :2] == P[0, :2]) and np.mod(P[-1, 2] - P[0, 2], 360.0) == 0.0)
+    if closed:
+        P, ins = P[:-1], None if ins is None else ins[:-1]
+    rad = None if ins is None else np.radians(ins)
+    motion_poses(P[:, 0], P[:, 1], np.radians(P[:, 2]), rad, closed, source=path)  # checked here, naming the file
+    return PoseFile(P, ins, closed, path)
 
 
 # ---------------------------------------------------------------------- dyads
