@@ -488,8 +488,14 @@ class MotionObjective(Objective):
         return fourbar_vector(d, np.arange(n), np.arange(n, 2 * n))
 
     def check(self, X: FloatArray) -> Score:
+        """The four-bar of each design judged with either dyad as the crank (the better one counts)."""
         F = self.fourbars(X)
-        return judge(self.poses, F, crank_angles(self.poses, F), first_mode(self.poses, F), self)
+        swapped = np.concatenate([F[:, 5:], F[:, :5]], axis=1)
+        a, b = (
+            judge(self.poses, G, crank_angles(self.poses, G), first_mode(self.poses, G), self) for G in (F, swapped)
+        )
+        pick = (b.violation < a.violation) | ((b.violation == a.violation) & (b.error < a.error))
+        return Score(*(np.where(pick, getattr(b, f), getattr(a, f)) for f in ("cost", "error", "violation")))
 
     def fingerprint(self) -> str:
         p = self.poses
