@@ -246,3 +246,17 @@ def test_a_template_without_p_and_q_is_refused(tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(ERROR_PREFIX) and "\n" not in err and "P and Q" in err
+
+
+def test_five_poses_take_the_exact_route_when_burmester_is_there():
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    mech = known_fourbar()
+    poses = traced_poses(mech, 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+    out = synthesize_motion(poses)
+    assert out.best.method == "exact" and out.best.one_branch
+    for f in out.fourbars:
+        assert f.max_position_error < 1e-9 * out.diagonal and f.max_angle_error < 1e-7
+    pos, ang = errors_by_analyze(out.best.mechanism, poses, out.best.inputs)
+    assert np.max(pos) < 1e-9 * out.diagonal and np.max(np.abs(ang)) < 1e-7
+    approx = synthesize_motion(poses, approximate=True)
+    assert approx.best.method == "approximate" and approx.best.max_position_error < 1e-8 * out.diagonal

@@ -553,6 +553,18 @@ def _motion_fourbar(p: Any, d: Any, units: str) -> MotionFourBar:
     )
 
 
+def _smallest_transmission(mech: Mechanism, inputs: np.ndarray) -> float:
+    """The smallest angle (degrees, folded to [0, 90]) between coupler ``A1-B1`` and rocker ``B0-B1`` over the sweep."""
+    from ..api import analyze
+
+    sweep = np.linspace(inputs[0], inputs[-1], max(2, int(4 * abs(inputs[-1] - inputs[0])) + 2))
+    res = analyze(mech, {"crank": sweep}, rates=False, dynamics=False)
+    b = res.point("B1")
+    u, v = res.point("A1") - b, res.point("B0") - b
+    mu = np.degrees(np.arccos(np.clip(np.abs((np.conj(u) * v).real) / (np.abs(u) * np.abs(v)), 0.0, 1.0)))
+    return float(np.nanmin(mu))
+
+
 def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
     """Every four-bar of Burmester theory for 3 to 5 poses (:mod:`linkagekit.synthesis.burmester`), if available."""
     import importlib
@@ -562,7 +574,7 @@ def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
     except ImportError:
         return []
     out = []
-    for fb in burmester.exact_motion(P[:, 0], P[:, 1], np.radians(P[:, 2])):
+    for fb in burmester.exact_motion((P[:, 0], P[:, 1], np.radians(P[:, 2]))):
         name = f"Burmester four-bar: max error {fb.position_error:.3g} {units}"
         out.append(
             MotionFourBar(
@@ -572,7 +584,7 @@ def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
                 np.degrees(np.asarray(fb.inputs, float)),
                 bool(fb.in_order),
                 str(fb.grashof),
-                float("nan"),
+                _smallest_transmission(fb.mechanism(units, name), np.degrees(fb.inputs)) if fb.in_order else np.nan,
                 "exact",
             )
         )
