@@ -381,9 +381,19 @@ def combined(pos: FloatArray, ang: FloatArray, weight: float) -> FloatArray:
 
 # ---------------------------------------------------------------------- minimax polish
 def minimax_polish(
-    p: MotionPoses, F: FloatArray, t: FloatArray, s: float, weight: float, iterations: int = 100
+    p: MotionPoses,
+    F: FloatArray,
+    t: FloatArray,
+    s: float,
+    weight: float,
+    iterations: int = 100,
+    min_transmission: float = 0.0,
 ) -> tuple[FloatArray, FloatArray]:
-    """SLSQP on ``min tau`` s.t. ``p_i <= tau``, ``w |a_i| <= tau``, assembly at the poses: ``(F, t)`` polished."""
+    """SLSQP on ``min tau`` s.t. ``p_i <= tau``, ``w |a_i| <= tau``: ``(F, t)`` polished.
+
+    Also constrained at the poses' crank angles and half-way between them: the four-bar
+    assembles (``cos^2 alpha <= 1``) and, when asked, ``cos^2 mu <= cos^2 min_transmission``.
+    """
     from scipy.optimize import minimize
 
     m = p.m
@@ -403,8 +413,11 @@ def minimax_polish(
         tau = Z[:, -1:]
         ss = np.broadcast_to(sv, (len(Z),))
         pos, ang = pose_errors(p, Fz, T, ss, clip=True)
-        _, _, cos_a, _ = frames(Fz, T, ss)
-        out = np.concatenate([tau**2 - pos**2, tau - weight * ang, tau + weight * ang, 1 - cos_a**2], axis=1)
+        _, _, cos_a, cos_mu = frames(Fz, np.concatenate([T, (T[:, 1:] + T[:, :-1]) / 2], axis=1), ss)
+        parts = [tau**2 - pos**2, tau - weight * ang, tau + weight * ang, 1 - cos_a**2]
+        if min_transmission > 0:
+            parts.append(np.cos(np.radians(min_transmission)) ** 2 - cos_mu**2)
+        out = np.concatenate(parts, axis=1)
         return np.where(np.isfinite(out), out, -1.0)
 
     def jac(z: FloatArray) -> FloatArray:
@@ -598,7 +611,8 @@ def _polished(
     """``[(E, F, t, s)]`` of a four-bar after the minimax polish, or as it was (``error``: its E if valid), or none."""
     _, un, _ = unwrap_turn(t[None], p.closed)
     start = (F, un[0])
-    Fk, tk = minimax_polish(p, F, un[0], s, o.weight) if error is None or error > EXACT else start
+    polish = error is None or error > EXACT
+    Fk, tk = minimax_polish(p, F, un[0], s, o.weight, min_transmission=o.min_transmission) if polish else start
     polished = judge(p, Fk[None], tk[None], np.array([s]), o)
     if polished.violation[0] == 0 and (error is None or polished.error[0] <= error):
         return [(float(polished.error[0]), Fk, tk, s)]

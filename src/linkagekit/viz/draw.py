@@ -526,7 +526,7 @@ def synthesis_figure(
 #: colour of the coupler's achieved frames (P -> Q) at the poses of a motion synthesis
 ACHIEVED_COLOR = "#1a7f37"
 #: a pose's frame: its line this fraction of the poses' diagonal long, its second axis half that
-FRAME_LENGTH = 0.08
+FRAME_LENGTH = 0.12
 
 
 def motion_figure(
