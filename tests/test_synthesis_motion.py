@@ -265,3 +265,18 @@ def test_five_poses_take_the_exact_route_when_burmester_is_there():
     assert np.max(pos) < 1e-9 * out.diagonal and np.max(np.abs(ang)) < 1e-7
     approx = synthesize_motion(poses, approximate=True)
     assert approx.best.method == "approximate" and approx.best.max_position_error < 1e-8 * out.diagonal
+
+
+def test_a_closed_motion_turns_the_crank_once_per_cycle(tmp_path):
+    poses = traced_poses(known_fourbar(), 41.6 + np.arange(0.0, 361.0, 45.0))  # the last repeats the first
+    pf = motion.read_poses(str(write_poses(tmp_path / "closed.csv", poses)))
+    assert pf.closed and len(pf.poses) == 8
+    out = synthesize_motion(pf.poses, closed=True, seconds=5)
+    best = out.best
+    assert best.one_branch
+    sweep = best.mechanism.drivers[0].sweep
+    assert abs(abs(sweep.stop - sweep.start) - 360.0) < 1e-9
+    res = lk.analyze(best.mechanism, {"crank": np.linspace(sweep.start, sweep.stop, 1441)})
+    assert np.all(res.assembled)  # it turns fully
+    pos, ang = errors_by_analyze(best.mechanism, pf.poses, best.inputs)
+    assert np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6

@@ -169,7 +169,9 @@ def read_poses(path: str) -> PoseFile:
     bad = np.flatnonzero(np.abs(P[:, 2]) > MAX_ANGLE)
     if len(bad):
         raise InputError(f"{path}: pose {bad[0] + 1}: angle {P[bad[0], 2]:g} is out of range [-360, 360] degrees")
-    closed = len(P) > 3 and bool(np.all(P[-1, :2] == P[0, :2]) and np.mod(P[-1, 2] - P[0, 2], 360.0) == 0.0)
+    size = float(np.hypot(np.ptp(P[:, 0]), np.ptp(P[:, 1])))
+    turn = abs(np.angle(np.exp(1j * np.radians(P[-1, 2] - P[0, 2]))))
+    closed = len(P) > 3 and bool(np.hypot(*(P[-1, :2] - P[0, :2])) <= SAME_POSE * size and turn <= SAME_POSE)
     if closed:
         P, ins = P[:-1], None if ins is None else ins[:-1]
     rad = None if ins is None else np.radians(ins)
