@@ -72,7 +72,7 @@ def write_poses(path: Path, poses: np.ndarray, inputs: np.ndarray | None = None)
 def test_seven_poses_of_a_four_bar_are_recovered_on_one_branch():
     mech = known_fourbar()
     poses = traced_poses(mech, 41.6 + np.linspace(0.0, 280.0, 7))
-    out = synthesize_motion(poses, seconds=5)
+    out = lk.synthesize(poses, task="motion", seconds=5)
     best = out.best
     assert best.one_branch and best.method == "approximate"
     pos, ang = errors_by_analyze(best.mechanism, poses, best.inputs)  # the written file, solved independently

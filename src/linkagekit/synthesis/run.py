@@ -218,7 +218,7 @@ def synthesize(
     inputs: Sequence[float] | None = None,
     units: str = "m",
     ordered: bool = False,
-    min_transmission: float = MIN_TRANSMISSION,
+    min_transmission: float | None = None,
     lengths: tuple[float, float] | None = None,
     pivots: tuple[tuple[float, float], tuple[float, float]] | None = None,
     free: Sequence[str] | Mapping[str, Any] | None = None,
@@ -234,6 +234,10 @@ def synthesize(
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
     objective: Objective | None = None,
+    task: str = "path",
+    closed: bool = False,
+    approximate: bool = False,
+    angle_weight: float | None = None,
     **old: Any,
 ) -> Any:
     """Find a mechanism whose tracer point passes near every target (or search any ``objective``).
@@ -252,8 +256,9 @@ def synthesize(
         ``read_targets``. ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
         Without timing, meet the targets in their order along the curve.
-    min_transmission : float
-        Degrees: transmission angles stay within ``[MIN, 180 - MIN]`` over the whole turn.
+    min_transmission : float, optional
+        Degrees: transmission angles stay within ``[MIN, 180 - MIN]`` over the whole turn
+        (default ``MIN_TRANSMISSION``, 20).
     lengths : (float, float), optional
         Bounds on every link length.
     pivots : ((xmin, xmax), (ymin, ymax)), optional
@@ -269,16 +274,30 @@ def synthesize(
     objective : Objective, optional
         A user's own :class:`~linkagekit.synthesis.base.Objective`: searched by the same
         engine instead of the targets (pass ``targets=None``); returns an :class:`Optimum`.
+    task : str
+        ``"path"`` (the default) or ``"motion"``: ``targets`` are then poses (m, 3) ``x, y,
+        angle`` (degrees) and :func:`synthesize_motion` runs with ``inputs``, ``closed``,
+        ``approximate``, ``angle_weight``, ``min_transmission`` (default 0 for motion),
+        ``units``, ``seed`` and ``seconds``.
 
     Returns
     -------
-    Synthesis, or Optimum with ``objective``
+    Synthesis; MotionSynthesis with ``task="motion"``; Optimum with ``objective``
     """
     if objective is not None:
         return search(
             objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, popsize=popsize,
             goal=goal, workers=workers, scheduler=scheduler, checkpoint=checkpoint, progress=progress,
         )  # fmt: skip
+    if task == "motion":
+        mt = 0.0 if min_transmission is None else min_transmission
+        return synthesize_motion(
+            targets, inputs=inputs, closed=closed, approximate=approximate, weight=angle_weight,
+            min_transmission=mt, units=_units(units, old), seed=seed, seconds=seconds,
+        )  # fmt: skip
+    if task != "path":
+        raise InputError(f"task: expected 'path' or 'motion', got {task!r}")
+    min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
     source = getattr(targets, "source", None)
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
