@@ -1346,13 +1346,18 @@ _SYNTHESIZE_DECIDING = (
 )
 
 
+#: the options that decide a ``--task motion`` result (besides --task, --approximate and --angle-weight)
+_MOTION_DECIDING = ("units", "seed", "seconds", "min_transmission")
+
+
 def _synthesize_command(args: argparse.Namespace) -> str:
     """The command that gives this result again, from the targets' directory (every deciding option spelt out)."""
     import os
     import shlex
 
     words = [PROG, "synthesize", os.path.basename(args.targets)]
-    for name in _SYNTHESIZE_DECIDING:
+    deciding = _MOTION_DECIDING if args.task == "motion" else _SYNTHESIZE_DECIDING
+    for name in deciding:
         value = getattr(args, name)
         if name == "min_transmission" and value is None and args.task == "path":
             value = "20"
