@@ -280,3 +280,28 @@ def test_a_closed_motion_turns_the_crank_once_per_cycle(tmp_path):
     assert np.all(res.assembled)  # it turns fully
     pos, ang = errors_by_analyze(best.mechanism, pf.poses, best.inputs)
     assert np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6
+
+
+def random_fourbar_poses(rng: np.random.Generator) -> np.ndarray | None:
+    """6 to 24 poses of a random four-bar over 90 % of its crank's range from its pose (None: too short a range)."""
+    j = {"A0": [0.0, 0.0], "B0": [rng.uniform(2, 5), rng.uniform(-1, 1)], "A1": list(rng.uniform(-1.5, 1.5, 2))}
+    j["B1"] = list(np.array(j["B0"]) + rng.uniform(-2.5, 2.5, 2))
+    j["P"] = list(rng.uniform(-1, 4, 2))
+    j["Q"] = list(np.array(j["P"]) + rng.uniform(-1, 1, 2))
+    mech = known_fourbar(j)
+    a0 = lk.api.pose_inputs(mech)["crank"]
+    ok = np.asarray(lk.analyze(mech, {"crank": a0 + np.arange(0.0, 360.0)}).assembled)
+    reach = int(np.argmax(~ok)) if (~ok).any() else 360
+    if reach < 40:
+        return None
+    return traced_poses(mech, a0 + np.linspace(0.0, 0.9 * (reach - 1), int(rng.integers(6, 25))))
+
+
+def test_random_four_bars_are_recovered():
+    rng = np.random.default_rng(2)
+    cases = [p for p in (random_fourbar_poses(rng) for _ in range(16)) if p is not None][:4]
+    assert len(cases) == 4
+    for poses in cases:
+        out = synthesize_motion(poses, seconds=5)
+        pos, ang = errors_by_analyze(out.best.mechanism, poses, out.best.inputs)
+        assert out.best.one_branch and np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6

@@ -59,6 +59,8 @@ if TYPE_CHECKING:
 ANGLE_WEIGHT = 0.05
 #: body-point grid of the dyad search (per axis), its half-width in diagonals, the dyads kept
 GRID, GRID_REACH, DYADS = 48, 1.5, 14
+#: pivots and radii beyond this many diagonals are left out (a nearly straight path: a slider's job)
+FAR_PIVOT = 12.0
 #: Levenberg-Marquardt iterations of the dyad refinement
 LM_STEPS = 60
 #: four-bars polished by the minimax step; one whose error is this many times the best polished one's is not
@@ -243,7 +245,13 @@ def refine_dyads(p: MotionPoses, V: FloatArray, timed: bool = False, steps: int 
 def search_dyads(p: MotionPoses, timed: bool = False, extra: FloatArray | None = None) -> Dyads:
     """The ``DYADS`` best distinct dyads: a grid of body points, Kasa's circles, refined together."""
     s = np.linspace(-GRID_REACH, GRID_REACH, GRID)
-    W0 = (s[:, None] + 1j * s[None, :]).reshape(-1)  # first-pose positions around the poses' centre
+    rho = np.geomspace(GRID_REACH, FAR_PIVOT / 2, GRID // 2)
+    W0 = np.concatenate(  # first-pose positions: a square about the poses' centre and rings out to the far ones
+        [
+            (s[:, None] + 1j * s[None, :]).reshape(-1),
+            (rho[:, None] * cis(np.linspace(0, 2 * np.pi, 2 * GRID)[None, :-1])).reshape(-1),
+        ]
+    )
     c = (W0 - p.d[0]) / p.u[0]
     g, r = kasa(p.at(c[:, None]))
     V = np.stack([c.real, c.imag, g.real, g.imag, r], axis=1)
@@ -256,10 +264,10 @@ def search_dyads(p: MotionPoses, timed: bool = False, extra: FloatArray | None =
 
 
 def _rms(p: MotionPoses, V: FloatArray, timed: bool) -> FloatArray:
-    """RMS residual of dyads; inf for a far pivot (beyond 4 diagonals) or a radius of 3 diagonals or more."""
+    """RMS residual of dyads; inf for a far pivot or radius (``FAR_PIVOT``) or a radius below 1e-3."""
     res = _dyad_residuals(p, V, timed)
     rms = np.sqrt(np.mean(res * res, axis=1))
-    far = (np.hypot(V[:, 2], V[:, 3]) > 4) | (V[:, 4] > 3) | (V[:, 4] < 1e-3)
+    far = (np.hypot(V[:, 2], V[:, 3]) > FAR_PIVOT) | (V[:, 4] > FAR_PIVOT) | (V[:, 4] < 1e-3)
     return np.where(far | ~np.isfinite(rms), np.inf, rms)
 
 
