@@ -21,6 +21,31 @@ analytic: a distance row has ``2 (z_a - z_b)`` (as ``[x, y]``) on ``a`` and its 
 ``rho_k - 1`` on ``j0``, ``-rho_k`` on ``j1``; ``c`` acting on ``[x, y]`` is ``[[Re c,
 -Im c], [Im c, Re c]]``).
 
+Sliders
+-------
+A slider whose two sides are the ground, links of the group or placed links adds rows after
+the links' (:class:`GroupSlider`). Its *carrier* (the ground, or a side with two joints
+``c0``, ``c1``) carries the line; the other side's first joint ``k`` stays on the line
+through its reference position along the slider's direction ``d`` in the carrier's frame.
+With ``e = z_c1 - z_c0`` and ``A = z_c0`` (the ground: ``e = 1``, ``A = 0``), ``rho = (p_k -
+s_c0) / (s_c1 - s_c0)``, ``dhat = d / (s_c1 - s_c0)`` (the ground: ``rho = p_k``, ``dhat =
+d``), ``w = z_k - A - rho e`` and ``u = dhat e`` (the line's unit direction):
+
+* line row ``Im(w conj(u)) = 0``;
+* lock row ``Im(e_o conj(c e)) = 0`` when the other side has two joints ``o0``, ``o1`` too
+  (``e_o = z_o1 - z_o0``, ``c = (s_o1 - s_o0) / (s_c1 - s_c0)``, the ground: ``c = s_o1 -
+  s_o0``): its rotation is the carrier's (the two distance rows fix the lengths, so one row
+  fixes the angle).
+
+Gradients, written as a complex ``G`` with ``d row = Re G dx + Im G dy`` (``Im(a dz)`` has
+``G = i conj(a)``, ``Im(g conj(dz))`` has ``G = -i g``): the line row has ``i u`` on ``k``,
+``i conj(rho - 1) u + i w conj(dhat)`` on ``c0``, ``-i conj(rho) u - i w conj(dhat)`` on
+``c1``; the lock row ``i c e`` on ``o1`` (negated on ``o0``) and ``-i e_o conj(c)`` on ``c1``
+(negated on ``c0``); the ground has no columns. Both rows are bilinear, so their acceleration
+terms are ``gamma = 2 Im(w' conj(u'))`` and ``2 Im(e_o' conj(c e'))`` (``w' = v_k - v_A - rho
+e'``, ``u' = dhat e'``, ``e' = v_c1 - v_c0``; zero on the ground). Scales: the group's mean
+link length on a line row, ``|s_o1 - s_o0|^2`` on a lock row.
+
 Continuation
 ------------
 Newton converges to the root nearest its start, which may belong to another assembly
@@ -72,9 +97,10 @@ its batch, so batching is exact):
 Rates
 -----
 Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J_k a_k -
-gamma``, ``gamma = 2 |v_a - v_b|^2`` for a distance row, 0 for a linear row. The
-conditioning reported with the rates is the smallest singular value of ``J_u`` with its
-distance rows divided by ``2 L`` (so every row has unit scale) over its largest.
+gamma``, ``gamma = 2 |v_a - v_b|^2`` for a distance row, 0 for a linear row (and the
+sliders' above). The conditioning reported with the rates is the smallest singular value of
+``J_u`` with its distance rows divided by ``2 L`` and its lock rows by ``|s_o1 - s_o0|`` (so
+every row has unit scale) over its largest.
 """
 
 from __future__ import annotations
@@ -127,6 +153,47 @@ class GroupLink:
     name: str
     slots: tuple[int, ...]  # slot of j0, j1, j2, ... (slots < n_unknown are unknowns)
     joints: tuple[int, ...]  # the same joints as plan indices
+
+
+@dataclass(frozen=True)
+class GroupSlider:
+    """A slider of a group: a point on a line carried by a link (or the ground), and a rotation lock.
+
+    The *carrier* is the side of the slider that carries the line: the ground (a fixed line),
+    or a link whose first two joints ``frame`` are slots of the group. The *point* is a joint
+    of the other side; it stays on the line through its reference position, parallel to the
+    slider's direction in the carrier's frame. When the other side is a link with two joints
+    too (``lock``: its first two joints), its rotation is the carrier's (a block translates).
+    """
+
+    slider: int  # index in the file's `sliders`
+    carrier: str  # the link carrying the line ("ground": a fixed line)
+    frame: tuple[int, int] | None  # the carrier's first two joints as slots (None: the ground)
+    frame_joints: tuple[int, int] | None  # ... as plan indices
+    point: int  # the other side's joint on the line, as a slot
+    point_joint: int  # ... as a plan index
+    other: str  # the other side's link
+    lock: tuple[int, int] | None = None  # the other side's first two joints as slots (None: no lock)
+    lock_joints: tuple[int, int] | None = None  # ... as plan indices
+
+    @property
+    def n_rows(self) -> int:
+        """Its equations: the line, and the lock when it has one."""
+        return 1 + (self.lock is not None)
+
+
+@dataclass(frozen=True)
+class _SRows:
+    """Where a group's slider equations sit (after the links' rows), per slider; ``-1``: none (the ground)."""
+
+    c0: np.ndarray  # (n_sl,) the carrier's first frame slot (-1: the ground)
+    c1: np.ndarray  # (n_sl,) its second
+    k: np.ndarray  # (n_sl,) the point's slot
+    line: np.ndarray  # (n_sl,) the row of its line equation
+    locked: np.ndarray  # (n_lock,) the sliders with a lock
+    o0: np.ndarray  # (n_lock,) the locked side's first slot
+    o1: np.ndarray  # (n_lock,) ... second
+    lock: np.ndarray  # (n_lock,) the row of the lock equation
 
 
 @dataclass(frozen=True)
@@ -186,6 +253,7 @@ class Group(Step):
     links: tuple[GroupLink, ...]
     keep_rotation: tuple[str, ...] = ()
     angular: tuple[bool, ...] = ()  # per driver: an angle (the walk's added samples are 1 degree apart)
+    sliders: tuple[GroupSlider, ...] = ()
 
     # ------------------------------------------------------------------ numbers
     def numbers(self, src: Source) -> Nums:
@@ -197,9 +265,30 @@ class Group(Step):
             lengths.append(np.abs(base))
             with np.errstate(divide="ignore", invalid="ignore"):
                 rhos.append(tuple((sk - s[0]) / base for sk in s[2:]))
+        rhos.extend(self._slider_numbers(src))
         zu = np.stack([src.pose(j) for j in self.joints])  # (m, D, 1)
         zk = np.stack([src.pose(j) for j in self.known]) if self.known else np.zeros((0, *zu.shape[1:]), complex)
         return tuple(lengths), tuple(rhos), tuple(bases), zu, zk
+
+    def _slider_numbers(self, src: Source) -> list[tuple[np.ndarray, ...]]:
+        """Per slider ``(rho, dhat, c, ell)``: its line ``A + rho e`` along ``dhat e`` (``A``, ``e``: the carrier's
+        first joint and base, or 0 and 1 for the ground), its lock ``e_o = c e`` and the locked side's length."""
+        out: list[tuple[np.ndarray, ...]] = []
+        for gs in self.sliders:
+            d = src.direction(gs.slider)
+            s0: Any = 0j
+            base: Any = 1.0 + 0j
+            if gs.frame_joints is not None:
+                s0 = src.shape(gs.carrier, gs.frame_joints[0])
+                base = src.shape(gs.carrier, gs.frame_joints[1]) - s0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rho, dhat = (src.pose(gs.point_joint) - s0) / base, d / base
+                c, ell = 0 * d, 1 + 0 * d
+                if gs.lock_joints is not None:
+                    lo = src.shape(gs.other, gs.lock_joints[1]) - src.shape(gs.other, gs.lock_joints[0])
+                    c, ell = lo / base, np.abs(lo) + 0j
+            out.append((rho, dhat, c, ell))
+        return out
 
     @property
     def dyad_like(self) -> bool:
@@ -208,7 +297,10 @@ class Group(Step):
         Only then does the walk restart after a gap (a class-3 group has up to three roots of one
         sign, so there a sample it cannot reach by continuation stays flagged).
         """
-        on_two = sum(sum(j in gl.joints for gl in self.links) >= 2 for j in self.joints)
+        on_two = sum(
+            sum(j in gl.joints for gl in self.links) + sum(j == gs.point_joint for gs in self.sliders) >= 2
+            for j in self.joints
+        )
         return on_two == 1
 
     @property
@@ -232,6 +324,79 @@ class Group(Step):
                 row += 2
         return _Rows(*(np.array(x, dtype=np.intp) for x in (a, b, dist, link, k, lin)))
 
+    @cached_property
+    def _srows(self) -> _SRows:
+        row = sum(1 + 2 * (len(gl.slots) - 2) for gl in self.links)
+        c0, c1, k, line, locked, o0, o1, lock = [], [], [], [], [], [], [], []
+        for i, gs in enumerate(self.sliders):
+            c0.append(gs.frame[0] if gs.frame else -1)
+            c1.append(gs.frame[1] if gs.frame else -1)
+            k.append(gs.point)
+            if gs.lock is not None:
+                locked.append(i)
+                o0.append(gs.lock[0])
+                o1.append(gs.lock[1])
+                lock.append(row)
+                row += 1
+            line.append(row)
+            row += 1
+        return _SRows(*(np.array(x, dtype=np.intp) for x in (c0, c1, k, line, locked, o0, o1, lock)))
+
+    def _frames(self, P: np.ndarray, rates: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Each slider's carrier frame ``(A, e)`` (n_sl, B) at ``P``: its first joint and base (``0, 1`` on the
+        ground); with ``rates`` (``P`` velocities or accelerations) their derivatives (``0, 0`` on the ground)."""
+        sr = self._srows
+        ground = (sr.c0 < 0)[:, None]
+        A = np.where(ground, 0.0, P[np.maximum(sr.c0, 0)])
+        e = np.where(ground, 0.0 if rates else 1.0, P[np.maximum(sr.c1, 0)] - A)
+        return A, e
+
+    def _snums(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The sliders' numbers ``(rho, dhat, c, ell)``, each (n_sl, B), from ``R`` (after the links' rhos)."""
+        n = len(self._rows.k)
+        return R[n::4], R[n + 1 :: 4], R[n + 2 :: 4], R[n + 3 :: 4]
+
+    def _slider_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
+        """The sliders' residuals into ``res``: ``Im(w conj(u))`` (line) and ``Im(e_o conj(c e))`` (lock)."""
+        sr = self._srows
+        rho, dhat, c, _ = self._snums(R)
+        A, e = self._frames(P)
+        res[sr.line] = ((P[sr.k] - A - rho * e) * np.conj(dhat * e)).imag
+        if len(sr.locked):
+            lk = sr.locked
+            res[sr.lock] = ((P[sr.o1] - P[sr.o0]) * np.conj(c[lk] * e[lk])).imag
+
+    def _slider_jac(self, P: np.ndarray, R: np.ndarray, J: FloatArray) -> None:
+        """The sliders' Jacobian rows into ``J`` (B, n_eq, 2 n_cols); a gradient ``G`` (complex) means
+        ``d res = Re G dx + Im G dy``: ``Im(a dz)`` has ``G = i conj(a)``, ``Im(g conj(dz))`` has ``G = -i g``."""
+        sr = self._srows
+        rho, dhat, c, _ = self._snums(R)
+        A, e = self._frames(P)
+        u, w = dhat * e, P[sr.k] - A - rho * e
+        wd = w * np.conj(dhat)
+        n_cols = J.shape[2] // 2
+        _add(J, sr.line, sr.k, 1j * u, n_cols)
+        _add(J, sr.line, sr.c0, 1j * np.conj(rho - 1) * u + 1j * wd, n_cols)
+        _add(J, sr.line, sr.c1, -1j * np.conj(rho) * u - 1j * wd, n_cols)
+        if len(sr.locked):
+            lk = sr.locked
+            ce, eoc = c[lk] * e[lk], (P[sr.o1] - P[sr.o0]) * np.conj(c[lk])
+            _add(J, sr.lock, sr.o1, 1j * ce, n_cols)
+            _add(J, sr.lock, sr.o0, -1j * ce, n_cols)
+            _add(J, sr.lock, sr.c1[lk], -1j * eoc, n_cols)
+            _add(J, sr.lock, sr.c0[lk], 1j * eoc, n_cols)
+
+    def _slider_gamma(self, P: np.ndarray, V: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The sliders' acceleration terms at positions ``P`` and velocities ``V`` (n_slots, B): line rows
+        ``2 Im(w' conj(u'))``, lock rows ``2 Im(e_o' conj(c e'))`` (each (rows, B)), in :attr:`_srows` order."""
+        sr = self._srows
+        rho, dhat, c, _ = self._snums(R)
+        vA, ve = self._frames(V, rates=True)
+        line = 2 * ((V[sr.k] - vA - rho * ve) * np.conj(dhat * ve)).imag
+        lk = sr.locked
+        lock = 2 * ((V[sr.o1] - V[sr.o0]) * np.conj(c[lk] * ve[lk])).imag
+        return line, lock
+
     def _stack(self, nums: Nums, B: int) -> tuple[FloatArray, np.ndarray]:
         """Design numbers as arrays: lengths (n_links, B) and the further joints' rhos (n_lin, B), in row order."""
         L = np.array([np.broadcast_to(np.ravel(x), (B,)) for x in nums[0]], float).reshape(len(self.links), B)
@@ -246,16 +411,23 @@ class Group(Step):
         res = np.empty((self.n_eq, P.shape[1]))
         res[rw.dist] = e.real * e.real + e.imag * e.imag - L * L
         if len(rw.k):
-            c = P[rw.k] - P[rw.a[rw.link]] - R * e[rw.link]
+            c = P[rw.k] - P[rw.a[rw.link]] - R[: len(rw.k)] * e[rw.link]
             res[rw.lin], res[rw.lin + 1] = c.real, c.imag
+        if self.sliders:
+            self._slider_res(P, R, res)
         return res
 
-    def _scale(self, L: FloatArray) -> FloatArray:
-        """The scale of every residual (n_eq, B): ``L^2`` on a distance row, ``L`` on a linear row."""
+    def _scale(self, L: FloatArray, R: np.ndarray) -> FloatArray:
+        """The scale of every residual (n_eq, B): ``L^2`` on a distance row, ``L`` on a linear row, the
+        group's mean link length on a slider's line row and the locked side's length squared on its lock row."""
         rw = self._rows
         scale = np.empty((self.n_eq, L.shape[1]))
         scale[rw.dist] = L * L
         scale[rw.lin] = scale[rw.lin + 1] = L[rw.link]
+        if self.sliders:
+            sr = self._srows
+            scale[sr.line] = np.mean(L, axis=0)
+            scale[sr.lock] = self._snums(R)[3][sr.locked].real ** 2
         return scale
 
     def _lin_jacobian(self, R: np.ndarray, n_cols: int) -> FloatArray:
@@ -274,8 +446,8 @@ class Group(Step):
                     J[:, row + 1, 2 * slot + 1] += c.real
         return J
 
-    def _jac(self, P: np.ndarray, J_lin: FloatArray) -> FloatArray:
-        """The Jacobian at ``P`` on the slots of ``J_lin`` (its linear rows): the distance rows added."""
+    def _jac(self, P: np.ndarray, J_lin: FloatArray, R: np.ndarray) -> FloatArray:
+        """The Jacobian at ``P`` on the slots of ``J_lin`` (its linear rows): the distance and slider rows added."""
         rw = self._rows
         n_cols = J_lin.shape[2] // 2
         J = J_lin.copy()
@@ -285,6 +457,8 @@ class Group(Step):
             rows, cols = rw.dist[on], 2 * s[on]
             J[:, rows, cols] = (f * e.real[on]).T
             J[:, rows, cols + 1] = (f * e.imag[on]).T
+        if self.sliders:
+            self._slider_jac(P, R, J)
         return J
 
     def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
@@ -292,7 +466,7 @@ class Group(Step):
         L, R = self._stack(nums, P.shape[1])
         rw = self._rows
         zero = 0 * (P[rw.b] - P[rw.a]).real  # NaN scales where a link is not finite
-        scale = self._scale(L)
+        scale = self._scale(L, R)
         scale[rw.dist] += zero
         scale[rw.lin] += zero[rw.link]
         scale[rw.lin + 1] += zero[rw.link]
@@ -301,7 +475,7 @@ class Group(Step):
     def jacobian(self, P: np.ndarray, nums: Nums, n_slots: int) -> np.ndarray:
         """d residual / d [x, y] of every slot: (B, n_eq, 2 n_slots)."""
         _, R = self._stack(nums, P.shape[1])
-        return self._jac(P, self._lin_jacobian(R, n_slots))
+        return self._jac(P, self._lin_jacobian(R, n_slots), R)
 
     def _design_nums(self, nums: Nums, d: np.ndarray) -> Nums:
         """The numbers of the designs ``d`` (a design index per batch row), flat."""
@@ -316,7 +490,7 @@ class Group(Step):
     def _arrays(self, nums: Nums, B: int) -> _Arrays:
         """The numbers ``nums`` of ``B`` columns as Newton reads them."""
         L, R = self._stack(nums, B)
-        return _Arrays(L, R, NEWTON_TOL * self._scale(L), self._lin_jacobian(R, len(self.joints)))
+        return _Arrays(L, R, NEWTON_TOL * self._scale(L, R), self._lin_jacobian(R, len(self.joints)))
 
     def newton(
         self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER
@@ -345,7 +519,7 @@ class Group(Step):
                 act = act[~ok]
                 if it == iters or not len(act):
                     break
-                dx = _newton_step(self._jac(P[:, ~ok], ar.J_lin[act]), res[:, ~ok])
+                dx = _newton_step(self._jac(P[:, ~ok], ar.J_lin[act], ar.R[:, act]), res[:, ~ok])
                 U[:, act] = U[:, act] + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
                 live = np.all(np.isfinite(U[:, act]), axis=0)
                 if not live.all():  # the next step makes the column NaN, and it stays NaN
@@ -353,7 +527,7 @@ class Group(Step):
                         U[:, act[~live]] = NAN_POINT
                     act = act[live]
             P = np.concatenate([U, K]) if len(K) else U
-            J = self._jac(P, ar.J_lin)
+            J = self._jac(P, ar.J_lin, ar.R)
             det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
             conv &= np.isfinite(det) & (det != 0)
         return U, conv, np.sign(det)
@@ -750,6 +924,9 @@ class Group(Step):
             dv = Vall[gl.slots[1]] - Vall[gl.slots[0]]
             gamma[:, row] = 2 * (dv.real**2 + dv.imag**2)
             row += 1 + 2 * (len(gl.slots) - 2)
+        if self.sliders:  # 2 Im(w' conj(u')) on a line row, 2 Im(e_o' conj(c e')) on a lock row
+            line, lock = self._slider_gamma(P, Vall, self._stack(dn, D * n)[1])
+            gamma[:, self._srows.line], gamma[:, self._srows.lock] = line.T, lock.T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
         au = np.linalg.solve(Ju_solve, rhs_a[..., None])[..., 0]
         au[sing] = np.nan
@@ -762,14 +939,22 @@ class Group(Step):
                 j0, j1 = gl.joints[0], gl.joints[1]
                 r.om[gl.name], r.al[gl.name] = link_rates(r.z[j1] - r.z[j0], r.v[j1] - r.v[j0], r.a[j1] - r.a[j0])
 
-    def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
-        """Smallest over largest singular value of J_u with distance rows scaled by 1/(2L)."""
-        lengths = dn[0]
-        scale = np.ones(Ju.shape[:2])
+    def row_scale(self, dn: Nums, B: int) -> FloatArray:
+        """Per row (B, n_eq), what makes its gradient of unit scale: ``1 / (2 L)`` on a distance row, ``1 / ell``
+        on a slider's lock row (``ell`` the locked side's length), 1 elsewhere."""
+        scale = np.ones((B, self.n_eq))
         row = 0
-        for gl, L in zip(self.links, lengths, strict=True):
+        for gl, L in zip(self.links, dn[0], strict=True):
             scale[:, row] = 1.0 / (2 * L)
             row += 1 + 2 * (len(gl.slots) - 2)
+        if self.sliders:
+            sr = self._srows
+            scale[:, sr.lock] = 1.0 / self._snums(self._stack(dn, B)[1])[3][sr.locked].real.T
+        return scale
+
+    def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
+        """Smallest over largest singular value of J_u with its rows scaled by :meth:`row_scale`."""
+        scale = self.row_scale(dn, Ju.shape[0])
         s = np.linalg.svd(Ju * scale[:, :, None], compute_uv=False)
         with np.errstate(invalid="ignore", divide="ignore"):
             return s[:, -1] / s[:, 0]
@@ -779,8 +964,9 @@ class Group(Step):
         placed = ", ".join(names[j] for j in self.joints)
         links = ", ".join(f"'{gl.name}'" for gl in self.links)
         held = ", ".join(names[j] for j in self.known) or "nothing"
+        sliding = "".join(f", slider {gs.slider} ('{gs.other}' on '{gs.carrier}')" for gs in self.sliders)
         return (
-            f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}, "
+            f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}{sliding}, "
             f"held by {held}; the mode is the pose's"
         )
 
@@ -827,6 +1013,16 @@ def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.nd
     up = order[key[order] >= 0]
     down = order[key[order] < 0][::-1]
     return [w for w in (up, down) if len(w)]
+
+
+def _add(J: FloatArray, rows: np.ndarray, slots: np.ndarray, G: np.ndarray, n_cols: int) -> None:
+    """Add the gradients ``G`` (rows, B; complex: ``[Re, Im]`` on ``[x, y]``) at ``rows``, ``slots`` of ``J``
+    (B, n_eq, 2 n_cols), on the slots below ``n_cols`` (a slot ``-1``, the ground's, has none)."""
+    on = (slots >= 0) & (slots < n_cols)
+    if on.any():
+        r, s, g = rows[on], slots[on], G[on]
+        J[:, r, 2 * s] += g.real.T
+        J[:, r, 2 * s + 1] += g.imag.T
 
 
 def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
