@@ -242,25 +242,42 @@ def refine_dyads(p: MotionPoses, V: FloatArray, timed: bool = False, steps: int 
     return V
 
 
-def search_dyads(p: MotionPoses, timed: bool = False, extra: FloatArray | None = None) -> Dyads:
-    """The ``DYADS`` best distinct dyads: a grid of body points, Kasa's circles, refined together."""
+def search_dyads(p: MotionPoses, timed: bool = False) -> Dyads:
+    """The ``DYADS`` best distinct dyads: grids of body points, Kasa's circles, the best of each grid refined.
+
+    The body points' first-pose positions are a square about the poses' centre and rings out
+    to the far ones; each grid sends its own best to the refinement, so that the many nearly
+    straight-moving far points cannot crowd out a near one.
+    """
     s = np.linspace(-GRID_REACH, GRID_REACH, GRID)
     rho = np.geomspace(GRID_REACH, FAR_PIVOT / 2, GRID // 2)
-    W0 = np.concatenate(  # first-pose positions: a square about the poses' centre and rings out to the far ones
-        [
-            (s[:, None] + 1j * s[None, :]).reshape(-1),
-            (rho[:, None] * cis(np.linspace(0, 2 * np.pi, 2 * GRID)[None, :-1])).reshape(-1),
-        ]
-    )
-    c = (W0 - p.d[0]) / p.u[0]
-    g, r = kasa(p.at(c[:, None]))
-    V = np.stack([c.real, c.imag, g.real, g.imag, r], axis=1)
-    if extra is not None:
-        V = np.concatenate([V, extra])
-    rms = _rms(p, V, timed)
-    V = V[np.argsort(rms)[: 8 * DYADS]]
-    V = refine_dyads(p, V, timed)
+    square = s[:, None] + 1j * s[None, :]
+    rings = rho[:, None] * cis(np.linspace(0, 2 * np.pi, 2 * GRID)[None, :-1])
+    starts = [
+        _best_starts(p, square, 5 * DYADS, timed, ("nearest", "nearest")),
+        _best_starts(p, rings, 3 * DYADS, timed, ("nearest", "wrap")),
+    ]
+    V = refine_dyads(p, np.concatenate(starts), timed)
     return _distinct(V, _rms(p, V, timed))
+
+
+def _best_starts(p: MotionPoses, W0: ComplexArray, k: int, timed: bool, modes: tuple[str, str]) -> FloatArray:
+    """Dyads (k, 5) of the body points at first-pose positions ``W0`` (a 2-d grid) whose Kasa circles fit best.
+
+    The grid's local minima of the residual come first (best first), then the best of the rest:
+    each valley of the residual gets a start, however shallow.
+    """
+    from scipy.ndimage import minimum_filter
+
+    c = (W0 - p.d[0]) / p.u[0]
+    g, r = kasa(p.at(c.reshape(-1)[:, None]))
+    V = np.stack([c.reshape(-1).real, c.reshape(-1).imag, g.real, g.imag, r], axis=1)
+    rms = _rms(p, V, timed)
+    grid = np.where(np.isfinite(rms), rms, np.inf).reshape(W0.shape)
+    local = (grid <= minimum_filter(grid, size=3, mode=modes)).reshape(-1) & np.isfinite(rms)
+    order = np.lexsort((rms, ~local))
+    best: FloatArray = V[order[:k]]
+    return best
 
 
 def _rms(p: MotionPoses, V: FloatArray, timed: bool) -> FloatArray:
@@ -272,13 +289,13 @@ def _rms(p: MotionPoses, V: FloatArray, timed: bool) -> FloatArray:
 
 
 def _distinct(V: FloatArray, rms: FloatArray) -> Dyads:
-    """The ``DYADS`` lowest-residual dyads, no two within 1e-4 in (c, g)."""
+    """The ``DYADS`` lowest-residual dyads, no two within ``1e-3`` (diagonals) in (c, g)."""
     order = np.argsort(rms)
     kept: list[int] = []
     for i in order:
         if not np.isfinite(rms[i]) or len(kept) == DYADS:
             break
-        if all(np.max(np.abs(V[i, :4] - V[k, :4])) > 1e-4 for k in kept):
+        if all(np.max(np.abs(V[i, :4] - V[k, :4])) > 1e-3 for k in kept):
             kept.append(int(i))
     K = V[kept]
     return Dyads(K[:, 0] + 1j * K[:, 1], K[:, 2] + 1j * K[:, 3], K[:, 4], rms[kept])
