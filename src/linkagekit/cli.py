@@ -440,6 +440,19 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
     )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
+    _function_arguments(p)
+
+
+def _function_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of ``synthesize --task function`` (and the ``--task`` switch)."""
+    p.add_argument(
+        "--task",
+        choices=("path", "function"),
+        default="path",
+        help="path (default): a point follows the targets; function: an output angle follows an input angle",
+    )
+    p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
+    p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
 
 #: --quantity groups: the report's plots, by their short name
@@ -1164,6 +1177,9 @@ def _synthesize(args: argparse.Namespace) -> int:
     import dataclasses
     import time
 
+    if args.task == "function":
+        return _synthesize_function(args)
+
     t0 = time.monotonic()
 
     import linkagekit as lk
@@ -1195,6 +1211,86 @@ def _synthesize(args: argparse.Namespace) -> int:
         _plot_synthesis(out, targets, args.plot)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     return 0
+
+
+def _synthesize_function(args: argparse.Namespace) -> int:
+    """``linkagekit synthesize --task function``: a four-bar whose output angle follows the pairs."""
+    import os
+
+    import linkagekit as lk
+
+    from .synthesis.function import read_pairs, solve
+    from .units import LENGTH_UNITS
+
+    _suffix(args.output, (".yaml", ".yml", ".json"))
+    if args.plot:
+        _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    if args.units not in LENGTH_UNITS:
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
+    length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
+    x, y = read_pairs(args.targets)
+    fit = solve(x, y, free_offsets=args.free_offsets, ground_length=length, source=os.path.basename(args.targets))
+    d = fit.mechanism_dict(args.units)
+    words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
+    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}"]
+    d["description"] = "command: " + " ".join(words)
+    mech = lk.Mechanism.from_dict(d)
+    lk.save(mech, args.output)
+    if args.plot:
+        _plot_function(mech, fit, args.plot)
+    print(function_text(fit, args.units, args.output))
+    return 0
+
+
+def _plot_function(mech: Any, fit: Any, path: str) -> None:
+    """``--plot`` of a function generator: its output angle (by ``analyze``) against the input, with the pairs."""
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .viz import draw
+
+    phi0, psi0 = fit.offsets
+    x = np.linspace(fit.inputs[0], fit.inputs[-1], 361)
+    psi = lk.analyze(mech, {"crank": x + phi0}).angle("output")
+    out = fit.outputs[0] + (psi - psi0 - fit.outputs[0] + 180.0) % 360.0 - 180.0  # unwrapped near the first pair
+    pairs = np.stack([fit.inputs, fit.outputs], axis=1)
+    fig, ax = draw.function_figure(np.stack([x, out], axis=1), pairs, fit.errors)
+    draw.save_figure(fig, path, ax)
+
+
+def _positive(text: str, option: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"{option}: expected a number, got {shorten(repr(text))}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option}: expected a positive number, got {shorten(repr(text))}")
+    return value
+
+
+def function_text(fit: Any, unit: str, path: str) -> str:
+    """The table of pairs and errors, and the summary, that ``synthesize --task function`` prints."""
+    cols = [
+        Column("pair", [str(i + 1) for i in range(len(fit.inputs))]),
+        Column("input [deg]", format_cells(fit.inputs)),
+        Column("output [deg]", format_cells(fit.outputs)),
+        Column("error [deg]", format_cells(fit.errors)),
+    ]
+    a, b, c, d = fit.lengths
+    side = "left" if fit.branch > 0 else "right"
+    lines = [*render_table(cols), ""]
+    lines.append(f"max error {fit.max_error:.6g} deg ({fit.method})")
+    if fit.offsets != (0.0, 0.0):
+        lines.append(
+            f"offsets: crank angle = input + {fit.offsets[0]:.6g} deg, output angle = output + {fit.offsets[1]:.6g} deg"
+        )
+    lines.append(f"crank {a:.6g}, coupler {b:.6g}, output {c:.6g}, ground {d:.6g} {unit}; Grashof type {fit.grashof}")
+    state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
+    lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
+    lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
+    lines.append(f"wrote {path}")
+    return "\n".join(lines)
 
 
 def _synthesize_resume(args: argparse.Namespace) -> str:
