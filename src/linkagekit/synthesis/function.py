@@ -211,7 +211,9 @@ def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") ->
             raise InputError(f"{source}: pair {bad[0] + 1}: {name} {v[bad[0]]} is not an angle in [-360, 360] deg")
     step = np.diff(x)
     if np.any(step == 0):
-        raise InputError(f"{source}: pair {int(np.flatnonzero(step == 0)[0]) + 2}: duplicate input {x[step == 0][0]}")
+        raise InputError(
+            f"{source}: pair {int(np.flatnonzero(step == 0)[0]) + 2}: duplicate input {x[1:][step == 0][0]}"
+        )
     if not (np.all(step > 0) or np.all(step < 0)):
         row = int(np.flatnonzero(np.sign(step) != np.sign(step[0]))[0]) + 2
         raise InputError(f"{source}: pair {row}: the inputs must increase (or decrease) along the list")
