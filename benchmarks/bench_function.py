@@ -78,7 +78,9 @@ def theirs(name: str, x: np.ndarray, y: np.ndarray, d: float) -> dict[str, Any]:
         }
     t0 = time.perf_counter()
     try:
-        res = function_generation([(math.radians(a), math.radians(b)) for a, b in zip(x, y)], ground_length=d)
+        res = function_generation(
+            [(math.radians(a), math.radians(b)) for a, b in zip(x, y, strict=True)], ground_length=d
+        )
         sols = list(res.raw_solutions)
     except Exception as e:  # noqa: BLE001 - a peer's failure is a result
         return {
