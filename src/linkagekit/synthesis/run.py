@@ -24,6 +24,7 @@ import numpy as np
 
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError
+from .base import Objective
 from .objective import Problem, check
 from .optimize import Outcome, Progress, Settings, optimize
 from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
@@ -85,6 +86,75 @@ class Synthesis:
     def rms_error(self) -> float:
         """The root mean square of the distances ``errors``, in the targets' unit."""
         return float(np.sqrt(np.mean(self.errors**2)))
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The outcome of a search of any :class:`~linkagekit.synthesis.base.Objective` (:func:`search`).
+
+    Attributes
+    ----------
+    x : ndarray (dim,)
+        The best design vector found.
+    error : float
+        Its error by the objective's dense check (``inf`` if it is infeasible there).
+    cost : float
+    feasible : bool
+    mechanism : Mechanism or None
+        ``objective.mechanism(x)``, or None when the objective builds none.
+    outcome : Outcome
+    """
+
+    x: np.ndarray
+    error: float
+    cost: float
+    feasible: bool
+    mechanism: Mechanism | None
+    outcome: Outcome
+
+
+def search(
+    objective: Objective,
+    *,
+    seed: int = 0,
+    seconds: float = 60.0,
+    restarts: int = 32,
+    generations: int = 500,
+    popsize: int = 15,
+    goal: float = 1e-5,
+    workers: int = 1,
+    scheduler: str | None = None,
+    checkpoint: str | None = None,
+    progress: Callable[[Progress], None] | None = None,
+) -> Optimum:
+    """Search any objective with the synthesis engine (``synthesize(objective=...)`` calls this).
+
+    Examples
+    --------
+    >>> from linkagekit.synthesis.base import Objective, Score
+    >>> class Nearest(Objective):  # the point of the unit square nearest to (0.3, 0.7)
+    ...     bounds = (np.zeros(2), np.ones(2))
+    ...     def score(self, X):
+    ...         r = X - [0.3, 0.7]
+    ...         return Score(np.sum(r * r, axis=1), np.abs(r).max(axis=1), np.zeros(len(X)))
+    ...     def residuals(self, X):
+    ...         return X - [0.3, 0.7]
+    ...     def fingerprint(self):
+    ...         return "nearest"
+    >>> out = search(Nearest(), restarts=1, generations=5)
+    >>> bool(out.error < 1e-9), out.mechanism is None
+    (True, True)
+    """
+    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
+    outcome = optimize(objective, settings, progress)
+    s = objective.check(outcome.x[None])
+    try:
+        mech = objective.mechanism(outcome.x)
+    except NotImplementedError:
+        mech = None
+    feasible = bool(s.violation[0] == 0)
+    error = float(s.error[0]) if feasible else float("inf")
+    return Optimum(outcome.x, error, float(s.cost[0]), feasible, mech, outcome)
 
 
 def make_problem(
@@ -163,9 +233,10 @@ def synthesize(
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
+    objective: Objective | None = None,
     **old: Any,
-) -> Synthesis:
-    """Find a mechanism whose tracer point passes near every target.
+) -> Any:
+    """Find a mechanism whose tracer point passes near every target (or search any ``objective``).
 
     Parameters
     ----------
@@ -195,7 +266,19 @@ def synthesize(
         See :class:`~linkagekit.synthesis.optimize.Settings`.
     progress : callable, optional
         Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
+    objective : Objective, optional
+        A user's own :class:`~linkagekit.synthesis.base.Objective`: searched by the same
+        engine instead of the targets (pass ``targets=None``); returns an :class:`Optimum`.
+
+    Returns
+    -------
+    Synthesis, or Optimum with ``objective``
     """
+    if objective is not None:
+        return search(
+            objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, popsize=popsize,
+            goal=goal, workers=workers, scheduler=scheduler, checkpoint=checkpoint, progress=progress,
+        )  # fmt: skip
     source = getattr(targets, "source", None)
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
@@ -290,4 +373,4 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
     return "\n".join(lines)
 
 
-__all__ = ["TOPOLOGIES", "Synthesis", "describe", "make_problem", "synthesize"]
+__all__ = ["TOPOLOGIES", "Optimum", "Synthesis", "describe", "make_problem", "search", "synthesize"]
