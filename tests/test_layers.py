@@ -33,7 +33,7 @@ LAYERS = [
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
-    {"synthesis.run"},
+    {"synthesis.run", "synthesis.function_run"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

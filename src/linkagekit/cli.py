@@ -412,7 +412,9 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="fourbar (default), watt2, stephenson3, or a mechanism file used as a template (see --free)",
     )
     _output_option(p, "the mechanism file to write: .yaml or .json")
-    p.add_argument("--seconds", metavar="S", default="60", help="time budget (default 60)")
+    p.add_argument(
+        "--seconds", metavar="S", default=_DEFAULT_SECONDS, help="time budget (default 60; 10 for --task function)"
+    )
     p.add_argument("--seed", metavar="N", default="0", help="random seed (default 0)")
     p.add_argument(
         "--min-transmission", metavar="DEG", default="20", help="smallest transmission angle, degrees (default 20)"
@@ -1213,13 +1215,19 @@ def _synthesize(args: argparse.Namespace) -> int:
     return 0
 
 
+#: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
+_DEFAULT_SECONDS, FUNCTION_SECONDS = "60", 10.0
+
+
 def _synthesize_function(args: argparse.Namespace) -> int:
     """``linkagekit synthesize --task function``: a four-bar whose output angle follows the pairs."""
+    import dataclasses
     import os
 
     import linkagekit as lk
 
-    from .synthesis.function import read_pairs, solve
+    from .synthesis.function import read_pairs
+    from .synthesis.function_run import synthesize_function
     from .units import LENGTH_UNITS
 
     _suffix(args.output, (".yaml", ".yml", ".json"))
@@ -1229,16 +1237,28 @@ def _synthesize_function(args: argparse.Namespace) -> int:
         raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
     x, y = read_pairs(args.targets)
-    fit = solve(x, y, free_offsets=args.free_offsets, ground_length=length, source=os.path.basename(args.targets))
-    d = fit.mechanism_dict(args.units)
+    engine = {
+        k: v for k, v in _search_options(args).items() if k in ("seconds", "seed", "restarts", "generations", "workers")
+    }
+    if args.seconds == _DEFAULT_SECONDS:
+        engine["seconds"] = FUNCTION_SECONDS
+    out = synthesize_function(
+        x,
+        y,
+        free_offsets=args.free_offsets,
+        ground_length=length,
+        units=args.units,
+        source=os.path.basename(args.targets),
+        **engine,
+    )
+    fit, mech = out.fit, out.mechanism
     words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
-    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}"]
-    d["description"] = "command: " + " ".join(words)
-    mech = lk.Mechanism.from_dict(d)
+    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}", f"--seed {engine['seed']}"]
+    mech = dataclasses.replace(mech, description="command: " + " ".join(words))
     lk.save(mech, args.output)
     if args.plot:
         _plot_function(mech, fit, args.plot)
-    print(function_text(fit, args.units, args.output))
+    print(function_text(out, args.units, args.output))
     return 0
 
 
@@ -1269,8 +1289,9 @@ def _positive(text: str, option: str) -> float:
     return value
 
 
-def function_text(fit: Any, unit: str, path: str) -> str:
+def function_text(out: Any, unit: str, path: str) -> str:
     """The table of pairs and errors, and the summary, that ``synthesize --task function`` prints."""
+    fit = out.fit
     cols = [
         Column("pair", [str(i + 1) for i in range(len(fit.inputs))]),
         Column("input [deg]", format_cells(fit.inputs)),
@@ -1289,6 +1310,12 @@ def function_text(fit: Any, unit: str, path: str) -> str:
     state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
     lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
     lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
+    if out.engine is not None:
+        o = out.engine.outcome
+        lines.append(
+            f"engine: {o.restarts} searches, {o.evaluations} designs in {o.seconds:.1f} s "
+            f"(its best, before the minimax polish: {math.degrees(out.engine.error):.6g} deg)"
+        )
     lines.append(f"wrote {path}")
     return "\n".join(lines)
 

@@ -33,9 +33,10 @@ from __future__ import annotations
 import csv
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -43,7 +44,11 @@ from numpy.typing import ArrayLike
 from ..checks import FourBar, grashof
 from ..errors import InputError
 from ..geometry import BoolArray, FloatArray
+from .base import Objective, Score, digest
 from .targets import _read_text
+
+if TYPE_CHECKING:
+    from ..model import Mechanism
 
 #: the error (degrees) that stands for "does not assemble there" in a search
 UNASSEMBLED = 360.0
@@ -146,17 +151,12 @@ def angle_errors(
     return wrap_deg(np.degrees(output_angle(abc, d, x, sigma) - y))
 
 
-def assembles_between(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> BoolArray:
-    """Whether each design assembles at every input from the first to the last of ``x`` (radians, monotone).
+def assembly_shortfall(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> FloatArray:
+    """How far (over ``d^2``) each design is from assembling at every input from the first to the last of ``x``.
 
-    Exact: on ``[x_1, x_n]`` the squared distance ``a^2 + d^2 - 2ad cos phi`` from ``C`` to ``B``
-    is extreme where ``cos phi`` is, at an end or at a multiple of pi inside; it must stay in
-    ``[(b - c)^2, (b + c)^2]``.  Returns a bool array ``(...)``.
-
-    >>> bool(assembles_between(np.array([0.2, 1.0, 1.0]), 1.0, np.radians([0.0, 350.0])))
-    True
-    >>> bool(assembles_between(np.array([1.0, 0.5, 0.6]), 1.0, np.radians([-10.0, 10.0])))
-    False
+    Exact: on ``[x_1, x_n]`` (radians) the squared distance ``a^2 + d^2 - 2ad cos phi`` from
+    ``C`` to ``B`` is extreme where ``cos phi`` is, at an end or at a multiple of pi inside; it
+    must stay in ``[(b - c)^2, (b + c)^2]``.  0 where it does; NaN for a design with NaN lengths.
     """
     abc = np.asarray(abc, float)
     lo, hi = np.min(x, axis=-1), np.max(x, axis=-1)
@@ -168,8 +168,23 @@ def assembles_between(abc: FloatArray, d: float, x: FloatArray, offsets: FloatAr
     cmin = np.where(odd >= lo, -1.0, np.minimum(np.cos(lo), np.cos(hi)))
     a, b, c = abc[..., 0], abc[..., 1], abc[..., 2]
     near, far = a * a + d * d - 2 * a * d * cmax, a * a + d * d - 2 * a * d * cmin
-    tol = 1e-12 * (a + b + c + d) ** 2
-    ok: BoolArray = (near >= (b - c) ** 2 - tol) & (far <= (b + c) ** 2 + tol)
+    out: FloatArray = np.maximum(np.maximum((b - c) ** 2 - near, far - (b + c) ** 2), 0.0) / (d * d)
+    return out
+
+
+def assembles_between(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> BoolArray:
+    """Whether each design assembles at every input from the first to the last of ``x`` (radians, monotone).
+
+    :func:`assembly_shortfall` is 0 (to 1e-12 of the squared sizes).  Returns a bool array ``(...)``.
+
+    >>> bool(assembles_between(np.array([0.2, 1.0, 1.0]), 1.0, np.radians([0.0, 350.0])))
+    True
+    >>> bool(assembles_between(np.array([1.0, 0.5, 0.6]), 1.0, np.radians([-10.0, 10.0])))
+    False
+    """
+    abc = np.asarray(abc, float)
+    tol = 1e-12 * (np.sum(abc, axis=-1) + d) ** 2 / (d * d)
+    ok: BoolArray = assembly_shortfall(abc, d, x, offsets) <= tol
     return ok
 
 
@@ -467,6 +482,7 @@ def solve(
     ground_length: float = 1.0,
     method: str = "minimax",
     source: str = "pairs",
+    starts: Sequence[FloatArray] = (),
 ) -> FunctionFit:
     """A four-bar whose output angle meets ``outputs`` at ``inputs`` (degrees, from the ground line), on one branch.
 
@@ -474,7 +490,8 @@ def solve(
     Freudenstein fit (of all pairs, of each triple, or, with ``free_offsets``, of a grid of
     offsets) is tried on both branches; the best ``POLISH_STARTS`` that assemble between the
     first and the last pair are polished by ``method`` (:data:`METHODS`) and the best valid
-    one is returned (an invalid one only when no start is valid).
+    one is returned (an invalid one only when no start is valid).  ``starts``: more design
+    vectors of :class:`FunctionObjective` (e.g. the engine's best) polished the same way.
     """
     if method not in METHODS:
         raise InputError(f"method: {method!r} is not one of {', '.join(METHODS)}")
@@ -487,11 +504,93 @@ def solve(
         raise InputError(f"{source}: no four-bar with positive link lengths fits these pairs")
     if len(x) == 3 and not free_offsets and score[0] < 1e-9:
         return _fit(p, z[0], sigma[0], "exact")
+    todo = [(z[k], float(sigma[k])) for k in range(min(POLISH_STARTS, len(z)))]
+    todo += [(np.asarray(v, float)[1:], 1.0 if v[0] >= 0 else -1.0) for v in starts]
     best: tuple[float, FloatArray, float, str] | None = None
-    for k in range(min(POLISH_STARTS, len(z))):
-        zk, label = _polish(p, z[k], sigma[k], method)
-        s = _score(p, zk, sigma[k])
+    for zk, sk in todo:
+        zk, label = _polish(p, zk, sk, method)
+        s = _score(p, zk, sk)
         if best is None or s < best[0]:
-            best = (s, zk, sigma[k], label)
+            best = (s, zk, sk, label)
     assert best is not None
     return _fit(p, best[1], best[2], best[3])
+
+
+# ---------------------------------------------------------------------- the engine's objective
+#: bounds of ln(length / ground length) of the crank, the coupler and the output
+LOG_RATIO = 3.0
+#: the exact penalty on an assembly gap between the pairs (as path generation's)
+PENALTY = 100.0
+
+
+@dataclass(frozen=True)
+class FunctionObjective(Objective):
+    """Function generation as the synthesis engine's objective (:mod:`linkagekit.synthesis.base`).
+
+    The design vector is ``[s, ln a/d, ln b/d, ln c/d(, phi0, psi0)]``: the branch is the sign
+    of ``s``, the offsets (radians) are there only when free.  ``error`` is the largest
+    absolute output-angle error in radians; ``violation`` the :func:`assembly_shortfall`
+    (exact, so :meth:`check` is :meth:`score`); ``cost`` the mean squared error (radians) plus
+    ``PENALTY * violation``.  The engine's answer is then polished to the minimax by :func:`solve`.
+
+    Attributes
+    ----------
+    inputs, outputs : ndarray (n,)
+        The pairs, radians.
+    ground : float
+        The ground length.
+    free : bool
+        Whether the two offsets are free.
+    unit : str
+        The length unit of the written mechanism.
+    """
+
+    inputs: FloatArray
+    outputs: FloatArray
+    ground: float = 1.0
+    free: bool = False
+    unit: str = "m"
+
+    @property
+    def bounds(self) -> tuple[FloatArray, FloatArray]:
+        """``s`` in [-1, 1], each log ratio within ``LOG_RATIO``, each offset in [-pi, pi]."""
+        hi = np.array([1.0, LOG_RATIO, LOG_RATIO, LOG_RATIO] + [np.pi, np.pi] * self.free)
+        return -hi, hi
+
+    def _pairs(self) -> _Pairs:
+        return _Pairs(np.asarray(self.inputs, float), np.asarray(self.outputs, float), self.ground, self.free)
+
+    def _parts(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Errors (radians, (N, n)) and violations (N,) of designs ``X``."""
+        X = np.atleast_2d(np.asarray(X, float))
+        p = self._pairs()
+        e = np.radians(p.errors(X[:, 1:], np.where(X[:, 0] >= 0, 1.0, -1.0)))
+        abc, off = p.unpack(X[:, 1:])
+        v = assembly_shortfall(abc, p.d, p.x, off)
+        return e, np.where(np.isfinite(v), v, 1.0)
+
+    def score(self, X: FloatArray) -> Score:
+        """Cost, largest error (radians) and violation of designs ``X`` (N, dim)."""
+        e, v = self._parts(X)
+        return Score(np.mean(e * e, axis=1) + PENALTY * v, np.max(np.abs(e), axis=1), v)
+
+    def residuals(self, X: FloatArray) -> FloatArray:
+        """``e_i / sqrt(n)`` and ``sqrt(PENALTY * violation)``: the squared sum is the cost."""
+        e, v = self._parts(X)
+        out: FloatArray = np.concatenate([e / np.sqrt(e.shape[1]), np.sqrt(PENALTY * v)[:, None]], axis=1)
+        return out
+
+    def fingerprint(self) -> str:
+        """A digest of the pairs, the ground length and the offsets' freedom."""
+        return digest(np.asarray(self.inputs), np.asarray(self.outputs), self.ground, self.free, "function")
+
+    def fit(self, x: FloatArray, method: str = "engine") -> FunctionFit:
+        """The :class:`FunctionFit` of design vector ``x`` (dim,)."""
+        x = np.asarray(x, float)
+        return _fit(self._pairs(), x[1:], 1.0 if x[0] >= 0 else -1.0, method)
+
+    def mechanism(self, x: FloatArray) -> Mechanism:
+        """The four-bar of ``x`` at its first pair (links ground, crank, coupler, output)."""
+        from ..model import Mechanism
+
+        return Mechanism.from_dict(self.fit(x).mechanism_dict(self.unit))
