@@ -151,12 +151,12 @@ def angle_errors(
     return wrap_deg(np.degrees(output_angle(abc, d, x, sigma) - y))
 
 
-def assembly_shortfall(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> FloatArray:
-    """How far (over ``d^2``) each design is from assembling at every input from the first to the last of ``x``.
+def assembly_margin(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> FloatArray:
+    """By how much (over ``d^2``) each design assembles at every input from the first to the last of ``x``.
 
-    Exact: on ``[x_1, x_n]`` (radians) the squared distance ``a^2 + d^2 - 2ad cos phi`` from
+    Negative where it does not somewhere: :func:`assembly_shortfall` is its negative part.  Exact: on ``[x_1, x_n]`` (radians) the squared distance ``a^2 + d^2 - 2ad cos phi`` from
     ``C`` to ``B`` is extreme where ``cos phi`` is, at an end or at a multiple of pi inside; it
-    must stay in ``[(b - c)^2, (b + c)^2]``.  0 where it does; NaN for a design with NaN lengths.
+    must stay in ``[(b - c)^2, (b + c)^2]``; the margin is the smaller distance to those bounds.
     """
     abc = np.asarray(abc, float)
     lo, hi = np.min(x, axis=-1), np.max(x, axis=-1)
@@ -168,7 +168,13 @@ def assembly_shortfall(abc: FloatArray, d: float, x: FloatArray, offsets: FloatA
     cmin = np.where(odd >= lo, -1.0, np.minimum(np.cos(lo), np.cos(hi)))
     a, b, c = abc[..., 0], abc[..., 1], abc[..., 2]
     near, far = a * a + d * d - 2 * a * d * cmax, a * a + d * d - 2 * a * d * cmin
-    out: FloatArray = np.maximum(np.maximum((b - c) ** 2 - near, far - (b + c) ** 2), 0.0) / (d * d)
+    out: FloatArray = np.minimum(near - (b - c) ** 2, (b + c) ** 2 - far) / (d * d)
+    return out
+
+
+def assembly_shortfall(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> FloatArray:
+    """How far (over ``d^2``) each design is from assembling from the first to the last of ``x``: 0 where it does."""
+    out: FloatArray = np.maximum(-assembly_margin(abc, d, x, offsets), 0.0)
     return out
 
 
@@ -288,6 +294,13 @@ class _Pairs:
         e = angle_errors(abc, self.d, self.x, self.y, sigma, off)
         return np.where(np.isfinite(e), e, UNASSEMBLED)
 
+    def margin(self, z: FloatArray) -> FloatArray:
+        """:func:`assembly_margin` of design vectors ``z`` (NaN lengths: -1)."""
+        abc, off = self.unpack(z)
+        m = assembly_margin(abc, self.d, self.x, off)
+        out: FloatArray = np.where(np.isfinite(m), m, -1.0)
+        return out
+
     def valid(self, z: FloatArray) -> BoolArray:
         """Whether each design assembles over the whole path from the first pair to the last."""
         abc, off = self.unpack(z)
@@ -342,13 +355,18 @@ def _least_squares(p: _Pairs, z: FloatArray, sigma: float) -> FloatArray:
 
 
 def _minimax(p: _Pairs, z: FloatArray, sigma: float) -> FloatArray:
-    """Minimise the largest absolute error from ``z``: ``min t`` s.t. ``-t <= e_i(z) <= t`` (SLSQP, epigraph form)."""
+    """Minimise the largest absolute error from ``z``: ``min t`` s.t. ``-t <= e_i(z) <= t`` (SLSQP, epigraph form).
+
+    One more constraint keeps the design assembled from the first pair to the last (its
+    :func:`assembly_margin` is not negative).
+    """
     from scipy.optimize import minimize
 
     t0 = float(np.max(np.abs(p.errors(z, sigma))))
     cons = [
         {"type": "ineq", "fun": lambda v: v[-1] - p.errors(v[:-1], sigma)},
         {"type": "ineq", "fun": lambda v: v[-1] + p.errors(v[:-1], sigma)},
+        {"type": "ineq", "fun": lambda v: np.atleast_1d(p.margin(v[:-1]))},
     ]
     res = minimize(
         lambda v: v[-1], np.r_[z, t0], method="SLSQP", constraints=cons, options={"ftol": 1e-15, "maxiter": 300}
