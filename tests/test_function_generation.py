@@ -142,3 +142,12 @@ def test_bad_pairs_get_one_line_and_exit_2(rows, says, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "bad.csv" in err and says in err
     assert not (tmp_path / "o.yaml").exists()
+
+
+@pytest.mark.parametrize("value", ["-1", "0", "nan", "abc"])
+def test_bad_ground_length_exits_2(value, tmp_path, capsys):
+    src = write_pairs(tmp_path / "p.csv", [(30, 75), (75, 90), (135, 135)])
+    args = ["synthesize", str(src), "--task", "function", f"--ground-length={value}", "-o", str(tmp_path / "o.yaml")]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--ground-length" in err
