@@ -151,3 +151,15 @@ def test_bad_ground_length_exits_2(value, tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "--ground-length" in err
+
+
+def test_min_transmission_bounds_the_angle_between_the_pairs():
+    pairs = shared("weaving_striking_5pair_function")
+    free = solve(pairs[:, 0], pairs[:, 1], ground_length=180.0)
+    fit = solve(pairs[:, 0], pairs[:, 1], ground_length=180.0, min_transmission=80.0)
+    res = lk.analyze(lk.Mechanism.from_dict(fit.mechanism_dict("mm")), {"crank": np.linspace(40, 60, 401)})
+    C, B, D = (res.point(j) for j in "CBD")
+    mu = np.degrees(np.abs(np.angle((C - D) / (B - D))))  # at D, between coupler and output
+    assert free.transmission[0] < 80 and fit.valid  # the bound binds
+    assert mu.min() >= 80 - 1e-6 and mu.max() <= 100 + 1e-6
+    assert fit.max_error > free.max_error + 0.01

@@ -417,7 +417,10 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--seed", metavar="N", default="0", help="random seed (default 0)")
     p.add_argument(
-        "--min-transmission", metavar="DEG", default="20", help="smallest transmission angle, degrees (default 20)"
+        "--min-transmission",
+        metavar="DEG",
+        default=_DEFAULT_MIN_TRANSMISSION,
+        help="smallest transmission angle, degrees (default 20; none for --task function)",
     )
     p.add_argument("--workers", metavar="N", default="1", help="evaluate each generation on N local processes")
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
@@ -1217,6 +1220,8 @@ def _synthesize(args: argparse.Namespace) -> int:
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
 _DEFAULT_SECONDS, FUNCTION_SECONDS = "60", 10.0
+#: ``synthesize --min-transmission``' default (path generation's bound; function generation's is 0 unless given)
+_DEFAULT_MIN_TRANSMISSION = "20"
 
 
 def _synthesize_function(args: argparse.Namespace) -> int:
@@ -1242,6 +1247,8 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     }
     if args.seconds == _DEFAULT_SECONDS:
         engine["seconds"] = FUNCTION_SECONDS
+    given = args.min_transmission != _DEFAULT_MIN_TRANSMISSION  # the task imposes no bound unless asked
+    engine["min_transmission"] = _one_number(args.min_transmission, "--min-transmission") if given else 0.0
     out = synthesize_function(
         x,
         y,

@@ -54,6 +54,8 @@ if TYPE_CHECKING:
 UNASSEMBLED = 360.0
 #: offsets tried per angle scale when both are free (a grid of OFFSET_GRID^2 Freudenstein fits)
 OFFSET_GRID = 36
+#: exact Freudenstein fits of triples of pairs tried as starts (all triples when there are no more)
+TRIPLES = 400
 #: least-squares starts polished by the minimax step
 POLISH_STARTS = 6
 
@@ -151,12 +153,17 @@ def angle_errors(
     return wrap_deg(np.degrees(output_angle(abc, d, x, sigma) - y))
 
 
-def assembly_margin(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> FloatArray:
+def assembly_margin(
+    abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None, min_transmission: float = 0.0
+) -> FloatArray:
     """By how much (over ``d^2``) each design assembles at every input from the first to the last of ``x``.
 
-    Negative where it does not somewhere: :func:`assembly_shortfall` is its negative part.  Exact: on ``[x_1, x_n]`` (radians) the squared distance ``a^2 + d^2 - 2ad cos phi`` from
+    Negative where it does not somewhere: :func:`assembly_shortfall` is its negative part.
+    Exact: on ``[x_1, x_n]`` (radians) the squared distance ``a^2 + d^2 - 2ad cos phi`` from
     ``C`` to ``B`` is extreme where ``cos phi`` is, at an end or at a multiple of pi inside; it
     must stay in ``[(b - c)^2, (b + c)^2]``; the margin is the smaller distance to those bounds.
+    With ``min_transmission`` (degrees) the transmission angle ``mu`` must also stay within
+    ``[min, 180 - min]``: ``|b^2 + c^2 - r^2| <= 2bc cos(min)``, the same test with narrower bounds.
     """
     abc = np.asarray(abc, float)
     lo, hi = np.min(x, axis=-1), np.max(x, axis=-1)
@@ -168,17 +175,22 @@ def assembly_margin(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArra
     cmin = np.where(odd >= lo, -1.0, np.minimum(np.cos(lo), np.cos(hi)))
     a, b, c = abc[..., 0], abc[..., 1], abc[..., 2]
     near, far = a * a + d * d - 2 * a * d * cmax, a * a + d * d - 2 * a * d * cmin
-    out: FloatArray = np.minimum(near - (b - c) ** 2, (b + c) ** 2 - far) / (d * d)
+    k = 2 * b * c * math.cos(math.radians(min_transmission))
+    out: FloatArray = np.minimum(near - (b * b + c * c - k), (b * b + c * c + k) - far) / (d * d)
     return out
 
 
-def assembly_shortfall(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> FloatArray:
+def assembly_shortfall(
+    abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None, min_transmission: float = 0.0
+) -> FloatArray:
     """How far (over ``d^2``) each design is from assembling from the first to the last of ``x``: 0 where it does."""
-    out: FloatArray = np.maximum(-assembly_margin(abc, d, x, offsets), 0.0)
+    out: FloatArray = np.maximum(-assembly_margin(abc, d, x, offsets, min_transmission), 0.0)
     return out
 
 
-def assembles_between(abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None) -> BoolArray:
+def assembles_between(
+    abc: FloatArray, d: float, x: FloatArray, offsets: FloatArray | None = None, min_transmission: float = 0.0
+) -> BoolArray:
     """Whether each design assembles at every input from the first to the last of ``x`` (radians, monotone).
 
     :func:`assembly_shortfall` is 0 (to 1e-12 of the squared sizes).  Returns a bool array ``(...)``.
@@ -190,7 +202,7 @@ def assembles_between(abc: FloatArray, d: float, x: FloatArray, offsets: FloatAr
     """
     abc = np.asarray(abc, float)
     tol = 1e-12 * (np.sum(abc, axis=-1) + d) ** 2 / (d * d)
-    ok: BoolArray = assembly_shortfall(abc, d, x, offsets) <= tol
+    ok: BoolArray = assembly_shortfall(abc, d, x, offsets, min_transmission) <= tol
     return ok
 
 
@@ -275,6 +287,7 @@ class _Pairs:
     y: FloatArray
     d: float
     free: bool
+    mu: float = 0.0
 
     def unpack(self, z: FloatArray) -> tuple[FloatArray, FloatArray | None]:
         """``abc`` and offsets of design vectors ``z`` = ``[ln a/d, ln b/d, ln c/d(, phi0, psi0)]``."""
@@ -297,14 +310,14 @@ class _Pairs:
     def margin(self, z: FloatArray) -> FloatArray:
         """:func:`assembly_margin` of design vectors ``z`` (NaN lengths: -1)."""
         abc, off = self.unpack(z)
-        m = assembly_margin(abc, self.d, self.x, off)
+        m = assembly_margin(abc, self.d, self.x, off, self.mu)
         out: FloatArray = np.where(np.isfinite(m), m, -1.0)
         return out
 
     def valid(self, z: FloatArray) -> BoolArray:
         """Whether each design assembles over the whole path from the first pair to the last."""
         abc, off = self.unpack(z)
-        ok: BoolArray = assembles_between(abc, self.d, self.x, off) & np.all(np.isfinite(abc), axis=-1)
+        ok: BoolArray = assembles_between(abc, self.d, self.x, off, self.mu) & np.all(np.isfinite(abc), axis=-1)
         return ok
 
 
@@ -323,9 +336,19 @@ def _freudenstein_designs(p: _Pairs) -> tuple[FloatArray, FloatArray | None]:
         off = _offset_grid(OFFSET_GRID)
         K = freudenstein_lsq(p.x + off[:, :1], p.y + off[:, 1:])
         return lengths_from_k(K, p.d), off
-    triples = np.array(list(itertools.islice(itertools.combinations(range(n), 3), 400)))
+    if math.comb(n, 3) <= TRIPLES:
+        triples = np.array(list(itertools.combinations(range(n), 3)))
+    else:  # a fixed sample, spread over all pairs
+        triples = np.sort(np.argsort(np.random.default_rng(0).random((TRIPLES, n)), axis=1)[:, :3], axis=1)
     K = np.concatenate([freudenstein_lsq(p.x, p.y)[None], freudenstein_exact(p.x[triples], p.y[triples])])
     return lengths_from_k(K, p.d), None
+
+
+def _generic(p: _Pairs) -> FloatArray:
+    """27 design vectors: each of crank, coupler and output 0.5, 1 or 2 ground lengths (offsets 0)."""
+    ratios = np.log(np.array(list(itertools.product([0.5, 1.0, 2.0], repeat=3))))
+    out: FloatArray = np.concatenate([ratios, np.zeros((len(ratios), 2))], axis=1) if p.free else ratios
+    return out
 
 
 def _starts(p: _Pairs) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -333,6 +356,7 @@ def _starts(p: _Pairs) -> tuple[FloatArray, FloatArray, FloatArray]:
     abc, off = _freudenstein_designs(p)
     keep = np.all(np.isfinite(abc), axis=-1)
     z = p.pack(abc[keep], None if off is None else off[keep])
+    z = np.concatenate([z, _generic(p)])  # when no fit has positive lengths, these still start the polish
     z = np.concatenate([z, z])
     sigma = np.repeat([1.0, -1.0], len(z) // 2)
     score = np.max(np.abs(p.errors(z, sigma)), axis=-1) + np.where(p.valid(z), 0.0, 2 * UNASSEMBLED)
@@ -501,6 +525,7 @@ def solve(
     method: str = "minimax",
     source: str = "pairs",
     starts: Sequence[FloatArray] = (),
+    min_transmission: float = 0.0,
 ) -> FunctionFit:
     """A four-bar whose output angle meets ``outputs`` at ``inputs`` (degrees, from the ground line), on one branch.
 
@@ -510,16 +535,18 @@ def solve(
     first and the last pair are polished by ``method`` (:data:`METHODS`) and the best valid
     one is returned (an invalid one only when no start is valid).  ``starts``: more design
     vectors of :class:`FunctionObjective` (e.g. the engine's best) polished the same way.
+    ``min_transmission`` (degrees): a valid design also keeps its transmission angle within
+    ``[min, 180 - min]`` from the first pair to the last (default 0: it only assembles).
     """
     if method not in METHODS:
         raise InputError(f"method: {method!r} is not one of {', '.join(METHODS)}")
     if not (math.isfinite(ground_length) and ground_length > 0):
         raise InputError(f"--ground-length: {ground_length} is not a positive length")
     x, y = check_pairs(inputs, outputs, source)
-    p = _Pairs(x, y, float(ground_length), bool(free_offsets))
+    if not 0 <= min_transmission < 90:
+        raise InputError(f"--min-transmission: {min_transmission} is not an angle in [0, 90) deg")
+    p = _Pairs(x, y, float(ground_length), bool(free_offsets), float(min_transmission))
     z, sigma, score = _starts(p)
-    if len(z) == 0:
-        raise InputError(f"{source}: no four-bar with positive link lengths fits these pairs")
     if len(x) == 3 and not free_offsets and score[0] < 1e-9:
         return _fit(p, z[0], sigma[0], "exact")
     todo = [(z[k], float(sigma[k])) for k in range(min(POLISH_STARTS, len(z)))]
@@ -561,6 +588,8 @@ class FunctionObjective(Objective):
         Whether the two offsets are free.
     unit : str
         The length unit of the written mechanism.
+    min_transmission : float
+        Degrees: the transmission angle stays within ``[min, 180 - min]`` between the pairs.
     """
 
     inputs: FloatArray
@@ -568,6 +597,7 @@ class FunctionObjective(Objective):
     ground: float = 1.0
     free: bool = False
     unit: str = "m"
+    min_transmission: float = 0.0
 
     @property
     def bounds(self) -> tuple[FloatArray, FloatArray]:
@@ -576,7 +606,8 @@ class FunctionObjective(Objective):
         return -hi, hi
 
     def _pairs(self) -> _Pairs:
-        return _Pairs(np.asarray(self.inputs, float), np.asarray(self.outputs, float), self.ground, self.free)
+        x, y = np.asarray(self.inputs, float), np.asarray(self.outputs, float)
+        return _Pairs(x, y, self.ground, self.free, self.min_transmission)
 
     def _parts(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Errors (radians, (N, n)) and violations (N,) of designs ``X``."""
@@ -584,7 +615,7 @@ class FunctionObjective(Objective):
         p = self._pairs()
         e = np.radians(p.errors(X[:, 1:], np.where(X[:, 0] >= 0, 1.0, -1.0)))
         abc, off = p.unpack(X[:, 1:])
-        v = assembly_shortfall(abc, p.d, p.x, off)
+        v = assembly_shortfall(abc, p.d, p.x, off, p.mu)
         return e, np.where(np.isfinite(v), v, 1.0)
 
     def score(self, X: FloatArray) -> Score:
@@ -600,7 +631,8 @@ class FunctionObjective(Objective):
 
     def fingerprint(self) -> str:
         """A digest of the pairs, the ground length and the offsets' freedom."""
-        return digest(np.asarray(self.inputs), np.asarray(self.outputs), self.ground, self.free, "function")
+        x, y = np.asarray(self.inputs), np.asarray(self.outputs)
+        return digest(x, y, self.ground, self.free, self.min_transmission, "function")
 
     def fit(self, x: FloatArray, method: str = "engine") -> FunctionFit:
         """The :class:`FunctionFit` of design vector ``x`` (dim,)."""

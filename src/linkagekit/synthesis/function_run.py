@@ -10,7 +10,8 @@ scales, or pairs that Freudenstein's least squares meets exactly, are met withou
 Examples
 --------
 >>> from linkagekit.synthesis.function_run import synthesize_function
->>> out = synthesize_function([40, 45, 50, 55, 60], [70, 76, 83, 91, 100], ground_length=180, restarts=1, generations=40)
+>>> pairs = [40, 45, 50, 55, 60], [70, 76, 83, 91, 100]
+>>> out = synthesize_function(*pairs, ground_length=180, restarts=1, generations=40)
 >>> round(out.fit.max_error, 4), out.fit.valid, out.mechanism.drivers[0].name
 (0.1076, True, 'crank')
 """
@@ -68,21 +69,39 @@ def synthesize_function(
     generations: int = 200,
     workers: int = 1,
     source: str = "pairs",
+    min_transmission: float = 0.0,
 ) -> FunctionSynthesis:
     """A four-bar whose output angle follows ``outputs`` at ``inputs`` (degrees from the ground line), minimax.
 
     The engine's options (``seed``, ``seconds``, ``restarts``, ``generations``, ``workers``) are
     :func:`~linkagekit.synthesis.run.search`'s; see the module's description for the method.
+    ``min_transmission`` (degrees, default 0): the transmission angle stays within
+    ``[min, 180 - min]`` from the first pair to the last.
     """
     x, y = check_pairs(inputs, outputs, source)
-    first = solve(inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source)
-    objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units)
+    first = solve(
+        inputs,
+        outputs,
+        free_offsets=free_offsets,
+        ground_length=ground_length,
+        source=source,
+        min_transmission=min_transmission,
+    )
+    objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units, float(min_transmission))
     if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
         return FunctionSynthesis(first, _mechanism(first, units), None)
     opt = search(
         objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, goal=GOAL, workers=workers
     )
-    fit = solve(inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source, starts=[opt.x])
+    fit = solve(
+        inputs,
+        outputs,
+        free_offsets=free_offsets,
+        ground_length=ground_length,
+        source=source,
+        min_transmission=min_transmission,
+        starts=[opt.x],
+    )
     return FunctionSynthesis(fit, _mechanism(fit, units), opt)
 
 
