@@ -30,6 +30,7 @@ LAYERS = [
         "synthesis.objective",
         "synthesis.cmaes",
         "synthesis.function",
+        "synthesis.motion",
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},

@@ -419,8 +419,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--min-transmission",
         metavar="DEG",
-        default=_DEFAULT_MIN_TRANSMISSION,
-        help="smallest transmission angle, degrees (default 20; none for --task function)",
+        help="smallest transmission angle, degrees (default 20; 0 with --task motion or function)",
     )
     p.add_argument("--workers", metavar="N", default="1", help="evaluate each generation on N local processes")
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
@@ -445,20 +444,27 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
     )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
-    _function_arguments(p)
-
-
-def _function_arguments(p: argparse.ArgumentParser) -> None:
-    """The options of ``synthesize --task function`` (and the ``--task`` switch)."""
     p.add_argument(
         "--task",
-        choices=("path", "function"),
+        choices=SYNTHESIS_TASKS,
         default="path",
-        help="path (default): a point follows the targets; function: an output angle follows an input angle",
+        help="path (default: a point follows the targets), motion (a body passes through poses x,y,angle) "
+        "or function (an output angle follows an input angle)",
+    )
+    p.add_argument(
+        "--approximate", action="store_true", help="motion, 3 to 5 poses: the approximate route, not Burmester's"
+    )
+    p.add_argument(
+        "--angle-weight",
+        metavar="W",
+        help="motion: one radian of orientation error weighs as much as W diagonals of position error (default 0.05)",
     )
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
+
+#: the tasks of ``synthesize --task`` (spec section 6)
+SYNTHESIS_TASKS = ("path", "motion", "function")
 
 #: --quantity groups: the report's plots, by their short name
 _QUANTITY_GROUPS = {g.short: g for g in Group if g.plotted}
@@ -1182,9 +1188,6 @@ def _synthesize(args: argparse.Namespace) -> int:
     import dataclasses
     import time
 
-    if args.task == "function":
-        return _synthesize_function(args)
-
     t0 = time.monotonic()
 
     import linkagekit as lk
@@ -1196,6 +1199,10 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    if args.task == "motion":
+        return _synthesize_motion(args)
+    if args.task == "function":
+        return _synthesize_function(args)
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
@@ -1220,8 +1227,6 @@ def _synthesize(args: argparse.Namespace) -> int:
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
 _DEFAULT_SECONDS, FUNCTION_SECONDS = "60", 10.0
-#: ``synthesize --min-transmission``' default (path generation's bound; function generation's is 0 unless given)
-_DEFAULT_MIN_TRANSMISSION = "20"
 
 
 def _synthesize_function(args: argparse.Namespace) -> int:
@@ -1247,7 +1252,7 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     }
     if args.seconds == _DEFAULT_SECONDS:
         engine["seconds"] = FUNCTION_SECONDS
-    given = args.min_transmission != _DEFAULT_MIN_TRANSMISSION  # the task imposes no bound unless asked
+    given = args.min_transmission is not None  # the task imposes no bound unless asked
     engine["min_transmission"] = _one_number(args.min_transmission, "--min-transmission") if given else 0.0
     out = synthesize_function(
         x,
@@ -1327,6 +1332,95 @@ def function_text(out: Any, unit: str, path: str) -> str:
     return "\n".join(lines)
 
 
+def _synthesize_motion(args: argparse.Namespace) -> int:
+    """``linkagekit synthesize POSES.csv --task motion``: a four-bar whose coupler passes through the poses."""
+    import dataclasses
+
+    import linkagekit as lk
+
+    from .synthesis.motion import read_poses
+    from .synthesis.run import synthesize_motion
+
+    if args.topology != "fourbar":
+        _motion_template(args.topology)
+    seconds = _one_number(args.seconds, "--seconds")
+    if not 0 < seconds <= 1e7:
+        raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
+    weight = None if args.angle_weight is None else _one_number(args.angle_weight, "--angle-weight")
+    pf = read_poses(args.targets)
+    out = synthesize_motion(
+        pf.poses,
+        inputs=None if pf.inputs is None else list(pf.inputs),
+        closed=pf.closed,
+        approximate=args.approximate,
+        weight=weight,
+        min_transmission=_one_number(args.min_transmission, "--min-transmission") if args.min_transmission else 0.0,
+        units=args.units,
+        seed=_integer(args.seed, "--seed", 0, 2**32 - 1),
+        seconds=seconds,
+    )
+    best = out.best
+    described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"
+    lk.save(dataclasses.replace(best.mechanism, description=described), args.output)
+    if args.plot:
+        from .viz import draw
+
+        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed)
+        draw.save_figure(fig, args.plot, fig.axes[0])
+    print(motion_text(out, pf.poses, args.units, args.output))
+    return 0
+
+
+def _motion_template(path: str) -> None:
+    """``--topology FILE`` with ``--task motion``: refused unless a four-bar whose coupler carries ``P`` and ``Q``."""
+    import os
+
+    import linkagekit as lk
+
+    if not os.path.exists(path):
+        raise InputError(f"--topology: '{shorten_path(path)}' is neither fourbar nor a file")
+    mech = lk.load(path)
+    if not any({"P", "Q"} <= set(link.joints) for link in mech.links):
+        raise InputError(f"{shorten_path(path)}: a motion template needs tracer joints P and Q on one link")
+    raise InputError(f"{shorten_path(path)}: motion generation designs four-bars only (--topology fourbar)")
+
+
+def motion_text(out: Any, poses: Any, unit: str, path: str | None) -> str:
+    """The table of poses and errors, the summary and the other four-bars found, that ``--task motion`` prints."""
+    import numpy as np
+
+    best = out.best
+    cols = [
+        Column("pose", [str(i + 1) for i in range(len(poses))]),
+        Column(f"x [{unit}]", format_cells(poses[:, 0])),
+        Column(f"y [{unit}]", format_cells(poses[:, 1])),
+        Column("angle [deg]", format_cells(poses[:, 2])),
+        Column("crank [deg]", format_cells(np.mod(best.inputs, 360.0))),
+        Column(f"error [{unit}]", format_cells(best.position_errors)),
+        Column("error [deg]", format_cells(best.angle_errors)),
+    ]
+    lines = render_table(cols)
+    lines.append("")
+    lines.append(
+        f"{best.method} four-bar: max error {best.max_position_error:.6g} {unit} "
+        f"({100 * best.max_position_error / out.diagonal:.4g} % of the poses' diagonal {out.diagonal:.6g} {unit}) "
+        f"and {best.max_angle_error:.4g} deg"
+    )
+    branch = "met in order on one branch" if best.one_branch else "NOT met in order on one branch"
+    lines.append(f"{best.grashof}; poses {branch}; smallest transmission angle {best.min_transmission:.4g} deg")
+    if len(out.fourbars) > 1:
+        lines.append(f"{len(out.fourbars)} four-bars found (best first):")
+        for i, f in enumerate(out.fourbars):
+            order = "one branch" if f.one_branch else "not in order on one branch"
+            lines.append(
+                f"  {i + 1}. {f.method}, {f.grashof}, {order}: max error {f.max_position_error:.4g} {unit}, "
+                f"{f.max_angle_error:.4g} deg"
+            )
+    if path is not None:
+        lines.append(f"wrote {path}")
+    return "\n".join(lines)
+
+
 def _synthesize_resume(args: argparse.Namespace) -> str:
     """How to go on after a run that stopped before its end."""
     if args.checkpoint:
@@ -1371,10 +1465,15 @@ def _synthesize_command(args: argparse.Namespace) -> str:
     words = [PROG, "synthesize", os.path.basename(args.targets)]
     for name in _SYNTHESIZE_DECIDING:
         value = getattr(args, name)
+        if name == "min_transmission" and value is None and args.task == "path":
+            value = "20"
         if value is not None:
             words += ["--" + name.replace("_", "-"), str(value)]
     if args.ordered:
         words.append("--ordered")
+    if args.task != "path":
+        words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
+        words += ["--angle-weight", str(args.angle_weight)] if args.angle_weight is not None else []
     return " ".join(shlex.quote(w) for w in words)
 
 
@@ -1391,7 +1490,7 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
     options: dict[str, Any] = {
         "seconds": seconds,
         "seed": _integer(args.seed, "--seed", 0, 2**32 - 1),
-        "min_transmission": _one_number(args.min_transmission, "--min-transmission"),
+        "min_transmission": _one_number(args.min_transmission or "20", "--min-transmission"),
         "workers": _integer(args.workers, "--workers", 1, 1024),
     }
     options["points"] = _integer(
