@@ -113,11 +113,13 @@ def check_plot(png: Path, pairs: np.ndarray) -> None:
     t = json.loads(im.text[draw.TRANSFORM_KEY])
     rgb = np.asarray(im.convert("RGB"), float)
     target = np.linalg.norm(rgb - [int(draw.TARGET_COLOR[k : k + 2], 16) for k in (1, 3, 5)], axis=-1) < 60
+    curve = np.linalg.norm(rgb - [int(draw.CURVE_COLOR[k : k + 2], 16) for k in (1, 3, 5)], axis=-1) < 60
 
     def ring_found(col: float, row: float) -> bool:
         rr, cc = np.mgrid[: rgb.shape[0], : rgb.shape[1]]
         r = np.hypot(cc + 0.5 - col, rr + 0.5 - row)
-        return bool(target[(r > 8) & (r < 14)].sum() > 20 and not target[r < 4].any())
+        ring = target[(r > 8) & (r < 14)].sum() > 20 and not target[r < 4].any()
+        return bool(ring and curve[r < 3].any())  # the curve (solved by analyze) passes through the ring
 
     for shift in (0.0, 25.0):
         found = [ring_found(t[0] * a + t[1] + shift, t[2] * b + t[3]) for a, b in pairs]
