@@ -46,6 +46,17 @@ COMMANDS = [
         "docs/images/synthesize_motion.png",
     ],
     [
+        "synthesize",
+        "examples/targets/log_function.csv",
+        "--task",
+        "function",
+        "--free-offsets",
+        "-o",
+        "/tmp/log_function.yaml",
+        "--plot",
+        "docs/images/synthesize_function.png",
+    ],
+    [
         "plot",
         "examples/slider_crank.yaml",
         "-q",

@@ -28,12 +28,13 @@ LAYERS = [
         "synthesis.targets",
         "synthesis.space",
         "synthesis.objective",
-        "synthesis.motion",
         "synthesis.cmaes",
+        "synthesis.function",
+        "synthesis.motion",
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
-    {"synthesis.run"},
+    {"synthesis.run", "synthesis.function_run"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

@@ -420,12 +420,14 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="fourbar (default), watt2, stephenson3, or a mechanism file used as a template (see --free)",
     )
     _output_option(p, "the mechanism file to write: .yaml or .json")
-    p.add_argument("--seconds", metavar="S", default="60", help="time budget (default 60)")
+    p.add_argument(
+        "--seconds", metavar="S", default=_DEFAULT_SECONDS, help="time budget (default 60; 10 for --task function)"
+    )
     p.add_argument("--seed", metavar="N", default="0", help="random seed (default 0)")
     p.add_argument(
         "--min-transmission",
         metavar="DEG",
-        help="smallest transmission angle, degrees (default 20; 0 with --task motion)",
+        help="smallest transmission angle, degrees (default 20; 0 with --task motion or function)",
     )
     p.add_argument("--workers", metavar="N", default="1", help="evaluate each generation on N local processes")
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
@@ -465,6 +467,8 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         metavar="W",
         help="motion: one radian of orientation error weighs as much as W diagonals of position error (default 0.05)",
     )
+    p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
+    p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
 
 #: the tasks of ``synthesize --task`` (spec section 6)
@@ -1180,7 +1184,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     if args.task == "motion":
         return _synthesize_motion(args)
     if args.task == "function":
-        raise InputError("--task function: not available in this version")
+        return _synthesize_function(args)
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
@@ -1201,6 +1205,113 @@ def _synthesize(args: argparse.Namespace) -> int:
         _plot_synthesis(out, targets, args.plot)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     return 0
+
+
+#: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
+_DEFAULT_SECONDS, FUNCTION_SECONDS = "60", 10.0
+
+
+def _synthesize_function(args: argparse.Namespace) -> int:
+    """``linkagekit synthesize --task function``: a four-bar whose output angle follows the pairs."""
+    import dataclasses
+    import os
+
+    import linkagekit as lk
+
+    from .synthesis.function import read_pairs
+    from .synthesis.function_run import synthesize_function
+    from .units import LENGTH_UNITS
+
+    _suffix(args.output, (".yaml", ".yml", ".json"))
+    if args.plot:
+        _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    if args.units not in LENGTH_UNITS:
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
+    length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
+    x, y = read_pairs(args.targets)
+    engine = {
+        k: v for k, v in _search_options(args).items() if k in ("seconds", "seed", "restarts", "generations", "workers")
+    }
+    if args.seconds == _DEFAULT_SECONDS:
+        engine["seconds"] = FUNCTION_SECONDS
+    given = args.min_transmission is not None  # the task imposes no bound unless asked
+    engine["min_transmission"] = _one_number(args.min_transmission, "--min-transmission") if given else 0.0
+    out = synthesize_function(
+        x,
+        y,
+        free_offsets=args.free_offsets,
+        ground_length=length,
+        units=args.units,
+        source=os.path.basename(args.targets),
+        **engine,
+    )
+    fit, mech = out.fit, out.mechanism
+    words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
+    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}", f"--seed {engine['seed']}"]
+    mech = dataclasses.replace(mech, description="command: " + " ".join(words))
+    lk.save(mech, args.output)
+    if args.plot:
+        _plot_function(mech, fit, args.plot)
+    print(function_text(out, args.units, args.output))
+    return 0
+
+
+def _plot_function(mech: Any, fit: Any, path: str) -> None:
+    """``--plot`` of a function generator: its output angle (by ``analyze``) against the input, with the pairs."""
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .viz import draw
+
+    phi0, psi0 = fit.offsets
+    x = np.linspace(fit.inputs[0], fit.inputs[-1], 361)
+    psi = lk.analyze(mech, {"crank": x + phi0}).angle("output")
+    out = fit.outputs[0] + (psi - psi0 - fit.outputs[0] + 180.0) % 360.0 - 180.0  # unwrapped near the first pair
+    pairs = np.stack([fit.inputs, fit.outputs], axis=1)
+    fig, ax = draw.function_figure(np.stack([x, out], axis=1), pairs, fit.errors)
+    draw.save_figure(fig, path, ax)
+
+
+def _positive(text: str, option: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"{option}: expected a number, got {shorten(repr(text))}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option}: expected a positive number, got {shorten(repr(text))}")
+    return value
+
+
+def function_text(out: Any, unit: str, path: str) -> str:
+    """The table of pairs and errors, and the summary, that ``synthesize --task function`` prints."""
+    fit = out.fit
+    cols = [
+        Column("pair", [str(i + 1) for i in range(len(fit.inputs))]),
+        Column("input [deg]", format_cells(fit.inputs)),
+        Column("output [deg]", format_cells(fit.outputs)),
+        Column("error [deg]", format_cells(fit.errors)),
+    ]
+    a, b, c, d = fit.lengths
+    side = "left" if fit.branch > 0 else "right"
+    lines = [*render_table(cols), ""]
+    lines.append(f"max error {fit.max_error:.6g} deg ({fit.method})")
+    if fit.offsets != (0.0, 0.0):
+        lines.append(
+            f"offsets: crank angle = input + {fit.offsets[0]:.6g} deg, output angle = output + {fit.offsets[1]:.6g} deg"
+        )
+    lines.append(f"crank {a:.6g}, coupler {b:.6g}, output {c:.6g}, ground {d:.6g} {unit}; Grashof type {fit.grashof}")
+    state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
+    lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
+    lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
+    if out.engine is not None:
+        o = out.engine.outcome
+        lines.append(
+            f"engine: {o.restarts} searches, {o.evaluations} designs in {o.seconds:.1f} s "
+            f"(its best, before the minimax polish: {math.degrees(out.engine.error):.6g} deg)"
+        )
+    lines.append(f"wrote {path}")
+    return "\n".join(lines)
 
 
 def _synthesize_motion(args: argparse.Namespace) -> int:

@@ -523,6 +523,34 @@ def synthesis_figure(
     return fig
 
 
+def function_figure(curve: Any, pairs: Any, errors: Any, title: str = "", size: float = 6.0) -> tuple[Figure, Axes]:
+    """Function generation: the output angle against the input angle, the wanted pairs, and the errors.
+
+    ``curve`` (k, 2): input and output angle (degrees) of the mechanism, densely; ``pairs``
+    (n, 2): the wanted input, output pairs; ``errors`` (n,): the output-angle error at each
+    pair (degrees).  The upper axes (returned, for :func:`save_figure`'s pixel map) draw the
+    curve with the pairs as rings; the lower axes the error at each pair.
+    """
+    fig = Figure(figsize=(size, size * 0.9), dpi=DPI)
+    top, bottom = fig.subplots(2, 1, height_ratios=[3, 1.4], sharex=True)
+    c, p, e = np.asarray(curve, float), np.asarray(pairs, float), np.asarray(errors, float)
+    top.plot(c[:, 0], c[:, 1], color=CURVE_COLOR, linewidth=1.6, zorder=3)
+    top.plot(p[:, 0], p[:, 1], "o", markersize=8, markerfacecolor="none", markeredgecolor=TARGET_COLOR, zorder=4)
+    top.set_ylabel("output [deg]")
+    top.grid(True, color="#dddddd", linewidth=0.5)
+    bottom.axhline(0.0, color="#999999", linewidth=0.8)
+    bottom.vlines(p[:, 0], 0.0, e, color=TARGET_COLOR, linewidth=1.2)
+    bottom.plot(p[:, 0], e, "o", markersize=4, color=TARGET_COLOR)
+    worst = float(np.max(np.abs(e))) if len(e) else 0.0
+    for s in (-1.0, 1.0):
+        bottom.axhline(s * worst, color=CURVE_COLOR, linewidth=0.8, linestyle="--")
+    bottom.set_ylim(-1.25 * worst - 1e-12, 1.25 * worst + 1e-12)
+    bottom.set_xlabel("input [deg]")
+    bottom.set_ylabel("error [deg]")
+    fig.suptitle(_t(title or f"{len(p)} pairs: max error {worst:.4g} deg"), fontsize=10)
+    return fig, top
+
+
 #: colour of the coupler's achieved frames (P -> Q) at the poses of a motion synthesis
 ACHIEVED_COLOR = "#1a7f37"
 #: a pose's frame: its line this fraction of the poses' diagonal long, its second axis half that
