@@ -34,7 +34,8 @@ LAYERS = [
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
-    {"synthesis.run", "synthesis.function_run"},
+    {"synthesis.function_run"},
+    {"synthesis.run"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from ..geometry import FloatArray
 from .function import FunctionFit, FunctionObjective, check_pairs, solve
-from .run import Optimum, search
+from .optimize import Optimum, search
 
 if TYPE_CHECKING:
     from ..model import Mechanism

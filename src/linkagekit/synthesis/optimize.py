@@ -43,7 +43,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -52,6 +52,9 @@ from ..geometry import FloatArray
 from .base import Objective
 from .distribute import Evaluator
 from .objective import best_index
+
+if TYPE_CHECKING:
+    from ..model import Mechanism
 
 #: designs polished per restart
 POLISHED = 5
@@ -184,6 +187,75 @@ def optimize(
         if settings.checkpoint:
             run.save()
     return run.outcome()
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The outcome of a search of any :class:`~linkagekit.synthesis.base.Objective` (:func:`search`).
+
+    Attributes
+    ----------
+    x : ndarray (dim,)
+        The best design vector found.
+    error : float
+        Its error by the objective's dense check (``inf`` if it is infeasible there).
+    cost : float
+    feasible : bool
+    mechanism : Mechanism or None
+        ``objective.mechanism(x)``, or None when the objective builds none.
+    outcome : Outcome
+    """
+
+    x: np.ndarray
+    error: float
+    cost: float
+    feasible: bool
+    mechanism: Mechanism | None
+    outcome: Outcome
+
+
+def search(
+    objective: Objective,
+    *,
+    seed: int = 0,
+    seconds: float = 60.0,
+    restarts: int = 32,
+    generations: int = 500,
+    popsize: int = 15,
+    goal: float = 1e-5,
+    workers: int = 1,
+    scheduler: str | None = None,
+    checkpoint: str | None = None,
+    progress: Callable[[Progress], None] | None = None,
+) -> Optimum:
+    """Search any objective with the synthesis engine (``synthesize(objective=...)`` calls this).
+
+    Examples
+    --------
+    >>> from linkagekit.synthesis.base import Objective, Score
+    >>> class Nearest(Objective):  # the point of the unit square nearest to (0.3, 0.7)
+    ...     bounds = (np.zeros(2), np.ones(2))
+    ...     def score(self, X):
+    ...         r = X - [0.3, 0.7]
+    ...         return Score(np.sum(r * r, axis=1), np.abs(r).max(axis=1), np.zeros(len(X)))
+    ...     def residuals(self, X):
+    ...         return X - [0.3, 0.7]
+    ...     def fingerprint(self):
+    ...         return "nearest"
+    >>> out = search(Nearest(), restarts=1, generations=5)
+    >>> bool(out.error < 1e-9), out.mechanism is None
+    (True, True)
+    """
+    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
+    outcome = optimize(objective, settings, progress)
+    s = objective.check(outcome.x[None])
+    try:
+        mech = objective.mechanism(outcome.x)
+    except NotImplementedError:
+        mech = None
+    feasible = bool(s.violation[0] == 0)
+    error = float(s.error[0]) if feasible else float("inf")
+    return Optimum(outcome.x, error, float(s.cost[0]), feasible, mech, outcome)
 
 
 @dataclass

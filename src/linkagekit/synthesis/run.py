@@ -25,8 +25,9 @@ import numpy as np
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError, LinkageError
 from .base import Objective
+from .function_run import synthesize_function
 from .objective import Problem, check
-from .optimize import Outcome, Progress, Settings, optimize
+from .optimize import Optimum, Outcome, Progress, Settings, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
 
 if TYPE_CHECKING:
@@ -86,75 +87,6 @@ class Synthesis:
     def rms_error(self) -> float:
         """The root mean square of the distances ``errors``, in the targets' unit."""
         return float(np.sqrt(np.mean(self.errors**2)))
-
-
-@dataclass(frozen=True)
-class Optimum:
-    """The outcome of a search of any :class:`~linkagekit.synthesis.base.Objective` (:func:`search`).
-
-    Attributes
-    ----------
-    x : ndarray (dim,)
-        The best design vector found.
-    error : float
-        Its error by the objective's dense check (``inf`` if it is infeasible there).
-    cost : float
-    feasible : bool
-    mechanism : Mechanism or None
-        ``objective.mechanism(x)``, or None when the objective builds none.
-    outcome : Outcome
-    """
-
-    x: np.ndarray
-    error: float
-    cost: float
-    feasible: bool
-    mechanism: Mechanism | None
-    outcome: Outcome
-
-
-def search(
-    objective: Objective,
-    *,
-    seed: int = 0,
-    seconds: float = 60.0,
-    restarts: int = 32,
-    generations: int = 500,
-    popsize: int = 15,
-    goal: float = 1e-5,
-    workers: int = 1,
-    scheduler: str | None = None,
-    checkpoint: str | None = None,
-    progress: Callable[[Progress], None] | None = None,
-) -> Optimum:
-    """Search any objective with the synthesis engine (``synthesize(objective=...)`` calls this).
-
-    Examples
-    --------
-    >>> from linkagekit.synthesis.base import Objective, Score
-    >>> class Nearest(Objective):  # the point of the unit square nearest to (0.3, 0.7)
-    ...     bounds = (np.zeros(2), np.ones(2))
-    ...     def score(self, X):
-    ...         r = X - [0.3, 0.7]
-    ...         return Score(np.sum(r * r, axis=1), np.abs(r).max(axis=1), np.zeros(len(X)))
-    ...     def residuals(self, X):
-    ...         return X - [0.3, 0.7]
-    ...     def fingerprint(self):
-    ...         return "nearest"
-    >>> out = search(Nearest(), restarts=1, generations=5)
-    >>> bool(out.error < 1e-9), out.mechanism is None
-    (True, True)
-    """
-    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
-    outcome = optimize(objective, settings, progress)
-    s = objective.check(outcome.x[None])
-    try:
-        mech = objective.mechanism(outcome.x)
-    except NotImplementedError:
-        mech = None
-    feasible = bool(s.violation[0] == 0)
-    error = float(s.error[0]) if feasible else float("inf")
-    return Optimum(outcome.x, error, float(s.cost[0]), feasible, mech, outcome)
 
 
 def make_problem(
@@ -238,6 +170,8 @@ def synthesize(
     closed: bool = False,
     approximate: bool = False,
     angle_weight: float | None = None,
+    free_offsets: bool = False,
+    ground_length: float = 1.0,
     **old: Any,
 ) -> Any:
     """Find a mechanism whose tracer point passes near every target (or search any ``objective``).
@@ -278,11 +212,16 @@ def synthesize(
         ``"path"`` (the default) or ``"motion"``: ``targets`` are then poses (m, 3) ``x, y,
         angle`` (degrees) and :func:`synthesize_motion` runs with ``inputs``, ``closed``,
         ``approximate``, ``angle_weight``, ``min_transmission`` (default 0 for motion),
-        ``units``, ``seed`` and ``seconds``.
+        ``units``, ``seed`` and ``seconds``; or ``"function"``: ``targets`` are pairs (m, 2)
+        ``input, output`` (degrees from the ground line) and
+        :func:`~linkagekit.synthesis.function_run.synthesize_function` runs with
+        ``free_offsets``, ``ground_length``, ``min_transmission`` (default 0), ``units``,
+        ``seed``, ``seconds`` and ``workers``.
 
     Returns
     -------
-    Synthesis; MotionSynthesis with ``task="motion"``; Optimum with ``objective``
+    Synthesis; MotionSynthesis with ``task="motion"``; FunctionSynthesis with ``task="function"``;
+    Optimum with ``objective``
     """
     if objective is not None:
         return search(
@@ -295,8 +234,16 @@ def synthesize(
             targets, inputs=inputs, closed=closed, approximate=approximate, weight=angle_weight,
             min_transmission=mt, units=_units(units, old), seed=seed, seconds=seconds,
         )  # fmt: skip
+    if task == "function":
+        pairs = np.asarray(targets, float)
+        if pairs.ndim != 2 or pairs.shape[1] != 2:
+            raise InputError("targets: function generation takes pairs (m, 2) of input, output angles (degrees)")
+        return synthesize_function(
+            pairs[:, 0], pairs[:, 1], free_offsets=free_offsets, ground_length=ground_length, units=_units(units, old),
+            seed=seed, seconds=seconds, workers=workers, min_transmission=min_transmission or 0.0,
+        )  # fmt: skip
     if task != "path":
-        raise InputError(f"task: expected 'path' or 'motion', got {task!r}")
+        raise InputError(f"task: expected 'path', 'motion' or 'function', got {task!r}")
     min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
     source = getattr(targets, "source", None)
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
