@@ -23,7 +23,7 @@ LAYERS = [
     {"result", "api", "checks"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},
-    {"synthesis.targets", "synthesis.space", "synthesis.objective", "synthesis.cmaes"},
+    {"synthesis.targets", "synthesis.space", "synthesis.objective", "synthesis.cmaes", "synthesis.burmester"},
     {"synthesis.distribute"},
     {"synthesis.optimize"},
     {"synthesis.run"},

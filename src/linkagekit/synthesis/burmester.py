@@ -26,9 +26,11 @@ Examples
 >>> import numpy as np
 >>> x, y = [0.0, 1.0, 2.0, 2.6, 3.0], [0.0, 0.6, 0.8, 0.5, 0.0]
 >>> angle = np.radians([0.0, -15.0, -35.0, -60.0, -80.0])
->>> fbs = exact_motion(x, y, angle)
+>>> fbs = exact_motion((x, y, angle))  # every real Burmester pair, best first
 >>> len(fbs) >= 1, max(fb.position_error for fb in fbs) < 1e-9
 (True, True)
+>>> fbs[0].mechanism(unit="mm").joint_names
+('A0', 'A1', 'B1', 'B0', 'P', 'Q')
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from itertools import combinations, permutations
+from itertools import permutations
 from typing import Any
 
 import numpy as np
@@ -50,8 +52,12 @@ from ..model import Mechanism
 
 #: two poses closer than this (relative to the poses' size, and in radians) are one pose
 SAME_POSE = 1e-9
-#: Burmester points farther than this many pose sizes from the poses are left out (slider dyads)
-FAR = 1e6
+#: Burmester points farther than this many pose sizes from the poses are left out: such a dyad
+#: is a slider for any practical purpose, and its four-bar's joints are too far out for its
+#: residual at the poses to stay within 1e-9 of their size (about 1e-7 at 10^4 sizes)
+FAR = 1e3
+#: a dyad is kept when its circle point's positions are on one circle to this much of its size
+MISFIT = 1e-10
 #: joint names of the written four-bar, in the order of :meth:`BurmesterFourBar.pose_array`
 JOINTS = ("A0", "A1", "B1", "B0", "P", "Q")
 #: crank steps per degree when a sweep is checked densely
@@ -90,11 +96,13 @@ class Poses:
 
     def place(self, w: ArrayLike) -> ComplexArray:
         """Positions ``(..., n)`` of body points ``w`` (body frame, shape ``(...)``) at every pose."""
-        return self.d + self.rot * np.asarray(w, complex)[..., None]
+        out: ComplexArray = self.d + self.rot * np.asarray(w, complex)[..., None]
+        return out
 
     def body(self, p: ArrayLike, j: int = 0) -> ComplexArray:
         """Body-frame coordinates of the points ``p`` (plane) at pose ``j``."""
-        return (np.asarray(p, complex) - self.d[j]) / self.rot[j]
+        out: ComplexArray = (np.asarray(p, complex) - self.d[j]) / self.rot[j]
+        return out
 
     def seen_from_body(self, c: ArrayLike) -> ComplexArray:
         """``z_j = e^{-i theta_j}(c - d_j)``: where the fixed points ``c`` are in the body's frame, ``(..., n)``."""
@@ -151,7 +159,11 @@ def _as_poses(poses: Poses | Sequence[ArrayLike]) -> Poses:
 
 def _exact(poses: Poses, counts: tuple[int, ...], what: str) -> None:
     if poses.n not in counts:
-        want = " or ".join(str(c) for c in counts)
+        want = (
+            " or ".join([", ".join(str(c) for c in counts[:-1]), str(counts[-1])])
+            if len(counts) > 1
+            else str(counts[0])
+        )
         raise InputError(f"poses: {what} takes {want} poses, got {poses.n}")
 
 
@@ -174,7 +186,7 @@ class Dyad:
     @property
     def length(self) -> float:
         """The link's length ``|moving - ground|``."""
-        return abs(self.moving - self.ground)
+        return float(abs(self.moving - self.ground))
 
 
 def _circle_fit(points: ComplexArray) -> tuple[ComplexArray, FloatArray]:
@@ -295,7 +307,9 @@ class _Frame:
         f = center_cubic(*self.poses(p), k)
         top = float(np.max(np.abs(f)))
         if not top > 0:
-            raise MethodNotApplicableError(f"poses {[i + 1 for i in k]}: every point is a center point (degenerate poses)")
+            raise MethodNotApplicableError(
+                f"poses {[i + 1 for i in k]}: every point is a center point (degenerate poses)"
+            )
         return f / top
 
 
@@ -303,8 +317,8 @@ def poles(poses: Poses | Sequence[ArrayLike], pairs: Sequence[tuple[int, int]]) 
     """The displacement poles ``P_ab``: the plane point the body occupies at poses ``a`` and ``b`` (inf: a translation).
 
     >>> p = motion_poses([1.0, 0.0, -1.0], [0.0, 1.0, 0.0], np.radians([0.0, 90.0, 180.0]))
-    >>> complex(np.round(poles(p, [(0, 1)])[0], 12))
-    0j
+    >>> bool(abs(poles(p, [(0, 1)])[0]) < 1e-12)  # turning 90 degrees about the origin
+    True
     """
     p = _as_poses(poses)
     a, b = np.array(pairs).T
@@ -375,7 +389,7 @@ def center_point_curve(poses: Poses | Sequence[ArrayLike], samples: int = 360) -
 
 
 def _line_roots(f: FloatArray, pole: complex, u: ComplexArray) -> ComplexArray:
-    """The two other roots ``s`` (2, m) of ``f(pole + s u) = a1 s + a2 s^2 + a3 s^3`` per direction ``u`` (NaN: complex)."""
+    """The other two roots ``s`` (2, m) of ``f(pole + s u) = a1 s + a2 s^2 + a3 s^3`` for each ``u`` (NaN: none)."""
     v = {s: _eval(f, pole + s * u) for s in (-1.0, 1.0, 2.0)}
     a2 = (v[1.0] + v[-1.0]) / 2
     odd = (v[1.0] - v[-1.0]) / 2
@@ -409,40 +423,87 @@ def burmester_points(poses: Poses | Sequence[ArrayLike]) -> list[Dyad]:
     _exact(p, (5,), "Burmester points")
     fr = _Frame.of(p)
     f, g = fr.cubic(p, (0, 1, 2, 3)), fr.cubic(p, (0, 1, 2, 4))
-    pts = _polish(f, g, _starts(f, g))
     spurious = fr.from_plane(poles(p, [(0, 1), (0, 2), (1, 2)]))
-    keep: list[complex] = []
-    for c in pts:
-        near = [abs(c - q) <= 1e-6 * max(1.0, abs(c)) for q in [*keep, *spurious]]
-        if abs(c) < FAR and not any(near):
-            keep.append(complex(c))
-    out = []
-    for c in keep:
-        dy = dyad_from_center(p, complex(fr.to_plane(c)))
+    found: list[complex] = []
+    for c in _polish(f, g, _starts(f, g, spurious)):
+        near = [abs(c - q) <= 1e-9 * max(1.0, abs(c)) for q in found]
+        off_pole = np.min(np.abs(spurious - c)) > 1e-6 * max(1.0, abs(c))
+        if abs(c) < FAR and off_pole and not any(near):
+            found.append(complex(c))
+    out: list[Dyad] = []
+    for c in found:
+        dy = _refine(p, dyad_from_center(p, complex(fr.to_plane(c))))
         _, misfit = _circle_fit(p.place(p.body(dy.moving)) - dy.ground)
-        if misfit <= 1e-7 * max(p.size, dy.length):
+        same = [abs(dy.ground - o.ground) <= 1e-7 * p.size for o in out]
+        if misfit <= MISFIT * max(p.size, dy.length) and not any(same):
             out.append(dy)
     return out
 
 
-def _starts(f: FloatArray, g: FloatArray) -> ComplexArray:
-    """Starting points for the common real roots of two cubics: real roots of the resultant in ``x``, then roots in ``y``."""
+def _refine(p: Poses, dy: Dyad, steps: int = 12) -> Dyad:
+    """Newton's method on the dyad's own equations ``|W_j - c|^2 - |W_0 - c|^2 = 0``, ``j = 1..4`` (5 poses).
+
+    Four equations in the four coordinates of ``c`` and of the body point ``w``: the dyad
+    itself rather than the determinants that found it, so that the five circle positions come
+    onto one circle to rounding.  Close poses make this system ill-conditioned (a first step
+    may overshoot): every step is taken and the iterate of least residual is kept.
+    """
+    fr = _Frame.of(p)
+    d, theta = fr.poses(p)
+    rot = cis(theta)
+    c, w = complex(fr.from_plane(dy.ground)), complex(((fr.from_plane(dy.moving)) - d[0]) / rot[0])
+
+    def residual(c: complex, w: complex) -> tuple[FloatArray, FloatArray]:
+        u = d + rot * w - c  # W_j - c
+        e = np.abs(u[1:]) ** 2 - np.abs(u[0]) ** 2
+        dc = -2 * (u[1:] - u[0])  # gradient in c, as x + iy
+        dw = 2 * (np.conj(rot[1:]) * u[1:] - np.conj(rot[0]) * u[0])  # gradient in w
+        return e, np.stack([dc.real, dc.imag, dw.real, dw.imag], axis=1)
+
+    e, jac = residual(c, w)
+    best = (float(np.max(np.abs(e))), c, w)
+    for _ in range(steps):
+        try:
+            step = np.linalg.solve(jac, e)
+        except np.linalg.LinAlgError:
+            break
+        c, w = c - complex(step[0], step[1]), w - complex(step[2], step[3])
+        e, jac = residual(c, w)
+        if not np.all(np.isfinite(e)):
+            break
+        best = min(best, (float(np.max(np.abs(e))), c, w), key=lambda b: b[0])
+    _, c, w = best
+    return Dyad(complex(fr.to_plane(c)), complex(fr.to_plane(d[0] + rot[0] * w)))
+
+
+def _starts(f: FloatArray, g: FloatArray, known: ComplexArray) -> ComplexArray:
+    """Starts for the common real roots of two cubics: real roots of their resultant in ``x``, then roots in ``y``.
+
+    The resultant ``R(x)`` (degree 7) is sampled on a circle ``|x| = rho`` by the determinant of
+    the Sylvester matrix, divided there by ``x - Re(k)`` for every known common root ``k`` (the
+    poles, within 10 of the origin), and its coefficients read off by an FFT: the quotient is
+    the quartic of the Burmester points, whose roots stay simple even next to a pole.
+    """
+    near = known[np.isfinite(known) & (np.abs(known) <= 10)].real
+    rho = max(1.0, 1.25 * float(np.max(np.abs(near), initial=0.0)))
     n = 16
-    xs = cis(2 * np.pi * np.arange(n) / n)
+    xs = rho * cis(2 * np.pi * np.arange(n) / n)
     fy = np.stack([npoly.polyval(xs, f[:, i]) for i in range(4)], axis=-1)  # coefficients of y^0..y^3
     gy = np.stack([npoly.polyval(xs, g[:, i]) for i in range(4)], axis=-1)
     syl = np.zeros((n, 6, 6), complex)
     for r in range(3):
         syl[:, r, r : r + 4] = fy[:, ::-1]
         syl[:, r + 3, r : r + 4] = gy[:, ::-1]
-    coef = (np.fft.fft(np.linalg.det(syl)) / n).real[:8]  # degree 7: the circular points are common
+    vals = np.linalg.det(syl) / np.prod(xs[:, None] - near[None, :], axis=1)
+    degree = 7 - near.size  # 9 intersections less the circular points at infinity and the poles
+    coef = (np.fft.fft(vals) / n).real[: degree + 1] / rho ** np.arange(degree + 1)
     x = np.roots(coef[::-1]) if np.any(coef) else np.zeros(0)
-    x = x[np.abs(x.imag) <= 1e-4 * (1 + np.abs(x))].real
     out = []
-    for x0 in x:
+    for x0 in x[np.abs(x.imag) <= 0.1 * (1 + np.abs(x))].real:  # a close pair of real roots may come out complex
         for h in (f, g):
-            ys = np.roots(npoly.polyval(x0, h)[::-1]) if np.any(npoly.polyval(x0, h)) else []
-            out += [complex(x0, y.real) for y in ys if abs(y.imag) <= 1e-4 * (1 + abs(y))]
+            coef_y = npoly.polyval(x0, h)
+            ys = np.roots(coef_y[::-1]) if np.any(coef_y) else np.zeros(0, complex)
+            out += [complex(x0, y.real) for y in ys if abs(y.imag) <= 0.1 * (1 + abs(y))]
     return np.array(out, complex)
 
 
@@ -460,7 +521,9 @@ def _polish(f: FloatArray, g: FloatArray, c: ComplexArray, steps: int = 50) -> C
             x, y = x - (a * j22 - b * j12) / det, y - (j11 * b - j21 * a) / det
         scale = (1 + np.hypot(x, y)) ** 3
         ok = np.isfinite(x + y)
-        ok[ok] = (np.abs(npoly.polyval2d(x[ok], y[ok], f)) + np.abs(npoly.polyval2d(x[ok], y[ok], g))) <= 1e-10 * scale[ok]
+        ok[ok] = (np.abs(npoly.polyval2d(x[ok], y[ok], f)) + np.abs(npoly.polyval2d(x[ok], y[ok], g))) <= 1e-10 * scale[
+            ok
+        ]
     return (x + 1j * y)[ok]
 
 
@@ -534,10 +597,10 @@ class BurmesterFourBar:
 
 def _lengths(crank: Dyad, rocker: Dyad) -> dict[str, float]:
     return {
-        "ground": abs(rocker.ground - crank.ground),
-        "crank": crank.length,
-        "coupler": abs(rocker.moving - crank.moving),
-        "rocker": rocker.length,
+        "ground": float(abs(rocker.ground - crank.ground)),
+        "crank": float(crank.length),
+        "coupler": float(abs(rocker.moving - crank.moving)),
+        "rocker": float(rocker.length),
     }
 
 
@@ -566,7 +629,9 @@ def _mechanism(p: Poses, crank: Dyad, rocker: Dyad, inputs: FloatArray, unit: st
                 "coupler": ["A1", "B1", "P", "Q"],
                 "rocker": ["B0", "B1"],
             },
-            "drivers": [{"link": "crank", "pivot": "A0", "toward": "A1", "angles": {"start": start, "stop": stop, "step": step}}],
+            "drivers": [
+                {"link": "crank", "pivot": "A0", "toward": "A1", "angles": {"start": start, "stop": stop, "step": step}}
+            ],
         },
         "<Burmester four-bar>",
     )
@@ -602,7 +667,10 @@ def four_bar(poses: Poses | Sequence[ArrayLike], crank: Dyad, rocker: Dyad) -> B
     sweep = inputs[0] + direction * np.linspace(0, span, max(2, int(np.degrees(span) * CHECK_STEPS_PER_DEG) + 2))
     dense = analyze(mech, {"crank": np.degrees(sweep)}, rates=False, dynamics=False)
     in_order = bool(span < 2 * np.pi and np.all(prm.signs == prm.signs[:, :1]) and np.all(dense.assembled))
-    kind, detail = grashof(FourBar(0, 1, 2, 3, **_lengths(crank, rocker)))
+    lengths = _lengths(crank, rocker)
+    kind, detail = grashof(
+        FourBar(0, 1, 2, 3, lengths["ground"], lengths["crank"], lengths["coupler"], lengths["rocker"])
+    )
     return BurmesterFourBar(
         crank,
         rocker,
@@ -691,7 +759,7 @@ def _default_dyads(p: Poses, samples: int = 256, keep: int = 40) -> list[Dyad]:
         for d in dyads
         if np.isfinite(d.ground) and abs(d.ground - mid) <= 4 * p.size and 0.05 * p.size <= d.length <= 4 * p.size
     ]
-    pick = np.unique(np.linspace(0, len(good) - 1, min(keep, len(good))).round().astype(int)) if good else []
+    pick = np.unique(np.linspace(0, len(good) - 1, min(keep, len(good))).round().astype(int))
     return [good[i] for i in pick]
 
 
@@ -734,7 +802,9 @@ def exact_motion(
     return sorted(fbs, key=lambda fb: not fb.in_order)
 
 
-def _given_dyads(p: Poses, centers: Sequence[complex] | None, circle_points: Sequence[complex] | None) -> list[Dyad] | None:
+def _given_dyads(
+    p: Poses, centers: Sequence[complex] | None, circle_points: Sequence[complex] | None
+) -> list[Dyad] | None:
     """The user's dyads, each checked to meet every pose."""
     if centers is None and circle_points is None:
         return None
