@@ -136,6 +136,53 @@ def test_burmester_points_skip_the_poles_and_agree_with_the_center_point_curves(
     assert on_circle(poses, bm.dyad_from_center(poses, pole[0])) > 1e-3 * poses.size
 
 
+def newton_dyads(poses, starts, steps=40):
+    """Dyads of 5 poses by Newton's method on ``|W_j - c|^2 = |W_0 - c|^2`` from many ground pivots at once.
+
+    No cubic, no resultant: an independent search for the Burmester points (its circle point
+    starts at the least-squares circle of the ground pivot's positions seen from the body).
+    """
+    d, rot = poses.d, np.exp(1j * poses.theta)
+    c = np.asarray(starts, complex)
+    z = (c[:, None] - d) / rot  # the ground pivot seen from the body
+    a = np.stack([2 * z.real, 2 * z.imag, np.ones(z.shape)], axis=-1)
+    sol = np.linalg.pinv(a) @ (np.abs(z) ** 2)[..., None]
+    w = sol[:, 0, 0] + 1j * sol[:, 1, 0]
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            u = d + rot * w[:, None] - c[:, None]
+            e = np.abs(u[:, 1:]) ** 2 - np.abs(u[:, :1]) ** 2
+            dc = -2 * (u[:, 1:] - u[:, :1])
+            dw = 2 * (np.conj(rot[1:]) * u[:, 1:] - np.conj(rot[0]) * u[:, :1])
+            jac = np.stack([dc.real, dc.imag, dw.real, dw.imag], axis=-1)
+            ok = np.abs(np.linalg.det(jac)) > 1e-300
+            step = np.zeros((c.size, 4))
+            step[ok] = np.linalg.solve(jac[ok], e[ok][..., None])[..., 0]
+            c, w = c - (step[:, 0] + 1j * step[:, 1]), w - (step[:, 2] + 1j * step[:, 3])
+        u = d + rot * w[:, None] - c[:, None]
+        r = np.abs(u)
+        good = np.isfinite(r).all(axis=1) & (np.ptp(r, axis=1) <= 1e-10 * poses.size)
+    out = []
+    for ci in c[good]:
+        if all(abs(ci - o) > 1e-6 * poses.size for o in out):
+            out.append(ci)
+    return out
+
+
+@pytest.mark.parametrize("seed", [21, 22, 23])
+def test_every_burmester_point_newton_finds_is_listed(seed):
+    rng = np.random.default_rng(seed)
+    _, _, xya = random_poses(rng, 5)
+    poses = bm.motion_poses(*xya)
+    mid, size = poses.d.mean(), poses.size
+    starts = mid + size * (rng.uniform(-4, 4, 600) + 1j * rng.uniform(-4, 4, 600))
+    brute = newton_dyads(poses, starts)
+    listed = [dy.ground for dy in bm.burmester_points(poses)]
+    assert len(brute) >= 2
+    for c in brute:  # complete: nothing the independent search finds is missing
+        assert min(abs(c - g) for g in listed) <= 1e-8 * size
+
+
 # ---------------------------------------------------------------------- 4 and 3 poses
 def test_center_point_curve_holds_a_known_dyad_and_only_center_points():
     rng = np.random.default_rng(3)

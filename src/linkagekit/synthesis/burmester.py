@@ -39,7 +39,6 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import permutations
-from typing import Any
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
@@ -47,14 +46,14 @@ from numpy.polynomial import polynomial as npoly
 from ..api import analyze, prepare
 from ..checks import FourBar, grashof
 from ..errors import InputError, MethodNotApplicableError
-from ..geometry import ArrayLike, BoolArray, ComplexArray, FloatArray, cis, cross
+from ..geometry import ArrayLike, BoolArray, ComplexArray, FloatArray, IntArray, cis, cross
 from ..model import Mechanism
 
 #: two poses closer than this (relative to the poses' size, and in radians) are one pose
 SAME_POSE = 1e-9
-#: Burmester points farther than this many pose sizes from the poses are left out: such a dyad
-#: is a slider for any practical purpose, and its four-bar's joints are too far out for its
-#: residual at the poses to stay within 1e-9 of their size (about 1e-7 at 10^4 sizes)
+#: Burmester dyads with a pivot farther than this many pose sizes from the poses are left out:
+#: such a dyad is a slider for any practical purpose, and its four-bar's joints are too far out
+#: for its residual at the poses to stay within 1e-9 of their size (about 1e-7 at 10^4 sizes)
 FAR = 1e3
 #: a dyad is kept when its circle point's positions are on one circle to this much of its size
 MISFIT = 1e-10
@@ -333,8 +332,9 @@ def poles(poses: Poses | Sequence[ArrayLike], pairs: Sequence[tuple[int, int]]) 
 class CenterPointCurve:
     """Samples of the center-point and circle-point curves of 4 poses.
 
-    Every line through the pole ``P01`` (which is on the cubic) meets the curve in at most two
-    more points: the roots of a quadratic.  Sample ``k`` is the line at angle ``slope[k]``.
+    Every line through a pole (``P01``, or the first pole at a finite place; every pole is on
+    the cubic) meets the curve in at most two more points: the roots of a quadratic.  Sample
+    ``k`` is the line at angle ``slope[k]``.
 
     Attributes
     ----------
@@ -345,7 +345,7 @@ class CenterPointCurve:
     slope : ndarray, shape (samples,)
         The direction of each line through the pole, in ``[0, pi)``.
     pole : complex
-        The pole ``P01`` (on the curve; its own circle point is not defined by one line).
+        The pole the lines pass through (on the curve; not a sample itself).
     """
 
     center: ComplexArray
@@ -373,9 +373,11 @@ def center_point_curve(poses: Poses | Sequence[ArrayLike], samples: int = 360) -
     _exact(p, (4,), "the center-point curve")
     fr = _Frame.of(p)
     f = fr.cubic(p, (0, 1, 2, 3))
-    pole = fr.from_plane(poles(p, [(0, 1)]))[0]
-    if not np.isfinite(pole):  # poses 1 and 2 differ by a translation: lines through pole P02
-        pole = fr.from_plane(poles(p, [(0, 2)]))[0]
+    every = fr.from_plane(poles(p, [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]))
+    finite = every[np.isfinite(every)]  # a pole is at infinity when two poses differ by a translation
+    if finite.size == 0:
+        raise MethodNotApplicableError("poses: all four at one angle (translations only): no center-point curve")
+    pole = complex(finite[0])
     t = np.pi * np.arange(samples) / samples
     s = _line_roots(f, pole, cis(t))
     center = fr.to_plane(pole + s * cis(t))
@@ -435,7 +437,8 @@ def burmester_points(poses: Poses | Sequence[ArrayLike]) -> list[Dyad]:
         dy = _refine(p, dyad_from_center(p, complex(fr.to_plane(c))))
         _, misfit = _circle_fit(p.place(p.body(dy.moving)) - dy.ground)
         same = [abs(dy.ground - o.ground) <= 1e-7 * p.size for o in out]
-        if misfit <= MISFIT * max(p.size, dy.length) and not any(same):
+        near = abs(dy.moving - fr.origin) < FAR * p.size  # a circle point at infinity: a slider the other way
+        if misfit <= MISFIT * max(p.size, dy.length) and near and not any(same):
             out.append(dy)
     return out
 
@@ -562,7 +565,7 @@ class BurmesterFourBar:
     poses: Poses
     inputs: FloatArray
     direction: int
-    signs: Any
+    signs: IntArray
     in_order: bool
     grashof: str
     grashof_detail: str
