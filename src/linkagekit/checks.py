@@ -35,7 +35,7 @@ from .model import CrankType, Mechanism
 from .params import Params, all_sign_combinations
 from .positions import solve
 from .rates import SINGULAR_TOL, solve_rates
-from .steps import CircleLine, CylinderDyad, CylinderLine, Dyad
+from .steps import ActuatorDyad, CircleLine, CylinderDyad, CylinderLine, Dyad, SliderDrive
 
 N_COARSE = 7200
 #: dead points the text of check lists per driver (the JSON has them all)
@@ -572,17 +572,17 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
     elif isinstance(step, CircleLine):
         out["links"] = [step.link, step.block]
         out["detail"] = f"{step.link} square to the line of slider {step.slider} at {names[step.joint]}"
-    elif isinstance(step, CylinderDyad | CylinderLine):
+    elif isinstance(step, CylinderDyad | CylinderLine | ActuatorDyad):
         cyl = params.plan.drivers[step.driver]
-        s = float(abs(st.z[step.joint, col] - st.z[step.k2 if isinstance(step, CylinderDyad) else step.center, col]))
-        lo, hi = float(nums[-2][0, 0]), float(nums[-1][0, 0])
-        other = step.link if isinstance(step, CylinderDyad) else step.block
+        s = float(abs(st.z[step.joint, col] - st.z[step.center if isinstance(step, CylinderLine) else step.k2, col]))
+        lo, hi = _stroke_lengths(step, nums)
+        other = step.block if isinstance(step, CylinderLine) else step.link
         out["links"] = [other]
         out["cylinder"] = cyl
         if math.isfinite(s) and min(abs(s - lo), abs(s - hi)) <= 1e-6 * s:
             end = "shortest" if abs(s - lo) <= abs(s - hi) else "longest"
             out["detail"] = f"cylinder '{cyl}' at the end of its stroke ({end})"
-        elif isinstance(step, CylinderDyad):
+        elif isinstance(step, CylinderDyad | ActuatorDyad):
             out["detail"] = f"cylinder '{cyl}' in line with {other} at {names[step.joint]}"
         else:
             out["detail"] = f"cylinder '{cyl}' square to the line of slider {step.slider} at {names[step.joint]}"
@@ -590,6 +590,16 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
         out["links"] = [getattr(step, "on", "")]
         out["detail"] = f"guide '{getattr(step, 'on', '')}' at the end of its turn ({names[step.joint]})"
     return out
+
+
+def _stroke_lengths(step: CylinderDyad | CylinderLine | ActuatorDyad, nums: Any) -> tuple[float, float]:
+    """The distances between a cylinder's ends at the ends of its stroke (a slider's: ``|rel0 + u d|``)."""
+    lo, hi = float(nums[-2][0, 0]), float(nums[-1][0, 0])
+    if not isinstance(step, ActuatorDyad):
+        return lo, hi
+    rel0, d = complex(nums[1][0, 0]), complex(nums[2][0, 0])
+    lo_s, hi_s = (abs(rel0 + u * d) if math.isfinite(u) else math.inf for u in (lo, hi))
+    return lo_s, hi_s
 
 
 def _group_end(params: Params) -> dict[str, Any]:
@@ -770,12 +780,33 @@ def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[fl
         margins = fin.state.margin[:, col]
         k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
         info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
-        if params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
+        if (stroke_end := _slide_stroke_end(run, v)) is not None:
+            info.update(stroke_end)
+        elif params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
             info.update(_group_end(params))
         elif params.plan.n_signs:
             info.update(_step_links(params, k, fin.state, col))
         dead.append((v, info))
     return dead
+
+
+def _slide_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
+    """A block pushed along a placed guide at an end of its driver's stroke there (None: not such an end)."""
+    plan = run.params.plan
+    found = [
+        (st, nums)
+        for st, nums in zip(plan.steps, run.params.steps, strict=True)
+        if isinstance(st, SliderDrive) and st.driver == run.driver
+    ]
+    if not found:
+        return None
+    step, nums = found[0]
+    lo, hi = float(nums[3][0, 0]), float(nums[4][0, 0])
+    if not (math.isfinite(lo) and math.isfinite(hi)) or min(abs(v - lo), abs(v - hi)) > 1e-9 * max(-lo, hi):
+        return None
+    end = "min" if abs(v - lo) <= abs(v - hi) else "max"
+    detail = f"slider driver '{plan.drivers[run.driver]}' at the end of its stroke ({end})"
+    return {"links": [step.block], "detail": detail}
 
 
 def _change_dead_points(

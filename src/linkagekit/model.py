@@ -286,17 +286,27 @@ class _LinearType(_DriverType):
 
 @dataclass(frozen=True)
 class SliderType(_LinearType):
-    """A slider pushed: block of slider ``slider`` displaced along its line (its input; 0 at the pose)."""
+    """A slider pushed: block of slider ``slider`` displaced along its line (its input; 0 at the pose).
+
+    ``stroke`` ``(min, max)`` bounds the displacement (samples outside do not assemble), as a
+    cylinder's bounds its length: an actuator written as a barrel, a rod and a slider.
+    """
 
     slider: int
+    stroke: tuple[float, float] | None = None
     tag: ClassVar[Literal["slider"]] = "slider"
     sweep_key: ClassVar[str] = "displacements"
 
     def search_span(self, size: float) -> tuple[float, float]:
-        return -size, size
+        if self.stroke is None:
+            return -size, size
+        return _around(self.stroke)
 
     def file_entry(self, name: str, link: str, sweep: Sweep) -> dict[str, Any]:
-        return {"slider": self.slider, "displacements": sweep.to_dict()}
+        out: dict[str, Any] = {"slider": self.slider, "displacements": sweep.to_dict()}
+        if self.stroke is not None:
+            out["stroke"] = [float(self.stroke[0]), float(self.stroke[1])]
+        return out
 
 
 @dataclass(frozen=True)
@@ -314,8 +324,7 @@ class CylinderType(_LinearType):
     def search_span(self, size: float) -> tuple[float, float]:
         if self.stroke is None:
             return 0.0, size
-        lo, hi = self.stroke  # the stroke and 1 % of it either side
-        return lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo)
+        return _around(self.stroke)
 
     def file_entry(self, name: str, link: str, sweep: Sweep) -> dict[str, Any]:
         out: dict[str, Any] = {"cylinder": list(self.ends)}
@@ -325,6 +334,12 @@ class CylinderType(_LinearType):
         if self.stroke is not None:
             out["stroke"] = [float(self.stroke[0]), float(self.stroke[1])]
         return out
+
+
+def _around(stroke: tuple[float, float]) -> tuple[float, float]:
+    """A stroke and 1 % of it either side (where an input bounded by it is searched)."""
+    lo, hi = stroke
+    return lo - 0.01 * (hi - lo), hi + 0.01 * (hi - lo)
 
 
 #: Every driver type; a new kind of driver is one more class here (and one more case where a
@@ -396,8 +411,8 @@ class Driver:
 
     @property
     def stroke(self) -> tuple[float, float] | None:
-        """A cylinder's stroke ``(min, max)``, if given."""
-        return self.type.stroke if isinstance(self.type, CylinderType) else None
+        """The bounds ``(min, max)`` of the input, if given: a cylinder's length, a slider's displacement."""
+        return self.type.stroke if isinstance(self.type, CylinderType | SliderType) else None
 
     def to_dict(self) -> dict[str, Any]:
         """The driver as the file writes it."""
@@ -831,7 +846,11 @@ class _Builder:
             dup = next(j for j in js if js.count(j) > 1)
             raise self.fail(key, f"joint '{dup}' is listed twice")
         if len(js) < 2 and lname != GROUND and lname not in {s.link for s in self.spec.sliders}:
-            raise self.fail(key, "a link needs at least two joints (only ground and a slider block may carry one)")
+            guide = " (a slider's guide, e.g. an actuator's barrel, lists its pin and a point of its line)"
+            hint = guide if lname in {s.on for s in self.spec.sliders} else ""
+            raise self.fail(
+                key, f"a link needs at least two joints (only ground and a slider block may carry one){hint}"
+            )
         for i, a in enumerate(js):
             for b in js[i + 1 :]:
                 if abs(self.joints[a] - self.joints[b]) <= LENGTH_RTOL * self.scale:
@@ -868,7 +887,7 @@ class _Builder:
                 drivers.append(self._cylinder_driver(d, key))
                 continue
             for attr in ("name", "lengths", "stroke"):
-                if getattr(d, attr) is not None:
+                if getattr(d, attr) is not None and not (attr == "stroke" and d.slider is not None):
                     raise self.fail(f"{key}.{attr}", "belongs to a cylinder driver (`cylinder: [A, B]`)")
             drivers.append(self._slider_driver(d, key, sliders) if d.slider is not None else self._crank_driver(d, key))
         names = [d.name for d in drivers]
@@ -891,9 +910,16 @@ class _Builder:
         sl = sliders[d.slider]
         if d.link is not None and d.link != sl.link:
             raise self.fail(f"{key}.link", f"slider {d.slider} moves link '{sl.link}', not '{d.link}'")
-        sw = d.displacements or SweepSpec(start=0.0, stop=0.0, step=1.0)
+        stroke = None if d.stroke is None else _travel(key, d.stroke, self.fail)
+        if d.displacements is not None:
+            sw = d.displacements
+        elif stroke is not None:  # as a cylinder's: its whole stroke in 100 steps
+            sw = SweepSpec(start=stroke[0], stop=stroke[1], step=(stroke[1] - stroke[0]) / 100)
+        else:
+            sw = SweepSpec(start=0.0, stop=0.0, step=1.0)
         sweep = _sweep(sw, f"{key}.displacements", self.fail)
-        return Driver(sl.link, sl.link, sweep, SliderType(d.slider), d.speed, d.acceleration)
+        _inside(f"{key}.displacements", sweep, stroke, self.fail)
+        return Driver(sl.link, sl.link, sweep, SliderType(d.slider, stroke), d.speed, d.acceleration)
 
     def _crank_driver(self, d: DriverSpec, key: str) -> Driver:
         """``{link, pivot, toward, angles: {...}}``: a link turned about one of its joints (a turn by default)."""
@@ -1013,6 +1039,33 @@ def _stroke(key: str, given: tuple[float, float], length: float, fail: Fail) -> 
     return lo, hi
 
 
+def _travel(key: str, given: tuple[float, float], fail: Fail) -> tuple[float, float]:
+    """A slider driver's stroke ``[min, max]`` of displacements: increasing, holding the pose's 0."""
+    lo, hi = given
+    if hi <= lo:
+        raise fail(f"{key}.stroke", f"[min, max] with min < max, got [{lo:g}, {hi:g}]")
+    if not lo <= 0 <= hi:
+        raise fail(
+            f"{key}.stroke",
+            f"[{lo:g}, {hi:g}] leaves out the pose (displacement 0): a slider's stroke is measured from the pose",
+        )
+    return lo, hi
+
+
+def _inside(key: str, sweep: Sweep, stroke: tuple[float, float] | None, fail: Fail) -> None:
+    """A file's sweep lies inside the driver's stroke (to 1e-9 of its size), else a located error."""
+    if stroke is None:
+        return
+    first, last = sweep.start, sweep.start + sweep.step * (sweep.count() - 1)
+    slack = 1e-9 * max(abs(stroke[0]), abs(stroke[1]))
+    if not (stroke[0] - slack <= min(first, last) and max(first, last) <= stroke[1] + slack):
+        raise fail(
+            key,
+            f"{first:g} to {last:g} leaves the stroke [{stroke[0]:g}, {stroke[1]:g}] (keep the file's sweep "
+            f"inside it; inputs asked for outside it are flagged as not assembled)",
+        )
+
+
 def _cylinder_sweep(
     key: str, given: SweepSpec | None, stroke: tuple[float, float] | None, length: float, fail: Fail
 ) -> Sweep:
@@ -1032,14 +1085,7 @@ def _cylinder_sweep(
     first, last = sweep.start, sweep.start + sweep.step * (sweep.count() - 1)
     if min(first, last) <= 0:
         raise fail(f"{key}.lengths", f"a cylinder's length must be positive, the sweep goes to {min(first, last):g}")
-    if stroke is not None and not (
-        stroke[0] * (1 - 1e-9) <= min(first, last) and max(first, last) <= stroke[1] * (1 + 1e-9)
-    ):
-        raise fail(
-            f"{key}.lengths",
-            f"{first:g} to {last:g} leaves the stroke [{stroke[0]:g}, {stroke[1]:g}] (keep the file's sweep "
-            f"inside it; inputs asked for outside it are flagged as not assembled)",
-        )
+    _inside(f"{key}.lengths", sweep, stroke, fail)
     return sweep
 
 

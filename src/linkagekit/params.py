@@ -195,7 +195,7 @@ class _Shapes:
         return self.directions[slider]
 
     def stroke(self, driver: int) -> tuple[np.ndarray, np.ndarray]:
-        lo, hi = self.mech.drivers[driver].stroke or (0.0, np.inf)
+        lo, hi = self.mech.drivers[driver].stroke or (-np.inf, np.inf)
         return np.full((self.D, 1), lo), np.full((self.D, 1), hi)
 
 

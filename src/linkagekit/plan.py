@@ -43,6 +43,7 @@ from .errors import MechanismFileError, NotSolvableError
 from .group import Group, GroupLink
 from .model import CrankType, CylinderType, SliderType
 from .steps import (
+    ActuatorDyad,
     Carry,
     CircleLine,
     Crank,
@@ -96,6 +97,12 @@ class Plan:
     def numerical(self) -> tuple[int, ...]:
         """The joints placed by numerical groups (Newton), in step order."""
         return tuple(j for st in self.steps if isinstance(st, Group) for j in st.joints)
+
+    @property
+    def nan_flagged(self) -> tuple[int, ...]:
+        """Joints whose step flags a failure by NaN, not by a margin: numerical groups, driven blocks (stroke)."""
+        driven = tuple(j for st in self.steps if isinstance(st, SliderDrive) for j in st.joints)
+        return self.numerical + driven
 
     @property
     def unwritten(self) -> tuple[int, ...]:
@@ -263,12 +270,62 @@ class _Planner:
                 f"mechanism; the drivers do not match its freedom"
             )
         if s.on not in self.rot_known or s.on not in self.placed:
-            return False
+            return self._actuator(di, t)
         blk = self.links[s.link]
         joints = tuple(self.idx[j] for j in blk.joints)
         self.steps.append(SliderDrive(di, t.slider, s.link, s.on, self.anchors.get(s.on), joints))
         self._take(s.link, self.idx[blk.joints[0]])
         return True
+
+    def _actuator(self, di: int, t: SliderType) -> bool:
+        """Driver ``di`` between two moving links: a barrel (the guide) and a rod (the block), each with a pin.
+
+        Once one pin is known and the other is on a link with a known joint, the driver sets
+        the pins' distance: the free pin is placed as a cylinder's free end (:class:`ActuatorDyad`),
+        then the barrel's turn is known, and the barrel and the rod are carried.
+        """
+        mech, s = self.mech, self.mech.sliders[t.slider]
+        if s.on in self.rot_known or s.link in self.rot_known:
+            return False
+        on_barrel = [j for j in self.links[s.on].joints if j in self.known]
+        on_rod = [j for j in self.links[s.link].joints if j in self.known]
+        if on_barrel and on_rod:
+            raise MechanismFileError(
+                f"{mech.source}: drivers[{di}]: both pins of slider {t.slider} ('{on_barrel[0]}' on '{s.on}', "
+                f"'{on_rod[0]}' on '{s.link}') are already fixed by the rest of the mechanism, so it cannot set "
+                f"their distance; the drivers do not match its freedom"
+            )
+        if not (on_barrel or on_rod):
+            return False
+        known_pin, free_side = (on_barrel[0], s.link) if on_barrel else (on_rod[0], s.on)
+        for end in self.links[free_side].joints:
+            anchored = {k: ln.name for ln, k in self._anchored(end) if ln.name not in (s.on, s.link)}
+            if len(anchored) >= 2:
+                fixers = " and ".join(f"'{n}'" for n in anchored.values())
+                raise MechanismFileError(
+                    f"{mech.source}: drivers[{di}]: links {fixers} already fix '{end}', a pin of slider {t.slider}, "
+                    f"so it cannot set its length; the drivers do not match the mechanism's freedom"
+                )
+            for k, link in anchored.items():
+                pins = (known_pin, end) if on_barrel else (end, known_pin)
+                self._add_actuator(di, t, (end, k, known_pin), link, pins)
+                return True
+        return False
+
+    def _add_actuator(
+        self, di: int, t: SliderType, joints: tuple[str, str, str], link: str, pins: tuple[str, str]
+    ) -> None:
+        """Add the :class:`ActuatorDyad` placing ``joints[0]`` from ``joints[1]`` (on ``link``) and the known pin."""
+        end, k, known_pin = joints
+        idx, barrel = self.idx, self.mech.sliders[t.slider].on
+        pin_p, pin_q = (idx[j] for j in pins)
+        sign = len(self.labels)
+        self.steps.append(
+            ActuatorDyad(idx[end], idx[k], idx[known_pin], link, di, t.slider, barrel, pin_p, pin_q, sign)
+        )
+        self.known.add(end)
+        self.rot_known.add(barrel)
+        self.labels.append(f"{end}: left of {k}->{known_pin}")
 
     def _cylinder(self) -> bool:
         """Apply the first cylinder with one end known (then let the links it fixes be placed first)."""
@@ -479,7 +536,9 @@ class _Planner:
                     )
                 case SliderType():
                     raise MechanismFileError(
-                        f"{mech.source}: drivers[{di}]: slider {t.slider} slides on a link that nothing fixes before it"
+                        f"{mech.source}: drivers[{di}]: slider {t.slider} slides on a link that nothing fixes "
+                        f"before it (a slider driver needs its guide '{mech.sliders[t.slider].on}' placed first, or, "
+                        f"as an actuator's barrel and rod, one pin placed and the other on a link with a placed joint)"
                     )
                 case _:
                     assert_never(t)

@@ -125,8 +125,8 @@ def solve(
             st.place(k, nums)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
     assembled = np.all(k.margin >= 0, axis=0) if plan.n_signs else np.ones((D, n), bool)
-    if plan.numerical:  # a numerical group flags what it could not reach by NaN, not by a margin
-        assembled &= np.all(np.isfinite(z[list(plan.numerical)]), axis=0)
+    if plan.nan_flagged:  # a numerical group (or a block beyond its stroke) flags by NaN, not by a margin
+        assembled &= np.all(np.isfinite(z[list(plan.nan_flagged)]), axis=0)
     if not params.valid.all():
         assembled &= params.valid[:, None]
     if not assembled.all():  # a mechanism that does not assemble has no joint positions at all

@@ -116,7 +116,7 @@ class DriverSpec(_Strict):
     cylinder: tuple[Name, Name] | None = None  # a linear actuator between two joints, driven by its length
     name: Name | None = None  # a cylinder's name (other drivers are named by their link)
     lengths: SweepSpec | None = None  # a cylinder's sweep of lengths
-    stroke: Point | None = None  # a cylinder's [min, max] length
+    stroke: Point | None = None  # a cylinder's [min, max] length, a slider driver's [min, max] displacement
     speed: Number = 1.0
     acceleration: Number = 0.0
 

@@ -54,7 +54,7 @@ class Source(Protocol):
         ...
 
     def stroke(self, driver: int) -> tuple[np.ndarray, np.ndarray]:
-        """Shortest and longest length of cylinder ``driver``, each (designs, 1) (0 and inf: no stroke)."""
+        """Bounds of ``driver``'s input (a cylinder's length, a slider's displacement), (designs, 1) each; inf: none."""
         ...
 
 
@@ -453,20 +453,24 @@ class SliderDrive(Step):
 
     def numbers(self, src: Source) -> Nums:
         anchor_s = src.shape(self.on, self.anchor) if self.anchor is not None else 0j
-        return anchor_s, src.direction(self.slider), tuple(src.pose(j) for j in self.joints)
+        lo, hi = src.stroke(self.driver)
+        return anchor_s, src.direction(self.slider), tuple(src.pose(j) for j in self.joints), lo, hi
 
     def rotation_needs(self) -> tuple[str, ...]:
         return (self.on,)
 
     def place(self, k: Kin, nums: Nums) -> None:
-        anchor_s, direction, points = nums
+        anchor_s, direction, points, lo, hi = nums
         origin, turn = _line_frame(self.anchor, k.z, k.rot, self.on, anchor_s)
         k.rot[self.block] = np.broadcast_to(turn, k.z.shape[1:])
+        u = k.q[self.driver]
+        slack = k.eps * np.maximum(np.abs(lo), np.abs(hi))  # no stroke: lo - slack = -inf, hi + slack = inf
+        u = np.where((u < lo - slack) | (u > hi + slack), np.nan, u)  # beyond its stroke: NaN (positions flags it)
         for j, p in zip(self.joints, points, strict=True):
-            k.z[j] = origin + turn * (p + k.q[self.driver] * direction)
+            k.z[j] = origin + turn * (p + u * direction)
 
     def rates(self, r: Rate, nums: Nums) -> None:
-        anchor_s, direction, _ = nums
+        anchor_s, direction = nums[:2]
         w, alpha, va, aa, za = r.frame(self.on, self.anchor)
         turn = r.rot[self.on] if self.anchor is not None else 1.0
         e = turn * direction
@@ -672,6 +676,99 @@ class CylinderLine(Step):
         )
 
 
+def _travel_margin(u: Any, lo: Any, hi: Any, s: Any, eps: float) -> Any:
+    """How far a slider's displacement ``u`` is inside its stroke ``[lo, hi]``, relative to the length ``s``."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        m = np.minimum(u - lo, hi - u) / s + eps
+    return np.where(s > 0, m, -1.0)
+
+
+@dataclass(frozen=True)
+class ActuatorDyad(Step):
+    """A slider driver between two moving links: a cylinder written as a barrel, a rod and a slider.
+
+    The rod (slider ``slider``'s block) slides on the barrel (its guide ``barrel``) and keeps
+    its direction; the barrel carries its pin ``P`` and the line, the rod its pin ``Q``.  In the
+    barrel's frame ``Q - P = rel(u) = rel0 + u d`` (``rel0`` from the pose, ``d`` the slide's
+    unit direction, ``u`` the driver's displacement), so the pins are ``s(u) = |rel(u)|`` apart:
+    one pin (``k2``) is known, the other (``joint``) is on ``link`` with the known joint ``k1``,
+    and it is placed as :class:`CylinderDyad`'s free end with radius ``s(u)`` (the same sign);
+    the barrel then turns by ``(z_Q - z_P) / rel(u)``.  With the line through both pins,
+    ``s = s0 + u``: the cylinder driver ``[P, Q]`` of length ``s0 + u``.
+
+    Rates: as :class:`CylinderDyad` with ``s ds = (rel . d) du`` and ``ds^2 + s dds = du^2 +
+    (rel . d) ddu``; the barrel's ``w = Im((D' - du E) / D)`` and ``alpha = Im((D'' - ddu E) / D
+    - (D' / D)^2 + (du E / D)^2)`` with ``D = z_Q - z_P`` and ``E`` the slide direction now.
+    """
+
+    joint: int
+    k1: int
+    k2: int
+    link: str  # the body through `joint` and `k1`
+    driver: int
+    slider: int
+    barrel: str  # the slider's guide, carrying pin `pin_p`
+    pin_p: int
+    pin_q: int  # on the rod (the slider's block)
+    sign: int  # index into the sign vector
+
+    def numbers(self, src: Source) -> Nums:
+        r1 = np.abs(src.shape(self.link, self.joint) - src.shape(self.link, self.k1))
+        rel0 = src.pose(self.pin_q) - src.shape(self.barrel, self.pin_p)
+        lo, hi = src.stroke(self.driver)
+        return r1, rel0, src.direction(self.slider), lo, hi
+
+    def place(self, k: Kin, nums: Nums) -> None:
+        r1, rel0, direction, lo, hi = nums
+        u = k.q[self.driver]
+        rel = rel0 + u * direction
+        s = np.abs(rel)
+        with np.errstate(invalid="ignore"):
+            _, m = circle_circle(k.z[self.k1], k.z[self.k2], r1, s, k.signs[self.sign], k.eps, out=k.z[self.joint])
+        m = np.minimum(m, _travel_margin(u, lo, hi, s, k.eps))
+        k.margin[self.sign] = m
+        k.z[self.joint] = np.where(m >= 0, k.z[self.joint], NAN_POINT)
+        k.rot[self.barrel] = (k.z[self.pin_q] - k.z[self.pin_p]) / rel
+
+    def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
+        return side(zpose[self.k1], zpose[self.k2], zpose[self.joint])
+
+    def rates(self, r: Rate, nums: Nums) -> None:
+        r1, direction = nums[0], nums[2]
+        z, v, a = r.z, r.v, r.a
+        e = r.rot[self.barrel] * direction
+        du, ddu = r.w_in[self.driver], r.a_in[self.driver]
+        p = z[self.joint] - z[self.k1]
+        q = z[self.joint] - z[self.k2]
+        pc, qc = np.conj(p), np.conj(q)
+        det = (pc * q).imag
+        inv = 1.0 / det
+        r.cond[self.sign] = det / (r1 * np.abs(q))
+        along = dot(z[self.pin_q] - z[self.pin_p], e)  # rel . d, turned with the barrel
+        c1 = (pc * v[self.k1]).real
+        c2 = (qc * v[self.k2]).real + along * du
+        vj = (c2 * p - c1 * q) * (1j * inv)
+        w1 = (pc * (vj - v[self.k1])).imag / (r1 * r1)
+        c1 = (pc * a[self.k1]).real - (w1 * r1) ** 2
+        c2 = (qc * a[self.k2]).real - np.abs(vj - v[self.k2]) ** 2 + du * du + along * ddu
+        aj = (c2 * p - c1 * q) * (1j * inv)
+        v[self.joint], a[self.joint] = vj, aj
+        if self.link not in r.om:
+            r.om[self.link], r.al[self.link] = w1, (pc * (aj - a[self.k1])).imag / (r1 * r1)
+        d0 = z[self.pin_q] - z[self.pin_p]
+        d1, d2 = v[self.pin_q] - v[self.pin_p], a[self.pin_q] - a[self.pin_p]
+        r.om[self.barrel] = np.imag((d1 - du * e) / d0)
+        r.al[self.barrel] = np.imag((d2 - ddu * e) / d0 - (d1 / d0) ** 2 + (du * e / d0) ** 2)
+
+    def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
+        n = names
+        r1 = f", {_num(nums[0])}" if nums else ""
+        return (
+            f"{n[self.joint]} = circle({n[self.k1]}{r1}) x circle({n[self.k2]}, actuator length of slider "
+            f"{self.slider} on '{self.barrel}'); sign +1: left of {n[self.k1]}->{n[self.k2]}"
+        )
+
+
 @dataclass(frozen=True)
 class LineLine(Step):
     """A slider block (``yoke``) translating on its guide ``on``, fixed by a block that slides in it: two lines.
@@ -746,7 +843,7 @@ class LineLine(Step):
         )
 
 
-SIGN_STEPS = (Dyad, CircleLine, Pivot, CylinderDyad, CylinderLine)
+SIGN_STEPS = (Dyad, CircleLine, Pivot, CylinderDyad, CylinderLine, ActuatorDyad)
 
 
 def is_sign_step(step: Step) -> bool:
@@ -755,6 +852,7 @@ def is_sign_step(step: Step) -> bool:
 
 
 __all__ = [
+    "ActuatorDyad",
     "Carry",
     "CircleLine",
     "Crank",
