@@ -183,6 +183,20 @@ def test_every_burmester_point_newton_finds_is_listed(seed):
         assert min(abs(c - g) for g in listed) <= 1e-8 * size
 
 
+def test_translations_between_poses_put_poles_at_infinity():
+    rng = np.random.default_rng(5)
+    x, y = rng.normal(size=5), rng.normal(size=5)
+    poses = bm.motion_poses(x, y, np.array([0.2, 0.2, 0.2, 1.4, 2.0]))  # poses 1, 2, 3: translations
+    assert not np.isfinite(bm.poles(poses, [(0, 1), (0, 2), (1, 2)])).any()
+    starts = poses.d.mean() + poses.size * (rng.uniform(-4, 4, 600) + 1j * rng.uniform(-4, 4, 600))
+    brute = newton_dyads(poses, starts)
+    listed = bm.burmester_points(poses)
+    assert len(brute) >= 2 and len(listed) >= len(brute)
+    for c in brute:
+        assert min(abs(c - dy.ground) for dy in listed) <= 1e-8 * poses.size
+    assert max(on_circle(poses, dy) for dy in listed) <= 1e-9 * poses.size
+
+
 # ---------------------------------------------------------------------- 4 and 3 poses
 def test_center_point_curve_holds_a_known_dyad_and_only_center_points():
     rng = np.random.default_rng(3)

@@ -13,8 +13,9 @@ Two dyads make a four-bar whose coupler (the body) meets every pose.  The deriva
   :func:`dyad_from_center`.
 * 4 poses: the center points lie on a cubic, the *center-point curve* ``f_{0123}(c) = 0``, and
   their circle points on the circle-point curve: :func:`center_point_curve` samples both.
-* 5 poses: the center points common to the curves of poses 0123 and 0124, without the poles
-  ``P01, P02, P12`` that both curves pass through: up to four real *Burmester points*
+* 5 poses: the center points common to the curves of poses ``abcd`` and ``abce`` (usually
+  0123 and 0124), without the poles ``Pab, Pac, Pbc`` that both curves pass through: up to
+  four real *Burmester points*
   (:func:`burmester_points`), so up to six four-bars.
 
 :func:`exact_motion` returns four-bars for 3, 4 or 5 poses, each checked by
@@ -38,7 +39,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from itertools import permutations
+from itertools import combinations, permutations
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
@@ -409,13 +410,14 @@ def _line_roots(f: FloatArray, pole: complex, u: ComplexArray) -> ComplexArray:
 def burmester_points(poses: Poses | Sequence[ArrayLike]) -> list[Dyad]:
     """Every real Burmester point pair of 5 poses: the dyads whose circle point meets all five.
 
-    The center points common to the center-point cubics of poses 0123 and 0124: the real roots
-    of their resultant in ``x`` (degree 7 = 9 intersections less the two circular points at
-    infinity) give ``x``, the cubics' roots in ``y`` start a Newton polish of both; the poles
-    ``P01, P02, P12`` (on both curves) are removed, and every point kept has its five circle
-    positions on one circle.
+    The center points common to the center-point cubics of poses ``abcd`` and ``abce``, where
+    ``a, b, c`` are the three poses whose angles lie farthest apart (usually 0, 1, 2 and 3, 4
+    the others): the real roots of their resultant in ``x`` (degree 7 = 9 intersections less
+    the two circular points at infinity) give ``x``, the cubics' roots in ``y`` start a Newton
+    polish of both; the poles ``Pab, Pac, Pbc`` (on both curves) are removed, each point's
+    dyad is refined on its own equations, and every dyad kept has its five circle positions on
+    one circle.
 
-    >>> import json
     >>> x, y = [0.0, 1.0, 2.0, 2.6, 3.0], [0.0, 0.6, 0.8, 0.5, 0.0]
     >>> dyads = burmester_points((x, y, np.radians([0.0, -15.0, -35.0, -60.0, -80.0])))
     >>> len(dyads) in (0, 2, 4)
@@ -424,23 +426,39 @@ def burmester_points(poses: Poses | Sequence[ArrayLike]) -> list[Dyad]:
     p = _as_poses(poses)
     _exact(p, (5,), "Burmester points")
     fr = _Frame.of(p)
-    f, g = fr.cubic(p, (0, 1, 2, 3)), fr.cubic(p, (0, 1, 2, 4))
-    spurious = fr.from_plane(poles(p, [(0, 1), (0, 2), (1, 2)]))
+    k0, k1, k2, r1, r2 = _shared_three(p.theta)
+    f, g = fr.cubic(p, (k0, k1, k2, r1)), fr.cubic(p, (k0, k1, k2, r2))
+    spurious = fr.from_plane(poles(p, [(k0, k1), (k0, k2), (k1, k2)]))
+    spurious = spurious[np.isfinite(spurious)]  # a pole at infinity (a translation) is no point of the plane
     found: list[complex] = []
     for c in _polish(f, g, _starts(f, g, spurious)):
-        near = [abs(c - q) <= 1e-9 * max(1.0, abs(c)) for q in found]
-        off_pole = np.min(np.abs(spurious - c)) > 1e-6 * max(1.0, abs(c))
-        if abs(c) < FAR and off_pole and not any(near):
+        seen = any(abs(c - q) <= 1e-9 * max(1.0, abs(c)) for q in found)
+        on_pole = bool(np.any(np.abs(spurious - c) <= 1e-6 * max(1.0, abs(c))))
+        if abs(c) < FAR and not on_pole and not seen:
             found.append(complex(c))
     out: list[Dyad] = []
     for c in found:
         dy = _refine(p, dyad_from_center(p, complex(fr.to_plane(c))))
         _, misfit = _circle_fit(p.place(p.body(dy.moving)) - dy.ground)
-        same = [abs(dy.ground - o.ground) <= 1e-7 * p.size for o in out]
+        same = any(abs(dy.ground - o.ground) <= 1e-7 * p.size for o in out)
         near = abs(dy.moving - fr.origin) < FAR * p.size  # a circle point at infinity: a slider the other way
-        if misfit <= MISFIT * max(p.size, dy.length) and near and not any(same):
+        if misfit <= MISFIT * max(p.size, dy.length) and near and not same:
             out.append(dy)
     return out
+
+
+def _shared_three(theta: FloatArray) -> tuple[int, int, int, int, int]:
+    """The three poses the two cubics share (then the other two): the angles farthest apart.
+
+    When two shared poses have one angle (a translation), two rows of both determinants stop
+    depending on ``c`` and the cubics drop to conics, which the resultant of two cubics
+    cannot handle; the most distinct angles avoid that whenever any three angles differ.
+    """
+    triples = list(combinations(range(5), 3))
+    spread = [min(abs(math.sin((theta[i] - theta[j]) / 2)) for i, j in combinations(t, 2)) for t in triples]
+    best = triples[int(np.argmax(spread))]
+    r1, r2 = (k for k in range(5) if k not in best)
+    return (*best, r1, r2)
 
 
 def _refine(p: Poses, dy: Dyad, steps: int = 12) -> Dyad:
