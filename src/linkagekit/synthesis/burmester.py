@@ -54,8 +54,8 @@ from ..model import Mechanism
 SAME_POSE = 1e-9
 #: Burmester dyads with a pivot farther than this many pose sizes from the poses are left out:
 #: such a dyad is a slider for any practical purpose, and its four-bar's joints are too far out
-#: for its residual at the poses to stay within 1e-9 of their size (about 1e-7 at 10^4 sizes)
-FAR = 1e3
+#: for its residual at the poses to stay within 1e-9 of their size (2e-9 at 10^3 sizes, 1e-7 at 10^4)
+FAR = 1e2
 #: a dyad is kept when its circle point's positions are on one circle to this much of its size
 MISFIT = 1e-10
 #: joint names of the written four-bar, in the order of :meth:`BurmesterFourBar.pose_array`
@@ -413,10 +413,11 @@ def burmester_points(poses: Poses | Sequence[ArrayLike]) -> list[Dyad]:
     The center points common to the center-point cubics of poses ``abcd`` and ``abce``, where
     ``a, b, c`` are the three poses whose angles lie farthest apart (usually 0, 1, 2 and 3, 4
     the others): the real roots of their resultant in ``x`` (degree 7 = 9 intersections less
-    the two circular points at infinity) give ``x``, the cubics' roots in ``y`` start a Newton
-    polish of both; the poles ``Pab, Pac, Pbc`` (on both curves) are removed, each point's
-    dyad is refined on its own equations, and every dyad kept has its five circle positions on
-    one circle.
+    the two circular points at infinity, divided by the poles ``Pab, Pac, Pbc`` that are on
+    both curves) give ``x``, the cubics' roots in ``y`` give starts, and Newton's method on
+    the dyads' own equations (:func:`_dyad_newton`, where a pole is no solution) ends at the
+    dyads; every dyad kept has its five circle positions on one circle, and both pivots
+    within :data:`FAR` sizes of the poses.
 
     >>> x, y = [0.0, 1.0, 2.0, 2.6, 3.0], [0.0, 0.6, 0.8, 0.5, 0.0]
     >>> dyads = burmester_points((x, y, np.radians([0.0, -15.0, -35.0, -60.0, -80.0])))
@@ -430,21 +431,24 @@ def burmester_points(poses: Poses | Sequence[ArrayLike]) -> list[Dyad]:
     f, g = fr.cubic(p, (k0, k1, k2, r1)), fr.cubic(p, (k0, k1, k2, r2))
     spurious = fr.from_plane(poles(p, [(k0, k1), (k0, k2), (k1, k2)]))
     spurious = spurious[np.isfinite(spurious)]  # a pole at infinity (a translation) is no point of the plane
-    found: list[complex] = []
-    for c in _polish(f, g, _starts(f, g, spurious)):
-        seen = any(abs(c - q) <= 1e-9 * max(1.0, abs(c)) for q in found)
-        on_pole = bool(np.any(np.abs(spurious - c) <= 1e-6 * max(1.0, abs(c))))
-        if abs(c) < FAR and not on_pole and not seen:
-            found.append(complex(c))
+    starts = _starts(f, g, spurious)
+    starts = np.concatenate([starts, _polish(f, g, starts)])
+    ground, moving = _dyad_newton(p, fr.to_plane(starts[np.abs(starts) < FAR]))
     out: list[Dyad] = []
-    for c in found:
-        dy = _refine(p, dyad_from_center(p, complex(fr.to_plane(c))))
-        _, misfit = _circle_fit(p.place(p.body(dy.moving)) - dy.ground)
-        same = any(abs(dy.ground - o.ground) <= 1e-7 * p.size for o in out)
-        near = abs(dy.moving - fr.origin) < FAR * p.size  # a circle point at infinity: a slider the other way
-        if misfit <= MISFIT * max(p.size, dy.length) and near and not same:
-            out.append(dy)
+    for c, w in zip(ground, moving, strict=True):
+        reach = max(abs(c - fr.origin), abs(w - fr.origin), p.size)
+        if reach < FAR * p.size and not any(_same(Dyad(c, w), o, 1e-6 * reach) for o in out):
+            out.append(Dyad(complex(c), complex(w)))  # a farther one is a slider for any practical purpose
     return out
+
+
+def _same(a: Dyad, b: Dyad, tol: float) -> bool:
+    """Whether two dyads are one: their ground pivots or their moving pivots within ``tol``.
+
+    Two Burmester dyads never share a pivot (a circle point has one center, and a center point
+    one circle point), and a far dyad is fixed by the poses only to about 1e-7 of its distance.
+    """
+    return abs(a.ground - b.ground) <= tol or abs(a.moving - b.moving) <= tol
 
 
 def _shared_three(theta: FloatArray) -> tuple[int, int, int, int, int]:
@@ -461,40 +465,43 @@ def _shared_three(theta: FloatArray) -> tuple[int, int, int, int, int]:
     return (*best, r1, r2)
 
 
-def _refine(p: Poses, dy: Dyad, steps: int = 12) -> Dyad:
-    """Newton's method on the dyad's own equations ``|W_j - c|^2 - |W_0 - c|^2 = 0``, ``j = 1..4`` (5 poses).
+def _dyad_newton(p: Poses, centers: ComplexArray, steps: int = 30) -> tuple[ComplexArray, ComplexArray]:
+    """Dyads of 5 poses by Newton's method on their own equations, from every start at once.
 
-    Four equations in the four coordinates of ``c`` and of the body point ``w``: the dyad
-    itself rather than the determinants that found it, so that the five circle positions come
-    onto one circle to rounding.  Close poses make this system ill-conditioned (a first step
-    may overshoot): every step is taken and the iterate of least residual is kept.
+    The unknowns are the ground pivot ``c`` and the body point ``w``, and the equations
+    ``|W_j - c|^2 - |W_0 - c|^2 = 0`` (``j = 1..4``): four in four.  Unlike the cubics, a
+    pole is no solution of them, so a Burmester point next to a pole is found as precisely as
+    any other.  ``w`` starts at the least-squares circle of ``c`` seen from the body.  A start
+    stops once its residual is at rounding (so that it cannot step on to a neighbouring
+    solution); the converged ones are returned, ``(ground, moving)`` in the plane (``moving``
+    at the first pose), those whose five positions lie on one circle to :data:`MISFIT`.
     """
     fr = _Frame.of(p)
     d, theta = fr.poses(p)
     rot = cis(theta)
-    c, w = complex(fr.from_plane(dy.ground)), complex(((fr.from_plane(dy.moving)) - d[0]) / rot[0])
-
-    def residual(c: complex, w: complex) -> tuple[FloatArray, FloatArray]:
-        u = d + rot * w - c  # W_j - c
-        e = np.abs(u[1:]) ** 2 - np.abs(u[0]) ** 2
-        dc = -2 * (u[1:] - u[0])  # gradient in c, as x + iy
-        dw = 2 * (np.conj(rot[1:]) * u[1:] - np.conj(rot[0]) * u[0])  # gradient in w
-        return e, np.stack([dc.real, dc.imag, dw.real, dw.imag], axis=1)
-
-    e, jac = residual(c, w)
-    best = (float(np.max(np.abs(e))), c, w)
-    for _ in range(steps):
-        try:
-            step = np.linalg.solve(jac, e)
-        except np.linalg.LinAlgError:
-            break
-        c, w = c - complex(step[0], step[1]), w - complex(step[2], step[3])
-        e, jac = residual(c, w)
-        if not np.all(np.isfinite(e)):
-            break
-        best = min(best, (float(np.max(np.abs(e))), c, w), key=lambda b: b[0])
-    _, c, w = best
-    return Dyad(complex(fr.to_plane(c)), complex(fr.to_plane(d[0] + rot[0] * w)))
+    c = fr.from_plane(centers)
+    w = _circle_fit((c[:, None] - d) / rot)[0] if c.size else c
+    done = np.zeros(c.shape, bool)
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            u = d + rot * w[:, None] - c[:, None]  # W_j - c
+            e = np.abs(u[:, 1:]) ** 2 - np.abs(u[:, :1]) ** 2
+            scale = np.max(np.abs(u) ** 2, axis=1)
+            done |= np.max(np.abs(e), axis=1) <= 1e-15 * scale
+            live = ~done & np.isfinite(e).all(axis=1)
+            if not live.any():
+                break
+            dc = -2 * (u[live, 1:] - u[live, :1])  # gradients in c and in w, as x + iy
+            dw = 2 * (np.conj(rot[1:]) * u[live, 1:] - np.conj(rot[0]) * u[live, :1])
+            jac = np.stack([dc.real, dc.imag, dw.real, dw.imag], axis=-1)
+            solvable = np.abs(np.linalg.det(jac)) > 0
+            delta = np.zeros((int(live.sum()), 4))
+            delta[solvable] = np.linalg.solve(jac[solvable], e[live][solvable][..., None])[..., 0]
+            c[live] -= delta[:, 0] + 1j * delta[:, 1]
+            w[live] -= delta[:, 2] + 1j * delta[:, 3]
+        r = np.abs(d + rot * w[:, None] - c[:, None])
+        ok = np.isfinite(r).all(axis=1) & (np.ptp(r, axis=1) <= MISFIT * np.maximum(1.0, np.max(r, axis=1)))
+    return fr.to_plane(c[ok]), fr.to_plane(d[0] + rot[0] * w[ok])
 
 
 def _starts(f: FloatArray, g: FloatArray, known: ComplexArray) -> ComplexArray:
@@ -752,8 +759,8 @@ def _pairs(p: Poses, dyads: Sequence[Dyad], count: int | None) -> list[tuple[Dya
     used: set[int] = set()
     for flat in order:
         i, j = (int(v) for v in np.unravel_index(flat, score.shape))
-        if i == j or (j, i) in chosen or (i, j) in chosen:
-            continue
+        if i == j or (j, i) in chosen or (i, j) in chosen or _same(dyads[i], dyads[j], 1e-9 * p.size):
+            continue  # one dyad twice (or a pivot shared): no four-bar
         if count is not None and (i in used or j in used):
             continue
         chosen.append((i, j))
