@@ -140,7 +140,8 @@ def newton_dyads(poses, starts, steps=40):
     """Dyads of 5 poses by Newton's method on ``|W_j - c|^2 = |W_0 - c|^2`` from many ground pivots at once.
 
     No cubic, no resultant: an independent search for the Burmester points (its circle point
-    starts at the least-squares circle of the ground pivot's positions seen from the body).
+    starts at the least-squares circle of the ground pivot's positions seen from the body);
+    those with both pivots within ``bm.FAR`` sizes of the poses, as the module lists them.
     """
     d, rot = poses.d, np.exp(1j * poses.theta)
     c = np.asarray(starts, complex)
@@ -162,8 +163,11 @@ def newton_dyads(poses, starts, steps=40):
         u = d + rot * w[:, None] - c[:, None]
         r = np.abs(u)
         good = np.isfinite(r).all(axis=1) & (np.ptp(r, axis=1) <= 1e-10 * poses.size)
+        moving = d[0] + rot[0] * w
+        mid = d.mean()
+        near = np.maximum(np.abs(c - mid), np.abs(moving - mid)) < bm.FAR * poses.size  # the module's bound
     out = []
-    for ci in c[good]:
+    for ci in c[good & near]:
         if all(abs(ci - o) > 1e-6 * poses.size for o in out):
             out.append(ci)
     return out
