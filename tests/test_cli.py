@@ -180,8 +180,9 @@ drivers: [{link: crank, pivot: A, toward: C}]
     assert code == 0 and "numerically" in out.splitlines()[0] and "D, E, F" in out
 
 
-def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):
-    # a triad whose third leg is a block sliding on the ground: a slider inside a class-3 group
+def test_slider_inside_a_class3_group_is_solved_numerically(tmp_path, capsys):
+    # a triad whose third leg is a block sliding on the ground: a slider inside a class-3 group (refused before
+    # issue 29; tests/test_group_sliders.py checks its numbers)
     text = """
 joints: {A: [0,0], B: [6,0], C: [1,1], D: [2,4], E: [5,4], F: [3.5,6]}
 links:
@@ -194,6 +195,25 @@ links:
 sliders:
   - {link: block, on: ground, through: F, direction: [1, 0]}
 drivers: [{link: crank, pivot: A, toward: C}]
+"""
+    code, out, _ = run(["analyze", write(tmp_path, text), "--at", "45,60", "--format", "json"], capsys)
+    joints = json.loads(out)["joints"]
+    assert (
+        code == 0 and joints["F"]["x"][0] == pytest.approx(3.5, abs=1e-12) and joints["F"]["y"][1] == pytest.approx(6)
+    )
+
+
+def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):
+    # a triad whose third leg is a cylinder: a cylinder driver inside a class-3 group
+    text = """
+joints: {A: [0,0], B: [6,0], G: [3,8], C: [1,1], D: [2,4], E: [5,4], F: [3.5,6]}
+links:
+  ground: [A, B, G]
+  crank: [A, C]
+  l1: [C, D]
+  l2: [B, E]
+  tri: [D, E, F]
+drivers: [{link: crank, pivot: A, toward: C}, {cylinder: [G, F], name: lift}]
 """
     code, _, err = run(["check", write(tmp_path, text)], capsys)
     assert code == 1 and "no triangulation order" in err and err.count("\n") == 1

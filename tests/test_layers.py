@@ -19,7 +19,7 @@ LAYERS = [
     {"errors", "units", "geometry"},
     {"schema", "model", "files"},
     {"steps", "group", "plan", "params", "catalogue"},
-    {"positions", "rates", "forces", "vectorloop", "groupmodes"},
+    {"positions", "rates", "branch", "forces", "vectorloop", "groupmodes"},
     {"result", "api", "checks"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .branch import BRANCHES, along_sweep
 from .errors import InputError, LinkageError, shorten
 from .forces import Forces, Kinematics, solve_forces
 from .model import Mechanism
@@ -191,6 +192,7 @@ class Options:
     dynamics: bool = True
     method: str = "natural"
     static: bool = False
+    branch: str = "pose"
 
 
 @dataclass(frozen=True)
@@ -201,7 +203,8 @@ class Request:
     design shares them); ``values``, ``speeds``, ``accels`` are per driver in file units
     (speeds in rad/s or length/s), as the Result shows them; ``w_in``, ``a_in`` are
     (drivers, 1, n).  ``signs`` (sign steps, D or 1, n or 1) and ``mirrors`` (mirror links,
-    ...) are None when the pose's own are used.
+    ...) are None when the pose's own are used.  ``branch``: ``"pose"`` (the pose's signs) or
+    ``"continuous"`` (followed through change points, :mod:`linkagekit.branch`).
     """
 
     mech: Mechanism
@@ -220,6 +223,7 @@ class Request:
     method: str
     rates: bool
     forces: bool
+    branch: str = "pose"
 
 
 def _check_kinds(mech: Mechanism, o: Options) -> None:
@@ -332,7 +336,16 @@ def _modes(params: Params, o: Options, n: int) -> tuple[np.ndarray | None, np.nd
         raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {o.method!r}")
     if o.method == "vector-loop" and (o.poses is not None or sg is not None or mr is not None):
         raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
+    _check_branch(o, sg)
     return sg, mr
+
+
+def _check_branch(o: Options, sg: np.ndarray | None) -> None:
+    """The ``branch`` option: one of :data:`linkagekit.branch.BRANCHES`, and not with given signs or the vector loop."""
+    if not isinstance(o.branch, str) or o.branch not in BRANCHES:
+        raise InputError(f"branch: expected 'pose' or 'continuous', got {o.branch!r}")
+    if o.branch == "continuous" and (sg is not None or o.method == "vector-loop"):
+        raise InputError("branch 'continuous' chooses the signs itself: not with signs= or method='vector-loop'")
 
 
 def request(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None, o: Options) -> Request:
@@ -350,12 +363,14 @@ def request(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None,
     a_in = np.array([accels[d.name] for d in mech.drivers])[:, None, :]
     sg, mr = _modes(params, o, n)
     forces = bool(o.rates and o.dynamics and mech.has_dynamics)
-    return Request(mech, params, poses, D, n, values, q, speeds, accels, w_in, a_in, sg, mr, o.method, o.rates, forces)
+    return Request(
+        mech, params, poses, D, n, values, q, speeds, accels, w_in, a_in, sg, mr, o.method, o.rates, forces, o.branch
+    )
 
 
 def solve_request(req: Request) -> Result:
     """Solve a request chunk of designs by chunk of designs (bounded working memory) into one Result."""
-    out = _Outputs(req.mech, req.params.plan, req.n_designs, req.n, req.rates)
+    out = _Outputs(req.mech, req.params.plan, req.n_designs, req.n, req.rates, req.branch == "continuous")
     chunk = max(1, CHUNK_SAMPLES // max(req.n, 1))
     for start in range(0, req.n_designs, chunk):  # every chunk writes its slice
         sl = slice(start, min(start + chunk, req.n_designs))
@@ -369,7 +384,12 @@ def solve_request(req: Request) -> Result:
         if req.method == "vector-loop":
             pos, rt = _vector_loop(req.mech, req.params, req.q, req.w_in, req.a_in)
         else:
-            pos = solve(p, cut(req.q), cut(req.signs), cut(req.mirrors), out=out.z[:, sl])  # type: ignore[arg-type]
+            sg, continuous = cut(req.signs), req.branch == "continuous"
+            if continuous:
+                sg = along_sweep(p, cut(req.q), tuple(d.type.cyclic for d in req.mech.drivers)).signs  # type: ignore[arg-type]
+                assert out.signs is not None
+                out.signs[:, sl] = sg
+            pos = solve(p, cut(req.q), sg, cut(req.mirrors), out=out.z[:, sl], continuous=continuous)  # type: ignore[arg-type]
             if out.v is not None and out.a is not None:
                 rt = solve_rates(p, pos, req.w_in, req.a_in, out=(out.v[:, sl], out.a[:, sl]))
         out.write(sl, p, pos, rt)
@@ -392,6 +412,7 @@ def analyze(
     dynamics: bool = True,
     method: str = "natural",
     static: bool = False,
+    branch: str = "pose",
 ) -> Result:
     """Positions, velocities and accelerations (and forces, when the file has masses or loads).
 
@@ -416,27 +437,27 @@ def analyze(
         assembly mode off its own pose, exactly as a file without ``lengths`` would; masses,
         inertias, loads and slider directions are the mechanism's (centres of gravity and
         load points keep their place relative to each link's first two joints).
-    rates : bool
-        False: positions only (faster, smaller).
-    dynamics : bool
-        False: no forces even when the mechanism has masses or loads.
+    rates, dynamics : bool
+        False: positions only (faster, smaller); no forces even when the mechanism has masses or loads.
     method : {"natural", "vector-loop", "numerical"}
         ``"natural"`` (default): successive triangulation in natural coordinates, with
         numerical groups only where no closed-form step applies.
         ``"vector-loop"``: the independent link-angle formulation of seeds 003/001
         (:mod:`linkagekit.vectorloop`), four-bars and Stephenson six-bars, one design.
         ``"numerical"``: numerical groups (Newton, continued from the pose) wherever they
-        apply, even where circle-circle steps could place the joints: a cross-check; the
-        assembly mode is the pose's.
+        apply, even where circle-circle steps could: a cross-check.
     static : bool
         Zero speed and acceleration for every driver: the forces are then the static ones
         that balance gravity and the loads (not to be combined with ``speed``/``acceleration``).
+    branch : {"pose", "continuous"}
+        ``"pose"`` (default): the pose's signs at every input; ``"continuous"``: followed through
+        change points from the pose's input (:mod:`linkagekit.branch`), ``Result.signs`` per sample.
 
     Returns
     -------
     Result
     """
-    options = Options(speed, acceleration, signs, mirrors, poses, rates, dynamics, method, static)
+    options = Options(speed, acceleration, signs, mirrors, poses, rates, dynamics, method, static, branch)
     return solve_request(request(mech, inputs, options))
 
 
@@ -474,8 +495,11 @@ def analyze_chunks(
 class _Outputs:
     """The arrays of a Result over (designs, samples), allocated once and filled chunk by chunk."""
 
-    def __init__(self, mech: Mechanism, plan: Plan, D: int, n: int, rates: bool) -> None:
+    def __init__(
+        self, mech: Mechanism, plan: Plan, D: int, n: int, rates: bool, per_sample_signs: bool = False
+    ) -> None:
         J = len(plan.joint_names)
+        self.signs = np.empty((plan.n_signs, D, n)) if per_sample_signs else None  # the continuous branch's
         self.mech = mech
         self.z = np.empty((J, D, n), complex)
         self.v = np.empty((J, D, n), complex) if rates else None
@@ -546,7 +570,7 @@ def _result(req: Request, out: _Outputs) -> Result:
         squeeze(out.assembled),
         squeeze(out.singular),
         squeeze(out.condition),
-        MappingProxyType(_signs_used(req)),
+        MappingProxyType(_signs_used(req, out.signs)),
         None if out.forces is None else _frozen_forces(out.forces, squeeze),
         None if req.poses is None else frozen(req.poses),
         squeeze(out.z),
@@ -570,9 +594,13 @@ def _ground_angle(mech: Mechanism, params: Params, batch: bool) -> Any:
     return per_design[:, None] if batch else float(per_design[0])
 
 
-def _signs_used(req: Request) -> dict[str, Any]:
-    """The mode used, per sign joint: an int (one design), or an array (per design and/or per sample)."""
-    params, sg, batch = req.params, req.signs, req.poses is not None
+def _signs_used(req: Request, chosen: np.ndarray | None = None) -> dict[str, Any]:
+    """The mode used, per sign joint: an int (one design), or an array (per design and/or per sample).
+
+    ``chosen``: the signs the continuous branch chose, (n_signs, D, n).
+    """
+    params, batch = req.params, req.poses is not None
+    sg = req.signs if chosen is None else chosen
     signs_used = params.signs[:, :, None] if sg is None else np.broadcast_to(sg, (params.plan.n_signs, *sg.shape[1:]))
     sign_map: dict[str, Any] = {}
     for i, j in enumerate(params.plan.sign_joints):

@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .api import analyze, prepare
+from .branch import along_sweep
 from .errors import InputError
 from .group import Group
 from .groupmodes import continuation_intervals, enumerate_modes
@@ -1228,6 +1229,11 @@ class CheckReport:
     assembly_gaps : dict of str to list of [float, float]
         For each angle driver the open intervals of the turn where it does not assemble
         (the complement of ``input_ranges``, each starting in [0, 1 turn)).
+    change_points : tuple of dict
+        The change points the branch crosses along the file's sweep when it is followed
+        continuously (``analyze --branch continuous``), from the pose's input up and down:
+        each ``{"joint", "driver", "input"}`` (the sign step's joint, the driver the sweep
+        follows, its input there in the file's unit, to about 1e-6 degree).
     warnings : tuple of dict
         ``kind`` ``"transmission-angle"`` (a loop's ``min`` below ``limit``,
         :data:`MIN_TRANSMISSION`, or its ``max`` above 180 - ``limit``) or ``"toggle"`` (a
@@ -1257,6 +1263,7 @@ class CheckReport:
     sliders: tuple[dict[str, Any], ...] = ()
     assembly_gaps: dict[str, list[list[float]]] = field(default_factory=dict)
     warnings: tuple[dict[str, Any], ...] = ()
+    change_points: tuple[dict[str, Any], ...] = ()
 
     @property
     def input_range(self) -> list[list[float]]:
@@ -1294,6 +1301,7 @@ class CheckReport:
             out["dynamics"] = self.dynamics
         out["sliders"] = list(self.sliders)
         out["assembly_gaps"] = self.assembly_gaps
+        out["change_points"] = list(self.change_points)
         out["warnings"] = list(self.warnings)
         finite: dict[str, Any] = _finite(out)
         return finite
@@ -1423,7 +1431,22 @@ def check(mech: Mechanism) -> CheckReport:
         sliders=tuple(sliders),
         assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
         warnings=tuple(_warnings(entries, dynamics)),
+        change_points=change_points_crossed(mech, params),
         **_first_loop(entries),
+    )
+
+
+def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...]:
+    """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`)."""
+    q = np.array([d.sweep.values() * d.input_scale(mech) for d in mech.drivers])[:, None, :]
+    br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
+    steps, _, where = br.points
+    drv = mech.drivers[br.driver]
+    scale = drv.input_scale(mech)
+    names = params.plan.sign_joints
+    return tuple(
+        {"joint": names[int(i)], "driver": drv.name, "input": round(float(x) / scale, 9)}
+        for i, x in zip(steps, where, strict=True)
     )
 
 
@@ -1537,9 +1560,21 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
         *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
+        *_change_point_lines(rep.get("change_points"), fmt),
         *(_warning_line(w, fmt) for w in rep.get("warnings") or []),
     ]
     return "\n".join(lines) + "\n"
+
+
+def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text) -> list[str]:
+    """The change points the continuous branch crosses along the sweep (none: no line)."""
+    if not cps:
+        return []
+    at = ", ".join(f"{cp['joint']} at {fmt.inp(cp['driver'], cp['input'])}" for cp in cps[:MAX_TEXT_DEAD_POINTS])
+    more = f" and {len(cps) - MAX_TEXT_DEAD_POINTS} more" if len(cps) > MAX_TEXT_DEAD_POINTS else ""
+    return [
+        f"Change points crossed along the sweep (analyze --branch continuous goes on smoothly through them): {at}{more}"
+    ]
 
 
 def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:

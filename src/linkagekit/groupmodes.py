@@ -49,6 +49,15 @@ branch stops and restarts assembling inside one cell).  Modes missed would be wi
 compare the result with an independent dense search on random triads and with a triad of
 six modes known by its sextic.
 
+**Groups with sliders.** The group's sliders come into the cut mechanism with their sides
+(a block of one joint on a line becomes a circle-line step there, a block of two joints is
+carried with its guide), and links that are sides of a slider are neither cut nor driven. The
+argument above is unchanged: the cut mechanism's branches are continuous in ``theta`` and a
+mode of the group is a root of ``f`` on one of them, so the same guarantee holds. A group
+whose line is carried by a link placed before it cannot be cut so (that link would share two
+joints with the cut mechanism's ground), nor can a group with no two binary links that are
+no slider's sides: it is listed in its continued mode only, with a note.
+
 The modes of the whole mechanism combine these with the closed-form sign combinations:
 the steps before a group give its known joints for each combination, the group's modes
 are enumerated for each distinct set of known joints, and the solve goes on downstream
@@ -72,7 +81,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -290,11 +299,7 @@ def group_condition(st: Group, nums: Nums, z: np.ndarray) -> np.ndarray:
     P = np.concatenate([z[list(st.joints)], z[list(st.known)]]) if st.known else z[list(st.joints)]
     dn = st._design_nums(nums, np.zeros(z.shape[1], int))
     J = st.jacobian(P, dn, m + len(st.known))[:, :, : 2 * m]
-    scale = np.ones(J.shape[:2])
-    row = 0
-    for gl, L in zip(st.links, dn[0], strict=True):
-        scale[:, row] = 1.0 / (2 * L)
-        row += 1 + 2 * (len(gl.slots) - 2)
+    scale = st.row_scale(dn, J.shape[0])
     J = np.where(np.isfinite(J), J * scale[:, :, None], 0.0)
     s = np.linalg.svd(J, compute_uv=False)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -408,6 +413,10 @@ class Reduction:
         The driven link (turned about its known joint) and the cut link.
     size : float
         The group's size (its largest link dimension), for relative tolerances.
+    frame : tuple or None
+        When a slider's line is carried by a link placed before the group: that link's first two
+        joints (indices in ``group.known``) and their pose positions. The cut mechanism is then
+        solved in that link's frame (its line on the cut mechanism's ground) and moved back.
     """
 
     group: Group
@@ -420,6 +429,17 @@ class Reduction:
     drive: str
     cut: str
     size: float
+    frame: tuple[int, int, complex, complex] | None = None
+
+    def _into_frame(self, known: np.ndarray) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+        """The known joints in the carrier's pose frame (:attr:`frame`), and the map back to the world."""
+        if self.frame is None:
+            return known, lambda z: z
+        i0, i1, p0, p1 = self.frame
+        turn = (known[i1] - known[i0]) / (p1 - p0)
+        turn = turn / np.abs(turn)  # the carrier's rotation from the pose
+        origin = known[i0]
+        return p0 + (known - origin) / turn, lambda z: origin + turn * (z - p0)
 
     def closure(self, known: np.ndarray, combo: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``f = |z_a - z_b| - L_cut`` and the group's joints at each column (NaN where it does not assemble).
@@ -444,9 +464,10 @@ class Reduction:
         a, b = self.ends
         for s in range(0, n, CHUNK):
             sl = slice(s, min(n, s + CHUNK))
-            p = self._at(known[:, sl])
+            inside, back = self._into_frame(known[:, sl])
+            p = self._at(inside)
             sol = solve(p, theta[None, sl, None], self.combos[:, combo[sl]][:, :, None])
-            z = sol.z[:, :, 0]
+            z = back(sol.z[:, :, 0])
             f[sl] = np.where(sol.assembled[:, 0], np.abs(z[a] - z[b]) - self.length, np.nan)
             zs[:, sl] = z[list(self.unknown)]
         return f, zs
@@ -485,13 +506,17 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
     m = len(st.joints)
     unknown = [names[j] for j in st.joints]
     known = [names[j] for j in st.known]
-    binary = [gl for gl in st.links if len(gl.slots) == 2]
+    sliding = {name for gs in st.sliders for name in (gs.carrier, gs.other)}
+    binary = [gl for gl in st.links if len(gl.slots) == 2 and gl.name not in sliding]
+    frame = _frame(mech, st, names)
+    if frame is False:
+        return None
     drives = [gl for gl in binary if sum(s >= m for s in gl.slots) == 1]
     for dl in drives:
         for cl in binary:
             if cl.name == dl.name:
                 continue
-            cut = _cut_mechanism(mech, st, names, dl.name, cl.name)
+            cut = _cut_mechanism(mech, st, names, dl.name, cl.name, frame[0] if frame else None)
             if cut is None:
                 continue
             try:
@@ -519,12 +544,37 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
                 drive=dl.name,
                 cut=cl.name,
                 size=float(size),
+                frame=frame[1] if frame else None,
             )
     return None
 
 
-def _cut_mechanism(mech: Mechanism, st: Group, names: tuple[str, ...], drive: str, cut: str) -> Mechanism | None:
-    """The group without link ``cut``, its known joints on the ground, link ``drive`` driven (None if invalid)."""
+def _frame(
+    mech: Mechanism, st: Group, names: tuple[str, ...]
+) -> tuple[str, tuple[int, int, complex, complex]] | None | Literal[False]:
+    """The placed link carrying a slider's line, with its frame (see :attr:`Reduction.frame`); None if there is
+    none, False if there are several or it is a slider's block (then no cut mechanism is written)."""
+    inner = {gl.name for gl in st.links}
+    placed = {gs.carrier for gs in st.sliders if gs.frame_joints is not None and gs.carrier not in inner}
+    if not placed:
+        return None
+    if len(placed) > 1 or any(mech.sliders[gs.slider].link in placed for gs in st.sliders):
+        return False
+    (carrier,) = placed
+    j0, j1 = next(gs.frame_joints for gs in st.sliders if gs.carrier == carrier and gs.frame_joints)
+    known = list(st.known)
+    return carrier, (known.index(j0), known.index(j1), mech.joints[names[j0]], mech.joints[names[j1]])
+
+
+def _cut_mechanism(
+    mech: Mechanism, st: Group, names: tuple[str, ...], drive: str, cut: str, frame: str | None = None
+) -> Mechanism | None:
+    """The group without link ``cut``, its known joints on the ground, link ``drive`` driven (None if invalid).
+
+    The group's sliders come along with their sides: a side that is not a link of the group
+    (a block of one joint) is added as it is; a placed link ``frame`` carrying a line is the
+    cut mechanism's ground (it is solved in that link's frame, :attr:`Reduction.frame`).
+    """
     known = [names[j] for j in st.known]
     used = {names[j] for j in (*st.joints, *st.known)}
     dl = mech.link(drive)
@@ -536,6 +586,15 @@ def _cut_mechanism(mech: Mechanism, st: Group, names: tuple[str, ...], drive: st
             continue
         ln = mech.link(gl.name)
         links[gl.name] = {"joints": list(ln.joints), "lengths": dict(ln.lengths)} if ln.lengths else list(ln.joints)
+    sliders = []
+    for gs in st.sliders:
+        s = mech.sliders[gs.slider]
+        on = "ground" if s.on == frame else s.on
+        for side in (on, s.link):
+            if side not in links:
+                links[side] = list(mech.link(side).joints)
+        d = s.direction
+        sliders.append({"link": s.link, "on": on, "through": names[gs.point_joint], "direction": [d.real, d.imag]})
     doc = {
         "format": FORMAT,
         "name": f"group {', '.join(names[j] for j in st.joints)} cut at '{cut}', '{drive}' driven",
@@ -543,6 +602,7 @@ def _cut_mechanism(mech: Mechanism, st: Group, names: tuple[str, ...], drive: st
         "joints": {j: [mech.joints[j].real, mech.joints[j].imag] for j in mech.joint_names if j in used},
         "links": links,
         "drivers": [{"link": drive, "pivot": pivot, "toward": toward}],
+        **({"sliders": sliders} if sliders else {}),
     }
     try:
         return Mechanism.from_dict(doc, source=f"{mech.source} (group cut)")
@@ -894,7 +954,10 @@ def _solve_rows(
         params,
         plan=plan,
         steps=tuple(steps[: len(plan.steps)]),
-        pose_inputs=np.repeat(params.pose_inputs[:, :1], R, axis=1),
+        # a group started at a mode at q walks from q (its grid's origin is the driver's input there)
+        pose_inputs=np.repeat(np.asarray(q, float)[:, None], R, axis=1)
+        if starts
+        else params.pose_inputs[:, :1].repeat(R, 1),
         signs=np.repeat(params.signs[:, :1], R, axis=1),
         valid=np.ones(R, bool),
         pose=np.repeat(params.pose[:, :1], R, axis=1),

@@ -136,9 +136,9 @@ class Params:
             lock(pair)
         return self
 
-    def take(self, sl: slice) -> Params:
-        """The designs ``sl`` of this batch (for chunked solves)."""
-        if sl == slice(0, self.n_designs):
+    def take(self, sl: slice | np.ndarray) -> Params:
+        """The designs ``sl`` of this batch (a slice for chunked solves, or design indices, repeats allowed)."""
+        if isinstance(sl, slice) and sl == slice(0, self.n_designs):
             return self
 
         def cut(x: Any) -> Any:

@@ -35,12 +35,13 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from enum import Enum
 from functools import lru_cache
 from itertools import combinations
-from typing import TYPE_CHECKING, Any, assert_never
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple, assert_never
 
 from .errors import MechanismFileError, NotSolvableError
-from .group import Group, GroupLink
+from .group import Group, GroupLink, GroupSlider
 from .model import CrankType, CylinderType, SliderType
 from .steps import (
     ActuatorDyad,
@@ -60,7 +61,7 @@ from .steps import (
 )
 
 if TYPE_CHECKING:
-    from .model import Link, Mechanism
+    from .model import Link, Mechanism, Slider
 
 GROUND = "ground"
 
@@ -143,6 +144,31 @@ def make_plan(mech: Mechanism, numerical: bool = False) -> Plan:
     if mech.dof != len(mech.drivers):  # pragma: no cover - the model already refuses it
         raise MechanismFileError(f"{mech.source}: drivers: {len(mech.drivers)} driver(s) for {mech.dof} freedom(s)")
     return _Planner(mech, numerical).plan()
+
+
+class _Side(Enum):
+    """What a side of a slider can be to a candidate numerical group."""
+
+    GROUND = "the ground: a fixed line"
+    FRAME = "a link of two joints or more, of the group or placed: it can carry the line"
+    POINT = "a link of one joint whose rotation is not known: its joint can be the point on the line"
+    TURNED = "a link of one joint whose rotation is known: a constraint the group cannot write"
+
+
+class _SliderSpec(NamedTuple):
+    """A slider of a candidate group, by joint names (see :class:`~linkagekit.group.GroupSlider`)."""
+
+    slider: int
+    carrier: str
+    frame: tuple[str, str] | None  # None: the ground
+    other: str
+    point: str
+    lock: tuple[str, str] | None
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """The joints its equations read."""
+        return (*(self.frame or ()), self.point, *(self.lock or ()))
 
 
 #: A step that reads a sign, with the joints it makes known, the links whose rotation it makes known, its label.
@@ -430,6 +456,10 @@ class _Planner:
             self.placed.add(gl.name)
             self.rot_known.add(gl.name)
             self.anchors[gl.name] = gl.joints[0]
+        for gs in group.sliders:  # a side of one joint turns with the carrier
+            if gs.other not in self.placed and gs.lock is None:
+                self.steps.append(Carry(gs.other, gs.carrier, gs.point_joint, ()))
+                self._take(gs.other, gs.point_joint, ())
         return True
 
     def _next_sign_step(self) -> SignStep | None:
@@ -485,42 +515,112 @@ class _Planner:
         return None
 
     def _find_group(self) -> Group | None:
-        """The smallest set of unknown joints that the links among them fix (2 equations per joint), or None.
+        """The smallest set of unknown joints that the links and sliders among them fix (2 equations per joint).
 
         A link counts ``2 n - 3`` equations (its rigidity, natural coordinates; see
-        :mod:`linkagekit.group`) once all its joints are known or in the set. Sets are tried by
-        size, then in file order, so the plan is deterministic. Slider blocks and guides, and
-        links a pending driver turns, are left to the closed-form steps.
+        :mod:`linkagekit.group`) once all its joints are known or in the set; a slider between
+        two such sides counts 1 (a point on a line) or 2 (and a rotation lock) equations
+        (:meth:`_group_slider`). Sets are tried by size, then in file order, so the plan is
+        deterministic. Links a pending driver turns or pushes are left to the closed-form steps.
+        None when no set fits.
         """
         mech, known = self.mech, self.known
         unknown = [j for j in mech.joints if j not in known]
         driven = {mech.drivers[di].link for di, _ in self.drives}
-        sliding = set(self.slider_of) | {s.on for s in mech.sliders}
-        left = self.placed | driven | sliding
-        free = [(ln, set(ln.joints)) for ln in mech.links if ln.name not in left and len(ln.joints) >= 2]
+        free = [
+            (ln, set(ln.joints)) for ln in mech.links if ln.name not in self.placed | driven and len(ln.joints) >= 2
+        ]
+        sliders = [(si, s) for si, s in enumerate(mech.sliders) if s.link not in driven and s.on not in driven]
         sizes = range(1, len(unknown) + 1) if len(unknown) <= MAX_GROUP_SEARCH else [len(unknown)]
         for size in sizes:
             for subset in combinations(unknown, size):
                 inside = set(subset)
                 reach = inside | known
                 links = [ln for ln, js in free if js & inside and js <= reach]
-                if sum(2 * len(ln.joints) - 3 for ln in links) == 2 * size:
-                    return self._group(subset, links)
+                if not links:
+                    continue
+                names = {ln.name for ln in links}
+                found = [self._group_slider(si, s, inside, reach, names) for si, s in sliders]
+                if False in found:
+                    continue
+                gsl = [g for g in found if g]
+                if sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl) == 2 * size:
+                    return self._group(subset, links, gsl)
         return None
 
-    def _group(self, subset: tuple[str, ...], links: list[Link]) -> Group:
-        """The numerical group placing the joints ``subset`` by the rigidity of ``links``."""
+    def _group_slider(
+        self, si: int, s: Slider, inside: set[str], reach: set[str], names: set[str]
+    ) -> _SliderSpec | None | Literal[False]:
+        """How slider ``si`` constrains the candidate group ``inside`` (links ``names``).
+
+        Its *carrier* carries the line: the ground, or a side with two joints in the group or
+        placed. The other side's first joint is the point on the line; when that side has two
+        joints too, its rotation is locked to the carrier's (2 equations, else 1). None when
+        it does not constrain the group (a side not all in it, or two sides of one joint each:
+        those fix nothing by themselves and are left to the closed-form steps); False when it
+        does in a way the group cannot write (a side of one joint whose rotation is known): the
+        candidate is not a group.
+        """
+        kinds = {side: self._side(side, reach, names) for side in (s.on, s.link)}
+        if None in kinds.values():
+            return None
+        if _Side.TURNED in kinds.values():
+            return False if any(set(self.links[n].joints) & inside for n in kinds if n != GROUND) else None
+        carrier = next((side for side in (s.on, s.link) if kinds[side] in (_Side.GROUND, _Side.FRAME)), None)
+        other = s.link if carrier == s.on else s.on
+        if carrier is None or kinds[other] is _Side.GROUND:
+            return None
+        cj, oj = self.links[carrier].joints, self.links[other].joints
+        frame = (cj[0], cj[1]) if kinds[carrier] is _Side.FRAME else None
+        lock = (oj[0], oj[1]) if kinds[other] is _Side.FRAME else None
+        spec = _SliderSpec(si, carrier, frame, other, oj[0], lock)
+        return spec if set(spec.joints) & inside else None
+
+    def _side(self, name: str, reach: set[str], names: set[str]) -> _Side | None:
+        """What link ``name`` can be to a slider of a candidate group (:class:`_Side`), or None (not all its
+        joints in ``reach``, or a link of two joints that is neither in the group nor placed)."""
+        if name == GROUND:
+            return _Side.GROUND
+        js = self.links[name].joints
+        if not set(js) <= reach:
+            return None
+        if len(js) >= 2:
+            return _Side.FRAME if name in names or name in self.placed else None
+        return _Side.TURNED if name in self.rot_known else _Side.POINT
+
+    def _group(self, subset: tuple[str, ...], links: list[Link], sliders: list[_SliderSpec]) -> Group:
+        """The numerical group placing the joints ``subset`` by the rigidity of ``links`` and by ``sliders``."""
         inside = set(subset)
         slots = {j: i for i, j in enumerate(subset)}
-        held = list(dict.fromkeys(j for ln in links for j in ln.joints if j not in inside))
+        around = [j for ln in links for j in ln.joints] + [j for g in sliders for j in g.joints]
+        held = list(dict.fromkeys(j for j in around if j not in inside))
         slots.update({j: len(subset) + i for i, j in enumerate(held)})
         group_links = []
         for ln in links:
             order = sorted(ln.joints, key=lambda j: (j in inside, ln.joints.index(j)))  # a known joint first
             group_links.append(GroupLink(ln.name, tuple(slots[j] for j in order), tuple(self.idx[j] for j in order)))
-        cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
         idx = self.idx
-        return Group(tuple(idx[j] for j in subset), tuple(idx[j] for j in held), tuple(group_links), (), cyclic)
+
+        def pair(js: tuple[str, str] | None, where: dict[str, int]) -> tuple[int, int] | None:
+            return (where[js[0]], where[js[1]]) if js else None
+
+        group_sliders = tuple(
+            GroupSlider(
+                g.slider,
+                g.carrier,
+                pair(g.frame, slots),
+                pair(g.frame, idx),
+                slots[g.point],
+                idx[g.point],
+                g.other,
+                pair(g.lock, slots),
+                pair(g.lock, idx),
+            )
+            for g in sliders
+        )
+        cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
+        joints, known = tuple(idx[j] for j in subset), tuple(idx[j] for j in held)
+        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders)
 
     # ------------------------------------------------------------------ the end
     def _check_complete(self) -> None:
@@ -546,8 +646,8 @@ class _Planner:
         if missing:
             raise NotSolvableError(
                 f"{mech.source}: no triangulation order places {', '.join(missing)}, and no numerical group does: "
-                f"the numerical solver takes groups of revolute joints only (a slider or a cylinder inside an Assur "
-                f"group of class 3 or more is not handled yet)"
+                f"the numerical solver takes groups of links and sliders whose equations fix their joints (a "
+                f"cylinder driver inside an Assur group of class 3 or more is not handled yet)"
             )
 
 

@@ -65,7 +65,8 @@ class Result:
         The smallest dimensionless determinant of the sign steps (1 well conditioned, 0
         singular); NaN where it does not assemble or without rates.
     signs : mapping of joint name to int or ndarray
-        The assembly mode used (one entry per joint found by a sign step; per design for a batch).
+        The assembly mode used (one entry per joint found by a sign step; per design for a batch;
+        per sample too when given so, or with ``analyze(..., branch="continuous")``).
     forces : Forces or None
         Joint reactions and driver efforts, when the mechanism has masses, gravity or loads.
     poses : ndarray or None

@@ -1,0 +1,406 @@
+"""Following a branch through change points: the sign of every sign step, sample by sample, along a path.
+
+By default every sign step keeps the sign read off the reference pose.  At a *change point*
+two assembly modes meet (a parallelogram's flat position: the dyad's two circles touch, or
+their centres pass through each other) and the fixed sign switches from one mode to the
+other there: the joint's position is continuous but its velocity jumps (or, when the
+centres pass through each other, the position jumps).  Following the branch continuously
+means flipping the sign there, so that the motion goes on smoothly.
+
+:func:`follow` decides it along a path given in order (a simulation calls it with its time
+steps); :func:`along_sweep` builds the path of a sweep (from the pose's input up to the
+largest input and down to the smallest, through every requested input and a fixed grid)
+and calls it.  The work is vectorized over samples and designs and sequential only over
+the sign steps (a step's candidates depend on the signs chosen before it).  Derivation:
+``docs/method.md``, "Following a branch through change points".
+
+Examples
+--------
+>>> import numpy as np, linkagekit as lk
+>>> from linkagekit.api import prepare
+>>> mech = lk.load("examples/seed003_ex22.yaml")  # a parallelogram, pose at 30 deg
+>>> br = along_sweep(prepare(mech), np.radians([[[0.0, 90.0, 270.0, 400.0]]]), (True,))
+>>> br.signs[0, 0].tolist()  # the pose's +1 until the flat position at 180 deg, then -1, +1 again after 360
+[1.0, 1.0, -1.0, 1.0]
+>>> [round(float(np.degrees(x)), 6) for x in br.points[2]]
+[180.0, 360.0]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .errors import InputError
+from .params import Params
+from .positions import WALK_STEP, Positions, solve
+from .rates import solve_rates
+from .steps import Pivot, Step, is_sign_step
+
+#: at a meeting, a flip is taken only where the flipped sign's defect (:func:`_defect`) is below
+#: this share of the kept one's
+RHO = 0.125
+#: the step's relative assembly margin must come within this of zero between the two samples (a real meeting);
+#: a meeting is resolved to about the square root of rounding (1e-8), and worse after an earlier one
+#: (a double rhombus's second dyad, placed from a joint found from coincident circles, gets to 1e-8)
+CHANGE_TOL = 1e-6
+#: golden-section iterations locating the meeting (the interval shrinks by 0.618 each: 1 degree to 1e-12 rad)
+GOLDEN_ITERATIONS = 48
+#: consecutive good samples further apart than this many grid steps are never bridged (a gap in the range)
+MAX_GAP_STEPS = 3.0
+
+#: the longest path one call follows (samples per design: about 550 turns at 1 degree)
+MAX_PATH = 200_000
+#: design-samples of path solved at once (bounds the working memory of a batch)
+BLOCK = 1 << 18
+
+BRANCHES = ("pose", "continuous")
+
+__all__ = ["BRANCHES", "Branch", "along_sweep", "follow"]
+
+
+@dataclass(frozen=True)
+class Branch:
+    """Signs along a path, and the change points crossed.
+
+    Attributes
+    ----------
+    signs : ndarray, shape (n_signs, D, n)
+        +1/-1 per sign step, design and sample.
+    points : list of (step, design, input) arrays
+        The change points crossed: the index of the sign step (in ``plan.sign_joints``),
+        the design, and the path driver's input there (solver units), sorted by input.
+    driver : int
+        The driver the path follows (the one that moves most).
+    """
+
+    signs: np.ndarray
+    points: tuple[np.ndarray, np.ndarray, np.ndarray]
+    driver: int = 0
+
+
+def _state(step: Step, pos: object, rt: object, i: int) -> tuple[np.ndarray, np.ndarray]:
+    """What sign step ``step`` places, (m, D, n) complex, and its rate: its joint, or (a pivot) its guide's rotation."""
+    if isinstance(step, Pivot):
+        rot = pos.rot[step.on]  # type: ignore[attr-defined]
+        om = rt.omega[step.on]  # type: ignore[attr-defined]
+        return rot[None], (1j * om * rot)[None]
+    j = list(step.writes())
+    return pos.z[j], rt.v[j]  # type: ignore[attr-defined]
+
+
+def _previous_good(good: np.ndarray) -> np.ndarray:
+    """For each sample, the index of the last good sample before it (-1: none), (D, n)."""
+    n = good.shape[-1]
+    idx = np.where(good, np.arange(n), -1)
+    last = np.maximum.accumulate(idx, axis=-1)
+    return np.concatenate([np.full((good.shape[0], 1), -1), last[:, :-1]], axis=-1)
+
+
+def _defect(Xa: np.ndarray, Va: np.ndarray, Xb: np.ndarray, Vb: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    """How far the motion from ``a`` to ``b`` is from smooth: ``max |X_b - X_a - V_a dt| + max |V_b - V_a| |dt|``.
+
+    ``O(dt^2)`` (times the acceleration) on a smooth motion; at least ``|jump of V| |dt|``
+    across a kink anywhere between (and the jump itself where the position jumps).
+    """
+    d: np.ndarray = np.max(np.abs(Xb - Xa - Va * dt), axis=0) + np.max(np.abs(Vb - Va), axis=0) * np.abs(dt)
+    return d
+
+
+Candidate = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _candidates(
+    params: Params, q: np.ndarray, S: np.ndarray, i: int, w_in: np.ndarray, continuous: bool
+) -> list[Candidate]:
+    """Step ``i``'s state with sign +1 and -1 at every sample (earlier steps as decided): [(X, V, margin)] * 2."""
+    out = []
+    for sigma in (1.0, -1.0):
+        Si = S.copy()
+        Si[i] = sigma
+        pos = solve(params, q, Si, continuous=continuous)
+        rt = solve_rates(params, pos, w_in, np.zeros_like(w_in))
+        X, V = _state(params.plan.steps[-1], pos, rt, i)
+        out.append((X, V, pos.margin[i]))
+    return out
+
+
+def _upto(params: Params, i: int) -> Params:
+    """``params`` with the plan cut after sign step ``i``: what it places does not depend on the later steps.
+
+    (A later step that does not assemble, or is singular, would make the whole sample NaN.)
+    """
+    k = [n for n, st in enumerate(params.plan.steps) if is_sign_step(st)][i]
+    plan = replace(params.plan, steps=params.plan.steps[: k + 1])
+    return replace(params, plan=plan, steps=params.steps[: k + 1])
+
+
+def _smooth_flips(cands: list[Candidate], t: np.ndarray, max_gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where flipping the sign is the smooth continuation from the last good sample: (flip (D, n), prev (D, n)).
+
+    Both ways must agree (from +1 the smooth next is -1, and from -1 it is +1, as where two
+    branches cross), and the kept sign must have a real defect (not rounding).
+    """
+    (Xp, Vp, mg), (Xm, Vm, _) = cands
+    good = (mg >= 0) & np.all(np.isfinite(Vp) & np.isfinite(Vm) & np.isfinite(Xp) & np.isfinite(Xm), axis=0)
+    prev = _previous_good(good)
+    a = np.maximum(prev, 0)
+
+    def at(x: np.ndarray) -> np.ndarray:
+        return np.take_along_axis(x, np.broadcast_to(a, x.shape), axis=-1)
+
+    dt = t - np.take_along_axis(np.broadcast_to(t, a.shape), a, axis=-1)
+    keep_p = _defect(at(Xp), at(Vp), Xp, Vp, dt)
+    keep_m = _defect(at(Xm), at(Vm), Xm, Vm, dt)
+    flip_p = _defect(at(Xp), at(Vp), Xm, Vm, dt)
+    flip_m = _defect(at(Xm), at(Vm), Xp, Vp, dt)
+    scale = np.max(np.abs(at(Vp)) + np.abs(Vp), axis=0) * np.abs(dt)
+    real = np.minimum(keep_p, keep_m) > 1e-9 * scale
+    flip = good & (prev >= 0) & (np.abs(dt) <= max_gap) & real
+    flip &= (flip_p < keep_p) & (flip_m < keep_m)  # a candidate: the meeting itself decides (_meetings)
+    return flip, prev
+
+
+def _signs_between(
+    S: np.ndarray, E: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray, tt: np.ndarray
+) -> np.ndarray:
+    """The signs at path parameter ``tt`` between samples ``a`` and ``b`` of designs ``d``: (n_signs, C).
+
+    A step whose last crossing (``E``, forward-filled) lies at or before ``tt`` has the sign of ``b``, else of ``a``.
+    """
+    return np.where(tt >= E[:, d, b], S[:, d, b], S[:, d, a])
+
+
+@dataclass(frozen=True)
+class _Between:
+    """Step ``i`` between samples ``a`` and ``b`` of designs ``d`` (one column per candidate): solved anywhere there."""
+
+    params: Params  # one design per candidate
+    q: np.ndarray  # (n_drivers, D, n)
+    S: np.ndarray  # (n_signs, D, n) the signs so far
+    E: np.ndarray  # (n_signs, D, n) where each step's last flip was (path parameter, forward-filled)
+    i: int
+    d: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    ta: np.ndarray
+    tb: np.ndarray
+    continuous: bool
+
+    def _solve(self, tt: np.ndarray, own: np.ndarray | None = None) -> tuple[Positions, np.ndarray]:
+        """Positions at path parameter ``tt`` (step ``i`` with sign ``own``, default as at ``a``), and dq/dt."""
+        span = np.where(self.tb > self.ta, self.tb - self.ta, 1.0)
+        f = np.where(self.tb > self.ta, (tt - self.ta) / span, 0.0)
+        qa, qb = self.q[:, self.d, self.a], self.q[:, self.d, self.b]
+        sg = np.where(tt >= self.E[:, self.d, self.b], self.S[:, self.d, self.b], self.S[:, self.d, self.a])
+        if own is not None:
+            sg[self.i] = own
+        pos = solve(self.params, ((1 - f) * qa + f * qb)[:, :, None], sg[:, :, None], continuous=self.continuous)
+        return pos, ((qb - qa) / span)[:, :, None]
+
+    def margin(self, tt: np.ndarray) -> np.ndarray:
+        """Step ``i``'s relative assembly margin at ``tt`` (inf where an earlier step fails)."""
+        m = self._solve(tt)[0].margin[self.i, :, 0]
+        return np.where(np.isfinite(m), m, np.inf)
+
+    def state(self, tt: np.ndarray, own: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Step ``i``'s points and their rates d/dt at ``tt``, (m, C) each."""
+        pos, w = self._solve(tt, own)
+        rt = solve_rates(self.params, pos, w, np.zeros_like(w))
+        X, V = _state(self.params.plan.steps[-1], pos, rt, self.i)
+        return X[..., 0], V[..., 0]
+
+
+def _golden(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The minimum of ``f`` on ``[lo, hi]`` (each column its own interval) by golden section: (where, value)."""
+    g = (np.sqrt(5.0) - 1) / 2
+    lo, hi = lo.copy(), hi.copy()
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = f(x1), f(x2)
+    for _ in range(GOLDEN_ITERATIONS):
+        left = f1 <= f2
+        hi = np.where(left, x2, hi)
+        lo = np.where(left, lo, x1)
+        x2n = np.where(left, x1, lo + g * (hi - lo))
+        x1n = np.where(left, hi - g * (hi - lo), x2)
+        fnew = f(np.where(left, x1n, x2n))
+        f1, f2 = np.where(left, fnew, f2), np.where(left, f1, fnew)
+        x1, x2 = x1n, x2n
+    return np.where(f1 <= f2, x1, x2), np.minimum(f1, f2)
+
+
+def _meetings(btw: _Between, probe: float) -> tuple[np.ndarray, np.ndarray]:
+    """Whether step ``i``'s sign flips between each candidate's samples, and where (path parameter).
+
+    The step's assembly margin is minimised over ``[t_a, t_b]`` (golden section, then a
+    parabola's vertex); the two modes meet where it comes within ``CHANGE_TOL`` of zero (a
+    gap deeper than that, or a near miss, is no meeting).  At a meeting the sign flips when,
+    ``probe`` before and after it, the flipped sign continues the motion smoothly and the kept
+    one does not (the test of :func:`_defect`, now at the meeting itself, so
+    that it does not depend on where the samples fall).
+    """
+    best, low = _golden(btw.margin, btw.ta, btw.tb)
+    where = _vertex(btw.margin, best, low, 1e-3 * (btw.tb - btw.ta))
+    h = np.minimum(probe, 0.5 * np.minimum(where - btw.ta, btw.tb - where))
+    one = np.ones_like(where)
+    before = [btw.state(where - h, sigma * one) for sigma in (1.0, -1.0)]
+    after = [btw.state(where + h, sigma * one) for sigma in (1.0, -1.0)]
+    smooth = np.ones(len(where), bool)
+    for k in (0, 1):  # from either sign (the sign at a may already have flipped earlier along the path)
+        keep = _defect(*before[k], *after[k], 2 * h)
+        flip = _defect(*before[k], *after[1 - k], 2 * h)
+        smooth &= np.isfinite(flip) & (flip < RHO * np.where(np.isfinite(keep), keep, np.inf))
+    return (np.abs(low) <= CHANGE_TOL) & smooth, where
+
+
+def _vertex(f: Callable[[np.ndarray], np.ndarray], x: np.ndarray, fx: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """The minimum of ``f`` near ``x`` refined by the parabola through ``x - h, x, x + h``.
+
+    The margin is quadratic about a meeting, so its minimiser is found by golden section to
+    only about the square root of rounding; the parabola's vertex from points ``h`` away,
+    where the margin is well above rounding, is good to about ``h`` times its relative rounding.
+    """
+    lo, hi = f(x - h), f(x + h)
+    curv = lo - 2 * fx + hi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shift = h * (lo - hi) / (2 * curv)
+    ok = (curv > 0) & (np.abs(shift) <= np.abs(h))
+    return np.where(ok, x + np.where(ok, shift, 0.0), x)
+
+
+def follow(
+    params: Params,
+    q: np.ndarray,
+    t: np.ndarray,
+    start: np.ndarray | None = None,
+    max_gap: float = np.inf,
+    continuous: bool = True,
+    probe: float = 1e-5,
+) -> Branch:
+    """The signs along a path given in order, each sign flipped where its step crosses a change point.
+
+    Parameters
+    ----------
+    params : Params
+    q : ndarray, shape (n_drivers, D or 1, n)
+        The inputs along the path, in the order the mechanism goes through them (solver units).
+    t : ndarray, shape (D or 1, n)
+        The path parameter, non-decreasing (e.g. the input of the driver that moves, or time).
+    start : ndarray, shape (n_signs, D), optional
+        The signs at the first sample; default: each design's pose's.
+    max_gap : float
+        Two good samples further apart in ``t`` are not bridged (the motion cannot pass a gap).
+    continuous : bool
+        Numerical groups, too, follow their branch (:mod:`linkagekit.group`).
+    probe : float
+        How far before and after a meeting (in ``t``) the motion is compared on both signs.
+
+    Returns
+    -------
+    Branch
+        ``signs`` (n_signs, D, n); ``points`` the change points crossed, as path parameters.
+    """
+    plan = params.plan
+    D, n = params.n_designs, q.shape[-1]
+    S = np.empty((plan.n_signs, D, n))
+    S[...] = (params.signs if start is None else np.asarray(start, float))[:, :, None]
+    E = np.full(S.shape, -np.inf)
+    t = np.broadcast_to(np.asarray(t, float), (D, n))
+    q_all = np.broadcast_to(q, (q.shape[0], D, n))
+    dq = np.diff(q, axis=-1)
+    dt = np.diff(t, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(dt != 0, dq / np.where(dt != 0, dt, 1.0), 0.0)
+    w_in = np.concatenate([slope[..., :1], slope], axis=-1)  # dq/dt at each sample (from the interval before)
+    found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for i in range(plan.n_signs):
+        sub = _upto(params, i)
+        cands = _candidates(sub, q, S, i, w_in, continuous)
+        flip, prev = _smooth_flips(cands, t, max_gap)
+        if flip.any():
+            d, b = np.nonzero(flip)
+            a = prev[d, b]
+            btw = _Between(sub.take(d), q_all, S, E, i, d, a, b, t[d, a], t[d, b], continuous)
+            real, where = _meetings(btw, probe)
+            flip[d[~real], b[~real]] = False
+            E[i, d[real], b[real]] = where[real]
+            E[i] = np.maximum.accumulate(E[i], axis=-1)
+            found.append((np.full(int(real.sum()), i), d[real], where[real]))
+        S[i] = S[i, :, :1] * np.cumprod(np.where(flip, -1.0, 1.0), axis=-1)
+    return Branch(S, _joined(found))
+
+
+def _joined(found: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lists of (steps, designs, inputs) arrays joined into three arrays."""
+    if not found:
+        return np.zeros(0, int), np.zeros(0, int), np.zeros(0)
+    s, d, x = (np.concatenate(z) for z in zip(*found, strict=True))
+    return s, d, x
+
+
+def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], continuous: bool = True) -> Branch:
+    """The signs at requested inputs ``q`` (n_drivers, D or 1, n), following the branch from each design's pose.
+
+    The path runs along the driver that moves most, from the pose's input (its value as read
+    off the pose, unwrapped: an angle of 400 deg is a turn and 40 deg further than 0) up to
+    the largest requested input and down to the smallest, through every requested input and
+    the multiples of ``WALK_STEP`` (of 1/360 of the span for a length) in between, so the
+    signs at an input do not depend on which other inputs are asked.  The other drivers
+    move along it as they do between the requested samples.  ``points`` are in the path
+    driver's input.  Designs go through in blocks of about ``BLOCK`` design-samples of path;
+    a path longer than ``MAX_PATH`` samples is refused.
+    """
+    D, n = params.n_designs, q.shape[-1]
+    x0 = params.pose_inputs  # (n_drivers, D)
+    span = np.ptp(np.concatenate([q.reshape(q.shape[0], -1), x0], axis=1), axis=1)
+    d = int(np.argmax(span))
+    if span[d] == 0 or params.plan.n_signs == 0:
+        return Branch(np.repeat(params.signs[:, :, None], n, axis=2), _joined([]), d)
+    step = WALK_STEP if d < len(angular) and angular[d] else float(span[d]) / 360.0
+    x = q[d, 0]
+    lo, hi = min(x.min(), x0[d].min()), max(x.max(), x0[d].max())
+    if (hi - lo) / step > MAX_PATH:
+        raise InputError(
+            f"branch 'continuous': the inputs and the pose's input span {(hi - lo) / step:.0f} steps of the path "
+            f"it follows, more than linkagekit.branch.MAX_PATH ({MAX_PATH}); ask for a smaller span"
+        )
+    grid = np.arange(np.floor(lo / step), np.ceil(hi / step) + 1) * step
+    u = np.unique(np.concatenate([x, grid[(grid > lo) & (grid < hi)]]))
+    per = max(1, BLOCK // (2 * len(u) + 2))
+    parts = []
+    for start in range(0, D, per):  # blocks of designs: the path is longer than the samples asked
+        sl = slice(start, min(start + per, D))
+        parts.append(_along(params.take(sl), q[:, sl] if q.shape[1] > 1 else q, d, u, step, continuous))
+    signs = np.concatenate([p.signs for p in parts], axis=1)
+    found = [(p.points[0], p.points[1] + k * per, p.points[2]) for k, p in enumerate(parts)]
+    return Branch(signs, _joined(found), d)
+
+
+def _along(params: Params, q: np.ndarray, d: int, u: np.ndarray, step: float, continuous: bool) -> Branch:
+    """:func:`along_sweep` for one block of designs, the path's values ``u`` (ascending) given."""
+    D, n = params.n_designs, q.shape[-1]
+    x0 = params.pose_inputs
+    x = q[d, 0]
+    srt = np.argsort(x, kind="stable")
+    signs = np.empty((params.plan.n_signs, D, n))
+    points: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for way in (1.0, -1.0):
+        uu = u if way > 0 else u[::-1]
+        tpath = np.concatenate([x0[d][:, None], np.where(way * uu >= way * x0[d][:, None], uu, x0[d][:, None])], axis=1)
+        qp = np.empty((q.shape[0], D, len(uu) + 1))
+        for k in range(q.shape[0]):  # the other drivers: held, or moved as between the requested samples
+            held = np.ptp(q[k], axis=-1).max() == 0
+            qp[k] = q[k][:, :1] if held else np.interp(tpath, x[srt], q[k, 0][srt])
+            qp[k][:, 0] = x0[k]
+        qp[d] = tpath
+        br = follow(params, qp, way * tpath, max_gap=MAX_GAP_STEPS * step, continuous=continuous, probe=1e-3 * step)
+        pos = 1 + np.searchsorted(u, x) if way > 0 else len(u) - np.searchsorted(u, x)
+        mine = (way * x[None, :] >= way * x0[d][:, None]) if way > 0 else (x[None, :] < x0[d][:, None])
+        signs[...] = np.where(mine[None], br.signs[:, :, pos], signs)
+        s, dd, where = br.points
+        points.append((s, dd, way * where))
+    s, dd, where = _joined(points)
+    order = np.lexsort((s, where, dd))
+    return Branch(signs, (s[order], dd[order], where[order]), d)

@@ -1,0 +1,290 @@
+"""Following a branch through change points (``analyze --branch continuous``).
+
+Independent checks: the geometry (a parallelogram's opposite sides are parallel: their cross
+product, relative to size^2, is rounding) and the motion's smoothness (the solver's velocities
+against central finite differences of its own positions, across the change points too).
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+import linkagekit as lk
+from helpers import by_cosines, fourbar_dict, xy
+from linkagekit.api import prepare
+from linkagekit.checks import change_points_crossed
+from linkagekit.cli import main
+
+DEG = np.arange(0.0, 721.0, 1.0)
+
+
+def cross(u, v):
+    return u.real * v.imag - u.imag * v.real
+
+
+def z(res, name):
+    p = res.xy(name)
+    return p[:, 0] + 1j * p[:, 1]
+
+
+def parallelogram(ground=4.0, crank=1.0, at=60.0):
+    A, B = 0j, complex(ground, 0)
+    C = crank * np.exp(1j * np.radians(at))
+    D = C + ground
+    return lk.Mechanism.from_dict(fourbar_dict(A, B, C, D, C + 0.5 + 0.7j))
+
+
+def double_parallelogram(at=50.0, spans=(3.0, 2.0)):
+    """Three parallel cranks of 1 on a line, two couplers; spans (1, 1): the IFToMM double four-bar (five 1 m bars)."""
+    A1, A2, A3 = 0j, complex(spans[0]), complex(sum(spans))
+    C1 = np.exp(1j * np.radians(at))
+    pts = dict(A1=A1, A2=A2, A3=A3, C1=C1, C2=C1 + A2, C3=C1 + A3)
+    return lk.Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "joints": xy(pts),
+            "links": {
+                "ground": ["A1", "A2", "A3"],
+                "crank1": ["A1", "C1"],
+                "crank2": ["A2", "C2"],
+                "crank3": ["A3", "C3"],
+                "coupler1": ["C1", "C2"],
+                "coupler2": ["C2", "C3"],
+            },
+            "drivers": [{"link": "crank1", "pivot": "A1", "toward": "C1"}],
+        }
+    )
+
+
+def worst_parallel(res, quads, skip=None):
+    """The largest |cross| of opposite sides over the assembled samples (but ``skip``), relative to size^2."""
+    worst = 0.0
+    for a, b, c, d in quads:  # A-C parallel to B-D, and C-D parallel to A-B
+        za, zb, zc, zd = (z(res, n) for n in (a, b, c, d))
+        size2 = abs(zb - za) ** 2 + abs(zc - za) ** 2
+        ok = res.assembled if skip is None else res.assembled & ~skip
+        e = np.maximum(abs(cross(zc - za, zd - zb)), abs(cross(zd - zc, zb - za))) / size2
+        worst = max(worst, float(np.max(e[ok])))
+    return worst
+
+
+def velocity_defect(res, joints, step_deg=1.0):
+    """max |v - central difference of positions| / max |v| over interior samples with defined rates (speed 1 rad/s)."""
+    h = np.radians(step_deg)
+    worst, top = 0.0, 0.0
+    for j in joints:
+        p = z(res, j)
+        d = res.to_dict()["joints"][j]
+        vel = np.array([complex(x, y) if x is not None else np.nan for x, y in zip(d["vx"], d["vy"], strict=True)])
+        fd = (p[2:] - p[:-2]) / (2 * h)
+        ok = np.isfinite(vel[1:-1]) & np.isfinite(fd)
+        worst = max(worst, float(np.max(np.abs(vel[1:-1] - fd)[ok])))
+        top = max(top, float(np.max(np.abs(vel[1:-1])[ok])))
+    return worst / top
+
+
+def velocity_jump(res, joint, at):
+    """|v(at + 1) - v(at - 1)| / |v(at - 1)| (samples one degree apart)."""
+    d = res.to_dict()["joints"][joint]
+    k = int(np.argmin(np.abs(DEG - at)))
+    before, after = (complex(d["vx"][i], d["vy"][i]) for i in (k - 1, k + 1))
+    return abs(after - before) / abs(before)
+
+
+@pytest.mark.parametrize(("name", "mech"), [("parallelogram", parallelogram()), ("rhombus", parallelogram(2.0, 2.0))])
+def test_four_bar_parallelograms_stay_parallelograms(name, mech):
+    res = lk.analyze(mech, DEG, speed=1.0, branch="continuous")
+    # the rhombus's crank lies on the ground at 0, 360, 720 deg: C on B, the dyad's two circles are one (undefined)
+    expect = np.isin(DEG, [0.0, 360.0, 720.0]) if name == "rhombus" else np.zeros(len(DEG), bool)
+    assert np.array_equal(~res.assembled, expect)
+    assert worst_parallel(res, [("A", "B", "C", "D")]) <= 1e-12
+    assert velocity_defect(res, ["D", "P"]) < 2e-4  # finite differences' own error ~ h^2/6 = 5e-5
+    # the coupler translates: omega 0 wherever it is defined, across every change point
+    w = res.link_omega["coupler"]
+    assert np.nanmax(np.abs(w)) < 1e-9 and np.isfinite(w).sum() >= len(DEG) - 6
+    # the default keeps the pose's sign and leaves the parallelogram after 180 deg
+    base = lk.analyze(mech, DEG, speed=1.0)
+    assert worst_parallel(base, [("A", "B", "C", "D")]) > 0.1
+    # across the change point at 180 deg: D's velocity turns by 2 deg of crank on the parallelogram (0.035 of
+    # its size), and jumps on the default's fold
+    assert velocity_jump(res, "D", 180.0) < 0.036 < 0.5 < velocity_jump(base, "D", 180.0)
+    if name == "rhombus":  # the other mode of a rhombus folds into a kite: D on A
+        assert np.max(np.abs(z(base, "D") - z(base, "A"))[(DEG > 181) & (DEG < 359)]) < 1e-12
+    # the signs per sample flip at each change point crossed
+    s = np.asarray(res.signs["D"])
+    assert s.shape == DEG.shape and set(np.unique(s)) == {-1, 1}
+
+
+@pytest.mark.parametrize("spans", [(3.0, 2.0), (1.0, 1.0)])
+def test_double_parallelogram_stays_parallel(spans):
+    mech = double_parallelogram(90.0 if spans == (1.0, 1.0) else 50.0, spans)
+    res = lk.analyze(mech, DEG, speed=1.0, branch="continuous")
+    # the double rhombus's first crank lies on the ground at 0, 360, 720 deg: C1 on A2, C2 on A3 (undefined)
+    expect = np.isin(DEG, [0.0, 360.0, 720.0]) if spans == (1.0, 1.0) else np.zeros(len(DEG), bool)
+    assert np.array_equal(~res.assembled, expect)
+    # exactly at a flat position the second dyad's circles touch and the rounding of its discriminant
+    # (1e-16) becomes sqrt(1e-16) in its position, in either mode (the default there is the same number)
+    flat = DEG % 180 == 0
+    quads = [("A1", "A2", "C1", "C2"), ("A2", "A3", "C2", "C3")]
+    assert worst_parallel(res, quads, skip=flat) <= 1e-12
+    assert worst_parallel(res, quads) <= 1e-7
+    assert velocity_defect(res, ["C2", "C3"]) < 2e-4
+    assert worst_parallel(lk.analyze(mech, DEG), quads) > 0.1  # the default folds the first loop
+
+
+def test_crank_rocker_is_exactly_the_default():
+    mech = lk.load("examples/seed000_fourbar.yaml")
+    a = lk.analyze(mech, DEG, branch="continuous")
+    b = lk.analyze(mech, DEG)
+    for j in mech.joint_names:
+        assert np.array_equal(a.xy(j), b.xy(j), equal_nan=True)
+    da, db = a.to_dict(), b.to_dict()
+    assert json.dumps(da["joints"]) == json.dumps(db["joints"])
+    assert all(np.all(np.asarray(s) == b.signs[k]) for k, s in a.signs.items())
+
+
+def test_numerical_group_follows_the_branch():
+    mech = parallelogram()
+    deg = np.arange(-30.0, 400.0, 2.0)
+    res = lk.analyze(mech, deg, method="numerical", branch="continuous", rates=False)
+    assert res.assembled.all()
+    far = np.abs(((deg + 90) % 180) - 90) > 1  # Newton is slow at the flat positions themselves
+    A, B, C, D = (z(res, n) for n in "ABCD")
+    assert np.max(np.abs(cross(C - A, D - B))[far]) / 17 < 1e-10
+    default = lk.analyze(mech, deg, method="numerical", rates=False)
+    assert np.nanmax(np.abs(cross(z(default, "C") - A, z(default, "D") - B))) > 0.1
+
+
+def test_check_lists_the_change_points_crossed():
+    d = fourbar_dict(0j, 4 + 0j, np.exp(1j * np.radians(60)), np.exp(1j * np.radians(60)) + 4, 1 + 1j)
+    d["drivers"][0]["angles"] = {"start": -90, "stop": 270, "step": 1}
+    mech = lk.Mechanism.from_dict(d)
+    got = lk.check(mech)["change_points"]
+    # by hand: crank, ground 4 and coupler along one line at 0 deg (C = (1, 0), D = (5, 0)) and 180 deg
+    # (C = (-1, 0), D = (3, 0)): the dyad's circles about C (radius 4) and B (radius 1) touch there
+    assert [cp["joint"] for cp in got] == ["D", "D"]
+    assert [cp["input"] for cp in got] == pytest.approx([0.0, 180.0], abs=1e-6)
+    # a crank-rocker crosses none
+    assert lk.check(lk.load("examples/seed000_fourbar.yaml"))["change_points"] == []
+
+
+def test_cli_branch(tmp_path, capsys):
+    path = tmp_path / "p.json"
+    mech = parallelogram()
+    path.write_text(json.dumps(mech.to_dict()))
+    assert main(["analyze", str(path), "--angles", "0:720:10", "--branch", "continuous", "--format", "json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    ax, ay = np.array(out["joints"]["C"]["x"]), np.array(out["joints"]["C"]["y"])
+    dx, dy = np.array(out["joints"]["D"]["x"]), np.array(out["joints"]["D"]["y"])
+    assert np.max(np.abs(dx - ax - 4.0)) < 1e-12 and np.max(np.abs(dy - ay)) < 1e-12
+    assert main(["analyze", str(path), "--branch", "sideways"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--branch" in err[0]
+
+
+def test_bad_branch_in_python():
+    with pytest.raises(lk.LinkageError, match="branch"):
+        lk.analyze(parallelogram(), [0.0], branch="smooth")
+    with pytest.raises(lk.LinkageError, match="branch"):
+        lk.analyze(parallelogram(), [0.0], branch="continuous", signs={"D": 1})
+
+
+def test_batch_follows_each_designs_branch():
+    one = parallelogram()
+    pose = np.array([[one.joints[j].real, one.joints[j].imag] for j in one.joint_names])
+    bent = pose.copy()
+    bent[one.joint_names.index("D")] += [0.3, 0.2]  # no parallelogram: no change point
+    poses = np.stack([pose, 2.0 * pose, bent])
+    res = lk.analyze(one, DEG, poses=poses, branch="continuous", rates=False)
+    for k, p in enumerate(poses):
+        single = lk.Mechanism.from_dict(one.to_dict() | {"joints": dict(zip(one.joint_names, p.tolist(), strict=True))})
+        alone = lk.analyze(single, DEG, branch="continuous", rates=False)
+        assert np.array_equal(res.xy("D")[k], alone.xy("D"), equal_nan=True)
+        assert np.array_equal(res.signs["D"][k], alone.signs["D"])
+    assert len(set(res.signs["D"][0])) == 2 and len(set(res.signs["D"][2])) == 1
+
+
+@pytest.mark.parametrize("rocker", [1.001, 0.999, 1 + 1e-7, 1 - 1e-7])
+def test_near_parallelograms_keep_the_default(rocker):
+    """Two modes that come near but do not meet (or lock just short of meeting): no change point, the default."""
+    A, B, C = 0j, 4 + 0j, np.exp(1j * np.radians(60))
+    D = complex(by_cosines(C, B, 4.0, rocker, 1))
+    mech = lk.Mechanism.from_dict(fourbar_dict(A, B, C, D, C + 0.5 + 0.7j))
+    a, b = lk.analyze(mech, DEG, branch="continuous"), lk.analyze(mech, DEG)
+    assert all(np.array_equal(a.xy(j), b.xy(j), equal_nan=True) for j in mech.joint_names)
+    assert lk.check(mech)["change_points"] == []
+
+
+def test_isosceles_slider_crank_goes_through_its_pivot():
+    """Crank = rod = 1, no offset: the block is at 2 cos(theta) on one branch and at the pivot on the other.
+
+    The circle about A (radius 1) and the slider's line touch where A is at (0, +-1): theta = 90 and 270 deg.
+    """
+    th = np.radians(40.0)
+    a = np.exp(1j * th)
+    mech = lk.Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "joints": {"O": [0, 0], "A": [a.real, a.imag], "B": [2 * np.cos(th), 0]},
+            "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B"]},
+            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        }
+    )
+    res = lk.analyze(mech, DEG, branch="continuous")
+    assert np.max(np.abs(res.xy("B")[:, 0] - 2 * np.cos(np.radians(DEG)))) < 1e-12
+    default = lk.analyze(mech, DEG)
+    assert np.max(np.abs(default.xy("B")[:, 0] - 2 * np.cos(np.radians(DEG)))) > 1.0
+    got = change_points_crossed(mech, prepare(mech))  # what check lists (check's other parts take a second here)
+    assert [cp["joint"] for cp in got] == ["B", "B"]
+    assert [cp["input"] for cp in got] == pytest.approx([90.0, 270.0], abs=1e-6)
+
+
+def test_follow_step_by_step_as_a_simulation_would():
+    """A simulation calls follow with its last sample and the next, carrying the signs: the same signs as a sweep."""
+    from linkagekit.branch import along_sweep, follow
+
+    params = prepare(double_parallelogram(90.0, (1.0, 1.0)))  # the IFToMM double four-bar: five 1 m bars
+    rng = np.random.default_rng(7)
+    q = np.radians(90.0) + np.cumsum(np.r_[0.0, rng.uniform(0.001, 0.12, 200)])  # uneven steps, about 2 turns
+    signs, crossed = [params.signs[:, 0]], 0
+    for k in range(len(q) - 1):
+        br = follow(params, q[None, None, k : k + 2], q[None, k : k + 2], start=signs[-1][:, None])
+        signs.append(br.signs[:, 0, 1])
+        crossed += len(br.points[0])
+    stepwise = np.array(signs).T
+    sweep = along_sweep(params, q[None, None], (True,)).signs[:, 0]
+    ok = np.abs(np.sin(q)) > 1e-6  # samples on a change point carry either sign
+    assert np.array_equal(stepwise[:, ok], sweep[:, ok])
+    # a change point every half turn (crank along the ground: 180, 360, ... deg), for both dyads
+    half_turns = int(np.floor(q[-1] / np.pi))
+    assert half_turns >= 3 and crossed == 2 * half_turns
+
+
+def test_batch_in_blocks_and_a_path_too_long(monkeypatch):
+    import linkagekit.branch as branch
+
+    mech = parallelogram()
+    pose = np.array([[mech.joints[j].real, mech.joints[j].imag] for j in mech.joint_names])
+    poses = np.stack([pose * (1 + 0.1 * k) for k in range(5)])
+    whole = lk.analyze(mech, DEG, poses=poses, branch="continuous", rates=False)
+    monkeypatch.setattr(branch, "BLOCK", 3000)  # two designs' paths per block
+    blocks = lk.analyze(mech, DEG, poses=poses, branch="continuous", rates=False)
+    assert np.array_equal(whole.xy("D"), blocks.xy("D"), equal_nan=True)
+    assert np.array_equal(whole.signs["D"], blocks.signs["D"])
+    with pytest.raises(lk.LinkageError, match="MAX_PATH"):
+        lk.analyze(mech, [0.0, 1e6], branch="continuous")
+
+
+def test_numerical_groups_follow_the_double_rhombus():
+    """IFToMM's double four-bar solved by Newton groups: a smooth change of the determinant's sign is accepted."""
+    mech = double_parallelogram(90.0, (1.0, 1.0))
+    deg = np.arange(-30.0, 400.0, 2.0)
+    res = lk.analyze(mech, deg, method="numerical", branch="continuous", rates=False)
+    assert res.assembled.all()
+    far = np.abs(((deg + 90) % 180) - 90) > 1  # Newton is slow at the flat positions themselves
+    c1, c2, c3 = (z(res, n) for n in ("C1", "C2", "C3"))
+    assert np.max(np.maximum(np.abs((c2 - c1).imag), np.abs((c3 - c2).imag))[far]) < 1e-10
+    default = lk.analyze(mech, deg, method="numerical", rates=False)
+    assert np.nanmax(np.abs((z(default, "C2") - z(default, "C1")).imag)) > 0.5
