@@ -270,7 +270,23 @@ def test_bad_poses_raise_one_line(x, y, angle, message):
     assert isinstance(err.value, LinkageError) and "\n" not in str(err.value)
 
 
-def test_a_center_off_the_curve_is_refused():
-    poses = (np.array([0.0, 1.0, 2.0, 2.5]), np.array([0.0, 0.5, 0.6, 0.2]), np.radians([0.0, -20.0, -45.0, -70.0]))
-    with pytest.raises(InputError, match=r"centers\[0\]: not a dyad"):
-        bm.exact_motion(poses, centers=[5 + 5j, 1j])
+def test_given_centers_are_moved_onto_the_curve_or_to_the_burmester_points():
+    rng = np.random.default_rng(3)
+    z, res, xya = random_poses(rng, 5)
+    four = bm.motion_poses(*(v[:4] for v in xya))
+    near = [z[0] + 0.01, z[3] - 0.01j]  # a pick off a plot of the curve
+    fb = bm.exact_motion(four, centers=near)[0]
+    for dy in (fb.crank, fb.rocker):
+        assert on_circle(four, dy) <= 1e-9 * four.size  # on the curve: exact
+    for c in near:  # and near the picks
+        assert min(abs(dy.ground - c) for dy in (fb.crank, fb.rocker)) <= 0.03
+    pos, ang = pose_errors(fb)
+    assert pos <= 1e-9 * four.size and ang <= 1e-9
+    five = bm.motion_poses(*xya)
+    fb5 = bm.exact_motion(five, centers=near)[0]  # the nearest Burmester points: the generator
+    listed = np.array([fb5.crank.ground, fb5.rocker.ground])
+    assert np.abs(listed[:, None] - z[[0, 3]]).min(axis=0).max() <= 1e-9 * five.size
+    with pytest.raises(InputError, match=r"centers\[1\]: the same dyad as an earlier one"):
+        bm.exact_motion(five, centers=[z[0], z[0] + 1e-3])
+    with pytest.raises(InputError, match="count: a whole number"):
+        bm.exact_motion(four, count=0)

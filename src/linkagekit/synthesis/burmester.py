@@ -374,11 +374,7 @@ def center_point_curve(poses: Poses | Sequence[ArrayLike], samples: int = 360) -
     _exact(p, (4,), "the center-point curve")
     fr = _Frame.of(p)
     f = fr.cubic(p, (0, 1, 2, 3))
-    every = fr.from_plane(poles(p, [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]))
-    finite = every[np.isfinite(every)]  # a pole is at infinity when two poses differ by a translation
-    if finite.size == 0:
-        raise MethodNotApplicableError("poses: all four at one angle (translations only): no center-point curve")
-    pole = complex(finite[0])
+    pole = _curve_pole(p, fr)
     t = np.pi * np.arange(samples) / samples
     s = _line_roots(f, pole, cis(t))
     center = fr.to_plane(pole + s * cis(t))
@@ -389,6 +385,50 @@ def center_point_curve(poses: Poses | Sequence[ArrayLike], samples: int = 360) -
         circle[ok] = p.place(w)[:, 0]
     center[~ok] = np.nan
     return CenterPointCurve(center, circle, t, complex(fr.to_plane(pole)))
+
+
+def _curve_pole(p: Poses, fr: _Frame) -> complex:
+    """The pole the sampling lines of the 4-pose curve pass through (frame coordinates): ``P01`` or the first finite."""
+    every = fr.from_plane(poles(p, [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]))
+    finite = every[np.isfinite(every)]  # a pole is at infinity when two poses differ by a translation
+    if finite.size == 0:
+        raise MethodNotApplicableError("poses: all four at one angle (translations only): no center-point curve")
+    return complex(finite[0])
+
+
+def nearest_dyad(poses: Poses | Sequence[ArrayLike], point: complex) -> Dyad:
+    """The dyad whose ground pivot is a center point near ``point``: for picking dyads off a plot.
+
+    3 poses: ``point`` itself.  4 poses: where the line from the curve's pole through
+    ``point`` meets the center-point curve nearest to it.  5 poses: the nearest Burmester point.
+
+    Raises
+    ------
+    InputError
+        4 poses, when that line meets the curve at no real point; 5 poses, when there is no
+        real Burmester point.
+    """
+    p = _as_poses(poses)
+    _exact(p, (3, 4, 5), "a dyad near a point")
+    if p.n == 3:
+        return dyad_from_center(p, point)
+    if p.n == 5:
+        dyads = burmester_points(p)
+        if not dyads:
+            raise InputError("poses: these 5 poses have no real Burmester point")
+        return min(dyads, key=lambda dy: abs(dy.ground - point))
+    fr = _Frame.of(p)
+    pole = _curve_pole(p, fr)
+    here = complex(fr.from_plane(point))
+    u = complex(cis(np.angle(here - pole))) if here != pole else 1.0 + 0j
+    s = _line_roots(fr.cubic(p, (0, 1, 2, 3)), pole, np.array([u]))[:, 0]
+    s = s[np.isfinite(s)]
+    if s.size == 0:
+        raise InputError(
+            f"({point.real:g}, {point.imag:g}): the line from the pole through it misses the center-point curve"
+        )
+    best = s[np.argmin(np.abs(pole + s * u - here))]
+    return dyad_from_center(p, complex(fr.to_plane(pole + best * u)))
 
 
 def _line_roots(f: FloatArray, pole: complex, u: ComplexArray) -> ComplexArray:
@@ -808,11 +848,12 @@ def exact_motion(
         For 3 and 4 poses, how many four-bars to return (each from two dyads no other uses).
         For 5 poses every real Burmester pair is returned (up to six).
     centers, circle_points : sequence of complex, optional
-        Dyads to pair, given by their ground pivots (any point for 3 poses; points of the
-        center-point curve for 4, :func:`center_point_curve`) or, for 3 poses, by their moving
-        pivots at the first pose.  Default: 3 poses, circle points on rings of radius 1/4, 1/2
-        and 1 size about the first pose's point; 4 poses, points spread over the center-point
-        curve; 5 poses, the Burmester points.
+        Dyads to pair, given by their ground pivots or, for 3 poses, by their moving pivots at
+        the first pose.  A ground pivot is any point for 3 poses; for 4 it is moved onto the
+        center-point curve, for 5 to the nearest Burmester point (:func:`nearest_dyad`).
+        Default: 3 poses, circle points on rings of radius 1/4, 1/2 and 1 size about the
+        first pose's point; 4 poses, points spread over the center-point curve; 5 poses, the
+        Burmester points.
 
     Returns
     -------
@@ -822,6 +863,8 @@ def exact_motion(
     """
     p = _as_poses(poses)
     _exact(p, (3, 4, 5), "exact motion generation (Burmester theory)")
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise InputError(f"count: a whole number of four-bars, at least 1, got {count!r}")
     dyads = _given_dyads(p, centers, circle_points)
     if dyads is None:
         dyads = burmester_points(p) if p.n == 5 else _default_dyads(p)
@@ -833,19 +876,21 @@ def exact_motion(
 def _given_dyads(
     p: Poses, centers: Sequence[complex] | None, circle_points: Sequence[complex] | None
 ) -> list[Dyad] | None:
-    """The user's dyads, each checked to meet every pose."""
+    """The user's dyads: ground pivots moved onto the center points nearest (:func:`nearest_dyad`), or circle points."""
     if centers is None and circle_points is None:
         return None
     if circle_points is not None:
         _exact(p, (3,), "circle points given by the user")
         dyads = [dyad_from_circle_point(p, complex(c)) for c in circle_points]
     else:
-        dyads = [dyad_from_center(p, complex(c)) for c in centers or ()]
+        dyads = [nearest_dyad(p, complex(c)) for c in centers or ()]
+    what = "centers" if circle_points is None else "circle_points"
     for k, dy in enumerate(dyads):
         _, misfit = _circle_fit(p.place(p.body(dy.moving)))
         if not (np.isfinite(dy.ground) and misfit <= 1e-7 * max(p.size, dy.length)):
-            what = "centers" if circle_points is None else "circle_points"
-            raise InputError(f"{what}[{k}]: not a dyad of these {p.n} poses (off the center-point curve)")
+            raise InputError(f"{what}[{k}]: no dyad of these {p.n} poses (its circle point's positions are collinear)")
+        if any(_same(dy, o, 1e-9 * p.size) for o in dyads[:k]):
+            raise InputError(f"{what}[{k}]: the same dyad as an earlier one (the same center point)")
     if len(dyads) < 2:
-        raise InputError("centers/circle_points: give at least two dyads to pair")
+        raise InputError(f"{what}: give at least two dyads to pair")
     return dyads
