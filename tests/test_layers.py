@@ -23,10 +23,19 @@ LAYERS = [
     {"result", "api", "checks"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},
-    {"synthesis.targets", "synthesis.space", "synthesis.objective", "synthesis.cmaes", "synthesis.burmester"},
+    {
+        "synthesis.base",
+        "synthesis.targets",
+        "synthesis.space",
+        "synthesis.objective",
+        "synthesis.cmaes",
+        "synthesis.function",
+        "synthesis.motion",
+        "synthesis.burmester",
+    },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
-    {"synthesis.run"},
+    {"synthesis.run", "synthesis.function_run"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}
