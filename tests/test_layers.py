@@ -31,6 +31,7 @@ LAYERS = [
         "synthesis.cmaes",
         "synthesis.function",
         "synthesis.motion",
+        "synthesis.burmester",
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
