@@ -125,6 +125,7 @@ def test_a_crank_with_spring_damper_and_flywheel_follows_the_hand_written_equati
     assert np.ptp(ref.y[0]) > 1.0
     assert np.max(np.abs(q - ref.y[0])) < 1e-8
     assert np.max(np.abs(res.speeds["crank"] - ref.y[1])) < 1e-7
+    assert np.max(np.abs(res.forces.driver_torque["crank"] - 0.7)) < 1e-8  # kinetostatics with spring and damper
     red = reduced(mech)
     assert red.mass(np.linspace(0, 7, 5)) == pytest.approx(M, rel=1e-12)
 
