@@ -511,8 +511,8 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     d = md.mech.drivers[k]
     value = q_si / (md.scale[k] * d.input_scale(md.mech))
     return (
-        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached a toggle at {value:.6g} "
-        f"{d.input_unit(md.mech)} that the motion cannot pass"
+        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached the end of its range at {value:.6g} "
+        f"{d.input_unit(md.mech)} (a toggle or its stroke's end) that the motion cannot pass"
     )
 
 
