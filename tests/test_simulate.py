@@ -126,8 +126,10 @@ def test_a_crank_with_spring_damper_and_flywheel_follows_the_hand_written_equati
     assert np.max(np.abs(q - ref.y[0])) < 1e-8
     assert np.max(np.abs(res.speeds["crank"] - ref.y[1])) < 1e-7
     assert np.max(np.abs(res.forces.driver_torque["crank"] - 0.7)) < 1e-8  # kinetostatics with spring and damper
-    red = reduced(mech)
+    red, heavier = reduced(mech), reduced(mech, flywheel=0.5)  # a flywheel on a crank adds its inertia to M
     assert red.mass(np.linspace(0, 7, 5)) == pytest.approx(M, rel=1e-12)
+    assert heavier.mass(np.linspace(0, 7, 5)) == pytest.approx(M + 0.5, rel=1e-12)
+    assert red.force(1.0, 2.0) == pytest.approx(rhs(0, [1.0, 2.0])[1] * M - 0.7, rel=1e-9)
 
 
 def test_a_motor_driven_fourbar_from_rest_reaches_a_periodic_steady_state():

@@ -395,12 +395,30 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
         if period is None or np.all(np.bincount(steps, minlength=md.params.plan.n_signs) % 2 == 0):
             break
     Y, dY = _rows_at(md, x, br.signs[:, 0])
-    _bridge(x, Y, dY, np.asarray(where), period)
-    if not np.all(np.isfinite(Y)) or np.any(Y[:, 0] <= 0):
-        raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
     q0 = float(md.params.pose_inputs[0, 0] * md.scale[0])
+    change = np.asarray(where) * md.scale[0]
+    x, Y, dY, period = _reachable(mech, q0, x, Y, dY, period)
+    _bridge(x, Y, dY, change, period)
     rng = (float(x[0]), float(x[-1]))
-    return Reduced(mech.drivers[0].name, q0, rng, period, np.asarray(where) * md.scale[0], np.asarray(steps), Y, dY)
+    return Reduced(mech.drivers[0].name, q0, rng, period, change, np.asarray(steps), Y, dY)
+
+
+def _reachable(
+    mech: Mechanism, q0: float, x: np.ndarray, Y: np.ndarray, dY: np.ndarray, period: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+    """The table cut to the run of good rows (assembled, positive inertia) around the pose (then not periodic)."""
+    ok = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
+    if ok.all():
+        return x, Y, dY, period
+    i0 = int(np.clip(np.searchsorted(x, q0), 1, len(x) - 1))
+    if not (ok[i0 - 1] and ok[i0]):
+        if np.all(np.nan_to_num(Y[:, 0]) <= 0):
+            raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
+        raise InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
+    bad = np.flatnonzero(~ok)
+    lo = int(bad[bad < i0].max(initial=-1)) + 1
+    hi = int(bad[bad > i0].min(initial=len(x)))
+    return x[lo:hi], Y[lo:hi], dY[lo:hi], None
 
 
 def _cells(red: Reduced) -> list[float]:
