@@ -222,6 +222,9 @@ def test_cli_json_has_the_time_beside_the_inputs(tmp_path, capsys):
     doc = json.loads(out.read_text())
     assert doc["time"] == pytest.approx([0.0, 0.01, 0.02]) and len(doc["inputs"]["crank"]) == 3
     assert doc["speeds"]["crank"][0] == 0.0
+    entry = next(q for q in doc["quantities"] if q["name"] == "time")  # the time axis is a catalogue entry
+    assert entry["unit"] == "s" and entry["path"] == ["time"] and entry["owner"] == "mechanism"
+    assert [q["name"] for q in doc["quantities"]][:2] == ["time", "input:crank"]
     assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.02:0.01"]) == 0
     assert "time [s]" in capsys.readouterr().out
 
