@@ -208,7 +208,10 @@ def test_two_drivers_kinetostatics_agrees(tmp_path):
     for link, a, b in (("crank1", "A", "C"), ("crank2", "B", "D"), ("link1", "C", "E"), ("link2", "D", "E")):
         _bar(doc, link, 0.2, a, b)
     mech = lk.Mechanism.from_dict(doc)
-    res = lk.simulate(mech, np.linspace(0.0, 0.05, 6), torque={"crank1": 0.05, "crank2": -0.02})
+    res = lk.simulate(mech, np.linspace(0.0, 0.2, 9), torque={"crank1": 0.05, "crank2": -0.02})
+    # the two links of the dyad at E come into line at t = 0.1238 s: a singular position the motion cannot pass
+    assert res.stopped is not None and "singular" in res.stopped and res.n == 5
+    assert res.condition[-1] > 1e-3
     T = res.forces.driver_torque
     assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
     assert np.ptp(res.inputs["crank1"]) > 1.0
