@@ -882,7 +882,6 @@ def _analyze(args: argparse.Namespace) -> int:
         static=args.static,
         branch=args.branch,
     )
-    _note_beyond_reach(res, args.method == "numerical")
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
         return 0
@@ -897,32 +896,6 @@ def _analyze(args: argparse.Namespace) -> int:
     )
     _emit(text, args.output)
     return 0
-
-
-def _note_beyond_reach(res: Any, numerical: bool) -> None:
-    """One line on stderr when samples were not assembled because the numerical walk does not go that far.
-
-    A numerical group is continued from the pose's input at most ``group.WALK_TURNS`` turns of
-    a crank each way; a sample beyond is reported as not assembled, whatever the mechanism
-    would do there: say so, rather than let it read as a gap of the mechanism.
-    """
-    import numpy as np
-
-    from .api import prepare
-    from .group import WALK_TURNS
-    from .positions import beyond_reach
-
-    mech = res.mechanism
-    params = prepare(mech, numerical=numerical)
-    q = np.array([np.broadcast_to(res.inputs[d.name], res.shape) * d.input_scale(mech) for d in mech.drivers])
-    far = beyond_reach(params, q)
-    count = int(np.sum(far & ~np.asarray(res.assembled)))
-    if count:
-        print(
-            f"{PROG}: note: {count} sample(s) lie more than {WALK_TURNS} turns of a crank from the pose's input: "
-            "the numerical group is not followed that far, so they are shown as not assembled",
-            file=sys.stderr,
-        )
 
 
 def _modes(args: argparse.Namespace) -> int:
