@@ -241,15 +241,14 @@ def synthesize_path(
         The targets' (and the design's) length unit (:data:`linkagekit.units.LENGTH_UNITS`);
         ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
-        Without timing, meet the targets in their order along the curve.
+        Without timing: meet the targets in their order along the curve.
     min_transmission : float, optional
         Degrees: transmission angles within ``[MIN, 180 - MIN]`` over the turn (default 20).
     lengths, pivots : (float, float), ((xmin, xmax), (ymin, ymax)), optional
         Bounds on every link length; the region of the ground pivots (built-in topologies).
-    free : sequence of str or mapping, optional
-        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``.
-    reach : float
-        Joints lie within ``reach`` target diagonals of the targets' centre.
+    free, reach : sequence of str or mapping, optional; float
+        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``;
+        joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
         See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
 
