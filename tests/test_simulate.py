@@ -193,6 +193,7 @@ def test_a_toggle_stops_the_motion_with_one_line_and_exit_1(tmp_path, capsys):
     mech = lk.load(path)
     res = lk.simulate(mech, np.linspace(0.0, 3.0, 301), torque=20.0)
     assert res.stopped is not None and "toggle" in res.stopped and 1 < res.n < 301
+    assert res.to_dict()["stopped"] == res.stopped and "stopped" not in lk.simulate(mech, [0.0, 0.1]).to_dict()
     hi = lk.check(mech).to_dict()["input_range"][0][1]
     assert res.inputs["crank"][-1] < hi
     out = tmp_path / "out.csv"
