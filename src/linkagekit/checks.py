@@ -742,6 +742,8 @@ def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
 
     For a circle-circle step that is where the distance s between its known joints has an
     extremum at r1 + r2 or |r1 - r2|: a simple root of ds; otherwise a minimum of |cond|.
+    Where the step stays at a change point over a run of samples (a rhombus folded into a kite
+    puts the next dyad's circles tangent for half a turn), only the run's two ends count.
     """
     sw, q = run.sw, run.q
     interior = sw.has_prev & sw.has_next
@@ -750,6 +752,8 @@ def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
         c = run.rows[q.cond(k)]
         with np.errstate(invalid="ignore"):
             cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
+            flat = c < SINGULAR_TOL  # a step that stays at its change point (a kite's folded dyad): its two ends
+            cand &= ~(flat & flat[sw.prev] & flat[sw.next])
         out += [(k, _around(run, int(i), q.cond(k), q.ds(k))) for i in np.flatnonzero(cand)]
     return out
 
