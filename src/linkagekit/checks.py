@@ -581,7 +581,8 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
         out["links"] = [other]
         out["cylinder"] = cyl
         if math.isfinite(s) and min(abs(s - lo), abs(s - hi)) <= 1e-6 * s:
-            end = "shortest" if abs(s - lo) <= abs(s - hi) else "longest"
+            # by length, not by which end of the stroke: an actuator's slide may point from rod to barrel
+            end = "shortest" if abs(s - min(lo, hi)) <= abs(s - max(lo, hi)) else "longest"
             out["detail"] = f"cylinder '{cyl}' at the end of its stroke ({end})"
         elif isinstance(step, CylinderDyad | ActuatorDyad):
             out["detail"] = f"cylinder '{cyl}' in line with {other} at {names[step.joint]}"
