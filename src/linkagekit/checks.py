@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .api import analyze, prepare
+from .api import analyze, prepare, sweep_inputs
 from .branch import MAX_PATH, PathTooLongError, along_sweep
 from .errors import InputError
 from .group import Group
@@ -1444,7 +1444,7 @@ def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, An
     None when the sweep is too long to follow: ``check`` still reports everything else about
     a file that ``analyze`` takes.
     """
-    q = np.array([d.sweep.values() * d.input_scale(mech) for d in mech.drivers])[:, None, :]
+    q = sweep_inputs(mech, params)
     try:
         br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
     except PathTooLongError:

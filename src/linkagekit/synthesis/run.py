@@ -23,9 +23,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..checks import MIN_TRANSMISSION
-from ..errors import InputError
+from ..errors import InputError, LinkageError
+from .base import Objective
+from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
-from .optimize import Outcome, Progress, Settings, optimize
+from .optimize import Optimum, Outcome, Progress, Settings, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
 
 if TYPE_CHECKING:
@@ -145,10 +147,69 @@ def synthesize(
     targets: Any,
     topology: str | Mechanism = "fourbar",
     *,
+    task: str = "path",
+    objective: Objective | None = None,
+    **options: Any,
+) -> Synthesis | MotionSynthesis | FunctionSynthesis | Optimum:
+    """Design a mechanism: for a path, a motion or a function (spec section 6), or for any ``objective``.
+
+    Parameters
+    ----------
+    targets : array_like or Targets or None
+        ``task="path"``: the points (m, 2) or complex (m,) (:func:`synthesize_path`);
+        ``"motion"``: the poses (m, 3) ``x, y, angle`` (degrees) (:func:`synthesize_motion`);
+        ``"function"``: the pairs (m, 2) ``input, output`` (degrees from the ground line)
+        (:func:`~linkagekit.synthesis.function_run.synthesize_function`).  ``None`` with ``objective``.
+    topology : str or Mechanism
+        Path generation's topology or template.
+    task : str
+        ``"path"`` (the default), ``"motion"`` or ``"function"``.
+    objective : Objective, optional
+        A user's own :class:`~linkagekit.synthesis.base.Objective`: searched by the same engine
+        instead (:func:`~linkagekit.synthesis.optimize.search`); returns an :class:`Optimum`.
+    **options
+        The keywords of the function that runs the task (for ``objective``, the engine's:
+        ``seed``, ``seconds``, ``restarts``, ``generations``, ``popsize``, ``goal``, ``workers``,
+        ``scheduler``, ``checkpoint``, ``progress``).  ``angle_weight`` is motion's ``weight``.
+
+    Returns
+    -------
+    Synthesis, MotionSynthesis, FunctionSynthesis or Optimum
+    """
+    if objective is not None:
+        return search(objective, **options)
+    if task == "path":
+        return synthesize_path(targets, topology, **options)
+    if task == "motion":
+        if "angle_weight" in options:
+            options["weight"] = options.pop("angle_weight")
+        if options.get("min_transmission") is None:
+            options.pop("min_transmission", None)
+        return synthesize_motion(targets, **options)
+    if task == "function":
+        return _function_task(targets, **options)
+    raise InputError(f"task: expected 'path', 'motion' or 'function', got {task!r}")
+
+
+def _function_task(
+    targets: Any, units: str = "m", min_transmission: float | None = None, **options: Any
+) -> FunctionSynthesis:
+    """``synthesize(task="function")``: the pairs' two columns to :func:`synthesize_function`."""
+    pairs = np.asarray(targets, float)
+    if pairs.ndim != 2 or pairs.shape[1] != 2:
+        raise InputError("targets: function generation takes pairs (m, 2) of input, output angles (degrees)")
+    mt = 0.0 if min_transmission is None else float(min_transmission)
+    return synthesize_function(pairs[:, 0], pairs[:, 1], units=units, min_transmission=mt, **options)
+
+
+def synthesize_path(
+    targets: Any,
+    topology: str | Mechanism = "fourbar",
+    *,
     inputs: Sequence[float] | None = None,
     units: str = "m",
     ordered: bool = False,
-    min_transmission: float = MIN_TRANSMISSION,
+    min_transmission: float | None = None,
     lengths: tuple[float, float] | None = None,
     pivots: tuple[tuple[float, float], tuple[float, float]] | None = None,
     free: Sequence[str] | Mapping[str, Any] | None = None,
@@ -165,37 +226,37 @@ def synthesize(
     progress: Callable[[Progress], None] | None = None,
     **old: Any,
 ) -> Synthesis:
-    """Find a mechanism whose tracer point passes near every target.
+    """Path generation: a mechanism whose tracer point passes near every target (``synthesize``'s ``task="path"``).
 
     Parameters
     ----------
-    targets : array_like, (m, 2) or complex (m,)
-        The points, in ``units``. A :class:`~linkagekit.synthesis.targets.Targets` is taken as it is.
+    targets : array_like, (m, 2) or complex (m,), or Targets
+        The points, in ``units`` (a :class:`~linkagekit.synthesis.targets.Targets` as it is).
     topology : str or Mechanism
         One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move within
         the targets' neighbourhood, all by default; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
     units : str
-        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's, as in
-        ``read_targets``. ``unit=``, its former name, still works and warns (``DeprecationWarning``).
+        The targets' (and the design's) length unit (:data:`linkagekit.units.LENGTH_UNITS`);
+        ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
-        Without timing, meet the targets in their order along the curve.
-    min_transmission : float
-        Degrees: transmission angles stay within ``[MIN, 180 - MIN]`` over the whole turn.
-    lengths : (float, float), optional
-        Bounds on every link length.
-    pivots : ((xmin, xmax), (ymin, ymax)), optional
-        The region of the ground pivots (built-in topologies).
-    free : sequence of str or mapping, optional
-        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``.
-    reach : float
-        Joints lie within ``reach`` target diagonals of the targets' centre.
-    seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint
-        See :class:`~linkagekit.synthesis.optimize.Settings`.
-    progress : callable, optional
-        Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
+        Without timing: meet the targets in their order along the curve.
+    min_transmission : float, optional
+        Degrees: transmission angles within ``[MIN, 180 - MIN]`` over the turn (default 20).
+    lengths, pivots : (float, float), ((xmin, xmax), (ymin, ymax)), optional
+        Bounds on every link length; the region of the ground pivots (built-in topologies).
+    free, reach : sequence of str or mapping, optional; float
+        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``;
+        joints lie within ``reach`` target diagonals of the targets' centre.
+    seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
+        See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
+
+    Returns
+    -------
+    Synthesis
     """
+    min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
     source = getattr(targets, "source", None)
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
@@ -290,4 +351,239 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
     return "\n".join(lines)
 
 
-__all__ = ["TOPOLOGIES", "Synthesis", "describe", "make_problem", "synthesize"]
+__all__ = [
+    "TOPOLOGIES",
+    "MotionFourBar",
+    "MotionSynthesis",
+    "Optimum",
+    "Synthesis",
+    "describe",
+    "make_problem",
+    "search",
+    "synthesize",
+    "synthesize_motion",
+]
+
+
+# ---------------------------------------------------------------------- motion generation
+@dataclass(frozen=True)
+class MotionFourBar:
+    """One four-bar found for the poses.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+        Joints ``A0, A1, B1, B0, P, Q``; the coupler carries ``P`` (the pose point) and ``Q``
+        (along the pose's line); driver ``crank`` sweeping from the first pose to the last.
+    position_errors : ndarray (m,)
+        ``|P - (x, y)|`` at each pose, in the poses' unit.
+    angle_errors : ndarray (m,)
+        The orientation error at each pose, degrees (signed: achieved minus wanted).
+    inputs : ndarray (m,)
+        The crank angle at each pose (degrees), in the order the crank turns.
+    one_branch : bool
+        The poses are met in order on one assembly branch, assembling all the way.
+    grashof : str
+        Its Grashof type (:func:`linkagekit.checks.grashof`).
+    min_transmission : float
+        The smallest transmission angle over the sweep (degrees).
+    method : str
+        ``"exact"`` (Burmester) or ``"approximate"``.
+    """
+
+    mechanism: Mechanism
+    position_errors: np.ndarray
+    angle_errors: np.ndarray
+    inputs: np.ndarray
+    one_branch: bool
+    grashof: str
+    min_transmission: float
+    method: str
+
+    @property
+    def max_position_error(self) -> float:
+        return float(np.max(self.position_errors))
+
+    @property
+    def max_angle_error(self) -> float:
+        """Degrees."""
+        return float(np.max(np.abs(self.angle_errors)))
+
+
+@dataclass(frozen=True)
+class MotionSynthesis:
+    """The outcome of :func:`synthesize_motion`.
+
+    Attributes
+    ----------
+    fourbars : list of MotionFourBar
+        Every four-bar found, the best first.
+    diagonal : float
+        The poses' bounding-box diagonal.
+    weight : float
+        The angle weight of the error measure (:mod:`linkagekit.synthesis.motion`).
+    best : MotionFourBar
+        ``fourbars[0]``.
+    mechanism : Mechanism
+        The best four-bar's mechanism.
+    """
+
+    fourbars: list[MotionFourBar]
+    diagonal: float
+    weight: float
+
+    @property
+    def best(self) -> MotionFourBar:
+        """The best four-bar found."""
+        return self.fourbars[0]
+
+    @property
+    def mechanism(self) -> Mechanism:
+        """The best four-bar's mechanism."""
+        return self.best.mechanism
+
+
+def synthesize_motion(
+    poses: Any,
+    *,
+    inputs: Sequence[float] | None = None,
+    closed: bool = False,
+    approximate: bool = False,
+    weight: float | None = None,
+    min_transmission: float = 0.0,
+    units: str = "m",
+    seed: int = 0,
+    seconds: float = 20.0,
+) -> MotionSynthesis:
+    """Four-bars whose coupler passes through (or near) the poses, best first.
+
+    Parameters
+    ----------
+    poses : array_like (m, 3)
+        ``x, y, angle`` per pose (``angle`` in degrees, counter-clockwise from +x).
+    inputs : sequence of float, optional
+        The crank angle at each pose (degrees): timing, up to one common offset.
+    closed : bool
+        The motion is a cycle (the crank turns fully, back to the first pose).
+    approximate : bool
+        For 3 to 5 poses: the approximate route instead of the exact one (Burmester).
+    weight : float, optional
+        The angle weight ``w`` (diagonals per radian, default ``motion.ANGLE_WEIGHT``).
+    min_transmission : float
+        Degrees: the smallest transmission angle allowed over the sweep.
+    units : str
+        The poses' length unit.
+    seed, seconds
+        Of the engine's search that adds seeds (:func:`linkagekit.synthesis.optimize.optimize`).
+
+    Examples
+    --------
+    >>> import linkagekit as lk
+    >>> from linkagekit.synthesis import motion
+    >>> t = np.radians([0, 15, 30, 45, 60, 75])
+    >>> F = np.array([[0.0, 0, 0.3, 0.1, 0.4, 0.9, 0, 0.6, -0.2, 0.7]])  # a four-bar: pose of the body at t
+    >>> O, u, _, _ = motion.frames(F, t[None], np.array([1.0]))
+    >>> poses = np.stack([O[0].real, O[0].imag, np.degrees(np.angle(u[0]))], axis=1)
+    >>> out = synthesize_motion(poses)
+    >>> bool(out.best.max_position_error < 1e-9 and out.best.max_angle_error < 1e-7 and out.best.one_branch)
+    True
+    """
+    from . import motion as mo
+
+    P, p, w = _motion_problem(poses, inputs, closed, weight)
+    found: list[MotionFourBar] = []
+    if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
+        found = _exact_motion(P, units)
+    if not found or not any(f.one_branch for f in found):
+        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
+        designs = mo.approximate(p, w, min_transmission, seeds)
+        found += [_motion_fourbar(p, d, units) for d in designs]
+    if not found:
+        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
+    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
+    return MotionSynthesis(found, p.scale, w)
+
+
+def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, weight: float | None) -> Any:
+    """The checked poses (m, 3), the :class:`~.motion.MotionPoses` and the angle weight of :func:`synthesize_motion`."""
+    from . import motion as mo
+
+    P = np.asarray(poses, float)
+    if P.ndim != 2 or P.shape[1] != 3:
+        raise InputError(f"poses: expected (m, 3) rows of x, y, angle, got shape {P.shape}")
+    if np.any(np.abs(P[:, 2]) > 360):
+        raise InputError("poses: an angle is out of range (degrees within [-360, 360] expected)")
+    ins = None if inputs is None else np.radians(np.asarray(inputs, float))
+    p = mo.motion_poses(P[:, 0], P[:, 1], np.radians(P[:, 2]), ins, closed)
+    w = mo.ANGLE_WEIGHT if weight is None else float(weight)
+    if not w > 0:
+        raise InputError(f"--angle-weight: expected a positive number, got {weight}")
+    return P, p, w
+
+
+def _engine_seeds(objective: Any, seed: int, seconds: float) -> np.ndarray:
+    """The engine's best design of the circle-fit objective (a short search), as a four-bar vector (1, 10)."""
+    settings = Settings(seed, min(seconds, 5.0), restarts=2, generations=60, popsize=15, goal=0.0)
+    x = optimize(objective, settings).x
+    return np.asarray(objective.fourbars(x[None]), float)
+
+
+def _motion_fourbar(p: Any, d: Any, units: str) -> MotionFourBar:
+    """A :class:`~linkagekit.synthesis.motion.MotionDesign` as a :class:`MotionFourBar`."""
+    from ..checks import FourBar, grashof
+    from . import motion as mo
+
+    v = d.vector
+    ga, a, gb, b = complex(v[0], v[1]), complex(v[2], v[3]), complex(v[5], v[6]), complex(v[7], v[8])
+    kind, _ = grashof(FourBar(0, 1, 2, 3, ground=abs(gb - ga), crank=v[4], coupler=abs(b - a), rocker=v[9]))
+    name = f"motion four-bar: max errors {np.max(d.position_errors):.4g} {units}, "
+    name += f"{np.degrees(np.max(np.abs(d.angle_errors))):.4g} deg"
+    mech = mo.mechanism(p, d, units, name)
+    return MotionFourBar(
+        mech,
+        d.position_errors,
+        np.degrees(d.angle_errors),
+        np.degrees(d.inputs),
+        d.one_branch,
+        kind,
+        d.min_transmission,
+        "approximate",
+    )
+
+
+def _smallest_transmission(mech: Mechanism, inputs: np.ndarray) -> float:
+    """The smallest angle (degrees, folded to [0, 90]) between coupler ``A1-B1`` and rocker ``B0-B1`` over the sweep."""
+    from ..api import analyze
+
+    sweep = np.linspace(inputs[0], inputs[-1], max(2, int(4 * abs(inputs[-1] - inputs[0])) + 2))
+    res = analyze(mech, {"crank": sweep}, rates=False, dynamics=False)
+    b = res.point("B1")
+    u, v = res.point("A1") - b, res.point("B0") - b
+    mu = np.degrees(np.arccos(np.clip(np.abs((np.conj(u) * v).real) / (np.abs(u) * np.abs(v)), 0.0, 1.0)))
+    return float(np.nanmin(mu))
+
+
+def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
+    """Every four-bar of Burmester theory for 3 to 5 poses (:mod:`linkagekit.synthesis.burmester`), if available."""
+    import importlib
+
+    try:
+        burmester = importlib.import_module("linkagekit.synthesis.burmester")
+    except ImportError:
+        return []
+    out = []
+    for fb in burmester.exact_motion((P[:, 0], P[:, 1], np.radians(P[:, 2]))):
+        name = f"Burmester four-bar: max error {fb.position_error:.3g} {units}"
+        out.append(
+            MotionFourBar(
+                fb.mechanism(units, name),
+                np.asarray(fb.position_errors, float),
+                np.degrees(np.asarray(fb.angle_errors, float)),
+                np.degrees(np.asarray(fb.inputs, float)),
+                bool(fb.in_order),
+                str(fb.grashof),
+                _smallest_transmission(fb.mechanism(units, name), np.degrees(fb.inputs)) if fb.in_order else np.nan,
+                "exact",
+            )
+        )
+    return out
