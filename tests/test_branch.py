@@ -190,6 +190,21 @@ def test_bad_branch_in_python():
         lk.analyze(parallelogram(), [0.0], branch="continuous", signs={"D": 1})
 
 
+def test_check_of_a_sweep_too_long_to_follow(tmp_path, capsys):
+    # a valid file whose sweep (1000 turns) is longer than the branch follows: check reports the rest,
+    # and says the change points were not followed (it used to exit 2 on an option the user never gave)
+    d = parallelogram().to_dict()
+    d["drivers"][0]["angles"] = {"start": 0, "stop": 360000, "step": 100}
+    path = tmp_path / "long.json"
+    path.write_text(json.dumps(d))
+    assert lk.check(lk.load(path))["change_points"] is None
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Change points: not followed" in out and "change-point" in out
+    with pytest.raises(lk.LinkageError, match="MAX_PATH"):  # analyze --branch continuous still refuses it
+        lk.analyze(lk.load(path), [0.0, 360000.0], branch="continuous")
+
+
 def test_batch_follows_each_designs_branch():
     one = parallelogram()
     pose = np.array([[one.joints[j].real, one.joints[j].imag] for j in one.joint_names])
