@@ -50,6 +50,8 @@ class Owner(Enum):
     DRIVER = "driver"
     REACTION = "reaction"
     MECHANISM = "mechanism"
+    SPRING = "spring"
+    DAMPER = "damper"
 
 
 class Group(Enum):
@@ -70,6 +72,9 @@ class Group(Enum):
     REACTIONS = ("Reaction components", "", False)
     INPUT_POWER = ("Input power", "", False)
     SHAKING = ("Shaking force and moment", "", False)
+    SPRING_FORCES = ("Spring forces", "springs", True)
+    SPRING_LENGTHS = ("Spring lengths", "", False)
+    DAMPER_FORCES = ("Damper forces", "dampers", True)
 
     @property
     def title(self) -> str:
@@ -93,7 +98,7 @@ class Section(Enum):
     VELOCITIES = "joint velocities"
     ACCELERATIONS = "joint accelerations"
     LINKS = "link angles and rates"
-    FORCES = "forces (|F| at joint:by>on, driver torques and forces, input power)"
+    FORCES = "forces (|F| at joint:by>on, driver torques and forces, input power, spring and damper tensions)"
 
 
 class Needs(Enum):
@@ -304,6 +309,12 @@ KINDS: tuple[Kind, ...] = (
          lambda r, q: r.forces.shaking_force.imag, Needs.FORCES),
     Kind(Owner.MECHANISM, "shaking_moment", "shaking.moment", UnitKind.TORQUE, Group.SHAKING, None,
          ("shaking_moment",), lambda r, q: r.forces.shaking_moment, Needs.FORCES),
+    Kind(Owner.SPRING, "force", "spring[{}].force", UnitKind.FORCE, Group.SPRING_FORCES, Section.FORCES,
+         ("springs", _O, "force"), lambda r, q: r.forces.spring_force[q.owner_name], Needs.FORCES),
+    Kind(Owner.SPRING, "length", "spring[{}].length", UnitKind.LENGTH, Group.SPRING_LENGTHS, None,
+         ("springs", _O, "length"), lambda r, q: r.forces.spring_length[q.owner_name], Needs.FORCES),
+    Kind(Owner.DAMPER, "force", "damper[{}].force", UnitKind.FORCE, Group.DAMPER_FORCES, Section.FORCES,
+         ("dampers", _O, "force"), lambda r, q: r.forces.damper_force[q.owner_name], Needs.FORCES),
     Kind(Owner.JOINT, "speed", "|v|[{}]", UnitKind.VELOCITY, Group.JOINT_SPEEDS, None, ("joint_speeds", _O),
          lambda r, q: abs(r.velocity(q.owner_name)), Needs.RATES, _moving_joint, table=False),
 )  # fmt: skip
@@ -369,6 +380,10 @@ def _owners(mech: Mechanism, owner: Owner, reactions: Sequence[ReactionKey]) -> 
             return [OwnerRef(r.tag, i, False, r) for i, r in enumerate(reactions)]
         case Owner.MECHANISM:
             return [OwnerRef("", 0, False)]
+        case Owner.SPRING:
+            return [OwnerRef(e.name, i, False) for i, e in enumerate(mech.springs)]
+        case Owner.DAMPER:
+            return [OwnerRef(e.name, i, False) for i, e in enumerate(mech.dampers)]
         case _:
             assert_never(owner)
 
