@@ -124,33 +124,40 @@ _ROWS = [
 ]
 
 
-def _terms(q):
-    """For each row: list of (coefficient, trig value, d trig / d phi, n)."""
-    p = A03
-    out = []
-    for terms, _ in _ROWS:
-        row = []
-        for trig, name, n, sign in terms:
-            phi = np.dot(n, q)
-            val, der = (np.cos(phi), -np.sin(phi)) if trig == "c" else (np.sin(phi), np.cos(phi))
-            row.append((sign * p[name], val, der, np.array(n, float)))
-        out.append(row)
+_ROW = np.array([i for i, (terms, _) in enumerate(_ROWS) for _ in terms])
+_N = np.array([n for terms, _ in _ROWS for _, _, n, _ in terms], float)  # (terms, 7)
+_COEF = np.array([sign * A03[name] for terms, _ in _ROWS for _, name, _, sign in terms])
+_IS_COS = np.array([trig == "c" for terms, _ in _ROWS for trig, _, _, _ in terms])
+_RHS = np.array([A03[c] for _, c in _ROWS])
+
+
+def _trig(q):
+    """Each term's a * trig(n.q) and its derivative a * trig'(n.q)."""
+    phi = _N @ q
+    c, s = np.cos(phi), np.sin(phi)
+    return _COEF * np.where(_IS_COS, c, s), _COEF * np.where(_IS_COS, -s, c)
+
+
+def _rows(values):
+    """Sum term values (terms, ...) into their six rows."""
+    out = np.zeros((6, *values.shape[1:]))
+    np.add.at(out, _ROW, values)
     return out
 
 
 def a03_g(q):
     """The six constraint residuals g(q) (m)."""
-    return np.array([sum(a * v for a, v, _, _ in row) - A03[c] for row, (_, c) in zip(_terms(q), _ROWS)])
+    return _rows(_trig(q)[0]) - _RHS
 
 
 def a03_jac(q):
     """G = dg/dq, 6 x 7."""
-    return np.array([sum(a * dv * n for a, _, dv, n in row) for row in _terms(q)])
+    return _rows(_trig(q)[1][:, None] * _N)
 
 
 def a03_gamma(q, qd):
     """The velocity-product part of g'': g'' = G q'' + gamma, gamma = -sum a trig(n.q) (n.q')^2."""
-    return np.array([sum(-a * v * np.dot(n, qd) ** 2 for a, v, _, n in row) for row in _terms(q)])
+    return _rows(-_trig(q)[0] * (_N @ qd) ** 2)
 
 
 def a03_mass(q):
@@ -264,14 +271,14 @@ def a03_points(q):
     """Every named point of the mechanism at q (metres), from the test set's relative angles."""
     p = A03
     be, th, ga, ph, de, om, ep = q
-    O, A, B, C = np.zeros(2), np.array([p["xa"], p["ya"]]), np.array([p["xb"], p["yb"]]), np.array([p["xc"], p["yc"]])
+    A, B, C = np.array([p["xa"], p["ya"]]), np.array([p["xb"], p["yb"]]), np.array([p["xc"], p["yc"]])
     P = p["rr"] * _e(be)
     E = P - p["d"] * _e(be + th)
     F = A + p["zt"] * _e(de)
     H = A + p["u"] * _perp(ep)
     D = B + p["sd"] * _e(ga) + p["sc"] * _perp(ga)
     return dict(
-        O=O, A=A, B=B, C=C, P=P, E=E, F=F, H=H, D=D,
+        O=np.zeros(2), A=A, B=B, C=C, P=P, E=E, F=F, H=H, D=D,
         E_via_B=B + p["ss"] * _perp(ga),
         E_via_F=F + p["e"] * _perp(ph + de),
         E_via_H=H + p["zf"] * _e(om + ep),
