@@ -1,0 +1,356 @@
+"""Periodic steady state of a one-driver machine under a torque law, and flywheel sizing.
+
+The reduced equation of a one-driver mechanism (``docs/method.md``, "Forward dynamics") is
+``M(q) q'' + 1/2 M'(q) w^2 = F(q, w) + T(w)`` with ``w = q'``.  With the kinetic energy
+``E = 1/2 M w^2`` and ``q`` as the independent variable (``w`` keeps one sign),
+
+    dE/dq = (dE/dt) / w = M q'' + 1/2 M' w^2 = F(q, w) + T(w),    w = sqrt(2 E / M),
+
+so one turn is a first-order ODE in ``q`` and a periodic motion is a fixed point of the
+period map ``E(q0) -> E(q0 + period)``, found here by a safeguarded Newton iteration (the
+map's derivative comes from the variational equation).  With a motor curve or a damper the
+map contracts (its derivative ``exp(int (dF/dw + T'(w)) / (M |w|) dq)`` is below one), so the
+fixed point is unique.  A flywheel of inertia ``I`` on the driver's crank adds ``I`` to
+``M``; the smallest ``I`` with a coefficient of speed fluctuation
+``Cs = (w_max - w_min) / ((w_max + w_min) / 2)`` at most the one asked is found by bracketing
+and Brent's method on ``log Cs(I)`` (``Cs`` falls with ``I``).
+
+>>> import numpy as np
+>>> class Toy:  # M = 1 + 0.5 cos 2q, no loads: a motor alone
+...     period = 2 * np.pi
+...     q_range = (0.0, 2 * np.pi)
+...     def mass(self, q): return 1 + 0.5 * np.cos(2 * q)
+...     def dmass(self, q): return -np.sin(2 * q)
+...     def force(self, q, w): return 0 * q * w
+>>> motor = Motor(2.0, 10.0)
+>>> st = steady_state(Toy(), motor)
+>>> round(float(np.mean(st.w[:-1])), 6)   # no loads: the motor's mean torque over a turn is 0
+10.0
+>>> round(st.cs, 4), round(size_flywheel_reduced(Toy(), motor, 0.02).inertia, 4)  # about (M_max - M_min) / (2 Cs) - M
+(0.5359, 24.0025)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import InputError, LinkageError
+
+Array = NDArray[np.float64]
+
+#: solve_ivp's tolerances on the kinetic energy over one period (relative; absolute is RTOL * E0)
+RTOL = 1e-10
+#: the fixed point is accepted when one turn changes the energy by less than this (relative)
+FIXED_POINT_TOL = 1e-10
+#: the flywheel inertia is found to this relative tolerance
+INERTIA_RTOL = 1e-6
+#: samples of w(q) per period (the extremes are then polished on the integrator's dense output)
+SAMPLES = 1024
+#: grid of q for the mean torque balance that guesses the mean speed
+BALANCE_SAMPLES = 256
+#: the energy below which (relative to the period's start) the machine counts as stopped: its speed
+#: fell to 1e-3 of the start's (the energy equation in q is singular at w = 0)
+STALL_FRACTION = 1e-6
+
+
+class StallError(LinkageError):
+    """No periodic motion: under the torque law the machine stops, or never settles.
+
+    Exit status 1: the file and options are valid; the answer to the question asked is
+    that this machine has no periodic steady state (like a simulation meeting a toggle).
+    """
+
+    exit_code = 1
+
+
+class Reduced(Protocol):
+    """The one-driver reduced model (``dynamics.reduced``), vectorised over ``q``."""
+
+    period: float | None
+
+    def mass(self, q: Array) -> Array: ...
+
+    def force(self, q: Array, w: Array) -> Array: ...
+
+
+Drive = Callable[[Array], Array]
+
+
+@dataclass(frozen=True)
+class Motor:
+    """The driver torque law ``T(w) = t0 (1 - w / w0)`` (``w0 = inf``: a constant torque ``t0``).
+
+    >>> Motor(10.0, 5.0)(np.array([0.0, 5.0, 10.0])).tolist()
+    [10.0, 0.0, -10.0]
+    """
+
+    t0: float
+    w0: float = math.inf
+
+    def __call__(self, w: Array) -> Array:
+        return self.t0 * (1.0 - np.asarray(w, dtype=float) / self.w0)
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """The periodic motion: speed ``w`` at the input values ``q`` over one period (``q[-1] = q[0] + period``).
+
+    Attributes
+    ----------
+    q, w : ndarray
+        Input value (rad) and speed (rad/s), ``SAMPLES + 1`` points over one period.
+    energy : float
+        Kinetic energy ``1/2 M w^2`` at ``q[0]`` (J).
+    w_min, w_max : float
+        The speed's extremes over the period.
+    contraction : float
+        The derivative of the period map at the fixed point (below 1: the motion attracts).
+    extra_inertia : float
+        The flywheel inertia added to the model (kg*m^2).
+    """
+
+    q: Array
+    w: Array
+    energy: float
+    w_min: float
+    w_max: float
+    contraction: float
+    extra_inertia: float
+
+    @property
+    def mean_speed(self) -> float:
+        """``(w_max + w_min) / 2``, the mean speed of the coefficient's definition."""
+        return 0.5 * (self.w_max + self.w_min)
+
+    @property
+    def cs(self) -> float:
+        """The coefficient of speed fluctuation ``(w_max - w_min) / ((w_max + w_min) / 2)``."""
+        return (self.w_max - self.w_min) / self.mean_speed
+
+
+@dataclass(frozen=True)
+class FlywheelSize:
+    """The answer of :func:`size_flywheel`: the smallest extra inertia and the steady state with it.
+
+    ``float(size)`` is the inertia (kg*m^2).
+    """
+
+    inertia: float
+    cs: float
+    cs_without: float
+    steady: SteadyState
+
+    def __float__(self) -> float:
+        return self.inertia
+
+
+@dataclass(frozen=True)
+class _Turn:
+    """One run of the period map from the energy ``e0``."""
+
+    e0: float
+    e_end: float
+    slope: float  # dE_end / dE0
+    stalled: bool
+    sol: Any
+
+
+class _Problem:
+    """The energy ODE over one period, with the extra inertia, in the driving direction."""
+
+    def __init__(self, red: Reduced, drive: Drive, extra: float, q0: float, sign: float) -> None:
+        if red.period is None:
+            raise InputError("--flywheel: the driver does not turn fully (no periodic motion to size a flywheel for)")
+        self.red, self.drive, self.extra = red, drive, float(extra)
+        self.q0, self.sign, self.period = float(q0), float(sign), float(red.period)
+
+    def mass(self, q: Array) -> Array:
+        return np.asarray(self.red.mass(q), dtype=float) + self.extra
+
+    def speed(self, q: Array, e: Array) -> Array:
+        """``w`` from the energy: ``sign * sqrt(2 E / M)`` (``E`` clipped at 0)."""
+        return self.sign * np.sqrt(2.0 * np.maximum(e, 0.0) / self.mass(q))
+
+    def rhs(self, u: float, y: Array) -> Array:
+        """``d(E, ln dE/dE0)/du`` at ``q = q0 + sign * u``: the energy equation and its variational equation."""
+        q = np.full(3, self.q0 + self.sign * u)
+        m = self.mass(q[:1])[0]
+        w = self.speed(q[:1], y[:1])[0]
+        h = 1e-6 * max(abs(w), 1e-3)
+        ws = np.array([w, w + h, w - h])
+        g = np.asarray(self.red.force(q, ws), dtype=float) + np.asarray(self.drive(ws), dtype=float)
+        dg_dw = (g[1] - g[2]) / (2.0 * h)
+        return np.array([self.sign * g[0], dg_dw / (m * max(abs(w), 1e-300))])
+
+    def turn(self, e0: float) -> _Turn:
+        """Integrate one period from ``E(q0) = e0``; stop early if the energy falls to ~0 (a stall)."""
+        from scipy.integrate import solve_ivp
+
+        floor = STALL_FRACTION * e0
+
+        def stop(u: float, y: Array) -> float:
+            return float(y[0] - floor)
+
+        stop.terminal = True  # type: ignore[attr-defined]
+        stop.direction = -1  # type: ignore[attr-defined]
+        sol = solve_ivp(
+            self.rhs,
+            (0.0, self.period),
+            [e0, 0.0],
+            method="DOP853",
+            rtol=RTOL,
+            atol=[RTOL * e0, RTOL],
+            events=stop,
+            dense_output=True,
+        )
+        stalled = sol.status == 1 or not sol.success
+        return _Turn(e0, float(sol.y[0, -1]), math.exp(float(sol.y[1, -1])), stalled, sol)
+
+
+def _mean_balance_speed(p: _Problem) -> float:
+    """The constant speed at which the torque law's mean over a period balances the loads'.
+
+    A first guess of the steady state's speed; raises :class:`StallError` when no speed
+    balances (the mean torque cannot overcome the loads, or the speed grows without bound).
+    """
+    from scipy.optimize import brentq
+
+    q = p.q0 + p.sign * np.linspace(0.0, p.period, BALANCE_SAMPLES, endpoint=False)
+
+    def mean_power(speed: float) -> float:
+        w = np.full_like(q, p.sign * speed)
+        return float(p.sign * np.mean(np.asarray(p.red.force(q, w)) + np.asarray(p.drive(w))))
+
+    low = 1e-9
+    if mean_power(low) <= 0.0:
+        raise StallError("the mechanism stalls: the mean driving torque cannot overcome the loads at any speed")
+    high = 1.0
+    for _ in range(80):
+        if mean_power(high) < 0.0:
+            return float(brentq(mean_power, low, high, xtol=1e-12, rtol=1e-12))
+        low, high = high, 2.0 * high
+    raise StallError(
+        "no periodic steady state: the speed grows without bound (the torque law never balances the loads)"
+    )
+
+
+def _energy_at(p: _Problem, speed: float) -> float:
+    return float(0.5 * p.mass(np.array([p.q0]))[0] * speed**2)
+
+
+def _fixed_point(p: _Problem, e0: float) -> _Turn:
+    """Safeguarded Newton iteration on ``g(E0) = E(end) - E0``.
+
+    ``g`` falls with ``E0`` (the map's slope is below one), so a bracket ``[lo, hi]`` with
+    ``g > 0`` or a stall at ``lo`` and ``g < 0`` at ``hi`` holds the fixed point; a Newton
+    step leaving it is replaced by bisection (or by growing ``E0`` while no ``hi`` is known).
+    A bracket that shrinks onto a stall without a fixed point means there is none.
+    """
+    lo, hi, lo_stalled = 0.0, math.inf, True
+    for _ in range(200):
+        t = p.turn(e0)
+        g = t.e_end - e0
+        if not t.stalled and abs(g) <= FIXED_POINT_TOL * e0:
+            return t
+        if t.stalled or g > 0.0:
+            lo, lo_stalled = e0, t.stalled
+        else:
+            hi = e0
+        if lo_stalled and hi - lo <= STALL_FRACTION * hi:
+            break
+        step = e0 - g / (t.slope - 1.0) if not t.stalled and t.slope < 1.0 else math.nan
+        e0 = step if lo < step < hi else (0.5 * (lo + hi) if math.isfinite(hi) else 4.0 * e0)
+    if lo_stalled:
+        raise StallError("the mechanism stalls: under this torque law the speed falls to zero within a turn")
+    raise StallError("no periodic steady state: the period map did not converge")
+
+
+def _extreme(p: _Problem, sol: Any, u: Array, k: int, sign: float) -> float:
+    """The speed's extreme near sample ``k``: ``sign * |w|`` minimised on the two neighbouring intervals."""
+    from scipy.optimize import minimize_scalar
+
+    def f(x: float) -> float:
+        q = np.array([p.q0 + p.sign * x])
+        return sign * float(np.abs(p.speed(q, sol.sol(x)[:1]))[0])
+
+    lo, hi = u[max(k - 1, 0)], u[min(k + 1, len(u) - 1)]
+    res = minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": 1e-12 * p.period})
+    return sign * min(float(res.fun), f(u[k]))
+
+
+def steady_state(red: Reduced, drive: Drive, extra_inertia: float = 0.0, *, guess: float | None = None) -> SteadyState:
+    """The periodic motion of a one-driver mechanism under the torque law ``drive(w)``.
+
+    Parameters
+    ----------
+    red : Reduced
+        The reduced model; ``red.period`` must be set (the crank turns fully).
+    drive : callable
+        The driver torque as a function of the speed (e.g. :class:`Motor`).
+    extra_inertia : float
+        A flywheel on the crank, added to ``M(q)`` (kg*m^2).
+    guess : float, optional
+        The speed at the period's start to start from (default: the constant speed of mean
+        torque balance).
+
+    Raises
+    ------
+    StallError
+        When no periodic motion exists (the machine stops, or never settles).
+    """
+    q0 = float(getattr(red, "q_range", (0.0,))[0] or 0.0)
+    sign = 1.0 if float(np.asarray(drive(np.zeros(1)))[0]) >= 0.0 else -1.0
+    p = _Problem(red, drive, extra_inertia, q0, sign)
+    speed = _mean_balance_speed(p) if guess is None else abs(guess)
+    t = _fixed_point(p, _energy_at(p, speed))
+    u = np.linspace(0.0, p.period, SAMPLES + 1)
+    q = p.q0 + p.sign * u
+    w = p.speed(q, t.sol.sol(u)[0])
+    a = np.abs(w)
+    w_max = _extreme(p, t.sol, u, int(np.argmax(a)), -1.0)
+    w_min = _extreme(p, t.sol, u, int(np.argmin(a)), 1.0)
+    return SteadyState(q, w, t.e0, w_min, w_max, t.slope, float(extra_inertia))
+
+
+def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float = INERTIA_RTOL) -> FlywheelSize:
+    """The smallest extra inertia on the crank for which the steady state's ``Cs`` is at most ``cs``.
+
+    ``Cs(I)`` falls with ``I``, roughly as ``1 / (M_mean + I)``: that model's prediction
+    (enlarged by 5 %) is tried until one meets ``cs``, which brackets the answer; Brent's
+    method on ``log(Cs(I) / cs)`` then finds it to ``rtol`` relative.  The inertia returned
+    is the bracket's upper end, so its ``Cs`` is at most ``cs`` (to the integration's tolerance).
+    """
+    from scipy.optimize import brentq
+
+    if not cs > 0.0 or not math.isfinite(cs):
+        raise InputError(f"--flywheel: the coefficient of speed fluctuation must be positive, got {cs}")
+    base = steady_state(red, drive)
+    if base.cs <= cs:
+        return FlywheelSize(0.0, base.cs, base.cs, base)
+    m_mean = float(np.mean(red.mass(base.q[:-1])))
+    found = {0.0: base}
+
+    def at(inertia: float) -> SteadyState:
+        if inertia not in found:
+            near = found[min(found, key=lambda i: abs(i - inertia))]
+            found[inertia] = steady_state(red, drive, inertia, guess=near.w[0])
+        return found[inertia]
+
+    def excess(inertia: float) -> float:
+        return math.log(at(inertia).cs / cs)
+
+    lo, hi = 0.0, 0.0
+    while excess(hi) > 0.0:
+        lo, hi = hi, max((m_mean + hi) * at(hi).cs / cs * 1.05 - m_mean, 2.0 * hi)
+    root = brentq(excess, lo, hi, xtol=rtol * hi, rtol=rtol)
+    top = min(hi, root + rtol * hi)
+    if excess(top) <= 0.0:
+        hi = top
+    st = at(hi)
+    return FlywheelSize(hi, st.cs, base.cs, st)
