@@ -50,8 +50,14 @@ RTOL = 1e-10
 FIXED_POINT_TOL = 1e-10
 #: the flywheel inertia is found to this relative tolerance
 INERTIA_RTOL = 1e-6
-#: samples of w(q) per period (the extremes are then polished on the integrator's dense output)
-SAMPLES = 1024
+#: Fourier collocation points per period to start with, and the most (doubled until the
+#: harmonics of ln E above a quarter of the grid have amplitudes below TAIL: E to ~1e-10 relative)
+COLLOCATION_POINTS = 256
+MAX_COLLOCATION_POINTS = 2048
+TAIL = 1e-10
+#: Newton's steps on the collocation equations, and the step in ln E at which it has converged
+NEWTON_STEPS = 40
+NEWTON_TOL = 1e-12
 #: grid of q for the mean torque balance that guesses the mean speed
 BALANCE_SAMPLES = 256
 #: the energy below which (relative to the period's start) the machine counts as stopped: its speed
@@ -113,6 +119,8 @@ class SteadyState:
         The derivative of the period map at the fixed point (below 1: the motion attracts).
     extra_inertia : float
         The flywheel inertia added to the model (kg*m^2).
+    nodes, log_energy : ndarray
+        The collocation points (``q``, rad) and ``ln E`` there: the solution itself.
     """
 
     q: Array
@@ -122,6 +130,8 @@ class SteadyState:
     w_max: float
     contraction: float
     extra_inertia: float
+    nodes: Array
+    log_energy: Array
 
     @property
     def mean_speed(self) -> float:
@@ -179,14 +189,14 @@ class _Problem:
 
     def rhs(self, u: float, y: Array) -> Array:
         """``d(E, ln dE/dE0)/du`` at ``q = q0 + sign * u``: the energy equation and its variational equation."""
-        q = np.full(3, self.q0 + self.sign * u)
-        m = self.mass(q[:1])[0]
-        w = self.speed(q[:1], y[:1])[0]
-        h = 1e-6 * max(abs(w), 1e-3)
-        ws = np.array([w, w + h, w - h])
-        g = np.asarray(self.red.force(q, ws), dtype=float) + np.asarray(self.drive(ws), dtype=float)
-        dg_dw = (g[1] - g[2]) / (2.0 * h)
-        return np.array([self.sign * g[0], dg_dw / (m * max(abs(w), 1e-300))])
+        q = self.q0 + self.sign * u
+        m = float(self.red.mass(np.array([q]))[0]) + self.extra
+        speed = math.sqrt(2.0 * max(float(y[0]), 0.0) / m)
+        h = 1e-6 * max(speed, 1e-3)
+        ws = self.sign * np.array([speed, speed + h, speed - h])
+        g = np.asarray(self.red.force(np.full(3, q), ws), dtype=float) + np.asarray(self.drive(ws), dtype=float)
+        dg_dw = self.sign * (g[1] - g[2]) / (2.0 * h)
+        return np.array([self.sign * g[0], dg_dw / (m * max(speed, 1e-300))])
 
     def turn(self, e0: float) -> _Turn:
         """Integrate one period from ``E(q0) = e0``; stop early if the energy falls to ~0 (a stall)."""
@@ -271,20 +281,112 @@ def _fixed_point(p: _Problem, e0: float) -> _Turn:
     raise StallError("no periodic steady state: the period map did not converge")
 
 
-def _extreme(p: _Problem, sol: Any, u: Array, k: int, sign: float) -> float:
-    """The speed's extreme near sample ``k``: ``sign * |w|`` minimised on the two neighbouring intervals."""
-    from scipy.optimize import minimize_scalar
-
-    def f(x: float) -> float:
-        q = np.array([p.q0 + p.sign * x])
-        return sign * float(np.abs(p.speed(q, sol.sol(x)[:1]))[0])
-
-    lo, hi = u[max(k - 1, 0)], u[min(k + 1, len(u) - 1)]
-    res = minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": 1e-12 * p.period})
-    return sign * min(float(res.fun), f(u[k]))
+def _fourier_diff(n: int, period: float) -> Array:
+    """The Fourier differentiation matrix on ``n`` (even) equispaced points of one period (Trefethen, ch. 3)."""
+    k = np.arange(n)
+    d = k[:, None] - k[None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mat = 0.5 * (-1.0) ** d / np.tan(np.pi * d / n)
+    mat[d == 0] = 0.0
+    return np.asarray(mat * (2.0 * np.pi / period), dtype=float)
 
 
-def steady_state(red: Reduced, drive: Drive, extra_inertia: float = 0.0, *, guess: float | None = None) -> SteadyState:
+class _Collocation:
+    """``dz/du = sign (F + T) e^-z`` (``z = ln E``) at ``n`` Fourier points of one period, solved by Newton."""
+
+    def __init__(self, p: _Problem, n: int) -> None:
+        self.p, self.n = p, n
+        self.u = np.arange(n) * (p.period / n)
+        self.q = p.q0 + p.sign * self.u
+        self.m = p.mass(self.q)
+        self.dmat = _fourier_diff(n, p.period)
+
+    def parts(self, z: Array) -> tuple[Array, Array, Array]:
+        """The residual, the diagonal of ``d(rate)/dz`` and ``dF/dw + T'`` at ``z``."""
+        p = self.p
+        e = np.exp(z)
+        w = p.sign * np.sqrt(2.0 * e / self.m)
+        h = 1e-6 * np.maximum(np.abs(w), 1e-3)
+        ws = np.concatenate([w, w + h, w - h])
+        gs = np.asarray(p.red.force(np.tile(self.q, 3), ws), dtype=float) + np.asarray(p.drive(ws), dtype=float)
+        g, g_w = gs[: self.n], (gs[self.n : 2 * self.n] - gs[2 * self.n :]) / (2.0 * h)
+        rate = p.sign * g / e
+        return self.dmat @ z - rate, p.sign * (g_w * w / 2.0 - g) / e, g_w
+
+    def solve(self, z: Array) -> Array | None:
+        """Damped Newton from ``z``; None when it does not converge to ``NEWTON_TOL``."""
+        r, a, _ = self.parts(z)
+        for _ in range(NEWTON_STEPS):
+            try:
+                step = np.linalg.solve(self.dmat - np.diag(a), -r)
+            except np.linalg.LinAlgError:
+                return None
+            lam, norm = 1.0, float(np.max(np.abs(r)))
+            while True:
+                z_try = z + lam * step
+                r_try, a_try, _ = self.parts(z_try)
+                if np.max(np.abs(r_try)) < (1.0 - lam / 4.0) * norm or lam < 1e-3:
+                    break
+                lam /= 2.0
+            z, r, a = z_try, r_try, a_try
+            if not np.all(np.isfinite(z)):
+                return None
+            if np.max(np.abs(lam * step)) <= NEWTON_TOL:
+                return z
+        return None
+
+    def resolved(self, z: Array) -> bool:
+        """Whether the harmonics of ``ln E`` above a quarter of the grid have amplitudes below ``TAIL``."""
+        amplitude = 2.0 * np.abs(np.fft.rfft(z)) / self.n
+        return bool(np.max(amplitude[self.n // 4 :]) <= TAIL)
+
+    def upsample(self, z: Array, factor: int) -> Array:
+        """The trigonometric interpolant of ``z`` on ``factor`` times as many points."""
+        c = np.fft.rfft(z)
+        c[-1] *= 0.5  # the Nyquist mode split evenly (a real interpolant)
+        return np.asarray(np.fft.irfft(c, factor * self.n) * factor, dtype=float)
+
+
+def _periodic_energy(p: _Problem, z: Array | None) -> tuple[_Collocation, Array]:
+    """``ln E`` at the collocation points: Fourier collocation, refined until resolved; shooting if it fails."""
+    n = COLLOCATION_POINTS if z is None else len(z)
+    if z is None:
+        z = np.full(n, math.log(_energy_at(p, _mean_balance_speed(p))))
+    while True:
+        col = _Collocation(p, n)
+        sol = col.solve(z)
+        if sol is None:
+            break
+        if col.resolved(sol) or 2 * n > MAX_COLLOCATION_POINTS:
+            return col, sol
+        n, z = 2 * n, col.upsample(sol, 2)
+    # Newton on the collocation failed: shoot (slower, and tells a stall from a slow start)
+    col = _Collocation(p, COLLOCATION_POINTS)
+    t = _fixed_point(p, _energy_at(p, _mean_balance_speed(p)))
+    return col, np.log(np.maximum(t.sol.sol(col.u)[0], 1e-300))
+
+
+def _speed_extremes(p: _Problem, col: _Collocation, z: Array) -> tuple[Array, Array, float, float]:
+    """``q`` and ``w`` on a 16-fold finer grid (closed over the period), and ``min |w|``, ``max |w|``."""
+    fine = col.upsample(z, 16)
+    n = len(fine)
+    u = np.arange(n + 1) * (p.period / n)
+    q = p.q0 + p.sign * u
+    w = p.speed(q, np.exp(np.append(fine, fine[0])))
+    a = np.abs(w[:-1])
+    return q, w, _vertex(a, int(np.argmin(a))), _vertex(a, int(np.argmax(a)))
+
+
+def _vertex(v: Array, k: int) -> float:
+    """The extreme of a periodic sampled function at sample ``k``, by the parabola through its neighbours."""
+    a, b, c = v[k - 1], v[k], v[(k + 1) % len(v)]
+    curv = a - 2.0 * b + c
+    return float(b) if curv == 0.0 else float(b - (c - a) ** 2 / (8.0 * curv))
+
+
+def steady_state(
+    red: Reduced, drive: Drive, extra_inertia: float = 0.0, *, start: SteadyState | None = None
+) -> SteadyState:
     """The periodic motion of a one-driver mechanism under the torque law ``drive(w)``.
 
     Parameters
@@ -295,27 +397,28 @@ def steady_state(red: Reduced, drive: Drive, extra_inertia: float = 0.0, *, gues
         The driver torque as a function of the speed (e.g. :class:`Motor`).
     extra_inertia : float
         A flywheel on the crank, added to ``M(q)`` (kg*m^2).
-    guess : float, optional
-        The speed at the period's start to start from (default: the constant speed of mean
-        torque balance).
+    start : SteadyState, optional
+        A steady state (another flywheel) whose speeds start the Newton iteration; default:
+        the constant speed of mean torque balance.
 
     Raises
     ------
     StallError
         When no periodic motion exists (the machine stops, or never settles).
     """
-    q0 = float(getattr(red, "q_range", (0.0,))[0] or 0.0)
+    q0 = float(getattr(red, "q0", getattr(red, "q_range", (0.0,))[0]))
     sign = 1.0 if float(np.asarray(drive(np.zeros(1)))[0]) >= 0.0 else -1.0
     p = _Problem(red, drive, extra_inertia, q0, sign)
-    speed = _mean_balance_speed(p) if guess is None else abs(guess)
-    t = _fixed_point(p, _energy_at(p, speed))
-    u = np.linspace(0.0, p.period, SAMPLES + 1)
-    q = p.q0 + p.sign * u
-    w = p.speed(q, t.sol.sol(u)[0])
-    a = np.abs(w)
-    w_max = _extreme(p, t.sol, u, int(np.argmax(a)), -1.0)
-    w_min = _extreme(p, t.sol, u, int(np.argmin(a)), 1.0)
-    return SteadyState(q, w, t.e0, w_min, w_max, t.slope, float(extra_inertia))
+    z = (
+        None
+        if start is None
+        else start.log_energy + np.log(p.mass(start.nodes) / (p.mass(start.nodes) - p.extra + start.extra_inertia))
+    )
+    col, z = _periodic_energy(p, z)
+    q, w, w_min, w_max = _speed_extremes(p, col, z)
+    _, _, g_w = col.parts(z)
+    contraction = math.exp(float(np.mean(g_w / (col.m * np.abs(p.speed(col.q, np.exp(z)))))) * p.period)
+    return SteadyState(q, w, float(np.exp(z[0])), w_min, w_max, contraction, float(extra_inertia), col.q, z)
 
 
 def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float = INERTIA_RTOL) -> FlywheelSize:
@@ -333,13 +436,13 @@ def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float 
     base = steady_state(red, drive)
     if base.cs <= cs:
         return FlywheelSize(0.0, base.cs, base.cs, base)
-    m_mean = float(np.mean(red.mass(base.q[:-1])))
+    m_mean = float(np.mean(red.mass(base.nodes)))
     found = {0.0: base}
 
     def at(inertia: float) -> SteadyState:
         if inertia not in found:
             near = found[min(found, key=lambda i: abs(i - inertia))]
-            found[inertia] = steady_state(red, drive, inertia, guess=near.w[0])
+            found[inertia] = steady_state(red, drive, inertia, start=near)
         return found[inertia]
 
     def excess(inertia: float) -> float:
