@@ -21,6 +21,7 @@ LAYERS = [
     {"steps", "group", "plan", "params", "catalogue"},
     {"positions", "rates", "branch", "forces", "vectorloop", "groupmodes"},
     {"result", "api", "checks"},
+    {"dynamics"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},
     {"synthesis.targets", "synthesis.space", "synthesis.objective", "synthesis.cmaes"},

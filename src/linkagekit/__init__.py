@@ -31,6 +31,8 @@ _LAZY = {
     "Result": "result",
     "check": "checks",
     "modes": "checks",
+    "simulate": "dynamics",
+    "reduced": "dynamics",
     "build_scene": "viz.scene",
     "draw_mechanism": "viz.draw",
     "plot_quantity": "viz.draw",
@@ -59,8 +61,10 @@ __all__ = [
     "modes",
     "plot_quantity",
     "read_targets",
+    "reduced",
     "reference_signs",
     "save",
+    "simulate",
     "synthesize",
     "write_report",
 ]
@@ -68,6 +72,7 @@ __all__ = [
 if TYPE_CHECKING:  # pragma: no cover
     from .api import analyze, analyze_chunks, reference_signs
     from .checks import check, modes
+    from .dynamics import reduced, simulate
     from .files import load, save
     from .model import Mechanism
     from .result import Result

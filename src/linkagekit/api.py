@@ -656,6 +656,9 @@ def _frozen_forces(f: Forces, squeeze: Any) -> Forces:
         g,
         driver_torque=MappingProxyType(g.driver_torque),  # type: ignore[arg-type]
         driver_force=MappingProxyType(g.driver_force),  # type: ignore[arg-type]
+        spring_force=MappingProxyType(g.spring_force),  # type: ignore[arg-type]
+        spring_length=MappingProxyType(g.spring_length),  # type: ignore[arg-type]
+        damper_force=MappingProxyType(g.damper_force),  # type: ignore[arg-type]
     )
 
 

@@ -50,6 +50,8 @@ class Owner(Enum):
     DRIVER = "driver"
     REACTION = "reaction"
     MECHANISM = "mechanism"
+    SPRING = "spring"
+    DAMPER = "damper"
 
 
 class Group(Enum):
@@ -70,6 +72,9 @@ class Group(Enum):
     REACTIONS = ("Reaction components", "", False)
     INPUT_POWER = ("Input power", "", False)
     SHAKING = ("Shaking force and moment", "", False)
+    SPRING_FORCES = ("Spring forces", "springs", True)
+    SPRING_LENGTHS = ("Spring lengths", "", False)
+    DAMPER_FORCES = ("Damper forces", "dampers", True)
 
     @property
     def title(self) -> str:
@@ -93,7 +98,7 @@ class Section(Enum):
     VELOCITIES = "joint velocities"
     ACCELERATIONS = "joint accelerations"
     LINKS = "link angles and rates"
-    FORCES = "forces (|F| at joint:by>on, driver torques and forces, input power)"
+    FORCES = "forces (|F| at joint:by>on, driver torques and forces, input power, spring and damper tensions)"
 
 
 class Needs(Enum):
@@ -102,6 +107,7 @@ class Needs(Enum):
     POSITIONS = "positions"
     RATES = "rates"
     FORCES = "forces"
+    TIME = "time"  # a simulation's time axis
 
 
 #: placeholders in a :attr:`Kind.json` path: the owner's name, the reaction's index
@@ -260,6 +266,8 @@ _O, _I = OWNER_KEY, INDEX_KEY
 
 #: every kind of quantity, in column order (kinds of one owner kind in a row go owner by owner)
 KINDS: tuple[Kind, ...] = (
+    Kind(Owner.MECHANISM, "time", "time", UnitKind.TIME, Group.INPUTS, None, ("time",), lambda r, q: r.time,
+         Needs.TIME),
     Kind(Owner.DRIVER, "input", "input:{}", None, Group.INPUTS, None, ("inputs", _O),
          lambda r, q: r.inputs[q.owner_name]),
     Kind(Owner.MECHANISM, "assembled", "assembled", UnitKind.NONE, Group.STATE, None, ("assembled",),
@@ -304,6 +312,12 @@ KINDS: tuple[Kind, ...] = (
          lambda r, q: r.forces.shaking_force.imag, Needs.FORCES),
     Kind(Owner.MECHANISM, "shaking_moment", "shaking.moment", UnitKind.TORQUE, Group.SHAKING, None,
          ("shaking_moment",), lambda r, q: r.forces.shaking_moment, Needs.FORCES),
+    Kind(Owner.SPRING, "force", "spring[{}].force", UnitKind.FORCE, Group.SPRING_FORCES, Section.FORCES,
+         ("springs", _O, "force"), lambda r, q: r.forces.spring_force[q.owner_name], Needs.FORCES),
+    Kind(Owner.SPRING, "length", "spring[{}].length", UnitKind.LENGTH, Group.SPRING_LENGTHS, None,
+         ("springs", _O, "length"), lambda r, q: r.forces.spring_length[q.owner_name], Needs.FORCES),
+    Kind(Owner.DAMPER, "force", "damper[{}].force", UnitKind.FORCE, Group.DAMPER_FORCES, Section.FORCES,
+         ("dampers", _O, "force"), lambda r, q: r.forces.damper_force[q.owner_name], Needs.FORCES),
     Kind(Owner.JOINT, "speed", "|v|[{}]", UnitKind.VELOCITY, Group.JOINT_SPEEDS, None, ("joint_speeds", _O),
          lambda r, q: abs(r.velocity(q.owner_name)), Needs.RATES, _moving_joint, table=False),
 )  # fmt: skip
@@ -369,6 +383,10 @@ def _owners(mech: Mechanism, owner: Owner, reactions: Sequence[ReactionKey]) -> 
             return [OwnerRef(r.tag, i, False, r) for i, r in enumerate(reactions)]
         case Owner.MECHANISM:
             return [OwnerRef("", 0, False)]
+        case Owner.SPRING:
+            return [OwnerRef(e.name, i, False) for i, e in enumerate(mech.springs)]
+        case Owner.DAMPER:
+            return [OwnerRef(e.name, i, False) for i, e in enumerate(mech.dampers)]
         case _:
             assert_never(owner)
 
@@ -390,9 +408,13 @@ def build(
     rates: bool,
     reactions: Sequence[ReactionKey] | None = None,
     kinds: Sequence[Kind] = KINDS,
+    time: bool = False,
 ) -> Catalogue:
-    """The catalogue of an analysis of ``mech``: with rates or not, with forces (their reactions' layout) or not."""
+    """The catalogue of an analysis of ``mech``: with rates or not, with forces (their reactions' layout) or not,
+    with a time axis (a simulation) or not."""
     have = {Needs.POSITIONS, *([Needs.RATES] if rates else []), *([Needs.FORCES] if reactions is not None else [])}
+    if time:
+        have.add(Needs.TIME)
     layout = tuple(reactions or ())
     lu, au = mech.length_unit, mech.angle_unit
     turn = 360.0 if au == "deg" else 2 * math.pi

@@ -493,7 +493,7 @@ def _styled(d: dict[str, Any]) -> dict[str, Any]:
             }
         elif key == "drivers":
             out[key] = [{k: flow(v) for k, v in drv.items()} for drv in value]
-        elif key in {"sliders", "loads"}:
+        elif key in {"sliders", "loads", "springs", "dampers", "flywheels"}:
             out[key] = [flow(item) for item in value]
         else:
             out[key] = value

@@ -36,7 +36,7 @@ Samples that do not assemble or sit at a singular position have NaN forces.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, assert_never
 
 import numpy as np
@@ -88,6 +88,9 @@ class Forces:
     shaking_force: np.ndarray  # N, complex: resultant force of the mechanism on the frame
     shaking_moment: np.ndarray  # N*m: its moment about the origin of the file's frame
     residual: np.ndarray  # per sample: max |A x - b| over (max |b| + size * max |x|), size = mechanism size in m
+    spring_force: dict[str, np.ndarray] = field(default_factory=dict)  # N, tension (> 0 pulls the ends together)
+    spring_length: dict[str, np.ndarray] = field(default_factory=dict)  # file length unit
+    damper_force: dict[str, np.ndarray] = field(default_factory=dict)  # N, tension (> 0 pulls the ends together)
 
     def reaction(self, joint: str, on: str, by: str | None = None) -> np.ndarray:
         """Force on link ``on`` at ``joint`` by link ``by`` (may be left out when only one link acts there)."""
@@ -128,6 +131,9 @@ class Forces:
             f(self.shaking_force),
             f(self.shaking_moment),
             f(self.residual),
+            {k: f(v) for k, v in self.spring_force.items()},
+            {k: f(v) for k, v in self.spring_length.items()},
+            {k: f(v) for k, v in self.damper_force.items()},
         )
 
     def arrays(self) -> list[np.ndarray]:
@@ -136,7 +142,8 @@ class Forces:
         for r in self.reactions:
             out += [r.force] if r.moment is None else [r.force, r.moment]
         out += list(self.driver_torque.values()) + list(self.driver_force.values())
-        return [*out, self.input_power, self.shaking_force, self.shaking_moment, self.residual]
+        out += [self.input_power, self.shaking_force, self.shaking_moment, self.residual]
+        return out + [*self.spring_force.values(), *self.spring_length.values(), *self.damper_force.values()]
 
     def take(self, index: Any) -> Forces:
         """The same forces with every array indexed by ``index`` (one design of a batch)."""
@@ -195,6 +202,117 @@ class Kinematics:
     loads: tuple[LoadParams, ...]  # external loads, arrays (N,)
 
 
+# ------------------------------------------------------------------------------- force elements
+@dataclass(frozen=True)
+class ElementForces:
+    """What the springs and dampers do at each sample (arrays (N,), keyed by the element's name).
+
+    ``spring`` and ``damper`` are tensions in N (positive pulls the two joints together);
+    ``spring_length`` is each spring's length in the file's length unit.
+    """
+
+    spring: dict[str, np.ndarray]
+    spring_length: dict[str, np.ndarray]
+    damper: dict[str, np.ndarray]
+
+    def pulls(self, mech: Mechanism, z: np.ndarray) -> list[tuple[str, str, np.ndarray]]:
+        """``(joint, link, force)``: each element's force (N, complex) on the link carrying each of its ends.
+
+        The tension ``S`` pulls end ``a`` toward ``b``: ``S (z_b - z_a) / |z_b - z_a|`` on ``a``'s
+        carrier, the opposite on ``b``'s; the carrier of a joint of several links is the first
+        of them (the pin's carrier, as for loads and cylinders).  ``z`` as in :func:`element_forces`.
+        """
+        names = mech.joint_names
+        out: list[tuple[str, str, np.ndarray]] = []
+        tensions = [(e.between, self.spring[e.name]) for e in mech.springs]
+        tensions += [(e.between, self.damper[e.name]) for e in mech.dampers]
+        for (a, b), tension in tensions:
+            d = z[names.index(b)] - z[names.index(a)]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                f = tension * d / np.abs(d)
+            out += [(a, mech.links_of(a)[0], f), (b, mech.links_of(b)[0], -f)]
+        return out
+
+
+def element_forces(mech: Mechanism, z: np.ndarray, v: np.ndarray) -> ElementForces:
+    """The springs' and dampers' tensions for joint positions ``z`` and velocities ``v``.
+
+    Parameters
+    ----------
+    mech : Mechanism
+    z, v : ndarray, complex, shape (n_joints, N)
+        Joint positions (file length unit) and velocities (unit/s), joints in ``mech.joint_names`` order.
+
+    Returns
+    -------
+    ElementForces
+        Spring tension ``k (L - L0)``, damper tension ``c dL/dt`` (N; lengths in metres), with
+        ``dL/dt = Re(conj(z_a - z_b) (v_a - v_b)) / L``.
+
+    Examples
+    --------
+    >>> import numpy as np, linkagekit as lk
+    >>> m = lk.load("examples/seed000_fourbar.yaml").to_dict()
+    >>> m["units"]  # lengths in cm, converted to metres for the force
+    {'length': 'cm', 'angle': 'deg'}
+    >>> m["springs"] = [{"between": ["A", "D"], "stiffness": 1000.0, "free_length": 4.0}]
+    >>> mech = lk.Mechanism.from_dict(m)
+    >>> z = np.array([mech.joints[j] for j in mech.joint_names])[:, None]
+    >>> el = element_forces(mech, z, np.zeros_like(z))
+    >>> round(float(el.spring_length["A-D"][0]), 4), round(float(el.spring["A-D"][0]), 3)  # 1000 N/m * 0.0092770 m
+    (4.9277, 9.277)
+    """
+    names, si = mech.joint_names, mech.length_to_si
+    spring: dict[str, np.ndarray] = {}
+    length: dict[str, np.ndarray] = {}
+    damper: dict[str, np.ndarray] = {}
+    for sp in mech.springs:
+        a, b = (names.index(j) for j in sp.between)
+        length[sp.name] = np.abs(z[a] - z[b])
+        spring[sp.name] = sp.stiffness * (length[sp.name] - sp.free_length) * si
+    for dm in mech.dampers:
+        a, b = (names.index(j) for j in dm.between)
+        d = z[a] - z[b]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rate = np.real(np.conj(d) * (v[a] - v[b])) / np.abs(d) * si  # dL/dt, m/s
+        damper[dm.name] = dm.damping * rate
+    return ElementForces(spring, length, damper)
+
+
+def spring_energy(mech: Mechanism, z: np.ndarray) -> np.ndarray:
+    """The springs' potential energy ``sum 1/2 k (L - L0)^2`` (J, lengths in metres), shape (N,); ``z`` as above."""
+    names, si = mech.joint_names, mech.length_to_si
+    out = np.zeros(np.shape(z)[1:])
+    for sp in mech.springs:
+        a, b = (names.index(j) for j in sp.between)
+        out = out + 0.5 * sp.stiffness * ((np.abs(z[a] - z[b]) - sp.free_length) * si) ** 2
+    return out
+
+
+def element_generalised_force(mech: Mechanism, z: np.ndarray, v: np.ndarray, jac: np.ndarray) -> np.ndarray:
+    """The springs' and dampers' generalised force on one driver coordinate ``q``, by virtual power.
+
+    ``Q = - sum_e S_e dL_e/dq``, ``S_e`` the tension (N) and ``dL_e/dq = Re(conj(u_e) (J_a - J_b))``
+    (m per unit of ``q``), ``u_e`` the unit vector from ``b`` to ``a``.  ``jac`` (n_joints, N)
+    is the joints' velocity (file unit/s) at a unit speed of the driver (1 rad/s for a crank,
+    1 length unit/s for a slider or cylinder), e.g. :func:`linkagekit.analyze` at speed 1.
+    So ``Q`` is in N*m/rad for a crank, N*m per length unit for a linear driver (divide by
+    ``mech.length_to_si`` for N).  For springs alone ``Q = -dV/dq`` (:func:`spring_energy`).
+    """
+    names, si = mech.joint_names, mech.length_to_si
+    el = element_forces(mech, z, v)
+    out = np.zeros(np.shape(z)[1:])
+    elements = [(e.between, el.spring[e.name]) for e in mech.springs]
+    elements += [(e.between, el.damper[e.name]) for e in mech.dampers]
+    for (ja, jb), tension in elements:
+        a, b = names.index(ja), names.index(jb)
+        d = z[a] - z[b]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dl = np.real(np.conj(d) * (jac[a] - jac[b])) / np.abs(d) * si
+        out = out - tension * dl
+    return out
+
+
 # ------------------------------------------------------------------------------- the system
 @dataclass(frozen=True)
 class _Frame:
@@ -212,6 +330,8 @@ class _Frame:
     Q: dict[str, np.ndarray]
     slide_dir: tuple[np.ndarray, ...]
     cyl_dir: dict[str, np.ndarray]
+    elements: ElementForces
+    frame_pulls: tuple[tuple[Any, Any], ...]  # the springs' and dampers' loads on the frame (force, moment)
 
 
 #: one entry of the stacked matrices: (row, column, coefficient: a number or one per sample)
@@ -387,6 +507,7 @@ def _frame(mech: Mechanism, km: Kinematics) -> tuple[_Frame, np.ndarray]:
         rhs[:, r0] -= ld.force.real
         rhs[:, r0 + 1] -= ld.force.imag
         rhs[:, r0 + 2] -= cross(zp - Q[ld.link], ld.force)
+    elements, frame_pulls = _apply_elements(mech, km, row, z, Q, rhs)
     slide_dir = tuple(np.broadcast_to(km.motion[sl.on][0] * sl.direction, (n,)) for sl in mech.sliders)
     cyl_dir: dict[str, np.ndarray] = {}
     for d in mech.drivers:
@@ -394,7 +515,32 @@ def _frame(mech: Mechanism, km: Kinematics) -> tuple[_Frame, np.ndarray]:
             za, zb = z[d.type.ends[0]], z[d.type.ends[1]]
             with np.errstate(invalid="ignore", divide="ignore"):
                 cyl_dir[d.name] = (za - zb) / np.abs(za - zb)
-    return _Frame(mech, n, row, z, Q, slide_dir, cyl_dir), rhs
+    return _Frame(mech, n, row, z, Q, slide_dir, cyl_dir, elements, frame_pulls), rhs
+
+
+def _apply_elements(
+    mech: Mechanism,
+    km: Kinematics,
+    row: dict[str, int],
+    z: dict[str, np.ndarray],
+    Q: dict[str, np.ndarray],
+    rhs: np.ndarray,
+) -> tuple[ElementForces, tuple[tuple[Any, Any], ...]]:
+    """Springs and dampers as applied forces on the links carrying their ends (moved to ``rhs``, as loads).
+
+    Returns their tensions and what they do to the frame (an end carried by the ground).
+    """
+    el = element_forces(mech, km.z, km.v)
+    frame: list[tuple[Any, Any]] = []
+    for joint, link, f in el.pulls(mech, km.z):
+        if link == "ground":
+            frame.append((f, cross(z[joint], f)))
+            continue
+        r0 = row[link]
+        rhs[:, r0] -= f.real
+        rhs[:, r0 + 1] -= f.imag
+        rhs[:, r0 + 2] -= cross(z[joint] - Q[link], f)
+    return el, tuple(frame)
 
 
 def solve_stacked(
@@ -450,7 +596,7 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
             reactions.append(u.reaction(x, fr))
             frame += u.on_frame(reactions[-1], fr)
     shaking, shaking_m = np.zeros(fr.n, complex), np.zeros(fr.n)
-    for f, moment in frame:
+    for f, moment in [*frame, *fr.frame_pulls]:
         shaking += f
         shaking_m += moment
     power = np.zeros(fr.n)
@@ -463,4 +609,7 @@ def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
         shaking[bad] = complex(np.nan, np.nan)
         shaking_m[bad] = np.nan
         power[bad] = np.nan
-    return Forces(tuple(reactions), torque, push, power, shaking, shaking_m, residual)
+    el = fr.elements
+    return Forces(
+        tuple(reactions), torque, push, power, shaking, shaking_m, residual, el.spring, el.spring_length, el.damper
+    )

@@ -56,6 +56,7 @@ FORMAT = "linkagekit/1"
 
 K = TypeVar("K")
 V = TypeVar("V")
+E = TypeVar("E", "Spring", "Damper")
 
 
 class FrozenMap(Mapping[K, V]):
@@ -479,6 +480,72 @@ class Load:
         return out
 
 
+def element_name(a: str, b: str) -> str:
+    """The default name of a spring or damper between joints ``a`` and ``b``: ``"a-b"`` (as a cylinder's)."""
+    return cylinder_name(a, b)
+
+
+@dataclass(frozen=True)
+class Spring:
+    """A linear spring between two joints (on two different links).
+
+    Its tension ``stiffness * (length - free_length)`` (N; positive pulls the joints together)
+    acts along the line between them.  ``stiffness`` is N/m, ``free_length`` in the file's
+    length unit (converted to metres once, by the force solve).
+    """
+
+    between: tuple[str, str]
+    stiffness: float
+    free_length: float = 0.0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "between", tuple(self.between))
+        if not self.name:
+            object.__setattr__(self, "name", element_name(*self.between))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The spring as the file writes it."""
+        out: dict[str, Any] = {"between": list(self.between), "stiffness": float(self.stiffness)}
+        out["free_length"] = float(self.free_length)
+        if self.name != element_name(*self.between):
+            out["name"] = self.name
+        return out
+
+
+@dataclass(frozen=True)
+class Damper:
+    """A linear damper between two joints: tension ``damping * d(length)/dt`` (N, N*s/m), opposing the change."""
+
+    between: tuple[str, str]
+    damping: float
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "between", tuple(self.between))
+        if not self.name:
+            object.__setattr__(self, "name", element_name(*self.between))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The damper as the file writes it."""
+        out: dict[str, Any] = {"between": list(self.between), "damping": float(self.damping)}
+        if self.name != element_name(*self.between):
+            out["name"] = self.name
+        return out
+
+
+@dataclass(frozen=True)
+class Flywheel:
+    """Extra rotational inertia ``inertia`` (kg*m^2) on a moving link, centred on its first joint, no mass."""
+
+    link: str
+    inertia: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """The flywheel as the file writes it."""
+        return {"link": self.link, "inertia": float(self.inertia)}
+
+
 @dataclass(frozen=True)
 class Mechanism:
     """A validated planar mechanism.  Build it with :func:`linkagekit.files.load` or :meth:`from_dict`.
@@ -505,6 +572,9 @@ class Mechanism:
         The acceleration of gravity (m/s^2, ``gx + i gy``), None when the file gives none.
     loads : tuple of Load
         External forces and torques on links.
+    springs, dampers, flywheels : tuple of Spring, Damper, Flywheel
+        Force elements (spec section 7): linear springs and dampers between two joints,
+        extra rotational inertia on a link.
     source : str
         Where the mechanism came from (a file path, or ``"<dict>"``); not compared.
     description : str or None
@@ -522,6 +592,9 @@ class Mechanism:
     sliders: tuple[Slider, ...] = ()
     gravity: complex | None = None
     loads: tuple[Load, ...] = ()
+    springs: tuple[Spring, ...] = ()
+    dampers: tuple[Damper, ...] = ()
+    flywheels: tuple[Flywheel, ...] = ()
     source: str = field(default="<dict>", compare=False)
     description: str | None = None
     joint_names: tuple[str, ...] = field(init=False, repr=False)
@@ -530,7 +603,7 @@ class Mechanism:
     def __post_init__(self) -> None:
         if not isinstance(self.joints, FrozenMap):
             object.__setattr__(self, "joints", FrozenMap(self.joints))
-        for attr in ("links", "drivers", "sliders", "loads"):
+        for attr in ("links", "drivers", "sliders", "loads", "springs", "dampers", "flywheels"):
             object.__setattr__(self, attr, tuple(getattr(self, attr)))
         object.__setattr__(self, "joint_names", tuple(self.joints))
         object.__setattr__(self, "_by_name", FrozenMap({ln.name: ln for ln in self.links}))
@@ -571,6 +644,10 @@ class Mechanism:
             out["gravity"] = _xy(self.gravity)
         if self.loads:
             out["loads"] = [ld.to_dict() for ld in self.loads]
+        for key in ("springs", "dampers", "flywheels"):
+            items = getattr(self, key)
+            if items:
+                out[key] = [e.to_dict() for e in items]
         return out
 
     def pose_array(self) -> np.ndarray:
@@ -702,8 +779,16 @@ class Mechanism:
 
     @property
     def has_dynamics(self) -> bool:
-        """True when the file gives mass properties, gravity or loads."""
-        return bool(self.loads) or self.gravity is not None or any(ln.has_mass_properties for ln in self.links)
+        """True when the file gives mass properties, gravity, loads or force elements (springs, dampers, flywheels)."""
+        return (
+            bool(self.loads or self.springs or self.dampers or self.flywheels)
+            or self.gravity is not None
+            or any(ln.has_mass_properties for ln in self.links)
+        )
+
+    def flywheel_inertia(self, link: str) -> float:
+        """The flywheels' inertia on ``link`` summed (kg*m^2; 0 without one)."""
+        return float(sum(f.inertia for f in self.flywheels if f.link == link))
 
     @property
     def has_given_lengths(self) -> bool:
@@ -747,6 +832,7 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
     sliders = b.sliders()
     drivers = b.drivers(sliders)
     loads = b.loads()
+    springs, dampers, flywheels = b.springs(), b.dampers(), b.flywheels()
     b.check_freedom(drivers, len(sliders))
     return Mechanism(
         name=spec.name,
@@ -758,6 +844,9 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
         sliders=sliders,
         gravity=complex(*spec.gravity) if spec.gravity is not None else None,
         loads=loads,
+        springs=springs,
+        dampers=dampers,
+        flywheels=flywheels,
         source=src,
         description=spec.description,
     )
@@ -1012,6 +1101,69 @@ class _Builder:
             force = complex(*(ld.force or (0.0, 0.0)))
             out.append(Load(ld.link, at, at_joint, force, ld.torque or 0.0, at_pose=at_pose))
         return tuple(out)
+
+    # -------------------------------------------------------------- force elements
+    def springs(self) -> tuple[Spring, ...]:
+        """Every spring: between two joints of two different links, stiffness and free length not negative."""
+        out = []
+        for i, s in enumerate(self.spec.springs):
+            key = f"springs[{i}]"
+            ends = self._element_ends(key, s.between, "spring")
+            for attr in ("stiffness", "free_length"):
+                if getattr(s, attr) < 0:
+                    raise self.fail(f"{key}.{attr}", f"must not be negative, got {getattr(s, attr):g}")
+            out.append(Spring(ends, s.stiffness, s.free_length, s.name or ""))
+        return self._unique("springs", tuple(out))
+
+    def dampers(self) -> tuple[Damper, ...]:
+        """Every damper: between two joints of two different links, damping not negative."""
+        out = []
+        for i, d in enumerate(self.spec.dampers):
+            key = f"dampers[{i}]"
+            ends = self._element_ends(key, d.between, "damper")
+            if d.damping < 0:
+                raise self.fail(f"{key}.damping", f"must not be negative, got {d.damping:g}")
+            out.append(Damper(ends, d.damping, d.name or ""))
+        return self._unique("dampers", tuple(out))
+
+    def flywheels(self) -> tuple[Flywheel, ...]:
+        """Every flywheel: on a known moving link, inertia not negative."""
+        out = []
+        for i, f in enumerate(self.spec.flywheels):
+            key = f"flywheels[{i}]"
+            if f.link not in self.by_name:
+                raise self.fail(f"{key}.link", f"unknown link '{f.link}'")
+            if f.link == GROUND:
+                raise self.fail(f"{key}.link", "a flywheel on the ground does nothing (put it on a moving link)")
+            if f.inertia < 0:
+                raise self.fail(f"{key}.inertia", f"must not be negative, got {f.inertia:g}")
+            out.append(Flywheel(f.link, f.inertia))
+        return tuple(out)
+
+    def _element_ends(self, key: str, between: tuple[str, str], what: str) -> tuple[str, str]:
+        """A spring's or damper's two joints: known, different, not on one link (it would do nothing)."""
+        a, b = between
+        for i, j in enumerate((a, b)):
+            if j not in self.joints:
+                raise self.fail(f"{key}.between[{i}]", f"unknown joint '{j}' (not under joints)")
+        if a == b:
+            raise self.fail(f"{key}.between", f"both ends are joint '{a}': a {what} joins two different joints")
+        common = next((ln.name for ln in self.by_name.values() if a in ln.joints and b in ln.joints), None)
+        if common is not None:
+            raise self.fail(
+                f"{key}.between",
+                f"joints '{a}' and '{b}' are both on link '{common}': a {what} between two joints of one link "
+                f"does nothing (attach its ends to two different links)",
+            )
+        return a, b
+
+    def _unique(self, key: str, items: tuple[E, ...]) -> tuple[E, ...]:
+        """Force elements with distinct names (two between the same joints need a ``name`` each)."""
+        names = [e.name for e in items]
+        for i, n in enumerate(names):
+            if names.index(n) != i:
+                raise self.fail(f"{key}[{i}]", f"a second element named '{n}' (give it another `name`)")
+        return items
 
     def check_freedom(self, drivers: tuple[Driver, ...], n_sliders: int) -> None:
         """One driver per degree of freedom (Gruebler count)."""

@@ -53,6 +53,9 @@ if TYPE_CHECKING:
 class Body:
     """Mass properties of one moving link, per design (arrays (D, 1)).
 
+    ``inertia`` (kg*m^2) is the link's own, about its centre of gravity, plus its flywheels'
+    (massless rotors: their inertia adds whatever the reference point).
+
     ``cg`` is where the centre of gravity sits on the link: for a link of two or more joints
     the complex ratio ``rho = (G - s_a) / (s_b - s_a)`` to its first two joints, so
     ``z_G = z_a + rho (z_b - z_a)``; for a one-joint block, the offset ``G - s_j`` turned with
@@ -304,8 +307,13 @@ def _dynamics(mech: Mechanism, src: _Shapes) -> tuple[tuple[Body, ...], tuple[Lo
             return at_joint(ld.link, ld.at_joint)
         return None if ld.at is None else col(_on_link(mech, ld.link, ld.at))
 
-    bodies = tuple(
-        Body(ln.name, col(ln.mass), col(ln.inertia), None if ln.cg is None else col(_on_link(mech, ln.name, ln.cg)))
+    bodies = tuple(  # a flywheel is inertia without mass on its link: its I adds to the link's
+        Body(
+            ln.name,
+            col(ln.mass),
+            col(ln.inertia + mech.flywheel_inertia(ln.name)),
+            None if ln.cg is None else col(_on_link(mech, ln.name, ln.cg)),
+        )
         for ln in mech.links
         if ln.name != "ground"
     )

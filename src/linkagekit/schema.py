@@ -135,6 +135,24 @@ class LoadSpec(_Strict):
     torque: Number | None = None
 
 
+class SpringSpec(_Strict):
+    between: tuple[Name, Name]
+    stiffness: Number  # N/m
+    free_length: Number = 0.0  # file length unit
+    name: Name | None = None  # default "A-B"
+
+
+class DamperSpec(_Strict):
+    between: tuple[Name, Name]
+    damping: Number  # N*s/m
+    name: Name | None = None  # default "A-B"
+
+
+class FlywheelSpec(_Strict):
+    link: Name
+    inertia: Number  # kg*m^2
+
+
 class FileSpec(_Strict):
     format: Literal["linkagekit/1"] = "linkagekit/1"
     name: Title = ""
@@ -146,6 +164,9 @@ class FileSpec(_Strict):
     sliders: list[SliderSpec] = []
     gravity: Point | None = None
     loads: list[LoadSpec] = []
+    springs: list[SpringSpec] = []
+    dampers: list[DamperSpec] = []
+    flywheels: list[FlywheelSpec] = []
 
 
 _UNION_TAGS = {"LinkSpec", "str", "float", "int"}
@@ -169,6 +190,8 @@ def _message(err: Any) -> str:
     tuple_error = kind in ("missing", "too_long", "too_short", "tuple_type")
     if tuple_error and loc[:1] == ("drivers",) and len(loc) >= 3 and loc[2] in ("cylinder", "stroke"):
         return "expected two joint names [A, B]" if loc[2] == "cylinder" else "expected [min, max]: two numbers"
+    if tuple_error and loc[:1] in (("springs",), ("dampers",)) and len(loc) >= 3 and loc[2] == "between":
+        return "expected two joint names [A, B]"
     point = bool(loc) and isinstance(loc[-1], int) and kind in ("missing", "too_long", "too_short")
     if point or (kind in ("too_long", "too_short") and "tuple" in str(err.get("msg", "")).lower()):
         return "expected a point [x, y]: two numbers"

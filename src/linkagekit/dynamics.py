@@ -1,0 +1,642 @@
+"""Forward dynamics: Lagrange's equations in the driver coordinates, integrated in time.
+
+Every point and link velocity is linear in the driver speeds ``w = q'`` (SI: rad/s, or m/s
+for a slider or cylinder): ``v_P = J_P(q) w``, ``omega_b = j_b(q) w``.  The rates solver
+gives the velocity coefficients (unit input speeds) and, with zero input accelerations, the
+velocity-product terms ``a0_P = J_P' w``.  Lagrange's equations are then (derivation in
+``docs/method.md``, "Forward dynamics")::
+
+    M(q) q'' + h(q, w) = Q(q, w) + tau(w)
+    M = sum_b m_b J_Gb^T J_Gb + I_b j_b^T j_b          h = sum_b m_b J_Gb^T a0_Gb + I_b j_b^T alpha0_b
+    Q = gravity + loads + springs (virtual power) - dampers
+
+For one driver (:class:`Reduced`) ``h = 1/2 M'(q) w^2``; ``M``, ``M'``, the position-dependent
+force ``Q_s(q)`` and the damping coefficient ``C(q)`` are tabulated once on a fine grid with
+their exact derivatives (from the acceleration coefficients), so cubic Hermite interpolation
+is ``O(h^4)`` and the right-hand side costs microseconds.  Several drivers evaluate ``M``,
+``h`` and ``Q`` directly at every step.  :func:`simulate` integrates with SciPy's DOP853
+(:data:`RTOL`, :data:`ATOL`) and analyses the motion at the requested times in one vectorised
+call (so every catalogue column comes with it).
+
+Examples
+--------
+>>> import numpy as np, linkagekit as lk
+>>> mech = lk.load("examples/slider_crank.yaml")
+>>> red = reduced(mech)
+>>> red.period == 2 * np.pi, bool(red.mass(red.q0) > 0)
+(True, True)
+>>> res = simulate(mech, np.linspace(0.0, 0.05, 6), torque=2.0)
+>>> res.time.tolist()
+[0.0, 0.01, 0.02, 0.03, 0.04, 0.05]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from .api import analyze, prepare
+from .branch import along_sweep
+from .checks import input_range
+from .errors import InputError
+from .forces import Kinematics, point_motion
+from .model import Mechanism
+from .params import Params
+from .positions import solve
+from .rates import link_motion, solve_rates
+from .result import Result, frozen
+
+#: relative and absolute tolerances of the integration (SI state: rad or m, rad/s or m/s)
+RTOL = 1e-11
+ATOL = 1e-11
+#: grid points of the one-driver table (over a turn, or over the assembly range)
+POINTS = 4096
+#: the most output times one simulation gives
+MAX_TIMES = 1_000_000
+
+__all__ = ["ATOL", "POINTS", "RTOL", "Reduced", "TorqueLaw", "reduced", "simulate"]
+
+ArrayLike = Any
+
+
+# ---------------------------------------------------------------------- torque laws
+@dataclass(frozen=True)
+class TorqueLaw:
+    """A driver's torque (force) law, SI: ``T0`` constant, or the linear motor curve ``T0 (1 - w / W0)``."""
+
+    T0: float = 0.0
+    W0: float | None = None
+
+    def __call__(self, w: ArrayLike) -> Any:
+        if self.W0 is None:
+            return self.T0 + 0.0 * np.asarray(w)
+        return self.T0 * (1.0 - np.asarray(w) / self.W0)
+
+
+# ---------------------------------------------------------------------- the model's parts
+@dataclass(frozen=True)
+class _Model:
+    """What the coefficients read, once per mechanism: solver numbers, scales and the force elements (SI)."""
+
+    mech: Mechanism
+    params: Params
+    scale: np.ndarray  # (n_d,) SI per solver unit of each driver (1 for an angle, m per length unit)
+    bodies: tuple[tuple[str, float, float, complex | None], ...]  # link, mass, inertia (+ flywheels), cg ratio
+    loads: tuple[tuple[str, complex, float, complex | None], ...]  # link, force, torque, point ratio
+    springs: tuple[tuple[int, int, float, float], ...]  # joint a, joint b, stiffness, free length (m)
+    dampers: tuple[tuple[int, int, float], ...]  # joint a, joint b, damping
+
+
+def _model(mech: Mechanism, flywheel: float = 0.0) -> _Model:
+    """The mechanism's dynamic parts in SI, ``flywheel`` (kg*m^2) added to the first driver's link."""
+    params = prepare(mech)
+    si = mech.length_to_si
+    extra: dict[str, float] = {}
+    for fw in getattr(mech, "flywheels", ()):
+        extra[fw.link] = extra.get(fw.link, 0.0) + float(fw.inertia)
+    if flywheel:
+        link = mech.drivers[0].link
+        extra[link] = extra.get(link, 0.0) + float(flywheel)
+    bodies = [
+        (b.link, float(b.mass[0, 0]), float(b.inertia[0, 0]) + extra.pop(b.link, 0.0), _one(b.cg))
+        for b in params.bodies
+    ]
+    bodies += [(link, 0.0, inertia, None) for link, inertia in extra.items() if link != "ground"]
+    loads = tuple((ld.link, complex(ld.force[0, 0]), float(ld.torque[0, 0]), _one(ld.at)) for ld in params.loads)
+    idx = {j: i for i, j in enumerate(mech.joint_names)}
+    springs = tuple(
+        (idx[s.between[0]], idx[s.between[1]], float(s.stiffness), float(s.free_length) * si)
+        for s in getattr(mech, "springs", ())
+    )
+    dampers = tuple((idx[d.between[0]], idx[d.between[1]], float(d.damping)) for d in getattr(mech, "dampers", ()))
+    scale = np.array([d.type.rate_to_si(si) for d in mech.drivers])
+    return _Model(mech, params, scale, tuple(bodies), loads, springs, dampers)
+
+
+def _one(a: np.ndarray | None) -> complex | None:
+    return None if a is None else complex(a[0, 0])
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """Positions (m), velocities and velocity-product accelerations of what the forces act on, per sample (n,)."""
+
+    good: np.ndarray
+    z: np.ndarray  # joints (n_joints, n), m
+    v: np.ndarray
+    a: np.ndarray
+    gz: list[tuple[np.ndarray, np.ndarray, np.ndarray]]  # per body: z_G, v_G, a_G (m)
+    lz: list[tuple[np.ndarray, np.ndarray, np.ndarray]]  # per load: its point's z, v, a (m)
+    body_w: list[tuple[np.ndarray, np.ndarray]]  # per body: omega, alpha
+    load_w: list[tuple[np.ndarray, np.ndarray]]  # per load: omega, alpha
+
+
+def _motion(md: _Model, q: np.ndarray, signs: np.ndarray, w: np.ndarray) -> _Motion:
+    """The motion at solver inputs ``q`` (n_d, n) with signs (n_signs, n), SI speeds ``w`` (n_d, n), no acceleration."""
+    mech, params = md.mech, md.params
+    pos = solve(params, q[:, None, :], signs[:, None, :])
+    speed = (w / md.scale[:, None])[:, None, :]  # solver units per second
+    rt = solve_rates(params, pos, speed, np.zeros_like(speed))
+    lm = link_motion(params, pos, rt, mech.links)
+    n = q.shape[1]
+    motion = {k: tuple(np.broadcast_to(x, (1, n))[0] for x in m) for k, m in lm.items()}
+    good = pos.assembled[0] & ~rt.singular[0]
+    km = Kinematics(pos.z[:, 0], rt.v[:, 0], rt.a[:, 0], motion, good, np.zeros((0, n)), (), ())
+    si = mech.length_to_si
+
+    def at(link: str, local: complex | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if local is None:
+            i = mech.joint_names.index(mech.link(link).joints[0])
+            return km.z[i] * si, km.v[i] * si, km.a[i] * si
+        zz, vv, aa = point_motion(mech, link, np.asarray(local), km)
+        return zz * si, vv * si, aa * si
+
+    gz = [at(b[0], b[3]) for b in md.bodies]
+    lz = [at(ld[0], ld[3]) for ld in md.loads]
+    body_w = [(motion[b[0]][1], motion[b[0]][2]) for b in md.bodies]
+    load_w = [(motion[ld[0]][1], motion[ld[0]][2]) for ld in md.loads]
+    return _Motion(good, km.z * si, km.v * si, km.a * si, gz, lz, body_w, load_w)
+
+
+def _stretch(m: _Motion, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A force element's length ``L`` (m), its rate ``L'`` and the velocity-product part of ``L''`` (per sample)."""
+    d, dv, da = m.z[b] - m.z[a], m.v[b] - m.v[a], m.a[b] - m.a[a]
+    L = np.abs(d)
+    u = d / L
+    Lv = np.real(np.conj(u) * dv)
+    La = np.real(np.conj(u) * da) + (np.abs(dv) ** 2 - Lv**2) / L
+    return L, Lv, La
+
+
+# ---------------------------------------------------------------------- one driver: the table
+def _table_rows(md: _Model, m: _Motion) -> tuple[np.ndarray, np.ndarray]:
+    """``[M, Q_s, C]`` and their derivatives along q at unit speed (velocities J, accelerations J'), each (3, n)."""
+    g = md.mech.gravity if md.mech.gravity is not None else 0j
+    n = m.good.shape[0]
+    M, dM, Qs, dQs, C, dC = (np.zeros(n) for _ in range(6))
+    for (_, mass, inertia, _), (_zg, J, dJ), (jw, djw) in zip(md.bodies, m.gz, m.body_w, strict=True):
+        M += mass * np.abs(J) ** 2 + inertia * jw**2
+        dM += 2.0 * (mass * np.real(np.conj(J) * dJ) + inertia * jw * djw)
+        Qs += mass * np.real(np.conj(g) * J)
+        dQs += mass * np.real(np.conj(g) * dJ)
+    for (_, force, torque, _), (_zp, J, dJ), (jw, djw) in zip(md.loads, m.lz, m.load_w, strict=True):
+        Qs += np.real(np.conj(force) * J) + torque * jw
+        dQs += np.real(np.conj(force) * dJ) + torque * djw
+    for a, b, k, free in md.springs:
+        L, Lv, La = _stretch(m, a, b)
+        Qs -= k * (L - free) * Lv
+        dQs -= k * (Lv**2 + (L - free) * La)
+    for a, b, c in md.dampers:
+        _, Lv, La = _stretch(m, a, b)
+        C += c * Lv**2
+        dC += 2.0 * c * Lv * La
+    return np.array([M, Qs, C]), np.array([dM, dQs, dC])
+
+
+def _hermite(x0: float, h: float, Y: np.ndarray, dY: np.ndarray, x: Any) -> np.ndarray:
+    """Cubic Hermite interpolation on the uniform grid ``x0 + k h`` of values ``Y`` and slopes ``dY`` (n, k)."""
+    s = (np.asarray(x, float) - x0) / h
+    i = np.clip(np.floor(s).astype(int), 0, len(Y) - 2)
+    t = (s - i)[..., None]
+    t1 = 1.0 - t
+    return (  # type: ignore[no-any-return]
+        (1.0 + 2.0 * t) * t1 * t1 * Y[i]
+        + t * t1 * t1 * h * dY[i]
+        + t * t * (3.0 - 2.0 * t) * Y[i + 1]
+        - t * t * t1 * h * dY[i + 1]
+    )
+
+
+@dataclass(frozen=True)
+class Reduced:
+    """One driver's reduced model, SI: ``M(q) q'' + 1/2 M'(q) w^2 = force(q, w) + torque(w)``.
+
+    ``q`` in rad (m for a slider or cylinder driver), ``w = dq/dt``; ``mass`` in kg*m^2 (kg),
+    forces in N*m (N).  Build it with :func:`reduced`.
+
+    Attributes
+    ----------
+    driver : str
+        The driver's name.
+    q0 : float
+        The pose's input, where a simulation starts.
+    q_range : (float, float)
+        Where the table holds (periodic: ``(q0, q0 + period)``; otherwise the assembly range
+        around the pose, just inside its ends).
+    period : float or None
+        ``2 pi`` when the mechanism comes back to itself after a turn of the driver, else None.
+    points : ndarray
+        The change points of the branch inside the table (where a sign flips), SI.
+    """
+
+    driver: str
+    q0: float
+    q_range: tuple[float, float]
+    period: float | None
+    points: np.ndarray
+    steps: np.ndarray  # the sign step of each change point
+    _Y: np.ndarray
+    _dY: np.ndarray
+
+    @property
+    def _h(self) -> float:
+        return (self.q_range[1] - self.q_range[0]) / (len(self._Y) - 1)
+
+    def _wrap(self, q: ArrayLike) -> Any:
+        q = np.asarray(q, float)
+        if self.period is None:
+            return q
+        return self.q0 + np.mod(q - self.q0, self.period)
+
+    def _rows(self, q: ArrayLike) -> np.ndarray:
+        return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
+
+    def mass(self, q: ArrayLike) -> np.ndarray:
+        """``M(q)``."""
+        return self._rows(q)[..., 0]
+
+    def dmass(self, q: ArrayLike) -> np.ndarray:
+        """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points)."""
+        q = self._wrap(q)
+        s = (np.asarray(q) - self.q_range[0]) / self._h
+        i = np.clip(np.floor(s).astype(int), 0, len(self._Y) - 2)
+        t = s - i
+        Y, dY, h = self._Y[:, 0], self._dY[:, 0], self._h
+        return (  # type: ignore[no-any-return]
+            (6 * t * t - 6 * t) / h * Y[i]
+            + (3 * t * t - 4 * t + 1) * dY[i]
+            + (6 * t - 6 * t * t) / h * Y[i + 1]
+            + (3 * t * t - 2 * t) * dY[i + 1]
+        )
+
+    def force(self, q: ArrayLike, w: ArrayLike) -> np.ndarray:
+        """The generalised force of gravity, loads, springs and dampers ``Q_s(q) - C(q) w`` (not the torque law)."""
+        r = self._rows(q)
+        return r[..., 1] - r[..., 2] * np.asarray(w)  # type: ignore[no-any-return]
+
+    def accel(self, q: ArrayLike, w: ArrayLike, torque: ArrayLike = 0.0) -> np.ndarray:
+        """``q''`` for speed ``w`` under the driver torque ``torque``."""
+        w = np.asarray(w, float)
+        r = self._rows(q)
+        return (r[..., 1] - r[..., 2] * w + torque - 0.5 * self.dmass(q) * w * w) / r[..., 0]  # type: ignore[no-any-return]
+
+    def signs(self, params: Params, q: ArrayLike) -> np.ndarray:
+        """The branch's signs (n_signs, n) at inputs ``q`` (SI): the pose's, flipped at every change point passed."""
+        qq = np.atleast_1d(self._wrap(q))
+        lo, hi = np.minimum(qq, self.q0), np.maximum(qq, self.q0)
+        out = np.repeat(params.signs[:, :1], len(qq), axis=1)
+        for step, p in zip(self.steps, self.points, strict=True):
+            out[step] *= np.where((p > lo) & (p <= hi), -1.0, 1.0)
+        return out
+
+
+def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | None]:
+    """The table's grid (SI) over ``turns`` turns (periodic), or inside the assembly interval that holds the pose."""
+    mech, d = md.mech, md.mech.drivers[0]
+    x0 = float(md.params.pose_inputs[0, 0]) * md.scale[0]
+    to_si = d.input_scale(mech) * md.scale[0]  # SI per file unit
+    ranges = input_range(mech, 0)
+    full = d.type.cyclic and any(hi - lo >= 2 * math.pi / to_si * (1 - 1e-12) for lo, hi in ranges)
+    if full:
+        return x0 + np.linspace(0.0, 2 * math.pi * turns, turns * points + 1), 2 * math.pi * turns
+    for lo, hi in ranges:
+        span = (hi - lo) * to_si
+        shift = 0.0
+        if d.type.cyclic:  # the pose's angle, within a turn of the interval
+            shift = 2 * math.pi * math.floor((x0 - lo * to_si) / (2 * math.pi))
+        a, b = lo * to_si + shift, hi * to_si + shift
+        if a <= x0 <= b:
+            margin = span * 1e-4
+            return np.linspace(a + margin, b - margin, points + 1), None
+    raise InputError(f"{mech.source}: the mechanism does not assemble at its pose's input")
+
+
+def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The table's rows at grid inputs ``x`` (SI); a sample on a singular position is the mean of its two sides."""
+    q = (x / md.scale[0])[None]
+    Y, dY = _table_rows(md, _motion(md, q, signs, np.ones_like(q)))  # unit SI speed: J and J' = dJ/dq
+    bad = ~np.all(np.isfinite(Y) & np.isfinite(dY), axis=0)
+    if bad.any():
+        delta = 1e-6 * (x[1] - x[0])
+        one = np.ones((1, int(bad.sum())))
+        sides = [_table_rows(md, _motion(md, q[:, bad] + s * delta / md.scale[0], signs[:, bad], one)) for s in (-1, 1)]
+        Y[:, bad] = 0.5 * (sides[0][0] + sides[1][0])
+        dY[:, bad] = 0.5 * (sides[0][1] + sides[1][1])
+    return Y.T, dY.T
+
+
+def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> Reduced:
+    """The reduced one-coordinate model of a one-driver mechanism, tabulated along its branch from the pose.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        With exactly one driver.
+    flywheel : float
+        Extra inertia (kg*m^2) on the driver's link.
+    points : int
+        Grid intervals of the table.
+
+    Returns
+    -------
+    Reduced
+    """
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    if len(mech.drivers) != 1:
+        raise InputError(
+            f"{mech.source}: the reduced model needs exactly one driver, this mechanism has {len(mech.drivers)}"
+        )
+    if not (isinstance(flywheel, int | float) and math.isfinite(flywheel) and flywheel >= 0):
+        raise InputError(f"flywheel: expected a finite inertia >= 0 (kg*m^2), got {flywheel!r}")
+    md = _model(mech, float(flywheel))
+    for turns in (1, 2):  # a branch whose signs come back after two turns only (an odd number of flips in one)
+        x, period = _grid(md, int(points), turns)
+        br = along_sweep(md.params, (x / md.scale[0])[None, None, :], (mech.drivers[0].type.cyclic,))
+        steps, _, where = br.points
+        if period is None or np.all(np.bincount(steps, minlength=md.params.plan.n_signs) % 2 == 0):
+            break
+    Y, dY = _rows_at(md, x, br.signs[:, 0])
+    if not np.all(np.isfinite(Y)) or np.any(Y[:, 0] <= 0):
+        raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
+    q0 = float(md.params.pose_inputs[0, 0] * md.scale[0])
+    rng = (float(x[0]), float(x[-1]))
+    return Reduced(mech.drivers[0].name, q0, rng, period, np.asarray(where) * md.scale[0], np.asarray(steps), Y, dY)
+
+
+def _cells(red: Reduced) -> list[tuple[float, ...]]:
+    """Per grid cell, the cubic coefficients in ``t`` in [0, 1] of ``M``, ``Q_s``, ``C`` (plain floats: a fast RHS)."""
+    h, Y, dY = red._h, red._Y, red._dY
+    y0, y1, d0, d1 = Y[:-1], Y[1:], dY[:-1] * h, dY[1:] * h
+    c2 = 3 * (y1 - y0) - 2 * d0 - d1
+    c3 = 2 * (y0 - y1) + d0 + d1
+    return [tuple(r) for r in np.stack([y0, d0, c2, c3], axis=1).reshape(len(y0), 12).tolist()]
+
+
+# ---------------------------------------------------------------------- integration
+@dataclass(frozen=True)
+class _Run:
+    """A motion at the output times (SI): ``q``, ``w``, ``qdd`` (n_d, n); ``stopped``: why it ended early."""
+
+    t: np.ndarray
+    q: np.ndarray
+    w: np.ndarray
+    qdd: np.ndarray
+    signs: np.ndarray | None
+    stopped: str | None
+
+
+def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
+    """The state derivative ``(w, q'')`` of the tabulated model, in plain floats (microseconds a call)."""
+    cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
+    q_ref, period = red.q0, red.period
+    T0, W0 = law.T0, law.W0
+
+    def rhs(_t: float, y: Any) -> list[float]:
+        q, w = float(y[0]), float(y[1])
+        if period is not None:
+            q = q_ref + (q - q_ref) % period
+        s = (q - x0) / h
+        i = min(max(int(s), 0), n)
+        t = s - i
+        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[i]
+        M = ((m3 * t + m2) * t + m1) * t + m0
+        dM = ((3 * m3 * t + 2 * m2) * t + m1) / h
+        Qs = ((q3 * t + q2) * t + q1) * t + q0
+        C = ((c3 * t + c2) * t + c1) * t + c0
+        tau = T0 if W0 is None else T0 * (1.0 - w / W0)
+        return [w, (Qs - C * w + tau - 0.5 * dM * w * w) / M]
+
+    return rhs
+
+
+def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float) -> _Run:
+    """One driver: the tabulated model integrated by DOP853; stops at the table's ends (a toggle)."""
+    from scipy.integrate import solve_ivp
+
+    red = reduced(md.mech)
+    rhs = _rhs_reduced(red, law)
+    events: list[Callable[[float, Any], float]] = []
+    if red.period is None:
+        lo, hi = red.q_range
+        events = [lambda _t, y: float(y[0]) - lo, lambda _t, y: hi - float(y[0])]
+        for e in events:
+            e.terminal = True  # type: ignore[attr-defined]
+    sol = solve_ivp(
+        rhs,
+        (times[0], times[-1]),
+        [red.q0, w0],
+        method="DOP853",
+        t_eval=times,
+        rtol=RTOL,
+        atol=ATOL,
+        events=events or None,
+    )
+    if sol.status < 0:
+        raise InputError(f"simulate: the integration failed: {sol.message}")
+    q, w = sol.y
+    stopped = None
+    if sol.status == 1:
+        te = float(np.concatenate(sol.t_events)[0])
+        qe = float(np.concatenate([y[:, 0] for y in sol.y_events if len(y)])[0])
+        stopped = _toggle_message(md, 0, te, qe)
+    tau = law(w)
+    qdd = red.accel(q, w, tau)
+    signs = red.signs(md.params, q) if md.params.plan.n_signs else None
+    return _Run(sol.t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
+    """The one line that says where the motion stopped: time and the driver's input (file units)."""
+    d = md.mech.drivers[k]
+    value = q_si / (md.scale[k] * d.input_scale(md.mech))
+    return (
+        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached a toggle at {value:.6g} "
+        f"{d.input_unit(md.mech)} that the motion cannot pass"
+    )
+
+
+def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Several drivers: ``q''`` from ``M``, ``h`` and ``Q`` evaluated at (q, w) (SI), the pose's signs."""
+    nd = len(q)
+    qs = np.repeat((q / md.scale)[:, None], nd + 1, axis=1)
+    speeds = np.concatenate([np.eye(nd), w[:, None]], axis=1)  # unit speeds (J per driver), then w (a0)
+    m = _motion(md, qs, np.repeat(md.params.signs, nd + 1, axis=1), speeds)
+    if not m.good.all():
+        return np.full(nd, np.nan)
+    g = md.mech.gravity if md.mech.gravity is not None else 0j
+    M, rhs = np.zeros((nd, nd)), tau.astype(float).copy()
+    for (_, mass, inertia, _), (_, v, acc), (om, al) in zip(md.bodies, m.gz, m.body_w, strict=True):
+        J, jw = v[:nd], om[:nd]
+        M += mass * np.real(np.conj(J)[:, None] * J[None]) + inertia * np.outer(jw, jw)
+        rhs += mass * np.real(np.conj(J) * (g - acc[nd])) - inertia * jw * al[nd]
+    for (_, force, torque, _), (_, v, _), (om, _) in zip(md.loads, m.lz, m.load_w, strict=True):
+        rhs += np.real(np.conj(force) * v[:nd]) + torque * om[:nd]
+    for a, b, k, free in md.springs:
+        L, Lv, _ = _stretch(m, a, b)
+        rhs -= k * (L[0] - free) * Lv[:nd]
+    for a, b, c in md.dampers:
+        _, Lv, _ = _stretch(m, a, b)
+        rhs -= c * Lv[:nd] * Lv[nd]
+    out: np.ndarray = np.linalg.solve(M, rhs)
+    return out
+
+
+def _integrate_direct(md: _Model, times: np.ndarray, laws: tuple[TorqueLaw, ...], w0: np.ndarray) -> _Run:
+    """Several drivers: ``M``, ``h``, ``Q`` evaluated at every step (slower); stops where it stops assembling."""
+    from scipy.integrate import solve_ivp
+
+    nd = len(laws)
+
+    def tau(w: np.ndarray) -> np.ndarray:
+        return np.array([law(x) for law, x in zip(laws, w, strict=True)], float)
+
+    def rhs(_t: float, y: np.ndarray) -> np.ndarray:
+        return np.concatenate([y[nd:], _direct_accel(md, y[:nd], y[nd:], tau(y[nd:]))])
+
+    y0 = np.concatenate([md.params.pose_inputs[:, 0] * md.scale, w0])
+    sol = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL)
+    t, y = sol.t, sol.y
+    stopped = None
+    if sol.status < 0 or not np.all(np.isfinite(y)):
+        ok = np.all(np.isfinite(y), axis=0)
+        last = int(np.argmin(ok)) if not ok.all() else len(t)
+        t, y = t[:last], y[:, :last]
+        te = t[-1] if len(t) else times[0]
+        stopped = f"simulate: stopped at t = {te:.6g} s: the mechanism reached a position it cannot pass"
+    qdd = np.array([_direct_accel(md, y[:nd, i], y[nd:, i], tau(y[nd:, i])) for i in range(len(t))]).T.reshape(nd, -1)
+    return _Run(t, y[:nd], y[nd:], qdd, None, stopped)
+
+
+# ---------------------------------------------------------------------- arguments
+def _times(times: ArrayLike) -> np.ndarray:
+    """The output times: finite, strictly increasing, at least two."""
+    try:
+        t = np.asarray(times, float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("times: expected an array of numbers (s)") from None
+    if t.ndim != 1 or len(t) < 2:
+        raise InputError(f"times: expected at least two times (s) in a 1-D array, got shape {t.shape}")
+    if len(t) > MAX_TIMES:
+        raise InputError(f"times: {len(t)} times, more than linkagekit.dynamics.MAX_TIMES ({MAX_TIMES})")
+    if not np.all(np.isfinite(t)):
+        raise InputError("times: every time must be a finite number")
+    if not np.all(np.diff(t) > 0):
+        raise InputError("times: the times must increase strictly")
+    return t
+
+
+def _number(value: Any, what: str) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{what}: expected a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise InputError(f"{what}: expected a finite number, got {value!r}")
+    return x
+
+
+def _by_driver(mech: Mechanism, value: Any, what: str) -> dict[str, Any]:
+    """A value per driver from one value (one driver) or a mapping by name."""
+    names = [d.name for d in mech.drivers]
+    if value is None:
+        return {}
+    if not names:
+        raise InputError(f"{what}: {mech.source} has no driver to apply it to")
+    if isinstance(value, Mapping):
+        for k in value:
+            if k not in names:
+                raise InputError(f"{what}: no driver named {k!r} (drivers: {', '.join(names)})")
+        return dict(value)
+    if len(names) != 1:
+        raise InputError(f"{what}: this mechanism has drivers {', '.join(names)}: give one value per driver by name")
+    return {names[0]: value}
+
+
+def _laws(md: _Model, torque: Any, motor: Any) -> tuple[TorqueLaw, ...]:
+    """Each driver's law in SI (none given: no torque)."""
+    mech = md.mech
+    tq, mt = _by_driver(mech, torque, "torque"), _by_driver(mech, motor, "motor")
+    out = []
+    for k, d in enumerate(mech.drivers):
+        if d.name in tq and d.name in mt:
+            raise InputError(f"driver '{d.name}': give a torque or a motor curve, not both")
+        if d.name in mt:
+            try:
+                t0, w0 = mt[d.name]
+            except (TypeError, ValueError):
+                raise InputError(f"motor[{d.name}]: expected (T0, W0), got {mt[d.name]!r}") from None
+            T0, W0 = _number(t0, f"motor[{d.name}] T0"), _number(w0, f"motor[{d.name}] W0")
+            if W0 == 0:
+                raise InputError(f"motor[{d.name}]: the no-load speed W0 must not be zero")
+            out.append(TorqueLaw(T0, W0 * md.scale[k]))
+        else:
+            out.append(TorqueLaw(_number(tq.get(d.name, 0.0), f"torque[{d.name}]")))
+    return tuple(out)
+
+
+def _start_speeds(md: _Model, speed: Any) -> np.ndarray:
+    sp = _by_driver(md.mech, speed, "speed")
+    out: np.ndarray = np.array([_number(sp.get(d.name, 0.0), f"speed[{d.name}]") for d in md.mech.drivers])
+    return out * md.scale
+
+
+# ---------------------------------------------------------------------- simulate
+def simulate(
+    mech: Mechanism,
+    times: ArrayLike,
+    *,
+    torque: float | Mapping[str, float] | None = None,
+    motor: tuple[float, float] | Mapping[str, tuple[float, float]] | None = None,
+    speed: float | Mapping[str, float] | None = None,
+) -> Result:
+    """The motion under a torque law, from the pose at rest (or at ``speed``): spec section 7.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        With masses or inertias; gravity, loads, springs, dampers and flywheels as the file gives them.
+    times : array_like
+        Output times (s), strictly increasing; the motion starts at the first.
+    torque : float or mapping of driver name to float, optional
+        A constant driver torque (N*m; N for a slider or cylinder driver).
+    motor : (T0, W0) or mapping of driver name to (T0, W0), optional
+        The linear motor curve ``T0 (1 - w / W0)``, ``W0`` in rad/s (length unit/s for a slider or cylinder).
+    speed : float or mapping, optional
+        The starting speed (rad/s, or length unit/s); default 0.
+
+    Returns
+    -------
+    Result
+        One sample per output time, ``time`` the times; ``stopped`` a one-line message when
+        the motion met a toggle it cannot pass (the rows then end there), else None.
+    """
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    t = _times(times)
+    if not mech.drivers:
+        raise InputError(f"{mech.source}: the mechanism has no driver: nothing to simulate")
+    md = _model(mech)
+    laws, w0 = _laws(md, torque, motor), _start_speeds(md, speed)
+    if len(mech.drivers) == 1:
+        run = _integrate_reduced(md, t, laws[0], float(w0[0]))
+    else:
+        run = _integrate_direct(md, t, laws, w0)
+    return _result(md, run)
+
+
+def _result(md: _Model, run: _Run) -> Result:
+    """The motion analysed at its samples in one call: every catalogue column, with the time axis."""
+    mech = md.mech
+    if len(run.t) == 0:
+        raise InputError(run.stopped or "simulate: no output time reached")
+    factor = {d.name: md.scale[k] * d.input_scale(mech) for k, d in enumerate(mech.drivers)}
+    inputs = {d.name: run.q[k] / factor[d.name] for k, d in enumerate(mech.drivers)}
+    speed = {d.name: run.w[k] / md.scale[k] for k, d in enumerate(mech.drivers)}
+    accel = {d.name: run.qdd[k] / md.scale[k] for k, d in enumerate(mech.drivers)}
+    res = analyze(mech, inputs, speed=speed, acceleration=accel, signs=run.signs)
+    return replace(res, time=frozen(run.t), stopped=run.stopped)
