@@ -106,7 +106,7 @@ def test_flywheel_cs_matches_brute_force_time_integration():
     assert size.cs <= 0.02 * (1 + 1e-6)
     assert size.cs == pytest.approx(0.02, rel=1e-5)
     assert size.cs_without > 0.02
-    # from rest, 15 turns (the period map contracts by 0.13 a turn): the motion settles on the periodic solution, with Cs as sized
+    # from rest, 15 turns (the period map contracts by 0.13 a turn): it settles on the periodic motion, Cs as sized
     cs, w_end = brute_cs(model, motor, size.inertia, 0.0, 15)
     assert cs == pytest.approx(0.02, rel=1e-5)
     assert w_end == pytest.approx(size.steady.w[-1], rel=1e-7)
