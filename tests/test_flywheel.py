@@ -13,7 +13,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from linkagekit.errors import InputError, LinkageError
-from linkagekit.flywheel import Motor, StallError, size_flywheel_reduced, steady_state
+from linkagekit.dynamics import TorqueLaw as Motor
+from linkagekit.flywheel import StallError, size_flywheel_reduced, steady_state
 
 
 class Toy:

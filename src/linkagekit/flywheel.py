@@ -16,13 +16,14 @@ fixed point is unique.  A flywheel of inertia ``I`` on the driver's crank adds `
 and Brent's method on ``log Cs(I)`` (``Cs`` falls with ``I``).
 
 >>> import numpy as np
+>>> from linkagekit.dynamics import TorqueLaw
 >>> class Toy:  # M = 1 + 0.5 cos 2q, no loads: a motor alone
 ...     period = 2 * np.pi
 ...     q_range = (0.0, 2 * np.pi)
 ...     def mass(self, q): return 1 + 0.5 * np.cos(2 * q)
 ...     def dmass(self, q): return -np.sin(2 * q)
 ...     def force(self, q, w): return 0 * q * w
->>> motor = Motor(2.0, 10.0)
+>>> motor = TorqueLaw(2.0, 10.0)
 >>> st = steady_state(Toy(), motor)
 >>> round(float(np.mean(st.w[:-1])), 6)   # no loads: the motor's mean torque over a turn is 0
 10.0
@@ -33,16 +34,18 @@ and Brent's method on ``log Cs(I)`` (``Cs`` falls with ``I``).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .dynamics import _laws, _model, reduced
 from .errors import InputError, LinkageError
+from .model import CrankType, Mechanism
 
-Array = NDArray[np.float64]
+Array = NDArray[Any]
 
 #: solve_ivp's tolerances on the kinetic energy over one period (relative; absolute is RTOL * E0)
 RTOL = 1e-10
@@ -52,12 +55,15 @@ FIXED_POINT_TOL = 1e-10
 INERTIA_RTOL = 1e-6
 #: Fourier collocation points per period to start with, and the most (doubled until the
 #: harmonics of ln E above a quarter of the grid have amplitudes below TAIL: E to ~1e-10 relative)
-COLLOCATION_POINTS = 256
-MAX_COLLOCATION_POINTS = 2048
+COLLOCATION_POINTS = 512
+MAX_COLLOCATION_POINTS = 8192
 TAIL = 1e-10
 #: Newton's steps on the collocation equations, and the step in ln E at which it has converged
 NEWTON_STEPS = 40
 NEWTON_TOL = 1e-12
+#: GMRES on each Newton step: relative residual and restart length
+GMRES_RTOL = 1e-12
+GMRES_RESTART = 60
 #: grid of q for the mean torque balance that guesses the mean speed
 BALANCE_SAMPLES = 256
 #: the energy below which (relative to the period's start) the machine counts as stopped: its speed
@@ -78,7 +84,8 @@ class StallError(LinkageError):
 class Reduced(Protocol):
     """The one-driver reduced model (``dynamics.reduced``), vectorised over ``q``."""
 
-    period: float | None
+    @property
+    def period(self) -> float | None: ...
 
     def mass(self, q: Array) -> Array: ...
 
@@ -86,21 +93,6 @@ class Reduced(Protocol):
 
 
 Drive = Callable[[Array], Array]
-
-
-@dataclass(frozen=True)
-class Motor:
-    """The driver torque law ``T(w) = t0 (1 - w / w0)`` (``w0 = inf``: a constant torque ``t0``).
-
-    >>> Motor(10.0, 5.0)(np.array([0.0, 5.0, 10.0])).tolist()
-    [10.0, 0.0, -10.0]
-    """
-
-    t0: float
-    w0: float = math.inf
-
-    def __call__(self, w: Array) -> Array:
-        return self.t0 * (1.0 - np.asarray(w, dtype=float) / self.w0)
 
 
 @dataclass(frozen=True)
@@ -281,25 +273,24 @@ def _fixed_point(p: _Problem, e0: float) -> _Turn:
     raise StallError("no periodic steady state: the period map did not converge")
 
 
-def _fourier_diff(n: int, period: float) -> Array:
-    """The Fourier differentiation matrix on ``n`` (even) equispaced points of one period (Trefethen, ch. 3)."""
-    k = np.arange(n)
-    d = k[:, None] - k[None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mat = 0.5 * (-1.0) ** d / np.tan(np.pi * d / n)
-    mat[d == 0] = 0.0
-    return np.asarray(mat * (2.0 * np.pi / period), dtype=float)
-
-
 class _Collocation:
-    """``dz/du = sign (F + T) e^-z`` (``z = ln E``) at ``n`` Fourier points of one period, solved by Newton."""
+    """``dz/du = sign (F + T) e^-z`` (``z = ln E``) at ``n`` Fourier points of one period, solved by Newton.
+
+    Matrix-free: ``d/du`` by FFT, each Newton step by GMRES preconditioned with the
+    constant-coefficient operator (no dense solve, which a busy multi-threaded BLAS makes slow).
+    """
 
     def __init__(self, p: _Problem, n: int) -> None:
         self.p, self.n = p, n
         self.u = np.arange(n) * (p.period / n)
         self.q = p.q0 + p.sign * self.u
         self.m = p.mass(self.q)
-        self.dmat = _fourier_diff(n, p.period)
+        self.ik = 1j * np.fft.rfftfreq(n, 1.0 / n) * (2.0 * np.pi / p.period)
+        self.ik[-1] = 0.0  # the Nyquist mode's derivative (as the Fourier differentiation matrix has it)
+
+    def deriv(self, x: Array) -> Array:
+        """``dx/du`` of the trigonometric interpolant, at the points."""
+        return np.asarray(np.fft.irfft(self.ik * np.fft.rfft(x), self.n), dtype=float)
 
     def parts(self, z: Array) -> tuple[Array, Array, Array]:
         """The residual, the diagonal of ``d(rate)/dz`` and ``dF/dw + T'`` at ``z``."""
@@ -311,15 +302,28 @@ class _Collocation:
         gs = np.asarray(p.red.force(np.tile(self.q, 3), ws), dtype=float) + np.asarray(p.drive(ws), dtype=float)
         g, g_w = gs[: self.n], (gs[self.n : 2 * self.n] - gs[2 * self.n :]) / (2.0 * h)
         rate = p.sign * g / e
-        return self.dmat @ z - rate, p.sign * (g_w * w / 2.0 - g) / e, g_w
+        return self.deriv(z) - rate, p.sign * (g_w * w / 2.0 - g) / e, g_w
+
+    def newton_step(self, r: Array, a: Array) -> Array | None:
+        """``(d/du - diag(a))^-1 (-r)`` by GMRES, preconditioned by ``d/du - mean(a)`` (diagonal in Fourier space)."""
+        from scipy.sparse.linalg import LinearOperator, gmres
+
+        shift = float(np.mean(a))
+        if not shift < 0.0:
+            return None  # no contraction on average: the periodic solution is not isolated
+        inverse = 1.0 / (self.ik - shift)
+        n = self.n
+        jac = LinearOperator((n, n), matvec=lambda x: self.deriv(x) - a * x, dtype=float)
+        pre = LinearOperator((n, n), matvec=lambda x: np.fft.irfft(inverse * np.fft.rfft(x), n), dtype=float)
+        step, info = gmres(jac, -r, M=pre, rtol=GMRES_RTOL, atol=0.0, restart=GMRES_RESTART, maxiter=20)
+        return None if info != 0 else np.asarray(step, dtype=float)
 
     def solve(self, z: Array) -> Array | None:
         """Damped Newton from ``z``; None when it does not converge to ``NEWTON_TOL``."""
         r, a, _ = self.parts(z)
         for _ in range(NEWTON_STEPS):
-            try:
-                step = np.linalg.solve(self.dmat - np.diag(a), -r)
-            except np.linalg.LinAlgError:
+            step = self.newton_step(r, a)
+            if step is None:
                 return None
             lam, norm = 1.0, float(np.max(np.abs(r)))
             while True:
@@ -394,7 +398,7 @@ def steady_state(
     red : Reduced
         The reduced model; ``red.period`` must be set (the crank turns fully).
     drive : callable
-        The driver torque as a function of the speed (e.g. :class:`Motor`).
+        The driver torque as a function of the speed (e.g. :class:`~linkagekit.dynamics.TorqueLaw`).
     extra_inertia : float
         A flywheel on the crank, added to ``M(q)`` (kg*m^2).
     start : SteadyState, optional
@@ -451,9 +455,70 @@ def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float 
     lo, hi = 0.0, 0.0
     while excess(hi) > 0.0:
         lo, hi = hi, max((m_mean + hi) * at(hi).cs / cs * 1.05 - m_mean, 2.0 * hi)
-    root = brentq(excess, lo, hi, xtol=rtol * hi, rtol=rtol)
-    top = min(hi, root + rtol * hi)
-    if excess(top) <= 0.0:
+    root = brentq(excess, lo, hi, xtol=1e-12 * hi, rtol=rtol / 4.0)  # |root - crossing| <= rtol / 4 * root
+    top = root * (1.0 + rtol / 2.0)
+    if top < hi and excess(top) <= 0.0:
         hi = top
     st = at(hi)
     return FlywheelSize(hi, st.cs, base.cs, st)
+
+
+def size_flywheel(
+    mech: Mechanism,
+    cs: float,
+    *,
+    torque: float | Mapping[str, float] | None = None,
+    motor: tuple[float, float] | Mapping[str, tuple[float, float]] | None = None,
+) -> FlywheelSize:
+    """The smallest extra inertia on the driver's crank that keeps the steady state's ``Cs`` at most ``cs``.
+
+    The mechanism has one crank driver that turns fully; the torque law is ``torque`` (a
+    constant, N*m) or ``motor`` ``(T0, W0)``: ``T = T0 (1 - w / W0)``, as :func:`simulate`
+    takes them.  The file's own flywheels stay; the inertia found is added to theirs.
+
+    Parameters
+    ----------
+    mech : Mechanism
+    cs : float
+        The coefficient of speed fluctuation ``(w_max - w_min) / ((w_max + w_min) / 2)`` asked.
+    torque, motor
+        The torque law (one of them).
+
+    Returns
+    -------
+    FlywheelSize
+        ``inertia`` (kg*m^2; ``float(size)``), the ``cs`` reached, ``cs_without`` the extra
+        inertia, and ``steady`` the periodic motion with it.
+
+    Raises
+    ------
+    InputError
+        Not one crank driver that turns fully, no torque law, or ``cs`` not a positive number (exit 2).
+    StallError
+        No periodic motion under this torque law: the machine stalls, or runs away (exit 1).
+
+    Examples
+    --------
+    >>> import linkagekit as lk
+    >>> mech = lk.load("examples/motor_fourbar.yaml")
+    >>> size = lk.size_flywheel(mech, 0.02, motor=(6500.0, 6.5))
+    >>> round(size.cs, 6), size.cs_without > 0.02, round(size.steady.mean_speed, 2)
+    (0.02, True, 6.2)
+    """
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    if len(mech.drivers) != 1 or not isinstance(mech.drivers[0].type, CrankType):
+        kinds = ", ".join(f"'{d.name}' ({d.kind})" for d in mech.drivers) or "none"
+        raise InputError(
+            f"--flywheel: {mech.source}: needs exactly one crank driver (the flywheel's link); drivers: {kinds}"
+        )
+    if torque is None and motor is None:
+        raise InputError("--flywheel: give the torque law: --torque T or --motor T0,W0")
+    try:
+        target = float(cs)
+    except (TypeError, ValueError):
+        raise InputError(f"--flywheel: expected a number, got {cs!r}") from None
+    if not (target > 0.0 and math.isfinite(target)):
+        raise InputError(f"--flywheel: the coefficient of speed fluctuation must be positive, got {cs}")
+    (law,) = _laws(_model(mech), torque, motor)
+    return size_flywheel_reduced(reduced(mech), law, target)
