@@ -51,10 +51,13 @@ from .rates import link_motion, solve_rates
 from .result import Result, frozen
 
 #: relative and absolute tolerances of the integration (SI state: rad or m, rad/s or m/s)
-RTOL = 1e-11
-ATOL = 1e-11
+RTOL = 1e-12
+ATOL = 1e-12
 #: grid points of the one-driver table (over a turn, or over the assembly range)
-POINTS = 4096
+POINTS = 16384
+#: the periodic table starts this share of a grid step before the pose's input (the golden ratio's part: a grid
+#: point never lands exactly on a change point at a rational fraction of a turn from the pose)
+SHIFT = (math.sqrt(5.0) - 1.0) / 2.0
 #: the most output times one simulation gives
 MAX_TIMES = 1_000_000
 
@@ -95,24 +98,19 @@ def _model(mech: Mechanism, flywheel: float = 0.0) -> _Model:
     """The mechanism's dynamic parts in SI, ``flywheel`` (kg*m^2) added to the first driver's link."""
     params = prepare(mech)
     si = mech.length_to_si
-    extra: dict[str, float] = {}
-    for fw in getattr(mech, "flywheels", ()):
-        extra[fw.link] = extra.get(fw.link, 0.0) + float(fw.inertia)
+    extra: dict[str, float] = {}  # the file's flywheels are in params.bodies' inertia already
     if flywheel:
-        link = mech.drivers[0].link
-        extra[link] = extra.get(link, 0.0) + float(flywheel)
+        extra[mech.drivers[0].link] = float(flywheel)
     bodies = [
         (b.link, float(b.mass[0, 0]), float(b.inertia[0, 0]) + extra.pop(b.link, 0.0), _one(b.cg))
         for b in params.bodies
     ]
-    bodies += [(link, 0.0, inertia, None) for link, inertia in extra.items() if link != "ground"]
     loads = tuple((ld.link, complex(ld.force[0, 0]), float(ld.torque[0, 0]), _one(ld.at)) for ld in params.loads)
     idx = {j: i for i, j in enumerate(mech.joint_names)}
     springs = tuple(
-        (idx[s.between[0]], idx[s.between[1]], float(s.stiffness), float(s.free_length) * si)
-        for s in getattr(mech, "springs", ())
+        (idx[s.between[0]], idx[s.between[1]], float(s.stiffness), float(s.free_length) * si) for s in mech.springs
     )
-    dampers = tuple((idx[d.between[0]], idx[d.between[1]], float(d.damping)) for d in getattr(mech, "dampers", ()))
+    dampers = tuple((idx[d.between[0]], idx[d.between[1]], float(d.damping)) for d in mech.dampers)
     scale = np.array([d.type.rate_to_si(si) for d in mech.drivers])
     return _Model(mech, params, scale, tuple(bodies), loads, springs, dampers)
 
@@ -250,7 +248,7 @@ class Reduced:
         q = np.asarray(q, float)
         if self.period is None:
             return q
-        return self.q0 + np.mod(q - self.q0, self.period)
+        return self.q_range[0] + np.mod(q - self.q_range[0], self.period)
 
     def _rows(self, q: ArrayLike) -> np.ndarray:
         return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
@@ -302,7 +300,9 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
     ranges = input_range(mech, 0)
     full = d.type.cyclic and any(hi - lo >= 2 * math.pi / to_si * (1 - 1e-12) for lo, hi in ranges)
     if full:
-        return x0 + np.linspace(0.0, 2 * math.pi * turns, turns * points + 1), 2 * math.pi * turns
+        n = turns * points
+        h = 2 * math.pi * turns / n  # shifted by an irrational part of a step: no grid point on a change point
+        return x0 - SHIFT * h + h * np.arange(n + 1), 2 * math.pi * turns
     for lo, hi in ranges:
         span = (hi - lo) * to_si
         shift = 0.0
@@ -321,7 +321,7 @@ def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, 
     Y, dY = _table_rows(md, _motion(md, q, signs, np.ones_like(q)))  # unit SI speed: J and J' = dJ/dq
     bad = ~np.all(np.isfinite(Y) & np.isfinite(dY), axis=0)
     if bad.any():
-        delta = 1e-6 * (x[1] - x[0])
+        delta = 0.25 * (x[1] - x[0])  # well off the singular position (the rates solver is NaN within 1e-6 of it)
         one = np.ones((1, int(bad.sum())))
         sides = [_table_rows(md, _motion(md, q[:, bad] + s * delta / md.scale[0], signs[:, bad], one)) for s in (-1, 1)]
         Y[:, bad] = 0.5 * (sides[0][0] + sides[1][0])
@@ -393,7 +393,7 @@ class _Run:
 def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
     """The state derivative ``(w, q'')`` of the tabulated model, in plain floats (microseconds a call)."""
     cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
-    q_ref, period = red.q0, red.period
+    q_ref, period = x0, red.period
     T0, W0 = law.T0, law.W0
 
     def rhs(_t: float, y: Any) -> list[float]:
@@ -415,39 +415,59 @@ def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[fl
 
 
 def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float) -> _Run:
-    """One driver: the tabulated model integrated by DOP853; stops at the table's ends (a toggle)."""
-    from scipy.integrate import solve_ivp
-
+    """One driver: the tabulated model integrated by DOP853; a motion that leaves the table's range stops (a toggle)."""
     red = reduced(md.mech)
     rhs = _rhs_reduced(red, law)
-    events: list[Callable[[float, Any], float]] = []
+    y0 = [red.q0, w0]
     if red.period is None:
-        lo, hi = red.q_range
-        events = [lambda _t, y: float(y[0]) - lo, lambda _t, y: hi - float(y[0])]
-        for e in events:
-            e.terminal = True  # type: ignore[attr-defined]
-    sol = solve_ivp(
-        rhs,
-        (times[0], times[-1]),
-        [red.q0, w0],
-        method="DOP853",
-        t_eval=times,
-        rtol=RTOL,
-        atol=ATOL,
-        events=events or None,
-    )
+        t, y, stop = _with_events(red, rhs, times, y0)
+    else:
+        t, y, stop = times, _dop853(rhs, times, y0), None
+    stopped = None if stop is None else _toggle_message(md, 0, *stop)
+    q, w = y
+    qdd = red.accel(q, w, law(w))
+    signs = red.signs(md.params, q) if md.params.plan.n_signs else None
+    return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def _dop853(rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float]) -> np.ndarray:
+    """The state at every output time by the compiled DOP853 (SciPy's ``ode``): microseconds a step."""
+    from scipy.integrate import ode
+
+    solver = ode(rhs).set_integrator("dop853", rtol=RTOL, atol=ATOL, nsteps=10**9)
+    solver.set_initial_value(y0, times[0])
+    y = np.empty((2, len(times)))
+    y[:, 0] = y0
+    for i in range(1, len(times)):
+        y[:, i] = solver.integrate(times[i])
+        if not solver.successful():
+            raise InputError(f"simulate: the integration failed at t = {solver.t:.6g} s")
+    return y
+
+
+def _with_events(
+    red: Reduced, rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float]
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+    """``solve_ivp``'s DOP853 with the table's ends as terminal events: (times, states, (time, q) of a stop)."""
+    from scipy.integrate import solve_ivp
+
+    lo, hi = red.q_range
+
+    def below(_t: float, y: Any) -> float:
+        return float(y[0]) - lo
+
+    def above(_t: float, y: Any) -> float:
+        return hi - float(y[0])
+
+    below.terminal = above.terminal = True  # type: ignore[attr-defined]
+    span = (times[0], times[-1])
+    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[below, above])
     if sol.status < 0:
         raise InputError(f"simulate: the integration failed: {sol.message}")
-    q, w = sol.y
-    stopped = None
     if sol.status == 1:
-        te = float(np.concatenate(sol.t_events)[0])
-        qe = float(np.concatenate([y[:, 0] for y in sol.y_events if len(y)])[0])
-        stopped = _toggle_message(md, 0, te, qe)
-    tau = law(w)
-    qdd = red.accel(q, w, tau)
-    signs = red.signs(md.params, q) if md.params.plan.n_signs else None
-    return _Run(sol.t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+        k = 0 if len(sol.t_events[0]) else 1
+        return sol.t, sol.y, (float(sol.t_events[k][0]), float(sol.y_events[k][0][0]))
+    return sol.t, sol.y, None
 
 
 def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
@@ -581,8 +601,8 @@ def _laws(md: _Model, torque: Any, motor: Any) -> tuple[TorqueLaw, ...]:
 
 def _start_speeds(md: _Model, speed: Any) -> np.ndarray:
     sp = _by_driver(md.mech, speed, "speed")
-    out: np.ndarray = np.array([_number(sp.get(d.name, 0.0), f"speed[{d.name}]") for d in md.mech.drivers])
-    return out * md.scale
+    out: np.ndarray = np.array([_number(sp.get(d.name, 0.0), f"speed[{d.name}]") for d in md.mech.drivers]) * md.scale
+    return out
 
 
 # ---------------------------------------------------------------------- simulate
