@@ -6,14 +6,18 @@ the coefficient of speed fluctuation against a brute-force time integration writ
 stall / runaway cases.
 """
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from linkagekit.errors import InputError, LinkageError
+import linkagekit as lk
+from linkagekit.cli import main
 from linkagekit.dynamics import TorqueLaw as Motor
+from linkagekit.errors import InputError, LinkageError
 from linkagekit.flywheel import StallError, size_flywheel_reduced, steady_state
 
 
@@ -157,3 +161,68 @@ def test_negative_direction_is_the_mirror():
     back = steady_state(model, Motor(-100.0, -10.0))
     assert back.cs == pytest.approx(ahead.cs, rel=1e-7)  # c sin q is odd: q -> -q maps one on the other
     assert np.all(back.w < 0)
+
+
+# ---------------------------------------------------------------------- on a mechanism
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "motor_fourbar.yaml"
+MOTOR = (6500.0, 6.5)
+
+
+@pytest.fixture(scope="module")
+def pump():
+    mech = lk.load(EXAMPLE)
+    return mech, lk.size_flywheel(mech, 0.02, motor=MOTOR)
+
+
+def test_the_sized_pump_keeps_cs_in_a_simulation(pump):
+    """lk.simulate (time integration of the tabulated model) from the periodic state, with the flywheel."""
+    mech, size = pump
+    st = size.steady
+    assert size.cs == pytest.approx(0.02, rel=2e-6) and size.cs <= 0.02
+    assert size.cs_without > 0.2  # without it the beam's changing inertia swings the speed by about 23 %
+    data = mech.to_dict()
+    data["flywheels"] = [{"link": "crank", "inertia": size.inertia}]
+    fly = lk.Mechanism.from_dict(data)
+    period = 2 * np.pi / st.mean_speed
+    res = lk.simulate(fly, np.linspace(0.0, 1.05 * period, 1500), motor=MOTOR, speed=st.w[0])
+    q = np.unwrap(np.radians(res.inputs["crank"]))
+    w = res.omega("crank")
+    # the same motion: the collocation's w(q) at the simulated q, and back to the start after a turn
+    assert np.max(np.abs(w - np.interp(q, st.q, st.w, period=2 * np.pi))) < 1e-6 * st.mean_speed
+    turn = q <= q[0] + 2 * np.pi
+    cs = (w[turn].max() - w[turn].min()) / ((w[turn].max() + w[turn].min()) / 2)
+    assert cs == pytest.approx(size.cs, abs=2e-5)  # the samples, 1500 a turn, miss the extremes by ~1e-5
+    # a flywheel on the file adds to it: the same steady state needs no more
+    assert lk.size_flywheel(fly, 0.02, motor=MOTOR).inertia == 0.0
+
+
+def test_cli_prints_the_inertia(pump, capsys):
+    _, size = pump
+    assert main(["simulate", str(EXAMPLE), "--motor", "6500,6.5", "--flywheel", "0.02"]) == 0
+    assert float(capsys.readouterr().out) == pytest.approx(size.inertia, rel=1e-9)
+    assert main(["simulate", str(EXAMPLE), "--motor", "6500,6.5", "--flywheel", "0.02", "--format", "json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["link"] == "crank" and out["inertia"] == pytest.approx(size.inertia, rel=1e-9)
+    assert out["speed"]["min"] < out["speed"]["mean"] < out["speed"]["max"]
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "words"),
+    [
+        (["--motor", "200,6.5", "--flywheel", "0.02"], 1, "stalls"),  # 200 N*m < the 300 N*m pumping load
+        (["--torque", "500", "--flywheel", "0.02"], 1, "without bound"),  # no speed-dependent term: no balance
+        (["--flywheel", "0.02"], 2, "torque law"),
+        (["--motor", "6500,6.5", "--flywheel", "0"], 2, "positive"),
+        (["--motor", "6500,6.5", "--flywheel", "0.02", "--speed", "1"], 2, "--speed"),
+    ],
+)
+def test_cli_no_steady_state_or_bad_input_one_line(args, code, words, capsys):
+    assert main(["simulate", str(EXAMPLE), *args]) == code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+
+
+def test_a_slider_driver_has_no_crank_for_a_flywheel():
+    mech = lk.load(EXAMPLE.parent / "excavator_bucket_slider.yaml")
+    with pytest.raises(InputError, match="crank driver"):
+        lk.size_flywheel(mech, 0.02, torque=1.0)
