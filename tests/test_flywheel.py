@@ -226,3 +226,10 @@ def test_a_slider_driver_has_no_crank_for_a_flywheel():
     mech = lk.load(EXAMPLE.parent / "excavator_bucket_slider.yaml")
     with pytest.raises(InputError, match="crank driver"):
         lk.size_flywheel(mech, 0.02, torque=1.0)
+
+
+def test_a_crank_that_does_not_turn_fully_is_refused():
+    data = lk.load(EXAMPLE).to_dict()
+    data["drivers"] = [{"link": "beam", "pivot": "B", "toward": "D", "angles": {"start": 110, "stop": 150, "step": 1}}]
+    with pytest.raises(InputError, match="does not turn fully"):
+        lk.size_flywheel(lk.Mechanism.from_dict(data), 0.02, motor=MOTOR)

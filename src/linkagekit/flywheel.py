@@ -141,6 +141,17 @@ class FlywheelSize:
     """The answer of :func:`size_flywheel`: the smallest extra inertia and the steady state with it.
 
     ``float(size)`` is the inertia (kg*m^2).
+
+    Attributes
+    ----------
+    inertia : float
+        The extra inertia on the driver's crank (kg*m^2); 0 when none is needed.
+    cs : float
+        The coefficient of speed fluctuation of the steady state with it.
+    cs_without : float
+        The same without the extra inertia.
+    steady : SteadyState
+        The periodic motion with it.
     """
 
     inertia: float
