@@ -58,6 +58,10 @@ POINTS = 16384
 #: the periodic table starts this share of a grid step before the pose's input (the golden ratio's part: a grid
 #: point never lands exactly on a change point at a rational fraction of a turn from the pose)
 SHIFT = (math.sqrt(5.0) - 1.0) / 2.0
+#: grid steps (of :data:`POINTS` a turn) around a change point where the table is bridged by a fit (:func:`_bridge`)
+BRIDGE = 200
+#: the degree of that fit
+DEGREE = 11
 #: the most output times one simulation gives
 MAX_TIMES = 1_000_000
 
@@ -329,6 +333,34 @@ def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, 
     return Y.T, dY.T
 
 
+def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, period: float | None) -> None:
+    """Rows within :data:`BRIDGE` steps of a change point replaced by a polynomial fit from both sides, in place.
+
+    Near a change point the closed-form solver loses digits (two circles nearly touch: position
+    errors of about ``eps / theta``, the velocity and acceleration coefficients worse), while
+    ``M``, ``Q`` and ``C`` go on smoothly along the branch; a least-squares polynomial of degree
+    :data:`DEGREE` over the samples from ``BRIDGE`` to ``4 BRIDGE`` steps away on both sides
+    bridges them (the interpolant's slope divides value errors by the step: they must be tiny).
+    """
+    h = x[1] - x[0]
+    unique = np.unique(np.round(points / h, 3)) * h  # two sign steps may meet at one change point
+    centres = [c for p in unique for c in ((p,) if period is None else (p - period, p, p + period))]
+    near_any = np.zeros(len(x), bool)
+    for c in centres:
+        near_any |= np.abs(x - c) < BRIDGE * h
+    for c in centres:
+        d = np.abs(x - c)
+        near, ring = d < BRIDGE * h, (d <= 4 * BRIDGE * h) & ~near_any
+        if not near.any() or ring.sum() < 4 * DEGREE:
+            continue
+        scale = 4 * BRIDGE * h
+        V = np.polynomial.chebyshev.chebvander((x[ring] - c) / scale, DEGREE)  # well conditioned on [-1, 1]
+        coef = np.linalg.solve(V.T @ V, V.T @ Y[ring])  # least squares by the (small, tame) normal equations
+        u = (x[near] - c) / scale
+        Y[near] = np.polynomial.chebyshev.chebvander(u, DEGREE) @ coef
+        dY[near] = np.polynomial.chebyshev.chebvander(u, DEGREE - 1) @ np.polynomial.chebyshev.chebder(coef) / scale
+
+
 def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> Reduced:
     """The reduced one-coordinate model of a one-driver mechanism, tabulated along its branch from the pose.
 
@@ -361,6 +393,7 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
         if period is None or np.all(np.bincount(steps, minlength=md.params.plan.n_signs) % 2 == 0):
             break
     Y, dY = _rows_at(md, x, br.signs[:, 0])
+    _bridge(x, Y, dY, np.asarray(where), period)
     if not np.all(np.isfinite(Y)) or np.any(Y[:, 0] <= 0):
         raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
     q0 = float(md.params.pose_inputs[0, 0] * md.scale[0])
@@ -368,13 +401,14 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
     return Reduced(mech.drivers[0].name, q0, rng, period, np.asarray(where) * md.scale[0], np.asarray(steps), Y, dY)
 
 
-def _cells(red: Reduced) -> list[tuple[float, ...]]:
+def _cells(red: Reduced) -> list[float]:
     """Per grid cell, the cubic coefficients in ``t`` in [0, 1] of ``M``, ``Q_s``, ``C`` (plain floats: a fast RHS)."""
     h, Y, dY = red._h, red._Y, red._dY
     y0, y1, d0, d1 = Y[:-1], Y[1:], dY[:-1] * h, dY[1:] * h
     c2 = 3 * (y1 - y0) - 2 * d0 - d1
     c3 = 2 * (y0 - y1) + d0 + d1
-    return [tuple(r) for r in np.stack([y0, d0, c2, c3], axis=1).reshape(len(y0), 12).tolist()]
+    out: list[float] = np.stack([y0, d0, c2, c3], axis=1).ravel().tolist()  # 12 per cell: M, Q_s, C by power
+    return out
 
 
 # ---------------------------------------------------------------------- integration
@@ -403,7 +437,7 @@ def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[fl
         s = (q - x0) / h
         i = min(max(int(s), 0), n)
         t = s - i
-        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[i]
+        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[12 * i : 12 * i + 12]
         M = ((m3 * t + m2) * t + m1) * t + m0
         dM = ((3 * m3 * t + 2 * m2) * t + m1) / h
         Qs = ((q3 * t + q2) * t + q1) * t + q0
