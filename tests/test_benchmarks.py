@@ -140,3 +140,11 @@ def test_benchmarks_leave_no_module_cache():
         "timing",
     ):
         sys.modules.pop(name, None)
+
+
+def test_bench_burmester(capsys):
+    import bench_burmester
+
+    bench_burmester.main(2, seed=1)
+    out = capsys.readouterr().out
+    assert "generator listed" in out and "2/2" in out

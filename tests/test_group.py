@@ -17,13 +17,17 @@ Checked against other computations:
 
 from __future__ import annotations
 
+import cmath
+import copy
+import functools
 import math
+import warnings
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.optimize import root
+from scipy.optimize import fsolve, root
 
 import linkagekit as lk
 from helpers import TRIAD_LINKS, fourbar_dict, points, random_points, stephenson_dict, velocities, watt2_dict, xy
@@ -364,16 +368,14 @@ def walks() -> list[lk.Result]:
 
 
 def test_the_shortcuts_change_no_sample_and_no_bit(monkeypatch):
-    """Chain bounds and look-ahead batches (docs/method.md, "Cost, at the same results") give exactly the walk
-    solved one step at a time: the same assembled samples and bit-identical positions."""
+    """Chain bounds (docs/method.md, "Cost, at the same results") give exactly the walk without them: the same
+    assembled samples and bit-identical positions. (The look-ahead batches this test also switched off are gone:
+    the walk now follows a fixed grid, one Newton batch per step for every design.)"""
     from linkagekit import group
 
     fast = walks()
     assert all(0.05 < r.assembled.mean() < 0.95 for r in fast)  # every case walks through gaps
     monkeypatch.setattr(group.Group, "_possible", lambda self, K, reach: np.ones(K.shape[1:], bool))
-    monkeypatch.setattr(group, "AHEAD_FIRST", 1)
-    monkeypatch.setattr(group, "AHEAD_MOST", 1)
-    monkeypatch.setattr(group.Group, "_ahead_of", lambda self, seg, w: [group._Ahead(w.out.shape[1]) for _ in seg])
     for a, b in zip(fast, walks(), strict=True):
         assert np.array_equal(a.assembled, b.assembled)
         assert np.array_equal(points(a), points(b), equal_nan=True)
@@ -418,3 +420,194 @@ def test_chains_never_rule_out_an_assembled_sample(seed):
         assert ruled_out > 0 or res.assembled.all() or method == "natural"
         if method == "numerical":
             assert ruled_out == np.sum(~res.assembled)  # a four-bar's only gap: its dyad's circles do not meet
+
+
+# ----------------------------------------------------------------------------- a crank's input is a direction
+# Issue 29: a six-bar of Pyslvs' collection whose class-3 group assembles over part of the crank's turn only.
+# Before, inputs were walked to as given (not modulo a turn): --at=360 and --at=-250 (110 deg) were not assembled,
+# and the edge of the range moved with the other inputs asked.
+SIX = {
+    "format": "linkagekit/1",
+    "name": "Six bar linkage mechanism (Pyslvs collection)",
+    "units": {"length": "mm", "angle": "deg"},
+    "joints": {
+        "P0": [5.8511, -103.2831],
+        "P1": [-71.3292, -109.7644],
+        "P2": [77.8903, -110.263],
+        "P3": [23.7994, 20.3606],
+        "P4": [-33.1974, 90.658],
+        "P5": [112.2951, 18.3663],
+        "P6": [-117.0519, -18.5671],
+    },
+    "links": {
+        "ground": ["P0", "P1", "P2"],
+        "L2": ["P0", "P3"],
+        "L3": ["P1", "P6"],
+        "L5": ["P2", "P5"],
+        "L1": ["P3", "P4", "P5"],
+        "L4": ["P4", "P6"],
+    },
+    "drivers": [{"link": "L3", "pivot": "P1", "toward": "P6"}],
+}
+
+
+class SixbarReference:
+    """The six-bar by another formulation: unknowns the angle of L2 and the rotation of the ternary L1 from its
+    pose (2 reals; the ternary is rigid and keeps its handedness by construction), equations the lengths of L5 and
+    L4; continued from the pose in small steps with scipy's fsolve, keeping the sign of the 2x2 Jacobian."""
+
+    STEP = 0.5  # degrees
+
+    def __init__(self, doc):
+        J = {k: complex(*v) for k, v in doc["joints"].items()}
+        self.J = J
+        self.r = abs(J["P6"] - J["P1"])
+        self.l2, self.l5, self.l4 = abs(J["P3"] - J["P0"]), abs(J["P5"] - J["P2"]), abs(J["P4"] - J["P6"])
+        self.d4, self.d5 = J["P4"] - J["P3"], J["P5"] - J["P3"]
+        self.x0 = math.degrees(cmath.phase(J["P6"] - J["P1"]))
+        self.size = max(abs(z - np.mean(list(J.values()))) for z in J.values())
+        start = np.array([cmath.phase(J["P3"] - J["P0"]), 0.0])
+        self.sign = np.sign(np.linalg.det(self.jac(start, self.x0)))
+        self.cache = {}
+        self.up = self.walk(start, +1)
+        self.down = self.walk(start, -1)
+
+    def points(self, x, a):
+        J = self.J
+        P3 = J["P0"] + self.l2 * cmath.exp(1j * x[0])
+        rot = cmath.exp(1j * x[1])
+        return {
+            "P3": P3,
+            "P4": P3 + self.d4 * rot,
+            "P5": P3 + self.d5 * rot,
+            "P6": J["P1"] + self.r * cmath.exp(1j * math.radians(a)),
+        }
+
+    def F(self, x, a):
+        p = self.points(x, a)
+        return [abs(p["P5"] - self.J["P2"]) - self.l5, abs(p["P4"] - p["P6"]) - self.l4]
+
+    def jac(self, x, a, h=1e-7):
+        return np.array([(np.array(self.F(x + e, a)) - self.F(x - e, a)) / (2 * h) for e in np.eye(2) * h]).T
+
+    def solve(self, x, a):
+        """From x to input a (a small step): the solution on the pose's branch, or None."""
+        with warnings.catch_warnings():  # it may say it cannot improve: the residual decides
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sol = fsolve(self.F, x, args=(a,), xtol=1e-13)
+        if max(abs(v) for v in self.F(sol, a)) > 1e-11 * self.size:
+            return None
+        if np.sign(np.linalg.det(self.jac(sol, a))) != self.sign or np.max(np.abs(sol - x)) > 0.3:
+            return None
+        return sol
+
+    def walk(self, x, direction):
+        """States every STEP degrees from the pose until the branch ends (at most a turn); the end to 1e-9 deg."""
+        states = [(self.x0, x)]
+        a = self.x0
+        while abs(a - self.x0) < 360:
+            nxt = self.solve(x, a + direction * self.STEP)
+            if nxt is None:
+                break
+            a, x = a + direction * self.STEP, nxt
+            states.append((a, x))
+        else:
+            return states, None
+        lo, hi = 0.0, self.STEP  # bisection of the last step, from the last good state
+        while hi - lo > 1e-10:
+            mid = (lo + hi) / 2
+            got = self.solve(x, a + direction * mid)
+            if got is None:
+                hi = mid
+            else:
+                lo = mid
+        return states, a + direction * lo
+
+    @property
+    def range(self):
+        return self.down[1], self.up[1]
+
+    def at(self, u):
+        """The joints P3, P4, P5 at direction u (deg), or None where the pose's branch does not reach it."""
+        lo, hi = self.range
+        a = lo + (u - lo) % 360.0  # the direction (the same for u + 360 k, to rounding)
+        key = round(a, 11)
+        if a > hi:
+            return None
+        if key not in self.cache:
+            self.cache[key] = self.solve_at(a)
+        return self.cache[key]
+
+    def solve_at(self, a):
+        states = self.up[0] if a >= self.x0 else self.down[0]
+        k = min(int(abs(a - self.x0) // self.STEP), len(states) - 1)
+        sol = self.solve(states[k][1], a)
+        if sol is None:
+            return None
+        p = self.points(sol, a)
+        return np.array([p["P3"], p["P4"], p["P5"]])
+
+
+@functools.cache
+def sixbar(dx: float = 0.0, dy: float = 0.0) -> tuple[lk.Mechanism, SixbarReference]:
+    """The six-bar with joint P4 moved by (dx, dy) (other lengths of L1 and L4: another limited range)."""
+    doc = copy.deepcopy(SIX)
+    doc["joints"]["P4"] = [SIX["joints"]["P4"][0] + dx, SIX["joints"]["P4"][1] + dy]
+    return lk.Mechanism.from_dict(doc), SixbarReference(doc)
+
+
+def joints_of(res) -> tuple[np.ndarray, np.ndarray]:
+    """The group's joints P3, P4, P5 (3, n) and the flags (n,) of a result."""
+    return np.array([res.point(j) for j in ("P3", "P4", "P5")]), np.asarray(res.assembled)
+
+
+def check_against_reference(ref: SixbarReference, u: np.ndarray, pts: np.ndarray, ok: np.ndarray) -> None:
+    """Samples at inputs ``u`` (degrees) assembled exactly where the reference reaches their direction, and there
+    at the reference's joints (1e-9 of the size)."""
+    for i, ui in enumerate(u):
+        want = ref.at(float(ui))
+        assert ok[i] == (want is not None), (ui, ok[i])
+        if want is not None:
+            err = np.max(np.abs(pts[:, i] - want)) / ref.size
+            assert err <= 1e-9, (ui, err)
+
+
+def same_answers(pts_a: np.ndarray, ok_a: np.ndarray, pts_b: np.ndarray, ok_b: np.ndarray, size: float) -> None:
+    assert np.array_equal(ok_a, ok_b)
+    assert np.max(np.abs(pts_a[:, ok_a] - pts_b[:, ok_b]), initial=0.0) <= 1e-9 * size
+
+
+@pytest.mark.parametrize("moved", [(0.0, 0.0), (3.0, 0.0), (-2.0, 4.0)])
+def test_a_cranks_input_is_a_direction(moved):
+    """The six-bar and two variants with other ranges: the range ``check`` reports is the reference continuation's
+    (1e-6 deg); inputs u + 360 k (k = -3..3) answer alike in a shuffled list, in a 1-degree list from -1080 to
+    1080 and (the six-bar) alone: positions to 1e-9 of the size, the same flags; assembled exactly where the
+    direction lies in the range, and there equal to the reference continuation from the pose (1e-9 of the size)."""
+    from linkagekit.checks import input_range
+
+    mech, ref = sixbar(*moved)
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo - ref.range[0]) <= 1e-6 and abs(hi - ref.range[1]) <= 1e-6, (lo, hi, ref.range)
+    assert hi - lo < 330  # a limited range: the directions beyond it do not assemble
+    # directions across the turn, and a hair (1e-4 deg) inside and outside each end
+    u = np.concatenate([np.linspace(-180.0, 180.0, 12, endpoint=False), [lo + 1e-4, hi - 1e-4, lo - 1e-4, hi + 1e-4]])
+    every = (u[:, None] + 360.0 * np.arange(-3, 4)[None, :]).ravel()
+    perm = np.random.default_rng(29).permutation(len(every))
+    pts, ok = joints_of(lk.analyze(mech, {"L3": every[perm]}, rates=False))
+    check_against_reference(ref, every[perm], pts, ok)
+    # a 1-degree list: each sample as the same direction in [-180, 180), and those as the reference
+    x = np.arange(-1080.0, 1081.0, 1.0)
+    dpts, dok = joints_of(lk.analyze(mech, {"L3": x}, rates=False))
+    turn = np.flatnonzero((x >= -180) & (x < 180))
+    same = turn[np.searchsorted(x[turn], (x + 180.0) % 360.0 - 180.0)]
+    same_answers(dpts, dok, dpts[:, same], dok[same], ref.size)
+    check_against_reference(ref, x[turn][::5], dpts[:, turn[::5]], dok[turn[::5]])
+    if moved == (0.0, 0.0):  # alone: each input its own call (the issue's --at=360, --at=-250, --at=-300 too)
+        for ui in [hi - 1e-4, 0.0, 110.0]:
+            alone = [joints_of(lk.analyze(mech, {"L3": [ui + 360.0 * k]}, rates=False)) for k in range(-3, 4)]
+            check_against_reference(
+                ref,
+                np.full(7, ui),
+                np.concatenate([a[0] for a in alone], axis=1),
+                np.concatenate([a[1] for a in alone]),
+            )

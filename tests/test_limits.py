@@ -1,8 +1,8 @@
 """Limits that keep hostile or extreme input from hanging or exhausting the machine (issue 23, items 1-3).
 
-* the numerical walk of a group goes at most ``group.WALK_TURNS`` turns of an angle driver
-  from the pose's input: a sample farther away is not reached (NaN, not assembled), in a
-  bounded CPU time, and a sample inside the reach is solved as before;
+* the numerical walk of a group follows a fixed grid over at most a turn either way of an
+  angle driver (a crank's input is a direction, issue 29): a sample however far away is
+  answered as its direction, in a bounded CPU time;
 * files are read through a regular-file check and a byte limit (``/dev/zero``, a FIFO, a
   file over the limit: one line naming the file, never a hang or a memory error);
 * the Python API refuses complex values and checks sizes before converting anything; the
@@ -19,7 +19,8 @@ import pytest
 
 import linkagekit as lk
 from linkagekit.api import prepare
-from linkagekit.group import WALK_REACH, WALK_TURNS
+from linkagekit.group import GRID_STEP
+from linkagekit.positions import _walk_grid
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
 TRIAD = ROOT / "examples" / "triad_six_modes.yaml"
@@ -37,48 +38,60 @@ def cpu(fn):
 
 
 # ---------------------------------------------------------------------- 1. the numerical walk
-def test_walk_reach_is_ten_turns():
-    assert WALK_TURNS == 10
-    assert abs(WALK_REACH - 2 * math.pi * 10) <= 1e-12
+def test_walk_grid_is_at_most_a_turn_either_way():
+    """However far the inputs, the grid the walk follows spans at most a turn either way of the pose's input
+    (before issue 29: at most ten turns, and samples beyond were not reached)."""
+    params = prepare(lk.load(TRIAD))
+    _, grid = _walk_grid(params, np.radians([[[1e11, -1e11, 1e5, -30.0]]]))
+    turn = 2 * math.pi / GRID_STEP
+    assert len(grid.index) <= 2 * math.ceil(turn) + 3 and grid.index.min() >= -turn - 1 and grid.index.max() <= turn + 1
+
+
+def _reduced(at: float) -> float:
+    return float(np.mod(at, 360.0))  # exact for a float
 
 
 @pytest.mark.parametrize("at", [1e11, -1e11, 1e5, 1e12])
-def test_far_input_of_a_class3_group_is_not_reached_in_bounded_time(at):
-    """Before: 1e11 deg was a MemoryError (745 GiB of walk samples) and 1e5 deg took minutes."""
+def test_far_input_of_a_class3_group_is_its_direction_in_bounded_time(at):
+    """Before: 1e11 deg was a MemoryError (745 GiB of walk samples) and 1e5 deg took minutes; then (ten turns of
+    reach) it was not assembled. A crank's input is a direction: the answer is that of the same direction in
+    [0, 360), to the precision the input carries (its conversion to radians rounds by about 1e-16 of it)."""
     mech = lk.load(TRIAD)
-    res, spent = cpu(lambda: lk.analyze(mech, np.array([at, -30.0])))
-    assert res.assembled.tolist() == [False, True]
-    assert np.all(np.isnan(res.x("J1")[:1])) and np.all(np.isfinite(res.x("J1")[1:]))
+    res, spent = cpu(lambda: lk.analyze(mech, np.array([at, -30.0, _reduced(at)])))
+    assert res.assembled[1] and res.assembled[0] == res.assembled[2]
+    size = max(abs(p) for p in mech.joints.values())
+    tol = 1e-9 * size + 1e-15 * math.radians(abs(at)) * 10 * size
+    for j in mech.joints:
+        assert abs(res.x(j)[0] - res.x(j)[2]) <= tol and abs(res.y(j)[0] - res.y(j)[2]) <= tol, j
     assert spent < CPU_BUDGET
 
 
-def test_far_input_through_the_command_line_is_flagged(capsys):
+def test_far_input_through_the_command_line_is_its_direction(capsys):
+    import json
+
     from linkagekit.cli import main
 
     assert main(["analyze", str(TRIAD), "--at", "1e11", "--format", "json"]) == 0
-    import json
+    far = json.loads(capsys.readouterr().out)
+    assert main(["analyze", str(TRIAD), "--at", "280", "--format", "json"]) == 0
+    near = json.loads(capsys.readouterr().out)
+    assert far["assembled"] == near["assembled"] == [True]
 
-    doc = json.loads(capsys.readouterr().out)
-    assert doc["assembled"] == [False]
 
-
-def test_walk_reach_boundary_numerical_fourbar():
-    """A crank-rocker forced onto the numerical group: inside the reach it agrees with the closed form
-    (1e-9 of its size) however many turns away; just outside, the sample is not reached."""
+def test_far_inputs_numerical_fourbar():
+    """A crank-rocker forced onto the numerical group agrees with the closed form (1e-9 of its size) however many
+    turns away (before issue 29, beyond ten turns the samples were not reached)."""
     mech = lk.load(FOURBAR)
     x0 = float(np.degrees(prepare(mech).pose_inputs[0, 0]))
-    reach = math.degrees(WALK_REACH)
-    inside = x0 + np.array([reach - 0.5, -reach + 0.5, 17.0, reach - 200.3])
-    outside = x0 + np.array([reach + 0.5, -reach - 0.5, 1e11])
-    x = np.concatenate([inside, outside])
+    reach = 3600.0
+    x = x0 + np.array([reach - 0.5, -reach + 0.5, 17.0, reach - 200.3, reach + 0.5, -reach - 0.5, 1e7 + 0.25])
     num, spent = cpu(lambda: lk.analyze(mech, x, method="numerical", rates=False))
     closed = lk.analyze(mech, x, rates=False)
-    assert closed.assembled.all()
-    assert num.assembled.tolist() == [True] * len(inside) + [False] * len(outside)
+    assert closed.assembled.all() and num.assembled.all()
     size = max(abs(p) for p in mech.joints.values())
     for j in mech.joints:
-        got = num.x(j)[: len(inside)] + 1j * num.y(j)[: len(inside)]
-        want = closed.x(j)[: len(inside)] + 1j * closed.y(j)[: len(inside)]
+        got = num.x(j) + 1j * num.y(j)
+        want = closed.x(j) + 1j * closed.y(j)
         assert np.max(np.abs(got - want)) <= 1e-9 * size, j
     assert spent < CPU_BUDGET
 
@@ -342,19 +355,17 @@ def test_inputs_that_are_not_numbers_are_refused(value):
         lk.analyze(mech, {"crank": value})
 
 
-def test_analyze_says_when_samples_lie_beyond_the_walk(capsys):
-    """A sample beyond the numerical walk's reach is not assembled, and the command says why (stderr);
-    a sample within reach, or a mechanism without a numerical group, gets no such note."""
+def test_analyze_answers_far_samples_as_their_direction(capsys):
+    """A sample many turns of a crank from the pose's input answers as its direction, with no note (before issue
+    29 it was not assembled and a note said the walk did not go that far)."""
     from linkagekit import cli
 
     assert cli.main(["analyze", "examples/triad_six_modes.yaml", "--at", "1e11,60,-5000", "--format", "csv"]) == 0
     out, err = capsys.readouterr()
-    assert out.splitlines()[1].startswith("100000000000.0,false") and out.splitlines()[2].startswith("60.0,true")
-    assert err.strip().splitlines() == [
-        "linkagekit: note: 2 sample(s) lie more than 10 turns of a crank from the pose's input: the numerical "
-        "group is not followed that far, so they are shown as not assembled"
-    ]
-    assert cli.main(["analyze", "examples/triad_six_modes.yaml", "--at", "60", "--format", "csv"]) == 0
-    assert capsys.readouterr().err == ""
-    assert cli.main(["analyze", "examples/seed000_fourbar.yaml", "--at", "1e11", "--format", "csv"]) == 0
-    assert capsys.readouterr().err == ""
+    assert err == ""
+    assert cli.main(["analyze", "examples/triad_six_modes.yaml", "--at", "280,60,40", "--format", "csv"]) == 0
+    near, _ = capsys.readouterr()
+    for far_row, near_row in zip(out.splitlines()[1:], near.splitlines()[1:], strict=True):
+        a, b = far_row.split(",")[1:], near_row.split(",")[1:]
+        assert a[:2] == b[:2] == ["true", "false"]  # assembled, not singular
+        assert np.allclose([float(v) for v in a[2:]], [float(v) for v in b[2:]], rtol=1e-5, atol=1e-5)

@@ -305,6 +305,17 @@ def _input_values(
     return values, q
 
 
+def sweep_inputs(mech: Mechanism, params: Params) -> np.ndarray:
+    """``q`` (drivers, D or 1, n) in solver units of the file's own sweep, exactly as :func:`analyze` runs it.
+
+    ``n`` is the first driver's sweep count; a driver whose sweep has another count stays at
+    each design's pose value (:func:`_input_values`).
+    """
+    n = mech.drivers[0].sweep.count()
+    D = params.pose_inputs.shape[1]
+    return _input_values(mech, params, {}, n, D, D > 1)[1]
+
+
 def _input_rates(mech: Mechanism, o: Options, n: int) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Every driver's input speed and acceleration over the samples (``static``: zero)."""
     speed, acceleration = o.speed, o.acceleration

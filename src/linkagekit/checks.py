@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .api import analyze, prepare
+from .api import analyze, prepare, sweep_inputs
 from .branch import along_sweep
 from .errors import InputError
 from .group import Group
@@ -1438,7 +1438,7 @@ def check(mech: Mechanism) -> CheckReport:
 
 def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...]:
     """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`)."""
-    q = np.array([d.sweep.values() * d.input_scale(mech) for d in mech.drivers])[:, None, :]
+    q = sweep_inputs(mech, params)
     br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
     steps, _, where = br.points
     drv = mech.drivers[br.driver]

@@ -513,10 +513,14 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="fourbar (default), watt2, stephenson3, or a mechanism file used as a template (see --free)",
     )
     _output_option(p, "the mechanism file to write: .yaml or .json")
-    p.add_argument("--seconds", metavar="S", default="60", help="time budget (default 60)")
+    p.add_argument(
+        "--seconds", metavar="S", default=_DEFAULT_SECONDS, help="time budget (default 60; 10 for --task function)"
+    )
     p.add_argument("--seed", metavar="N", default="0", help="random seed (default 0)")
     p.add_argument(
-        "--min-transmission", metavar="DEG", default="20", help="smallest transmission angle, degrees (default 20)"
+        "--min-transmission",
+        metavar="DEG",
+        help="smallest transmission angle, degrees (default 20; 0 with --task motion or function)",
     )
     p.add_argument("--workers", metavar="N", default="1", help="evaluate each generation on N local processes")
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
@@ -541,7 +545,27 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
     )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
+    p.add_argument(
+        "--task",
+        choices=SYNTHESIS_TASKS,
+        default="path",
+        help="path (default: a point follows the targets), motion (a body passes through poses x,y,angle) "
+        "or function (an output angle follows an input angle)",
+    )
+    p.add_argument(
+        "--approximate", action="store_true", help="motion, 3 to 5 poses: the approximate route, not Burmester's"
+    )
+    p.add_argument(
+        "--angle-weight",
+        metavar="W",
+        help="motion: one radian of orientation error weighs as much as W diagonals of position error (default 0.05)",
+    )
+    p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
+    p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
+
+#: the tasks of ``synthesize --task`` (spec section 6)
+SYNTHESIS_TASKS = ("path", "motion", "function")
 
 #: --quantity groups: the report's plots, by their short name
 _QUANTITY_GROUPS = {g.short: g for g in Group if g.plotted}
@@ -975,7 +999,6 @@ def _analyze(args: argparse.Namespace) -> int:
         static=args.static,
         branch=args.branch,
     )
-    _note_beyond_reach(res, args.method == "numerical")
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
         return 0
@@ -990,32 +1013,6 @@ def _analyze(args: argparse.Namespace) -> int:
     )
     _emit(text, args.output)
     return 0
-
-
-def _note_beyond_reach(res: Any, numerical: bool) -> None:
-    """One line on stderr when samples were not assembled because the numerical walk does not go that far.
-
-    A numerical group is continued from the pose's input at most ``group.WALK_TURNS`` turns of
-    a crank each way; a sample beyond is reported as not assembled, whatever the mechanism
-    would do there: say so, rather than let it read as a gap of the mechanism.
-    """
-    import numpy as np
-
-    from .api import prepare
-    from .group import WALK_TURNS
-    from .positions import beyond_reach
-
-    mech = res.mechanism
-    params = prepare(mech, numerical=numerical)
-    q = np.array([np.broadcast_to(res.inputs[d.name], res.shape) * d.input_scale(mech) for d in mech.drivers])
-    far = beyond_reach(params, q)
-    count = int(np.sum(far & ~np.asarray(res.assembled)))
-    if count:
-        print(
-            f"{PROG}: note: {count} sample(s) lie more than {WALK_TURNS} turns of a crank from the pose's input: "
-            "the numerical group is not followed that far, so they are shown as not assembled",
-            file=sys.stderr,
-        )
 
 
 def _modes(args: argparse.Namespace) -> int:
@@ -1277,6 +1274,10 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    if args.task == "motion":
+        return _synthesize_motion(args)
+    if args.task == "function":
+        return _synthesize_function(args)
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
@@ -1297,6 +1298,202 @@ def _synthesize(args: argparse.Namespace) -> int:
         _plot_synthesis(out, targets, args.plot)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     return 0
+
+
+#: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
+_DEFAULT_SECONDS, FUNCTION_SECONDS = "60", 10.0
+
+
+def _synthesize_function(args: argparse.Namespace) -> int:
+    """``linkagekit synthesize --task function``: a four-bar whose output angle follows the pairs."""
+    import dataclasses
+    import os
+
+    import linkagekit as lk
+
+    from .synthesis.function import read_pairs
+    from .synthesis.function_run import synthesize_function
+    from .units import LENGTH_UNITS
+
+    _suffix(args.output, (".yaml", ".yml", ".json"))
+    if args.plot:
+        _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    if args.units not in LENGTH_UNITS:
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
+    length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
+    x, y = read_pairs(args.targets)
+    engine = {
+        k: v for k, v in _search_options(args).items() if k in ("seconds", "seed", "restarts", "generations", "workers")
+    }
+    if args.seconds == _DEFAULT_SECONDS:
+        engine["seconds"] = FUNCTION_SECONDS
+    given = args.min_transmission is not None  # the task imposes no bound unless asked
+    engine["min_transmission"] = _one_number(args.min_transmission, "--min-transmission") if given else 0.0
+    out = synthesize_function(
+        x,
+        y,
+        free_offsets=args.free_offsets,
+        ground_length=length,
+        units=args.units,
+        source=os.path.basename(args.targets),
+        **engine,
+    )
+    fit, mech = out.fit, out.mechanism
+    words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
+    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}", f"--seed {engine['seed']}"]
+    mech = dataclasses.replace(mech, description="command: " + " ".join(words))
+    lk.save(mech, args.output)
+    if args.plot:
+        _plot_function(mech, fit, args.plot)
+    print(function_text(out, args.units, args.output))
+    return 0
+
+
+def _plot_function(mech: Any, fit: Any, path: str) -> None:
+    """``--plot`` of a function generator: its output angle (by ``analyze``) against the input, with the pairs."""
+    import numpy as np
+
+    import linkagekit as lk
+
+    from .viz import draw
+
+    phi0, psi0 = fit.offsets
+    x = np.linspace(fit.inputs[0], fit.inputs[-1], 361)
+    psi = lk.analyze(mech, {"crank": x + phi0}).angle("output")
+    out = fit.outputs[0] + (psi - psi0 - fit.outputs[0] + 180.0) % 360.0 - 180.0  # unwrapped near the first pair
+    pairs = np.stack([fit.inputs, fit.outputs], axis=1)
+    fig, ax = draw.function_figure(np.stack([x, out], axis=1), pairs, fit.errors)
+    draw.save_figure(fig, path, ax)
+
+
+def _positive(text: str, option: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"{option}: expected a number, got {shorten(repr(text))}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option}: expected a positive number, got {shorten(repr(text))}")
+    return value
+
+
+def function_text(out: Any, unit: str, path: str) -> str:
+    """The table of pairs and errors, and the summary, that ``synthesize --task function`` prints."""
+    fit = out.fit
+    cols = [
+        Column("pair", [str(i + 1) for i in range(len(fit.inputs))]),
+        Column("input [deg]", format_cells(fit.inputs)),
+        Column("output [deg]", format_cells(fit.outputs)),
+        Column("error [deg]", format_cells(fit.errors)),
+    ]
+    a, b, c, d = fit.lengths
+    side = "left" if fit.branch > 0 else "right"
+    lines = [*render_table(cols), ""]
+    lines.append(f"max error {fit.max_error:.6g} deg ({fit.method})")
+    if fit.offsets != (0.0, 0.0):
+        lines.append(
+            f"offsets: crank angle = input + {fit.offsets[0]:.6g} deg, output angle = output + {fit.offsets[1]:.6g} deg"
+        )
+    lines.append(f"crank {a:.6g}, coupler {b:.6g}, output {c:.6g}, ground {d:.6g} {unit}; Grashof type {fit.grashof}")
+    state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
+    lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
+    lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
+    if out.engine is not None:
+        o = out.engine.outcome
+        lines.append(
+            f"engine: {o.restarts} searches, {o.evaluations} designs in {o.seconds:.1f} s "
+            f"(its best, before the minimax polish: {math.degrees(out.engine.error):.6g} deg)"
+        )
+    lines.append(f"wrote {path}")
+    return "\n".join(lines)
+
+
+def _synthesize_motion(args: argparse.Namespace) -> int:
+    """``linkagekit synthesize POSES.csv --task motion``: a four-bar whose coupler passes through the poses."""
+    import dataclasses
+
+    import linkagekit as lk
+
+    from .synthesis.motion import read_poses
+    from .synthesis.run import synthesize_motion
+
+    if args.topology != "fourbar":
+        _motion_template(args.topology)
+    seconds = _one_number(args.seconds, "--seconds")
+    if not 0 < seconds <= 1e7:
+        raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
+    weight = None if args.angle_weight is None else _one_number(args.angle_weight, "--angle-weight")
+    pf = read_poses(args.targets)
+    out = synthesize_motion(
+        pf.poses,
+        inputs=None if pf.inputs is None else list(pf.inputs),
+        closed=pf.closed,
+        approximate=args.approximate,
+        weight=weight,
+        min_transmission=_one_number(args.min_transmission, "--min-transmission") if args.min_transmission else 0.0,
+        units=args.units,
+        seed=_integer(args.seed, "--seed", 0, 2**32 - 1),
+        seconds=seconds,
+    )
+    best = out.best
+    described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"
+    lk.save(dataclasses.replace(best.mechanism, description=described), args.output)
+    if args.plot:
+        from .viz import draw
+
+        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed)
+        draw.save_figure(fig, args.plot, fig.axes[0])
+    print(motion_text(out, pf.poses, args.units, args.output))
+    return 0
+
+
+def _motion_template(path: str) -> None:
+    """``--topology FILE`` with ``--task motion``: refused unless a four-bar whose coupler carries ``P`` and ``Q``."""
+    import os
+
+    import linkagekit as lk
+
+    if not os.path.exists(path):
+        raise InputError(f"--topology: '{shorten_path(path)}' is neither fourbar nor a file")
+    mech = lk.load(path)
+    if not any({"P", "Q"} <= set(link.joints) for link in mech.links):
+        raise InputError(f"{shorten_path(path)}: a motion template needs tracer joints P and Q on one link")
+    raise InputError(f"{shorten_path(path)}: motion generation designs four-bars only (--topology fourbar)")
+
+
+def motion_text(out: Any, poses: Any, unit: str, path: str | None) -> str:
+    """The table of poses and errors, the summary and the other four-bars found, that ``--task motion`` prints."""
+    import numpy as np
+
+    best = out.best
+    cols = [
+        Column("pose", [str(i + 1) for i in range(len(poses))]),
+        Column(f"x [{unit}]", format_cells(poses[:, 0])),
+        Column(f"y [{unit}]", format_cells(poses[:, 1])),
+        Column("angle [deg]", format_cells(poses[:, 2])),
+        Column("crank [deg]", format_cells(np.mod(best.inputs, 360.0))),
+        Column(f"error [{unit}]", format_cells(best.position_errors)),
+        Column("error [deg]", format_cells(best.angle_errors)),
+    ]
+    lines = render_table(cols)
+    lines.append("")
+    lines.append(
+        f"{best.method} four-bar: max error {best.max_position_error:.6g} {unit} "
+        f"({100 * best.max_position_error / out.diagonal:.4g} % of the poses' diagonal {out.diagonal:.6g} {unit}) "
+        f"and {best.max_angle_error:.4g} deg"
+    )
+    branch = "met in order on one branch" if best.one_branch else "NOT met in order on one branch"
+    lines.append(f"{best.grashof}; poses {branch}; smallest transmission angle {best.min_transmission:.4g} deg")
+    if len(out.fourbars) > 1:
+        lines.append(f"{len(out.fourbars)} four-bars found (best first):")
+        for i, f in enumerate(out.fourbars):
+            order = "one branch" if f.one_branch else "not in order on one branch"
+            lines.append(
+                f"  {i + 1}. {f.method}, {f.grashof}, {order}: max error {f.max_position_error:.4g} {unit}, "
+                f"{f.max_angle_error:.4g} deg"
+            )
+    if path is not None:
+        lines.append(f"wrote {path}")
+    return "\n".join(lines)
 
 
 def _synthesize_resume(args: argparse.Namespace) -> str:
@@ -1335,18 +1532,28 @@ _SYNTHESIZE_DECIDING = (
 )
 
 
+#: the options that decide a ``--task motion`` result (besides --task, --approximate and --angle-weight)
+_MOTION_DECIDING = ("units", "seed", "seconds", "min_transmission")
+
+
 def _synthesize_command(args: argparse.Namespace) -> str:
     """The command that gives this result again, from the targets' directory (every deciding option spelt out)."""
     import os
     import shlex
 
     words = [PROG, "synthesize", os.path.basename(args.targets)]
-    for name in _SYNTHESIZE_DECIDING:
+    deciding = _MOTION_DECIDING if args.task == "motion" else _SYNTHESIZE_DECIDING
+    for name in deciding:
         value = getattr(args, name)
+        if name == "min_transmission" and value is None and args.task == "path":
+            value = "20"
         if value is not None:
             words += ["--" + name.replace("_", "-"), str(value)]
     if args.ordered:
         words.append("--ordered")
+    if args.task != "path":
+        words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
+        words += ["--angle-weight", str(args.angle_weight)] if args.angle_weight is not None else []
     return " ".join(shlex.quote(w) for w in words)
 
 
@@ -1363,7 +1570,7 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
     options: dict[str, Any] = {
         "seconds": seconds,
         "seed": _integer(args.seed, "--seed", 0, 2**32 - 1),
-        "min_transmission": _one_number(args.min_transmission, "--min-transmission"),
+        "min_transmission": _one_number(args.min_transmission or "20", "--min-transmission"),
         "workers": _integer(args.workers, "--workers", 1, 1024),
     }
     options["points"] = _integer(

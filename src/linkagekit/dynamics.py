@@ -233,6 +233,8 @@ class Reduced:
         ``2 pi`` when the mechanism comes back to itself after a turn of the driver, else None.
     points : ndarray
         The change points of the branch inside the table (where a sign flips), SI.
+    steps : ndarray of int
+        The sign step (index in ``plan.sign_joints``) that flips at each of ``points``.
     """
 
     driver: str
@@ -240,7 +242,7 @@ class Reduced:
     q_range: tuple[float, float]
     period: float | None
     points: np.ndarray
-    steps: np.ndarray  # the sign step of each change point
+    steps: np.ndarray
     _Y: np.ndarray
     _dY: np.ndarray
 

@@ -46,53 +46,56 @@ terms are ``gamma = 2 Im(w' conj(u'))`` and ``2 Im(e_o' conj(c e'))`` (``w' = v_
 e'``, ``u' = dhat e'``, ``e' = v_c1 - v_c0``; zero on the ground). Scales: the group's mean
 link length on a line row, ``|s_o1 - s_o0|^2`` on a lock row.
 
-Continuation
-------------
+Continuation on a fixed grid
+----------------------------
 Newton converges to the root nearest its start, which may belong to another assembly
-mode. So the sweep is solved in order from the reference pose outwards: the samples are
-sorted by the input that moves, split at the pose's input, and each half is walked away
-from the pose, every sample started from the last one solved (with a linear predictor
-from the two before it). A step is accepted only when Newton converges (residual below
-``NEWTON_TOL`` relative), the Jacobian's determinant keeps its sign (a sign change is a
-passage through a singular position: a change of mode, never silent) and no joint moves
-more than ``STEP_LIMIT`` times the group's mean link length (a class-3 group has up to
-three roots of one sign; over a small step Newton's root is the branch's). A step that
-fails is retried, from a sample solved just before, in adaptive sub-steps (halved on
-failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known joints linearly
-from the last solved sample to the target (a homotopy in the group's boundary: each
-known joint moves alone, so the path is well defined). A sample still not reached is
-flagged (NaN, not assembled) and the walk goes on from the last good sample. Where the
-walk cannot reach a sample from the last good one (after a gap where the group does not
-assemble), Newton is restarted from ``RESTARTS`` points scattered about the last good
-configuration and about the held joints, for a group with one root per sign (a dyad,
-with joints riding rigidly on its links: exactly the closed form's rule, one solution per
-sign); the walk resumes there. A class-3 group can have three roots of one sign, so after
-a gap it does not guess: its samples stay flagged until the walk reaches them by
-continuation (from the pose's other side, or never; ``modes`` lists every mode there). So
-the sweep never changes mode silently. Results do not depend on the order of the inputs.
+mode, so the mode is defined by continuation from the pose. The walk follows a fixed grid
+of the driver that moves (:class:`linkagekit.steps.WalkGrid`, appended to the samples by
+:func:`linkagekit.positions.solve`): the pose's input plus whole steps of ``GRID_STEP``
+(``GRID_STEP_LENGTH`` of the group's mean link length for a length), in two legs, up and
+down from the pose's input, both legs of every design in one Newton batch per grid step,
+each started from a quadratic predictor. The grid does not depend on the inputs asked; they
+only say how far the legs go. A step is accepted (:meth:`Group._accept`, the one place that
+decides) only when Newton converges (residual below ``NEWTON_TOL`` relative), the
+Jacobian's determinant keeps the pose's sign (a sign change is a passage through a singular
+position: a change of mode, never silent) and no joint moves more than ``STEP_LIMIT`` times
+the group's mean link length (a class-3 group has up to three roots of one sign; over a
+small step Newton's root is the branch's). A step that fails waits while the other designs
+go on; the waiting steps are then retried together in adaptive sub-steps (halved on
+failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known
+joints linearly between the grid points (a homotopy in the group's boundary: each known
+joint moves alone, so the path is well defined). A class-3 leg that still fails stops:
+after a gap it does not guess (it has up to three roots of one sign; ``modes`` lists every
+mode there). A dyad-like group (one root per sign) goes on past a gap, Newton restarted
+from ``RESTARTS`` points scattered about the last good configuration and about the held
+joints; the walk resumes on the unique root of the pose's sign (the closed form's rule).
+
+Every sample is then solved at once: from its cell of the grid, Newton starts at the
+cubic Hermite interpolation of the cell's two solutions and their motions (from the
+Jacobian, :meth:`Group._grid_slopes`), accepted by the same test within half the cell's
+move; the rare rejects are reached by sub-steps from the cell's end nearer the pose, all at
+once. A sample outside the walked range is flagged at once (NaN, not assembled). The pose
+is given back at its input (the grid's origin starts at the pose, exact). A sample's answer
+depends only on its input and the grid: not on the order of the inputs, nor on which others
+are asked. **A crank's input is a direction**: an angle input u is placed on the grid at its
+representative in half a turn either side of the pose's input, or, where a class-3 leg
+stopped before it, at the one a turn the other way (:func:`grid_places`); so u and u + 360 k
+answer alike. A group that comes back in another configuration after a turn keeps, for each
+direction, the configuration reached by turning less than half a turn from the pose.
 
 Cost, at the same results
 -------------------------
-Three things make a walk cheaper without changing a single accepted sample or a bit of
-its position (each Newton column is computed by the same operations whatever else is in
-its batch, so batching is exact):
-
-* Newton iterates only the columns still iterating (a converged column is frozen, as
-  before; a column gone NaN stays NaN), with the residual and Jacobian built from index
-  arrays and the Jacobian's constant linear rows built once.
-* *Chains.* Along any chain of link edges between two held joints (two joints of one
-  link, ``|w_p - w_q| L`` apart with ``w`` = 0, 1, ``rho_k``), the held joints are at most
-  the sum of the edges apart and at least twice the longest minus the sum. A configuration
-  Newton accepts keeps every edge to about ``1e-12`` of its link, so where the held joints
-  break a chain's bounds by more than ``CHAIN_MARGIN`` (``1e-8``) of its lengths no Newton
-  can converge: the sample is failed at once (no Newton, sub-steps or restarts), as it
-  would have been after all of them. This is the gap of a dyad (two circles that do not
-  meet).
-* *Look-ahead.* After a failure, a design's next steps all start from the same state (its
-  last good solution and the predictor before it) until one is accepted, so they do not
-  depend on each other: they are solved in one batch over a window of the next samples
-  (8, doubling to 256) and read from there (:class:`_Ahead`). The segments a two-level
-  walk walks again start, in a gap, from one same state: their steps come from one batch.
+Newton iterates only the columns still iterating (a converged column is frozen; a column
+gone NaN stays NaN), with the residual and Jacobian built from index arrays and the
+Jacobian's constant linear rows built once; each Newton column is computed by the same
+operations whatever else is in its batch, so batching is exact. *Chains.* Along any chain of
+link edges between two held joints (two joints of one link, ``|w_p - w_q| L`` apart with
+``w`` = 0, 1, ``rho_k``), the held joints are at most the sum of the edges apart and at least
+twice the longest minus the sum. A configuration Newton accepts keeps every edge to about
+``1e-12`` of its link, so where the held joints break a chain's bounds by more than
+``CHAIN_MARGIN`` (``1e-8``) of its lengths no Newton can converge: the grid step or sample is
+failed at once (no Newton, sub-steps or restarts), as it would have been after all of them.
+This is the gap of a dyad (two circles that do not meet).
 
 Rates
 -----
@@ -106,19 +109,27 @@ every row has unit scale) over its largest.
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from .geometry import NAN_POINT, FloatArray, link_rates
-from .steps import Kin, Nums, Rate, Source, Step
+from .steps import Kin, Nums, Rate, Source, Step, WalkGrid
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
 NEWTON_TOL = 1e-12
 #: Newton iterations per attempt
 NEWTON_ITER = 16
+#: Newton iterations of a sub-step (it starts from a solution a small step away: a sub-step that needs
+#: more is halved, so a sub-step past the end of the range costs this many, not NEWTON_ITER)
+SUBSTEP_ITER = 6
+#: a group's conditioning below this is computed by an SVD (above, from the eigenvalues of J^T J: within
+#: 1e-16 / COND_EXACT^2 relative of it)
+COND_EXACT = 1e-3
+#: samples solved at once in chunks of this many (their arrays stay in the cache)
+FILL_CHUNK = 2048
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
@@ -126,24 +137,17 @@ MAX_HALVINGS = 10
 STEP_LIMIT = 0.25
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
-#: long walks go in two levels: about this many samples walked one by one, the rest filled in at once
-COARSE_SAMPLES = 256
-#: ... with at least this stride
-COARSE_STRIDE_MIN = 4
-#: the walk goes at most this many turns of an angle driver from the pose's input (3600 sub-steps of
-#: 1 degree, a few CPU-seconds): a sample farther away is not reached (NaN, not assembled)
-WALK_TURNS = 10
-#: ... in radians
-WALK_REACH = 2 * np.pi * WALK_TURNS
+#: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ...
+GRID_STEP = np.radians(3.0)
+#: ... and of a length driver's, times the group's mean link length
+GRID_STEP_LENGTH = 1 / 32
+#: a length driver's grid goes at most this many steps either way from the pose's input
+GRID_MOST = 4096
 #: a chain of link edges rules a sample out only beyond this margin (relative to its lengths): far
 #: above what Newton's tolerance and rounding allow a converged configuration
 CHAIN_MARGIN = 1e-8
 #: at most this many chains between held joints are checked (and this many search steps to find them)
 MAX_CHAINS, MAX_CHAIN_SEARCH = 64, 4096
-#: a lost design's steps are solved ahead over this many samples at first, doubling up to the most ...
-AHEAD_FIRST, AHEAD_MOST = 8, 256
-#: ... and this many (design, sample) columns in one batch
-AHEAD_COLUMNS = 2048
 
 
 @dataclass(frozen=True)
@@ -242,6 +246,7 @@ class _Walk:
     size: FloatArray  # (D,) the group's mean link length
     arrays: _Arrays  # the numbers per design as Newton reads them
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
+    K0: np.ndarray  # (k, D) the known joints the start was solved with
     any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
@@ -624,23 +629,16 @@ class Group(Step):
             _size(dn),
             self._arrays(dn, D),
             (lo, hi, mg),
+            zk0,
             k.continuous,
         )
-        for half in _walks(k, D, n, self.angular):
-            state = (start.copy(), zk0.copy(), np.full_like(start, NAN_POINT), np.ones(D, bool))
-            if len(half) < 4 * COARSE_STRIDE_MIN:
-                self._walk(half, state, w)
-                continue
-            # two levels: walk every stride-th sample; then the samples between two walked ones
-            # together, each from the interpolation of its two neighbours' solutions
-            stride = max(COARSE_STRIDE_MIN, len(half) // COARSE_SAMPLES)
-            ends = np.arange(stride - 1, len(half), stride)
-            if ends[-1] != len(half) - 1:
-                ends = np.append(ends, len(half) - 1)
-            snaps: list[tuple[np.ndarray, ...]] = []
-            clean = self._walk(half[ends], state, w, snaps)
-            lo_end = np.concatenate([[-1], ends[:-1]])
-            self._fill(half, lo_end, ends, snaps, clean, start, w)
+        g = k.grid
+        if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
+            c, s = np.nonzero(ok)
+            self._from_state(start[:, c], zk0[:, c], start[:, c], c, s, w)
+        else:
+            places = self._walk_grid(g, k, start, w)
+            self._solve_samples(g, places, start, w)
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
         if self.keep_rotation:
@@ -649,84 +647,259 @@ class Group(Step):
                 if gl.name in self.keep_rotation:
                     k.rot[gl.name] = (z[gl.joints[1]] - z[gl.joints[0]]) / bases[gl.name]
 
-    def _walk(
-        self,
-        samples: np.ndarray,
-        state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        w: _Walk,
-        snaps: list[tuple[np.ndarray, ...]] | None = None,
-        ahead: _Ahead | None = None,
-    ) -> np.ndarray:
-        """Walk ``samples`` in order from ``state`` (U, knowns, previous U, fresh), updated in place.
+    # ------------------------------------------------------------------ the walk over the grid
+    def _walk_grid(self, g: WalkGrid, k: Kin, start: np.ndarray, w: _Walk) -> np.ndarray:
+        """Walk the grid from the pose as far as the samples need; each sample's place on it, (D, n_given).
 
-        Returns, per design and sample, whether the sample was accepted by a plain continuation
-        step (no restart after a gap, no failure), (D, len(samples)). With ``snaps``, the state
-        before each sample is appended to it. A design whose last sample failed (not fresh)
-        takes its next steps from the look-ahead (:class:`_Ahead`): the same steps, solved at once.
+        The two legs (up and down from the pose's input) step together, one Newton batch per
+        grid step for every design. A class-3 leg stops where a step fails; a dyad-like leg
+        goes on (restarting after a gap). A sample's place (in grid steps from the pose's
+        input) is, for an angle, the representative of its direction nearest the pose's input
+        when a leg reaches it, else the other one (a turn the other way) when the other leg
+        does (a second walk, as far as those need); NaN where neither is reached.
         """
-        U, Kc, U_prev, fresh = state  # fresh: the last sample walked was solved (sub-steps allowed)
-        D = U.shape[1]
-        clean = np.zeros((D, len(samples)), bool)
-        ahead = _Ahead(D) if ahead is None else ahead
-        for i, s in enumerate(samples):
-            if snaps is not None:
-                snaps.append(tuple(x.copy() for x in state))
-            K_t = w.K[:, :, s]
-            U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(D, bool), np.zeros(D, bool)
-            now = np.flatnonzero(w.ok[:, s] & fresh)
-            if len(now):
-                U_new[:, now], acc[now], lost[now] = self._fresh_step(U[:, now], U_prev[:, now], Kc[:, now], now, s, w)
-            later = np.flatnonzero(w.ok[:, s] & ~fresh)
-            if len(later):
-                U_new[:, later], acc[later], lost[later] = ahead.get(self, i, later, samples, U, U_prev, w)
-            clean[:, i] = acc & ~lost
-            fresh[:] = acc  # sub-steps only from a sample solved just before; after a gap, restarts (dyads)
-            ahead.forget(acc)
-            w.out[:, acc, s] = U_new[:, acc]
-            # no predictor across a gap: the next step starts from the restart's solution
-            U_prev[:, acc] = np.where(lost, U_new, U)[:, acc]
-            U[:, acc] = U_new[:, acc]
-            Kc[:, acc] = K_t[:, acc]
-        return clean
+        D = start.shape[1]
+        u = np.broadcast_to(k.q[g.driver, :, : g.n_given], (D, g.n_given))
+        x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
+        near, other = grid_places(u, x0, g.step, g.cyclic)
+        c0 = int(np.searchsorted(g.index, 0))
+        origin = self._origin(start, g.n_given + c0, w)
+        legs = (_Leg.new(origin, w, g, c0, 1), _Leg.new(origin, w, g, c0, -1))
+        self._walk_legs(legs, near, w, g)
+        covered = legs[0].covers(near, c0) | legs[1].covers(near, c0)
+        if g.cyclic and not self.dyad_like and not covered.all():
+            alt = np.where(covered, np.nan, other)
+            self._walk_legs(legs, alt, w, g)
+            use = ~covered & (legs[0].covers(alt, c0) | legs[1].covers(alt, c0))
+            return np.where(covered, near, np.where(use, alt, np.nan))
+        return np.where(covered, near, np.nan)
+
+    def _origin(self, start: np.ndarray, col: int, w: _Walk) -> np.ndarray:
+        """The grid's origin (the pose's input, column ``col``) solved from the group's start, written to ``out``.
+
+        The start is the pose, solved with its own known joints: at the pose's input Newton
+        returns it as it is. (A start given at another input, as :mod:`linkagekit.groupmodes`
+        gives a mode, is carried there by sub-steps.)
+        """
+        D = start.shape[1]
+        d = np.arange(D)
+        U, acc = self._plain(start, start, w.K[:, :, col], d, w)
+        todo = np.flatnonzero(~acc & np.all(np.isfinite(start), axis=0) & w.ok[:, col])
+        if len(todo):
+            U[:, todo] = self._halving(start[:, todo], w.K0[:, todo], w.K[:, todo, col], w, todo)
+            acc[todo] = np.all(np.isfinite(U[:, todo]), axis=0)
+        U = np.where(acc & w.ok[:, col], U, NAN_POINT)
+        w.out[:, :, col] = U
+        return U
+
+    def _walk_legs(self, legs: tuple[_Leg, _Leg], places: np.ndarray, w: _Walk, g: WalkGrid) -> None:
+        """Step both legs, all designs at once, until each covers the ``places`` (D, n) on its side or stops.
+
+        A step that fails waits (pending) while the other designs go on; the waiting steps are
+        then retried in sub-steps all at once (one batch however many grid steps they failed at).
+        """
+        c0 = int(np.searchsorted(g.index, 0))
+        with np.errstate(invalid="ignore"):
+            # to the cell's end nearer the pose: the last cell of a leg is extrapolated (no step past the end)
+            far_up = np.nanmax(np.where(places >= 0, np.floor(places), 0), axis=1, initial=0)
+            far_dn = np.nanmin(np.where(places < 0, np.ceil(places), 0), axis=1, initial=0)
+        limits = (np.minimum(c0 + far_up, len(g.index) - 1), np.maximum(c0 + far_dn, 0))
+        while True:
+            steps = [leg.due(lim) for leg, lim in zip(legs, limits, strict=True)]
+            waiting = not any(len(x) for x in steps)
+            if waiting:
+                steps = [np.flatnonzero(leg.pending) for leg in legs]
+                if not any(len(x) for x in steps):
+                    return
+            d = np.concatenate(steps)
+            s = g.n_given + np.concatenate([leg.pos[x] + leg.sign for leg, x in zip(legs, steps, strict=True)])
+            U, U_prev, U_prev2, Kc, fresh = (
+                np.concatenate([getattr(leg, f)[..., x] for leg, x in zip(legs, steps, strict=True)], axis=-1)
+                for f in ("U", "U_prev", "U_prev2", "Kc", "fresh")
+            )
+            if waiting:
+                U_new, acc, lost = self._substeps(U, Kc, d, s, w)
+                pend = np.zeros(len(d), bool)
+            else:
+                U_new, acc, lost, pend = self._grid_step(U, np.stack([U_prev, U_prev2]), fresh, d, s, w)
+            w.out[:, d[acc], s[acc]] = U_new[:, acc]
+            first = 0
+            for leg, x in zip(legs, steps, strict=True):
+                sl = slice(first, first + len(x))
+                leg.pending[x] = pend[sl]
+                now = ~pend[sl]
+                leg.advance(
+                    x[now],
+                    U_new[:, sl][:, now],
+                    acc[sl][now],
+                    lost[sl][now],
+                    w.K[:, x[now], s[sl][now]],
+                    self.dyad_like,
+                )
+                first += len(x)
+
+    def _grid_step(
+        self, U: np.ndarray, before: np.ndarray, fresh: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One grid step of designs ``d`` to columns ``s`` by a continuation step: (U, accepted, lost, pending).
+
+        Pending: a step from a solved one that failed, to be retried in sub-steps
+        (:meth:`_substeps`). After a failure (dyad-like legs only) there are no sub-steps:
+        lost, and restarted.
+        """
+        U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(len(d), bool), np.ones(len(d), bool)
+        pend = np.zeros(len(d), bool)
+        can = np.flatnonzero(w.ok[d, s])  # the others cannot converge
+        if len(can):
+            cd = d[can]
+            K = w.K[:, cd, s[can]]
+            Un, a = self._plain(U[:, can], before[0][:, can], K, cd, w, before[1][:, can])
+            pend[can] = ~a & fresh[can]
+            lost[can] = ~a
+            self._restart_lost(U[:, can], K, cd, w, Un, a, ~a & ~fresh[can])
+            U_new[:, can], acc[can] = Un, a
+        return U_new, acc, lost, pend
+
+    def _substeps(
+        self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Grid steps that failed, retried by step halving from the last good state: (U, accepted, lost);
+        for a dyad-like group, restarts where that fails too."""
+        K = w.K[:, d, s]
+        U_new = self._halving(U, Kc, K, w, d)
+        acc = np.all(np.isfinite(U_new), axis=0)
+        lost = ~acc
+        self._restart_lost(U, K, d, w, U_new, acc, lost & w.ok[d, s])
+        return U_new, acc, lost
+
+    # ------------------------------------------------------------------ the samples, at once
+    def _solve_samples(self, g: WalkGrid, places: np.ndarray, start: np.ndarray, w: _Walk) -> None:
+        """Every sample from its grid cell: Newton from the interpolation of the cell's solutions, at once.
+
+        Accepted with the tests of a continuation step (:meth:`_accept`), within half the
+        cell's move of the interpolation; the others are reached by sub-steps from the cell's
+        end nearer the pose (or its other end), all at once; a place outside the walk is NaN.
+        """
+        c0 = int(np.searchsorted(g.index, 0))
+        c, s = np.nonzero(np.isfinite(places) & w.ok[:, : g.n_given])
+        P = places[c, s]
+        lo = np.floor(P).astype(np.intp)
+        t = P - lo
+        a = c0 + lo
+        b = np.where(t > 0, a + 1, a)
+        G = len(g.index)
+        Ug = w.out[:, :, g.n_given :]
+
+        def sol(col: np.ndarray, cc: np.ndarray = c) -> np.ndarray:
+            inside = (col >= 0) & (col < G)
+            return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
+
+        V = self._grid_slopes(g, w)
+        Ua, Ub = sol(a), sol(b)
+        guess = _hermite(Ua, V[:, c, a], Ub, V[:, c, b], t)
+        bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
+        other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
+        if len(other):
+            ao, bo, co = a[other], b[other], c[other]
+            Umm, Um, Uao, Ubo, Up, Upp = (sol(x, co) for x in (ao - 2, ao - 1, ao, bo, bo + 1, bo + 2))
+            guess[:, other], bound[other] = _cell_guess(Umm, Um, Uao, Ubo, Up, Upp, t[other])
+        with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0) & np.isfinite(bound))
+        done = np.zeros(len(c), bool)
+        if len(with_guess):
+            i = with_guess
+            done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w)
+        rest = np.flatnonzero(~done)
+        if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
+            near = np.where(P[rest] >= 0, a[rest], b[rest])
+            far = np.where(P[rest] >= 0, b[rest], a[rest])
+            cr = c[rest]
+            frm = np.where(np.all(np.isfinite(sol(near, cr)), axis=0), near, far)
+            frm = np.clip(frm, 0, G - 1)
+            U0 = Ug[:, cr, frm]
+            centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
+            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
+
+    def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
+        """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
+
+        ``J_u dU = -J_k dK``, the knowns' motion per step ``dK`` from the grid's own knowns by a
+        central difference of fourth order (second at the grid's ends): the solutions are
+        interpolated by cubic Hermite (:func:`_hermite`), far closer than from values alone.
+        """
+        m, D = w.out.shape[:2]
+        Ug, Kg = w.out[:, :, g.n_given :], w.K[:, :, g.n_given :]
+        G = Ug.shape[2]
+        dK = np.full_like(Kg, NAN_POINT)
+        if G >= 3:
+            dK[:, :, 1:-1] = (Kg[:, :, 2:] - Kg[:, :, :-2]) / 2
+        if G >= 5:
+            dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
+        V = np.full((m, D, G), NAN_POINT)
+        d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
+        if not len(d) or not len(self.known):
+            return V
+        P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + len(self.known))
+        dk = dK[:, d, j]
+        vk = np.stack([dk.real, dk.imag], axis=-1).transpose(1, 0, 2).reshape(len(d), -1)
+        rhs = -np.einsum("bij,bj->bi", J[:, :, 2 * m :], vk)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            du = _newton_step(J[:, :, : 2 * m], -rhs.T)
+        V[:, d, j] = (du[:, 0::2] + 1j * du[:, 1::2]).T
+        return V
+
+    def _from_state(
+        self, U0: np.ndarray, K0: np.ndarray, centre: np.ndarray, c: np.ndarray, s: np.ndarray, w: _Walk
+    ) -> None:
+        """Samples ``s`` of designs ``c`` reached by sub-steps from ``(U0, K0)``; a dyad-like group restarts
+        about ``centre`` where they fail."""
+        K1 = w.K[:, c, s]
+        U = np.full((U0.shape[0], len(c)), NAN_POINT)
+        live = np.flatnonzero(np.all(np.isfinite(U0), axis=0) & w.ok[c, s])
+        if len(live):
+            U[:, live] = self._halving(U0[:, live], K0[:, live], K1[:, live], w, c[live])
+        acc = np.all(np.isfinite(U), axis=0)
+        self._restart_lost(centre, K1, c, w, U, acc, ~acc & w.ok[c, s])
+        w.out[:, c[acc], s[acc]] = U[:, acc]
+
+    def _accept(
+        self,
+        sol: np.ndarray,
+        conv: np.ndarray,
+        sign: np.ndarray,
+        start: np.ndarray,
+        bound: np.ndarray,
+        w: _Walk,
+        designs: np.ndarray,
+    ) -> np.ndarray:
+        """Whether Newton's ``sol`` from ``start`` (columns of ``designs``) is the branch's: converged, with the
+        pose's determinant sign (a sign change is a passage through a singular position, never silent; following
+        the branch continuously, :meth:`_Walk.sign_ok`, any sign), and no joint farther than ``bound`` from where
+        it started (over a small step Newton's root is the branch's, not another of one sign)."""
+        near = np.max(np.abs(sol - start), axis=0) <= bound
+        return conv & w.sign_ok(sign, designs) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
 
     def _plain(
-        self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
+        self,
+        U: np.ndarray,
+        U_prev: np.ndarray,
+        K: np.ndarray,
+        designs: np.ndarray,
+        w: _Walk,
+        U_prev2: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """A continuation step to knowns ``K`` from ``U`` (with the linear predictor from ``U_prev``): (U, accepted)."""
-        guess = 2 * U - U_prev  # linear predictor along the walk
-        guess = np.where(np.isfinite(guess), guess, U)
-        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
-        acc = conv & w.sign_ok(sg, designs) & np.all(np.isfinite(U_new), axis=0)
-        acc &= np.max(np.abs(U_new - U), axis=0) <= STEP_LIMIT * w.size[designs]  # small steps: the nearest root
-        return U_new, acc
+        """A continuation step to knowns ``K`` from ``U``: (U, accepted).
 
-    def _fresh_step(
-        self, U: np.ndarray, U_prev: np.ndarray, Kc: np.ndarray, designs: np.ndarray, s: int, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Sample ``s`` from a sample solved just before: a step, else sub-steps, else (dyads) restarts.
-
-        Returns (U, accepted, lost): lost when neither the step nor the sub-steps got there.
+        Newton starts from the predictor along the walk: quadratic through ``U_prev2``,
+        ``U_prev`` and ``U`` (equal steps), else linear through the last two, else ``U``.
         """
-        K = w.K[:, designs, s]
-        U_new, acc = self._plain(U, U_prev, K, designs, w)
-        todo = np.flatnonzero(~acc)
-        if len(todo):  # step halving: move the knowns from the last good state in 2^h steps
-            U_h = self._halving(U[:, todo], Kc[:, todo], K[:, todo], w, designs[todo])
-            done = np.all(np.isfinite(U_h), axis=0)
-            U_new[:, todo[done]] = U_h[:, done]
-            acc[todo[done]] = True
-        lost = ~acc
-        self._restart_lost(U, K, designs, w, U_new, acc, lost)
-        return U_new, acc, lost
-
-    def _lost_step(
-        self, U: np.ndarray, U_prev: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """A sample after one that failed: a step, else (dyads) restarts. Returns (U, accepted, lost)."""
-        U_new, acc = self._plain(U, U_prev, K, designs, w)
-        lost = ~acc
-        self._restart_lost(U, K, designs, w, U_new, acc, lost)
-        return U_new, acc, lost
+        guess = 2 * U - U_prev
+        guess = np.where(np.isfinite(guess), guess, U)
+        if U_prev2 is not None:
+            quad = 3 * U - 3 * U_prev + U_prev2
+            guess = np.where(np.isfinite(quad), quad, guess)
+        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
+        return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w, designs)
 
     def _restart_lost(
         self,
@@ -747,99 +920,17 @@ class Group(Step):
         U_new[:, idx[found]] = U_r[:, found]
         acc[idx[found]] = True
 
-    def _fill(
-        self,
-        half: np.ndarray,
-        lo: np.ndarray,
-        hi: np.ndarray,
-        snaps: list[tuple[np.ndarray, ...]],
-        clean: np.ndarray,
-        start: np.ndarray,
-        w: _Walk,
-    ) -> None:
-        """The samples between walked ones: all at once where both ends are good, else walked.
-
-        A sample between two walked samples ``a`` and ``b`` (both reached by plain
-        continuation steps) starts Newton from the linear interpolation of their solutions;
-        it is accepted when Newton converges with the pose's determinant sign within half
-        the distance from ``a`` to ``b`` of that start. Everything else is walked, from the
-        state the walk had at ``a``.
-        """
-        m, D = start.shape
-        out = w.out
-        rows, cols, guess, bound, redo = [], [], [], [], []
-        for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
-            inner = half[a + 1 : b]
-            if not len(inner):
-                continue
-            Ua = start if a < 0 else out[:, :, half[a]]
-            Ub = out[:, :, half[b]]
-            both = clean[:, i] & np.all(np.isfinite(Ua), axis=0) & np.all(np.isfinite(Ub), axis=0)
-            if not both.all():
-                redo.append(i)
-                continue
-            t = (np.arange(1, b - a) / (b - a))[:, None, None]  # (len, 1, 1)
-            g = (1 - t) * Ua[None] + t * Ub[None]  # (len, m, D)
-            rows.append(np.repeat(inner, D))
-            cols.append(np.tile(np.arange(D), len(inner)))
-            guess.append(g.transpose(1, 0, 2).reshape(m, -1))
-            reach = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)  # (D,)
-            bound.append(np.tile(reach, len(inner)))
-        if rows:
-            r, c, g = np.concatenate(rows), np.concatenate(cols), np.concatenate(guess, axis=1)
-            ok = self._fill_batch(r, c, g, np.concatenate(bound), w)
-            bad_samples = set(r[~ok].tolist())
-            for i, (a, b) in enumerate(zip(lo, hi, strict=True)):
-                if i not in redo and bad_samples.intersection(half[a + 1 : b].tolist()):
-                    redo.append(i)
-        segments = [(half[lo[i] + 1 : hi[i]], tuple(x.copy() for x in snaps[i])) for i in sorted(redo)]
-        while segments:  # in batches of at most about AHEAD_COLUMNS lost (design, sample) columns
-            sizes = np.cumsum([np.sum(~state[3]) * len(samples) for samples, state in segments])
-            k = max(1, int(np.searchsorted(sizes, AHEAD_COLUMNS, side="right")))
-            batch, segments = segments[:k], segments[k:]
-            for (samples, state), ahead in zip(batch, self._ahead_of(batch, w), strict=True):
-                self._walk(samples, state, w, ahead=ahead)  # type: ignore[arg-type]
-
-    def _ahead_of(self, segments: list[tuple[np.ndarray, tuple[np.ndarray, ...]]], w: _Walk) -> list[_Ahead]:
-        """Look-aheads for walks of ``segments`` (samples, starting state): their lost designs' steps, at once.
-
-        A design lost at the start of a segment (in a gap, every segment starts so, from one same
-        state) gets its steps over the whole segment from one batch of :meth:`_lost_step`.
-        """
-        m, D = w.out.shape[:2]
-        cols = []
-        for samples, (U, _, U_prev, fresh) in segments:
-            need = np.flatnonzero(~fresh)
-            d, s = np.repeat(need, len(samples)), np.tile(samples, len(need))
-            cols.append((need, d, s, U[:, d], U_prev[:, d]))
-        d, s = np.concatenate([c[1] for c in cols]), np.concatenate([c[2] for c in cols])
-        U0, U1 = np.concatenate([c[3] for c in cols], axis=1), np.concatenate([c[4] for c in cols], axis=1)
-        Uw, acc, lost = np.full((m, len(d)), NAN_POINT), np.zeros(len(d), bool), np.zeros(len(d), bool)
-        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
-        if len(run):
-            Uw[:, run], acc[run], lost[run] = self._lost_step(U0[:, run], U1[:, run], w.K[:, d[run], s[run]], d[run], w)
-        out, start = [], 0
-        for (samples, _), (need, *_) in zip(segments, cols, strict=True):
-            ahead, n = _Ahead(D), len(need) * len(samples)
-            if len(need):
-                sl = slice(start, start + n)
-                ahead.add(0, need, Uw[:, sl], acc[sl], lost[sl], len(samples))
-            out.append(ahead)
-            start += n
-        return out
-
     def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
         """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
         ok = np.zeros(len(r), bool)
         can = np.flatnonzero(w.ok[c, r])  # the others cannot converge
-        if len(can):
-            r, c, g, bound = r[can], c[can], g[:, can], bound[can]
-            sol, conv, sg = self._newton(g, w.K[:, c, r], w.arrays.take(c))
-            # accepted: converged, with the pose's sign, near the interpolation (not another branch)
-            near = np.max(np.abs(sol - g), axis=0)
-            good = conv & w.sign_ok(sg, c) & np.all(np.isfinite(sol), axis=0) & (near <= bound)
-            w.out[:, c[good], r[good]] = sol[:, good]
-            ok[can] = good
+        for first in range(0, len(can), FILL_CHUNK):  # in chunks that stay in the cache
+            i = can[first : first + FILL_CHUNK]
+            ri, ci, gi = r[i], c[i], g[:, i]
+            sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci))
+            good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
+            w.out[:, ci[good], ri[good]] = sol[:, good]
+            ok[i] = good
         return ok
 
     def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
@@ -865,10 +956,8 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a))
-                ok[can] = (
-                    conv & w.sign_ok(sg, designs[a]) & (np.max(np.abs(Un - Uc[:, a]), axis=0) <= STEP_LIMIT * size[a])
-                )
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
+                ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]
@@ -970,10 +1059,17 @@ class Group(Step):
 
     def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
         """Smallest over largest singular value of J_u with its rows scaled by :meth:`row_scale`."""
-        scale = self.row_scale(dn, Ju.shape[0])
-        s = np.linalg.svd(Ju * scale[:, :, None], compute_uv=False)
+        Js = Ju * self.row_scale(dn, Ju.shape[0])[:, :, None]
+        # the singular values squared are the eigenvalues of Js^T Js (half the cost of an SVD); their
+        # rounding is about 1e-16 of the largest, so below COND_EXACT the ratio is taken from the SVD
+        ev = np.linalg.eigvalsh(Js.transpose(0, 2, 1) @ Js)
         with np.errstate(invalid="ignore", divide="ignore"):
-            return s[:, -1] / s[:, 0]
+            cond: np.ndarray = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
+            low = np.flatnonzero(~(cond >= COND_EXACT))
+            if len(low):
+                sv = np.linalg.svd(Js[low], compute_uv=False)
+                cond[low] = sv[:, -1] / sv[:, 0]
+        return cond
 
     # ------------------------------------------------------------------ description
     def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
@@ -996,39 +1092,6 @@ def _size(dn: Nums) -> FloatArray:
 def _take(dn: Nums, cols: np.ndarray) -> Nums:
     lengths, rhos = dn
     return tuple(L[cols] for L in lengths), tuple(tuple(r[cols] for r in rho) for rho in rhos)
-
-
-def _walks(k: Kin, D: int, n: int, angular: tuple[bool, ...] = ()) -> list[np.ndarray]:
-    """The sample indices in walking order: from the pose's input up, then from it down.
-
-    The samples are sorted by the driver input that varies most (the first design's inputs),
-    measured from the pose's input as given (not modulo a turn: a class-3 group may come back
-    in another mode after a full turn of its crank, and the walk follows the motion); inputs
-    equal to the pose's go up. When that driver is an angle (``angular``), samples more than
-    ``WALK_REACH`` from the pose's input are left out: never walked to, they stay NaN (not
-    reached), so the walk's length is bounded whatever the inputs. Over a
-    design axis every design walks in this one order from its own pose (the first
-    sub-step reaches the nearest sample by homotopy), so the walk stays continuous per design.
-
-    >>> import numpy as np
-    >>> from linkagekit.steps import Kin
-    >>> q = np.radians([[[10.0, -20.0, 5.0, 7200.0, -7200.0]]])
-    >>> k = Kin(np.zeros((0, 1, 5), complex), {}, np.zeros((0, 1, 5)), q, None, None, 0.0, np.zeros((1, 1)))
-    >>> [w.tolist() for w in _walks(k, 1, 5, (True,))]
-    [[2, 0], [1]]
-    """
-    if k.q.shape[0] == 0 or n == 0:
-        return [np.arange(n)]
-    q = np.broadcast_to(k.q, (k.q.shape[0], max(k.q.shape[1], 1), n))[:, 0, :]
-    q0 = k.q0[:, 0] if k.q0 is not None else q[:, 0]
-    d = int(np.argmax(np.ptp(q, axis=1)))
-    key = q[d] - q0[d]
-    order = np.argsort(key, kind="stable")
-    if d < len(angular) and angular[d]:
-        order = order[np.abs(key[order]) <= WALK_REACH]
-    up = order[key[order] >= 0]
-    down = order[key[order] < 0][::-1]
-    return [w for w in (up, down) if len(w)]
 
 
 def _add(J: FloatArray, rows: np.ndarray, slots: np.ndarray, G: np.ndarray, n_cols: int) -> None:
@@ -1057,67 +1120,110 @@ def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
 
 
 @dataclass
-class _Ahead:
-    """The steps of the designs a walk has lost, solved ahead.
+class _Leg:
+    """One leg of the grid walk (up or down from the pose's input), per design."""
 
-    A design whose last sample failed starts every next sample from the same state (its last
-    good solution, with the predictor from the one before), so its next steps do not depend
-    on each other until one is accepted: they are solved together over a window of the next
-    samples (:data:`AHEAD_FIRST` long, doubling while the design stays lost, up to
-    :data:`AHEAD_MOST`), exactly as one by one, and read from there. An accepted design is
-    forgotten (its state has moved on).
-    """
+    sign: int  # +1 up, -1 down the grid
+    pos: np.ndarray  # (D,) the last grid column stepped to (solved, or where the leg stopped)
+    U: np.ndarray  # (m, D) the last solution
+    U_prev: np.ndarray  # (m, D) the one before (the predictor's)
+    U_prev2: np.ndarray  # (m, D) and the one before that
+    Kc: np.ndarray  # (k, D) the knowns of the last solution
+    fresh: np.ndarray  # (D,) the last step was solved (sub-steps allowed from it)
+    alive: np.ndarray  # (D,) the leg goes on (a class-3 group's leg stops where a step fails)
+    pending: np.ndarray  # (D,) its next step failed and waits for sub-steps
 
-    D: int
-    windows: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
+    @classmethod
+    def new(cls, start: np.ndarray, w: _Walk, g: WalkGrid, c0: int, sign: int) -> _Leg:
+        D = start.shape[1]
+        alive = np.all(np.isfinite(start), axis=0)
+        K = w.K[:, :, g.n_given + c0].copy()
+        nan = np.full_like(start, NAN_POINT)
+        return cls(sign, np.full(D, c0), start.copy(), nan, nan.copy(), K, alive.copy(), alive, np.zeros(D, bool))
 
-    def __post_init__(self) -> None:
-        self.until = np.zeros(self.D, np.intp)  # the first sample position past the design's window
-        self.which = np.zeros(self.D, np.intp)  # its window (first position, U (m, k, c), accepted, lost)
-        self.col = np.zeros(self.D, np.intp)  # its column there
-        self.streak = np.zeros(self.D, np.intp)  # windows since the design was lost
+    def due(self, limit: np.ndarray) -> np.ndarray:
+        """The designs whose next step is not past ``limit`` (a grid column per design)."""
+        return np.flatnonzero(self.alive & ~self.pending & ((self.pos + self.sign - limit) * self.sign <= 0))
 
-    def get(
-        self, group: Group, i: int, cols: np.ndarray, samples: np.ndarray, U: np.ndarray, U_prev: np.ndarray, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The step of the lost designs ``cols`` at the walk's ``i``-th sample: (U, accepted, lost)."""
-        need = cols[self.until[cols] <= i]
-        if len(need):
-            self._solve(group, i, need, samples, U, U_prev, w)
-        U_new = np.empty((U.shape[0], len(cols)), complex)
-        acc, lost = np.zeros(len(cols), bool), np.zeros(len(cols), bool)
-        for wid in np.unique(self.which[cols]):
-            sel = np.flatnonzero(self.which[cols] == wid)
-            first, Uw, aw, lw = self.windows[wid]
-            cc = self.col[cols[sel]]
-            U_new[:, sel], acc[sel], lost[sel] = Uw[:, cc, i - first], aw[cc, i - first], lw[cc, i - first]
-        return U_new, acc, lost
-
-    def _solve(
-        self, group: Group, i: int, need: np.ndarray, samples: np.ndarray, U: np.ndarray, U_prev: np.ndarray, w: _Walk
+    def advance(
+        self, x: np.ndarray, U: np.ndarray, acc: np.ndarray, lost: np.ndarray, K: np.ndarray, dyad_like: bool
     ) -> None:
-        """A window for the designs ``need``, from the walk's ``i``-th sample."""
-        c = AHEAD_FIRST << int(np.max(self.streak[need]))
-        c = int(min(len(samples) - i, c, AHEAD_MOST, max(1, AHEAD_COLUMNS // len(need))))
-        d = np.repeat(need, c)
-        s = samples[i + np.tile(np.arange(c), len(need))]
-        m = U.shape[0]
-        Uw = np.full((m, len(d)), NAN_POINT)
-        acc, lost = np.zeros(len(d), bool), np.zeros(len(d), bool)
-        run = np.flatnonzero(w.ok[d, s])  # the other samples are not read
-        if len(run):
-            dr = d[run]
-            Uw[:, run], acc[run], lost[run] = group._lost_step(U[:, dr], U_prev[:, dr], w.K[:, dr, s[run]], dr, w)
-        self.add(i, need, Uw, acc, lost, c)
+        """Designs ``x`` stepped to their next column: solved ``U`` where ``acc`` (``lost``: after restarts)."""
+        self.pos[x] += self.sign
+        good = x[acc]
+        # no predictor across a gap or a restart: the next step starts from the solution
+        reset = lost[acc] | ~self.fresh[good]
+        self.U_prev2[:, good] = np.where(reset, U[:, acc], self.U_prev[:, good])
+        self.U_prev[:, good] = np.where(reset, U[:, acc], self.U[:, good])
+        self.U[:, good], self.Kc[:, good] = U[:, acc], K[:, acc]
+        self.fresh[x] = acc
+        if not dyad_like:  # a class-3 group does not guess after a gap: the leg ends here
+            self.alive[x[~acc]] = False
 
-    def add(self, i: int, need: np.ndarray, Uw: np.ndarray, acc: np.ndarray, lost: np.ndarray, c: int) -> None:
-        """The steps of designs ``need`` over ``c`` samples from the ``i``-th (flat, design-major)."""
-        k = len(need)
-        self.windows.append((i, Uw.reshape(-1, k, c), acc.reshape(k, c), lost.reshape(k, c)))
-        self.which[need], self.col[need], self.until[need] = len(self.windows) - 1, np.arange(k), i + c
-        self.streak[need] += 1
+    def covers(self, places: np.ndarray, c0: int) -> np.ndarray:
+        """Which ``places`` (D, n), in grid steps from the pose's input, lie on this leg's side up to where it got.
 
-    def forget(self, acc: np.ndarray) -> None:
-        """The designs ``acc`` were accepted: their windows are out of date."""
-        self.until[acc] = 0
-        self.streak[acc] = 0
+        A leg that stopped covers up to the column where its step failed; one that goes on, the
+        cell past its last column too.
+        """
+        got = (self.pos - c0 + np.where(self.alive, self.sign, 0))[:, None]
+        with np.errstate(invalid="ignore"):
+            if self.sign > 0:
+                return (places >= 0) & (places <= got)
+            return (places < 0) & (places >= got)
+
+
+def grid_places(u: np.ndarray, x0: np.ndarray, step: np.ndarray, cyclic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Where inputs ``u`` (D, n) lie on the walk's grid, in steps from the pose's input ``x0`` (D,): (near, other).
+
+    For an angle (``cyclic``) ``u`` is a direction: ``near`` is its representative nearest the
+    pose's input (in half a turn below it to half a turn above), ``other`` the one a turn the
+    other way; for a length ``near`` is ``u``'s place and ``other`` NaN.
+
+    >>> import numpy as np
+    >>> near, other = grid_places(np.radians([[30.0, 390.0, -300.0, 200.0]]), np.zeros(1), np.radians([3.0]), True)
+    >>> np.round(near, 9).tolist(), np.round(other, 9).tolist()
+    ([[10.0, 10.0, 20.0, -53.333333333]], [[-110.0, -110.0, -100.0, 66.666666667]])
+    """
+    P = (np.asarray(u, float) - x0[:, None]) / step[:, None]
+    if not cyclic:
+        return P, np.full_like(P, np.nan)
+    turn = 2 * np.pi / step[:, None]
+    near = P - turn * np.floor(P / turn + 0.5)
+    return near, np.where(near >= 0, near - turn, near + turn)
+
+
+def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Cubic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with motions per cell ``Va``, ``Vb``."""
+    t2, t3 = t * t, t * t * t
+    out: np.ndarray = (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
+    return out
+
+
+def _cell_guess(
+    Umm: np.ndarray, Um: np.ndarray, Ua: np.ndarray, Ub: np.ndarray, Up: np.ndarray, Upp: np.ndarray, t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A sample's start at ``t`` in [0, 1) of its cell ``a``-``b`` from the grid's solutions, and how far from it
+    Newton may go (half the cell's move): (guess (m, N), bound (N,)); NaN where there is none.
+
+    Both ends solved: cubic through them and their outer neighbours (``Um``, ``Up``) where all
+    four are, else linear. One end only (the cell where a leg stopped): quadratic extrapolation
+    from that end and the two solutions before it.
+    """
+    cubic = -t * (t - 1) * (t - 2) / 6 * Um + (t + 1) * (t - 1) * (t - 2) / 2 * Ua
+    cubic += -(t + 1) * t * (t - 2) / 2 * Ub + (t + 1) * t * (t - 1) / 6 * Up
+    inside = np.where(np.all(np.isfinite(cubic), axis=0), cubic, (1 - t) * Ua + t * Ub)
+    r = 1 - t  # from b towards a
+
+    def beyond(U0: np.ndarray, U1: np.ndarray, U2: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Quadratic through U2, U1, U0 at -2, -1, 0, at x."""
+        out: np.ndarray = (x + 1) * (x + 2) / 2 * U0 - x * (x + 2) * U1 + x * (x + 1) / 2 * U2
+        return out
+
+    up, down = beyond(Ua, Um, Umm, t), beyond(Ub, Up, Upp, r)
+    fin = [np.all(np.isfinite(U), axis=0) for U in (Ua, Ub)]
+    guess = np.where(fin[0] & fin[1], inside, np.where(fin[0], up, down))
+    move = np.where(fin[0] & fin[1], Ub - Ua, np.where(fin[0], Ua - Um, Ub - Up))
+    with np.errstate(invalid="ignore"):
+        bound = 0.5 * np.max(np.abs(move), axis=0) + 1e-9 * np.max(np.abs(np.where(fin[0], Ua, Ub)), axis=0)
+    return guess, bound

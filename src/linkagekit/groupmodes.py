@@ -954,7 +954,10 @@ def _solve_rows(
         params,
         plan=plan,
         steps=tuple(steps[: len(plan.steps)]),
-        pose_inputs=np.repeat(params.pose_inputs[:, :1], R, axis=1),
+        # a group started at a mode at q walks from q (its grid's origin is the driver's input there)
+        pose_inputs=np.repeat(np.asarray(q, float)[:, None], R, axis=1)
+        if starts
+        else params.pose_inputs[:, :1].repeat(R, 1),
         signs=np.repeat(params.signs[:, :1], R, axis=1),
         valid=np.ones(R, bool),
         pose=np.repeat(params.pose[:, :1], R, axis=1),

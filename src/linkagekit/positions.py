@@ -33,9 +33,9 @@ import numpy as np
 
 from .errors import MechanismFileError
 from .geometry import ASSEMBLY_RTOL, NAN_POINT
-from .group import WALK_REACH, Group
+from .group import GRID_MOST, GRID_STEP, GRID_STEP_LENGTH, Group, grid_places
 from .params import Params, all_sign_combinations
-from .steps import Kin
+from .steps import Kin, WalkGrid
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -79,7 +79,7 @@ def solve(
     mirrors: np.ndarray | None = None,
     eps: float = ASSEMBLY_RTOL,
     out: np.ndarray | None = None,
-    _dense: bool = False,
+    grid: WalkGrid | None = None,
     continuous: bool = False,
 ) -> Positions:
     """Positions of every joint for every design and input sample.
@@ -96,6 +96,8 @@ def solve(
         True flips the link of three or more joints of that index; default: none.
     out : ndarray, complex, shape (n_joints, D, n), optional
         Where to write the positions.
+    grid : WalkGrid, optional
+        Set by this function itself: ``q``'s last columns are the grid a numerical group walks.
     continuous : bool
         Numerical groups follow their branch through change points (a sign change of their
         Jacobian's determinant is accepted where the motion is smooth); the sign steps take
@@ -103,9 +105,9 @@ def solve(
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
-    dense = _walk_inputs(params, q) if plan.numerical and not _dense else None
-    if dense is not None:  # the numerical group walks along the inputs, not across gaps between them
-        return _solve_dense(params, dense, signs, mirrors, eps, out, continuous)
+    got = _solve_on_grid(params, q, signs, mirrors, eps, out, continuous) if plan.numerical and grid is None else None
+    if got is not None:
+        return got
     sg = params.signs[:, :, None] if signs is None else np.asarray(signs, float)
     mr = np.zeros((plan.n_mirrors, 1, 1), bool) if mirrors is None else np.asarray(mirrors, bool)
     D = params.n_designs
@@ -115,7 +117,9 @@ def solve(
     missing = plan.unwritten
     if missing:  # a joint no step writes is NaN, never uninitialised memory
         z[list(missing)] = NAN_POINT
-    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
+    k = Kin(
+        z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous, grid
+    )
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -174,84 +178,86 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
     return replace(params, signs=signs)
 
 
-#: the numerical group's walk passes through inputs at most this far apart (radians; lengths use
-#: 1/360 of the sweep's span): a sub-step between two samples moves the known joints along a chord,
-#: which must not skip a turning point of the motion
+#: paths that follow the inputs (:mod:`linkagekit.branch`) pass through inputs at most this far apart
+#: (radians): a sub-step between two samples moves the known joints along a chord, which must not skip a
+#: turning point of the motion
 WALK_STEP = np.radians(1.0)
 
 
+def _solve_on_grid(
+    params: Params,
+    q: np.ndarray,
+    signs: np.ndarray | None,
+    mirrors: np.ndarray | None,
+    eps: float,
+    out: np.ndarray | None,
+    continuous: bool = False,
+) -> Positions | None:
+    """:func:`solve` with the grid the numerical group walks appended to the samples (:func:`_walk_grid`), and
+    the samples taken back; None without a grid (no driver, or no sample)."""
+    walk = _walk_grid(params, q)
+    if walk is None:
+        return None
+    qg, grid = walk
+    n, m = q.shape[-1], qg.shape[-1]
+    full = solve(
+        params, qg, _dense_choice(signs, n, m), _dense_choice(mirrors, n, m), eps, grid=grid, continuous=continuous
+    )
+    got = _take_samples(full, np.arange(n))
+    if out is not None:
+        out[...] = got.z
+        got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
+    return got
+
+
 def _walk_driver(params: Params, key: np.ndarray) -> tuple[int, bool]:
-    """The driver the walk follows (the one that moves most over ``key``, the pose's input first) and
-    whether it is an angle (then the walk goes at most ``WALK_REACH`` from the pose's input)."""
+    """The driver the walk follows (the one that moves most over ``key`` (n_drivers, n), the pose's input
+    first) and whether it is an angle (its input is a direction)."""
     d = int(np.argmax(np.ptp(key, axis=1)))
     angular = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
     return d, d < len(angular) and bool(angular[d])
 
 
-def beyond_reach(params: Params, q: np.ndarray) -> np.ndarray:
-    """Which samples of inputs ``q`` ``(n_drivers, n)`` (solver units) the numerical walk never goes to.
+def _grid_step(params: Params, cyclic: bool) -> np.ndarray:
+    """The walk's grid step per design: ``GRID_STEP`` for an angle, ``GRID_STEP_LENGTH`` of the first group's
+    mean link length for a length."""
+    D = params.n_designs
+    if cyclic:
+        return np.full(D, GRID_STEP)
+    st, nums = next((s, n) for s, n in zip(params.plan.steps, params.steps, strict=True) if isinstance(s, Group))
+    lengths = np.array(st._design_nums(nums, np.arange(D))[0], float).reshape(-1, D)
+    step: np.ndarray = GRID_STEP_LENGTH * np.mean(lengths, axis=0)
+    return step
 
-    All False for a plan without a numerical group, or when the walk follows a length.
-    """
-    if not any(isinstance(st, Group) for st in params.plan.steps):
-        return np.zeros(q.shape[-1], dtype=bool)
-    key = np.concatenate([params.pose_inputs[:, :1], q], axis=1)
-    d, angle = _walk_driver(params, key)
-    return np.abs(q[d] - key[d, 0]) > WALK_REACH if angle else np.zeros(q.shape[-1], dtype=bool)
 
+def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | None:
+    """The inputs with the grid the numerical walk follows appended: (inputs (n_drivers, D, n + G), grid).
 
-def _walk_inputs(params: Params, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """The inputs with the samples the numerical walk needs added: (inputs, columns of the given ones).
-
-    Along the driver that moves most, from the pose's input to every sample, at most ``WALK_STEP``
-    apart; the other drivers are interpolated along it. An angle sample more than
-    :data:`linkagekit.group.WALK_REACH` from the pose's input gets no added samples (the walk
-    never goes there: it is not reached), so at most ``2 WALK_REACH / WALK_STEP`` are added.
-    None when nothing needs adding, or when the inputs carry a design axis.
+    The grid is fixed: the pose's input plus whole steps of the driver that moves most
+    (:func:`_grid_step`), as far as the samples may need (for an angle, the representatives
+    of their directions either way round, :func:`linkagekit.group.grid_places`; at most
+    ``GRID_MOST`` steps either way for a length); the other drivers are interpolated along
+    it (between the pose's values and the samples'). None without a driver or a sample.
     """
     n = q.shape[-1]
-    if q.ndim != 3 or q.shape[1] != 1 or n == 0 or q.shape[0] == 0:
+    if q.ndim != 3 or n == 0 or q.shape[0] == 0:
         return None
-    q0 = params.pose_inputs[:, 0]
-    key = np.concatenate([q0[:, None], q[:, 0, :]], axis=1)  # the pose's input first
-    d, angle = _walk_driver(params, key)
-    if angle:
-        key = key[:, np.abs(key[d] - key[d, 0]) <= WALK_REACH]  # the samples the walk goes to
-        step = WALK_STEP
-    else:
-        step = max(float(np.ptp(key[d])) / 360.0, 1e-300)
-    x = key[d]
-    order = np.unique(x)
-    added = [
-        np.linspace(a, b, int(np.ceil((b - a) / step)) + 1)[1:-1] for a, b in zip(order[:-1], order[1:], strict=True)
-    ]
-    extra = np.concatenate(added) if added else np.zeros(0)
-    if not len(extra):
-        return None
-    srt = np.argsort(x, kind="stable")
-    rows = [extra if i == d else np.interp(extra, x[srt], key[i][srt]) for i in range(q.shape[0])]
-    dense = np.concatenate([q[:, 0, :], np.array(rows)], axis=1)[:, None, :]
-    return dense, np.arange(n)
-
-
-def _solve_dense(
-    params: Params,
-    dense: tuple[np.ndarray, np.ndarray],
-    signs: np.ndarray | None,
-    mirrors: np.ndarray | None,
-    eps: float,
-    out: np.ndarray | None,
-    continuous: bool,
-) -> Positions:
-    """:func:`solve` at the inputs with the walk's samples added (``dense``), the given samples taken back."""
-    qd, keep = dense
-    m = qd.shape[-1]
-    sd, md = _dense_choice(signs, len(keep), m), _dense_choice(mirrors, len(keep), m)
-    got = _take_samples(solve(params, qd, sd, md, eps, _dense=True, continuous=continuous), keep)
-    if out is not None:
-        out[...] = got.z
-        got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
-    return got
+    D = params.n_designs
+    q0 = params.pose_inputs
+    qb = np.broadcast_to(q, (q.shape[0], D, n))
+    key = np.concatenate([q0[:, :1], qb[:, 0, :]], axis=1)  # the pose's input first
+    d, cyclic = _walk_driver(params, key)
+    step = _grid_step(params, cyclic)
+    near, other = grid_places(qb[d], q0[d], step, cyclic)
+    with np.errstate(invalid="ignore"):
+        ends = np.nan_to_num(np.array([np.nanmin([near, other]), np.nanmax([near, other])]), posinf=0, neginf=0)
+    lo, hi = (int(np.clip(f(e), -GRID_MOST, GRID_MOST)) for f, e in zip((np.floor, np.ceil), ends, strict=True))
+    index = np.arange(min(lo, 0), max(hi, 0) + 1)
+    x = q0[d][:, None] + index * step[:, None]  # (D, G)
+    srt = np.argsort(key[d], kind="stable")
+    rows = [x if i == d else np.interp(x, key[d][srt], key[i][srt]) for i in range(q.shape[0])]
+    qg = np.concatenate([qb, np.array(rows)], axis=2)
+    return qg, WalkGrid(n, index, step, d, cyclic)
 
 
 def _dense_choice(arr: np.ndarray | None, n: int, n_total: int) -> np.ndarray | None:

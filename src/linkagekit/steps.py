@@ -77,6 +77,23 @@ class Kin:
     eps: float
     q0: np.ndarray | None = None  # (n_drivers, D) driver values at the pose (numerical groups walk from it)
     continuous: bool = False  # numerical groups follow their branch through change points (linkagekit.branch)
+    grid: WalkGrid | None = None  # the fixed inputs numerical groups walk (columns of q after the given samples)
+
+
+@dataclass(frozen=True)
+class WalkGrid:
+    """The fixed inputs a numerical group walks, appended to the given samples by the positions solve.
+
+    Column ``n_given + g`` of ``q`` is the input ``q0[driver] + index[g] * step`` of driver
+    ``driver`` (``index`` increasing, holding 0: the pose's input); ``cyclic``: that driver is
+    an angle, so a sample's input is a direction (:mod:`linkagekit.group`).
+    """
+
+    n_given: int
+    index: np.ndarray  # (G,) int
+    step: np.ndarray  # (D,) the grid's step per design (radians or length units)
+    driver: int
+    cyclic: bool
 
 
 @dataclass

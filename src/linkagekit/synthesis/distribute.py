@@ -21,10 +21,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, LinkageError
-from .objective import Problem, evaluate
+from .base import Objective
 
 #: the problems a worker process evaluates (set once per process by the pool's initializer)
-_PROBLEMS: tuple[Problem, ...] = ()
+_PROBLEMS: tuple[Objective, ...] = ()
 #: designs per chunk at most (bounds each call's memory; see objective.CHUNK)
 MAX_CHUNK = 4096
 #: glibc's mallopt parameters (malloc.h)
@@ -65,7 +65,7 @@ def keep_freed_memory() -> None:
     mallopt(M_TRIM_THRESHOLD, 1 << 30)
 
 
-def _install(problems: tuple[Problem, ...]) -> None:
+def _install(problems: tuple[Objective, ...]) -> None:
     """A local worker process's start: Ctrl-C is the parent's to handle (no traceback per worker), its problems."""
     global _PROBLEMS
     import signal
@@ -76,12 +76,12 @@ def _install(problems: tuple[Problem, ...]) -> None:
 
 
 def _cost_here(which: int, X: np.ndarray) -> np.ndarray:
-    return evaluate(_PROBLEMS[which], X).cost
+    return _PROBLEMS[which].cost(X)
 
 
-def _cost_of(problem: Problem, X: np.ndarray) -> np.ndarray:
+def _cost_of(problem: Objective, X: np.ndarray) -> np.ndarray:
     keep_freed_memory()  # once per process (a Dask worker's too)
-    return evaluate(problem, X).cost
+    return problem.cost(X)
 
 
 def _check_address(address: str) -> None:
@@ -114,7 +114,7 @@ class Evaluator:
 
     Parameters
     ----------
-    problem : Problem or tuple of Problem
+    problem : Objective or tuple of Objective
         What to score; with several (variants of one problem), ``cost(X, which)`` picks one.
     workers : int
         Local processes (1: in this process).
@@ -123,7 +123,9 @@ class Evaluator:
         go to its workers (``dask[distributed]`` must be installed).
     """
 
-    def __init__(self, problem: Problem | tuple[Problem, ...], workers: int = 1, scheduler: str | None = None) -> None:
+    def __init__(
+        self, problem: Objective | tuple[Objective, ...], workers: int = 1, scheduler: str | None = None
+    ) -> None:
         if workers < 1:
             raise InputError(f"--workers: expected a positive number of processes, got {workers}")
         self.problems = problem if isinstance(problem, tuple) else (problem,)

@@ -52,8 +52,9 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -63,7 +64,11 @@ from ..geometry import ComplexArray, FloatArray, abs2
 from ..params import Params
 from ..params import compile as compile_params
 from ..positions import solve
+from .base import Objective, Score
 from .space import DesignSpace
+
+if TYPE_CHECKING:
+    from ..model import Mechanism
 
 #: weight of the violation against the mean squared relative error (large: a design that gains accuracy
 #: by violating a constraint a little is still worse than a feasible one)
@@ -79,8 +84,11 @@ H_THETA = 1e-4
 
 
 @dataclass(frozen=True, eq=False)
-class Problem:
-    """What to synthesise: targets, a design space, constraints.
+class Problem(Objective):
+    """Path generation: targets, a design space, constraints (the engine's first :class:`~.base.Objective`).
+
+    Its error measure is the largest distance of a target to the curve over the targets'
+    diagonal; its cost and check are :func:`evaluate` and :func:`check`.
 
     Attributes
     ----------
@@ -154,6 +162,41 @@ class Problem:
         h.update(repr(self.space.template.to_dict()).encode())
         return h.hexdigest()[:16]
 
+    # -- the engine's interface (base.Objective)
+    @property
+    def polish_methods(self) -> tuple[str, str]:
+        """Trust-region reflective first without timing, dogbox first with it (see ``optimize.polish_method``)."""
+        return ("dogbox", "trf") if self.timed else ("trf", "dogbox")
+
+    def score(self, X: FloatArray) -> Score:
+        """The search's score (:func:`evaluate`): error = max distance / ``L``."""
+        return _score(self, evaluate(self, X))
+
+    def cost(self, X: FloatArray) -> FloatArray:
+        return evaluate(self, X).cost
+
+    def check(self, X: FloatArray) -> Score:
+        """The dense check (:func:`check`)."""
+        return _score(self, check(self, X))
+
+    def measure(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return measure(self, X)
+
+    def residuals(self, X: FloatArray) -> FloatArray:
+        """``e_i / (L sqrt(m))`` and ``sqrt(PENALTY * violation)``, (N, m + 1), nearest points refined 3 times."""
+        e = evaluate(self, X, refine=3)
+        m = len(self.targets)
+        rel = np.where(np.isfinite(e.errors), e.errors / self.scale, 1.0) / np.sqrt(m)
+        out: FloatArray = np.concatenate([rel, np.sqrt(PENALTY * e.violation)[:, None]], axis=1)
+        return out
+
+    def variants(self) -> tuple[Objective, ...]:
+        """With the order asked for, also the problem without it (cheaper; a fit found without it may be in order)."""
+        return (self, replace(self, ordered=False)) if self.ordered else (self,)
+
+    def mechanism(self, x: FloatArray) -> Mechanism:
+        return self.space.mechanism(np.asarray(x, float))
+
 
 @dataclass(frozen=True)
 class Evaluation:
@@ -217,6 +260,13 @@ def measure(problem: Problem, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ok = np.all(np.isfinite(e.errors), axis=1) & (e.violation == 0)
     err = np.max(np.where(np.isfinite(e.errors), e.errors, 0.0), axis=1) / problem.scale
     return np.where(ok, err, np.inf), e.cost
+
+
+def _score(problem: Problem, e: Evaluation) -> Score:
+    """An :class:`Evaluation` as the engine's :class:`~.base.Score` (error: max distance / L, NaN -> inf)."""
+    miss = ~np.all(np.isfinite(e.errors), axis=1)
+    err = np.max(np.where(np.isfinite(e.errors), e.errors, 0.0), axis=1) / problem.scale
+    return Score(e.cost, np.where(miss, np.inf, err), e.violation)
 
 
 def best_index(max_error: np.ndarray, cost: np.ndarray) -> int:

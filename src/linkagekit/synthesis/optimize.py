@@ -1,5 +1,9 @@
 """Differential evolution and CMA-ES over whole generations, a least-squares polish, restarts, checkpoints.
 
+The engine of every synthesis task: it searches an :class:`~linkagekit.synthesis.base.Objective`
+(path, motion, function generation or a user's own), seeing only its bounds, costs,
+residuals, dense check and fingerprint.
+
 One restart
     Either :class:`scipy.optimize.differential_evolution`'s solver (``rand1bin``, dithered
     mutation, ``updating="deferred"``, ``vectorized=True``) or CMA-ES
@@ -9,8 +13,8 @@ One restart
     after every generation and stop on the clock.
 Polish
     The ``POLISHED`` best distinct members are refined by
-    :func:`scipy.optimize.least_squares` on the residuals ``e_i / (L sqrt(m))`` and
-    ``sqrt(PENALTY * violation)``, each by both of its bounded methods (trust-region
+    :func:`scipy.optimize.least_squares` on the objective's residuals (for a path:
+    ``e_i / (L sqrt(m))`` and ``sqrt(PENALTY * violation)``), each by both of its bounded methods (trust-region
     reflective suits untimed problems, whose exact solutions form a manifold; dogbox suits
     timed ones; see :func:`polish_method`), with the Jacobian by forward differences
     computed as one batch of ``dim + 1`` designs; the refinement of the nearest points is
@@ -37,16 +41,20 @@ import json
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import InputError, LinkageError, shorten
 from ..geometry import FloatArray
+from .base import Objective
 from .distribute import Evaluator
-from .objective import PENALTY, Problem, best_index, evaluate, measure
+from .objective import best_index
+
+if TYPE_CHECKING:
+    from ..model import Mechanism
 
 #: designs polished per restart
 POLISHED = 5
@@ -163,14 +171,14 @@ class Outcome:
 
 
 def optimize(
-    problem: Problem,
+    problem: Objective,
     settings: Settings,
     progress: Callable[[Progress], None] | None = None,
 ) -> Outcome:
     """Search ``problem`` as ``settings`` say; returns the best design found (by :func:`objective.measure`)."""
-    # With the order asked for, every other search scores without it (cheaper, and a fit found without the
-    # order may well be in order); the polish and the choice of the best always use the problem itself.
-    variants = (problem, replace(problem, ordered=False)) if problem.ordered else (problem,)
+    # The searches take turns with the objective's cheaper variants (a path problem's order dropped: a fit
+    # found without the order may well be in order); the polish and the choice of the best use the objective.
+    variants = problem.variants()
     run = _Run.begin(problem, settings, progress, len(variants))
     if run.finished is None:  # a finished checkpoint's result is just written again
         with Evaluator(variants, settings.workers, settings.scheduler) as ev:
@@ -181,11 +189,80 @@ def optimize(
     return run.outcome()
 
 
+@dataclass(frozen=True)
+class Optimum:
+    """The outcome of a search of any :class:`~linkagekit.synthesis.base.Objective` (:func:`search`).
+
+    Attributes
+    ----------
+    x : ndarray (dim,)
+        The best design vector found.
+    error : float
+        Its error by the objective's dense check (``inf`` if it is infeasible there).
+    cost : float
+    feasible : bool
+    mechanism : Mechanism or None
+        ``objective.mechanism(x)``, or None when the objective builds none.
+    outcome : Outcome
+    """
+
+    x: np.ndarray
+    error: float
+    cost: float
+    feasible: bool
+    mechanism: Mechanism | None
+    outcome: Outcome
+
+
+def search(
+    objective: Objective,
+    *,
+    seed: int = 0,
+    seconds: float = 60.0,
+    restarts: int = 32,
+    generations: int = 500,
+    popsize: int = 15,
+    goal: float = 1e-5,
+    workers: int = 1,
+    scheduler: str | None = None,
+    checkpoint: str | None = None,
+    progress: Callable[[Progress], None] | None = None,
+) -> Optimum:
+    """Search any objective with the synthesis engine (``synthesize(objective=...)`` calls this).
+
+    Examples
+    --------
+    >>> from linkagekit.synthesis.base import Objective, Score
+    >>> class Nearest(Objective):  # the point of the unit square nearest to (0.3, 0.7)
+    ...     bounds = (np.zeros(2), np.ones(2))
+    ...     def score(self, X):
+    ...         r = X - [0.3, 0.7]
+    ...         return Score(np.sum(r * r, axis=1), np.abs(r).max(axis=1), np.zeros(len(X)))
+    ...     def residuals(self, X):
+    ...         return X - [0.3, 0.7]
+    ...     def fingerprint(self):
+    ...         return "nearest"
+    >>> out = search(Nearest(), restarts=1, generations=5)
+    >>> bool(out.error < 1e-9), out.mechanism is None
+    (True, True)
+    """
+    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
+    outcome = optimize(objective, settings, progress)
+    s = objective.check(outcome.x[None])
+    try:
+        mech = objective.mechanism(outcome.x)
+    except NotImplementedError:
+        mech = None
+    feasible = bool(s.violation[0] == 0)
+    error = float(s.error[0]) if feasible else float("inf")
+    return Optimum(outcome.x, error, float(s.cost[0]), feasible, mech, outcome)
+
+
 @dataclass
 class _Run:
     """One :func:`optimize` run: its restarts so far, the one under way, the clock (continued from a checkpoint)."""
 
-    problem: Problem
+    problem: Objective
     settings: Settings
     progress: Callable[[Progress], None] | None
     start: float
@@ -205,7 +282,7 @@ class _Run:
 
     @classmethod
     def begin(
-        cls, problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None, n_variants: int = 1
+        cls, problem: Objective, settings: Settings, progress: Callable[[Progress], None] | None, n_variants: int = 1
     ) -> _Run:
         """A new run, or the checkpoint's when there is one."""
         seeds = np.random.SeedSequence(settings.seed).spawn(settings.restarts)
@@ -247,7 +324,7 @@ class _Run:
         d = self.done[self.best()]
         return d["cost"], d["max_error"]
 
-    def search(self, ev: Evaluator, variants: tuple[Problem, ...]) -> None:
+    def search(self, ev: Evaluator, variants: tuple[Objective, ...]) -> None:
         """Restarts until the goal, the last one or the clock, then the best polished longer; time left: more."""
         while True:
             while self.restart < self.settings.restarts and not self.search_once(ev, variants):
@@ -260,7 +337,7 @@ class _Run:
                 return
             self.stopped_by = "restarts"  # the last polish ended early: the time left goes to another search
 
-    def search_once(self, ev: Evaluator, variants: tuple[Problem, ...]) -> bool:
+    def search_once(self, ev: Evaluator, variants: tuple[Objective, ...]) -> bool:
         """Restart ``self.restart``: its search, then its polish; True when the run is to stop."""
         which = self.restart % len(variants)
 
@@ -344,7 +421,7 @@ class _Run:
         if fresh and time.monotonic() < self.deadline():  # a whole polish, not one cut by the clock
             self.polish_time = max(self.polish_time, self.clock() - t0)
         cands = np.array(self.polished + picked)
-        err, cost = measure(self.problem, cands)
+        err, cost = self.problem.measure(cands)
         k = best_index(err, cost)
         return cands[k], float(cost[k]), float(err[k])
 
@@ -357,7 +434,7 @@ class _Run:
         x = np.asarray(best["x"], float)
         deep = [polish(self.problem, x, FINAL_POLISH, self.deadline(), m) for m in _both_methods(self.problem)]
         cands = np.array([x, *deep])
-        err, cost = measure(self.problem, cands)
+        err, cost = self.problem.measure(cands)
         j = best_index(err, cost)
         self.done[k] = {**best, "x": cands[j], "cost": float(cost[j]), "max_error": float(err[j]), "deep": True}
         if self.settings.checkpoint:
@@ -409,7 +486,7 @@ CMA_EVERY = 2
 CMA_POPULATION = 8
 
 
-def _search(restart: int, n_variants: int, problem: Problem, settings: Settings, seed: Any, cost: Cost) -> Search:
+def _search(restart: int, n_variants: int, problem: Objective, settings: Settings, seed: Any, cost: Cost) -> Search:
     """The search of restart ``restart``: differential evolution and CMA-ES take turns (after the variants)."""
     rng = np.random.Generator(np.random.PCG64(seed))
     turn = restart // n_variants
@@ -448,7 +525,7 @@ class Search:
 class DESearch(Search):
     """scipy's differential evolution (``rand1bin``, dithered mutation, deferred updating, vectorized)."""
 
-    def __init__(self, problem: Problem, settings: Settings, rng: np.random.Generator, cost: Cost) -> None:
+    def __init__(self, problem: Objective, settings: Settings, rng: np.random.Generator, cost: Cost) -> None:
         from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
 
         lo, hi = problem.bounds
@@ -517,7 +594,7 @@ class CMASearch(Search):
     """
 
     def __init__(
-        self, problem: Problem, settings: Settings, rng: np.random.Generator, cost: Cost, growth: int = 1
+        self, problem: Objective, settings: Settings, rng: np.random.Generator, cost: Cost, growth: int = 1
     ) -> None:
         from .cmaes import CMAES
 
@@ -561,23 +638,20 @@ class CMASearch(Search):
 
 
 # ---------------------------------------------------------------------- polish
-def residuals(problem: Problem, X: np.ndarray) -> np.ndarray:
-    """Least-squares residuals of designs ``X`` (N, dim): (N, m + 1), whose squared sum is the cost."""
-    e = evaluate(problem, X, refine=3)
-    m = len(problem.targets)
-    rel = np.where(np.isfinite(e.errors), e.errors / problem.scale, 1.0) / np.sqrt(m)
-    return np.concatenate([rel, np.sqrt(PENALTY * e.violation)[:, None]], axis=1)
+def residuals(problem: Objective, X: np.ndarray) -> np.ndarray:
+    """Least-squares residuals of designs ``X`` (N, dim), whose squared sum is the cost (the objective's)."""
+    return problem.residuals(X)
 
 
-def _both_methods(problem: Problem) -> tuple[str, str]:
+def _both_methods(problem: Objective) -> tuple[str, str]:
     """Both least-squares methods, the one that suits ``problem`` first (see :func:`polish_method`)."""
-    return ("dogbox", "trf") if problem.timed else ("trf", "dogbox")
+    return problem.polish_methods
 
 
-def polish_method(problem: Problem) -> str:
+def polish_method(problem: Objective) -> str:
     """The least-squares method that refines designs of ``problem`` best (measured; docs/method.md, "Search").
 
-    Without timing the residuals have a manifold of exact solutions (a rank-deficient
+    For path generation: without timing the residuals have a manifold of exact solutions (a rank-deficient
     Jacobian), on which dogbox stalls and trust-region reflective converges; with timing,
     trust-region reflective crawls where dogbox converges.
     """
@@ -585,7 +659,7 @@ def polish_method(problem: Problem) -> str:
 
 
 def polish(
-    problem: Problem, x0: np.ndarray, max_nfev: int = 100, until: float | None = None, method: str | None = None
+    problem: Objective, x0: np.ndarray, max_nfev: int = 100, until: float | None = None, method: str | None = None
 ) -> np.ndarray:
     """A local least-squares refinement of one design vector within the bounds.
 
@@ -629,7 +703,7 @@ class _OutOfTime(Exception):
     """The polish's deadline passed."""
 
 
-def _picked(problem: Problem, X: np.ndarray, energies: np.ndarray) -> list[np.ndarray]:
+def _picked(problem: Objective, X: np.ndarray, energies: np.ndarray) -> list[np.ndarray]:
     """The ``POLISHED`` best distinct candidates, best first."""
     picked: list[np.ndarray] = []
     for i in np.argsort(energies, kind="stable"):
@@ -653,7 +727,7 @@ class _Refused(ValueError):
 
 def _save(
     settings: Settings,
-    problem: Problem,
+    problem: Objective,
     header: dict[str, Any],
     solver: dict[str, Any] | None,
     done: list[dict[str, Any]],
@@ -694,7 +768,7 @@ def _temporary(path: Path) -> Path:
     return path.with_name(f".{path.name}.tmp")
 
 
-def _load(settings: Settings, problem: Problem, template: Callable[[int], Search]) -> dict[str, Any] | None:
+def _load(settings: Settings, problem: Objective, template: Callable[[int], Search]) -> dict[str, Any] | None:
     """The saved state, or None when the file does not exist yet.
 
     Nothing is allocated before it is known to fit: the file must be a regular file of at most
@@ -752,7 +826,7 @@ def _header(zf: Any) -> dict[str, Any]:
     return header
 
 
-def _check_owner(path: Path, header: dict[str, Any], settings: Settings, problem: Problem) -> None:
+def _check_owner(path: Path, header: dict[str, Any], settings: Settings, problem: Objective) -> None:
     if header.get("problem") != problem.fingerprint():
         raise InputError(f"{path}: this checkpoint belongs to another problem (other targets, topology or options)")
     if header.get("settings") != settings.key():
@@ -812,7 +886,7 @@ def _done(d: Any, i: int) -> dict[str, Any]:
     }
 
 
-def _expected(state: dict[str, Any], problem: Problem, template: Callable[[int], Search]) -> dict[str, Any]:
+def _expected(state: dict[str, Any], problem: Objective, template: Callable[[int], Search]) -> dict[str, Any]:
     """Every array the checkpoint must hold: name -> (smallest shape, largest shape) of numbers."""
     dim = (len(problem.bounds[0]),)
     out: dict[str, Any] = {f"done_x_{i}": (dim, dim) for i in range(len(state["done"]))}

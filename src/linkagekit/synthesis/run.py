@@ -23,9 +23,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..checks import MIN_TRANSMISSION
-from ..errors import InputError
+from ..errors import InputError, LinkageError
+from .base import Objective
+from .function_run import synthesize_function
 from .objective import Problem, check
-from .optimize import Outcome, Progress, Settings, optimize
+from .optimize import Optimum, Outcome, Progress, Settings, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
 
 if TYPE_CHECKING:
@@ -148,7 +150,7 @@ def synthesize(
     inputs: Sequence[float] | None = None,
     units: str = "m",
     ordered: bool = False,
-    min_transmission: float = MIN_TRANSMISSION,
+    min_transmission: float | None = None,
     lengths: tuple[float, float] | None = None,
     pivots: tuple[tuple[float, float], tuple[float, float]] | None = None,
     free: Sequence[str] | Mapping[str, Any] | None = None,
@@ -163,9 +165,16 @@ def synthesize(
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
+    objective: Objective | None = None,
+    task: str = "path",
+    closed: bool = False,
+    approximate: bool = False,
+    angle_weight: float | None = None,
+    free_offsets: bool = False,
+    ground_length: float = 1.0,
     **old: Any,
-) -> Synthesis:
-    """Find a mechanism whose tracer point passes near every target.
+) -> Any:
+    """Find a mechanism whose tracer point passes near every target (or search any ``objective``).
 
     Parameters
     ----------
@@ -181,8 +190,9 @@ def synthesize(
         ``read_targets``. ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
         Without timing, meet the targets in their order along the curve.
-    min_transmission : float
-        Degrees: transmission angles stay within ``[MIN, 180 - MIN]`` over the whole turn.
+    min_transmission : float, optional
+        Degrees: transmission angles stay within ``[MIN, 180 - MIN]`` over the whole turn
+        (default ``MIN_TRANSMISSION``, 20).
     lengths : (float, float), optional
         Bounds on every link length.
     pivots : ((xmin, xmax), (ymin, ymax)), optional
@@ -195,7 +205,46 @@ def synthesize(
         See :class:`~linkagekit.synthesis.optimize.Settings`.
     progress : callable, optional
         Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
+    objective : Objective, optional
+        A user's own :class:`~linkagekit.synthesis.base.Objective`: searched by the same
+        engine instead of the targets (pass ``targets=None``); returns an :class:`Optimum`.
+    task : str
+        ``"path"`` (the default) or ``"motion"``: ``targets`` are then poses (m, 3) ``x, y,
+        angle`` (degrees) and :func:`synthesize_motion` runs with ``inputs``, ``closed``,
+        ``approximate``, ``angle_weight``, ``min_transmission`` (default 0 for motion),
+        ``units``, ``seed`` and ``seconds``; or ``"function"``: ``targets`` are pairs (m, 2)
+        ``input, output`` (degrees from the ground line) and
+        :func:`~linkagekit.synthesis.function_run.synthesize_function` runs with
+        ``free_offsets``, ``ground_length``, ``min_transmission`` (default 0), ``units``,
+        ``seed``, ``seconds`` and ``workers``.
+
+    Returns
+    -------
+    Synthesis; MotionSynthesis with ``task="motion"``; FunctionSynthesis with ``task="function"``;
+    Optimum with ``objective``
     """
+    if objective is not None:
+        return search(
+            objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, popsize=popsize,
+            goal=goal, workers=workers, scheduler=scheduler, checkpoint=checkpoint, progress=progress,
+        )  # fmt: skip
+    if task == "motion":
+        mt = 0.0 if min_transmission is None else min_transmission
+        return synthesize_motion(
+            targets, inputs=inputs, closed=closed, approximate=approximate, weight=angle_weight,
+            min_transmission=mt, units=_units(units, old), seed=seed, seconds=seconds,
+        )  # fmt: skip
+    if task == "function":
+        pairs = np.asarray(targets, float)
+        if pairs.ndim != 2 or pairs.shape[1] != 2:
+            raise InputError("targets: function generation takes pairs (m, 2) of input, output angles (degrees)")
+        return synthesize_function(
+            pairs[:, 0], pairs[:, 1], free_offsets=free_offsets, ground_length=ground_length, units=_units(units, old),
+            seed=seed, seconds=seconds, workers=workers, min_transmission=min_transmission or 0.0,
+        )  # fmt: skip
+    if task != "path":
+        raise InputError(f"task: expected 'path', 'motion' or 'function', got {task!r}")
+    min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
     source = getattr(targets, "source", None)
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
@@ -290,4 +339,219 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
     return "\n".join(lines)
 
 
-__all__ = ["TOPOLOGIES", "Synthesis", "describe", "make_problem", "synthesize"]
+__all__ = [
+    "TOPOLOGIES",
+    "MotionFourBar",
+    "MotionSynthesis",
+    "Optimum",
+    "Synthesis",
+    "describe",
+    "make_problem",
+    "search",
+    "synthesize",
+    "synthesize_motion",
+]
+
+
+# ---------------------------------------------------------------------- motion generation
+@dataclass(frozen=True)
+class MotionFourBar:
+    """One four-bar found for the poses.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+        Joints ``A0, A1, B1, B0, P, Q``; the coupler carries ``P`` (the pose point) and ``Q``
+        (along the pose's line); driver ``crank`` sweeping from the first pose to the last.
+    position_errors : ndarray (m,)
+        ``|P - (x, y)|`` at each pose, in the poses' unit.
+    angle_errors : ndarray (m,)
+        The orientation error at each pose, degrees (signed: achieved minus wanted).
+    inputs : ndarray (m,)
+        The crank angle at each pose (degrees), in the order the crank turns.
+    one_branch : bool
+        The poses are met in order on one assembly branch, assembling all the way.
+    grashof : str
+        Its Grashof type (:func:`linkagekit.checks.grashof`).
+    min_transmission : float
+        The smallest transmission angle over the sweep (degrees).
+    method : str
+        ``"exact"`` (Burmester) or ``"approximate"``.
+    """
+
+    mechanism: Mechanism
+    position_errors: np.ndarray
+    angle_errors: np.ndarray
+    inputs: np.ndarray
+    one_branch: bool
+    grashof: str
+    min_transmission: float
+    method: str
+
+    @property
+    def max_position_error(self) -> float:
+        return float(np.max(self.position_errors))
+
+    @property
+    def max_angle_error(self) -> float:
+        """Degrees."""
+        return float(np.max(np.abs(self.angle_errors)))
+
+
+@dataclass(frozen=True)
+class MotionSynthesis:
+    """The outcome of :func:`synthesize_motion`: the best four-bar first, then every other one found.
+
+    ``diagonal`` is the poses' bounding-box diagonal; ``weight`` the angle weight of the error
+    measure (:mod:`linkagekit.synthesis.motion`).
+    """
+
+    fourbars: list[MotionFourBar]
+    diagonal: float
+    weight: float
+
+    @property
+    def best(self) -> MotionFourBar:
+        return self.fourbars[0]
+
+    @property
+    def mechanism(self) -> Mechanism:
+        return self.best.mechanism
+
+
+def synthesize_motion(
+    poses: Any,
+    *,
+    inputs: Sequence[float] | None = None,
+    closed: bool = False,
+    approximate: bool = False,
+    weight: float | None = None,
+    min_transmission: float = 0.0,
+    units: str = "m",
+    seed: int = 0,
+    seconds: float = 20.0,
+) -> MotionSynthesis:
+    """Four-bars whose coupler passes through (or near) the poses, best first.
+
+    Parameters
+    ----------
+    poses : array_like (m, 3)
+        ``x, y, angle`` per pose (``angle`` in degrees, counter-clockwise from +x).
+    inputs : sequence of float, optional
+        The crank angle at each pose (degrees): timing, up to one common offset.
+    closed : bool
+        The motion is a cycle (the crank turns fully, back to the first pose).
+    approximate : bool
+        For 3 to 5 poses: the approximate route instead of the exact one (Burmester).
+    weight : float, optional
+        The angle weight ``w`` (diagonals per radian, default ``motion.ANGLE_WEIGHT``).
+    min_transmission : float
+        Degrees: the smallest transmission angle allowed over the sweep.
+    units : str
+        The poses' length unit.
+    seed, seconds
+        Of the engine's search that adds seeds (:func:`linkagekit.synthesis.optimize.optimize`).
+
+    Examples
+    --------
+    >>> import linkagekit as lk
+    >>> from linkagekit.synthesis import motion
+    >>> t = np.radians([0, 15, 30, 45, 60, 75])
+    >>> F = np.array([[0.0, 0, 0.3, 0.1, 0.4, 0.9, 0, 0.6, -0.2, 0.7]])  # a four-bar: pose of the body at t
+    >>> O, u, _, _ = motion.frames(F, t[None], np.array([1.0]))
+    >>> poses = np.stack([O[0].real, O[0].imag, np.degrees(np.angle(u[0]))], axis=1)
+    >>> out = synthesize_motion(poses)
+    >>> bool(out.best.max_position_error < 1e-9 and out.best.max_angle_error < 1e-7 and out.best.one_branch)
+    True
+    """
+    from . import motion as mo
+
+    P = np.asarray(poses, float)
+    if P.ndim != 2 or P.shape[1] != 3:
+        raise InputError(f"poses: expected (m, 3) rows of x, y, angle, got shape {P.shape}")
+    if np.any(np.abs(P[:, 2]) > 360):
+        raise InputError("poses: an angle is out of range (degrees within [-360, 360] expected)")
+    ins = None if inputs is None else np.radians(np.asarray(inputs, float))
+    p = mo.motion_poses(P[:, 0], P[:, 1], np.radians(P[:, 2]), ins, closed)
+    w = mo.ANGLE_WEIGHT if weight is None else float(weight)
+    if not w > 0:
+        raise InputError(f"--angle-weight: expected a positive number, got {weight}")
+    found: list[MotionFourBar] = []
+    if 3 <= p.m <= 5 and not approximate and ins is None and not closed:
+        found = _exact_motion(P, units)
+    if not found or not any(f.one_branch for f in found):
+        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
+        designs = mo.approximate(p, w, min_transmission, seeds)
+        found += [_motion_fourbar(p, d, units) for d in designs]
+    if not found:
+        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
+    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
+    return MotionSynthesis(found, p.scale, w)
+
+
+def _engine_seeds(objective: Any, seed: int, seconds: float) -> np.ndarray:
+    """The engine's best design of the circle-fit objective (a short search), as a four-bar vector (1, 10)."""
+    settings = Settings(seed, min(seconds, 5.0), restarts=2, generations=60, popsize=15, goal=0.0)
+    x = optimize(objective, settings).x
+    return np.asarray(objective.fourbars(x[None]), float)
+
+
+def _motion_fourbar(p: Any, d: Any, units: str) -> MotionFourBar:
+    """A :class:`~linkagekit.synthesis.motion.MotionDesign` as a :class:`MotionFourBar`."""
+    from ..checks import FourBar, grashof
+    from . import motion as mo
+
+    v = d.vector
+    ga, a, gb, b = complex(v[0], v[1]), complex(v[2], v[3]), complex(v[5], v[6]), complex(v[7], v[8])
+    kind, _ = grashof(FourBar(0, 1, 2, 3, ground=abs(gb - ga), crank=v[4], coupler=abs(b - a), rocker=v[9]))
+    name = f"motion four-bar: max errors {np.max(d.position_errors):.4g} {units}, "
+    name += f"{np.degrees(np.max(np.abs(d.angle_errors))):.4g} deg"
+    mech = mo.mechanism(p, d, units, name)
+    return MotionFourBar(
+        mech,
+        d.position_errors,
+        np.degrees(d.angle_errors),
+        np.degrees(d.inputs),
+        d.one_branch,
+        kind,
+        d.min_transmission,
+        "approximate",
+    )
+
+
+def _smallest_transmission(mech: Mechanism, inputs: np.ndarray) -> float:
+    """The smallest angle (degrees, folded to [0, 90]) between coupler ``A1-B1`` and rocker ``B0-B1`` over the sweep."""
+    from ..api import analyze
+
+    sweep = np.linspace(inputs[0], inputs[-1], max(2, int(4 * abs(inputs[-1] - inputs[0])) + 2))
+    res = analyze(mech, {"crank": sweep}, rates=False, dynamics=False)
+    b = res.point("B1")
+    u, v = res.point("A1") - b, res.point("B0") - b
+    mu = np.degrees(np.arccos(np.clip(np.abs((np.conj(u) * v).real) / (np.abs(u) * np.abs(v)), 0.0, 1.0)))
+    return float(np.nanmin(mu))
+
+
+def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
+    """Every four-bar of Burmester theory for 3 to 5 poses (:mod:`linkagekit.synthesis.burmester`), if available."""
+    import importlib
+
+    try:
+        burmester = importlib.import_module("linkagekit.synthesis.burmester")
+    except ImportError:
+        return []
+    out = []
+    for fb in burmester.exact_motion((P[:, 0], P[:, 1], np.radians(P[:, 2]))):
+        name = f"Burmester four-bar: max error {fb.position_error:.3g} {units}"
+        out.append(
+            MotionFourBar(
+                fb.mechanism(units, name),
+                np.asarray(fb.position_errors, float),
+                np.degrees(np.asarray(fb.angle_errors, float)),
+                np.degrees(np.asarray(fb.inputs, float)),
+                bool(fb.in_order),
+                str(fb.grashof),
+                _smallest_transmission(fb.mechanism(units, name), np.degrees(fb.inputs)) if fb.in_order else np.nan,
+                "exact",
+            )
+        )
+    return out

@@ -427,6 +427,43 @@ def _csv_targets(text: str, name: str, units: str) -> Targets:
     return targets_from_array(xy, inputs=inputs, unit=units, closed=None, source=name)
 
 
+def read_table(
+    path: str | os.PathLike[str], headers: Sequence[Sequence[str]], what: str = "row"
+) -> tuple[list[str], np.ndarray]:
+    """The columns and the numbers (rows, columns) of a CSV file whose header is one of ``headers``.
+
+    Read as target files are (comments, blank lines, size limits, one-line errors naming the
+    file and the line); used by motion (``x,y,angle[,input]``) and function generation
+    (``input,output``). The header's names are case-insensitive, in any order.
+    """
+    name = str(path)
+    text = _read_text(Path(path), name)
+    allowed = {tuple(sorted(h)) for h in headers}
+    expected = " or ".join(repr(",".join(h)) for h in headers)
+    columns: list[str] | None = None
+    rows: list[list[float]] = []
+    for number, line in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), start=1):
+        if not line.strip() or line.strip().startswith("#"):
+            continue
+        try:
+            cells = [c.strip() for c in next(csv.reader([line], strict=True))]
+        except (csv.Error, StopIteration) as exc:
+            raise _error(name, f"line {number}: not a CSV row ({shorten(str(exc))})") from None
+        if columns is None:
+            columns = [c.lower() for c in cells]
+            if tuple(sorted(columns)) not in allowed:
+                raise _error(name, f"expected the header {expected}, got {_quote(','.join(cells))}")
+            continue
+        if len(cells) != len(columns):
+            raise _error(name, f"line {number}: {_plural(len(cells), 'value')}, expected {len(columns)}")
+        if len(rows) == MAX_POINTS:
+            raise _error(name, f"line {number}: more than {MAX_POINTS} {what}s")
+        rows.append([_value(cell, column, number, name) for cell, column in zip(cells, columns, strict=True)])
+    if columns is None:
+        raise _error(name, f"no header line {expected} (only comments and blank lines)")
+    return columns, np.array(rows, dtype=float).reshape(len(rows), len(columns))
+
+
 def _header(cells: list[str], name: str) -> list[str]:
     columns = [c.lower() for c in cells]
     if sorted(columns) not in (["x", "y"], ["input", "x", "y"]):

@@ -523,6 +523,87 @@ def synthesis_figure(
     return fig
 
 
+def function_figure(curve: Any, pairs: Any, errors: Any, title: str = "", size: float = 6.0) -> tuple[Figure, Axes]:
+    """Function generation: the output angle against the input angle, the wanted pairs, and the errors.
+
+    ``curve`` (k, 2): input and output angle (degrees) of the mechanism, densely; ``pairs``
+    (n, 2): the wanted input, output pairs; ``errors`` (n,): the output-angle error at each
+    pair (degrees).  The upper axes (returned, for :func:`save_figure`'s pixel map) draw the
+    curve with the pairs as rings; the lower axes the error at each pair.
+    """
+    fig = Figure(figsize=(size, size * 0.9), dpi=DPI)
+    top, bottom = fig.subplots(2, 1, height_ratios=[3, 1.4], sharex=True)
+    c, p, e = np.asarray(curve, float), np.asarray(pairs, float), np.asarray(errors, float)
+    top.plot(c[:, 0], c[:, 1], color=CURVE_COLOR, linewidth=1.6, zorder=3)
+    top.plot(p[:, 0], p[:, 1], "o", markersize=8, markerfacecolor="none", markeredgecolor=TARGET_COLOR, zorder=4)
+    top.set_ylabel("output [deg]")
+    top.grid(True, color="#dddddd", linewidth=0.5)
+    bottom.axhline(0.0, color="#999999", linewidth=0.8)
+    bottom.vlines(p[:, 0], 0.0, e, color=TARGET_COLOR, linewidth=1.2)
+    bottom.plot(p[:, 0], e, "o", markersize=4, color=TARGET_COLOR)
+    worst = float(np.max(np.abs(e))) if len(e) else 0.0
+    for s in (-1.0, 1.0):
+        bottom.axhline(s * worst, color=CURVE_COLOR, linewidth=0.8, linestyle="--")
+    bottom.set_ylim(-1.25 * worst - 1e-12, 1.25 * worst + 1e-12)
+    bottom.set_xlabel("input [deg]")
+    bottom.set_ylabel("error [deg]")
+    fig.suptitle(_t(title or f"{len(p)} pairs: max error {worst:.4g} deg"), fontsize=10)
+    return fig, top
+
+
+#: colour of the coupler's achieved frames (P -> Q) at the poses of a motion synthesis
+ACHIEVED_COLOR = "#1a7f37"
+#: a pose's frame: its line this fraction of the poses' diagonal long, its second axis half that
+FRAME_LENGTH = 0.12
+
+
+def motion_figure(
+    mech: Any, poses: Any, inputs: Any, closed: bool = False, size: float = 6.0, dpi: float = DPI
+) -> Figure:
+    """A motion synthesis: the four-bar, the paths of ``P`` and ``Q``, and each pose as a small frame.
+
+    ``poses`` (m, 3): ``x, y, angle`` (degrees); ``inputs`` (m,): the crank angle (degrees) at
+    each pose. A wanted pose is drawn in ``TARGET_COLOR``: a ring at ``(x, y)``, a line of
+    ``FRAME_LENGTH`` diagonals along ``angle`` and a shorter one at right angles (so a frame
+    shows its orientation and its handedness); the coupler's achieved frame at the pose's
+    crank angle (P to the direction of Q) in ``ACHIEVED_COLOR``, dashed.
+    """
+    from ..api import analyze
+
+    P = np.asarray(poses, float)
+    ins = np.asarray(inputs, float)
+    driver = mech.drivers[0].name
+    lo, hi = float(np.min(ins)), float(np.max(ins))
+    sweep = np.linspace(lo, lo + 360.0, 721) if closed else np.linspace(lo, hi, max(2, int(4 * (hi - lo)) + 2))
+    res = analyze(mech, {driver: sweep}, rates=False, dynamics=False)
+    at = analyze(mech, {driver: ins[:1]}, rates=False, dynamics=False)
+    fig = mechanism_figure(res, at, size=size, dpi=dpi)
+    ax = fig.axes[0]
+    diag = float(np.hypot(np.ptp(P[:, 0]), np.ptp(P[:, 1]))) or 1.0
+    ell = FRAME_LENGTH * diag
+    u = np.exp(1j * np.radians(P[:, 2]))
+    z = P[:, 0] + 1j * P[:, 1]
+    for i, (zi, ui) in enumerate(zip(z, u, strict=True)):
+        for end in (zi + ell * ui, zi + 0.5 * ell * ui * 1j):
+            ax.plot([zi.real, end.real], [zi.imag, end.imag], color=TARGET_COLOR, linewidth=1.4, zorder=7)
+        ax.annotate(str(i + 1), (zi.real, zi.imag), xytext=(-9, 4), textcoords="offset points", fontsize=7,
+                    color=TARGET_COLOR)  # fmt: skip
+    ax.plot(z.real, z.imag, "o", markersize=5, markerfacecolor="none", markeredgecolor=TARGET_COLOR, zorder=7)
+    got = analyze(mech, {driver: ins}, rates=False, dynamics=False)
+    p0, q0 = got.point("P"), got.point("Q")
+    w = (q0 - p0) / np.abs(q0 - p0)
+    for a, b in zip(p0, p0 + ell * w, strict=True):
+        ax.plot([a.real, b.real], [a.imag, b.imag], color=ACHIEVED_COLOR, linewidth=1.0, linestyle="--", zorder=8)
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    pad = ell * 1.2
+    ax.set_xlim(min(x0, z.real.min() - pad), max(x1, z.real.max() + pad))
+    ax.set_ylim(min(y0, z.imag.min() - pad), max(y1, z.imag.max() + pad))
+    kind = "closed" if closed else "open"
+    fig.suptitle(_t(f"{len(P)} poses ({kind}): {mech.name}"), fontsize=10)
+    return fig
+
+
 def _at_pose(mech: Any) -> Result | None:
     """The mechanism solved at its pose's own inputs (positions only), or None where it does not assemble there."""
     from ..api import analyze, pose_inputs

@@ -1,0 +1,120 @@
+"""``synthesize --task function``: the engine's global search, then the minimax polish of :mod:`.function`.
+
+The engine (:func:`linkagekit.synthesis.run.search`) searches :class:`~.function.FunctionObjective`
+(branch, link ratios and, when free, the offsets) by differential evolution and CMA-ES; its
+best design joins the Freudenstein starts (least squares of all pairs, exact fits of triples,
+or an offset grid) that :func:`~.function.solve` polishes by least squares and minimax.  The
+best design that meets every pair on one branch is returned.  Three pairs with fixed angle
+scales, or pairs that Freudenstein's least squares meets exactly, are met without a search.
+
+Examples
+--------
+>>> from linkagekit.synthesis.function_run import synthesize_function
+>>> pairs = [40, 45, 50, 55, 60], [70, 76, 83, 91, 100]
+>>> out = synthesize_function(*pairs, ground_length=180, restarts=1, generations=40)
+>>> round(out.fit.max_error, 4), out.fit.valid, out.mechanism.drivers[0].name
+(0.1076, True, 'crank')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..geometry import FloatArray
+from .function import FunctionFit, FunctionObjective, check_pairs, solve
+from .optimize import Optimum, search
+
+if TYPE_CHECKING:
+    from ..model import Mechanism
+
+#: a fit this close (degrees) meets the pairs exactly, and the engine is not run
+EXACT = 1e-9
+#: the engine's goal: the largest output-angle error in radians (1e-9 deg)
+GOAL = 1.7e-11
+
+
+@dataclass(frozen=True)
+class FunctionSynthesis:
+    """What :func:`synthesize_function` found.
+
+    Attributes
+    ----------
+    fit : FunctionFit
+        The four-bar, its errors, branch, Grashof type and transmission angles.
+    mechanism : Mechanism
+        The four-bar as a mechanism (links ground, crank, coupler, output; driver ``crank``).
+    engine : Optimum or None
+        The engine's search (None when three pairs were met exactly without one).
+    """
+
+    fit: FunctionFit
+    mechanism: Mechanism
+    engine: Optimum | None
+
+
+def synthesize_function(
+    inputs: ArrayLike,
+    outputs: ArrayLike,
+    *,
+    free_offsets: bool = False,
+    ground_length: float = 1.0,
+    units: str = "m",
+    seed: int = 0,
+    seconds: float = 10.0,
+    restarts: int = 4,
+    generations: int = 200,
+    workers: int = 1,
+    source: str = "pairs",
+    min_transmission: float = 0.0,
+) -> FunctionSynthesis:
+    """A four-bar whose output angle follows ``outputs`` at ``inputs`` (degrees from the ground line), minimax.
+
+    The engine's options (``seed``, ``seconds``, ``restarts``, ``generations``, ``workers``) are
+    :func:`~linkagekit.synthesis.run.search`'s; see the module's description for the method.
+    ``min_transmission`` (degrees, default 0): the transmission angle stays within
+    ``[min, 180 - min]`` from the first pair to the last.
+    """
+    x, y = check_pairs(inputs, outputs, source)
+    first = solve(
+        inputs,
+        outputs,
+        free_offsets=free_offsets,
+        ground_length=ground_length,
+        source=source,
+        min_transmission=min_transmission,
+    )
+    objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units, float(min_transmission))
+    if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
+        return FunctionSynthesis(first, _mechanism(first, units), None)
+    opt = search(
+        objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, goal=GOAL, workers=workers
+    )
+    fit = solve(
+        inputs,
+        outputs,
+        free_offsets=free_offsets,
+        ground_length=ground_length,
+        source=source,
+        min_transmission=min_transmission,
+        starts=[opt.x],
+    )
+    return FunctionSynthesis(fit, _mechanism(fit, units), opt)
+
+
+def _mechanism(fit: FunctionFit, units: str) -> Mechanism:
+    from ..model import Mechanism
+
+    return Mechanism.from_dict(fit.mechanism_dict(units))
+
+
+def objective_vector(fit: FunctionFit, free: bool) -> FloatArray:
+    """The :class:`~.function.FunctionObjective` design vector of a fit."""
+    import math
+
+    a, b, c, d = fit.lengths
+    z = [float(fit.branch), math.log(a / d), math.log(b / d), math.log(c / d)]
+    return np.array(z + [math.radians(fit.offsets[0]), math.radians(fit.offsets[1])] * free)

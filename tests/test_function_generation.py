@@ -1,0 +1,167 @@
+"""Function generation (`synthesize --task function`): exact, recovered and minimax four-bars.
+
+Every error is checked independently: the written mechanism is solved by `lk.analyze`, and its
+output link's angle (the link `output` lists its ground pivot first; the ground line is +x) is
+compared with the wanted outputs.  The weaving problem's least-squares figure is recomputed
+here with `numpy.linalg.lstsq` on Freudenstein's equation.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import linkagekit as lk
+from linkagekit.cli import main
+from linkagekit.synthesis.function import solve
+from linkagekit.viz import draw
+
+TARGETS = Path("/work/shared/benchmarks/motion-function/targets.json")
+
+
+def shared(key: str) -> np.ndarray:
+    if not TARGETS.exists():
+        pytest.skip("the shared benchmark data is absent")
+    return np.array(json.loads(TARGETS.read_text())[key]["angle_pairs_deg"], float)
+
+
+def analysed_errors(mech: lk.Mechanism, fit) -> np.ndarray:
+    """Output-angle errors (deg) of the mechanism as `lk.analyze` solves it."""
+    psi = lk.analyze(mech, {"crank": fit.inputs + fit.offsets[0]}).angle("output") - fit.offsets[1]
+    return (psi - fit.outputs + 180.0) % 360.0 - 180.0
+
+
+def write_pairs(path: Path, pairs) -> Path:
+    path.write_text("input,output\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in pairs))
+    return path
+
+
+def test_three_pairs_are_met_exactly(tmp_path):
+    pairs = shared("pylinkage_nb3_function")
+    out = tmp_path / "nb3.yaml"
+    assert main(["synthesize", str(write_pairs(tmp_path / "p.csv", pairs)), "--task", "function", "-o", str(out)]) == 0
+    fit = solve(pairs[:, 0], pairs[:, 1])
+    assert fit.method == "exact" and fit.valid and fit.max_error <= 1e-9
+    assert np.max(np.abs(analysed_errors(lk.load(out), fit))) <= 1e-9
+
+
+def random_fourbar(rng: np.random.Generator) -> tuple[lk.Mechanism, np.ndarray, np.ndarray]:
+    """A crank-rocker (crank shortest, Grashof) and six of its input/output pairs on one branch."""
+    while True:
+        a, b, c, d = rng.uniform(0.2, 0.5), *rng.uniform(1.0, 3.0, 3)
+        if a + max(b, c, d) < sum((b, c, d)) - max(b, c, d) - 0.1:
+            break
+    phi0 = rng.uniform(0, 2 * np.pi)
+    C = a * np.exp(1j * phi0)
+    far = np.abs(C - d)
+    alpha = np.arccos((c * c + far * far - b * b) / (2 * c * far)) * rng.choice([-1, 1])
+    D = d + c * np.exp(1j * (np.angle(C - d) + alpha))
+    pts = {"A": [0.0, 0.0], "B": [d, 0.0], "C": [C.real, C.imag], "D": [D.real, D.imag]}
+    links = {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "output": ["B", "D"]}
+    drv = [{"link": "crank", "pivot": "A", "toward": "C", "angles": {"start": 0, "stop": 360, "step": 1}}]
+    mech = lk.Mechanism.from_dict({"format": "linkagekit/1", "joints": pts, "links": links, "drivers": drv})
+    x = rng.uniform(-180, 100) + np.sort(rng.uniform(0, 200, 6))  # a crank-rocker assembles at every input
+    return mech, x, lk.analyze(mech, {"crank": x}).angle("output")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_fourbars_are_recovered(seed, tmp_path):
+    rng = np.random.default_rng(seed)
+    source, x, y = random_fourbar(rng)
+    d = abs(source.joints["B"])
+    fit = solve(x, y, ground_length=d)
+    assert fit.valid and fit.max_error <= 1e-6
+    mech = lk.Mechanism.from_dict(fit.mechanism_dict())
+    assert np.max(np.abs(analysed_errors(mech, fit))) <= 1e-6
+    # the same link lengths (up to 1e-6 of the ground): the generating four-bar itself
+    want = [abs(source.joints["C"]), abs(source.joints["D"] - source.joints["C"])]
+    assert np.allclose(fit.lengths[:2], want, atol=1e-6 * d)
+
+
+def test_weaving_minimax_beats_least_squares(tmp_path):
+    pairs = shared("weaving_striking_5pair_function")
+    x, y = np.radians(pairs.T)
+    M = np.stack([np.cos(y), -np.cos(x), np.ones_like(x)], axis=1)
+    K = np.linalg.lstsq(M, np.cos(x - y), rcond=None)[0]
+    ls = solve(pairs[:, 0], pairs[:, 1], ground_length=180.0, method="freudenstein")
+    assert np.allclose([180 / K[0], 180 / K[1]], ls.lengths[::2][:2], rtol=1e-9)  # crank, output = d/K1, d/K2
+    assert ls.max_error == pytest.approx(0.15614, abs=1e-4)
+    out, png = tmp_path / "w.yaml", tmp_path / "w.png"
+    args = ["synthesize", str(write_pairs(tmp_path / "w.csv", pairs)), "--task", "function", "--units", "mm"]
+    engine = [
+        "--restarts",
+        "1",
+        "--generations",
+        "40",
+    ]  # the Freudenstein starts reach the minimax; keep the test short
+    assert main([*args, *engine, "--ground-length", "180", "-o", str(out), "--plot", str(png)]) == 0
+    mech = lk.load(out)
+    fit = solve(pairs[:, 0], pairs[:, 1], ground_length=180.0)
+    worst = np.max(np.abs(analysed_errors(mech, fit)))
+    assert fit.valid and worst <= 0.108 and worst < ls.max_error - 0.04
+    assert abs(abs(mech.joints["B"] - mech.joints["A"]) - 180.0) < 1e-9
+    check_plot(png, pairs)
+
+
+def check_plot(png: Path, pairs: np.ndarray) -> None:
+    """Each pair is drawn as a ring (target colour) at its place; a blank or shifted figure fails."""
+    im = Image.open(png)
+    t = json.loads(im.text[draw.TRANSFORM_KEY])
+    rgb = np.asarray(im.convert("RGB"), float)
+    target = np.linalg.norm(rgb - [int(draw.TARGET_COLOR[k : k + 2], 16) for k in (1, 3, 5)], axis=-1) < 60
+    curve = np.linalg.norm(rgb - [int(draw.CURVE_COLOR[k : k + 2], 16) for k in (1, 3, 5)], axis=-1) < 60
+
+    def ring_found(col: float, row: float) -> bool:
+        rr, cc = np.mgrid[: rgb.shape[0], : rgb.shape[1]]
+        r = np.hypot(cc + 0.5 - col, rr + 0.5 - row)
+        ring = target[(r > 8) & (r < 14)].sum() > 20 and not target[r < 4].any()
+        return bool(ring and curve[r < 3].any())  # the curve (solved by analyze) passes through the ring
+
+    for shift in (0.0, 25.0):
+        found = [ring_found(t[0] * a + t[1] + shift, t[2] * b + t[3]) for a, b in pairs]
+        assert all(found) if shift == 0 else not any(found)
+
+
+@pytest.mark.parametrize(
+    "rows, says",
+    [
+        ("input,output\n1,2\n3,4\n", "at least 3 pairs"),
+        ("input,output\n1,2\nnan,4\n5,6\n", "not an angle"),
+        ("input,output\n1,2\n1,4\n5,6\n", "duplicate input"),
+        ("input,output\n1,2\n3,4\n500,6\n", "not an angle"),
+        ("input,output\n1,2\n5,4\n3,6\n", "increase (or decrease)"),
+        ("x,y\n1,2\n3,4\n5,6\n", "input,output"),
+    ],
+)
+def test_bad_pairs_get_one_line_and_exit_2(rows, says, tmp_path, capsys):
+    src = tmp_path / "bad.csv"
+    src.write_text(rows)
+    assert main(["synthesize", str(src), "--task", "function", "-o", str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "bad.csv" in err and says in err
+    assert not (tmp_path / "o.yaml").exists()
+
+
+@pytest.mark.parametrize("value", ["-1", "0", "nan", "abc"])
+def test_bad_ground_length_exits_2(value, tmp_path, capsys):
+    src = write_pairs(tmp_path / "p.csv", [(30, 75), (75, 90), (135, 135)])
+    args = ["synthesize", str(src), "--task", "function", f"--ground-length={value}", "-o", str(tmp_path / "o.yaml")]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--ground-length" in err
+
+
+def test_min_transmission_bounds_the_angle_between_the_pairs():
+    pairs = shared("weaving_striking_5pair_function")
+    free = solve(pairs[:, 0], pairs[:, 1], ground_length=180.0)
+    fit = solve(pairs[:, 0], pairs[:, 1], ground_length=180.0, min_transmission=80.0)
+    res = lk.analyze(lk.Mechanism.from_dict(fit.mechanism_dict("mm")), {"crank": np.linspace(40, 60, 401)})
+    C, B, D = (res.point(j) for j in "CBD")
+    mu = np.degrees(np.abs(np.angle((C - D) / (B - D))))  # at D, between coupler and output
+    assert free.transmission[0] < 80 and fit.valid  # the bound binds
+    assert mu.min() >= 80 - 1e-6 and mu.max() <= 100 + 1e-6
+    assert fit.max_error > free.max_error + 0.01

@@ -1,0 +1,307 @@
+"""Motion generation (``--task motion``) and the synthesis engine's objective interface.
+
+The poses are made by ``lk.analyze`` of a known four-bar (its coupler's ``P`` and the direction
+``P -> Q``), and every result is judged by ``lk.analyze`` of the mechanism written (not by the
+synthesis's own kinematics): at the crank angles reported, ``P`` must be on each pose's point
+and ``Q - P`` along its angle. The pose-frame picture is read pixel by pixel through the map
+the PNG carries, with a shifted map and a blank image as negative controls.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import linkagekit as lk
+from linkagekit.cli import main
+from linkagekit.model import Mechanism
+from linkagekit.synthesis import motion
+from linkagekit.synthesis.base import Objective, Score
+from linkagekit.synthesis.run import Optimum, synthesize_motion
+from linkagekit.viz import draw
+
+ERROR_PREFIX = "linkagekit: error: "
+#: a Grashof crank-rocker at its pose, its coupler carrying P and Q
+KNOWN = {"A0": [0, 0], "A1": [0.9, 0.8], "B1": [3.2, 2.6], "B0": [4, 0], "P": [2.5, 3.8], "Q": [3.0, 4.1]}
+
+
+def known_fourbar(joints: dict[str, list[float]] = KNOWN) -> Mechanism:
+    return Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "units": {"length": "m", "angle": "deg"},
+            "joints": joints,
+            "links": {"ground": ["A0", "B0"], "crank": ["A0", "A1"], "coupler": ["A1", "B1", "P", "Q"],
+                      "rocker": ["B0", "B1"]},
+            "drivers": [{"link": "crank", "pivot": "A0", "toward": "A1"}],
+        },
+        "<test four-bar>",
+    )  # fmt: skip
+
+
+def traced_poses(mech: Mechanism, crank_deg: np.ndarray) -> np.ndarray:
+    """``x, y, angle`` (degrees) of the coupler at the crank angles, by ``lk.analyze``."""
+    res = lk.analyze(mech, {"crank": crank_deg})
+    assert np.all(res.assembled)
+    p, q = res.point("P"), res.point("Q")
+    return np.stack([p.real, p.imag, np.degrees(np.angle(q - p))], axis=1)
+
+
+def errors_by_analyze(mech: Mechanism, poses: np.ndarray, crank_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position and orientation (degrees) errors of a written mechanism at the crank angles it reports."""
+    res = lk.analyze(mech, {"crank": crank_deg})
+    p, q = res.point("P"), res.point("Q")
+    pos = np.abs(p - (poses[:, 0] + 1j * poses[:, 1]))
+    ang = np.degrees(np.angle((q - p) / np.abs(q - p) * np.exp(-1j * np.radians(poses[:, 2]))))
+    return pos, ang
+
+
+def write_poses(path: Path, poses: np.ndarray, inputs: np.ndarray | None = None) -> Path:
+    head = "x,y,angle" + (",input" if inputs is not None else "")
+    rows = [",".join(repr(float(v)) for v in r) for r in (poses if inputs is None else np.c_[poses, inputs])]
+    path.write_text("\n".join([head, *rows]) + "\n")
+    return path
+
+
+# ---------------------------------------------------------------------- exact poses recovered
+def test_seven_poses_of_a_four_bar_are_recovered_on_one_branch():
+    mech = known_fourbar()
+    poses = traced_poses(mech, 41.6 + np.linspace(0.0, 280.0, 7))
+    out = lk.synthesize(poses, task="motion", seconds=5)
+    best = out.best
+    assert best.one_branch and best.method == "approximate"
+    pos, ang = errors_by_analyze(best.mechanism, poses, best.inputs)  # the written file, solved independently
+    assert np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6
+    np.testing.assert_allclose(pos, best.position_errors, atol=1e-9 * out.diagonal)
+    assert best.grashof == "crank-rocker"
+    # the crank turns one way through the poses: its reported angles are monotone, within a turn
+    steps = np.diff(best.inputs)
+    assert (np.all(steps > 0) or np.all(steps < 0)) and abs(best.inputs[-1] - best.inputs[0]) < 360
+
+
+def test_timed_poses_keep_their_crank_spacing():
+    mech = known_fourbar()
+    crank = 41.6 + np.array([0.0, 35.0, 80.0, 120.0, 170.0, 230.0])
+    poses = traced_poses(mech, crank)
+    out = synthesize_motion(poses, inputs=list(crank - 41.6), seconds=5)
+    best = out.best
+    assert best.one_branch
+    offset = np.mod(best.inputs - (crank - 41.6) + 180.0, 360.0) - 180.0
+    assert np.ptp(offset) < 1e-6  # one common offset: the timing is met
+    pos, ang = errors_by_analyze(best.mechanism, poses, best.inputs)
+    assert np.max(pos) < 1e-7 * out.diagonal and np.max(np.abs(ang)) < 1e-5
+
+
+def test_minimax_polish_lowers_the_largest_error_of_noisy_poses():
+    rng = np.random.default_rng(3)
+    poses = traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 300.0, 9))
+    poses[:, :2] += rng.normal(0.0, 0.01, (9, 2))
+    poses[:, 2] += rng.normal(0.0, 0.5, 9)
+    p = motion.motion_poses(poses[:, 0], poses[:, 1], np.radians(poses[:, 2]))
+    # the generating four-bar, normalised: pivots in the plane, moving pivots in the frame of P -> Q
+    z = {k: (complex(*v) - p.center) / p.scale for k, v in KNOWN.items()}
+    u0 = (z["Q"] - z["P"]) / abs(z["Q"] - z["P"])
+    a, b = (z["A1"] - z["P"]) / u0, (z["B1"] - z["P"]) / u0
+    F = np.array([[0, 0, a.real, a.imag, 0, 0, 0, b.real, b.imag, 0.0]])
+    F[0, [0, 1, 5, 6]] = [z["A0"].real, z["A0"].imag, z["B0"].real, z["B0"].imag]
+    F[0, 4], F[0, 9] = abs(z["A1"] - z["A0"]), abs(z["B1"] - z["B0"])
+    t, s = motion.crank_angles(p, F), motion.first_mode(p, F)
+    fit = motion.combined(*motion.pose_errors(p, F, t, s), motion.ANGLE_WEIGHT)[0]
+    _, un, _ = motion.unwrap_turn(t, False)
+    Fp, tp = motion.minimax_polish(p, F[0], un[0], float(s[0]), motion.ANGLE_WEIGHT)
+    pos, ang = motion.pose_errors(p, Fp[None], tp[None], s)
+    polished = motion.combined(pos, ang, motion.ANGLE_WEIGHT)[0]
+    assert polished < 0.7 * fit
+    # the minimax optimum equalises: several poses share the largest error (to 1 %)
+    e = np.maximum(pos[0], motion.ANGLE_WEIGHT * np.abs(ang[0]))
+    assert np.sum(e > 0.99 * polished) >= 3
+
+
+# ---------------------------------------------------------------------- the objective interface
+class Nearest(Objective):
+    """A user's objective: the point of the unit square nearest (0.3, 0.7); infeasible where x0 > 0.9."""
+
+    bounds = (np.zeros(2), np.ones(2))
+
+    def score(self, X):
+        r = X - [0.3, 0.7]
+        return Score(np.sum(r * r, axis=1), np.abs(r).max(axis=1), np.maximum(X[:, 0] - 0.9, 0.0))
+
+    def residuals(self, X):
+        return X - [0.3, 0.7]
+
+    def fingerprint(self):
+        return "nearest"
+
+
+def test_a_users_objective_runs_on_the_engine():
+    out = lk.synthesize(None, objective=Nearest(), restarts=1, generations=10, seconds=60)
+    assert isinstance(out, Optimum) and out.mechanism is None and out.feasible
+    np.testing.assert_allclose(out.x, [0.3, 0.7], atol=1e-9)
+    assert out.error < 1e-9 and pickle.loads(pickle.dumps(Nearest())).fingerprint() == "nearest"
+    err, _ = Nearest().measure(np.array([[0.95, 0.7]]))
+    assert err[0] == np.inf  # infeasible: never the best
+
+
+def test_motion_objective_is_an_engine_objective():
+    poses = traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 280.0, 7))
+    o = motion.MotionObjective(motion.motion_poses(poses[:, 0], poses[:, 1], np.radians(poses[:, 2])))
+    p = o.poses
+    d = motion.search_dyads(p)  # the true dyads: their design vector has zero cost and zero true error
+    x = np.array([d.g[0].real, d.g[0].imag, d.c[0].real, d.c[0].imag, d.g[1].real, d.g[1].imag, d.c[1].real,
+                  d.c[1].imag])  # fmt: skip
+    assert o.cost(x[None])[0] < 1e-20 and o.measure(x[None])[0][0] < 1e-9
+    assert (
+        pickle.loads(pickle.dumps(o)).fingerprint() == o.fingerprint() != motion.MotionObjective(p, 0.1).fingerprint()
+    )
+    assert o.residuals(np.stack([x, x + 0.01])).shape == (2, 2 * p.m)
+
+
+# ---------------------------------------------------------------------- the command
+def test_cli_writes_p_and_q_and_prints_each_pose(tmp_path, capsys):
+    poses = traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 280.0, 7))
+    src = write_poses(tmp_path / "poses.csv", poses)
+    out, png = tmp_path / "m.yaml", tmp_path / "m.png"
+    assert main(["synthesize", str(src), "--task", "motion", "-o", str(out), "--plot", str(png), "--seconds", "5"]) == 0
+    text = capsys.readouterr().out
+    mech = lk.load(out)
+    assert {"P", "Q"} <= set(next(ln for ln in mech.links if ln.name == "coupler").joints)
+    rows = [ln.split() for ln in text.splitlines() if ln.strip()[:1].isdigit() and len(ln.split()) == 7]
+    assert len(rows) == 7
+    crank = np.array([float(r[4]) for r in rows])
+    pos, ang = errors_by_analyze(mech, poses, crank)
+    assert np.max(pos) < 1e-4 and np.max(np.abs(ang)) < 2e-3  # at the crank angles as printed (6 digits)
+    printed = np.array([[float(r[5]), float(r[6])] for r in rows])
+    assert np.max(np.abs(printed)) < 1e-6
+    assert "met in order on one branch" in text
+    check_frames_drawn(png, poses)
+
+
+def frames_at(poses: np.ndarray, t: list[float]) -> np.ndarray:
+    """Pixel points along every pose frame's two lines (away from the ring at the pose point)."""
+    diag = np.hypot(np.ptp(poses[:, 0]), np.ptp(poses[:, 1]))
+    ell = draw.FRAME_LENGTH * diag
+    pts = []
+    for x, y, a in poses:
+        u = np.exp(1j * np.radians(a))
+        for end, k in ((u, 1.0), (1j * u, 0.5)):
+            s = np.linspace(0.35, 0.95, 12) * k * ell
+            z = x + 1j * y + s * end
+            pts.append(np.stack([t[0] * z.real + t[1], t[2] * z.imag + t[3]], axis=1))
+    return np.concatenate(pts)
+
+
+def frame_fraction(rgb: np.ndarray, pts: np.ndarray) -> float:
+    """Fraction of the points with a target- or achieved-coloured pixel within 2 px."""
+    colours = [np.array([0x00, 0x50, 0xB4]), np.array([0x1A, 0x7F, 0x37])]
+    mask = np.zeros(rgb.shape[:2], bool)
+    for c in colours:
+        mask |= np.linalg.norm(rgb - c, axis=-1) < 80
+    hits = 0
+    for cx, cy in pts:
+        r, c = int(cy), int(cx)
+        win = mask[max(r - 2, 0) : r + 3, max(c - 2, 0) : c + 3]
+        hits += bool(win.any())
+    return hits / len(pts)
+
+
+def check_frames_drawn(png: Path, poses: np.ndarray) -> None:
+    im = Image.open(png)
+    t = json.loads(im.text["linkagekit:transform"])
+    rgb = np.asarray(im.convert("RGB"), float)
+    assert frame_fraction(rgb, frames_at(poses, t)) >= 0.97
+    # NEGATIVE: the same check fails on a blank image and with the map shifted by 8 px
+    assert frame_fraction(np.full_like(rgb, 255.0), frames_at(poses, t)) == 0.0
+    for dc, dr in ((8, 0), (0, 8)):
+        assert frame_fraction(rgb, frames_at(poses, [t[0], t[1] + dc, t[2], t[3] + dr])) < 0.6
+
+
+@pytest.mark.parametrize(
+    ("rows", "needle"),
+    [
+        ("x,y,angle\n0,0,0\n1,0,10\n", "at least 3"),
+        ("x,y,angle\n0,0,0\n1,nan,10\n2,1,20\n", "not finite"),
+        ("x,y,angle\n0,0,0\n1,0,10\n1,0,10\n2,1,20\n", "repeats pose 2"),
+        ("x,y,angle\n0,0,0\n1,0,400\n2,1,20\n", "out of range"),
+        ("x,y\n0,0\n1,0\n2,1\n", "header"),
+    ],
+)
+def test_bad_poses_are_one_line_and_exit_2(tmp_path, capsys, rows, needle):
+    src = tmp_path / "poses.csv"
+    src.write_text(rows)
+    assert main(["synthesize", str(src), "--task", "motion", "-o", str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(ERROR_PREFIX) and "\n" not in err and needle in err and "poses.csv" in err
+
+
+def test_a_template_without_p_and_q_is_refused(tmp_path, capsys):
+    poses = traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 280.0, 7))
+    src = write_poses(tmp_path / "poses.csv", poses)
+    template = tmp_path / "t.yaml"
+    lk.save(known_fourbar({**KNOWN, "Q": [3.0, 4.1]}).__class__.from_dict(
+        {"format": "linkagekit/1", "joints": {k: v for k, v in KNOWN.items() if k != "Q"},
+         "links": {"ground": ["A0", "B0"], "crank": ["A0", "A1"], "coupler": ["A1", "B1", "P"], "rocker": ["B0", "B1"]},
+         "drivers": [{"link": "crank", "pivot": "A0", "toward": "A1"}]}, "<t>"), template)  # fmt: skip
+    args = ["synthesize", str(src), "--task", "motion", "--topology", str(template), "-o", str(tmp_path / "o.yaml")]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(ERROR_PREFIX) and "\n" not in err and "P and Q" in err
+
+
+def test_five_poses_take_the_exact_route_when_burmester_is_there():
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    mech = known_fourbar()
+    poses = traced_poses(mech, 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+    out = synthesize_motion(poses)
+    assert out.best.method == "exact" and out.best.one_branch
+    for f in out.fourbars:
+        assert f.max_position_error < 1e-9 * out.diagonal and f.max_angle_error < 1e-7
+    pos, ang = errors_by_analyze(out.best.mechanism, poses, out.best.inputs)
+    assert np.max(pos) < 1e-9 * out.diagonal and np.max(np.abs(ang)) < 1e-7
+    approx = synthesize_motion(poses, approximate=True)
+    assert approx.best.method == "approximate" and approx.best.max_position_error < 1e-8 * out.diagonal
+
+
+def test_a_closed_motion_turns_the_crank_once_per_cycle(tmp_path):
+    poses = traced_poses(known_fourbar(), 41.6 + np.arange(0.0, 361.0, 45.0))  # the last repeats the first
+    pf = motion.read_poses(str(write_poses(tmp_path / "closed.csv", poses)))
+    assert pf.closed and len(pf.poses) == 8
+    out = synthesize_motion(pf.poses, closed=True, seconds=5)
+    best = out.best
+    assert best.one_branch
+    sweep = best.mechanism.drivers[0].sweep
+    assert abs(abs(sweep.stop - sweep.start) - 360.0) < 1e-9
+    res = lk.analyze(best.mechanism, {"crank": np.linspace(sweep.start, sweep.stop, 1441)})
+    assert np.all(res.assembled)  # it turns fully
+    pos, ang = errors_by_analyze(best.mechanism, pf.poses, best.inputs)
+    assert np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6
+
+
+def random_fourbar_poses(rng: np.random.Generator) -> np.ndarray | None:
+    """6 to 24 poses of a random four-bar over 90 % of its crank's range from its pose (None: too short a range)."""
+    j = {"A0": [0.0, 0.0], "B0": [rng.uniform(2, 5), rng.uniform(-1, 1)], "A1": list(rng.uniform(-1.5, 1.5, 2))}
+    j["B1"] = list(np.array(j["B0"]) + rng.uniform(-2.5, 2.5, 2))
+    j["P"] = list(rng.uniform(-1, 4, 2))
+    j["Q"] = list(np.array(j["P"]) + rng.uniform(-1, 1, 2))
+    mech = known_fourbar(j)
+    a0 = lk.api.pose_inputs(mech)["crank"]
+    ok = np.asarray(lk.analyze(mech, {"crank": a0 + np.arange(0.0, 360.0)}).assembled)
+    reach = int(np.argmax(~ok)) if (~ok).any() else 360
+    if reach < 40:
+        return None
+    return traced_poses(mech, a0 + np.linspace(0.0, 0.9 * (reach - 1), int(rng.integers(6, 25))))
+
+
+def test_random_four_bars_are_recovered():
+    rng = np.random.default_rng(2)
+    cases = [p for p in (random_fourbar_poses(rng) for _ in range(16)) if p is not None][:4]
+    assert len(cases) == 4
+    for poses in cases:
+        out = synthesize_motion(poses, seconds=5)
+        pos, ang = errors_by_analyze(out.best.mechanism, poses, out.best.inputs)
+        assert out.best.one_branch and np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6
