@@ -144,12 +144,23 @@ def test_potential_barrier_stops_a_slow_machine():
         steady_state(Toy(c=200.0, load=50.0), Motor(52.0, 1.0))
 
 
+def test_a_flywheel_carries_a_stalling_machine_through():
+    # without a flywheel the 200 sin q hump stops it within a turn; the sizing starts from Cs = 2 there
+    model, motor = Toy(c=200.0, load=50.0), Motor(60.0, 100.0)
+    with pytest.raises(StallError, match="within a turn"):
+        steady_state(model, motor)
+    size = size_flywheel_reduced(model, motor, 0.02)
+    assert size.cs_without == 2.0 and size.cs == pytest.approx(0.02, rel=2e-6)
+    cs, w_end = brute_cs(model, motor, size.inertia, size.steady.w[0], 3)  # a periodic motion: back where it began
+    assert cs == pytest.approx(size.cs, rel=1e-6) and w_end == pytest.approx(size.steady.w[0], rel=1e-8)
+
+
 def test_constant_torque_without_damping_runs_away():
     with pytest.raises(StallError, match="without bound"):
         steady_state(Toy(load=50.0), Motor(60.0))
 
 
-@pytest.mark.parametrize("cs", [0.0, -0.1, math.nan])
+@pytest.mark.parametrize("cs", [0.0, -0.1, 2.0, math.nan])
 def test_bad_cs(cs):
     with pytest.raises(InputError, match="flywheel"):
         size_flywheel_reduced(Toy(), Motor(100.0, 10.0), cs)
@@ -212,7 +223,7 @@ def test_cli_prints_the_inertia(pump, capsys):
         (["--motor", "200,6.5", "--flywheel", "0.02"], 1, "stalls"),  # 200 N*m < the 300 N*m pumping load
         (["--torque", "500", "--flywheel", "0.02"], 1, "without bound"),  # no speed-dependent term: no balance
         (["--flywheel", "0.02"], 2, "torque law"),
-        (["--motor", "6500,6.5", "--flywheel", "0"], 2, "positive"),
+        (["--motor", "6500,6.5", "--flywheel", "0"], 2, "(0, 2)"),
         (["--motor", "6500,6.5", "--flywheel", "0.02", "--speed", "1"], 2, "--speed"),
     ],
 )

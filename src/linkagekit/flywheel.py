@@ -81,6 +81,10 @@ class StallError(LinkageError):
     exit_code = 1
 
 
+class NoBalanceError(StallError):
+    """No constant speed balances the torque law and the loads over a turn: no flywheel can help."""
+
+
 class Reduced(Protocol):
     """The one-driver reduced model (``dynamics.reduced``), vectorised over ``q``."""
 
@@ -242,13 +246,13 @@ def _mean_balance_speed(p: _Problem) -> float:
 
     low = 1e-9
     if mean_power(low) <= 0.0:
-        raise StallError("the mechanism stalls: the mean driving torque cannot overcome the loads at any speed")
+        raise NoBalanceError("the mechanism stalls: the mean driving torque cannot overcome the loads at any speed")
     high = 1.0
     for _ in range(80):
         if mean_power(high) < 0.0:
             return float(brentq(mean_power, low, high, xtol=1e-12, rtol=1e-12))
         low, high = high, 2.0 * high
-    raise StallError(
+    raise NoBalanceError(
         "no periodic steady state: the speed grows without bound (the torque law never balances the loads)"
     )
 
@@ -443,35 +447,62 @@ def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float 
     (enlarged by 5 %) is tried until one meets ``cs``, which brackets the answer; Brent's
     method on ``log(Cs(I) / cs)`` then finds it to ``rtol`` relative.  The inertia returned
     is the bracket's upper end, so its ``Cs`` is at most ``cs`` (to the integration's tolerance).
+    A machine that stalls within a turn with too small a flywheel counts as ``Cs = 2`` there
+    (the limit as ``w_min -> 0``): the flywheel that carries it through is part of the answer.
     """
     from scipy.optimize import brentq
 
-    if not cs > 0.0 or not math.isfinite(cs):
-        raise InputError(f"--flywheel: the coefficient of speed fluctuation must be positive, got {cs}")
-    base = steady_state(red, drive)
-    if base.cs <= cs:
-        return FlywheelSize(0.0, base.cs, base.cs, base)
-    m_mean = float(np.mean(red.mass(base.nodes)))
-    found = {0.0: base}
-
-    def at(inertia: float) -> SteadyState:
-        if inertia not in found:
-            near = found[min(found, key=lambda i: abs(i - inertia))]
-            found[inertia] = steady_state(red, drive, inertia, start=near)
-        return found[inertia]
+    if not 0.0 < cs < 2.0:
+        raise InputError(f"--flywheel: the coefficient of speed fluctuation must be in (0, 2), got {cs}")
+    search = _Search(red, drive)
+    cs_without = search.cs(0.0)
+    if cs_without <= cs:
+        return FlywheelSize(0.0, cs_without, cs_without, search.found[0.0])
+    m_mean = search.mean_mass()
 
     def excess(inertia: float) -> float:
-        return math.log(at(inertia).cs / cs)
+        return math.log(search.cs(inertia) / cs)
 
     lo, hi = 0.0, 0.0
     while excess(hi) > 0.0:
-        lo, hi = hi, max((m_mean + hi) * at(hi).cs / cs * 1.05 - m_mean, 2.0 * hi)
+        lo, hi = hi, max((m_mean + hi) * search.cs(hi) / cs * 1.05 - m_mean, 2.0 * hi)
     root = brentq(excess, lo, hi, xtol=1e-12 * hi, rtol=rtol / 4.0)  # |root - crossing| <= rtol / 4 * root
     top = root * (1.0 + rtol / 2.0)
     if top < hi and excess(top) <= 0.0:
         hi = top
-    st = at(hi)
-    return FlywheelSize(hi, st.cs, base.cs, st)
+    st = search.found[hi]
+    return FlywheelSize(hi, st.cs, cs_without, st)
+
+
+class _Search:
+    """``Cs`` of the steady state for each flywheel tried, each started from the nearest one solved."""
+
+    def __init__(self, red: Reduced, drive: Drive) -> None:
+        self.red, self.drive = red, drive
+        self.found: dict[float, SteadyState] = {}
+        self.stalled: set[float] = set()
+
+    def cs(self, inertia: float) -> float:
+        """``Cs`` with ``inertia`` on the crank; 2 where the machine stalls within a turn."""
+        if inertia in self.stalled:
+            return 2.0
+        if inertia not in self.found:
+            near = min(self.found, key=lambda i: abs(i - inertia)) if self.found else None
+            try:
+                st = steady_state(self.red, self.drive, inertia, start=None if near is None else self.found[near])
+            except NoBalanceError:
+                raise
+            except StallError:
+                self.stalled.add(inertia)
+                return 2.0
+            self.found[inertia] = st
+        return self.found[inertia].cs
+
+    def mean_mass(self) -> float:
+        """``M`` averaged over a period (kg*m^2)."""
+        period = float(self.red.period or 2.0 * math.pi)
+        q0 = float(getattr(self.red, "q0", 0.0))
+        return float(np.mean(self.red.mass(q0 + np.linspace(0.0, period, 256, endpoint=False))))
 
 
 def size_flywheel(
@@ -529,7 +560,5 @@ def size_flywheel(
         target = float(cs)
     except (TypeError, ValueError):
         raise InputError(f"--flywheel: expected a number, got {cs!r}") from None
-    if not (target > 0.0 and math.isfinite(target)):
-        raise InputError(f"--flywheel: the coefficient of speed fluctuation must be positive, got {cs}")
     (law,) = _laws(_model(mech), torque, motor)
     return size_flywheel_reduced(reduced(mech), law, target)
