@@ -7,10 +7,12 @@ The reduced equation of a one-driver mechanism (``docs/method.md``, "Forward dyn
     dE/dq = (dE/dt) / w = M q'' + 1/2 M' w^2 = F(q, w) + T(w),    w = sqrt(2 E / M),
 
 so one turn is a first-order ODE in ``q`` and a periodic motion is a fixed point of the
-period map ``E(q0) -> E(q0 + period)``, found here by a safeguarded Newton iteration (the
-map's derivative comes from the variational equation).  With a motor curve or a damper the
-map contracts (its derivative ``exp(int (dF/dw + T'(w)) / (M |w|) dq)`` is below one), so the
-fixed point is unique.  A flywheel of inertia ``I`` on the driver's crank adds ``I`` to
+period map ``E(q0) -> E(q0 + period)``.  With a motor curve or a damper the map contracts
+(its derivative ``exp(int (dF/dw + T'(w)) / (M |w|) dq)`` is below one), so the fixed point
+is unique.  It is found by Fourier collocation of ``ln E`` over the period (Newton, each
+step by GMRES with FFTs); if that fails, by shooting (the period map integrated by SciPy,
+Newton on its fixed point with the variational equation, safeguarded by a bracket), which
+also tells a stall within a turn.  A flywheel of inertia ``I`` on the driver's crank adds ``I`` to
 ``M``; the smallest ``I`` with a coefficient of speed fluctuation
 ``Cs = (w_max - w_min) / ((w_max + w_min) / 2)`` at most the one asked is found by bracketing
 and Brent's method on ``log Cs(I)`` (``Cs`` falls with ``I``).
@@ -59,8 +61,10 @@ COLLOCATION_POINTS = 512
 MAX_COLLOCATION_POINTS = 8192
 TAIL = 1e-10
 #: Newton's steps on the collocation equations, and the step in ln E at which it has converged
+#: (or below NEWTON_FLOOR, when the steps stop shrinking: rounding)
 NEWTON_STEPS = 40
 NEWTON_TOL = 1e-12
+NEWTON_FLOOR = 1e-10
 #: GMRES on each Newton step: relative residual and restart length
 GMRES_RTOL = 1e-12
 GMRES_RESTART = 60
@@ -106,11 +110,12 @@ class SteadyState:
     Attributes
     ----------
     q, w : ndarray
-        Input value (rad) and speed (rad/s), ``SAMPLES + 1`` points over one period.
+        Input value (rad) and speed (rad/s) over one period, closed (``w[-1] = w[0]``), on a
+        grid 16 times finer than the collocation's.
     energy : float
         Kinetic energy ``1/2 M w^2`` at ``q[0]`` (J).
     w_min, w_max : float
-        The speed's extremes over the period.
+        The extremes of ``|w|`` over the period.
     contraction : float
         The derivative of the period map at the fixed point (below 1: the motion attracts).
     extra_inertia : float
@@ -336,10 +341,15 @@ class _Collocation:
     def solve(self, z: Array) -> Array | None:
         """Damped Newton from ``z``; None when it does not converge to ``NEWTON_TOL``."""
         r, a, _ = self.parts(z)
+        last = math.inf
         for _ in range(NEWTON_STEPS):
             step = self.newton_step(r, a)
             if step is None:
                 return None
+            size = float(np.max(np.abs(step)))
+            if size <= NEWTON_TOL or (size <= NEWTON_FLOOR and size > last / 2.0):
+                return z  # converged, or stalled at the rounding of the FFT derivative on a fine grid
+            last = size
             lam, norm = 1.0, float(np.max(np.abs(r)))
             while True:
                 z_try = z + lam * step
@@ -350,8 +360,6 @@ class _Collocation:
             z, r, a = z_try, r_try, a_try
             if not np.all(np.isfinite(z)):
                 return None
-            if np.max(np.abs(lam * step)) <= NEWTON_TOL:
-                return z
         return None
 
     def resolved(self, z: Array) -> bool:
