@@ -125,8 +125,11 @@ def test_a_crank_with_spring_damper_and_flywheel_follows_the_hand_written_equati
     assert np.ptp(ref.y[0]) > 1.0
     assert np.max(np.abs(q - ref.y[0])) < 1e-8
     assert np.max(np.abs(res.speeds["crank"] - ref.y[1])) < 1e-7
-    red = reduced(mech)
+    assert np.max(np.abs(res.forces.driver_torque["crank"] - 0.7)) < 1e-8  # kinetostatics with spring and damper
+    red, heavier = reduced(mech), reduced(mech, flywheel=0.5)  # a flywheel on a crank adds its inertia to M
     assert red.mass(np.linspace(0, 7, 5)) == pytest.approx(M, rel=1e-12)
+    assert heavier.mass(np.linspace(0, 7, 5)) == pytest.approx(M + 0.5, rel=1e-12)
+    assert red.force(1.0, 2.0) == pytest.approx(rhs(0, [1.0, 2.0])[1] * M - 0.7, rel=1e-9)
 
 
 def test_a_motor_driven_fourbar_from_rest_reaches_a_periodic_steady_state():
@@ -190,6 +193,7 @@ def test_a_toggle_stops_the_motion_with_one_line_and_exit_1(tmp_path, capsys):
     mech = lk.load(path)
     res = lk.simulate(mech, np.linspace(0.0, 3.0, 301), torque=20.0)
     assert res.stopped is not None and "toggle" in res.stopped and 1 < res.n < 301
+    assert res.to_dict()["stopped"] == res.stopped and "stopped" not in lk.simulate(mech, [0.0, 0.1]).to_dict()
     hi = lk.check(mech).to_dict()["input_range"][0][1]
     assert res.inputs["crank"][-1] < hi
     out = tmp_path / "out.csv"
@@ -205,7 +209,10 @@ def test_two_drivers_kinetostatics_agrees(tmp_path):
     for link, a, b in (("crank1", "A", "C"), ("crank2", "B", "D"), ("link1", "C", "E"), ("link2", "D", "E")):
         _bar(doc, link, 0.2, a, b)
     mech = lk.Mechanism.from_dict(doc)
-    res = lk.simulate(mech, np.linspace(0.0, 0.05, 6), torque={"crank1": 0.05, "crank2": -0.02})
+    res = lk.simulate(mech, np.linspace(0.0, 0.2, 9), torque={"crank1": 0.05, "crank2": -0.02})
+    # the two links of the dyad at E come into line at t = 0.1238 s: a singular position the motion cannot pass
+    assert res.stopped is not None and "singular" in res.stopped and res.n == 5
+    assert res.condition[-1] > 1e-3
     T = res.forces.driver_torque
     assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
     assert np.ptp(res.inputs["crank1"]) > 1.0
@@ -219,6 +226,9 @@ def test_cli_json_has_the_time_beside_the_inputs(tmp_path, capsys):
     doc = json.loads(out.read_text())
     assert doc["time"] == pytest.approx([0.0, 0.01, 0.02]) and len(doc["inputs"]["crank"]) == 3
     assert doc["speeds"]["crank"][0] == 0.0
+    entry = next(q for q in doc["quantities"] if q["name"] == "time")  # the time axis is a catalogue entry
+    assert entry["unit"] == "s" and entry["path"] == ["time"] and entry["owner"] == "mechanism"
+    assert [q["name"] for q in doc["quantities"]][:2] == ["time", "input:crank"]
     assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.02:0.01"]) == 0
     assert "time [s]" in capsys.readouterr().out
 

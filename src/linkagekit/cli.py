@@ -1268,7 +1268,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     import linkagekit as lk
 
     from .synthesis.distribute import WorkersLost
-    from .synthesis.run import synthesize
+    from .synthesis.run import synthesize_path
     from .synthesis.targets import read_targets
 
     _suffix(args.output, (".yaml", ".yml", ".json"))
@@ -1286,7 +1286,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)  # the command's start counts too
     try:
         with _Search(budget) as progress:
-            out = synthesize(targets, topology, **search, progress=progress)
+            out = synthesize_path(targets, topology, **search, progress=progress)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; {_synthesize_resume(args)}", file=sys.stderr)
         return 1

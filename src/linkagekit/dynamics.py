@@ -62,6 +62,8 @@ SHIFT = (math.sqrt(5.0) - 1.0) / 2.0
 BRIDGE = 200
 #: the degree of that fit
 DEGREE = 11
+#: several drivers: the motion stops where the steps' smallest dimensionless determinant falls below this
+STOP_CONDITION = 1e-3
 #: the most output times one simulation gives
 MAX_TIMES = 1_000_000
 
@@ -135,6 +137,7 @@ class _Motion:
     lz: list[tuple[np.ndarray, np.ndarray, np.ndarray]]  # per load: its point's z, v, a (m)
     body_w: list[tuple[np.ndarray, np.ndarray]]  # per body: omega, alpha
     load_w: list[tuple[np.ndarray, np.ndarray]]  # per load: omega, alpha
+    cond: np.ndarray  # the smallest dimensionless determinant of the steps (1: well conditioned, 0: singular)
 
 
 def _motion(md: _Model, q: np.ndarray, signs: np.ndarray, w: np.ndarray) -> _Motion:
@@ -161,7 +164,8 @@ def _motion(md: _Model, q: np.ndarray, signs: np.ndarray, w: np.ndarray) -> _Mot
     lz = [at(ld[0], ld[3]) for ld in md.loads]
     body_w = [(motion[b[0]][1], motion[b[0]][2]) for b in md.bodies]
     load_w = [(motion[ld[0]][1], motion[ld[0]][2]) for ld in md.loads]
-    return _Motion(good, km.z * si, km.v * si, km.a * si, gz, lz, body_w, load_w)
+    cond = np.min(np.abs(rt.condition[:, 0]), axis=0, initial=1.0)
+    return _Motion(good, km.z * si, km.v * si, km.a * si, gz, lz, body_w, load_w, cond)
 
 
 def _stretch(m: _Motion, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -395,12 +399,30 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
         if period is None or np.all(np.bincount(steps, minlength=md.params.plan.n_signs) % 2 == 0):
             break
     Y, dY = _rows_at(md, x, br.signs[:, 0])
-    _bridge(x, Y, dY, np.asarray(where), period)
-    if not np.all(np.isfinite(Y)) or np.any(Y[:, 0] <= 0):
-        raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
     q0 = float(md.params.pose_inputs[0, 0] * md.scale[0])
+    change = np.asarray(where) * md.scale[0]
+    x, Y, dY, period = _reachable(mech, q0, x, Y, dY, period)
+    _bridge(x, Y, dY, change, period)
     rng = (float(x[0]), float(x[-1]))
-    return Reduced(mech.drivers[0].name, q0, rng, period, np.asarray(where) * md.scale[0], np.asarray(steps), Y, dY)
+    return Reduced(mech.drivers[0].name, q0, rng, period, change, np.asarray(steps), Y, dY)
+
+
+def _reachable(
+    mech: Mechanism, q0: float, x: np.ndarray, Y: np.ndarray, dY: np.ndarray, period: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+    """The table cut to the run of good rows (assembled, positive inertia) around the pose (then not periodic)."""
+    ok = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
+    if ok.all():
+        return x, Y, dY, period
+    i0 = int(np.clip(np.searchsorted(x, q0), 1, len(x) - 1))
+    if not (ok[i0 - 1] and ok[i0]):
+        if np.all(np.nan_to_num(Y[:, 0]) <= 0):
+            raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
+        raise InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
+    bad = np.flatnonzero(~ok)
+    lo = int(bad[bad < i0].max(initial=-1)) + 1
+    hi = int(bad[bad > i0].min(initial=len(x)))
+    return x[lo:hi], Y[lo:hi], dY[lo:hi], None
 
 
 def _cells(red: Reduced) -> list[float]:
@@ -511,60 +533,78 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     d = md.mech.drivers[k]
     value = q_si / (md.scale[k] * d.input_scale(md.mech))
     return (
-        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached a toggle at {value:.6g} "
-        f"{d.input_unit(md.mech)} that the motion cannot pass"
+        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached the end of its range at {value:.6g} "
+        f"{d.input_unit(md.mech)} (a toggle or its stroke's end) that the motion cannot pass"
     )
 
 
-def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Several drivers: ``q''`` from ``M``, ``h`` and ``Q`` evaluated at (q, w) (SI), the pose's signs."""
-    nd = len(q)
-    qs = np.repeat((q / md.scale)[:, None], nd + 1, axis=1)
-    speeds = np.concatenate([np.eye(nd), w[:, None]], axis=1)  # unit speeds (J per driver), then w (a0)
-    m = _motion(md, qs, np.repeat(md.params.signs, nd + 1, axis=1), speeds)
-    if not m.good.all():
-        return np.full(nd, np.nan)
+def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Several drivers: ``q''`` (n_d, n) from ``M``, ``h``, ``Q`` at states (q, w) (n_d, n), SI, the pose's signs.
+
+    One solve of ``n (n_d + 1)`` samples: each state with the unit speed of each driver (the
+    columns of ``J``), then with its own speed and no acceleration (``a0``).  Also returns the
+    conditioning of each state (NaN accelerations where it is singular).
+    """
+    nd, n = q.shape
+    qs = np.tile(q / md.scale[:, None], (1, nd + 1))
+    unit = np.repeat(np.eye(nd), n, axis=1)
+    m = _motion(md, qs, np.repeat(md.params.signs, n * (nd + 1), axis=1), np.concatenate([unit, w], axis=1))
+
+    def split(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(J (n_d, n), the velocity-product part (n,)) of a per-sample array."""
+        r = x.reshape(nd + 1, n)
+        return r[:nd], r[nd]
+
     g = md.mech.gravity if md.mech.gravity is not None else 0j
-    M, rhs = np.zeros((nd, nd)), tau.astype(float).copy()
+    M, rhs = np.zeros((n, nd, nd)), np.array(tau, float)
     for (_, mass, inertia, _), (_, v, acc), (om, al) in zip(md.bodies, m.gz, m.body_w, strict=True):
-        J, jw = v[:nd], om[:nd]
-        M += mass * np.real(np.conj(J)[:, None] * J[None]) + inertia * np.outer(jw, jw)
-        rhs += mass * np.real(np.conj(J) * (g - acc[nd])) - inertia * jw * al[nd]
+        (J, _), (_, a0), (jw, _), (_, al0) = split(v), split(acc), split(om), split(al)
+        M += mass * np.einsum("in,jn->nij", np.conj(J), J).real + inertia * np.einsum("in,jn->nij", jw, jw)
+        rhs += mass * np.real(np.conj(J) * (g - a0)) - inertia * jw * al0
     for (_, force, torque, _), (_, v, _), (om, _) in zip(md.loads, m.lz, m.load_w, strict=True):
-        rhs += np.real(np.conj(force) * v[:nd]) + torque * om[:nd]
+        rhs += np.real(np.conj(force) * split(v)[0]) + torque * split(om)[0]
     for a, b, k, free in md.springs:
         L, Lv, _ = _stretch(m, a, b)
-        rhs -= k * (L[0] - free) * Lv[:nd]
+        rhs -= k * (split(L)[1] - free) * split(Lv)[0]
     for a, b, c in md.dampers:
-        _, Lv, _ = _stretch(m, a, b)
-        rhs -= c * Lv[:nd] * Lv[nd]
-    out: np.ndarray = np.linalg.solve(M, rhs)
-    return out
+        Lq, Lw = split(_stretch(m, a, b)[1])
+        rhs -= c * Lq * Lw
+    good = np.all(m.good.reshape(nd + 1, n), axis=0) & np.all(np.isfinite(M), axis=(1, 2))
+    M[~good] = np.eye(nd)
+    qdd = np.linalg.solve(M, np.nan_to_num(rhs).T[..., None])[..., 0].T
+    qdd[:, ~good] = np.nan
+    return qdd, np.min(m.cond.reshape(nd + 1, n), axis=0)
 
 
 def _integrate_direct(md: _Model, times: np.ndarray, laws: tuple[TorqueLaw, ...], w0: np.ndarray) -> _Run:
-    """Several drivers: ``M``, ``h``, ``Q`` evaluated at every step (slower); stops where it stops assembling."""
+    """Several drivers: ``M``, ``h``, ``Q`` evaluated at every step (slower); stops at a singular position."""
     from scipy.integrate import solve_ivp
 
     nd = len(laws)
 
     def tau(w: np.ndarray) -> np.ndarray:
-        return np.array([law(x) for law, x in zip(laws, w, strict=True)], float)
+        return np.array([law(x) for law, x in zip(laws, w, strict=True)], float).reshape(w.shape)
 
     def rhs(_t: float, y: np.ndarray) -> np.ndarray:
-        return np.concatenate([y[nd:], _direct_accel(md, y[:nd], y[nd:], tau(y[nd:]))])
+        col = y[:, None]
+        return np.concatenate([y[nd:], _direct_accel(md, col[:nd], col[nd:], tau(col[nd:]))[0][:, 0]])
 
+    def singular(_t: float, y: np.ndarray) -> float:
+        col = y[:, None]
+        return float(_direct_accel(md, col[:nd], col[nd:], tau(col[nd:]))[1][0]) - STOP_CONDITION
+
+    singular.terminal = True  # type: ignore[attr-defined]
     y0 = np.concatenate([md.params.pose_inputs[:, 0] * md.scale, w0])
-    sol = solve_ivp(rhs, (times[0], times[-1]), y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL)
+    span = (times[0], times[-1])
+    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[singular])
     t, y = sol.t, sol.y
     stopped = None
-    if sol.status < 0 or not np.all(np.isfinite(y)):
+    if sol.status != 0 or not np.all(np.isfinite(y)):
         ok = np.all(np.isfinite(y), axis=0)
-        last = int(np.argmin(ok)) if not ok.all() else len(t)
-        t, y = t[:last], y[:, :last]
-        te = t[-1] if len(t) else times[0]
-        stopped = f"simulate: stopped at t = {te:.6g} s: the mechanism reached a position it cannot pass"
-    qdd = np.array([_direct_accel(md, y[:nd, i], y[nd:, i], tau(y[nd:, i])) for i in range(len(t))]).T.reshape(nd, -1)
+        t, y = t[ok], y[:, ok]
+        te = float(sol.t_events[0][0]) if sol.status == 1 else float(t[-1]) if len(t) else float(times[0])
+        stopped = f"simulate: stopped at t = {te:.6g} s: the mechanism reached a singular position it cannot pass"
+    qdd = _direct_accel(md, y[:nd], y[nd:], tau(y[nd:]))[0] if len(t) else np.zeros((nd, 0))
     return _Run(t, y[:nd], y[nd:], qdd, None, stopped)
 
 

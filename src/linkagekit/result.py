@@ -360,6 +360,8 @@ class Result:
         for q in self.catalogue.table:
             _put(out, q.json_path, q.values(self))
         out["quantities"] = [q.to_dict() for q in self.catalogue]
+        if self.stopped is not None:  # a simulation that met a toggle: why its rows end early
+            out["stopped"] = self.stopped
         return out
 
     def __repr__(self) -> str:

@@ -455,9 +455,7 @@ def minimax_polish(
         out: FloatArray = ((C[1:] - C[0]) / h).T
         return out
 
-    pos0, ang0 = pose_errors(p, F[None], t[None], sv, clip=True)
-    tau0 = float(max(np.max(pos0), weight * np.max(np.abs(ang0)))) * 1.001
-    z0 = np.concatenate([F, t[:k], [tau0]])
+    z0 = np.concatenate([F, t[:k], [_start_tau(p, F, t, sv, weight)]])
     res = minimize(
         lambda z: z[-1],
         z0,
@@ -468,6 +466,12 @@ def minimax_polish(
     )
     Fz, T = unpack(np.asarray(res.x, float)[None])
     return Fz[0], T[0]
+
+
+def _start_tau(p: MotionPoses, F: FloatArray, t: FloatArray, sv: FloatArray, weight: float) -> float:
+    """The minimax polish's start of ``tau``: just above the design's largest weighted error."""
+    pos0, ang0 = pose_errors(p, F[None], t[None], sv, clip=True)
+    return float(max(np.max(pos0), weight * np.max(np.abs(ang0)))) * 1.001
 
 
 # ---------------------------------------------------------------------- the engine's objective

@@ -25,7 +25,7 @@ import numpy as np
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError, LinkageError
 from .base import Objective
-from .function_run import synthesize_function
+from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
 from .optimize import Optimum, Outcome, Progress, Settings, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
@@ -147,6 +147,65 @@ def synthesize(
     targets: Any,
     topology: str | Mechanism = "fourbar",
     *,
+    task: str = "path",
+    objective: Objective | None = None,
+    **options: Any,
+) -> Synthesis | MotionSynthesis | FunctionSynthesis | Optimum:
+    """Design a mechanism: for a path, a motion or a function (spec section 6), or for any ``objective``.
+
+    Parameters
+    ----------
+    targets : array_like or Targets or None
+        ``task="path"``: the points (m, 2) or complex (m,) (:func:`synthesize_path`);
+        ``"motion"``: the poses (m, 3) ``x, y, angle`` (degrees) (:func:`synthesize_motion`);
+        ``"function"``: the pairs (m, 2) ``input, output`` (degrees from the ground line)
+        (:func:`~linkagekit.synthesis.function_run.synthesize_function`).  ``None`` with ``objective``.
+    topology : str or Mechanism
+        Path generation's topology or template.
+    task : str
+        ``"path"`` (the default), ``"motion"`` or ``"function"``.
+    objective : Objective, optional
+        A user's own :class:`~linkagekit.synthesis.base.Objective`: searched by the same engine
+        instead (:func:`~linkagekit.synthesis.optimize.search`); returns an :class:`Optimum`.
+    **options
+        The keywords of the function that runs the task (for ``objective``, the engine's:
+        ``seed``, ``seconds``, ``restarts``, ``generations``, ``popsize``, ``goal``, ``workers``,
+        ``scheduler``, ``checkpoint``, ``progress``).  ``angle_weight`` is motion's ``weight``.
+
+    Returns
+    -------
+    Synthesis, MotionSynthesis, FunctionSynthesis or Optimum
+    """
+    if objective is not None:
+        return search(objective, **options)
+    if task == "path":
+        return synthesize_path(targets, topology, **options)
+    if task == "motion":
+        if "angle_weight" in options:
+            options["weight"] = options.pop("angle_weight")
+        if options.get("min_transmission") is None:
+            options.pop("min_transmission", None)
+        return synthesize_motion(targets, **options)
+    if task == "function":
+        return _function_task(targets, **options)
+    raise InputError(f"task: expected 'path', 'motion' or 'function', got {task!r}")
+
+
+def _function_task(
+    targets: Any, units: str = "m", min_transmission: float | None = None, **options: Any
+) -> FunctionSynthesis:
+    """``synthesize(task="function")``: the pairs' two columns to :func:`synthesize_function`."""
+    pairs = np.asarray(targets, float)
+    if pairs.ndim != 2 or pairs.shape[1] != 2:
+        raise InputError("targets: function generation takes pairs (m, 2) of input, output angles (degrees)")
+    mt = 0.0 if min_transmission is None else float(min_transmission)
+    return synthesize_function(pairs[:, 0], pairs[:, 1], units=units, min_transmission=mt, **options)
+
+
+def synthesize_path(
+    targets: Any,
+    topology: str | Mechanism = "fourbar",
+    *,
     inputs: Sequence[float] | None = None,
     units: str = "m",
     ordered: bool = False,
@@ -165,85 +224,38 @@ def synthesize(
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
-    objective: Objective | None = None,
-    task: str = "path",
-    closed: bool = False,
-    approximate: bool = False,
-    angle_weight: float | None = None,
-    free_offsets: bool = False,
-    ground_length: float = 1.0,
     **old: Any,
-) -> Any:
-    """Find a mechanism whose tracer point passes near every target (or search any ``objective``).
+) -> Synthesis:
+    """Path generation: a mechanism whose tracer point passes near every target (``synthesize``'s ``task="path"``).
 
     Parameters
     ----------
-    targets : array_like, (m, 2) or complex (m,)
-        The points, in ``units``. A :class:`~linkagekit.synthesis.targets.Targets` is taken as it is.
+    targets : array_like, (m, 2) or complex (m,), or Targets
+        The points, in ``units`` (a :class:`~linkagekit.synthesis.targets.Targets` as it is).
     topology : str or Mechanism
         One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move within
         the targets' neighbourhood, all by default; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
     units : str
-        The targets' length unit (:data:`linkagekit.units.LENGTH_UNITS`), also the design's, as in
-        ``read_targets``. ``unit=``, its former name, still works and warns (``DeprecationWarning``).
+        The targets' (and the design's) length unit (:data:`linkagekit.units.LENGTH_UNITS`);
+        ``unit=``, its former name, still works and warns (``DeprecationWarning``).
     ordered : bool
-        Without timing, meet the targets in their order along the curve.
+        Without timing: meet the targets in their order along the curve.
     min_transmission : float, optional
-        Degrees: transmission angles stay within ``[MIN, 180 - MIN]`` over the whole turn
-        (default ``MIN_TRANSMISSION``, 20).
-    lengths : (float, float), optional
-        Bounds on every link length.
-    pivots : ((xmin, xmax), (ymin, ymax)), optional
-        The region of the ground pivots (built-in topologies).
-    free : sequence of str or mapping, optional
-        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``.
-    reach : float
-        Joints lie within ``reach`` target diagonals of the targets' centre.
-    seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint
-        See :class:`~linkagekit.synthesis.optimize.Settings`.
-    progress : callable, optional
-        Called with a :class:`~linkagekit.synthesis.optimize.Progress` after every generation.
-    objective : Objective, optional
-        A user's own :class:`~linkagekit.synthesis.base.Objective`: searched by the same
-        engine instead of the targets (pass ``targets=None``); returns an :class:`Optimum`.
-    task : str
-        ``"path"`` (the default) or ``"motion"``: ``targets`` are then poses (m, 3) ``x, y,
-        angle`` (degrees) and :func:`synthesize_motion` runs with ``inputs``, ``closed``,
-        ``approximate``, ``angle_weight``, ``min_transmission`` (default 0 for motion),
-        ``units``, ``seed`` and ``seconds``; or ``"function"``: ``targets`` are pairs (m, 2)
-        ``input, output`` (degrees from the ground line) and
-        :func:`~linkagekit.synthesis.function_run.synthesize_function` runs with
-        ``free_offsets``, ``ground_length``, ``min_transmission`` (default 0), ``units``,
-        ``seed``, ``seconds`` and ``workers``.
+        Degrees: transmission angles within ``[MIN, 180 - MIN]`` over the turn (default 20).
+    lengths, pivots : (float, float), ((xmin, xmax), (ymin, ymax)), optional
+        Bounds on every link length; the region of the ground pivots (built-in topologies).
+    free, reach : sequence of str or mapping, optional; float
+        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``;
+        joints lie within ``reach`` target diagonals of the targets' centre.
+    seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
+        See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
 
     Returns
     -------
-    Synthesis; MotionSynthesis with ``task="motion"``; FunctionSynthesis with ``task="function"``;
-    Optimum with ``objective``
+    Synthesis
     """
-    if objective is not None:
-        return search(
-            objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, popsize=popsize,
-            goal=goal, workers=workers, scheduler=scheduler, checkpoint=checkpoint, progress=progress,
-        )  # fmt: skip
-    if task == "motion":
-        mt = 0.0 if min_transmission is None else min_transmission
-        return synthesize_motion(
-            targets, inputs=inputs, closed=closed, approximate=approximate, weight=angle_weight,
-            min_transmission=mt, units=_units(units, old), seed=seed, seconds=seconds,
-        )  # fmt: skip
-    if task == "function":
-        pairs = np.asarray(targets, float)
-        if pairs.ndim != 2 or pairs.shape[1] != 2:
-            raise InputError("targets: function generation takes pairs (m, 2) of input, output angles (degrees)")
-        return synthesize_function(
-            pairs[:, 0], pairs[:, 1], free_offsets=free_offsets, ground_length=ground_length, units=_units(units, old),
-            seed=seed, seconds=seconds, workers=workers, min_transmission=min_transmission or 0.0,
-        )  # fmt: skip
-    if task != "path":
-        raise InputError(f"task: expected 'path', 'motion' or 'function', got {task!r}")
     min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
     source = getattr(targets, "source", None)
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
@@ -400,10 +412,20 @@ class MotionFourBar:
 
 @dataclass(frozen=True)
 class MotionSynthesis:
-    """The outcome of :func:`synthesize_motion`: the best four-bar first, then every other one found.
+    """The outcome of :func:`synthesize_motion`.
 
-    ``diagonal`` is the poses' bounding-box diagonal; ``weight`` the angle weight of the error
-    measure (:mod:`linkagekit.synthesis.motion`).
+    Attributes
+    ----------
+    fourbars : list of MotionFourBar
+        Every four-bar found, the best first.
+    diagonal : float
+        The poses' bounding-box diagonal.
+    weight : float
+        The angle weight of the error measure (:mod:`linkagekit.synthesis.motion`).
+    best : MotionFourBar
+        ``fourbars[0]``.
+    mechanism : Mechanism
+        The best four-bar's mechanism.
     """
 
     fourbars: list[MotionFourBar]
@@ -412,10 +434,12 @@ class MotionSynthesis:
 
     @property
     def best(self) -> MotionFourBar:
+        """The best four-bar found."""
         return self.fourbars[0]
 
     @property
     def mechanism(self) -> Mechanism:
+        """The best four-bar's mechanism."""
         return self.best.mechanism
 
 
@@ -466,6 +490,24 @@ def synthesize_motion(
     """
     from . import motion as mo
 
+    P, p, w = _motion_problem(poses, inputs, closed, weight)
+    found: list[MotionFourBar] = []
+    if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
+        found = _exact_motion(P, units)
+    if not found or not any(f.one_branch for f in found):
+        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
+        designs = mo.approximate(p, w, min_transmission, seeds)
+        found += [_motion_fourbar(p, d, units) for d in designs]
+    if not found:
+        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
+    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
+    return MotionSynthesis(found, p.scale, w)
+
+
+def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, weight: float | None) -> Any:
+    """The checked poses (m, 3), the :class:`~.motion.MotionPoses` and the angle weight of :func:`synthesize_motion`."""
+    from . import motion as mo
+
     P = np.asarray(poses, float)
     if P.ndim != 2 or P.shape[1] != 3:
         raise InputError(f"poses: expected (m, 3) rows of x, y, angle, got shape {P.shape}")
@@ -476,17 +518,7 @@ def synthesize_motion(
     w = mo.ANGLE_WEIGHT if weight is None else float(weight)
     if not w > 0:
         raise InputError(f"--angle-weight: expected a positive number, got {weight}")
-    found: list[MotionFourBar] = []
-    if 3 <= p.m <= 5 and not approximate and ins is None and not closed:
-        found = _exact_motion(P, units)
-    if not found or not any(f.one_branch for f in found):
-        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
-        designs = mo.approximate(p, w, min_transmission, seeds)
-        found += [_motion_fourbar(p, d, units) for d in designs]
-    if not found:
-        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
-    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
-    return MotionSynthesis(found, p.scale, w)
+    return P, p, w
 
 
 def _engine_seeds(objective: Any, seed: int, seconds: float) -> np.ndarray:
