@@ -1790,7 +1790,9 @@ _COMMANDS = (
         "Integrate the equations of motion from the pose (at rest, or at --speed) under a constant torque "
         "(--torque) or the linear motor curve T0 (1 - w/W0) (--motor), with the file's masses, gravity, loads, "
         "springs, dampers and flywheels; one row per output time, with the columns of analyze plus time. "
-        "A motion that meets a toggle it cannot pass is written up to it, then one line says where (exit 1).",
+        "A motion that meets a toggle it cannot pass is written up to it, then one line says where (exit 1). "
+        "With --flywheel CS instead of --time: the smallest extra inertia on the driver's crank that keeps the "
+        "periodic steady state's speed fluctuation (w_max - w_min) / mean within CS.",
         _simulate_arguments,
         _simulate,
     ),

@@ -249,16 +249,22 @@ def _mean_balance_speed(p: _Problem) -> float:
         w = np.full_like(q, p.sign * speed)
         return float(p.sign * np.mean(np.asarray(p.red.force(q, w)) + np.asarray(p.drive(w))))
 
+    zero = np.zeros_like(q)
+    load = -p.sign * float(np.mean(np.asarray(p.red.force(q, zero))))  # what the loads take at rest, on average
     low = 1e-9
     if mean_power(low) <= 0.0:
-        raise NoBalanceError("the mechanism stalls: the mean driving torque cannot overcome the loads at any speed")
+        raise NoBalanceError(
+            f"the mechanism stalls: the loads take {load:.6g} N*m on average over a turn, more than the "
+            f"torque law gives at any speed ({abs(float(np.asarray(p.drive(zero[:1]))[0])):.6g} N*m at rest)"
+        )
     high = 1.0
     for _ in range(80):
         if mean_power(high) < 0.0:
             return float(brentq(mean_power, low, high, xtol=1e-12, rtol=1e-12))
         low, high = high, 2.0 * high
     raise NoBalanceError(
-        "no periodic steady state: the speed grows without bound (the torque law never balances the loads)"
+        f"no periodic steady state: the speed grows without bound (the torque law exceeds the loads' mean "
+        f"{load:.6g} N*m at every speed; a motor curve or a damper would balance it)"
     )
 
 
