@@ -13,6 +13,7 @@
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -213,6 +214,13 @@ def test_two_drivers_kinetostatics_agrees(tmp_path):
     # the two links of the dyad at E come into line at t = 0.1238 s: a singular position the motion cannot pass
     assert res.stopped is not None and "singular" in res.stopped and res.n == 5
     assert res.condition[-1] > 1e-3
+    # the one line names the time and where each driver is (file units), the event just past the last row
+    stop = re.search(r"t = (\S+) s \(crank1 = (\S+) deg, crank2 = (\S+) deg\)", res.stopped)
+    assert stop is not None and abs(float(stop[1]) - 0.1238) < 1e-3
+    # there the cranks' tips C and D (30 mm cranks on A = (0, 0), B = (50, 0)) nearly meet: the dyad C-E-D folded
+    c = 30 * np.exp(1j * math.radians(float(stop[2])))
+    d = 50 + 30 * np.exp(1j * math.radians(float(stop[3])))
+    assert abs(c - d) < 1.0
     T = res.forces.driver_torque
     assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
     assert np.ptp(res.inputs["crank1"]) > 1.0

@@ -573,6 +573,16 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     )
 
 
+def _singular_message(md: _Model, t: float, q_si: np.ndarray) -> str:
+    """Several drivers: the one line that says where the motion stopped, time and every driver's input (file units)."""
+    mech = md.mech
+    at = ", ".join(
+        f"{d.name} = {q_si[k] / (md.scale[k] * d.input_scale(mech)):.6g} {d.input_unit(mech)}"
+        for k, d in enumerate(mech.drivers)
+    )
+    return f"simulate: stopped at t = {t:.6g} s ({at}): the mechanism reached a singular position it cannot pass"
+
+
 def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Several drivers: ``q''`` (n_d, n) from ``M``, ``h``, ``Q`` at states (q, w) (n_d, n), SI, the pose's signs.
 
@@ -637,8 +647,10 @@ def _integrate_direct(md: _Model, times: np.ndarray, laws: tuple[TorqueLaw, ...]
     if sol.status != 0 or not np.all(np.isfinite(y)):
         ok = np.all(np.isfinite(y), axis=0)
         t, y = t[ok], y[:, ok]
-        te = float(sol.t_events[0][0]) if sol.status == 1 else float(t[-1]) if len(t) else float(times[0])
-        stopped = f"simulate: stopped at t = {te:.6g} s: the mechanism reached a singular position it cannot pass"
+        te, qe = (float(times[0]), y0[:nd]) if not len(t) else (float(t[-1]), y[:nd, -1])
+        if sol.status == 1:
+            te, qe = float(sol.t_events[0][0]), sol.y_events[0][0][:nd]
+        stopped = _singular_message(md, te, qe)
     qdd = _direct_accel(md, y[:nd], y[nd:], tau(y[nd:]))[0] if len(t) else np.zeros((nd, 0))
     return _Run(t, y[:nd], y[nd:], qdd, None, stopped)
 
