@@ -264,3 +264,20 @@ def test_no_driver_or_no_inertia_is_refused():
         lk.simulate(lk.load(EXAMPLES / "seed000_fourbar.yaml"), [0.0, 1.0], torque=1.0)
     with pytest.raises(lk.InputError, match="times"):
         lk.simulate(_fourbar(), [0.0, np.nan])
+
+
+def test_two_drivers_spring_and_damper_agree_with_kinetostatics():
+    """Several drivers with a spring and a damper: kinetostatics (forces.py, its own spring and damper code)
+    of the simulated motion needs exactly the applied torques, so a wrong sign or factor of either in the
+    several-driver equations of motion shows (as it does for one driver in the reduced table)."""
+    doc = _example("fivebar_two_drivers.yaml", gravity=[0, -9.81])
+    for link, a, b in (("crank1", "A", "C"), ("crank2", "B", "D"), ("link1", "C", "E"), ("link2", "D", "E")):
+        _bar(doc, link, 0.2, a, b)
+    doc["springs"] = [{"between": ["P", "B"], "stiffness": 40.0, "free_length": 60.0}]
+    doc["dampers"] = [{"between": ["C", "D"], "damping": 0.5}]
+    mech = lk.Mechanism.from_dict(doc)
+    res = lk.simulate(mech, np.linspace(0.0, 0.04, 5), torque={"crank1": 0.05, "crank2": -0.02}, speed={"crank1": 2.0})
+    assert res.stopped is None
+    assert np.ptp(res.to_dict()["springs"]["P-B"]["force"]) > 0.5  # N: the spring works along the motion
+    T = res.forces.driver_torque
+    assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
