@@ -233,6 +233,8 @@ def test_cli_json_has_the_time_beside_the_inputs(tmp_path, capsys):
     assert code == 0
     doc = json.loads(out.read_text())
     assert doc["time"] == pytest.approx([0.0, 0.01, 0.02]) and len(doc["inputs"]["crank"]) == 3
+    keys = list(doc)
+    assert keys.index("time") + 1 == keys.index("inputs")  # spec section 7: "time" beside "inputs"
     assert doc["speeds"]["crank"][0] == 0.0
     entry = next(q for q in doc["quantities"] if q["name"] == "time")  # the time axis is a catalogue entry
     assert entry["unit"] == "s" and entry["path"] == ["time"] and entry["owner"] == "mechanism"

@@ -342,6 +342,7 @@ class Result:
             "format": "linkagekit-result/1",
             "name": m.name,
             "units": {"length": m.length_unit, "angle": m.angle_unit, "time": "s", "force": "N", "torque": "N*m"},
+            **({"time": None} if self.time is not None else {}),  # a simulation's time axis, beside the inputs
             "inputs": {},
             "speeds": {k: json_list(v) for k, v in self.speeds.items()},
             "input_accelerations": {k: json_list(v) for k, v in self.accelerations.items()},
