@@ -130,6 +130,12 @@ SUBSTEP_ITER = 6
 COND_EXACT = 1e-3
 #: samples solved at once in chunks of this many (their arrays stay in the cache)
 FILL_CHUNK = 2048
+#: from this many designs on, the walk's Newton runs as array operations over them (:func:`_gauss`), below
+#: by LAPACK per matrix (cheaper for a few: ~1 us a matrix against ~n^2 array operations a step)
+VECTOR_DESIGNS = 64
+#: ... and for this many iterations (the few columns still iterating after them cost less by LAPACK; a column's
+#: numbers still depend only on its own iterations, not on the other columns)
+VECTOR_ITER = 2
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
@@ -248,6 +254,7 @@ class _Walk:
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
     K0: np.ndarray  # (k, D) the known joints the start was solved with
     any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
+    vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
@@ -504,20 +511,23 @@ class Group(Step):
         return _Arrays(L, R, NEWTON_TOL * self._scale(L, R), self._lin_jacobian(R, len(self.joints)))
 
     def newton(
-        self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER
+        self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER, vector: bool = False
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Newton from ``U`` (m, B) with knowns ``K`` (k, B): (solution, converged, det sign).
 
         Each column is iterated until its residual passes (then it is left as it is), for at
         most ``iters`` steps; only the columns still iterating are computed (a column whose
-        step is not finite is NaN from the next step on: it is dropped, NaN).
+        step is not finite is NaN from the next step on: it is dropped, NaN). ``vector``: the
+        linear algebra as array operations over the columns (:func:`_gauss`), else LAPACK.
         """
-        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters)
+        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters, vector)
 
     def _newton(
-        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, vector: bool = False
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`newton` with the numbers as arrays."""
+        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector`."""
+        if vector:
+            return self._newton_vector(U, K, ar, iters)
         U = U.copy()
         conv = np.zeros(U.shape[1], bool)
         act = np.arange(U.shape[1])
@@ -541,6 +551,40 @@ class Group(Step):
             J = self._jac(P, ar.J_lin, ar.R)
             det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
             conv &= np.isfinite(det) & (det != 0)
+        return U, conv, np.sign(det)
+
+    def _newton_vector(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
+
+        The Jacobian is factored at every residual evaluated: a column that converges has its
+        determinant (at its solution) from that factorization, one still iterating its step.
+        Only the first ``VECTOR_ITER`` iterations are vectorized (the few columns left cost less
+        by LAPACK; a column's numbers depend only on its own iterations, not on the others).
+        """
+        U = U.copy()
+        conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
+        act, Ua, Ka = np.arange(U.shape[1]), U, K  # the columns still iterating, their unknowns and knowns
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for it in range(iters + 1):
+                P = np.concatenate([Ua, Ka]) if len(K) else Ua
+                res = self._res(P, ar.L, ar.R)
+                passed = np.all(np.abs(res) <= ar.tol, axis=0)
+                done = passed | (it == iters)
+                J = self._jac(P, ar.J_lin, ar.R)
+                dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER)
+                conv[act[passed]] = True
+                go = ~done & np.all(np.isfinite(dx), axis=1)  # a step not finite: the column is NaN, dropped
+                U[:, act[~go]] = np.where(done, Ua, NAN_POINT)[:, ~go]
+                det[act[~done & ~go]] = 0.0
+                if not go.any():
+                    break
+                if not go.all():
+                    act, Ua, Ka, ar = act[go], Ua[:, go], Ka[:, go], ar.take(go)
+                    dx = dx[go]
+                Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+        conv &= np.isfinite(det) & (det != 0)
         return U, conv, np.sign(det)
 
     # ------------------------------------------------------------------ chains between held joints
@@ -631,6 +675,7 @@ class Group(Step):
             (lo, hi, mg),
             zk0,
             k.continuous,
+            D >= VECTOR_DESIGNS,
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -898,7 +943,7 @@ class Group(Step):
         if U_prev2 is not None:
             quad = 3 * U - 3 * U_prev + U_prev2
             guess = np.where(np.isfinite(quad), quad, guess)
-        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
+        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs), vector=w.vector)
         return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w, designs)
 
     def _restart_lost(
@@ -927,7 +972,7 @@ class Group(Step):
         for first in range(0, len(can), FILL_CHUNK):  # in chunks that stay in the cache
             i = can[first : first + FILL_CHUNK]
             ri, ci, gi = r[i], c[i], g[:, i]
-            sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci))
+            sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci), vector=w.vector)
             good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
             w.out[:, ci[good], ri[good]] = sol[:, good]
             ok[i] = good
@@ -956,7 +1001,7 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, w.vector)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
@@ -1117,6 +1162,59 @@ def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
                 with contextlib.suppress(np.linalg.LinAlgError):
                     dx[i] = np.linalg.solve(J[i], -r[i])
     return dx
+
+
+def _solve_small(J: FloatArray, res: FloatArray, done: np.ndarray, vector: bool) -> tuple[FloatArray, FloatArray]:
+    """Newton's steps ``dx`` (B, n) with ``J dx = -res`` (``J`` (B, n, n), ``res`` (n, B)) where not ``done``, and
+    the determinants of ``J`` (B,) where ``done``: by :func:`_gauss` (``vector``; both everywhere), else by LAPACK
+    per matrix (NaN steps where singular or not finite; a non-finite ``J``'s determinant is its finite part's)."""
+    if vector:
+        return _gauss(J, res)
+    dx, det = np.full((J.shape[0], J.shape[2]), np.nan), np.zeros(J.shape[0])
+    if not done.all():
+        dx[~done] = _newton_step(J[~done], res[:, ~done])
+    if done.any():
+        Jd = J[done]
+        det[done] = np.linalg.det(np.where(np.isfinite(Jd), Jd, 0.0))
+    return dx, det
+
+
+def _gauss(J: FloatArray, res: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """:func:`_solve_small` as array operations over the columns: Gaussian elimination with partial pivoting.
+
+    Each entry of the ``n x (n + 1)`` augmented matrices is an array over the columns, so the
+    cost is about ``n^2`` array operations whatever the number of columns (LAPACK costs about
+    1 us per small matrix). A column's numbers are computed by the same scalar operations
+    whatever else is in the batch. The determinant is the product of the pivots, negated for
+    each row swap; a zero pivot (a singular matrix) gives a zero determinant and a step that is
+    not finite, a non-finite ``J`` or ``res`` NaN.
+    """
+    B, n, _ = J.shape
+    A = np.empty((n, n + 1, B))
+    A[:, :n] = J.transpose(1, 2, 0)
+    A[:, n] = -res
+    det = np.ones(B)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for k in range(n):
+            p = np.argmax(np.abs(A[k:, k]), axis=0)
+            counts = np.bincount(p, minlength=n - k)
+            for i in np.flatnonzero(counts[1:]) + k + 1:  # row i's pivot is the largest: swap rows k and i
+                if counts[i - k] == B:  # in every column (often: the rows' structure decides)
+                    A[[k, i], k:] = A[[i, k], k:]
+                    det = -det
+                else:
+                    sw = p == i - k
+                    top = np.where(sw, A[i, k:], A[k, k:])
+                    A[i, k:] = np.where(sw, A[k, k:], A[i, k:])
+                    A[k, k:] = top
+                    det = np.where(sw, -det, det)
+            det *= A[k, k]
+            if k < n - 1:
+                A[k + 1 :, k + 1 :] -= (A[k + 1 :, k] / A[k, k])[:, None, :] * A[k, None, k + 1 :, :]
+        x = np.empty((n, B))
+        for k in range(n - 1, -1, -1):
+            x[k] = (A[k, n] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
+    return x.T, det
 
 
 @dataclass
