@@ -97,6 +97,20 @@ twice the longest minus the sum. A configuration Newton accepts keeps every edge
 failed at once (no Newton, sub-steps or restarts), as it would have been after all of them.
 This is the gap of a dyad (two circles that do not meet).
 
+*Small linear systems as array operations.* LAPACK costs about 1 us per small matrix (a
+6x6 solve 0.3-0.5 us, its determinant 0.25 us more), whatever its size. Where many columns
+are solved at once (the samples of ``VECTOR_SAMPLES`` samples x designs or more, the walk
+of ``VECTOR_DESIGNS`` designs or more, the rates of as many samples) Newton's systems are
+solved by :func:`_gauss`, Gaussian elimination with partial pivoting written as about
+``n^2`` array operations over the columns, which gives the determinant (the product of the
+pivots, with the sign of the swaps) for free: :meth:`Group._newton_vector` factors the
+Jacobian at every residual it evaluates, so a column that converges has its determinant at
+its solution from that factorization. Which solver a column gets depends only on the
+problem's size (samples x designs, designs) and on the column's own iteration
+(``VECTOR_ITER``), never on the other columns of its batch: batching stays exact. The
+samples' columns still iterating after ``VECTOR_ITER`` go on together, every chunk's in one
+LAPACK batch (:meth:`Group._newton_samples`).
+
 Rates
 -----
 Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J_k a_k -
@@ -133,6 +147,8 @@ FILL_CHUNK = 2048
 #: from this many designs on, the walk's Newton runs as array operations over them (:func:`_gauss`), below
 #: by LAPACK per matrix (cheaper for a few: ~1 us a matrix against ~n^2 array operations a step)
 VECTOR_DESIGNS = 64
+#: ... and the samples' Newton from this many samples x designs on
+VECTOR_SAMPLES = 4096
 #: ... and for this many iterations (the few columns still iterating after them cost less by LAPACK; a column's
 #: numbers still depend only on its own iterations, not on the other columns)
 VECTOR_ITER = 2
@@ -255,6 +271,7 @@ class _Walk:
     K0: np.ndarray  # (k, D) the known joints the start was solved with
     any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
     vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
+    fill_vector: bool = False  # ... and the samples' (many samples and designs)
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
@@ -523,11 +540,17 @@ class Group(Step):
         return self._newton(U, K, self._arrays(nums, U.shape[1]), iters, vector)
 
     def _newton(
-        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, vector: bool = False
+        self,
+        U: np.ndarray,
+        K: np.ndarray,
+        ar: _Arrays,
+        iters: int = NEWTON_ITER,
+        vector: bool = False,
+        work: FloatArray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector`."""
+        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace)."""
         if vector:
-            return self._newton_vector(U, K, ar, iters)
+            return self._newton_vector(U, K, ar, iters, work)
         U = U.copy()
         conv = np.zeros(U.shape[1], bool)
         act = np.arange(U.shape[1])
@@ -554,7 +577,7 @@ class Group(Step):
         return U, conv, np.sign(det)
 
     def _newton_vector(
-        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, work: FloatArray | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
 
@@ -565,15 +588,15 @@ class Group(Step):
         """
         U = U.copy()
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
-        act, Ua, Ka = np.arange(U.shape[1]), U, K  # the columns still iterating, their unknowns and knowns
+        act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([Ua, Ka]) if len(K) else Ua
-                res = self._res(P, ar.L, ar.R)
-                passed = np.all(np.abs(res) <= ar.tol, axis=0)
+                res = self._res(P, ara.L, ara.R)
+                passed = np.all(np.abs(res) <= ara.tol, axis=0)
                 done = passed | (it == iters)
-                J = self._jac(P, ar.J_lin, ar.R)
-                dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER)
+                J = self._jac(P, ara.J_lin, ara.R)
+                dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER, work)
                 conv[act[passed]] = True
                 go = ~done & np.all(np.isfinite(dx), axis=1)  # a step not finite: the column is NaN, dropped
                 U[:, act[~go]] = np.where(done, Ua, NAN_POINT)[:, ~go]
@@ -581,11 +604,24 @@ class Group(Step):
                 if not go.any():
                     break
                 if not go.all():
-                    act, Ua, Ka, ar = act[go], Ua[:, go], Ka[:, go], ar.take(go)
+                    act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
                     dx = dx[go]
                 Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+            self._lapack_det_where_zero(U, K, ar, conv, det)
         conv &= np.isfinite(det) & (det != 0)
         return U, conv, np.sign(det)
+
+    def _lapack_det_where_zero(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, conv: np.ndarray, det: FloatArray
+    ) -> None:
+        """Where a converged column's pivots give an exactly zero determinant (an exactly singular position, such
+        as a parallelogram's flat one), its determinant by LAPACK as :meth:`_newton` takes it (its rounding is
+        what decides there), written into ``det``."""
+        zero = np.flatnonzero(conv & (det == 0))
+        if len(zero):
+            P = np.concatenate([U[:, zero], K[:, zero]]) if len(K) else U[:, zero]
+            J = self._jac(P, ar.J_lin[zero], ar.R[:, zero])
+            det[zero] = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
 
     # ------------------------------------------------------------------ chains between held joints
     @cached_property
@@ -676,6 +712,7 @@ class Group(Step):
             zk0,
             k.continuous,
             D >= VECTOR_DESIGNS,
+            D * n >= VECTOR_SAMPLES,
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -968,15 +1005,42 @@ class Group(Step):
     def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
         """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
         ok = np.zeros(len(r), bool)
-        can = np.flatnonzero(w.ok[c, r])  # the others cannot converge
-        for first in range(0, len(can), FILL_CHUNK):  # in chunks that stay in the cache
-            i = can[first : first + FILL_CHUNK]
-            ri, ci, gi = r[i], c[i], g[:, i]
-            sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci), vector=w.vector)
-            good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
-            w.out[:, ci[good], ri[good]] = sol[:, good]
-            ok[i] = good
+        i = np.flatnonzero(w.ok[c, r])  # the others cannot converge
+        ri, ci, gi = r[i], c[i], g[:, i]
+        sol, conv, sg = self._newton_samples(gi, w.K[:, ci, ri], ci, w)
+        good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
+        w.out[:, ci[good], ri[good]] = sol[:, good]
+        ok[i] = good
         return ok
+
+    def _newton_samples(
+        self, U: np.ndarray, K: np.ndarray, d: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Newton on the samples' columns (designs ``d``): vectorized (``w.fill_vector``), its first ``VECTOR_ITER``
+        iterations chunk by chunk, then the few columns still iterating all together by LAPACK (each column's
+        arithmetic is that of one Newton of ``NEWTON_ITER`` iterations; the tail of every chunk in one batch)."""
+        if not w.fill_vector:
+            return self._newton_chunks(U, K, d, w, NEWTON_ITER, False)
+        sol, conv, sg = self._newton_chunks(U, K, d, w, VECTOR_ITER, True)
+        tail = np.flatnonzero(~conv & np.all(np.isfinite(sol), axis=0))
+        if len(tail):
+            sol[:, tail], conv[tail], sg[tail] = self._newton_chunks(
+                sol[:, tail], K[:, tail], d[tail], w, NEWTON_ITER - VECTOR_ITER, False
+            )
+        return sol, conv, sg
+
+    def _newton_chunks(
+        self, U: np.ndarray, K: np.ndarray, d: np.ndarray, w: _Walk, iters: int, vector: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_newton` on columns of designs ``d`` in chunks of ``FILL_CHUNK`` (their arrays stay in the cache;
+        vectorized, they share one workspace)."""
+        B = U.shape[1]
+        sol, conv, sg = np.empty_like(U), np.zeros(B, bool), np.zeros(B)
+        work = np.empty(_gauss_size(self.n_eq, min(FILL_CHUNK, B))) if vector else None
+        for first in range(0, B, FILL_CHUNK):
+            i = slice(first, first + FILL_CHUNK)
+            sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
+        return sol, conv, sg
 
     def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
         """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
@@ -1064,7 +1128,8 @@ class Group(Step):
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
         Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe)
-        vu = np.linalg.solve(Ju_solve, rhs_v[..., None])[..., 0]
+        work = np.empty(_gauss_size(2 * m, FILL_CHUNK))  # both solves' workspace
+        vu = _solve_rates(Ju_solve, rhs_v, work)
         vu[sing] = np.nan
         # gamma: 2 |v_a - v_b|^2 on each distance row
         Vall = np.concatenate([(vu[:, 0::2] + 1j * vu[:, 1::2]).T, V]) if nk else (vu[:, 0::2] + 1j * vu[:, 1::2]).T
@@ -1078,7 +1143,7 @@ class Group(Step):
             line, lock = self._slider_gamma(P, Vall, self._stack(dn, D * n)[1])
             gamma[:, self._srows.line], gamma[:, self._srows.lock] = line.T, lock.T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
-        au = np.linalg.solve(Ju_solve, rhs_a[..., None])[..., 0]
+        au = _solve_rates(Ju_solve, rhs_a, work)
         au[sing] = np.nan
         for i, j in enumerate(self.joints):
             r.v[j] = (vu[:, 2 * i] + 1j * vu[:, 2 * i + 1]).reshape(D, n)
@@ -1164,12 +1229,14 @@ def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
     return dx
 
 
-def _solve_small(J: FloatArray, res: FloatArray, done: np.ndarray, vector: bool) -> tuple[FloatArray, FloatArray]:
+def _solve_small(
+    J: FloatArray, res: FloatArray, done: np.ndarray, vector: bool, work: FloatArray | None = None
+) -> tuple[FloatArray, FloatArray]:
     """Newton's steps ``dx`` (B, n) with ``J dx = -res`` (``J`` (B, n, n), ``res`` (n, B)) where not ``done``, and
     the determinants of ``J`` (B,) where ``done``: by :func:`_gauss` (``vector``; both everywhere), else by LAPACK
     per matrix (NaN steps where singular or not finite; a non-finite ``J``'s determinant is its finite part's)."""
     if vector:
-        return _gauss(J, res)
+        return _gauss(J, res, work)
     dx, det = np.full((J.shape[0], J.shape[2]), np.nan), np.zeros(J.shape[0])
     if not done.all():
         dx[~done] = _newton_step(J[~done], res[:, ~done])
@@ -1179,7 +1246,26 @@ def _solve_small(J: FloatArray, res: FloatArray, done: np.ndarray, vector: bool)
     return dx, det
 
 
-def _gauss(J: FloatArray, res: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _solve_rates(J: FloatArray, rhs: FloatArray, work: FloatArray | None = None) -> FloatArray:
+    """``x`` (B, n) with ``J x = rhs`` (``J`` (B, n, n) nonsingular, ``rhs`` (B, n)): by :func:`_gauss` from
+    ``VECTOR_SAMPLES`` systems on (in chunks of ``FILL_CHUNK`` sharing the workspace ``work``), else LAPACK."""
+    if len(J) >= VECTOR_SAMPLES:
+        x = np.empty(rhs.shape)
+        work = np.empty(_gauss_size(J.shape[1], FILL_CHUNK)) if work is None else work
+        for first in range(0, len(J), FILL_CHUNK):
+            i = slice(first, first + FILL_CHUNK)
+            x[i] = _gauss(J[i], -rhs[i].T, work)[0]
+        return x
+    y: np.ndarray = np.linalg.solve(J, rhs[..., None])[..., 0]
+    return y
+
+
+def _gauss_size(n: int, B: int) -> int:
+    """The workspace :func:`_gauss` needs for ``B`` systems of ``n`` equations (floats)."""
+    return (n * (n + 1) + (n - 1) * n) * B
+
+
+def _gauss(J: FloatArray, res: FloatArray, work: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
     """:func:`_solve_small` as array operations over the columns: Gaussian elimination with partial pivoting.
 
     Each entry of the ``n x (n + 1)`` augmented matrices is an array over the columns, so the
@@ -1187,10 +1273,13 @@ def _gauss(J: FloatArray, res: FloatArray) -> tuple[FloatArray, FloatArray]:
     1 us per small matrix). A column's numbers are computed by the same scalar operations
     whatever else is in the batch. The determinant is the product of the pivots, negated for
     each row swap; a zero pivot (a singular matrix) gives a zero determinant and a step that is
-    not finite, a non-finite ``J`` or ``res`` NaN.
+    not finite, a non-finite ``J`` or ``res`` NaN. ``work``: a workspace of :func:`_gauss_size` floats or more
+    (reused across calls, it spares the page faults of fresh large arrays).
     """
     B, n, _ = J.shape
-    A = np.empty((n, n + 1, B))
+    work = np.empty(_gauss_size(n, B)) if work is None else work
+    A = work[: n * (n + 1) * B].reshape(n, n + 1, B)
+    scratch = work[n * (n + 1) * B :]
     A[:, :n] = J.transpose(1, 2, 0)
     A[:, n] = -res
     det = np.ones(B)
@@ -1200,7 +1289,7 @@ def _gauss(J: FloatArray, res: FloatArray) -> tuple[FloatArray, FloatArray]:
             counts = np.bincount(p, minlength=n - k)
             for i in np.flatnonzero(counts[1:]) + k + 1:  # row i's pivot is the largest: swap rows k and i
                 if counts[i - k] == B:  # in every column (often: the rows' structure decides)
-                    A[[k, i], k:] = A[[i, k], k:]
+                    A[k, k:], A[i, k:] = A[i, k:].copy(), A[k, k:].copy()
                     det = -det
                 else:
                     sw = p == i - k
@@ -1209,8 +1298,10 @@ def _gauss(J: FloatArray, res: FloatArray) -> tuple[FloatArray, FloatArray]:
                     A[k, k:] = top
                     det = np.where(sw, -det, det)
             det *= A[k, k]
-            if k < n - 1:
-                A[k + 1 :, k + 1 :] -= (A[k + 1 :, k] / A[k, k])[:, None, :] * A[k, None, k + 1 :, :]
+            if k < n - 1:  # in place: large temporaries cost page faults
+                upd = scratch[: (n - k - 1) * (n - k) * B].reshape(n - k - 1, n - k, B)
+                np.multiply((A[k + 1 :, k] / A[k, k])[:, None, :], A[k, None, k + 1 :, :], out=upd)
+                A[k + 1 :, k + 1 :] -= upd
         x = np.empty((n, B))
         for k in range(n - 1, -1, -1):
             x[k] = (A[k, n] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
