@@ -1144,7 +1144,7 @@ def _plot(args: argparse.Namespace) -> int:
         groups = [_quantities(res.catalogue, item) for item in args.quantity]
         fig = draw.quantities_figure(scene, groups, **picture)
         _check_pixels(fig)
-        draw.save_figure(fig, args.output)
+        draw.save_figure(fig, args.output, fig.axes[0])  # a PNG maps the first plot's (x, value) to pixels
         return _stopped(res)
     poses = None
     if args.at:
