@@ -479,10 +479,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     InputError
         For a batch result, or a result with no samples.
     """
-    if not isinstance(res, Result):
-        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
-    if res.n_designs is not None:
-        raise InputError("a scene draws one design: pass res.design(i)")
+    _check_result(res)
     mech = res.mechanism
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
@@ -496,8 +493,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     drivers = tuple(d.name for d in mech.drivers)
     inputs = {d: np.asarray(columns[cat.find(Owner.DRIVER, d, "input").name], float).copy() for d in drivers}
     x_driver = _x_driver(inputs, drivers)
-    timed = res.time is not None  # a simulated motion: continuous in time, plotted along it
-    x_axis = cat.find(Owner.MECHANISM, "", "time").name if timed else cat.find(Owner.DRIVER, x_driver, "input").name
+    timed = res.time is not None  # a simulated motion: continuous in time (no breaks), plotted along it
     return Scene(
         name=mech.name,
         length_unit=mech.length_unit,
@@ -522,6 +518,14 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         x_driver=x_driver,
         breaks=_breaks(res, inputs[drivers[0]], input_range) if exact_breaks and not timed else (),
         catalogue=cat,
-        x_axis=x_axis,
+        x_axis=cat.find(Owner.MECHANISM, "", "time").name if timed else cat.find(Owner.DRIVER, x_driver, "input").name,
         stopped=res.stopped,
     )
+
+
+def _check_result(res: Any) -> None:
+    """Raise an InputError unless ``res`` is one design's Result."""
+    if not isinstance(res, Result):
+        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
+    if res.n_designs is not None:
+        raise InputError("a scene draws one design: pass res.design(i)")
