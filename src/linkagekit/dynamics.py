@@ -62,6 +62,8 @@ SHIFT = (math.sqrt(5.0) - 1.0) / 2.0
 BRIDGE = 200
 #: the degree of that fit
 DEGREE = 11
+#: the table's cubic Hermite interpolant must meet the model at every cell's middle to this (relative)
+TABLE_TOL = 1e-8
 #: several drivers: the motion stops where the steps' smallest dimensionless determinant falls below this
 STOP_CONDITION = 1e-3
 #: the most output times one simulation gives
@@ -339,7 +341,7 @@ def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, 
     return Y.T, dY.T
 
 
-def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, period: float | None) -> None:
+def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, period: float | None) -> np.ndarray:
     """Rows within :data:`BRIDGE` steps of a change point replaced by a polynomial fit from both sides, in place.
 
     Near a change point the closed-form solver loses digits (two circles nearly touch: position
@@ -349,6 +351,8 @@ def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, pe
     bridges them (the interpolant's slope divides value errors by the step: they must be tiny).
     """
     h = x[1] - x[0]
+    if len(points) == 0:
+        return np.zeros(len(x), bool)
     unique = np.unique(np.round(points / h, 3)) * h  # two sign steps may meet at one change point
     centres = [c for p in unique for c in ((p,) if period is None else (p - period, p, p + period))]
     near_any = np.zeros(len(x), bool)
@@ -365,6 +369,7 @@ def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, pe
         u = (x[near] - c) / scale
         Y[near] = np.polynomial.chebyshev.chebvander(u, DEGREE) @ coef
         dY[near] = np.polynomial.chebyshev.chebvander(u, DEGREE - 1) @ np.polynomial.chebyshev.chebder(coef) / scale
+    return near_any
 
 
 def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> Reduced:
@@ -398,31 +403,61 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
         steps, _, where = br.points
         if period is None or np.all(np.bincount(steps, minlength=md.params.plan.n_signs) % 2 == 0):
             break
-    Y, dY = _rows_at(md, x, br.signs[:, 0])
+    signs = br.signs[:, 0]
+    Y, dY = _rows_at(md, x, signs)
     q0 = float(md.params.pose_inputs[0, 0] * md.scale[0])
     change = np.asarray(where) * md.scale[0]
-    x, Y, dY, period = _reachable(mech, q0, x, Y, dY, period)
-    _bridge(x, Y, dY, change, period)
+    bridged = _bridge(x, Y, dY, change, period)
+    good = _verified(md, x, Y, dY, signs, bridged)
+    x, Y, dY, period = _reachable(mech, q0, x, Y, dY, good, period)
     rng = (float(x[0]), float(x[-1]))
     return Reduced(mech.drivers[0].name, q0, rng, period, change, np.asarray(steps), Y, dY)
 
 
+def _verified(
+    md: _Model, x: np.ndarray, Y: np.ndarray, dY: np.ndarray, signs: np.ndarray, bridged: np.ndarray
+) -> np.ndarray:
+    """Which cells the interpolant holds to :data:`TABLE_TOL`: checked against the model at every cell's middle.
+
+    ``M`` relative to itself, ``Q_s`` and ``C`` relative to their largest magnitude over the
+    table. A cell fails near a toggle (``M`` grows without bound) or where the model is not
+    smooth; a bridged cell (near a change point, where the direct values are the inaccurate
+    ones) and a middle on a singular position (no direct value) pass.
+    """
+    mid = 0.5 * (x[:-1] + x[1:])
+    q = (mid / md.scale[0])[None]
+    direct = _table_rows(md, _motion(md, q, signs[:, :-1], np.ones_like(q)))[0].T
+    h = x[1] - x[0]
+    interp = 0.5 * (Y[:-1] + Y[1:]) + h * (dY[:-1] - dY[1:]) / 8.0  # the cubic Hermite at t = 1/2
+    with np.errstate(invalid="ignore"):
+        scale = np.maximum(np.abs(direct), np.nanmax(np.abs(Y), axis=0, initial=0.0) * [0.0, 1.0, 1.0])
+        err = np.abs(interp - direct) <= TABLE_TOL * scale + 1e-300
+    rows = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
+    ok: np.ndarray = (np.all(err | ~np.isfinite(direct), axis=1) | bridged[:-1] | bridged[1:]) & rows[:-1] & rows[1:]
+    return ok
+
+
 def _reachable(
-    mech: Mechanism, q0: float, x: np.ndarray, Y: np.ndarray, dY: np.ndarray, period: float | None
+    mech: Mechanism,
+    q0: float,
+    x: np.ndarray,
+    Y: np.ndarray,
+    dY: np.ndarray,
+    good: np.ndarray,
+    period: float | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
-    """The table cut to the run of good rows (assembled, positive inertia) around the pose (then not periodic)."""
-    ok = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
-    if ok.all():
+    """The table cut to the run of good cells around the pose (then not periodic): its ends stop a motion."""
+    if good.all():
         return x, Y, dY, period
-    i0 = int(np.clip(np.searchsorted(x, q0), 1, len(x) - 1))
-    if not (ok[i0 - 1] and ok[i0]):
+    c0 = int(np.clip(np.searchsorted(x, q0) - 1, 0, len(good) - 1))  # the pose's cell
+    if not good[c0]:
         if np.all(np.nan_to_num(Y[:, 0]) <= 0):
             raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
         raise InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
-    bad = np.flatnonzero(~ok)
-    lo = int(bad[bad < i0].max(initial=-1)) + 1
-    hi = int(bad[bad > i0].min(initial=len(x)))
-    return x[lo:hi], Y[lo:hi], dY[lo:hi], None
+    bad = np.flatnonzero(~good)
+    lo = int(bad[bad < c0].max(initial=-1)) + 1
+    hi = int(bad[bad > c0].min(initial=len(good)))
+    return x[lo : hi + 1], Y[lo : hi + 1], dY[lo : hi + 1], None
 
 
 def _cells(red: Reduced) -> list[float]:
