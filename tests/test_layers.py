@@ -22,6 +22,7 @@ LAYERS = [
     {"positions", "rates", "branch", "forces", "vectorloop", "groupmodes"},
     {"result", "api", "checks"},
     {"dynamics"},
+    {"flywheel"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},
     {

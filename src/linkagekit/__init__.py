@@ -33,6 +33,7 @@ _LAZY = {
     "modes": "checks",
     "simulate": "dynamics",
     "reduced": "dynamics",
+    "size_flywheel": "flywheel",
     "build_scene": "viz.scene",
     "draw_mechanism": "viz.draw",
     "plot_quantity": "viz.draw",
@@ -65,6 +66,7 @@ __all__ = [
     "reference_signs",
     "save",
     "simulate",
+    "size_flywheel",
     "synthesize",
     "write_report",
 ]
@@ -73,6 +75,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .api import analyze, analyze_chunks, reference_signs
     from .checks import check, modes
     from .dynamics import reduced, simulate
+    from .flywheel import size_flywheel
     from .files import load, save
     from .model import Mechanism
     from .result import Result

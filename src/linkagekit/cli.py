@@ -337,8 +337,13 @@ def _analyze_arguments(p: argparse.ArgumentParser) -> None:
 
 def _simulate_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
-    p.add_argument(
-        "--time", required=True, metavar="START:STOP:STEP", help="output times, s (the motion starts at START)"
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--time", metavar="START:STOP:STEP", help="output times, s (the motion starts at START)")
+    what.add_argument(
+        "--flywheel",
+        metavar="CS",
+        help="instead of a motion, print the smallest extra inertia (kg*m^2) on the driver's crank that keeps "
+        "the periodic steady state's coefficient of speed fluctuation at most CS",
     )
     _law_options(p)
     _format_option(p, "table", "csv", "json")
@@ -427,14 +432,39 @@ def _motor_curve(text: str, what: str) -> tuple[float, float]:
     return values[0], values[1]
 
 
+def _flywheel(args: argparse.Namespace, mech: Mechanism, torque: Any, motor: Any) -> int:
+    """``simulate --flywheel CS``: the smallest extra inertia (kg*m^2), or its steady state in JSON."""
+    import linkagekit as lk
+
+    if args.speed:
+        raise InputError("--speed: not used with --flywheel (the steady state does not depend on the start)")
+    size = lk.size_flywheel(mech, _one_number(args.flywheel, "--flywheel"), torque=torque, motor=motor)
+    if args.format != "json":
+        _emit(f"{size.inertia:.10g}\n", args.output)
+        return 0
+    st = size.steady
+    out = {
+        "format": "linkagekit-flywheel/1",
+        "link": mech.drivers[0].link,
+        "inertia": size.inertia,
+        "cs": size.cs,
+        "cs_without": size.cs_without,
+        "speed": {"min": abs(st.w_min), "max": abs(st.w_max), "mean": abs(st.mean_speed)},
+    }
+    _emit(json.dumps(out, allow_nan=False) + "\n", args.output)
+    return 0
+
+
 def _simulate(args: argparse.Namespace) -> int:
     """``linkagekit simulate``: writes the motion (so far), then exit 1 with one line if it met a toggle."""
     import linkagekit as lk
 
     mech = lk.load(args.file)
-    times = _range(args.time, "--time")
     torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
     motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    if args.flywheel is not None:
+        return _flywheel(args, mech, torque, motor)
+    times = _range(args.time, "--time")
     speed = _by_driver(mech, args.speed, "--speed", _one_number) if args.speed else None
     res = lk.simulate(mech, times, torque=torque, motor=motor, speed=speed)
     if args.format == "json":
@@ -1824,7 +1854,9 @@ _COMMANDS = (
         "Integrate the equations of motion from the pose (at rest, or at --speed) under a constant torque "
         "(--torque) or the linear motor curve T0 (1 - w/W0) (--motor), with the file's masses, gravity, loads, "
         "springs, dampers and flywheels; one row per output time, with the columns of analyze plus time. "
-        "A motion that meets a toggle it cannot pass is written up to it, then one line says where (exit 1).",
+        "A motion that meets a toggle it cannot pass is written up to it, then one line says where (exit 1). "
+        "With --flywheel CS instead of --time: the smallest extra inertia on the driver's crank that keeps the "
+        "periodic steady state's speed fluctuation (w_max - w_min) / mean within CS.",
         _simulate_arguments,
         _simulate,
     ),
