@@ -403,8 +403,7 @@ def _motion(mech: Mechanism, args: argparse.Namespace, times: np.ndarray | None 
         return None
     if times is None:
         times = _range(args.time, "--time")
-    torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
-    motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    torque, motor = _torque_law(mech, args)
     speed = _by_driver(mech, args.speed, "--speed", _one_number) if args.speed else None
     return lk.simulate(mech, times, torque=torque, motor=motor, speed=speed)
 
@@ -415,6 +414,13 @@ def _solved(mech: Mechanism, args: argparse.Namespace) -> Result:
 
     res = _motion(mech, args)
     return lk.analyze(mech, _sweep(mech, args.angles)) if res is None else res
+
+
+def _torque_law(mech: Mechanism, args: argparse.Namespace) -> tuple[dict[str, float] | None, dict[str, Any] | None]:
+    """``--torque`` and ``--motor`` by driver (None where not given)."""
+    torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
+    motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    return torque, motor
 
 
 def _stopped(res: Result) -> int:
@@ -460,8 +466,7 @@ def _simulate(args: argparse.Namespace) -> int:
     import linkagekit as lk
 
     mech = lk.load(args.file)
-    torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
-    motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    torque, motor = _torque_law(mech, args)
     if args.flywheel is not None:
         return _flywheel(args, mech, torque, motor)
     times = _range(args.time, "--time")
@@ -479,10 +484,7 @@ def _simulate(args: argparse.Namespace) -> int:
             res.columns(), units, analysis_sections(cat, mech.name or ""), inputs=shown, width=terminal_width()
         )
         _emit(text, args.output)
-    if res.stopped:
-        print(f"{PROG}: {res.stopped}", file=sys.stderr)
-        return 1
-    return 0
+    return _stopped(res)
 
 
 def _modes_arguments(p: argparse.ArgumentParser) -> None:
