@@ -37,7 +37,9 @@ class Rates:
 
     ``omega``/``alpha``: angular rates of the links the steps knew them for; ``condition``
     (n_signs + n_groups, D, n) the dimensionless conditioning of each sign step, then of each
-    numerical group; ``singular`` (D, n).
+    numerical group; ``singular`` (D, n); ``limit`` (D, n) or None: the samples whose rates are
+    the followed branch's limit at a change point (:func:`linkagekit.branch.limits`), defined
+    although ``singular``.
     """
 
     v: np.ndarray
@@ -46,6 +48,7 @@ class Rates:
     alpha: dict[str, Any]
     condition: np.ndarray
     singular: np.ndarray
+    limit: np.ndarray | None = None
 
 
 def solve_rates(
@@ -113,7 +116,10 @@ def link_motion(params: Params, pos: Positions, rates: Rates | None, links: Any)
     """
     names = params.plan.joint_names
     z = pos.z
-    bad = ~pos.assembled if rates is None else (rates.singular | ~pos.assembled)
+    if rates is None:
+        bad = ~pos.assembled
+    else:  # a branch's limit at a change point has rates although singular
+        bad = (rates.singular if rates.limit is None else rates.singular & ~rates.limit) | ~pos.assembled
     out: dict[str, LinkMotion] = {}
     for ln in links:
         if ln.name == "ground":
