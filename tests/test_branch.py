@@ -178,11 +178,18 @@ def test_cli_branch(tmp_path, capsys):
     assert main(["analyze", str(path), "--branch", "sideways"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--branch" in err[0]
+    # the command line speaks its own options, not Python's keywords
+    assert main(["analyze", str(path), "--method", "vector-loop", "--branch", "continuous"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--branch continuous" in err[0] and "--method vector-loop" in err[0]
+    assert "signs=" not in err[0] and "method=" not in err[0]
 
 
 def test_bad_branch_in_python():
-    with pytest.raises(lk.LinkageError, match="branch"):
+    with pytest.raises(lk.LinkageError, match="branch: expected 'pose' or 'continuous', got 'smooth'"):
         lk.analyze(parallelogram(), [0.0], branch="smooth")
+    with pytest.raises(lk.LinkageError, match="branch"):
+        lk.analyze(parallelogram(), [0.0], branch=["continuous"])
     with pytest.raises(lk.LinkageError, match="branch"):
         lk.analyze(parallelogram(), [0.0], branch="continuous", signs={"D": 1})
 
@@ -420,3 +427,18 @@ def test_numerical_groups_at_change_points_give_the_limit_or_a_flag(name, mech, 
         assert limit[FLAT].all()
     flagged = FLAT & ~limit
     assert np.all(~num.assembled[flagged] | num.singular[flagged])
+
+
+def test_branch_modes_are_declared_once():
+    """The mode as an enum member or as its word gives the same analysis; the CLI's choices are the words."""
+    from linkagekit.cli import build_parser
+    from linkagekit.options import BranchMode
+
+    mech = parallelogram()
+    a = lk.analyze(mech, [0.0, 200.0], branch=BranchMode.CONTINUOUS)
+    b = lk.analyze(mech, [0.0, 200.0], branch="continuous")
+    assert np.array_equal(a.xy("D"), b.xy("D")) and np.array_equal(a.signs["D"], b.signs["D"])
+    assert BranchMode.words() == ("pose", "continuous")
+    action = next(x for x in build_parser()._subparsers._group_actions[0].choices["analyze"]._actions
+                  if "--branch" in x.option_strings)  # fmt: skip
+    assert tuple(action.choices) == BranchMode.words() and action.default == BranchMode.POSE.value
