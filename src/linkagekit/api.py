@@ -483,10 +483,8 @@ def analyze(
         Zero speed and acceleration for every driver: the forces are then the static ones
         that balance gravity and the loads (not to be combined with ``speed``/``acceleration``).
     branch : {"pose", "continuous"} or BranchMode
-        ``"pose"`` (default): the pose's signs at every input; ``"continuous"``: followed through
-        change points from the pose's input (:mod:`linkagekit.branch`), ``Result.signs`` per sample;
-        a sample exactly on a change point gets the branch's limit there (positions, and rates
-        although ``singular``: the limit of the branch's rates from either side).
+        ``"pose"`` (default): the pose's signs; ``"continuous"``: followed through change points
+        (:mod:`linkagekit.branch`; ``Result.signs`` per sample; on a change point, the branch's limit).
 
     Returns
     -------
