@@ -10,8 +10,9 @@ means flipping the sign there, so that the motion goes on smoothly.
 :func:`follow` decides it along a path given in order (a simulation calls it with its time
 steps); :func:`along_sweep` builds the path of a sweep (from the pose's input up to the
 largest input and down to the smallest, through every requested input and a fixed grid)
-and calls it.  The work is vectorized over samples and designs and sequential only over
-the sign steps (a step's candidates depend on the signs chosen before it).  Derivation:
+and calls it; :func:`limits` gives a sample exactly on a change point the branch's limit.
+The work is vectorized over samples and designs and sequential only over the sign steps
+(a step's candidates depend on the signs chosen before it).  Derivation:
 ``docs/method.md``, "Following a branch through change points".
 
 Examples

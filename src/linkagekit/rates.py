@@ -10,7 +10,9 @@ The determinant of each sign step, made dimensionless (for a dyad ``cross(p, q) 
 the sine of the angle at the joint), measures how well the step conditions its rates.
 Where it is below ``SINGULAR_TOL`` in magnitude (a flat triangle: dead point, change
 point, toggle) the rates are not defined: every rate of that sample is NaN and the
-sample is flagged ``singular``.
+sample is flagged ``singular``.  (Following a branch continuously, a sample exactly on a
+change point gets the branch's limit, rates included, and stays flagged:
+:func:`linkagekit.branch.limits`.)
 """
 
 from __future__ import annotations
