@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
 from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten, shorten_path
+from .options import BranchMode
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
     import numpy as np
@@ -327,8 +328,8 @@ def _analyze_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--branch",
-        choices=("pose", "continuous"),
-        default="pose",
+        choices=BranchMode.words(),
+        default=BranchMode.POSE.value,
         help="pose: every joint keeps the reference pose's assembly sign; continuous: follow the branch "
         "through change points (a parallelogram stays a parallelogram) from the pose's input up and down "
         "(default: %(default)s)",
@@ -1046,6 +1047,12 @@ def _analyze(args: argparse.Namespace) -> int:
     mech = lk.load(args.file)
     if args.static and (args.speed or args.acceleration):
         raise InputError("--static: do not give --speed or --acceleration with it")
+    branch = BranchMode.parse(args.branch)
+    if branch is BranchMode.CONTINUOUS and args.method == "vector-loop":
+        raise InputError(
+            "--branch continuous chooses the signs itself; --method vector-loop solves in the pose's mode: "
+            "give one of them"
+        )
     inputs = _inputs(mech, args.at, args.angles)
     if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
         raise InputError(
@@ -1059,7 +1066,7 @@ def _analyze(args: argparse.Namespace) -> int:
         acceleration=_rates(mech, args.acceleration, "--acceleration"),
         method=args.method,
         static=args.static,
-        branch=args.branch,
+        branch=branch,
     )
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
