@@ -116,7 +116,7 @@ from typing import Any
 import numpy as np
 
 from .geometry import NAN_POINT, FloatArray, link_rates
-from .steps import Kin, Nums, Rate, Source, Step, WalkGrid
+from .steps import Kin, Nums, Rate, Source, Step, WalkGrid, _stroke_margin
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
 NEWTON_TOL = 1e-12
@@ -184,6 +184,31 @@ class GroupSlider:
     def n_rows(self) -> int:
         """Its equations: the line, and the lock when it has one."""
         return 1 + (self.lock is not None)
+
+
+@dataclass(frozen=True)
+class GroupCylinder:
+    """A cylinder driver of a group: its two ends (joints of the group, or one a known joint) are the
+    driver's input apart, a length that changes from sample to sample.
+
+    The length enters the group as a *held value* after the known joints (slot ``m + len(known) +
+    i``, its real part the length): the walk moves it with the known joints, linearly between
+    states, which is a homotopy in the length as in the joints (see :meth:`Group.held`).
+    """
+
+    driver: int  # index in the file's `drivers`
+    ends: tuple[int, int]  # its ends as slots
+    end_joints: tuple[int, int]  # ... as plan indices
+
+
+@dataclass(frozen=True)
+class _CRows:
+    """Where a group's cylinder equations sit (after the sliders' rows), per cylinder."""
+
+    a: np.ndarray  # (n_cyl,) the slot of its first end
+    b: np.ndarray  # (n_cyl,) ... of its second
+    s: np.ndarray  # (n_cyl,) the slot of its length (a held value)
+    row: np.ndarray  # (n_cyl,) the row of its distance equation
 
 
 @dataclass(frozen=True)
@@ -265,9 +290,13 @@ class Group(Step):
     keep_rotation: tuple[str, ...] = ()
     angular: tuple[bool, ...] = ()  # per driver: an angle (the walk's added samples are 1 degree apart)
     sliders: tuple[GroupSlider, ...] = ()
+    cylinders: tuple[GroupCylinder, ...] = ()
 
     # ------------------------------------------------------------------ numbers
     def numbers(self, src: Source) -> Nums:
+        """``(lengths, rhos, bases, zu, zk, strokes)``: the links' lengths, their further joints' rhos (then the
+        sliders' and the cylinders' numbers, :meth:`_slider_numbers`, the cylinders' pose lengths), the links'
+        bases, the pose's group and known joints, and each cylinder's stroke ``(lo, hi)``."""
         lengths, rhos, bases = [], [], []
         for gl in self.links:
             s = [src.shape(gl.name, j) for j in gl.joints]
@@ -277,9 +306,47 @@ class Group(Step):
             with np.errstate(divide="ignore", invalid="ignore"):
                 rhos.append(tuple((sk - s[0]) / base for sk in s[2:]))
         rhos.extend(self._slider_numbers(src))
+        rhos.extend((np.abs(src.pose(gc.end_joints[1]) - src.pose(gc.end_joints[0])) + 0j,) for gc in self.cylinders)
         zu = np.stack([src.pose(j) for j in self.joints])  # (m, D, 1)
         zk = np.stack([src.pose(j) for j in self.known]) if self.known else np.zeros((0, *zu.shape[1:]), complex)
-        return tuple(lengths), tuple(rhos), tuple(bases), zu, zk
+        strokes = tuple(src.stroke(gc.driver) for gc in self.cylinders)
+        return tuple(lengths), tuple(rhos), tuple(bases), zu, zk, strokes
+
+    @property
+    def n_held(self) -> int:
+        """The held values the equations read after the group's joints: the known joints, then the cylinders'
+        lengths."""
+        return len(self.known) + len(self.cylinders)
+
+    def held(self, z: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """The held values (n_held, ...) at joint positions ``z`` (n_joints, ...): the known joints, then each
+        cylinder's length (complex, real), the driver's input ``q[driver]`` (``q`` (n_drivers, D or 1, n)
+        broadcast to ``z``'s samples) or, without ``q``, its ends' distance in ``z``."""
+        known = z[list(self.known)] if self.known else np.zeros((0, *z.shape[1:]), complex)
+        if not self.cylinders:
+            return known
+        if q is None:
+            lengths = [np.abs(z[gc.end_joints[1]] - z[gc.end_joints[0]]) for gc in self.cylinders]
+        else:
+            lengths = [np.broadcast_to(q[gc.driver], z.shape[1:]) for gc in self.cylinders]
+        return np.concatenate([known, np.array(lengths, float).astype(complex)])
+
+    def _pose_held(self, zu: np.ndarray, zk: np.ndarray) -> np.ndarray:
+        """The held values of a start (the group's joints ``zu`` and known joints ``zk``): the cylinders' lengths
+        are their ends' distance there."""
+        if not self.cylinders:
+            return zk
+        P = np.concatenate([zu, zk])
+        cr = self._crows
+        return np.concatenate([zk, np.abs(P[cr.b] - P[cr.a]) + 0j])
+
+    def _beyond_stroke(self, q: np.ndarray, strokes: Nums, eps: float, shape: tuple[int, ...]) -> np.ndarray:
+        """The samples (D, n) where a cylinder's length is beyond its stroke (or not positive): flagged, as the
+        closed-form cylinder steps flag them."""
+        out = np.zeros(shape, bool)
+        for gc, (lo, hi) in zip(self.cylinders, strokes, strict=True):
+            out |= _stroke_margin(np.broadcast_to(q[gc.driver], shape), lo, hi, eps) < 0
+        return out
 
     def _slider_numbers(self, src: Source) -> list[tuple[np.ndarray, ...]]:
         """Per slider ``(rho, dhat, c, ell)``: its line ``A + rho e`` along ``dhat e`` (``A``, ``e``: the carrier's
@@ -309,7 +376,10 @@ class Group(Step):
         sign, so there a sample it cannot reach by continuation stays flagged).
         """
         on_two = sum(
-            sum(j in gl.joints for gl in self.links) + sum(j == gs.point_joint for gs in self.sliders) >= 2
+            sum(j in gl.joints for gl in self.links)
+            + sum(j == gs.point_joint for gs in self.sliders)
+            + sum(j in gc.end_joints for gc in self.cylinders)
+            >= 2
             for j in self.joints
         )
         return on_two == 1
@@ -353,6 +423,38 @@ class Group(Step):
             row += 1
         return _SRows(*(np.array(x, dtype=np.intp) for x in (c0, c1, k, line, locked, o0, o1, lock)))
 
+    @cached_property
+    def _crows(self) -> _CRows:
+        row = sum(1 + 2 * (len(gl.slots) - 2) for gl in self.links) + sum(gs.n_rows for gs in self.sliders)
+        first = len(self.joints) + len(self.known)
+        a = [gc.ends[0] for gc in self.cylinders]
+        b = [gc.ends[1] for gc in self.cylinders]
+        n = len(self.cylinders)
+        out = (a, b, list(range(first, first + n)), list(range(row, row + n)))
+        return _CRows(*(np.array(x, dtype=np.intp) for x in out))
+
+    def _cnums(self, R: np.ndarray) -> np.ndarray:
+        """The cylinders' pose lengths (n_cyl, B) from ``R`` (after the links' rhos and the sliders' numbers)."""
+        n = len(self._rows.k) + 4 * len(self.sliders)
+        return R[n : n + len(self.cylinders)].real
+
+    def _cyl_res(self, P: np.ndarray, res: FloatArray) -> None:
+        """The cylinders' residuals into ``res``: ``|z_b - z_a|^2 - s^2``, ``s`` the length (a held value)."""
+        cr = self._crows
+        e = P[cr.b] - P[cr.a]
+        s = P[cr.s].real
+        res[cr.row] = e.real * e.real + e.imag * e.imag - s * s
+
+    def _cyl_jac(self, P: np.ndarray, J: FloatArray) -> None:
+        """The cylinders' Jacobian rows into ``J``: ``2 e`` on ``b``, ``-2 e`` on ``a`` (``e = z_b - z_a``), and
+        ``-2 s`` on the length's slot (its real part: the length)."""
+        cr = self._crows
+        e = P[cr.b] - P[cr.a]
+        n_cols = J.shape[2] // 2
+        _add(J, cr.row, cr.b, 2 * e, n_cols)
+        _add(J, cr.row, cr.a, -2 * e, n_cols)
+        _add(J, cr.row, cr.s, -2 * P[cr.s].real + 0j, n_cols)
+
     def _frames(self, P: np.ndarray, rates: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Each slider's carrier frame ``(A, e)`` (n_sl, B) at ``P``: its first joint and base (``0, 1`` on the
         ground); with ``rates`` (``P`` velocities or accelerations) their derivatives (``0, 0`` on the ground)."""
@@ -365,7 +467,8 @@ class Group(Step):
     def _snums(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The sliders' numbers ``(rho, dhat, c, ell)``, each (n_sl, B), from ``R`` (after the links' rhos)."""
         n = len(self._rows.k)
-        return R[n::4], R[n + 1 :: 4], R[n + 2 :: 4], R[n + 3 :: 4]
+        end = n + 4 * len(self.sliders)
+        return R[n:end:4], R[n + 1 : end : 4], R[n + 2 : end : 4], R[n + 3 : end : 4]
 
     def _slider_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
         """The sliders' residuals into ``res``: ``Im(w conj(u))`` (line) and ``Im(e_o conj(c e))`` (lock)."""
@@ -426,6 +529,8 @@ class Group(Step):
             res[rw.lin], res[rw.lin + 1] = c.real, c.imag
         if self.sliders:
             self._slider_res(P, R, res)
+        if self.cylinders:
+            self._cyl_res(P, res)
         return res
 
     def _scale(self, L: FloatArray, R: np.ndarray) -> FloatArray:
@@ -439,6 +544,8 @@ class Group(Step):
             sr = self._srows
             scale[sr.line] = np.mean(L, axis=0)
             scale[sr.lock] = self._snums(R)[3][sr.locked].real ** 2
+        if self.cylinders:
+            scale[self._crows.row] = self._cnums(R) ** 2
         return scale
 
     def _lin_jacobian(self, R: np.ndarray, n_cols: int) -> FloatArray:
@@ -470,6 +577,8 @@ class Group(Step):
             J[:, rows, cols + 1] = (f * e.imag[on]).T
         if self.sliders:
             self._slider_jac(P, R, J)
+        if self.cylinders:
+            self._cyl_jac(P, J)
         return J
 
     def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
@@ -612,9 +721,9 @@ class Group(Step):
         _, D, n = z.shape
         m = len(self.joints)
         zu0 = np.broadcast_to(nums[3][:, :, 0], (m, D))
-        zk0 = np.broadcast_to(nums[4][:, :, 0], (len(self.known), D))
+        zk0 = self._pose_held(zu0, np.broadcast_to(nums[4][:, :, 0], (len(self.known), D)))
         dn = self._design_nums(nums, np.arange(D))
-        K_all = z[list(self.known)] if self.known else np.zeros((0, D, n), complex)
+        K_all = self.held(z, k.q)  # the known joints, then the cylinders' lengths (the drivers' inputs)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
         lo, hi, mg = self._reach(dn, D)
@@ -639,6 +748,8 @@ class Group(Step):
         else:
             places = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
+        if self.cylinders:
+            w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
         if self.keep_rotation:
@@ -836,10 +947,10 @@ class Group(Step):
             dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
         V = np.full((m, D, G), NAN_POINT)
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
-        if not len(d) or not len(self.known):
+        if not len(d) or not self.n_held:
             return V
         P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
-        J = self.jacobian(P, self._design_nums(w.nums, d), m + len(self.known))
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
         dk = dK[:, d, j]
         vk = np.stack([dk.real, dk.imag], axis=-1).transpose(1, 0, 2).reshape(len(d), -1)
         rhs = -np.einsum("bij,bj->bi", J[:, :, 2 * m :], vk)
@@ -982,7 +1093,9 @@ class Group(Step):
         rng = np.random.default_rng(12345)
         noise = rng.standard_normal((RESTARTS, m, 1)) + 1j * rng.standard_normal((RESTARTS, m, 1))
         # half the starts about the last good configuration, half about the held joints
-        centre = np.where(np.arange(RESTARTS)[:, None, None] % 2 == 0, U[None], np.mean(K, axis=0)[None, None, :])
+        centre = np.where(
+            np.arange(RESTARTS)[:, None, None] % 2 == 0, U[None], np.mean(K[: len(self.known)], axis=0)[None, None, :]
+        )
         starts = centre + 2 * np.max(lengths, axis=0)[None, None, :] * noise  # (R, m, B)
         Ub = np.concatenate([U[None], starts]).transpose(1, 0, 2).reshape(m, -1)
         Kb = np.repeat(K[:, None, :], RESTARTS + 1, axis=1).reshape(K.shape[0], -1)
@@ -1001,12 +1114,12 @@ class Group(Step):
 
     # ------------------------------------------------------------------ rates
     def rates(self, r: Rate, nums: Nums) -> None:
-        m, nk = len(self.joints), len(self.known)
+        m, nk = len(self.joints), self.n_held
         _, D, n = r.z.shape
-        slots = list(self.joints) + list(self.known)
-        P = r.z[slots].reshape(m + nk, D * n)
-        V = r.v[list(self.known)].reshape(nk, D * n) if nk else np.zeros((0, D * n), complex)
-        A = r.a[list(self.known)].reshape(nk, D * n) if nk else np.zeros((0, D * n), complex)
+        P = np.concatenate([r.z[list(self.joints)], self.held(r.z)]).reshape(m + nk, D * n)
+        # the held values' rates: the known joints', then each cylinder's length's (its driver's speed, acceleration)
+        V = self.held(r.v, r.w_in).reshape(nk, D * n)
+        A = self.held(r.a, r.a_in).reshape(nk, D * n)
         d = np.repeat(np.arange(D), n)
         dn = self._design_nums(nums, d)
         J = self.jacobian(P, dn, m + nk)
@@ -1032,6 +1145,10 @@ class Group(Step):
         if self.sliders:  # 2 Im(w' conj(u')) on a line row, 2 Im(e_o' conj(c e')) on a lock row
             line, lock = self._slider_gamma(P, Vall, self._stack(dn, D * n)[1])
             gamma[:, self._srows.line], gamma[:, self._srows.lock] = line.T, lock.T
+        if self.cylinders:  # d2/dt2 (|e|^2 - s^2) = 2 e.e'' + 2 |e'|^2 - 2 s s'' - 2 s'^2: gamma 2 |e'|^2 - 2 s'^2
+            cr = self._crows
+            de = Vall[cr.b] - Vall[cr.a]
+            gamma[:, cr.row] = (2 * (de.real**2 + de.imag**2) - 2 * Vall[cr.s].real ** 2).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
         au = np.linalg.solve(Ju_solve, rhs_a[..., None])[..., 0]
         au[sing] = np.nan
@@ -1055,6 +1172,8 @@ class Group(Step):
         if self.sliders:
             sr = self._srows
             scale[:, sr.lock] = 1.0 / self._snums(self._stack(dn, B)[1])[3][sr.locked].real.T
+        if self.cylinders:
+            scale[:, self._crows.row] = 1.0 / (2 * self._cnums(self._stack(dn, B)[1])).T
         return scale
 
     def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
@@ -1077,6 +1196,10 @@ class Group(Step):
         links = ", ".join(f"'{gl.name}'" for gl in self.links)
         held = ", ".join(names[j] for j in self.known) or "nothing"
         sliding = "".join(f", slider {gs.slider} ('{gs.other}' on '{gs.carrier}')" for gs in self.sliders)
+        sliding += "".join(
+            f", cylinder {names[gc.end_joints[0]]}-{names[gc.end_joints[1]]} (driver {gc.driver})"
+            for gc in self.cylinders
+        )
         return (
             f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}{sliding}, "
             f"held by {held}; the mode is the pose's"

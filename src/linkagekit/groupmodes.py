@@ -92,7 +92,7 @@ from .model import FORMAT, Mechanism
 from .params import Params, all_sign_combinations, compile
 from .plan import Plan, make_plan
 from .positions import solve
-from .steps import Ground, Nums
+from .steps import Ground, Nums, _stroke_margin
 
 #: grid of the driven link's angle (per turn) on which the closure function is sampled
 N_THETA = 7200
@@ -151,8 +151,9 @@ def restarted(params: Params, z: np.ndarray, q: np.ndarray) -> Params:
 
 
 def _group_start(nums: Nums, zu: np.ndarray, zk: np.ndarray) -> Nums:
-    """A group's numbers with the start of its walk replaced (``Group.numbers``: lengths, rhos, bases, zu, zk)."""
-    return (*nums[:3], np.asarray(zu, complex)[:, :, None], np.asarray(zk, complex)[:, :, None])
+    """A group's numbers with the start of its walk replaced (``Group.numbers``: lengths, rhos, bases, zu, zk,
+    strokes)."""
+    return (*nums[:3], np.asarray(zu, complex)[:, :, None], np.asarray(zk, complex)[:, :, None], *nums[5:])
 
 
 def _driver_inputs(params: Params, driver: int, x: np.ndarray) -> np.ndarray:
@@ -277,7 +278,9 @@ def _indicator(params: Params, margin: np.ndarray, z: np.ndarray) -> np.ndarray:
 
     The smallest of the sign steps' margins (relative distances from a flat triangle) and
     of each group's conditioning squared (its smallest singular value goes like the square
-    root of the distance to a fold); NaN where it does not assemble.
+    root of the distance to a fold) and of its cylinders' stroke margins (relative distances of
+    their lengths from the stroke's ends, as the closed-form cylinder steps' margins); NaN where
+    it does not assemble.
     """
     D, n = z.shape[1:]
     vals = [np.min(margin, axis=0)] if margin.shape[0] else []
@@ -285,6 +288,8 @@ def _indicator(params: Params, margin: np.ndarray, z: np.ndarray) -> np.ndarray:
     for st, nums in zip(params.plan.steps, params.steps, strict=True):
         if isinstance(st, Group):
             vals.append((group_condition(st, nums, flat) ** 2).reshape(D, n))
+            lengths = st.held(z)[len(st.known) :].real
+            vals += [_stroke_margin(s, lo[:, :1], hi[:, :1], 0.0) for s, (lo, hi) in zip(lengths, nums[5], strict=True)]
     out = np.min(vals, axis=0) if vals else np.full((D, n), np.inf)
     return np.where(np.all(np.isfinite(z), axis=0), out, np.nan)
 
@@ -296,9 +301,9 @@ def group_condition(st: Group, nums: Nums, z: np.ndarray) -> np.ndarray:
     conditioning the rates report).
     """
     m = len(st.joints)
-    P = np.concatenate([z[list(st.joints)], z[list(st.known)]]) if st.known else z[list(st.joints)]
+    P = np.concatenate([z[list(st.joints)], st.held(z)])
     dn = st._design_nums(nums, np.zeros(z.shape[1], int))
-    J = st.jacobian(P, dn, m + len(st.known))[:, :, : 2 * m]
+    J = st.jacobian(P, dn, m + st.n_held)[:, :, : 2 * m]
     scale = st.row_scale(dn, J.shape[0])
     J = np.where(np.isfinite(J), J * scale[:, :, None], 0.0)
     s = np.linalg.svd(J, compute_uv=False)
@@ -502,6 +507,8 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
     """
     st = plan.steps[index]
     assert isinstance(st, Group)
+    if st.cylinders:  # a length that is an input: the cut mechanism would need it as a driver too (not written)
+        return None
     names = plan.joint_names
     m = len(st.joints)
     unknown = [names[j] for j in st.joints]
@@ -882,9 +889,14 @@ def enumerate_modes(
         red = reduction(mech, plan, gi)
         label = ", ".join(names[j] for j in st.joints)
         if red is None:
+            why = (
+                f"it holds cylinder {', '.join(mech.drivers[gc.driver].name for gc in st.cylinders)}"
+                if st.cylinders
+                else "no cut of one of its binary links makes it closed-form"
+            )
             notes.append(
-                f"the modes of group {label} are not enumerated (no cut of one of its binary links makes it "
-                f"closed-form): only the mode continued from the pose is listed"
+                f"the modes of group {label} are not enumerated ({why}): only the mode continued from the pose "
+                f"is listed"
             )
             gmode = np.concatenate([gmode, np.full((1, len(col)), -1)])
             gcount = np.concatenate([gcount, np.full((1, len(col)), -1)])

@@ -41,7 +41,7 @@ from itertools import combinations
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple, assert_never
 
 from .errors import MechanismFileError, NotSolvableError
-from .group import Group, GroupLink, GroupSlider
+from .group import Group, GroupCylinder, GroupLink, GroupSlider
 from .model import CrankType, CylinderType, SliderType
 from .steps import (
     ActuatorDyad,
@@ -209,7 +209,16 @@ class _Planner:
 
     def plan(self) -> Plan:
         """Apply the rules until none applies, check every joint is placed, and return the plan."""
-        while self._place_links() or self._drive() or self._cylinder() or self._line_line() or self._sign_or_group():
+        # with ``numerical`` a cylinder's end goes into a numerical group too when one holds it (else closed-form)
+        closed = not self.numerical
+        while (
+            self._place_links()
+            or self._drive()
+            or (closed and self._cylinder())
+            or self._line_line()
+            or self._sign_or_group()
+            or self._cylinder()
+        ):
             pass
         self._check_complete()
         needs = {link for st in self.steps for link in st.rotation_needs()}
@@ -452,6 +461,8 @@ class _Planner:
             return False
         self.steps.append(group)
         self.known.update(self.names[j] for j in group.joints)
+        inner = {gc.driver for gc in group.cylinders}
+        self.cylinders = [(ci, c) for ci, c in self.cylinders if ci not in inner]
         for gl in group.links:
             self.placed.add(gl.name)
             self.rot_known.add(gl.name)
@@ -520,9 +531,10 @@ class _Planner:
         A link counts ``2 n - 3`` equations (its rigidity, natural coordinates; see
         :mod:`linkagekit.group`) once all its joints are known or in the set; a slider between
         two such sides counts 1 (a point on a line) or 2 (and a rotation lock) equations
-        (:meth:`_group_slider`). Sets are tried by size, then in file order, so the plan is
-        deterministic. Links a pending driver turns or pushes are left to the closed-form steps.
-        None when no set fits.
+        (:meth:`_group_slider`), and a pending cylinder driver with an end in the set and the other
+        in it or known counts 1 (its ends' distance is its input). Sets are tried by size, then in
+        file order, so the plan is deterministic. Links a pending driver turns or pushes are left to
+        the closed-form steps. None when no set fits.
         """
         mech, known = self.mech, self.known
         unknown = [j for j in mech.joints if j not in known]
@@ -544,8 +556,10 @@ class _Planner:
                 if False in found:
                     continue
                 gsl = [g for g in found if g]
-                if sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl) == 2 * size:
-                    return self._group(subset, links, gsl)
+                cyl = [(ci, c.ends) for ci, c in self.cylinders if set(c.ends) & inside and set(c.ends) <= reach]
+                rows = sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl)
+                if rows + len(cyl) == 2 * size:
+                    return self._group(subset, links, gsl, cyl)
         return None
 
     def _group_slider(
@@ -588,11 +602,19 @@ class _Planner:
             return _Side.FRAME if name in names or name in self.placed else None
         return _Side.TURNED if name in self.rot_known else _Side.POINT
 
-    def _group(self, subset: tuple[str, ...], links: list[Link], sliders: list[_SliderSpec]) -> Group:
-        """The numerical group placing the joints ``subset`` by the rigidity of ``links`` and by ``sliders``."""
+    def _group(
+        self,
+        subset: tuple[str, ...],
+        links: list[Link],
+        sliders: list[_SliderSpec],
+        cylinders: list[tuple[int, tuple[str, str]]],
+    ) -> Group:
+        """The numerical group placing the joints ``subset`` by the rigidity of ``links``, by ``sliders`` and by
+        the ``cylinders`` (driver index, ends)."""
         inside = set(subset)
         slots = {j: i for i, j in enumerate(subset)}
         around = [j for ln in links for j in ln.joints] + [j for g in sliders for j in g.joints]
+        around += [j for _, ends in cylinders for j in ends]
         held = list(dict.fromkeys(j for j in around if j not in inside))
         slots.update({j: len(subset) + i for i, j in enumerate(held)})
         group_links = []
@@ -618,9 +640,10 @@ class _Planner:
             )
             for g in sliders
         )
+        group_cylinders = tuple(GroupCylinder(ci, (slots[a], slots[b]), (idx[a], idx[b])) for ci, (a, b) in cylinders)
         cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
         joints, known = tuple(idx[j] for j in subset), tuple(idx[j] for j in held)
-        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders)
+        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders, group_cylinders)
 
     # ------------------------------------------------------------------ the end
     def _check_complete(self) -> None:
@@ -646,8 +669,8 @@ class _Planner:
         if missing:
             raise NotSolvableError(
                 f"{mech.source}: no triangulation order places {', '.join(missing)}, and no numerical group does: "
-                f"the numerical solver takes groups of links and sliders whose equations fix their joints (a "
-                f"cylinder driver inside an Assur group of class 3 or more is not handled yet)"
+                f"the numerical solver takes groups of links, sliders and cylinder drivers whose equations fix "
+                f"their joints"
             )
 
 
