@@ -16,7 +16,12 @@ against computations written here, none of which shares code with linkagekit's:
   the stroke's end as the end of the range; ``modes`` lists the continued mode with a note;
 * the excavator examples forced onto numerical groups (their cylinders inside them) equal
   the closed form: positions, velocities, accelerations and the cylinders' forces to 1e-10
-  of their size (force: relative), the same flags over sweeps that leave the stroke.
+  of their size (force: relative), the same flags over sweeps that leave the stroke;
+* the actuator written as a barrel, a rod, a slider and a slider driver inside the triad (a
+  displacement row in the group) equals the cylinder form: positions and rates to 1e-12 of the
+  size, the driver's force to 1e-10 relative, the same flags beyond the stroke; likewise the
+  excavator's bucket written so (``excavator_bucket_slider.yaml``) forced onto groups equals
+  its closed form.
 """
 
 from __future__ import annotations
@@ -47,6 +52,16 @@ TRIAD = {
 LOADS = [{"link": "tri", "at": "F", "force": [300.0, -500.0]}, {"link": "tri", "torque": 40.0}]
 SIZE = 6.0
 S0 = float(np.hypot(0.5, 2.0))  # the cylinder's length in the pose
+
+
+#: the same triad with the cylinder written as an actuator: a barrel pinned at G, a rod pinned at F, a slider
+#: along G -> F between them (the line through both pins, so its length is the pose's plus the displacement)
+ACTUATOR = TRIAD | {
+    "joints": TRIAD["joints"] | {"GH": [3.2, 7.2], "FR": [3.3, 6.8]},
+    "links": TRIAD["links"] | {"barrel": ["G", "GH"], "rod": ["F", "FR"]},
+    "sliders": [{"link": "rod", "on": "barrel", "through": "F", "direction": [0.5, -2.0]}],
+    "drivers": [TRIAD["drivers"][0], {"slider": 0, "stroke": [1.5 - S0, 2.5 - S0]}],
+}
 
 
 def triad(**extra: object) -> lk.Mechanism:
@@ -176,14 +191,35 @@ def test_beyond_the_stroke_is_flagged_and_check_and_modes_say_so():
     assert hi == pytest.approx(2.5, abs=1e-9) and 2.0 < lo < 2.05
     assert "cylinder 'lift' at the end of its stroke (longest)" in lk.checks.check_text(rep)
     modes = lk.modes(mech, {"crank": 45.0, "lift": 2.2})
-    assert len(modes.modes) == 1 and any("holds cylinder lift" in n for n in modes.notes)
+    assert len(modes.modes) == 1 and any("holds driver lift" in n for n in modes.notes)
 
 
-@pytest.mark.parametrize("name", ["excavator_bucket", "excavator_boom"])
+def test_the_actuator_written_as_a_slider_inside_the_group_equals_the_cylinder():
+    act, cyl = lk.Mechanism.from_dict(ACTUATOR | {"loads": LOADS}), triad(loads=LOADS)
+    (group,) = [st for st in make_plan(act).steps if isinstance(st, Group)]
+    assert len(group.drives) == 1 and not group.cylinders
+    u = np.array([-0.6, -0.02, 0.0, 0.1, 0.3, 2.5 - S0, 2.5 - S0 + 1e-6, 0.5])
+    crank = np.full(len(u), 45.0)
+    ra = lk.analyze(act, {"crank": crank, "rod": u}, speed={"crank": 0.3, "rod": 0.2}, acceleration={"rod": -0.3})
+    rc = lk.analyze(
+        cyl, {"crank": crank, "lift": S0 + u}, speed={"crank": 0.3, "lift": 0.2}, acceleration={"lift": -0.3}
+    )
+    assert ra.assembled.tolist() == rc.assembled.tolist() == [False, True, True, True, True, True, False, False]
+    da, dc = ra.to_dict(), rc.to_dict()
+    for j in "DEF":
+        for key in ("x", "y", "vx", "vy", "ax", "ay"):
+            np.testing.assert_allclose(
+                np.array(da["joints"][j][key], float), np.array(dc["joints"][j][key], float), rtol=0, atol=1e-12 * SIZE
+            )
+    fa, fc = (np.array(x, float) for x in (da["driver_force"]["rod"], dc["driver_force"]["lift"]))
+    np.testing.assert_allclose(fa, fc, rtol=1e-10, atol=0)
+
+
+@pytest.mark.parametrize("name", ["excavator_bucket", "excavator_boom", "excavator_bucket_slider"])
 def test_cylinders_in_groups_equal_the_closed_form(name):
     mech = lk.load(EXAMPLES / f"{name}.yaml")
     groups = [st for st in make_plan(mech, True).steps if isinstance(st, Group)]
-    assert sum(len(g.cylinders) for g in groups) == len(mech.drivers)
+    assert sum(len(g.input_drivers) for g in groups) == len(mech.drivers)
     p0 = pose_inputs(mech)
     x = np.linspace(-0.6, 0.6, 25)
     inputs = {d.name: p0[d.name] + (x if i == 0 else -0.5 * x) for i, d in enumerate(mech.drivers)}

@@ -816,17 +816,17 @@ def _group_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
     for st, nums in zip(plan.steps, run.params.steps, strict=True):
         if not isinstance(st, Group):
             continue
-        for gc, (lo_a, hi_a) in zip(st.cylinders, nums[5], strict=True):
+        for i, (d, (lo_a, hi_a)) in enumerate(zip(st.input_drivers, nums[5], strict=True)):
             lo, hi = float(lo_a[0, 0]), float(hi_a[0, 0])
-            if gc.driver != run.driver or min(abs(v - lo), abs(v - hi)) > 1e-9 * abs(v):
+            if d != run.driver or min(abs(v - lo), abs(v - hi)) > 1e-9 * max(abs(v), abs(lo), abs(hi)):
                 continue
-            end = "shortest" if abs(v - lo) <= abs(v - hi) else "longest"
             links = [gl.name for gl in st.links]
-            return {
-                "links": links,
-                "cylinder": plan.drivers[gc.driver],
-                "detail": (f"cylinder '{plan.drivers[gc.driver]}' at the end of its stroke ({end})"),
-            }
+            if i < len(st.cylinders):
+                end = "shortest" if abs(v - lo) <= abs(v - hi) else "longest"
+                detail = f"cylinder '{plan.drivers[d]}' at the end of its stroke ({end})"
+                return {"links": links, "cylinder": plan.drivers[d], "detail": detail}
+            end = "min" if abs(v - lo) <= abs(v - hi) else "max"
+            return {"links": links, "detail": f"slider driver '{plan.drivers[d]}' at the end of its stroke ({end})"}
     return None
 
 

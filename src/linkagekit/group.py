@@ -202,6 +202,18 @@ class GroupCylinder:
 
 
 @dataclass(frozen=True)
+class GroupSliderDrive:
+    """A slider driver of a group (an actuator written as a barrel, a rod and a slider): the point of one of the
+    group's sliders is the driver's input (a displacement from its reference position) along the line.
+
+    The displacement is a held value after the cylinders' lengths, as theirs (:class:`GroupCylinder`).
+    """
+
+    driver: int  # index in the file's `drivers`
+    slider: int  # the slider's position in the group's `sliders`
+
+
+@dataclass(frozen=True)
 class _CRows:
     """Where a group's cylinder equations sit (after the sliders' rows), per cylinder."""
 
@@ -209,6 +221,15 @@ class _CRows:
     b: np.ndarray  # (n_cyl,) ... of its second
     s: np.ndarray  # (n_cyl,) the slot of its length (a held value)
     row: np.ndarray  # (n_cyl,) the row of its distance equation
+
+
+@dataclass(frozen=True)
+class _DRows:
+    """Where a group's slider drivers' equations sit (after the cylinders' rows), per slider driver."""
+
+    slider: np.ndarray  # (n_drv,) its slider's position in the group's sliders
+    s: np.ndarray  # (n_drv,) the slot of its displacement (a held value)
+    row: np.ndarray  # (n_drv,) the row of its equation
 
 
 @dataclass(frozen=True)
@@ -291,12 +312,14 @@ class Group(Step):
     angular: tuple[bool, ...] = ()  # per driver: an angle (the walk's added samples are 1 degree apart)
     sliders: tuple[GroupSlider, ...] = ()
     cylinders: tuple[GroupCylinder, ...] = ()
+    drives: tuple[GroupSliderDrive, ...] = ()
 
     # ------------------------------------------------------------------ numbers
     def numbers(self, src: Source) -> Nums:
         """``(lengths, rhos, bases, zu, zk, strokes)``: the links' lengths, their further joints' rhos (then the
         sliders' and the cylinders' numbers, :meth:`_slider_numbers`, the cylinders' pose lengths), the links'
-        bases, the pose's group and known joints, and each cylinder's stroke ``(lo, hi)``."""
+        bases, the pose's group and known joints, and the stroke ``(lo, hi)`` of each driver the group reads
+        (:attr:`input_drivers`)."""
         lengths, rhos, bases = [], [], []
         for gl in self.links:
             s = [src.shape(gl.name, j) for j in gl.joints]
@@ -309,43 +332,89 @@ class Group(Step):
         rhos.extend((np.abs(src.pose(gc.end_joints[1]) - src.pose(gc.end_joints[0])) + 0j,) for gc in self.cylinders)
         zu = np.stack([src.pose(j) for j in self.joints])  # (m, D, 1)
         zk = np.stack([src.pose(j) for j in self.known]) if self.known else np.zeros((0, *zu.shape[1:]), complex)
-        strokes = tuple(src.stroke(gc.driver) for gc in self.cylinders)
+        strokes = tuple(src.stroke(d) for d in self.input_drivers)
         return tuple(lengths), tuple(rhos), tuple(bases), zu, zk, strokes
 
     @property
+    def input_drivers(self) -> tuple[int, ...]:
+        """The drivers whose input the group's equations read, in held order: its cylinders, then its slider
+        drivers."""
+        return tuple(gc.driver for gc in self.cylinders) + tuple(gd.driver for gd in self.drives)
+
+    @property
     def n_held(self) -> int:
-        """The held values the equations read after the group's joints: the known joints, then the cylinders'
-        lengths."""
-        return len(self.known) + len(self.cylinders)
+        """The held values the equations read after the group's joints: the known joints, then the inputs of
+        :attr:`input_drivers` (a cylinder's length, a slider driver's displacement)."""
+        return len(self.known) + len(self.input_drivers)
 
     def held(self, z: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
         """The held values (n_held, ...) at joint positions ``z`` (n_joints, ...): the known joints, then each
-        cylinder's length (complex, real), the driver's input ``q[driver]`` (``q`` (n_drivers, D or 1, n)
-        broadcast to ``z``'s samples) or, without ``q``, its ends' distance in ``z``."""
+        input (complex, real) of :attr:`input_drivers`: ``q[driver]`` (``q`` (n_drivers, D or 1, n) broadcast to
+        ``z``'s samples) or, without ``q``, a cylinder's ends' distance in ``z`` and 0 for a slider driver's
+        displacement (its rows' Jacobian and acceleration terms do not read it; :meth:`inputs_at` does)."""
         known = z[list(self.known)] if self.known else np.zeros((0, *z.shape[1:]), complex)
-        if not self.cylinders:
+        if not self.input_drivers:
             return known
         if q is None:
-            lengths = [np.abs(z[gc.end_joints[1]] - z[gc.end_joints[0]]) for gc in self.cylinders]
+            ins = [np.abs(z[gc.end_joints[1]] - z[gc.end_joints[0]]) for gc in self.cylinders]
+            ins += [np.zeros(z.shape[1:]) for _ in self.drives]
         else:
-            lengths = [np.broadcast_to(q[gc.driver], z.shape[1:]) for gc in self.cylinders]
-        return np.concatenate([known, np.array(lengths, float).astype(complex)])
+            ins = [np.broadcast_to(q[d], z.shape[1:]) for d in self.input_drivers]
+        return np.concatenate([known, np.array(ins, float).astype(complex)])
 
-    def _pose_held(self, zu: np.ndarray, zk: np.ndarray) -> np.ndarray:
-        """The held values of a start (the group's joints ``zu`` and known joints ``zk``): the cylinders' lengths
-        are their ends' distance there."""
-        if not self.cylinders:
-            return zk
-        P = np.concatenate([zu, zk])
+    def inputs_at(self, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The inputs of :attr:`input_drivers` (n_in, B) that slot positions ``P`` (n_slots, B; its held inputs
+        not read) realise with numbers ``R``: the cylinders' ends' distances, the slider drivers' displacements
+        ``Re(w conj(u))`` (see the module's docstring)."""
         cr = self._crows
-        return np.concatenate([zk, np.abs(P[cr.b] - P[cr.a]) + 0j])
+        ins = [np.abs(P[cr.b] - P[cr.a])]
+        if self.drives:
+            dr = self._drows
+            rho, dhat, _, _ = self._snums(R)
+            A, e = self._frames(P)
+            i = dr.slider
+            ins.append(((P[self._srows.k[i]] - A[i] - rho[i] * e[i]) * np.conj(dhat[i] * e[i])).real)
+        return np.concatenate(ins)
+
+    def stroke_margins(self, z: np.ndarray, nums: Nums) -> np.ndarray:
+        """How far each input of :attr:`input_drivers` is inside its stroke at positions ``z`` (n_joints, D, n):
+        (n_in, D, n), negative outside; a cylinder's relative to its length (as the closed-form cylinder steps'
+        margins), a slider driver's relative to the group's mean link length."""
+        D, n = z.shape[1:]
+        P = np.concatenate([z[list(self.joints)], self.held(z)]).reshape(-1, D * n)
+        L, R = self._stack(self._design_nums(nums, np.repeat(np.arange(D), n)), D * n)
+        ins = self.inputs_at(P, R).reshape(-1, D, n)
+        size = np.mean(L, axis=0).reshape(D, n)
+        out = []
+        for i, (lo, hi) in enumerate(nums[5]):
+            if i < len(self.cylinders):
+                out.append(_stroke_margin(ins[i], lo, hi, 0.0))
+            else:
+                with np.errstate(invalid="ignore"):
+                    out.append(np.minimum(ins[i] - lo, hi - ins[i]) / size)
+        return np.array(out, float).reshape(len(out), D, n)
+
+    def _pose_held(self, zu: np.ndarray, zk: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The held values of a start (the group's joints ``zu`` and known joints ``zk``): its inputs are those
+        the start realises (:meth:`inputs_at`)."""
+        if not self.input_drivers:
+            return zk
+        P = np.concatenate([zu, zk, np.zeros((len(self.input_drivers), *zk.shape[1:]), complex)])
+        return np.concatenate([zk, self.inputs_at(P, R) + 0j])
 
     def _beyond_stroke(self, q: np.ndarray, strokes: Nums, eps: float, shape: tuple[int, ...]) -> np.ndarray:
-        """The samples (D, n) where a cylinder's length is beyond its stroke (or not positive): flagged, as the
-        closed-form cylinder steps flag them."""
+        """The samples (D, n) where an input is beyond its stroke: a cylinder's length (or not positive) as the
+        closed-form cylinder steps flag it, a slider driver's displacement as :class:`~linkagekit.steps.SliderDrive`
+        does (beyond ``eps`` of the stroke's larger end)."""
         out = np.zeros(shape, bool)
-        for gc, (lo, hi) in zip(self.cylinders, strokes, strict=True):
-            out |= _stroke_margin(np.broadcast_to(q[gc.driver], shape), lo, hi, eps) < 0
+        n_cyl = len(self.cylinders)
+        for i, (d, (lo, hi)) in enumerate(zip(self.input_drivers, strokes, strict=True)):
+            u = np.broadcast_to(q[d], shape)
+            if i < n_cyl:
+                out |= _stroke_margin(u, lo, hi, eps) < 0
+            else:
+                slack = eps * np.maximum(np.abs(lo), np.abs(hi))  # no stroke: lo - slack = -inf, hi + slack = inf
+                out |= (u < lo - slack) | (u > hi + slack)
         return out
 
     def _slider_numbers(self, src: Source) -> list[tuple[np.ndarray, ...]]:
@@ -425,13 +494,57 @@ class Group(Step):
 
     @cached_property
     def _crows(self) -> _CRows:
-        row = sum(1 + 2 * (len(gl.slots) - 2) for gl in self.links) + sum(gs.n_rows for gs in self.sliders)
+        row = self._crows_start
         first = len(self.joints) + len(self.known)
         a = [gc.ends[0] for gc in self.cylinders]
         b = [gc.ends[1] for gc in self.cylinders]
         n = len(self.cylinders)
         out = (a, b, list(range(first, first + n)), list(range(row, row + n)))
         return _CRows(*(np.array(x, dtype=np.intp) for x in out))
+
+    @cached_property
+    def _drows(self) -> _DRows:
+        first = self._crows_start + len(self.cylinders)
+        slot = len(self.joints) + len(self.known) + len(self.cylinders)
+        n = len(self.drives)
+        sl = [gd.slider for gd in self.drives]
+        return _DRows(*(np.array(x, dtype=np.intp) for x in (sl, range(slot, slot + n), range(first, first + n))))
+
+    @property
+    def _crows_start(self) -> int:
+        """The first row after the links' and the sliders'."""
+        return sum(1 + 2 * (len(gl.slots) - 2) for gl in self.links) + sum(gs.n_rows for gs in self.sliders)
+
+    def _drive_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
+        """The slider drivers' residuals into ``res``: ``Re(w conj(u)) - x``, ``x`` the displacement (a held value)."""
+        dr = self._drows
+        res[dr.row] = self.inputs_at(P, R)[len(self.cylinders) :] - P[dr.s].real
+
+    def _drive_jac(self, P: np.ndarray, R: np.ndarray, J: FloatArray) -> None:
+        """The slider drivers' Jacobian rows into ``J``: the real part's gradients of the slider's line row (``u``
+        on ``k``, ``conj(rho - 1) u - w conj(dhat)`` on ``c0``, ``-conj(rho) u + w conj(dhat)`` on ``c1``; none on
+        the ground) and ``-1`` on the displacement's slot."""
+        dr, sr = self._drows, self._srows
+        i = dr.slider
+        rho, dhat, _, _ = self._snums(R)
+        A, e = self._frames(P)
+        rho, dhat, A, e = rho[i], dhat[i], A[i], e[i]
+        u, w = dhat * e, P[sr.k[i]] - A - rho * e
+        wd = w * np.conj(dhat)
+        n_cols = J.shape[2] // 2
+        _add(J, dr.row, sr.k[i], u, n_cols)
+        _add(J, dr.row, sr.c0[i], np.conj(rho - 1) * u - wd, n_cols)
+        _add(J, dr.row, sr.c1[i], -np.conj(rho) * u + wd, n_cols)
+        _add(J, dr.row, dr.s, -np.ones_like(u), n_cols)
+
+    def _drive_gamma(self, V: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The slider drivers' acceleration terms (n_drives, B) at velocities ``V``: ``2 Re(w' conj(u'))``."""
+        dr, sr = self._drows, self._srows
+        i = dr.slider
+        rho, dhat, _, _ = self._snums(R)
+        vA, ve = self._frames(V, rates=True)
+        out: np.ndarray = 2 * ((V[sr.k[i]] - vA[i] - rho[i] * ve[i]) * np.conj(dhat[i] * ve[i])).real
+        return out
 
     def _cnums(self, R: np.ndarray) -> np.ndarray:
         """The cylinders' pose lengths (n_cyl, B) from ``R`` (after the links' rhos and the sliders' numbers)."""
@@ -531,6 +644,8 @@ class Group(Step):
             self._slider_res(P, R, res)
         if self.cylinders:
             self._cyl_res(P, res)
+        if self.drives:
+            self._drive_res(P, R, res)
         return res
 
     def _scale(self, L: FloatArray, R: np.ndarray) -> FloatArray:
@@ -546,6 +661,8 @@ class Group(Step):
             scale[sr.lock] = self._snums(R)[3][sr.locked].real ** 2
         if self.cylinders:
             scale[self._crows.row] = self._cnums(R) ** 2
+        if self.drives:
+            scale[self._drows.row] = np.mean(L, axis=0)
         return scale
 
     def _lin_jacobian(self, R: np.ndarray, n_cols: int) -> FloatArray:
@@ -579,6 +696,8 @@ class Group(Step):
             self._slider_jac(P, R, J)
         if self.cylinders:
             self._cyl_jac(P, J)
+        if self.drives:
+            self._drive_jac(P, R, J)
         return J
 
     def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
@@ -721,8 +840,8 @@ class Group(Step):
         _, D, n = z.shape
         m = len(self.joints)
         zu0 = np.broadcast_to(nums[3][:, :, 0], (m, D))
-        zk0 = self._pose_held(zu0, np.broadcast_to(nums[4][:, :, 0], (len(self.known), D)))
         dn = self._design_nums(nums, np.arange(D))
+        zk0 = self._pose_held(zu0, np.broadcast_to(nums[4][:, :, 0], (len(self.known), D)), self._stack(dn, D)[1])
         K_all = self.held(z, k.q)  # the known joints, then the cylinders' lengths (the drivers' inputs)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
@@ -748,7 +867,7 @@ class Group(Step):
         else:
             places = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
-        if self.cylinders:
+        if self.input_drivers:
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
@@ -1149,6 +1268,8 @@ class Group(Step):
             cr = self._crows
             de = Vall[cr.b] - Vall[cr.a]
             gamma[:, cr.row] = (2 * (de.real**2 + de.imag**2) - 2 * Vall[cr.s].real ** 2).T
+        if self.drives:  # 2 Re(w' conj(u')), the line row's real part
+            gamma[:, self._drows.row] = self._drive_gamma(Vall, self._stack(dn, D * n)[1]).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
         au = np.linalg.solve(Ju_solve, rhs_a[..., None])[..., 0]
         au[sing] = np.nan
@@ -1199,6 +1320,9 @@ class Group(Step):
         sliding += "".join(
             f", cylinder {names[gc.end_joints[0]]}-{names[gc.end_joints[1]]} (driver {gc.driver})"
             for gc in self.cylinders
+        )
+        sliding += "".join(
+            f", slider driver {gd.driver} on slider {self.sliders[gd.slider].slider}" for gd in self.drives
         )
         return (
             f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}{sliding}, "

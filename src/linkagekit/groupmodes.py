@@ -92,7 +92,7 @@ from .model import FORMAT, Mechanism
 from .params import Params, all_sign_combinations, compile
 from .plan import Plan, make_plan
 from .positions import solve
-from .steps import Ground, Nums, _stroke_margin
+from .steps import Ground, Nums
 
 #: grid of the driven link's angle (per turn) on which the closure function is sampled
 N_THETA = 7200
@@ -288,8 +288,7 @@ def _indicator(params: Params, margin: np.ndarray, z: np.ndarray) -> np.ndarray:
     for st, nums in zip(params.plan.steps, params.steps, strict=True):
         if isinstance(st, Group):
             vals.append((group_condition(st, nums, flat) ** 2).reshape(D, n))
-            lengths = st.held(z)[len(st.known) :].real
-            vals += [_stroke_margin(s, lo[:, :1], hi[:, :1], 0.0) for s, (lo, hi) in zip(lengths, nums[5], strict=True)]
+            vals += list(st.stroke_margins(z, nums))
     out = np.min(vals, axis=0) if vals else np.full((D, n), np.inf)
     return np.where(np.all(np.isfinite(z), axis=0), out, np.nan)
 
@@ -507,7 +506,7 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
     """
     st = plan.steps[index]
     assert isinstance(st, Group)
-    if st.cylinders:  # a length that is an input: the cut mechanism would need it as a driver too (not written)
+    if st.input_drivers:  # an input inside the group: the cut mechanism would need it as a driver too (not written)
         return None
     names = plan.joint_names
     m = len(st.joints)
@@ -889,15 +888,7 @@ def enumerate_modes(
         red = reduction(mech, plan, gi)
         label = ", ".join(names[j] for j in st.joints)
         if red is None:
-            why = (
-                f"it holds cylinder {', '.join(mech.drivers[gc.driver].name for gc in st.cylinders)}"
-                if st.cylinders
-                else "no cut of one of its binary links makes it closed-form"
-            )
-            notes.append(
-                f"the modes of group {label} are not enumerated ({why}): only the mode continued from the pose "
-                f"is listed"
-            )
+            notes.append(_not_enumerated(mech, st, label))
             gmode = np.concatenate([gmode, np.full((1, len(col)), -1)])
             gcount = np.concatenate([gcount, np.full((1, len(col)), -1)])
             continue
@@ -912,6 +903,16 @@ def enumerate_modes(
     z = _solve_rows(params, q, signs[:, col], None if mirrors is None else mirrors[:, col], starts)
     assembled = np.all(np.isfinite(z), axis=0) if z.shape[0] else np.ones(len(col), bool)
     return ModeTable(z, assembled, col, gmode, gcount, gsteps, tuple(notes))
+
+
+def _not_enumerated(mech: Mechanism, st: Group, label: str) -> str:
+    """The note that group ``label``'s modes are not enumerated, and why."""
+    why = (
+        f"it holds driver {', '.join(mech.drivers[d].name for d in st.input_drivers)}"
+        if st.input_drivers
+        else "no cut of one of its binary links makes it closed-form"
+    )
+    return f"the modes of group {label} are not enumerated ({why}): only the mode continued from the pose is listed"
 
 
 def _rows_per_mode(red: Reduction, K: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

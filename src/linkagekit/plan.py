@@ -41,7 +41,7 @@ from itertools import combinations
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple, assert_never
 
 from .errors import MechanismFileError, NotSolvableError
-from .group import Group, GroupCylinder, GroupLink, GroupSlider
+from .group import Group, GroupCylinder, GroupLink, GroupSlider, GroupSliderDrive
 from .model import CrankType, CylinderType, SliderType
 from .steps import (
     ActuatorDyad,
@@ -209,15 +209,16 @@ class _Planner:
 
     def plan(self) -> Plan:
         """Apply the rules until none applies, check every joint is placed, and return the plan."""
-        # with ``numerical`` a cylinder's end goes into a numerical group too when one holds it (else closed-form)
+        # with ``numerical`` a cylinder's end, or an actuator's pin, goes into a numerical group when one holds it
         closed = not self.numerical
         while (
             self._place_links()
-            or self._drive()
+            or self._drive(actuators=closed)
             or (closed and self._cylinder())
             or self._line_line()
             or self._sign_or_group()
             or self._cylinder()
+            or self._drive()
         ):
             pass
         self._check_complete()
@@ -266,7 +267,7 @@ class _Planner:
             return self.slider_of[link][1].on
         return None
 
-    def _drive(self) -> bool:
+    def _drive(self, actuators: bool = True) -> bool:
         """Apply every crank whose pivot is known and every slider driver whose guide is placed."""
         acted = False
         for di, t in list(self.drives):
@@ -274,7 +275,7 @@ class _Planner:
                 case CrankType():
                     done = self._crank(di, t)
                 case SliderType():
-                    done = self._slider_drive(di, t)
+                    done = self._slider_drive(di, t, actuators)
                 case _:
                     assert_never(t)
             if done:
@@ -296,7 +297,7 @@ class _Planner:
         self.known.add(t.toward)
         return True
 
-    def _slider_drive(self, di: int, t: SliderType) -> bool:
+    def _slider_drive(self, di: int, t: SliderType, actuator: bool = True) -> bool:
         """Driver ``di`` pushes a block along its placed guide: the block placed (:class:`SliderDrive`)."""
         d, s = self.mech.drivers[di], self.mech.sliders[t.slider]
         if d.link in self.placed:
@@ -305,7 +306,7 @@ class _Planner:
                 f"mechanism; the drivers do not match its freedom"
             )
         if s.on not in self.rot_known or s.on not in self.placed:
-            return self._actuator(di, t)
+            return actuator and self._actuator(di, t)
         blk = self.links[s.link]
         joints = tuple(self.idx[j] for j in blk.joints)
         self.steps.append(SliderDrive(di, t.slider, s.link, s.on, self.anchors.get(s.on), joints))
@@ -461,8 +462,9 @@ class _Planner:
             return False
         self.steps.append(group)
         self.known.update(self.names[j] for j in group.joints)
-        inner = {gc.driver for gc in group.cylinders}
+        inner = set(group.input_drivers)
         self.cylinders = [(ci, c) for ci, c in self.cylinders if ci not in inner]
+        self.drives = [(di, t) for di, t in self.drives if di not in inner]
         for gl in group.links:
             self.placed.add(gl.name)
             self.rot_known.add(gl.name)
@@ -538,7 +540,15 @@ class _Planner:
         """
         mech, known = self.mech, self.known
         unknown = [j for j in mech.joints if j not in known]
-        driven = {mech.drivers[di].link for di, _ in self.drives}
+        # a slider driver between two moving links (an actuator) may be in a group: its displacement is one row
+        actuators = {
+            t.slider: di
+            for di, t in self.drives
+            if isinstance(t, SliderType) and mech.sliders[t.slider].on not in self.placed
+        }
+        driven = {
+            mech.drivers[di].link for di, t in self.drives if not (isinstance(t, SliderType) and t.slider in actuators)
+        }
         free = [
             (ln, set(ln.joints)) for ln in mech.links if ln.name not in self.placed | driven and len(ln.joints) >= 2
         ]
@@ -557,9 +567,13 @@ class _Planner:
                     continue
                 gsl = [g for g in found if g]
                 cyl = [(ci, c.ends) for ci, c in self.cylinders if set(c.ends) & inside and set(c.ends) <= reach]
+                # an actuator's displacement: along the line its guide carries (the guide is the carrier)
+                drv = [(actuators[g.slider], g.slider) for g in gsl if g.slider in actuators]
+                if any(mech.sliders[si].on != next(g.carrier for g in gsl if g.slider == si) for _, si in drv):
+                    continue
                 rows = sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl)
-                if rows + len(cyl) == 2 * size:
-                    return self._group(subset, links, gsl, cyl)
+                if rows + len(cyl) + len(drv) == 2 * size:
+                    return self._group(subset, links, gsl, cyl, drv)
         return None
 
     def _group_slider(
@@ -608,9 +622,10 @@ class _Planner:
         links: list[Link],
         sliders: list[_SliderSpec],
         cylinders: list[tuple[int, tuple[str, str]]],
+        drives: list[tuple[int, int]],
     ) -> Group:
-        """The numerical group placing the joints ``subset`` by the rigidity of ``links``, by ``sliders`` and by
-        the ``cylinders`` (driver index, ends)."""
+        """The numerical group placing the joints ``subset`` by the rigidity of ``links``, by ``sliders``, by
+        the ``cylinders`` (driver index, ends) and by the slider ``drives`` (driver index, slider index)."""
         inside = set(subset)
         slots = {j: i for i, j in enumerate(subset)}
         around = [j for ln in links for j in ln.joints] + [j for g in sliders for j in g.joints]
@@ -641,9 +656,11 @@ class _Planner:
             for g in sliders
         )
         group_cylinders = tuple(GroupCylinder(ci, (slots[a], slots[b]), (idx[a], idx[b])) for ci, (a, b) in cylinders)
+        in_group = [g.slider for g in sliders]
+        group_drives = tuple(GroupSliderDrive(di, in_group.index(si)) for di, si in drives)
         cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
         joints, known = tuple(idx[j] for j in subset), tuple(idx[j] for j in held)
-        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders, group_cylinders)
+        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders, group_cylinders, group_drives)
 
     # ------------------------------------------------------------------ the end
     def _check_complete(self) -> None:
