@@ -46,6 +46,23 @@ terms are ``gamma = 2 Im(w' conj(u'))`` and ``2 Im(e_o' conj(c e'))`` (``w' = v_
 e'``, ``u' = dhat e'``, ``e' = v_c1 - v_c0``; zero on the ground). Scales: the group's mean
 link length on a line row, ``|s_o1 - s_o0|^2`` on a lock row.
 
+Cylinders and slider drivers
+----------------------------
+A cylinder driver whose ends are joints of the group (or one a known joint) adds the row
+``|z_b - z_a|^2 - s^2 = 0`` (:class:`GroupCylinder`), ``s`` its length: the driver's input.
+A slider driver between two moving links (an actuator's barrel and rod) whose slider is the
+group's, its guide the carrier, adds the *displacement row* ``Re(w conj(u)) - x = 0``
+(:class:`GroupSliderDrive`; ``w``, ``u`` as the line row's, ``x`` the displacement). The input
+is a *held value*: a slot after the known joints (its real part the input, :meth:`Group.held`),
+which the walk moves exactly as it moves the known joints (linearly between states), so the
+continuation is unchanged. Gradients: ``2 e`` on ``b``, ``-2 e`` on ``a``, ``-2 s`` on ``s``
+(``e = z_b - z_a``); ``u`` on ``k``, ``conj(rho - 1) u - w conj(dhat)`` on ``c0``, ``-conj(rho)
+u + w conj(dhat)`` on ``c1``, ``-1`` on ``x`` (``Re(a dz)`` has ``G = conj(a)``, ``Re(g
+conj(dz))`` has ``G = g``). The held values' rates are the drivers' speeds and accelerations,
+and ``gamma = 2 |e'|^2 - 2 s'^2`` and ``2 Re(w' conj(u'))``. Scales: ``s0^2`` (the pose's
+length) and the mean link length. A sample beyond a driver's stroke is flagged as the
+closed-form steps flag it (:meth:`Group._beyond_stroke`).
+
 Continuation on a fixed grid
 ----------------------------
 Newton converges to the root nearest its start, which may belong to another assembly

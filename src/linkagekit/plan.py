@@ -14,7 +14,10 @@ without solving anything: a greedy search for a triangulation order,
    fits its slot (``LineLine``: two lines, no sign);
 3. otherwise find one joint of two links that each have one known joint (``Dyad``: two
    circles), of a slider block and a link (``CircleLine``), or turn a guide about its one
-   known joint through a known block joint (``Pivot``); each of these reads one sign.
+   known joint through a known block joint (``Pivot``); each of these reads one sign;
+4. otherwise place the smallest group of joints that the links, sliders, cylinder drivers
+   and actuators (slider drivers between two moving links) among them fix, numerically
+   (:class:`~linkagekit.group.Group`).
 
 A mechanism for which this stops before every joint is known has no triangulation order
 (an Assur group of class 3 or more).
