@@ -796,7 +796,7 @@ def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[fl
         margins = fin.state.margin[:, col]
         k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
         info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
-        if (stroke_end := _slide_stroke_end(run, v)) is not None:
+        if (stroke_end := _slide_stroke_end(run, v) or _group_stroke_end(run, v)) is not None:
             info.update(stroke_end)
         elif params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
             info.update(_group_end(params))
@@ -823,6 +823,26 @@ def _slide_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
     end = "min" if abs(v - lo) <= abs(v - hi) else "max"
     detail = f"slider driver '{plan.drivers[run.driver]}' at the end of its stroke ({end})"
     return {"links": [step.block], "detail": detail}
+
+
+def _group_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
+    """A cylinder driver of a numerical group at an end of its stroke there (None: not such an end)."""
+    plan = run.params.plan
+    for st, nums in zip(plan.steps, run.params.steps, strict=True):
+        if not isinstance(st, Group):
+            continue
+        for i, (d, (lo_a, hi_a)) in enumerate(zip(st.input_drivers, nums[5], strict=True)):
+            lo, hi = float(lo_a[0, 0]), float(hi_a[0, 0])
+            if d != run.driver or min(abs(v - lo), abs(v - hi)) > 1e-9 * max(abs(v), abs(lo), abs(hi)):
+                continue
+            links = [gl.name for gl in st.links]
+            if i < len(st.cylinders):
+                end = "shortest" if abs(v - lo) <= abs(v - hi) else "longest"
+                detail = f"cylinder '{plan.drivers[d]}' at the end of its stroke ({end})"
+                return {"links": links, "cylinder": plan.drivers[d], "detail": detail}
+            end = "min" if abs(v - lo) <= abs(v - hi) else "max"
+            return {"links": links, "detail": f"slider driver '{plan.drivers[d]}' at the end of its stroke ({end})"}
+    return None
 
 
 def _change_dead_points(
