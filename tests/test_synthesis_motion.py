@@ -225,6 +225,7 @@ def check_frames_drawn(png: Path, poses: np.ndarray) -> None:
     ("rows", "needle"),
     [
         ("x,y,angle\n0,0,0\n1,0,10\n", "at least 3"),
+        ("x,y,angle\n", "0 poses; at least 3"),
         ("x,y,angle\n0,0,0\n1,nan,10\n2,1,20\n", "not finite"),
         ("x,y,angle\n0,0,0\n1,0,10\n1,0,10\n2,1,20\n", "repeats pose 2"),
         ("x,y,angle\n0,0,0\n1,0,400\n2,1,20\n", "out of range"),

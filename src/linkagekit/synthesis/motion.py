@@ -168,6 +168,8 @@ def read_poses(path: str) -> PoseFile:
     cols, table = read_table(path, [("x", "y", "angle"), ("x", "y", "angle", "input")], "pose")
     P = table[:, [cols.index(c) for c in ("x", "y", "angle")]]
     ins = table[:, cols.index("input")] if "input" in cols else None
+    if len(P) < 3:  # before the size below, which a header with no rows would break
+        raise InputError(f"{path}: {len(P)} poses; at least 3 are needed")
     bad = np.flatnonzero(np.abs(P[:, 2]) > MAX_ANGLE)
     if len(bad):
         raise InputError(f"{path}: pose {bad[0] + 1}: angle {P[bad[0], 2]:g} is out of range [-360, 360] degrees")
