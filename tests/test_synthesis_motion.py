@@ -306,3 +306,33 @@ def test_random_four_bars_are_recovered():
         out = synthesize_motion(poses, seconds=5)
         pos, ang = errors_by_analyze(out.best.mechanism, poses, out.best.inputs)
         assert out.best.one_branch and np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6
+
+
+def test_the_exact_route_keeps_the_transmission_bound(monkeypatch):
+    """Burmester's four-bars know no transmission bound: one below ``min_transmission`` is never the answer.
+
+    The five poses' exact four-bars have smallest transmission angles of about 45.4, 41.0, 17.7
+    and 17.2 deg (measured here by ``lk.analyze``); the approximate route is stubbed out (it
+    finds nothing), so a bound of 50 deg leaves no answer, and one of 42 deg the 45.4 deg one.
+    """
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    import linkagekit.synthesis.run as run
+
+    monkeypatch.setattr(run, "_engine_seeds", lambda *a: np.zeros((0, motion.FB_DIM)))
+    monkeypatch.setattr(motion, "approximate", lambda *a, **k: [])
+    poses = traced_poses(known_fourbar(), 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+
+    def smallest(f) -> float:  # folded to [0, 90], over the sweep, by lk.analyze
+        res = lk.analyze(f.mechanism, {"crank": np.linspace(f.inputs[0], f.inputs[-1], 721)})
+        u, v = res.point("A1") - res.point("B1"), res.point("B0") - res.point("B1")
+        mu = np.degrees(np.abs(np.angle(v / u)))
+        return float(np.min(np.minimum(mu, 180.0 - mu)))
+
+    free = synthesize_motion(poses)
+    best = smallest(free.best)
+    assert 40.0 < best < 50.0 and best == pytest.approx(free.best.min_transmission, abs=0.05)
+    assert min(smallest(f) for f in free.fourbars if f.one_branch) < 20.0
+    with pytest.raises(lk.LinkageError, match="transmission angle within"):
+        synthesize_motion(poses, min_transmission=50.0)
+    bounded = synthesize_motion(poses, min_transmission=42.0)
+    assert bounded.best.one_branch and smallest(bounded.best) >= 42.0

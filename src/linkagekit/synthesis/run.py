@@ -494,14 +494,31 @@ def synthesize_motion(
     found: list[MotionFourBar] = []
     if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
         found = _exact_motion(P, units)
-    if not found or not any(f.one_branch for f in found):
+    if not any(_admissible(f, min_transmission) for f in found):
         seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
         designs = mo.approximate(p, w, min_transmission, seeds)
         found += [_motion_fourbar(p, d, units) for d in designs]
-    if not found:
-        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
-    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
+    if not any(_admissible(f, min_transmission) for f in found):
+        bound = f" with a transmission angle within [{min_transmission:g}, {180 - min_transmission:g}] deg"
+        raise LinkageError(
+            f"motion: no four-bar meets the poses in order on one branch{bound * (min_transmission > 0)}"
+        )
+    found.sort(
+        key=lambda f: (
+            not _admissible(f, min_transmission),
+            max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error)),
+        )
+    )
     return MotionSynthesis(found, p.scale, w)
+
+
+def _admissible(f: MotionFourBar, min_transmission: float) -> bool:
+    """Meets the poses in order on one branch, its transmission angle never below ``min_transmission`` (degrees).
+
+    The exact route (Burmester) knows no bound: its four-bars are judged here, the approximate
+    route's search and polish impose it.
+    """
+    return f.one_branch and not f.min_transmission < min_transmission - 1e-6
 
 
 def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, weight: float | None) -> Any:
