@@ -336,3 +336,33 @@ def test_the_exact_route_keeps_the_transmission_bound(monkeypatch):
         synthesize_motion(poses, min_transmission=50.0)
     bounded = synthesize_motion(poses, min_transmission=42.0)
     assert bounded.best.one_branch and smallest(bounded.best) >= 42.0
+
+
+def test_full_turn_keeps_the_four_bars_whose_crank_turns_fully(tmp_path, capsys):
+    """``--full-turn`` (spec section 6): the written crank sweeps a whole turn and assembles all of it.
+
+    Judged by ``lk.analyze`` of each listed four-bar over a whole turn: without the option
+    some exact four-bars meet the poses on one branch yet stop short of a turn; with it every
+    one listed as one branch turns fully, and the best still meets the poses exactly.
+    """
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    poses = traced_poses(known_fourbar(), 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+
+    def turns(f) -> bool:
+        way = 1.0 if f.inputs[-1] >= f.inputs[0] else -1.0
+        crank = f.inputs[0] + way * np.linspace(0.0, 360.0, 1441)
+        return bool(np.all(lk.analyze(f.mechanism, {"crank": crank}).assembled))
+
+    free = synthesize_motion(poses)
+    assert not all(turns(f) for f in free.fourbars if f.one_branch)
+    src = write_poses(tmp_path / "poses.csv", poses)
+    assert main(["synthesize", str(src), "--task", "motion", "--full-turn", "-o", str(tmp_path / "o.yaml")]) == 0
+    assert "one branch" in capsys.readouterr().out
+    written = lk.load(tmp_path / "o.yaml")
+    sweep = written.drivers[0].sweep
+    assert abs(abs(sweep.stop - sweep.start) - 360.0) < 1e-9
+    assert np.all(lk.analyze(written, {"crank": np.linspace(sweep.start, sweep.stop, 1441)}).assembled)
+    full = synthesize_motion(poses, full_turn=True)
+    assert full.best.one_branch and all(turns(f) for f in full.fourbars if f.one_branch)
+    pos, ang = errors_by_analyze(full.best.mechanism, poses, full.best.inputs)
+    assert np.max(pos) < 1e-9 * full.diagonal and np.max(np.abs(ang)) < 1e-7

@@ -467,6 +467,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         metavar="W",
         help="motion: one radian of orientation error weighs as much as W diagonals of position error (default 0.05)",
     )
+    p.add_argument("--full-turn", action="store_true", help="motion: the crank turns fully through the poses")
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
@@ -1340,6 +1341,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
         units=args.units,
         seed=_integer(args.seed, "--seed", 0, 2**32 - 1),
         seconds=seconds,
+        full_turn=args.full_turn,
     )
     best = out.best
     described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"
@@ -1347,7 +1349,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
     if args.plot:
         from .viz import draw
 
-        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed)
+        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed or args.full_turn)
         draw.save_figure(fig, args.plot, fig.axes[0])
     print(motion_text(out, pf.poses, args.units, args.output))
     return 0
@@ -1460,6 +1462,7 @@ def _synthesize_command(args: argparse.Namespace) -> str:
         words.append("--ordered")
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
+        words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
         words += ["--angle-weight", str(args.angle_weight)] if args.angle_weight is not None else []
     return " ".join(shlex.quote(w) for w in words)
 
