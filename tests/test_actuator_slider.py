@@ -297,6 +297,22 @@ drivers: [{driver}]
         assert key in str(e)
 
 
+def test_check_names_the_stroke_ends_by_length_when_the_slide_points_back():
+    """The slide from the rod's pin to the barrel's: u = -0.4 is the longest actuator (2.9 m), 0.35 the shortest."""
+    d = lk.load("examples/excavator_bucket_slider.yaml").to_dict()
+    d["sliders"][0]["direction"] = [-0.96, 0.28]  # along G -> K: the length is 2.5 - u
+    d["drivers"][0]["stroke"] = [-0.4, 0.35]
+    d["drivers"][0].pop("displacements", None)  # the sweep: the stroke's
+    dead = lk.check(lk.Mechanism.from_dict(d))["dead_points"]["bucket_rod"]
+    got = {round(dp["input"], 6): dp["detail"] for dp in dead}
+    assert got == {
+        -0.4: "cylinder 'bucket_rod' at the end of its stroke (longest)",
+        0.35: "cylinder 'bucket_rod' at the end of its stroke (shortest)",
+    }
+    cyl = lk.check(lk.load("examples/excavator_bucket.yaml"))["dead_points"]["bucket_cylinder"]
+    assert [dp["detail"].rsplit(" ", 1)[1] for dp in cyl] == ["(shortest)", "(longest)"]
+
+
 def test_stroke_of_a_slider_driver_on_the_frame():
     """A block pushed along a fixed guide is flagged beyond its stroke too (the ends inclusive), with a round trip."""
     d = lk.load("examples/slider_crank.yaml").to_dict()

@@ -190,6 +190,21 @@ def test_bad_branch_in_python():
         lk.analyze(parallelogram(), [0.0], branch="continuous", signs={"D": 1})
 
 
+def test_check_of_a_sweep_too_long_to_follow(tmp_path, capsys):
+    # a valid file whose sweep (1000 turns) is longer than the branch follows: check reports the rest,
+    # and says the change points were not followed (it used to exit 2 on an option the user never gave)
+    d = parallelogram().to_dict()
+    d["drivers"][0]["angles"] = {"start": 0, "stop": 360000, "step": 100}
+    path = tmp_path / "long.json"
+    path.write_text(json.dumps(d))
+    assert lk.check(lk.load(path))["change_points"] is None
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Change points: not followed" in out and "change-point" in out
+    with pytest.raises(lk.LinkageError, match="MAX_PATH"):  # analyze --branch continuous still refuses it
+        lk.analyze(lk.load(path), [0.0, 360000.0], branch="continuous")
+
+
 def test_batch_follows_each_designs_branch():
     one = parallelogram()
     pose = np.array([[one.joints[j].real, one.joints[j].imag] for j in one.joint_names])
@@ -288,3 +303,39 @@ def test_numerical_groups_follow_the_double_rhombus():
     assert np.max(np.maximum(np.abs((c2 - c1).imag), np.abs((c3 - c2).imag))[far]) < 1e-10
     default = lk.analyze(mech, deg, method="numerical", rates=False)
     assert np.nanmax(np.abs((z(default, "C2") - z(default, "C1")).imag)) > 0.5
+
+
+def test_numerical_group_continuous_off_whole_degrees_and_after_a_gap():
+    """Found by review (on the walk before it was rewritten): a parallelogram forced through Newton
+    with the continuous branch, swept off whole degrees, took the crossed mode near 0.5 deg; a
+    slider-crank forced through Newton came back from its gap in the other mode.  Checked here
+    against the geometry and against the closed form."""
+    para = lk.Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "units": {"length": "m", "angle": "deg"},
+            "joints": {"A": [0, 0], "B": [3, 0], "C": [0.9396926207859084, 0.3420201433256687],
+                       "D": [3.9396926207859084, 0.3420201433256687]},
+            "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D"]},
+            "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+        }
+    )  # fmt: skip
+    for off in (0.3,):
+        r = lk.analyze(para, {"crank": np.arange(off, 720 + off, 1.0)}, method="numerical", branch="continuous")
+        assert r.assembled.all()
+        assert np.max(np.abs(r.point("D") - r.point("C") - 3)) < 1e-12  # still a parallelogram, every sample
+    sc = lk.Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "joints": {"O": [0, 0], "A": [0.6, 0.8], "B": [1.4, 0.5], "T": [1.7, 0.6]},
+            "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B", "T"]},
+            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        }
+    )
+    a = np.arange(300, 600, 0.7)
+    num = lk.analyze(sc, {"crank": a}, method="numerical", branch="continuous")
+    ref = lk.analyze(sc, {"crank": a}, method="natural", branch="continuous")
+    assert np.array_equal(num.assembled, ref.assembled) and num.assembled.any() and not num.assembled.all()
+    ok = num.assembled
+    assert np.max(np.abs(num.point("B")[ok] - ref.point("B")[ok])) < 1e-9

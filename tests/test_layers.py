@@ -21,6 +21,8 @@ LAYERS = [
     {"steps", "group", "plan", "params", "catalogue"},
     {"positions", "rates", "branch", "forces", "vectorloop", "groupmodes"},
     {"result", "api", "checks"},
+    {"dynamics"},
+    {"flywheel"},
     {"viz.scene"},
     {"viz.draw", "viz.animate", "web.report", "web.editor"},
     {

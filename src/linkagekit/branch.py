@@ -58,7 +58,11 @@ BLOCK = 1 << 18
 
 BRANCHES = ("pose", "continuous")
 
-__all__ = ["BRANCHES", "Branch", "along_sweep", "follow"]
+__all__ = ["BRANCHES", "Branch", "PathTooLongError", "along_sweep", "follow"]
+
+
+class PathTooLongError(InputError):
+    """The inputs span more than :data:`MAX_PATH` steps of the path :func:`along_sweep` would follow."""
 
 
 @dataclass(frozen=True)
@@ -362,7 +366,7 @@ def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], contin
     x = q[d, 0]
     lo, hi = min(x.min(), x0[d].min()), max(x.max(), x0[d].max())
     if (hi - lo) / step > MAX_PATH:
-        raise InputError(
+        raise PathTooLongError(
             f"branch 'continuous': the inputs and the pose's input span {(hi - lo) / step:.0f} steps of the path "
             f"it follows, more than linkagekit.branch.MAX_PATH ({MAX_PATH}); ask for a smaller span"
         )

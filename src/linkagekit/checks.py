@@ -28,7 +28,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .api import analyze, prepare, sweep_inputs
-from .branch import along_sweep
+from .branch import MAX_PATH, PathTooLongError, along_sweep
 from .errors import InputError
 from .group import Group
 from .groupmodes import continuation_intervals, enumerate_modes
@@ -581,7 +581,8 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
         out["links"] = [other]
         out["cylinder"] = cyl
         if math.isfinite(s) and min(abs(s - lo), abs(s - hi)) <= 1e-6 * s:
-            end = "shortest" if abs(s - lo) <= abs(s - hi) else "longest"
+            # by length, not by which end of the stroke: an actuator's slide may point from rod to barrel
+            end = "shortest" if abs(s - min(lo, hi)) <= abs(s - max(lo, hi)) else "longest"
             out["detail"] = f"cylinder '{cyl}' at the end of its stroke ({end})"
         elif isinstance(step, CylinderDyad | ActuatorDyad):
             out["detail"] = f"cylinder '{cyl}' in line with {other} at {names[step.joint]}"
@@ -742,6 +743,8 @@ def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
 
     For a circle-circle step that is where the distance s between its known joints has an
     extremum at r1 + r2 or |r1 - r2|: a simple root of ds; otherwise a minimum of |cond|.
+    Where the step stays at a change point over a run of samples (a rhombus folded into a kite
+    puts the next dyad's circles tangent for half a turn), only the run's two ends count.
     """
     sw, q = run.sw, run.q
     interior = sw.has_prev & sw.has_next
@@ -750,6 +753,8 @@ def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
         c = run.rows[q.cond(k)]
         with np.errstate(invalid="ignore"):
             cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
+            flat = c < SINGULAR_TOL  # a step that stays at its change point (a kite's folded dyad): its two ends
+            cand &= ~(flat & flat[sw.prev] & flat[sw.next])
         out += [(k, _around(run, int(i), q.cond(k), q.ds(k))) for i in np.flatnonzero(cand)]
     return out
 
@@ -1233,7 +1238,8 @@ class CheckReport:
         The change points the branch crosses along the file's sweep when it is followed
         continuously (``analyze --branch continuous``), from the pose's input up and down:
         each ``{"joint", "driver", "input"}`` (the sign step's joint, the driver the sweep
-        follows, its input there in the file's unit, to about 1e-6 degree).
+        follows, its input there in the file's unit, to about 1e-6 degree); None when the
+        sweep is too long to follow (more than :data:`linkagekit.branch.MAX_PATH` steps).
     warnings : tuple of dict
         ``kind`` ``"transmission-angle"`` (a loop's ``min`` below ``limit``,
         :data:`MIN_TRANSMISSION`, or its ``max`` above 180 - ``limit``) or ``"toggle"`` (a
@@ -1263,7 +1269,7 @@ class CheckReport:
     sliders: tuple[dict[str, Any], ...] = ()
     assembly_gaps: dict[str, list[list[float]]] = field(default_factory=dict)
     warnings: tuple[dict[str, Any], ...] = ()
-    change_points: tuple[dict[str, Any], ...] = ()
+    change_points: tuple[dict[str, Any], ...] | None = ()
 
     @property
     def input_range(self) -> list[list[float]]:
@@ -1301,7 +1307,7 @@ class CheckReport:
             out["dynamics"] = self.dynamics
         out["sliders"] = list(self.sliders)
         out["assembly_gaps"] = self.assembly_gaps
-        out["change_points"] = list(self.change_points)
+        out["change_points"] = None if self.change_points is None else list(self.change_points)
         out["warnings"] = list(self.warnings)
         finite: dict[str, Any] = _finite(out)
         return finite
@@ -1436,10 +1442,17 @@ def check(mech: Mechanism) -> CheckReport:
     )
 
 
-def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...]:
-    """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`)."""
+def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...] | None:
+    """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`).
+
+    None when the sweep is too long to follow: ``check`` still reports everything else about
+    a file that ``analyze`` takes.
+    """
     q = sweep_inputs(mech, params)
-    br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
+    try:
+        br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
+    except PathTooLongError:
+        return None
     steps, _, where = br.points
     drv = mech.drivers[br.driver]
     scale = drv.input_scale(mech)
@@ -1560,7 +1573,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
         *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
-        *_change_point_lines(rep.get("change_points"), fmt),
+        *_change_point_lines(rep.get("change_points", []), fmt),
         *(_warning_line(w, fmt) for w in rep.get("warnings") or []),
     ]
     return "\n".join(lines) + "\n"
@@ -1568,6 +1581,8 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
 
 def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text) -> list[str]:
     """The change points the continuous branch crosses along the sweep (none: no line)."""
+    if cps is None:
+        return [f"Change points: not followed (the sweep spans more than {MAX_PATH} steps of 1 degree)"]
     if not cps:
         return []
     at = ", ".join(f"{cp['joint']} at {fmt.inp(cp['driver'], cp['input'])}" for cp in cps[:MAX_TEXT_DEAD_POINTS])

@@ -63,7 +63,7 @@ NAN = "—"
 SEP = "  "
 """Between two table columns."""
 
-_RATE_OPTIONS = ("--angles", "--at", "--speed", "--acceleration")
+_RATE_OPTIONS = ("--angles", "--at", "--speed", "--acceleration", "--time", "--torque", "--motor")
 _NEGATIVE_VALUE = re.compile(r"-\.?\d")
 
 
@@ -333,6 +333,99 @@ def _analyze_arguments(p: argparse.ArgumentParser) -> None:
         "through change points (a parallelogram stays a parallelogram) from the pose's input up and down "
         "(default: %(default)s)",
     )
+
+
+def _simulate_arguments(p: argparse.ArgumentParser) -> None:
+    _file_argument(p)
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--time", metavar="START:STOP:STEP", help="output times, s (the motion starts at START)")
+    what.add_argument(
+        "--flywheel",
+        metavar="CS",
+        help="instead of a motion, print the smallest extra inertia (kg*m^2) on the driver's crank that keeps "
+        "the periodic steady state's coefficient of speed fluctuation at most CS",
+    )
+    p.add_argument(
+        "--torque",
+        action="append",
+        metavar="T",
+        help="a constant driver torque, N*m (N for a slider or cylinder); NAME=T per driver; default 0",
+    )
+    p.add_argument(
+        "--motor",
+        action="append",
+        metavar="T0,W0",
+        help="the linear motor curve T = T0 (1 - w/W0), W0 in rad/s (length unit/s for a slider or cylinder); "
+        "NAME=T0,W0 per driver",
+    )
+    p.add_argument(
+        "--speed",
+        action="append",
+        metavar="V",
+        help="starting speed, rad/s (length unit/s for a slider or cylinder); NAME=V per driver; default 0",
+    )
+    _format_option(p, "table", "csv", "json")
+    _output_option(p)
+
+
+def _motor_curve(text: str, what: str) -> tuple[float, float]:
+    values = _numbers(text, what)
+    if len(values) != 2:
+        raise InputError(f"{what}: expected T0,W0 (stall torque, no-load speed), got {shorten(repr(text))}")
+    return values[0], values[1]
+
+
+def _flywheel(args: argparse.Namespace, mech: Mechanism, torque: Any, motor: Any) -> int:
+    """``simulate --flywheel CS``: the smallest extra inertia (kg*m^2), or its steady state in JSON."""
+    import linkagekit as lk
+
+    if args.speed:
+        raise InputError("--speed: not used with --flywheel (the steady state does not depend on the start)")
+    size = lk.size_flywheel(mech, _one_number(args.flywheel, "--flywheel"), torque=torque, motor=motor)
+    if args.format != "json":
+        _emit(f"{size.inertia:.10g}\n", args.output)
+        return 0
+    st = size.steady
+    out = {
+        "format": "linkagekit-flywheel/1",
+        "link": mech.drivers[0].link,
+        "inertia": size.inertia,
+        "cs": size.cs,
+        "cs_without": size.cs_without,
+        "speed": {"min": abs(st.w_min), "max": abs(st.w_max), "mean": abs(st.mean_speed)},
+    }
+    _emit(json.dumps(out, allow_nan=False) + "\n", args.output)
+    return 0
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    """``linkagekit simulate``: writes the motion (so far), then exit 1 with one line if it met a toggle."""
+    import linkagekit as lk
+
+    mech = lk.load(args.file)
+    torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
+    motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    if args.flywheel is not None:
+        return _flywheel(args, mech, torque, motor)
+    times = _range(args.time, "--time")
+    speed = _by_driver(mech, args.speed, "--speed", _one_number) if args.speed else None
+    res = lk.simulate(mech, times, torque=torque, motor=motor, speed=speed)
+    if args.format == "json":
+        _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
+    elif args.format == "csv":
+        _emit(format_csv(res.columns()), args.output)
+    else:
+        cat = res.catalogue
+        shown = {q.name: q.owner_name or q.name for q in cat.table if q.group is Group.INPUTS}
+        units = res.column_units()
+        text = analysis_tables(
+            res.columns(), units, analysis_sections(cat, mech.name or ""), inputs=shown, width=terminal_width()
+        )
+        _emit(text, args.output)
+    if res.stopped:
+        print(f"{PROG}: {res.stopped}", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _modes_arguments(p: argparse.ArgumentParser) -> None:
@@ -1693,6 +1786,18 @@ _COMMANDS = (
         "per driver.",
         _analyze_arguments,
         _analyze,
+    ),
+    _Command(
+        "simulate",
+        "forward dynamics: the motion under a driver torque or motor curve",
+        "Integrate the equations of motion from the pose (at rest, or at --speed) under a constant torque "
+        "(--torque) or the linear motor curve T0 (1 - w/W0) (--motor), with the file's masses, gravity, loads, "
+        "springs, dampers and flywheels; one row per output time, with the columns of analyze plus time. "
+        "A motion that meets a toggle it cannot pass is written up to it, then one line says where (exit 1). "
+        "With --flywheel CS instead of --time: the smallest extra inertia on the driver's crank that keeps the "
+        "periodic steady state's speed fluctuation (w_max - w_min) / mean within CS.",
+        _simulate_arguments,
+        _simulate,
     ),
     _Command(
         "modes",
