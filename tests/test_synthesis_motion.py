@@ -366,3 +366,11 @@ def test_full_turn_keeps_the_four_bars_whose_crank_turns_fully(tmp_path, capsys)
     assert full.best.one_branch and all(turns(f) for f in full.fourbars if f.one_branch)
     pos, ang = errors_by_analyze(full.best.mechanism, poses, full.best.inputs)
     assert np.max(pos) < 1e-9 * full.diagonal and np.max(np.abs(ang)) < 1e-7
+
+
+def test_an_unknown_unit_is_refused_before_the_search(tmp_path, capsys):
+    src = write_poses(tmp_path / "poses.csv", traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 280.0, 7)))
+    assert main(["synthesize", str(src), "--task", "motion", "--units", "furlong", "-o", str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(ERROR_PREFIX) and "\n" not in err and "--units" in err and "furlong" in err
+    assert not (tmp_path / "o.yaml").exists()

@@ -1416,9 +1416,12 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
 
     from .synthesis.motion import read_poses
     from .synthesis.run import synthesize_motion
+    from .units import LENGTH_UNITS
 
     if args.topology != "fourbar":
         _motion_template(args.topology)
+    if args.units not in LENGTH_UNITS:  # before the search, not when the file is built
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     seconds = _one_number(args.seconds, "--seconds")
     if not 0 < seconds <= 1e7:
         raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
