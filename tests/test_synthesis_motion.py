@@ -226,6 +226,9 @@ def check_frames_drawn(png: Path, poses: np.ndarray) -> None:
     [
         ("x,y,angle\n0,0,0\n1,0,10\n", "at least 3"),
         ("x,y,angle\n", "0 poses; at least 3"),
+        ("x,y,angle,input\n0,0,0,0\n1,0,10,100\n2,1,20,50\n3,0,30,150\n", "pose 3: the inputs must increase"),
+        ("x,y,angle,input\n0,0,0,0\n1,0,10,10\n2,1,20,10\n", "pose 3: the inputs must increase"),
+        ("x,y,angle,input\n0,0,0,0\n1,0,10,1000\n2,1,20,2000\n", "within one turn"),
         ("x,y,angle\n0,0,0\n1,nan,10\n2,1,20\n", "not finite"),
         ("x,y,angle\n0,0,0\n1,0,10\n1,0,10\n2,1,20\n", "repeats pose 2"),
         ("x,y,angle\n0,0,0\n1,0,400\n2,1,20\n", "out of range"),
