@@ -377,3 +377,63 @@ def test_an_unknown_unit_is_refused_before_the_search(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith(ERROR_PREFIX) and "\n" not in err and "--units" in err and "furlong" in err
     assert not (tmp_path / "o.yaml").exists()
+
+
+def shared_exact5() -> np.ndarray:
+    """Hsieh's generating four-bar's five poses (public benchmark data), as ``x, y, angle``."""
+    path = Path("/work/shared/benchmarks/motion-function/targets.json")
+    if not path.exists():
+        pytest.skip("the shared benchmark data is absent")
+    q = np.array(json.loads(path.read_text())["hsieh2_generating_mechanism"]["exact5_poses"]["poses"])
+    return np.stack([q[:, 0], q[:, 1], np.degrees(np.arctan2(q[:, 3], q[:, 2]))], axis=1)
+
+
+@pytest.mark.parametrize("which", ["known", "hsieh2"])
+def test_one_branch_flags_agree_with_analyze_of_each_written_four_bar(which):
+    """Every listed four-bar's ``one_branch`` against ``lk.analyze`` of its own file.
+
+    Independently: the file's mode (its reference pose's signs) kept, the crank swept every
+    1/4 degree from the first pose to the last, it assembles all the way and puts ``P``, ``Q``
+    on every pose. Both kinds of exact four-bars occur here (met in order, and met only by
+    changing mode or across a gap), so a check that ignores either is caught.
+    """
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    if which == "known":
+        poses = traced_poses(known_fourbar(), 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+    else:
+        poses = shared_exact5()
+    out = synthesize_motion(poses)
+    verdicts = []
+    for f in out.fourbars:
+        a, b = f.inputs[0], f.inputs[-1]
+        dense = lk.analyze(f.mechanism, {"crank": np.linspace(a, b, int(4 * abs(b - a)) + 2)})
+        pos, ang = errors_by_analyze(f.mechanism, poses, f.inputs)
+        met = bool(np.all(dense.assembled) and np.max(pos) < 1e-7 * out.diagonal and np.max(np.abs(ang)) < 1e-5)
+        verdicts.append(met)
+        assert f.one_branch == met
+    assert any(verdicts) and not all(verdicts)
+
+
+def test_the_dense_check_sees_a_gap_between_poses():
+    """``sweep_check`` on a non-Grashof four-bar (Hsieh's: crank 12, coupler 4, rocker 9, ground 5).
+
+    Its crank assembles within 90 deg of the ground line only (``|p2 - p3| <= 13``); poses at
+    0, 50 and -40 deg from it are met turning one way through 0 -> 50 -> 320, across the gap,
+    and at -50, 0, 50 without one. ``lk.analyze`` of the same four-bar agrees at 180 deg.
+    """
+    g = 0.2
+    ga, gb = complex(-2, -3), complex(-2, -3) + 5 * np.exp(1j * g)
+    F = np.array([[ga.real, ga.imag, 0.0, 0.0, 12.0, gb.real, gb.imag, 4.0, 0.0, 9.0]])
+    s = np.array([1.0])
+    across = motion.sweep_check(F, g + np.radians([[0.0, 50.0, -40.0]]), s, closed=False)
+    within = motion.sweep_check(F, g + np.radians([[-50.0, 0.0, 50.0]]), s, closed=False)
+    assert not across.assembled[0] and within.assembled[0]
+    A0, A1 = ga, ga + 12 * np.exp(1j * g)
+    B1 = A1 + 4 * np.exp(1j * np.angle(gb - A1) + 1j * np.arccos((16 + abs(gb - A1) ** 2 - 81) / (8 * abs(gb - A1))))
+    mech = Mechanism.from_dict(
+        {"format": "linkagekit/1", "joints": {"A0": [A0.real, A0.imag], "A1": [A1.real, A1.imag],
+         "B1": [B1.real, B1.imag], "B0": [gb.real, gb.imag]},
+         "links": {"ground": ["A0", "B0"], "crank": ["A0", "A1"], "coupler": ["A1", "B1"], "rocker": ["B0", "B1"]},
+         "drivers": [{"link": "crank", "pivot": "A0", "toward": "A1"}]}, "<hsieh2>")  # fmt: skip
+    res = lk.analyze(mech, {"crank": np.degrees(g) + np.array([-50.0, 0.0, 50.0, 180.0])})
+    assert list(res.assembled) == [True, True, True, False]
