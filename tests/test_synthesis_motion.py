@@ -437,3 +437,36 @@ def test_the_dense_check_sees_a_gap_between_poses():
          "drivers": [{"link": "crank", "pivot": "A0", "toward": "A1"}]}, "<hsieh2>")  # fmt: skip
     res = lk.analyze(mech, {"crank": np.degrees(g) + np.array([-50.0, 0.0, 50.0, 180.0])})
     assert list(res.assembled) == [True, True, True, False]
+
+
+def test_the_judge_holds_the_transmission_bound():
+    """``judge`` (the engine's dense check of a motion design) against the bound, by ``lk.analyze``.
+
+    The known four-bar's smallest transmission angle between its first and last pose is
+    measured by ``lk.analyze`` (every 1/4 degree); the judge passes it under a bound 1 deg
+    below and fails it under one 1 deg above.
+    """
+    mech = known_fourbar()
+    crank = 41.6 + np.linspace(0.0, 280.0, 7)
+    poses = traced_poses(mech, crank)
+    p = motion.motion_poses(poses[:, 0], poses[:, 1], np.radians(poses[:, 2]))
+    res = lk.analyze(mech, {"crank": np.linspace(crank[0], crank[-1], 1121)})
+    u, v = res.point("A1") - res.point("B1"), res.point("B0") - res.point("B1")
+    mu = np.degrees(np.abs(np.angle(v / u)))
+    smallest = float(np.min(np.minimum(mu, 180.0 - mu)))
+    at = lk.analyze(mech, {"crank": crank[:1]})
+    P0, frame = at.point("P")[0], np.exp(1j * np.radians(poses[0, 2]))
+
+    def body(j: str) -> complex:
+        return complex((at.point(j)[0] - P0) / frame / p.scale)
+
+    def ground(j: str) -> complex:
+        return complex((at.point(j)[0] - p.center) / p.scale)
+
+    ga, gb, a, b = ground("A0"), ground("B0"), body("A1"), body("B1")
+    ra, rb = abs(at.point("A1")[0] - at.point("A0")[0]) / p.scale, abs(at.point("B1")[0] - at.point("B0")[0]) / p.scale
+    F = np.array([[ga.real, ga.imag, a.real, a.imag, ra, gb.real, gb.imag, b.real, b.imag, rb]])
+    t, s = motion.crank_angles(p, F), motion.first_mode(p, F)
+    for bound, violation in ((smallest - 1.0, 0.0), (smallest + 1.0, 1.0)):
+        score = motion.judge(p, F, t, s, motion.MotionObjective(p, min_transmission=bound))
+        assert score.violation[0] == violation and score.error[0] < 1e-9
