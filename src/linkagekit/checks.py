@@ -46,6 +46,8 @@ MAX_MODE_SLOTS = 12
 N_BISECT = 60
 #: a sign step's |determinant| at a sample below which a local minimum is refined as a possible change point
 TOUCH = 0.05
+#: a rocker whose angular velocity stays within this share of its largest is at rest (the rest is rounding)
+REST = 1e-9
 #: check warns when a four-bar's transmission angle goes below this (degrees; synthesize's --min-transmission default)
 MIN_TRANSMISSION = 20.0
 #: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
@@ -705,12 +707,20 @@ def _run(
 
 
 def _limit_brackets(run: _Run, li: int) -> list[_Bracket]:
-    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours."""
+    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours.
+
+    Not where it only flickers about zero while the rocker rests (both neighbours within ``REST`` of the largest
+    speed: a rhombus folded into a kite holds its rocker still for half a turn, and the rounding of its speed
+    changed sign at hundreds of samples).
+    """
     sw, row = run.sw, run.q.w(li)
     w = run.rows[row]
     ia = np.flatnonzero(sw.has_next)
     wa, wb = w[ia], w[sw.next[ia]]
     hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
+    if hit.any():
+        rest = REST * float(np.nanmax(np.abs(w)))
+        hit &= (np.abs(wa) > rest) | (np.abs(wb) > rest)
     return [_Bracket(sw.x[k], sw.nx[k], row, int(k), float(np.sign(w[k]))) for k in ia[hit]]
 
 
