@@ -623,6 +623,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         metavar="W",
         help="motion: one radian of orientation error weighs as much as W diagonals of position error (default 0.05)",
     )
+    p.add_argument("--full-turn", action="store_true", help="motion: the crank turns fully through the poses")
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
@@ -1488,9 +1489,12 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
 
     from .synthesis.motion import read_poses
     from .synthesis.run import synthesize_motion
+    from .units import LENGTH_UNITS
 
     if args.topology != "fourbar":
         _motion_template(args.topology)
+    if args.units not in LENGTH_UNITS:  # before the search, not when the file is built
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     seconds = _one_number(args.seconds, "--seconds")
     if not 0 < seconds <= 1e7:
         raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
@@ -1506,6 +1510,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
         units=args.units,
         seed=_integer(args.seed, "--seed", 0, 2**32 - 1),
         seconds=seconds,
+        full_turn=args.full_turn,
     )
     best = out.best
     described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"
@@ -1513,7 +1518,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
     if args.plot:
         from .viz import draw
 
-        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed)
+        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed or args.full_turn)
         draw.save_figure(fig, args.plot, fig.axes[0])
     print(motion_text(out, pf.poses, args.units, args.output))
     return 0
@@ -1626,6 +1631,7 @@ def _synthesize_command(args: argparse.Namespace) -> str:
         words.append("--ordered")
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
+        words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
         words += ["--angle-weight", str(args.angle_weight)] if args.angle_weight is not None else []
     return " ".join(shlex.quote(w) for w in words)
 

@@ -102,6 +102,17 @@ class MotionPoses:
         return self.d + self.u * c
 
 
+def _check_timing(th: FloatArray, source: str) -> None:
+    """The crank meets the poses in their order within one turn: ``th`` (radians) strictly monotone, spanning < 2 pi."""
+    steps = np.diff(th)
+    if not (np.all(steps > 0) or np.all(steps < 0)):
+        k = int(np.argmax(steps * np.sign(np.sum(steps)) <= 0)) + 2
+        raise InputError(f"{source}: pose {k}: the inputs must increase (or decrease) along the poses")
+    if abs(th[-1] - th[0]) >= 2 * np.pi:
+        span = abs(float(np.degrees(th[-1] - th[0])))
+        raise InputError(f"{source}: the inputs span {span:g} deg; the crank meets the poses within one turn")
+
+
 def motion_poses(
     x: FloatArray,
     y: FloatArray,
@@ -139,6 +150,7 @@ def motion_poses(
         th = np.asarray(inputs, float).reshape(-1)
         if th.shape != x.shape or not np.all(np.isfinite(th)):
             raise InputError(f"{source}: one finite input angle per pose is needed")
+        _check_timing(th, source)
     return MotionPoses(d, angle, center, scale, th, closed)
 
 
@@ -168,6 +180,8 @@ def read_poses(path: str) -> PoseFile:
     cols, table = read_table(path, [("x", "y", "angle"), ("x", "y", "angle", "input")], "pose")
     P = table[:, [cols.index(c) for c in ("x", "y", "angle")]]
     ins = table[:, cols.index("input")] if "input" in cols else None
+    if len(P) < 3:  # before the size below, which a header with no rows would break
+        raise InputError(f"{path}: {len(P)} poses; at least 3 are needed")
     bad = np.flatnonzero(np.abs(P[:, 2]) > MAX_ANGLE)
     if len(bad):
         raise InputError(f"{path}: pose {bad[0] + 1}: angle {P[bad[0], 2]:g} is out of range [-360, 360] degrees")

@@ -454,6 +454,7 @@ def synthesize_motion(
     units: str = "m",
     seed: int = 0,
     seconds: float = 20.0,
+    full_turn: bool = False,
 ) -> MotionSynthesis:
     """Four-bars whose coupler passes through (or near) the poses, best first.
 
@@ -475,6 +476,8 @@ def synthesize_motion(
         The poses' length unit.
     seed, seconds
         Of the engine's search that adds seeds (:func:`linkagekit.synthesis.optimize.optimize`).
+    full_turn : bool
+        The crank turns fully in one assembly mode, meeting the poses on the way (as a closed motion's).
 
     Examples
     --------
@@ -490,18 +493,41 @@ def synthesize_motion(
     """
     from . import motion as mo
 
-    P, p, w = _motion_problem(poses, inputs, closed, weight)
+    P, p, w = _motion_problem(poses, inputs, closed or full_turn, weight)  # the approximate route: as a cycle
     found: list[MotionFourBar] = []
     if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
         found = _exact_motion(P, units)
-    if not found or not any(f.one_branch for f in found):
+        found = [_turning_fully(f) for f in found] if full_turn else found
+    if not any(_admissible(f, min_transmission) for f in found):
         seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
         designs = mo.approximate(p, w, min_transmission, seeds)
         found += [_motion_fourbar(p, d, units) for d in designs]
-    if not found:
-        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
-    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
-    return MotionSynthesis(found, p.scale, w)
+    return MotionSynthesis(_best_first(found, p.scale, w, min_transmission), p.scale, w)
+
+
+def _best_first(found: list[MotionFourBar], scale: float, w: float, min_transmission: float) -> list[MotionFourBar]:
+    """The four-bars found, the admissible first, each group by ``E`` (:mod:`~.motion`); none admissible: an error."""
+    if not any(_admissible(f, min_transmission) for f in found):
+        bound = f" with a transmission angle within [{min_transmission:g}, {180 - min_transmission:g}] deg"
+        raise LinkageError(
+            f"motion: no four-bar meets the poses in order on one branch{bound * (min_transmission > 0)}"
+        )
+    return sorted(
+        found,
+        key=lambda f: (
+            not _admissible(f, min_transmission),
+            max(f.max_position_error / scale, w * np.radians(f.max_angle_error)),
+        ),
+    )
+
+
+def _admissible(f: MotionFourBar, min_transmission: float) -> bool:
+    """Meets the poses in order on one branch, its transmission angle never below ``min_transmission`` (degrees).
+
+    The exact route (Burmester) knows no bound: its four-bars are judged here, the approximate
+    route's search and polish impose it.
+    """
+    return f.one_branch and not f.min_transmission < min_transmission - 1e-6
 
 
 def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, weight: float | None) -> Any:
@@ -561,6 +587,28 @@ def _smallest_transmission(mech: Mechanism, inputs: np.ndarray) -> float:
     u, v = res.point("A1") - b, res.point("B0") - b
     mu = np.degrees(np.arccos(np.clip(np.abs((np.conj(u) * v).real) / (np.abs(u) * np.abs(v)), 0.0, 1.0)))
     return float(np.nanmin(mu))
+
+
+def _turning_fully(f: MotionFourBar) -> MotionFourBar:
+    """An exact four-bar judged over a whole turn of its crank from the first pose (the pose's mode throughout).
+
+    Its driver then sweeps that turn; ``one_branch`` says whether it assembles all the way
+    (by :func:`linkagekit.analyze`, every 1/4 degree).
+    """
+    from ..api import analyze
+    from ..model import Mechanism
+
+    if not f.one_branch:
+        return f
+    start = float(f.inputs[0])
+    way = 1.0 if f.inputs[-1] >= f.inputs[0] else -1.0
+    data = f.mechanism.to_dict()
+    data["drivers"][0]["angles"] = {"start": start, "stop": start + way * 360.0, "step": way}
+    mech = Mechanism.from_dict(data, "<Burmester four-bar>")
+    res = analyze(mech, {"crank": start + way * np.linspace(0.0, 360.0, 1441)}, rates=False, dynamics=False)
+    turns = bool(np.all(res.assembled))
+    smallest = _smallest_transmission(mech, np.array([start, start + way * 360.0])) if turns else np.nan
+    return replace(f, mechanism=mech, one_branch=turns, min_transmission=smallest)
 
 
 def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
