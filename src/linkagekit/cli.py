@@ -1397,7 +1397,9 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
     x, y = read_pairs(args.targets)
     engine = {
-        k: v for k, v in _search_options(args).items() if k in ("seconds", "seed", "restarts", "generations", "workers")
+        k: v
+        for k, v in _search_options(args).items()
+        if k in ("seconds", "seed", "restarts", "generations", "workers", "scheduler", "checkpoint")
     }
     if args.seconds == _DEFAULT_SECONDS:
         engine["seconds"] = FUNCTION_SECONDS
@@ -1511,6 +1513,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
         seed=_integer(args.seed, "--seed", 0, 2**32 - 1),
         seconds=seconds,
         full_turn=args.full_turn,
+        engine=_motion_engine(args),
     )
     best = out.best
     described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"
@@ -1634,6 +1637,13 @@ def _synthesize_command(args: argparse.Namespace) -> str:
         words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
         words += ["--angle-weight", str(args.angle_weight)] if args.angle_weight is not None else []
     return " ".join(shlex.quote(w) for w in words)
+
+
+def _motion_engine(args: argparse.Namespace) -> dict[str, Any]:
+    """The engine options given on the command line for motion's search of seeds (the rest: its short default)."""
+    options = _search_options(args)
+    defaults = {"restarts": 32, "generations": 500, "workers": 1, "scheduler": None, "checkpoint": None}
+    return {k: options[k] for k, d in defaults.items() if options[k] != d}
 
 
 def _search_options(args: argparse.Namespace) -> dict[str, Any]:

@@ -455,6 +455,7 @@ def synthesize_motion(
     seed: int = 0,
     seconds: float = 20.0,
     full_turn: bool = False,
+    engine: Mapping[str, Any] | None = None,
 ) -> MotionSynthesis:
     """Four-bars whose coupler passes through (or near) the poses, best first.
 
@@ -479,6 +480,11 @@ def synthesize_motion(
     full_turn : bool
         The crank turns fully in one assembly mode, meeting the poses on the way (as a closed motion's).
 
+    engine : mapping, optional
+        The engine's options for its search of seeds (:class:`~linkagekit.synthesis.optimize.Settings`'
+        ``restarts``, ``generations``, ``workers``, ``scheduler``, ``checkpoint``); by default a
+        short search (``ENGINE_SEEDS``) of at most 5 s of ``seconds``.
+
     Examples
     --------
     >>> import linkagekit as lk
@@ -499,7 +505,7 @@ def synthesize_motion(
         found = _exact_motion(P, units)
         found = [_turning_fully(f) for f in found] if full_turn else found
     if not any(_admissible(f, min_transmission) for f in found):
-        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
+        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds, engine or {})
         designs = mo.approximate(p, w, min_transmission, seeds)
         found += [_motion_fourbar(p, d, units) for d in designs]
     return MotionSynthesis(_best_first(found, p.scale, w, min_transmission), p.scale, w)
@@ -547,9 +553,19 @@ def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, we
     return P, p, w
 
 
-def _engine_seeds(objective: Any, seed: int, seconds: float) -> np.ndarray:
-    """The engine's best design of the circle-fit objective (a short search), as a four-bar vector (1, 10)."""
-    settings = Settings(seed, min(seconds, 5.0), restarts=2, generations=60, popsize=15, goal=0.0)
+#: motion's search of seeds by default: a short one (the circle fits do most of the work)
+ENGINE_SEEDS: dict[str, Any] = {"restarts": 2, "generations": 60, "popsize": 15, "goal": 0.0}
+
+
+def _engine_seeds(objective: Any, seed: int, seconds: float, engine: Mapping[str, Any]) -> np.ndarray:
+    """The engine's best design of the circle-fit objective, as a four-bar vector (1, 10).
+
+    A short search (:data:`ENGINE_SEEDS`, at most 5 s) unless ``engine`` says otherwise: its
+    restarts, generations, workers, scheduler and checkpoint are the engine's, as for every task.
+    """
+    given = {k: v for k, v in engine.items() if v is not None}
+    budget = seconds if given else min(seconds, 5.0)
+    settings = Settings(seed, budget, **{**ENGINE_SEEDS, **given})
     x = optimize(objective, settings).x
     return np.asarray(objective.fourbars(x[None]), float)
 
