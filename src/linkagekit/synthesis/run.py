@@ -465,25 +465,18 @@ def synthesize_motion(
         ``x, y, angle`` per pose (``angle`` in degrees, counter-clockwise from +x).
     inputs : sequence of float, optional
         The crank angle at each pose (degrees): timing, up to one common offset.
-    closed : bool
-        The motion is a cycle (the crank turns fully, back to the first pose).
-    approximate : bool
-        For 3 to 5 poses: the approximate route instead of the exact one (Burmester).
+    closed, approximate : bool
+        The motion is a cycle (the crank turns fully, back to the first pose); for 3 to 5
+        poses, the approximate route instead of the exact one (Burmester).
     weight : float, optional
         The angle weight ``w`` (diagonals per radian, default ``motion.ANGLE_WEIGHT``).
-    min_transmission : float
-        Degrees: the smallest transmission angle allowed over the sweep.
-    units : str
-        The poses' length unit.
-    seed, seconds
-        Of the engine's search that adds seeds (:func:`linkagekit.synthesis.optimize.optimize`).
+    min_transmission, units : float, str
+        Degrees: the smallest transmission angle allowed over the sweep; the poses' length unit.
     full_turn : bool
         The crank turns fully in one assembly mode, meeting the poses on the way (as a closed motion's).
-
-    engine : mapping, optional
-        The engine's options for its search of seeds (:class:`~linkagekit.synthesis.optimize.Settings`'
-        ``restarts``, ``generations``, ``workers``, ``scheduler``, ``checkpoint``); by default a
-        short search (``ENGINE_SEEDS``) of at most 5 s of ``seconds``.
+    seed, seconds, engine : int, float, mapping
+        The engine's search that adds seeds: by default short (``ENGINE_SEEDS``, at most 5 s);
+        ``engine`` may set its ``restarts``, ``generations``, ``workers``, ``scheduler``, ``checkpoint``.
 
     Examples
     --------
