@@ -43,6 +43,7 @@ Route (docs/method.md, "Motion generation")
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -670,8 +671,6 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
     ``P`` is the body frame's origin (the pose point), ``Q`` a tenth of the poses' diagonal
     along the body's line; the crank sweeps from the first pose's angle to the last one's.
     """
-    from ..model import Mechanism as _M
-
     v = d.vector
     ga, a, ra, gb, b, rb = v[0] + 1j * v[1], v[2] + 1j * v[3], v[4], v[5] + 1j * v[6], v[7] + 1j * v[8], v[9]
     F = np.array([[ga.real, ga.imag, a.real, a.imag, ra, gb.real, gb.imag, b.real, b.imag, rb]])
@@ -683,27 +682,30 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
     stop = start + (360.0 if p.closed else float(np.degrees(d.inputs[-1])) - start) * (
         1 if not p.closed or d.inputs[-1] >= d.inputs[0] else -1
     )
+    return guided_fourbar(z, start, stop, unit, name, "<motion synthesis>")
+
+
+def guided_fourbar(z: Sequence[complex], start: float, stop: float, unit: str, name: str, source: str) -> Mechanism:
+    """The four-bar a motion synthesis writes: joints ``A0, A1, B1, B0, P, Q`` (``z``, complex), its coupler
+    carrying ``P`` and ``Q`` (spec section 6), the crank sweeping from ``start`` to ``stop`` (degrees, steps of
+    at most 1 degree)."""
+    from ..model import Mechanism as _Mechanism
+
     steps = max(1, math.ceil(abs(stop - start) - 1e-9))
-    return _M.from_dict(
-        {
-            "format": "linkagekit/1",
-            "name": name,
-            "units": {"length": unit, "angle": "deg"},
-            "joints": {j: [float(w.real), float(w.imag)] for j, w in zip(JOINTS, z, strict=True)},
-            "links": {
-                "ground": ["A0", "B0"],
-                "crank": ["A0", "A1"],
-                "coupler": ["A1", "B1", "P", "Q"],
-                "rocker": ["B0", "B1"],
-            },
-            "drivers": [
-                {
-                    "link": "crank",
-                    "pivot": "A0",
-                    "toward": "A1",
-                    "angles": {"start": start, "stop": stop, "step": (stop - start) / steps},
-                }
-            ],
+    step = (stop - start) / steps if stop != start else 1.0
+    doc = {
+        "format": "linkagekit/1",
+        "name": name,
+        "units": {"length": unit, "angle": "deg"},
+        "joints": {j: [float(w.real), float(w.imag)] for j, w in zip(JOINTS, z, strict=True)},
+        "links": {
+            "ground": ["A0", "B0"],
+            "crank": ["A0", "A1"],
+            "coupler": ["A1", "B1", "P", "Q"],
+            "rocker": ["B0", "B1"],
         },
-        "<motion synthesis>",
-    )
+        "drivers": [
+            {"link": "crank", "pivot": "A0", "toward": "A1", "angles": {"start": start, "stop": stop, "step": step}}
+        ],
+    }
+    return _Mechanism.from_dict(doc, source)
