@@ -16,7 +16,7 @@ import pytest
 
 import linkagekit as lk
 from linkagekit.checks import input_range
-from linkagekit.errors import LinkageError, MechanismFileError
+from linkagekit.errors import LinkageError
 from linkagekit.plan import make_plan
 
 TOL = 1e-12  # of the mechanism's size, of the force scale
@@ -242,10 +242,14 @@ def _body_rates(mech, res, link, u, du, ddu):
     return ("K" if link == "bucket_barrel" else "G"), w_line - w_rel, al_line - al_rel
 
 
-def test_unfixable_actuator_is_refused_with_a_clear_message(tmp_path):
-    """An actuator whose rod's pin is on a link nothing places (inside a triad): one located line."""
+def test_actuator_inside_a_triad_is_placed_by_the_numerical_group(tmp_path):
+    """An actuator whose rod's pin is on a link no closed-form step places (inside a triad): refused with
+    "slides on a link that nothing fixes" before groups took slider drivers (issue 29); now the group holds
+    it: the pins are sqrt(17) + u apart (the slide is the line through both pins), every link keeps its lengths, the
+    pose comes back at 0 and a sample beyond the stroke is flagged (tests/test_group_cylinders.py checks the
+    numbers against the cylinder form and an independent solve)."""
     text = """
-joints: {A: [0, 0], B: [4, 0], C: [2, -1], X: [0.5, 2], Y: [3.5, 2], G: [2, 3], CH: [2, 0]}
+joints: {A: [0, 0], B: [4, 0], C: [1, -1], X: [0.5, 2], Y: [3.5, 2], G: [2, 3], CH: [1.25, 0]}
 links:
   ground: [A, B, C]
   l1: [A, X]
@@ -253,17 +257,20 @@ links:
   plate: [X, Y, G]
   barrel: [C, CH]
   rod: [G]
-sliders: [{link: rod, on: barrel, through: G, direction: [0, 1]}]
+sliders: [{link: rod, on: barrel, through: G, direction: [1, 4]}]
 drivers: [{slider: 0, stroke: [-0.5, 0.5]}]
 """
     path = tmp_path / "triad_actuator.yaml"
     path.write_text(text)
-    mech = lk.load(path)
-    with pytest.raises(MechanismFileError) as err:
-        lk.analyze(mech)
-    msg = str(err.value)
-    assert "drivers[0]: slider 0 slides on a link that nothing fixes before it" in msg and "'barrel'" in msg
-    assert "\n" not in msg
+    mech = lk.load(path)  # (with C at [2, -1] under G the pose is a dead point: G moves square to the slide)
+    u = np.array([-0.55, -0.45, -0.2, 0.0, 0.04, 0.2])  # it assembles for u in [-0.5 (stroke), 0.0501 (dead point)]
+    res = lk.analyze(mech, {"rod": u})
+    assert res.assembled.tolist() == [False, True, True, True, True, False]
+    z = {j: res.xy(j)[1:5] @ [1, 1j] for j in mech.joint_names}
+    np.testing.assert_allclose(np.abs(z["G"] - z["C"]), np.sqrt(17) + u[1:5], rtol=0, atol=1e-10)
+    for a, b in (("A", "X"), ("B", "Y"), ("X", "Y"), ("X", "G"), ("Y", "G"), ("C", "CH")):
+        np.testing.assert_allclose(np.abs(z[a] - z[b]), abs(mech.joints[a] - mech.joints[b]), rtol=0, atol=1e-10)
+    assert all(abs(z[j][2] - mech.joints[j]) <= 1e-12 for j in mech.joint_names)
 
 
 @pytest.mark.parametrize(
@@ -295,6 +302,22 @@ drivers: [{driver}]
         lk.load(path)
     except LinkageError as e:
         assert key in str(e)
+
+
+def test_check_names_the_stroke_ends_by_length_when_the_slide_points_back():
+    """The slide from the rod's pin to the barrel's: u = -0.4 is the longest actuator (2.9 m), 0.35 the shortest."""
+    d = lk.load("examples/excavator_bucket_slider.yaml").to_dict()
+    d["sliders"][0]["direction"] = [-0.96, 0.28]  # along G -> K: the length is 2.5 - u
+    d["drivers"][0]["stroke"] = [-0.4, 0.35]
+    d["drivers"][0].pop("displacements", None)  # the sweep: the stroke's
+    dead = lk.check(lk.Mechanism.from_dict(d))["dead_points"]["bucket_rod"]
+    got = {round(dp["input"], 6): dp["detail"] for dp in dead}
+    assert got == {
+        -0.4: "cylinder 'bucket_rod' at the end of its stroke (longest)",
+        0.35: "cylinder 'bucket_rod' at the end of its stroke (shortest)",
+    }
+    cyl = lk.check(lk.load("examples/excavator_bucket.yaml"))["dead_points"]["bucket_cylinder"]
+    assert [dp["detail"].rsplit(" ", 1)[1] for dp in cyl] == ["(shortest)", "(longest)"]
 
 
 def test_stroke_of_a_slider_driver_on_the_frame():

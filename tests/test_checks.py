@@ -868,8 +868,12 @@ def test_min_transmission_is_the_synthesis_default():
     import inspect
 
     from linkagekit.checks import MIN_TRANSMISSION
+    from linkagekit.synthesis.objective import Problem
+    from linkagekit.synthesis.run import synthesize_path
 
-    assert inspect.signature(lk.synthesize).parameters["min_transmission"].default == MIN_TRANSMISSION
+    # path generation's bound when none is given (None: the task's default; motion and function have none)
+    assert inspect.signature(synthesize_path).parameters["min_transmission"].default is None
+    assert inspect.signature(Problem).parameters["min_transmission"].default == MIN_TRANSMISSION
 
 
 def cylinder_arm(start):
@@ -918,3 +922,48 @@ def test_check_json_keeps_every_key_and_adds_the_new_ones(examples, capsys):
     assert {"dof", "input_range", "input_ranges", "dead_points", "fourbars", "held_at", "units"} <= set(doc)
     assert doc["sliders"][0]["time_ratio"] == pytest.approx(2.0, abs=1e-9)
     assert doc["warnings"] == [] and doc["assembly_gaps"] == {"crank": []}
+
+
+def test_a_dyad_that_stays_tangent_is_not_a_change_point_at_every_sample():
+    """Two rhombus windows (all bars 1): past 180 deg the first folds into a kite, which puts B1 on A0
+    and B2's two circles tangent (|A2 - A0| = 2 = 1 + 1) for half a turn.  Before, every sample
+    of that half turn was listed as a change point (about 3400); now the run counts by its ends."""
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {"A0": [0, 0], "A1": [1, 0], "A2": [2, 0], "B0": [0, 1], "B1": [1, 1], "B2": [2, 1]},
+        "links": {
+            "ground": ["A0", "A1", "A2"],
+            "c0": ["A0", "B0"],
+            "c1": ["A1", "B1"],
+            "c2": ["A2", "B2"],
+            "k1": ["B0", "B1"],
+            "k2": ["B1", "B2"],
+        },
+        "drivers": [{"link": "c0", "pivot": "A0", "toward": "B0", "angles": {"start": 90, "stop": 450, "step": 1}}],
+    }
+    rep = lk.check(lk.Mechanism.from_dict(doc))
+    dead = rep.dead_points["c0"]
+    changes = [d for d in dead if d["kind"] == "change point"]
+    assert 1 <= len(changes) <= 3, [round(d["input"], 4) for d in changes]
+    assert any(abs(d["input"] - 180) < 1e-6 for d in changes)  # the rhombus's own flat position
+
+
+def test_a_resting_rocker_has_no_limit_positions_from_rounding(tmp_path, capsys):
+    """A rhombus (ground and every side 1) in its pose's mode: a parallelogram for crank in (0, 180) deg, where
+    the rocker turns with the crank (rocker angle = crank angle), then folded into a kite, D on A, the rocker
+    resting at 180 deg until the crank reaches the ground again.  By hand: no zero crossing of the rocker's speed
+    (it rises, then rests), and a swing of 180 deg.  The rounding of the resting rocker's speed (1e-15) used to
+    flip sign at hundreds of samples, each listed as a limit position at +-180 deg, and the swing came out 0."""
+    from helpers import fourbar_dict
+
+    C = np.exp(1j * np.radians(60.0))
+    mech = lk.Mechanism.from_dict(fourbar_dict(0j, 1 + 0j, C, C + 1, C + 0.5 + 0.7j))
+    fb = lk.check(mech)["fourbars"][0]
+    assert fb["limit_positions"] == []
+    assert fb["swing"] == pytest.approx(180.0, abs=0.01)  # the dense samples' range (0.05 deg grid)
+    path = tmp_path / "rhombus.json"
+    path.write_text(json.dumps(mech.to_dict()))
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Limit positions of rocker: none" in out and len(out.splitlines()) < 40

@@ -31,6 +31,9 @@ _LAZY = {
     "Result": "result",
     "check": "checks",
     "modes": "checks",
+    "simulate": "dynamics",
+    "reduced": "dynamics",
+    "size_flywheel": "flywheel",
     "build_scene": "viz.scene",
     "draw_mechanism": "viz.draw",
     "plot_quantity": "viz.draw",
@@ -59,8 +62,11 @@ __all__ = [
     "modes",
     "plot_quantity",
     "read_targets",
+    "reduced",
     "reference_signs",
     "save",
+    "simulate",
+    "size_flywheel",
     "synthesize",
     "write_report",
 ]
@@ -68,7 +74,9 @@ __all__ = [
 if TYPE_CHECKING:  # pragma: no cover
     from .api import analyze, analyze_chunks, reference_signs
     from .checks import check, modes
+    from .dynamics import reduced, simulate
     from .files import load, save
+    from .flywheel import size_flywheel
     from .model import Mechanism
     from .result import Result
     from .synthesis.run import synthesize

@@ -107,6 +107,7 @@ class Needs(Enum):
     POSITIONS = "positions"
     RATES = "rates"
     FORCES = "forces"
+    TIME = "time"  # a simulation's time axis
 
 
 #: placeholders in a :attr:`Kind.json` path: the owner's name, the reaction's index
@@ -265,6 +266,8 @@ _O, _I = OWNER_KEY, INDEX_KEY
 
 #: every kind of quantity, in column order (kinds of one owner kind in a row go owner by owner)
 KINDS: tuple[Kind, ...] = (
+    Kind(Owner.MECHANISM, "time", "time", UnitKind.TIME, Group.INPUTS, None, ("time",), lambda r, q: r.time,
+         Needs.TIME),
     Kind(Owner.DRIVER, "input", "input:{}", None, Group.INPUTS, None, ("inputs", _O),
          lambda r, q: r.inputs[q.owner_name]),
     Kind(Owner.MECHANISM, "assembled", "assembled", UnitKind.NONE, Group.STATE, None, ("assembled",),
@@ -405,9 +408,13 @@ def build(
     rates: bool,
     reactions: Sequence[ReactionKey] | None = None,
     kinds: Sequence[Kind] = KINDS,
+    time: bool = False,
 ) -> Catalogue:
-    """The catalogue of an analysis of ``mech``: with rates or not, with forces (their reactions' layout) or not."""
+    """The catalogue of an analysis of ``mech``: with rates or not, with forces (their reactions' layout) or not,
+    with a time axis (a simulation) or not."""
     have = {Needs.POSITIONS, *([Needs.RATES] if rates else []), *([Needs.FORCES] if reactions is not None else [])}
+    if time:
+        have.add(Needs.TIME)
     layout = tuple(reactions or ())
     lu, au = mech.length_unit, mech.angle_unit
     turn = 360.0 if au == "deg" else 2 * math.pi

@@ -28,7 +28,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .api import analyze, prepare, sweep_inputs
-from .branch import along_sweep
+from .branch import MAX_PATH, PathTooLongError, along_sweep
 from .errors import InputError
 from .group import Group
 from .groupmodes import continuation_intervals, enumerate_modes
@@ -46,6 +46,8 @@ MAX_MODE_SLOTS = 12
 N_BISECT = 60
 #: a sign step's |determinant| at a sample below which a local minimum is refined as a possible change point
 TOUCH = 0.05
+#: a rocker whose angular velocity stays within this share of its largest is at rest (the rest is rounding)
+REST = 1e-9
 #: check warns when a four-bar's transmission angle goes below this (degrees; synthesize's --min-transmission default)
 MIN_TRANSMISSION = 20.0
 #: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
@@ -581,7 +583,8 @@ def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
         out["links"] = [other]
         out["cylinder"] = cyl
         if math.isfinite(s) and min(abs(s - lo), abs(s - hi)) <= 1e-6 * s:
-            end = "shortest" if abs(s - lo) <= abs(s - hi) else "longest"
+            # by length, not by which end of the stroke: an actuator's slide may point from rod to barrel
+            end = "shortest" if abs(s - min(lo, hi)) <= abs(s - max(lo, hi)) else "longest"
             out["detail"] = f"cylinder '{cyl}' at the end of its stroke ({end})"
         elif isinstance(step, CylinderDyad | ActuatorDyad):
             out["detail"] = f"cylinder '{cyl}' in line with {other} at {names[step.joint]}"
@@ -704,12 +707,20 @@ def _run(
 
 
 def _limit_brackets(run: _Run, li: int) -> list[_Bracket]:
-    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours."""
+    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours.
+
+    Not where it only flickers about zero while the rocker rests (both neighbours within ``REST`` of the largest
+    speed: a rhombus folded into a kite holds its rocker still for half a turn, and the rounding of its speed
+    changed sign at hundreds of samples).
+    """
     sw, row = run.sw, run.q.w(li)
     w = run.rows[row]
     ia = np.flatnonzero(sw.has_next)
     wa, wb = w[ia], w[sw.next[ia]]
     hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
+    if hit.any():
+        rest = REST * float(np.nanmax(np.abs(w)))
+        hit &= (np.abs(wa) > rest) | (np.abs(wb) > rest)
     return [_Bracket(sw.x[k], sw.nx[k], row, int(k), float(np.sign(w[k]))) for k in ia[hit]]
 
 
@@ -742,6 +753,8 @@ def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
 
     For a circle-circle step that is where the distance s between its known joints has an
     extremum at r1 + r2 or |r1 - r2|: a simple root of ds; otherwise a minimum of |cond|.
+    Where the step stays at a change point over a run of samples (a rhombus folded into a kite
+    puts the next dyad's circles tangent for half a turn), only the run's two ends count.
     """
     sw, q = run.sw, run.q
     interior = sw.has_prev & sw.has_next
@@ -750,6 +763,8 @@ def _change_point_brackets(run: _Run) -> list[tuple[int, _Bracket]]:
         c = run.rows[q.cond(k)]
         with np.errstate(invalid="ignore"):
             cand = interior & (c <= c[sw.prev]) & (c <= c[sw.next]) & (c < TOUCH)
+            flat = c < SINGULAR_TOL  # a step that stays at its change point (a kite's folded dyad): its two ends
+            cand &= ~(flat & flat[sw.prev] & flat[sw.next])
         out += [(k, _around(run, int(i), q.cond(k), q.ds(k))) for i in np.flatnonzero(cand)]
     return out
 
@@ -781,7 +796,7 @@ def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[fl
         margins = fin.state.margin[:, col]
         k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
         info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
-        if (stroke_end := _slide_stroke_end(run, v)) is not None:
+        if (stroke_end := _slide_stroke_end(run, v) or _group_stroke_end(run, v)) is not None:
             info.update(stroke_end)
         elif params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
             info.update(_group_end(params))
@@ -808,6 +823,26 @@ def _slide_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
     end = "min" if abs(v - lo) <= abs(v - hi) else "max"
     detail = f"slider driver '{plan.drivers[run.driver]}' at the end of its stroke ({end})"
     return {"links": [step.block], "detail": detail}
+
+
+def _group_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
+    """A cylinder driver of a numerical group at an end of its stroke there (None: not such an end)."""
+    plan = run.params.plan
+    for st, nums in zip(plan.steps, run.params.steps, strict=True):
+        if not isinstance(st, Group):
+            continue
+        for i, (d, (lo_a, hi_a)) in enumerate(zip(st.input_drivers, nums[5], strict=True)):
+            lo, hi = float(lo_a[0, 0]), float(hi_a[0, 0])
+            if d != run.driver or min(abs(v - lo), abs(v - hi)) > 1e-9 * max(abs(v), abs(lo), abs(hi)):
+                continue
+            links = [gl.name for gl in st.links]
+            if i < len(st.cylinders):
+                end = "shortest" if abs(v - lo) <= abs(v - hi) else "longest"
+                detail = f"cylinder '{plan.drivers[d]}' at the end of its stroke ({end})"
+                return {"links": links, "cylinder": plan.drivers[d], "detail": detail}
+            end = "min" if abs(v - lo) <= abs(v - hi) else "max"
+            return {"links": links, "detail": f"slider driver '{plan.drivers[d]}' at the end of its stroke ({end})"}
+    return None
 
 
 def _change_dead_points(
@@ -1233,7 +1268,8 @@ class CheckReport:
         The change points the branch crosses along the file's sweep when it is followed
         continuously (``analyze --branch continuous``), from the pose's input up and down:
         each ``{"joint", "driver", "input"}`` (the sign step's joint, the driver the sweep
-        follows, its input there in the file's unit, to about 1e-6 degree).
+        follows, its input there in the file's unit, to about 1e-6 degree); None when the
+        sweep is too long to follow (more than :data:`linkagekit.branch.MAX_PATH` steps).
     warnings : tuple of dict
         ``kind`` ``"transmission-angle"`` (a loop's ``min`` below ``limit``,
         :data:`MIN_TRANSMISSION`, or its ``max`` above 180 - ``limit``) or ``"toggle"`` (a
@@ -1263,7 +1299,7 @@ class CheckReport:
     sliders: tuple[dict[str, Any], ...] = ()
     assembly_gaps: dict[str, list[list[float]]] = field(default_factory=dict)
     warnings: tuple[dict[str, Any], ...] = ()
-    change_points: tuple[dict[str, Any], ...] = ()
+    change_points: tuple[dict[str, Any], ...] | None = ()
 
     @property
     def input_range(self) -> list[list[float]]:
@@ -1301,7 +1337,7 @@ class CheckReport:
             out["dynamics"] = self.dynamics
         out["sliders"] = list(self.sliders)
         out["assembly_gaps"] = self.assembly_gaps
-        out["change_points"] = list(self.change_points)
+        out["change_points"] = None if self.change_points is None else list(self.change_points)
         out["warnings"] = list(self.warnings)
         finite: dict[str, Any] = _finite(out)
         return finite
@@ -1436,10 +1472,17 @@ def check(mech: Mechanism) -> CheckReport:
     )
 
 
-def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...]:
-    """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`)."""
+def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...] | None:
+    """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`).
+
+    None when the sweep is too long to follow: ``check`` still reports everything else about
+    a file that ``analyze`` takes.
+    """
     q = sweep_inputs(mech, params)
-    br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
+    try:
+        br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
+    except PathTooLongError:
+        return None
     steps, _, where = br.points
     drv = mech.drivers[br.driver]
     scale = drv.input_scale(mech)
@@ -1560,7 +1603,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
         *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
-        *_change_point_lines(rep.get("change_points"), fmt),
+        *_change_point_lines(rep.get("change_points", []), fmt),
         *(_warning_line(w, fmt) for w in rep.get("warnings") or []),
     ]
     return "\n".join(lines) + "\n"
@@ -1568,6 +1611,8 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
 
 def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text) -> list[str]:
     """The change points the continuous branch crosses along the sweep (none: no line)."""
+    if cps is None:
+        return [f"Change points: not followed (the sweep spans more than {MAX_PATH} steps of 1 degree)"]
     if not cps:
         return []
     at = ", ".join(f"{cp['joint']} at {fmt.inp(cp['driver'], cp['input'])}" for cp in cps[:MAX_TEXT_DEAD_POINTS])

@@ -46,6 +46,23 @@ terms are ``gamma = 2 Im(w' conj(u'))`` and ``2 Im(e_o' conj(c e'))`` (``w' = v_
 e'``, ``u' = dhat e'``, ``e' = v_c1 - v_c0``; zero on the ground). Scales: the group's mean
 link length on a line row, ``|s_o1 - s_o0|^2`` on a lock row.
 
+Cylinders and slider drivers
+----------------------------
+A cylinder driver whose ends are joints of the group (or one a known joint) adds the row
+``|z_b - z_a|^2 - s^2 = 0`` (:class:`GroupCylinder`), ``s`` its length: the driver's input.
+A slider driver between two moving links (an actuator's barrel and rod) whose slider is the
+group's, its guide the carrier, adds the *displacement row* ``Re(w conj(u)) - x = 0``
+(:class:`GroupSliderDrive`; ``w``, ``u`` as the line row's, ``x`` the displacement). The input
+is a *held value*: a slot after the known joints (its real part the input, :meth:`Group.held`),
+which the walk moves exactly as it moves the known joints (linearly between states), so the
+continuation is unchanged. Gradients: ``2 e`` on ``b``, ``-2 e`` on ``a``, ``-2 s`` on ``s``
+(``e = z_b - z_a``); ``u`` on ``k``, ``conj(rho - 1) u - w conj(dhat)`` on ``c0``, ``-conj(rho)
+u + w conj(dhat)`` on ``c1``, ``-1`` on ``x`` (``Re(a dz)`` has ``G = conj(a)``, ``Re(g
+conj(dz))`` has ``G = g``). The held values' rates are the drivers' speeds and accelerations,
+and ``gamma = 2 |e'|^2 - 2 s'^2`` and ``2 Re(w' conj(u'))``. Scales: ``s0^2`` (the pose's
+length) and the mean link length. A sample beyond a driver's stroke is flagged as the
+closed-form steps flag it (:meth:`Group._beyond_stroke`).
+
 Continuation on a fixed grid
 ----------------------------
 Newton converges to the root nearest its start, which may belong to another assembly
@@ -130,7 +147,7 @@ from typing import Any
 import numpy as np
 
 from .geometry import NAN_POINT, FloatArray, link_rates
-from .steps import Kin, Nums, Rate, Source, Step, WalkGrid
+from .steps import Kin, Nums, Rate, Source, Step, WalkGrid, _stroke_margin
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
 NEWTON_TOL = 1e-12
@@ -206,6 +223,52 @@ class GroupSlider:
     def n_rows(self) -> int:
         """Its equations: the line, and the lock when it has one."""
         return 1 + (self.lock is not None)
+
+
+@dataclass(frozen=True)
+class GroupCylinder:
+    """A cylinder driver of a group: its two ends (joints of the group, or one a known joint) are the
+    driver's input apart, a length that changes from sample to sample.
+
+    The length enters the group as a *held value* after the known joints (slot ``m + len(known) +
+    i``, its real part the length): the walk moves it with the known joints, linearly between
+    states, which is a homotopy in the length as in the joints (see :meth:`Group.held`).
+    """
+
+    driver: int  # index in the file's `drivers`
+    ends: tuple[int, int]  # its ends as slots
+    end_joints: tuple[int, int]  # ... as plan indices
+
+
+@dataclass(frozen=True)
+class GroupSliderDrive:
+    """A slider driver of a group (an actuator written as a barrel, a rod and a slider): the point of one of the
+    group's sliders is the driver's input (a displacement from its reference position) along the line.
+
+    The displacement is a held value after the cylinders' lengths, as theirs (:class:`GroupCylinder`).
+    """
+
+    driver: int  # index in the file's `drivers`
+    slider: int  # the slider's position in the group's `sliders`
+
+
+@dataclass(frozen=True)
+class _CRows:
+    """Where a group's cylinder equations sit (after the sliders' rows), per cylinder."""
+
+    a: np.ndarray  # (n_cyl,) the slot of its first end
+    b: np.ndarray  # (n_cyl,) ... of its second
+    s: np.ndarray  # (n_cyl,) the slot of its length (a held value)
+    row: np.ndarray  # (n_cyl,) the row of its distance equation
+
+
+@dataclass(frozen=True)
+class _DRows:
+    """Where a group's slider drivers' equations sit (after the cylinders' rows), per slider driver."""
+
+    slider: np.ndarray  # (n_drv,) its slider's position in the group's sliders
+    s: np.ndarray  # (n_drv,) the slot of its displacement (a held value)
+    row: np.ndarray  # (n_drv,) the row of its equation
 
 
 @dataclass(frozen=True)
@@ -289,9 +352,15 @@ class Group(Step):
     keep_rotation: tuple[str, ...] = ()
     angular: tuple[bool, ...] = ()  # per driver: an angle (the walk's added samples are 1 degree apart)
     sliders: tuple[GroupSlider, ...] = ()
+    cylinders: tuple[GroupCylinder, ...] = ()
+    drives: tuple[GroupSliderDrive, ...] = ()
 
     # ------------------------------------------------------------------ numbers
     def numbers(self, src: Source) -> Nums:
+        """``(lengths, rhos, bases, zu, zk, strokes)``: the links' lengths, their further joints' rhos (then the
+        sliders' and the cylinders' numbers, :meth:`_slider_numbers`, the cylinders' pose lengths), the links'
+        bases, the pose's group and known joints, and the stroke ``(lo, hi)`` of each driver the group reads
+        (:attr:`input_drivers`)."""
         lengths, rhos, bases = [], [], []
         for gl in self.links:
             s = [src.shape(gl.name, j) for j in gl.joints]
@@ -301,9 +370,93 @@ class Group(Step):
             with np.errstate(divide="ignore", invalid="ignore"):
                 rhos.append(tuple((sk - s[0]) / base for sk in s[2:]))
         rhos.extend(self._slider_numbers(src))
+        rhos.extend((np.abs(src.pose(gc.end_joints[1]) - src.pose(gc.end_joints[0])) + 0j,) for gc in self.cylinders)
         zu = np.stack([src.pose(j) for j in self.joints])  # (m, D, 1)
         zk = np.stack([src.pose(j) for j in self.known]) if self.known else np.zeros((0, *zu.shape[1:]), complex)
-        return tuple(lengths), tuple(rhos), tuple(bases), zu, zk
+        strokes = tuple(src.stroke(d) for d in self.input_drivers)
+        return tuple(lengths), tuple(rhos), tuple(bases), zu, zk, strokes
+
+    @property
+    def input_drivers(self) -> tuple[int, ...]:
+        """The drivers whose input the group's equations read, in held order: its cylinders, then its slider
+        drivers."""
+        return tuple(gc.driver for gc in self.cylinders) + tuple(gd.driver for gd in self.drives)
+
+    @property
+    def n_held(self) -> int:
+        """The held values the equations read after the group's joints: the known joints, then the inputs of
+        :attr:`input_drivers` (a cylinder's length, a slider driver's displacement)."""
+        return len(self.known) + len(self.input_drivers)
+
+    def held(self, z: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """The held values (n_held, ...) at joint positions ``z`` (n_joints, ...): the known joints, then each
+        input (complex, real) of :attr:`input_drivers`: ``q[driver]`` (``q`` (n_drivers, D or 1, n) broadcast to
+        ``z``'s samples) or, without ``q``, a cylinder's ends' distance in ``z`` and 0 for a slider driver's
+        displacement (its rows' Jacobian and acceleration terms do not read it; :meth:`inputs_at` does)."""
+        known = z[list(self.known)] if self.known else np.zeros((0, *z.shape[1:]), complex)
+        if not self.input_drivers:
+            return known
+        if q is None:
+            ins = [np.abs(z[gc.end_joints[1]] - z[gc.end_joints[0]]) for gc in self.cylinders]
+            ins += [np.zeros(z.shape[1:]) for _ in self.drives]
+        else:
+            ins = [np.broadcast_to(q[d], z.shape[1:]) for d in self.input_drivers]
+        return np.concatenate([known, np.array(ins, float).astype(complex)])
+
+    def inputs_at(self, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The inputs of :attr:`input_drivers` (n_in, B) that slot positions ``P`` (n_slots, B; its held inputs
+        not read) realise with numbers ``R``: the cylinders' ends' distances, the slider drivers' displacements
+        ``Re(w conj(u))`` (see the module's docstring)."""
+        cr = self._crows
+        ins = [np.abs(P[cr.b] - P[cr.a])]
+        if self.drives:
+            dr = self._drows
+            rho, dhat, _, _ = self._snums(R)
+            A, e = self._frames(P)
+            i = dr.slider
+            ins.append(((P[self._srows.k[i]] - A[i] - rho[i] * e[i]) * np.conj(dhat[i] * e[i])).real)
+        return np.concatenate(ins)
+
+    def stroke_margins(self, z: np.ndarray, nums: Nums) -> np.ndarray:
+        """How far each input of :attr:`input_drivers` is inside its stroke at positions ``z`` (n_joints, D, n):
+        (n_in, D, n), negative outside; a cylinder's relative to its length (as the closed-form cylinder steps'
+        margins), a slider driver's relative to the group's mean link length."""
+        D, n = z.shape[1:]
+        P = np.concatenate([z[list(self.joints)], self.held(z)]).reshape(-1, D * n)
+        L, R = self._stack(self._design_nums(nums, np.repeat(np.arange(D), n)), D * n)
+        ins = self.inputs_at(P, R).reshape(-1, D, n)
+        size = np.mean(L, axis=0).reshape(D, n)
+        out = []
+        for i, (lo, hi) in enumerate(nums[5]):
+            if i < len(self.cylinders):
+                out.append(_stroke_margin(ins[i], lo, hi, 0.0))
+            else:
+                with np.errstate(invalid="ignore"):
+                    out.append(np.minimum(ins[i] - lo, hi - ins[i]) / size)
+        return np.array(out, float).reshape(len(out), D, n)
+
+    def _pose_held(self, zu: np.ndarray, zk: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The held values of a start (the group's joints ``zu`` and known joints ``zk``): its inputs are those
+        the start realises (:meth:`inputs_at`)."""
+        if not self.input_drivers:
+            return zk
+        P = np.concatenate([zu, zk, np.zeros((len(self.input_drivers), *zk.shape[1:]), complex)])
+        return np.concatenate([zk, self.inputs_at(P, R) + 0j])
+
+    def _beyond_stroke(self, q: np.ndarray, strokes: Nums, eps: float, shape: tuple[int, ...]) -> np.ndarray:
+        """The samples (D, n) where an input is beyond its stroke: a cylinder's length (or not positive) as the
+        closed-form cylinder steps flag it, a slider driver's displacement as :class:`~linkagekit.steps.SliderDrive`
+        does (beyond ``eps`` of the stroke's larger end)."""
+        out = np.zeros(shape, bool)
+        n_cyl = len(self.cylinders)
+        for i, (d, (lo, hi)) in enumerate(zip(self.input_drivers, strokes, strict=True)):
+            u = np.broadcast_to(q[d], shape)
+            if i < n_cyl:
+                out |= _stroke_margin(u, lo, hi, eps) < 0
+            else:
+                slack = eps * np.maximum(np.abs(lo), np.abs(hi))  # no stroke: lo - slack = -inf, hi + slack = inf
+                out |= (u < lo - slack) | (u > hi + slack)
+        return out
 
     def _slider_numbers(self, src: Source) -> list[tuple[np.ndarray, ...]]:
         """Per slider ``(rho, dhat, c, ell)``: its line ``A + rho e`` along ``dhat e`` (``A``, ``e``: the carrier's
@@ -333,7 +486,10 @@ class Group(Step):
         sign, so there a sample it cannot reach by continuation stays flagged).
         """
         on_two = sum(
-            sum(j in gl.joints for gl in self.links) + sum(j == gs.point_joint for gs in self.sliders) >= 2
+            sum(j in gl.joints for gl in self.links)
+            + sum(j == gs.point_joint for gs in self.sliders)
+            + sum(j in gc.end_joints for gc in self.cylinders)
+            >= 2
             for j in self.joints
         )
         return on_two == 1
@@ -377,6 +533,82 @@ class Group(Step):
             row += 1
         return _SRows(*(np.array(x, dtype=np.intp) for x in (c0, c1, k, line, locked, o0, o1, lock)))
 
+    @cached_property
+    def _crows(self) -> _CRows:
+        row = self._crows_start
+        first = len(self.joints) + len(self.known)
+        a = [gc.ends[0] for gc in self.cylinders]
+        b = [gc.ends[1] for gc in self.cylinders]
+        n = len(self.cylinders)
+        out = (a, b, list(range(first, first + n)), list(range(row, row + n)))
+        return _CRows(*(np.array(x, dtype=np.intp) for x in out))
+
+    @cached_property
+    def _drows(self) -> _DRows:
+        first = self._crows_start + len(self.cylinders)
+        slot = len(self.joints) + len(self.known) + len(self.cylinders)
+        n = len(self.drives)
+        sl = [gd.slider for gd in self.drives]
+        return _DRows(*(np.array(x, dtype=np.intp) for x in (sl, range(slot, slot + n), range(first, first + n))))
+
+    @property
+    def _crows_start(self) -> int:
+        """The first row after the links' and the sliders'."""
+        return sum(1 + 2 * (len(gl.slots) - 2) for gl in self.links) + sum(gs.n_rows for gs in self.sliders)
+
+    def _drive_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
+        """The slider drivers' residuals into ``res``: ``Re(w conj(u)) - x``, ``x`` the displacement (a held value)."""
+        dr = self._drows
+        res[dr.row] = self.inputs_at(P, R)[len(self.cylinders) :] - P[dr.s].real
+
+    def _drive_jac(self, P: np.ndarray, R: np.ndarray, J: FloatArray) -> None:
+        """The slider drivers' Jacobian rows into ``J``: the real part's gradients of the slider's line row (``u``
+        on ``k``, ``conj(rho - 1) u - w conj(dhat)`` on ``c0``, ``-conj(rho) u + w conj(dhat)`` on ``c1``; none on
+        the ground) and ``-1`` on the displacement's slot."""
+        dr, sr = self._drows, self._srows
+        i = dr.slider
+        rho, dhat, _, _ = self._snums(R)
+        A, e = self._frames(P)
+        rho, dhat, A, e = rho[i], dhat[i], A[i], e[i]
+        u, w = dhat * e, P[sr.k[i]] - A - rho * e
+        wd = w * np.conj(dhat)
+        n_cols = J.shape[2] // 2
+        _add(J, dr.row, sr.k[i], u, n_cols)
+        _add(J, dr.row, sr.c0[i], np.conj(rho - 1) * u - wd, n_cols)
+        _add(J, dr.row, sr.c1[i], -np.conj(rho) * u + wd, n_cols)
+        _add(J, dr.row, dr.s, -np.ones_like(u), n_cols)
+
+    def _drive_gamma(self, V: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The slider drivers' acceleration terms (n_drives, B) at velocities ``V``: ``2 Re(w' conj(u'))``."""
+        dr, sr = self._drows, self._srows
+        i = dr.slider
+        rho, dhat, _, _ = self._snums(R)
+        vA, ve = self._frames(V, rates=True)
+        out: np.ndarray = 2 * ((V[sr.k[i]] - vA[i] - rho[i] * ve[i]) * np.conj(dhat[i] * ve[i])).real
+        return out
+
+    def _cnums(self, R: np.ndarray) -> np.ndarray:
+        """The cylinders' pose lengths (n_cyl, B) from ``R`` (after the links' rhos and the sliders' numbers)."""
+        n = len(self._rows.k) + 4 * len(self.sliders)
+        return R[n : n + len(self.cylinders)].real
+
+    def _cyl_res(self, P: np.ndarray, res: FloatArray) -> None:
+        """The cylinders' residuals into ``res``: ``|z_b - z_a|^2 - s^2``, ``s`` the length (a held value)."""
+        cr = self._crows
+        e = P[cr.b] - P[cr.a]
+        s = P[cr.s].real
+        res[cr.row] = e.real * e.real + e.imag * e.imag - s * s
+
+    def _cyl_jac(self, P: np.ndarray, J: FloatArray) -> None:
+        """The cylinders' Jacobian rows into ``J``: ``2 e`` on ``b``, ``-2 e`` on ``a`` (``e = z_b - z_a``), and
+        ``-2 s`` on the length's slot (its real part: the length)."""
+        cr = self._crows
+        e = P[cr.b] - P[cr.a]
+        n_cols = J.shape[2] // 2
+        _add(J, cr.row, cr.b, 2 * e, n_cols)
+        _add(J, cr.row, cr.a, -2 * e, n_cols)
+        _add(J, cr.row, cr.s, -2 * P[cr.s].real + 0j, n_cols)
+
     def _frames(self, P: np.ndarray, rates: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Each slider's carrier frame ``(A, e)`` (n_sl, B) at ``P``: its first joint and base (``0, 1`` on the
         ground); with ``rates`` (``P`` velocities or accelerations) their derivatives (``0, 0`` on the ground)."""
@@ -389,7 +621,8 @@ class Group(Step):
     def _snums(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The sliders' numbers ``(rho, dhat, c, ell)``, each (n_sl, B), from ``R`` (after the links' rhos)."""
         n = len(self._rows.k)
-        return R[n::4], R[n + 1 :: 4], R[n + 2 :: 4], R[n + 3 :: 4]
+        end = n + 4 * len(self.sliders)
+        return R[n:end:4], R[n + 1 : end : 4], R[n + 2 : end : 4], R[n + 3 : end : 4]
 
     def _slider_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
         """The sliders' residuals into ``res``: ``Im(w conj(u))`` (line) and ``Im(e_o conj(c e))`` (lock)."""
@@ -450,6 +683,10 @@ class Group(Step):
             res[rw.lin], res[rw.lin + 1] = c.real, c.imag
         if self.sliders:
             self._slider_res(P, R, res)
+        if self.cylinders:
+            self._cyl_res(P, res)
+        if self.drives:
+            self._drive_res(P, R, res)
         return res
 
     def _scale(self, L: FloatArray, R: np.ndarray) -> FloatArray:
@@ -463,6 +700,10 @@ class Group(Step):
             sr = self._srows
             scale[sr.line] = np.mean(L, axis=0)
             scale[sr.lock] = self._snums(R)[3][sr.locked].real ** 2
+        if self.cylinders:
+            scale[self._crows.row] = self._cnums(R) ** 2
+        if self.drives:
+            scale[self._drows.row] = np.mean(L, axis=0)
         return scale
 
     def _lin_jacobian(self, R: np.ndarray, n_cols: int) -> FloatArray:
@@ -494,6 +735,10 @@ class Group(Step):
             J[:, rows, cols + 1] = (f * e.imag[on]).T
         if self.sliders:
             self._slider_jac(P, R, J)
+        if self.cylinders:
+            self._cyl_jac(P, J)
+        if self.drives:
+            self._drive_jac(P, R, J)
         return J
 
     def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
@@ -692,9 +937,9 @@ class Group(Step):
         _, D, n = z.shape
         m = len(self.joints)
         zu0 = np.broadcast_to(nums[3][:, :, 0], (m, D))
-        zk0 = np.broadcast_to(nums[4][:, :, 0], (len(self.known), D))
         dn = self._design_nums(nums, np.arange(D))
-        K_all = z[list(self.known)] if self.known else np.zeros((0, D, n), complex)
+        zk0 = self._pose_held(zu0, np.broadcast_to(nums[4][:, :, 0], (len(self.known), D)), self._stack(dn, D)[1])
+        K_all = self.held(z, k.q)  # the known joints, then the cylinders' lengths (the drivers' inputs)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
         lo, hi, mg = self._reach(dn, D)
@@ -721,6 +966,8 @@ class Group(Step):
         else:
             places = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
+        if self.input_drivers:
+            w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
         if self.keep_rotation:
@@ -918,10 +1165,10 @@ class Group(Step):
             dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
         V = np.full((m, D, G), NAN_POINT)
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
-        if not len(d) or not len(self.known):
+        if not len(d) or not self.n_held:
             return V
         P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
-        J = self.jacobian(P, self._design_nums(w.nums, d), m + len(self.known))
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
         dk = dK[:, d, j]
         vk = np.stack([dk.real, dk.imag], axis=-1).transpose(1, 0, 2).reshape(len(d), -1)
         rhs = -np.einsum("bij,bj->bi", J[:, :, 2 * m :], vk)
@@ -1091,7 +1338,9 @@ class Group(Step):
         rng = np.random.default_rng(12345)
         noise = rng.standard_normal((RESTARTS, m, 1)) + 1j * rng.standard_normal((RESTARTS, m, 1))
         # half the starts about the last good configuration, half about the held joints
-        centre = np.where(np.arange(RESTARTS)[:, None, None] % 2 == 0, U[None], np.mean(K, axis=0)[None, None, :])
+        centre = np.where(
+            np.arange(RESTARTS)[:, None, None] % 2 == 0, U[None], np.mean(K[: len(self.known)], axis=0)[None, None, :]
+        )
         starts = centre + 2 * np.max(lengths, axis=0)[None, None, :] * noise  # (R, m, B)
         Ub = np.concatenate([U[None], starts]).transpose(1, 0, 2).reshape(m, -1)
         Kb = np.repeat(K[:, None, :], RESTARTS + 1, axis=1).reshape(K.shape[0], -1)
@@ -1110,12 +1359,12 @@ class Group(Step):
 
     # ------------------------------------------------------------------ rates
     def rates(self, r: Rate, nums: Nums) -> None:
-        m, nk = len(self.joints), len(self.known)
+        m, nk = len(self.joints), self.n_held
         _, D, n = r.z.shape
-        slots = list(self.joints) + list(self.known)
-        P = r.z[slots].reshape(m + nk, D * n)
-        V = r.v[list(self.known)].reshape(nk, D * n) if nk else np.zeros((0, D * n), complex)
-        A = r.a[list(self.known)].reshape(nk, D * n) if nk else np.zeros((0, D * n), complex)
+        P = np.concatenate([r.z[list(self.joints)], self.held(r.z)]).reshape(m + nk, D * n)
+        # the held values' rates: the known joints', then each cylinder's length's (its driver's speed, acceleration)
+        V = self.held(r.v, r.w_in).reshape(nk, D * n)
+        A = self.held(r.a, r.a_in).reshape(nk, D * n)
         d = np.repeat(np.arange(D), n)
         dn = self._design_nums(nums, d)
         J = self.jacobian(P, dn, m + nk)
@@ -1142,6 +1391,12 @@ class Group(Step):
         if self.sliders:  # 2 Im(w' conj(u')) on a line row, 2 Im(e_o' conj(c e')) on a lock row
             line, lock = self._slider_gamma(P, Vall, self._stack(dn, D * n)[1])
             gamma[:, self._srows.line], gamma[:, self._srows.lock] = line.T, lock.T
+        if self.cylinders:  # d2/dt2 (|e|^2 - s^2) = 2 e.e'' + 2 |e'|^2 - 2 s s'' - 2 s'^2: gamma 2 |e'|^2 - 2 s'^2
+            cr = self._crows
+            de = Vall[cr.b] - Vall[cr.a]
+            gamma[:, cr.row] = (2 * (de.real**2 + de.imag**2) - 2 * Vall[cr.s].real ** 2).T
+        if self.drives:  # 2 Re(w' conj(u')), the line row's real part
+            gamma[:, self._drows.row] = self._drive_gamma(Vall, self._stack(dn, D * n)[1]).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
         au = _solve_rates(Ju_solve, rhs_a, work)
         au[sing] = np.nan
@@ -1165,6 +1420,8 @@ class Group(Step):
         if self.sliders:
             sr = self._srows
             scale[:, sr.lock] = 1.0 / self._snums(self._stack(dn, B)[1])[3][sr.locked].real.T
+        if self.cylinders:
+            scale[:, self._crows.row] = 1.0 / (2 * self._cnums(self._stack(dn, B)[1])).T
         return scale
 
     def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
@@ -1187,6 +1444,13 @@ class Group(Step):
         links = ", ".join(f"'{gl.name}'" for gl in self.links)
         held = ", ".join(names[j] for j in self.known) or "nothing"
         sliding = "".join(f", slider {gs.slider} ('{gs.other}' on '{gs.carrier}')" for gs in self.sliders)
+        sliding += "".join(
+            f", cylinder {names[gc.end_joints[0]]}-{names[gc.end_joints[1]]} (driver {gc.driver})"
+            for gc in self.cylinders
+        )
+        sliding += "".join(
+            f", slider driver {gd.driver} on slider {self.sliders[gd.slider].slider}" for gd in self.drives
+        )
         return (
             f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}{sliding}, "
             f"held by {held}; the mode is the pose's"

@@ -3,7 +3,9 @@
 Every array has the shape ``(*batch, n_samples)`` (points ``(*batch, n_samples, 2)`` as
 floats, or complex with :meth:`Result.point`), where ``batch`` is ``()`` for one mechanism
 and ``(n_designs,)`` for ``analyze(..., poses=...)``.  NaN marks a sample that does not
-assemble (positions and rates) or sits at a singular position (rates and forces).
+assemble (positions and rates) or sits at a singular position (rates and forces; with
+``branch="continuous"`` a sample on a change point has the branch's limit for its rates, and
+stays ``singular``).
 
 Units: positions in the file's length unit, velocities per second, accelerations per
 second squared, link angles in the file's angle unit, ``omega`` in rad/s, ``alpha`` in
@@ -71,6 +73,10 @@ class Result:
         Joint reactions and driver efforts, when the mechanism has masses, gravity or loads.
     poses : ndarray or None
         ``(n_designs, n_joints, 2)`` for a batch.
+    time : ndarray or None
+        The time of each sample (s) of a simulation (:func:`linkagekit.simulate`), else None.
+    stopped : str or None
+        A simulation that met a toggle it cannot pass: the one-line message (its rows end there).
     """
 
     mechanism: Mechanism
@@ -90,6 +96,8 @@ class Result:
     _alpha: Mapping[str, np.ndarray] | None = field(repr=False)
     _block_rot: Mapping[str, np.ndarray] = field(repr=False)
     _ground_angle: Any = field(repr=False)
+    time: np.ndarray | None = None
+    stopped: str | None = None
 
     # ---------------------------------------------------------------- shape
     @property
@@ -286,6 +294,7 @@ class Result:
             self.mechanism,
             rates=self.has_rates,
             reactions=None if self.forces is None else self.forces.layout(),
+            time=self.time is not None,
         )
 
     def columns(self) -> dict[str, np.ndarray]:
@@ -353,6 +362,8 @@ class Result:
         for q in self.catalogue.table:
             _put(out, q.json_path, q.values(self))
         out["quantities"] = [q.to_dict() for q in self.catalogue]
+        if self.stopped is not None:  # a simulation that met a toggle: why its rows end early
+            out["stopped"] = self.stopped
         return out
 
     def __repr__(self) -> str:

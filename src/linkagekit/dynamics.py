@@ -1,0 +1,773 @@
+"""Forward dynamics: Lagrange's equations in the driver coordinates, integrated in time.
+
+Every point and link velocity is linear in the driver speeds ``w = q'`` (SI: rad/s, or m/s
+for a slider or cylinder): ``v_P = J_P(q) w``, ``omega_b = j_b(q) w``.  The rates solver
+gives the velocity coefficients (unit input speeds) and, with zero input accelerations, the
+velocity-product terms ``a0_P = J_P' w``.  Lagrange's equations are then (derivation in
+``docs/method.md``, "Forward dynamics")::
+
+    M(q) q'' + h(q, w) = Q(q, w) + tau(w)
+    M = sum_b m_b J_Gb^T J_Gb + I_b j_b^T j_b          h = sum_b m_b J_Gb^T a0_Gb + I_b j_b^T alpha0_b
+    Q = gravity + loads + springs (virtual power) - dampers
+
+For one driver (:class:`Reduced`) ``h = 1/2 M'(q) w^2``; ``M``, ``M'``, the position-dependent
+force ``Q_s(q)`` and the damping coefficient ``C(q)`` are tabulated once on a fine grid with
+their exact derivatives (from the acceleration coefficients), so cubic Hermite interpolation
+is ``O(h^4)`` and the right-hand side costs microseconds.  Several drivers evaluate ``M``,
+``h`` and ``Q`` directly at every step.  :func:`simulate` integrates with SciPy's DOP853
+(:data:`RTOL`, :data:`ATOL`) and analyses the motion at the requested times in one vectorised
+call (so every catalogue column comes with it).
+
+Examples
+--------
+>>> import numpy as np, linkagekit as lk
+>>> mech = lk.load("examples/slider_crank.yaml")
+>>> red = reduced(mech)
+>>> red.period == 2 * np.pi, bool(red.mass(red.q0) > 0)
+(True, True)
+>>> res = simulate(mech, np.linspace(0.0, 0.05, 6), torque=2.0)
+>>> res.time.tolist()
+[0.0, 0.01, 0.02, 0.03, 0.04, 0.05]
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from .api import analyze, prepare
+from .branch import along_sweep
+from .checks import input_range
+from .errors import InputError
+from .forces import Kinematics, point_motion
+from .model import Mechanism
+from .params import Params
+from .positions import solve
+from .rates import link_motion, solve_rates
+from .result import Result, frozen
+
+#: relative and absolute tolerances of the integration (SI state: rad or m, rad/s or m/s)
+RTOL = 1e-12
+ATOL = 1e-12
+#: grid points of the one-driver table (over a turn, or over the assembly range)
+POINTS = 16384
+#: the periodic table starts this share of a grid step before the pose's input (the golden ratio's part: a grid
+#: point never lands exactly on a change point at a rational fraction of a turn from the pose)
+SHIFT = (math.sqrt(5.0) - 1.0) / 2.0
+#: grid steps (of :data:`POINTS` a turn) around a change point where the table is bridged by a fit (:func:`_bridge`)
+BRIDGE = 200
+#: the degree of that fit
+DEGREE = 11
+#: the table's cubic Hermite interpolant must meet the model at every cell's middle to this (relative)
+TABLE_TOL = 1e-8
+#: several drivers: the motion stops where the steps' smallest dimensionless determinant falls below this
+STOP_CONDITION = 1e-3
+#: the most output times one simulation gives
+MAX_TIMES = 1_000_000
+
+__all__ = ["ATOL", "POINTS", "RTOL", "Reduced", "TorqueLaw", "reduced", "simulate"]
+
+ArrayLike = Any
+
+
+# ---------------------------------------------------------------------- torque laws
+@dataclass(frozen=True)
+class TorqueLaw:
+    """A driver's torque (force) law, SI: ``T0`` constant, or the linear motor curve ``T0 (1 - w / W0)``."""
+
+    T0: float = 0.0
+    W0: float | None = None
+
+    def __call__(self, w: ArrayLike) -> Any:
+        if self.W0 is None:
+            return self.T0 + 0.0 * np.asarray(w)
+        return self.T0 * (1.0 - np.asarray(w) / self.W0)
+
+
+# ---------------------------------------------------------------------- the model's parts
+@dataclass(frozen=True)
+class _Model:
+    """What the coefficients read, once per mechanism: solver numbers, scales and the force elements (SI)."""
+
+    mech: Mechanism
+    params: Params
+    scale: np.ndarray  # (n_d,) SI per solver unit of each driver (1 for an angle, m per length unit)
+    bodies: tuple[tuple[str, float, float, complex | None], ...]  # link, mass, inertia (+ flywheels), cg ratio
+    loads: tuple[tuple[str, complex, float, complex | None], ...]  # link, force, torque, point ratio
+    springs: tuple[tuple[int, int, float, float], ...]  # joint a, joint b, stiffness, free length (m)
+    dampers: tuple[tuple[int, int, float], ...]  # joint a, joint b, damping
+
+
+def _model(mech: Mechanism, flywheel: float = 0.0) -> _Model:
+    """The mechanism's dynamic parts in SI, ``flywheel`` (kg*m^2) added to the first driver's link."""
+    params = prepare(mech)
+    si = mech.length_to_si
+    extra: dict[str, float] = {}  # the file's flywheels are in params.bodies' inertia already
+    if flywheel:
+        extra[mech.drivers[0].link] = float(flywheel)
+    bodies = [
+        (b.link, float(b.mass[0, 0]), float(b.inertia[0, 0]) + extra.pop(b.link, 0.0), _one(b.cg))
+        for b in params.bodies
+    ]
+    loads = tuple((ld.link, complex(ld.force[0, 0]), float(ld.torque[0, 0]), _one(ld.at)) for ld in params.loads)
+    idx = {j: i for i, j in enumerate(mech.joint_names)}
+    springs = tuple(
+        (idx[s.between[0]], idx[s.between[1]], float(s.stiffness), float(s.free_length) * si) for s in mech.springs
+    )
+    dampers = tuple((idx[d.between[0]], idx[d.between[1]], float(d.damping)) for d in mech.dampers)
+    scale = np.array([d.type.rate_to_si(si) for d in mech.drivers])
+    return _Model(mech, params, scale, tuple(bodies), loads, springs, dampers)
+
+
+def _one(a: np.ndarray | None) -> complex | None:
+    return None if a is None else complex(a[0, 0])
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """Positions (m), velocities and velocity-product accelerations of what the forces act on, per sample (n,)."""
+
+    good: np.ndarray
+    z: np.ndarray  # joints (n_joints, n), m
+    v: np.ndarray
+    a: np.ndarray
+    gz: list[tuple[np.ndarray, np.ndarray, np.ndarray]]  # per body: z_G, v_G, a_G (m)
+    lz: list[tuple[np.ndarray, np.ndarray, np.ndarray]]  # per load: its point's z, v, a (m)
+    body_w: list[tuple[np.ndarray, np.ndarray]]  # per body: omega, alpha
+    load_w: list[tuple[np.ndarray, np.ndarray]]  # per load: omega, alpha
+    cond: np.ndarray  # the smallest dimensionless determinant of the steps (1: well conditioned, 0: singular)
+
+
+def _motion(md: _Model, q: np.ndarray, signs: np.ndarray, w: np.ndarray) -> _Motion:
+    """The motion at solver inputs ``q`` (n_d, n) with signs (n_signs, n), SI speeds ``w`` (n_d, n), no acceleration."""
+    mech, params = md.mech, md.params
+    pos = solve(params, q[:, None, :], signs[:, None, :])
+    speed = (w / md.scale[:, None])[:, None, :]  # solver units per second
+    rt = solve_rates(params, pos, speed, np.zeros_like(speed))
+    lm = link_motion(params, pos, rt, mech.links)
+    n = q.shape[1]
+    motion = {k: tuple(np.broadcast_to(x, (1, n))[0] for x in m) for k, m in lm.items()}
+    good = pos.assembled[0] & ~rt.singular[0]
+    km = Kinematics(pos.z[:, 0], rt.v[:, 0], rt.a[:, 0], motion, good, np.zeros((0, n)), (), ())
+    si = mech.length_to_si
+
+    def at(link: str, local: complex | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if local is None:
+            i = mech.joint_names.index(mech.link(link).joints[0])
+            return km.z[i] * si, km.v[i] * si, km.a[i] * si
+        zz, vv, aa = point_motion(mech, link, np.asarray(local), km)
+        return zz * si, vv * si, aa * si
+
+    gz = [at(b[0], b[3]) for b in md.bodies]
+    lz = [at(ld[0], ld[3]) for ld in md.loads]
+    body_w = [(motion[b[0]][1], motion[b[0]][2]) for b in md.bodies]
+    load_w = [(motion[ld[0]][1], motion[ld[0]][2]) for ld in md.loads]
+    cond = np.min(np.abs(rt.condition[:, 0]), axis=0, initial=1.0)
+    return _Motion(good, km.z * si, km.v * si, km.a * si, gz, lz, body_w, load_w, cond)
+
+
+def _stretch(m: _Motion, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A force element's length ``L`` (m), its rate ``L'`` and the velocity-product part of ``L''`` (per sample)."""
+    d, dv, da = m.z[b] - m.z[a], m.v[b] - m.v[a], m.a[b] - m.a[a]
+    L = np.abs(d)
+    u = d / L
+    Lv = np.real(np.conj(u) * dv)
+    La = np.real(np.conj(u) * da) + (np.abs(dv) ** 2 - Lv**2) / L
+    return L, Lv, La
+
+
+# ---------------------------------------------------------------------- one driver: the table
+def _table_rows(md: _Model, m: _Motion) -> tuple[np.ndarray, np.ndarray]:
+    """``[M, Q_s, C]`` and their derivatives along q at unit speed (velocities J, accelerations J'), each (3, n)."""
+    g = md.mech.gravity if md.mech.gravity is not None else 0j
+    n = m.good.shape[0]
+    M, dM, Qs, dQs, C, dC = (np.zeros(n) for _ in range(6))
+    for (_, mass, inertia, _), (_zg, J, dJ), (jw, djw) in zip(md.bodies, m.gz, m.body_w, strict=True):
+        M += mass * np.abs(J) ** 2 + inertia * jw**2
+        dM += 2.0 * (mass * np.real(np.conj(J) * dJ) + inertia * jw * djw)
+        Qs += mass * np.real(np.conj(g) * J)
+        dQs += mass * np.real(np.conj(g) * dJ)
+    for (_, force, torque, _), (_zp, J, dJ), (jw, djw) in zip(md.loads, m.lz, m.load_w, strict=True):
+        Qs += np.real(np.conj(force) * J) + torque * jw
+        dQs += np.real(np.conj(force) * dJ) + torque * djw
+    for a, b, k, free in md.springs:
+        L, Lv, La = _stretch(m, a, b)
+        Qs -= k * (L - free) * Lv
+        dQs -= k * (Lv**2 + (L - free) * La)
+    for a, b, c in md.dampers:
+        _, Lv, La = _stretch(m, a, b)
+        C += c * Lv**2
+        dC += 2.0 * c * Lv * La
+    return np.array([M, Qs, C]), np.array([dM, dQs, dC])
+
+
+def _hermite(x0: float, h: float, Y: np.ndarray, dY: np.ndarray, x: Any) -> np.ndarray:
+    """Cubic Hermite interpolation on the uniform grid ``x0 + k h`` of values ``Y`` and slopes ``dY`` (n, k)."""
+    s = (np.asarray(x, float) - x0) / h
+    i = np.clip(np.floor(s).astype(int), 0, len(Y) - 2)
+    t = (s - i)[..., None]
+    t1 = 1.0 - t
+    return (  # type: ignore[no-any-return]
+        (1.0 + 2.0 * t) * t1 * t1 * Y[i]
+        + t * t1 * t1 * h * dY[i]
+        + t * t * (3.0 - 2.0 * t) * Y[i + 1]
+        - t * t * t1 * h * dY[i + 1]
+    )
+
+
+@dataclass(frozen=True)
+class Reduced:
+    """One driver's reduced model, SI: ``M(q) q'' + 1/2 M'(q) w^2 = force(q, w) + torque(w)``.
+
+    ``q`` in rad (m for a slider or cylinder driver), ``w = dq/dt``; ``mass`` in kg*m^2 (kg),
+    forces in N*m (N).  Build it with :func:`reduced`.
+
+    Attributes
+    ----------
+    driver : str
+        The driver's name.
+    q0 : float
+        The pose's input, where a simulation starts.
+    q_range : (float, float)
+        Where the table holds (periodic: ``(q0, q0 + period)``; otherwise the assembly range
+        around the pose, just inside its ends).
+    period : float or None
+        ``2 pi`` when the mechanism comes back to itself after a turn of the driver, else None.
+    points : ndarray
+        The change points of the branch inside the table (where a sign flips), SI.
+    steps : ndarray of int
+        The sign step (index in ``plan.sign_joints``) that flips at each of ``points``.
+    """
+
+    driver: str
+    q0: float
+    q_range: tuple[float, float]
+    period: float | None
+    points: np.ndarray
+    steps: np.ndarray
+    _Y: np.ndarray
+    _dY: np.ndarray
+
+    @property
+    def _h(self) -> float:
+        return (self.q_range[1] - self.q_range[0]) / (len(self._Y) - 1)
+
+    def _wrap(self, q: ArrayLike) -> Any:
+        q = np.asarray(q, float)
+        if self.period is None:
+            return q
+        return self.q_range[0] + np.mod(q - self.q_range[0], self.period)
+
+    def _rows(self, q: ArrayLike) -> np.ndarray:
+        return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
+
+    def mass(self, q: ArrayLike) -> np.ndarray:
+        """``M(q)``."""
+        return self._rows(q)[..., 0]
+
+    def dmass(self, q: ArrayLike) -> np.ndarray:
+        """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points)."""
+        q = self._wrap(q)
+        s = (np.asarray(q) - self.q_range[0]) / self._h
+        i = np.clip(np.floor(s).astype(int), 0, len(self._Y) - 2)
+        t = s - i
+        Y, dY, h = self._Y[:, 0], self._dY[:, 0], self._h
+        return (  # type: ignore[no-any-return]
+            (6 * t * t - 6 * t) / h * Y[i]
+            + (3 * t * t - 4 * t + 1) * dY[i]
+            + (6 * t - 6 * t * t) / h * Y[i + 1]
+            + (3 * t * t - 2 * t) * dY[i + 1]
+        )
+
+    def force(self, q: ArrayLike, w: ArrayLike) -> np.ndarray:
+        """The generalised force of gravity, loads, springs and dampers ``Q_s(q) - C(q) w`` (not the torque law)."""
+        r = self._rows(q)
+        return r[..., 1] - r[..., 2] * np.asarray(w)  # type: ignore[no-any-return]
+
+    def accel(self, q: ArrayLike, w: ArrayLike, torque: ArrayLike = 0.0) -> np.ndarray:
+        """``q''`` for speed ``w`` under the driver torque ``torque``."""
+        w = np.asarray(w, float)
+        r = self._rows(q)
+        return (r[..., 1] - r[..., 2] * w + torque - 0.5 * self.dmass(q) * w * w) / r[..., 0]  # type: ignore[no-any-return]
+
+    def signs(self, params: Params, q: ArrayLike) -> np.ndarray:
+        """The branch's signs (n_signs, n) at inputs ``q`` (SI): the pose's, flipped at every change point passed."""
+        qq = np.atleast_1d(self._wrap(q))
+        lo, hi = np.minimum(qq, self.q0), np.maximum(qq, self.q0)
+        out = np.repeat(params.signs[:, :1], len(qq), axis=1)
+        for step, p in zip(self.steps, self.points, strict=True):
+            out[step] *= np.where((p > lo) & (p <= hi), -1.0, 1.0)
+        return out
+
+
+def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | None]:
+    """The table's grid (SI) over ``turns`` turns (periodic), or inside the assembly interval that holds the pose."""
+    mech, d = md.mech, md.mech.drivers[0]
+    x0 = float(md.params.pose_inputs[0, 0]) * md.scale[0]
+    to_si = d.input_scale(mech) * md.scale[0]  # SI per file unit
+    ranges = input_range(mech, 0)
+    full = d.type.cyclic and any(hi - lo >= 2 * math.pi / to_si * (1 - 1e-12) for lo, hi in ranges)
+    if full:
+        n = turns * points
+        h = 2 * math.pi * turns / n  # shifted by an irrational part of a step: no grid point on a change point
+        return x0 - SHIFT * h + h * np.arange(n + 1), 2 * math.pi * turns
+    for lo, hi in ranges:
+        span = (hi - lo) * to_si
+        shift = 0.0
+        if d.type.cyclic:  # the pose's angle, within a turn of the interval
+            shift = 2 * math.pi * math.floor((x0 - lo * to_si) / (2 * math.pi))
+        a, b = lo * to_si + shift, hi * to_si + shift
+        if a <= x0 <= b:
+            margin = span * 1e-4
+            return np.linspace(a + margin, b - margin, points + 1), None
+    raise InputError(f"{mech.source}: the mechanism does not assemble at its pose's input")
+
+
+def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The table's rows at grid inputs ``x`` (SI); a sample on a singular position is the mean of its two sides."""
+    q = (x / md.scale[0])[None]
+    Y, dY = _table_rows(md, _motion(md, q, signs, np.ones_like(q)))  # unit SI speed: J and J' = dJ/dq
+    bad = ~np.all(np.isfinite(Y) & np.isfinite(dY), axis=0)
+    if bad.any():
+        delta = 0.25 * (x[1] - x[0])  # well off the singular position (the rates solver is NaN within 1e-6 of it)
+        one = np.ones((1, int(bad.sum())))
+        sides = [_table_rows(md, _motion(md, q[:, bad] + s * delta / md.scale[0], signs[:, bad], one)) for s in (-1, 1)]
+        Y[:, bad] = 0.5 * (sides[0][0] + sides[1][0])
+        dY[:, bad] = 0.5 * (sides[0][1] + sides[1][1])
+    return Y.T, dY.T
+
+
+def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, period: float | None) -> np.ndarray:
+    """Rows within :data:`BRIDGE` steps of a change point replaced by a polynomial fit from both sides, in place.
+
+    Near a change point the closed-form solver loses digits (two circles nearly touch: position
+    errors of about ``eps / theta``, the velocity and acceleration coefficients worse), while
+    ``M``, ``Q`` and ``C`` go on smoothly along the branch; a least-squares polynomial of degree
+    :data:`DEGREE` over the samples from ``BRIDGE`` to ``4 BRIDGE`` steps away on both sides
+    bridges them (the interpolant's slope divides value errors by the step: they must be tiny).
+    """
+    h = x[1] - x[0]
+    if len(points) == 0:
+        return np.zeros(len(x), bool)
+    unique = np.unique(np.round(points / h, 3)) * h  # two sign steps may meet at one change point
+    centres = [c for p in unique for c in ((p,) if period is None else (p - period, p, p + period))]
+    near_any = np.zeros(len(x), bool)
+    for c in centres:
+        near_any |= np.abs(x - c) < BRIDGE * h
+    for c in centres:
+        d = np.abs(x - c)
+        near, ring = d < BRIDGE * h, (d <= 4 * BRIDGE * h) & ~near_any
+        if not near.any() or ring.sum() < 4 * DEGREE:
+            continue
+        scale = 4 * BRIDGE * h
+        V = np.polynomial.chebyshev.chebvander((x[ring] - c) / scale, DEGREE)  # well conditioned on [-1, 1]
+        coef = np.linalg.solve(V.T @ V, V.T @ Y[ring])  # least squares by the (small, tame) normal equations
+        u = (x[near] - c) / scale
+        Y[near] = np.polynomial.chebyshev.chebvander(u, DEGREE) @ coef
+        dY[near] = np.polynomial.chebyshev.chebvander(u, DEGREE - 1) @ np.polynomial.chebyshev.chebder(coef) / scale
+    return near_any
+
+
+def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> Reduced:
+    """The reduced one-coordinate model of a one-driver mechanism, tabulated along its branch from the pose.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        With exactly one driver.
+    flywheel : float
+        Extra inertia (kg*m^2) on the driver's link.
+    points : int
+        Grid intervals of the table.
+
+    Returns
+    -------
+    Reduced
+    """
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    if len(mech.drivers) != 1:
+        raise InputError(
+            f"{mech.source}: the reduced model needs exactly one driver, this mechanism has {len(mech.drivers)}"
+        )
+    if not (isinstance(flywheel, int | float) and math.isfinite(flywheel) and flywheel >= 0):
+        raise InputError(f"flywheel: expected a finite inertia >= 0 (kg*m^2), got {flywheel!r}")
+    md = _model(mech, float(flywheel))
+    for turns in (1, 2):  # a branch whose signs come back after two turns only (an odd number of flips in one)
+        x, period = _grid(md, int(points), turns)
+        br = along_sweep(md.params, (x / md.scale[0])[None, None, :], (mech.drivers[0].type.cyclic,))
+        steps, _, where = br.points
+        if period is None or np.all(np.bincount(steps, minlength=md.params.plan.n_signs) % 2 == 0):
+            break
+    signs = br.signs[:, 0]
+    Y, dY = _rows_at(md, x, signs)
+    q0 = float(md.params.pose_inputs[0, 0] * md.scale[0])
+    change = np.asarray(where) * md.scale[0]
+    bridged = _bridge(x, Y, dY, change, period)
+    good = _verified(md, x, Y, dY, signs, bridged)
+    x, Y, dY, period = _reachable(mech, q0, x, Y, dY, good, period)
+    rng = (float(x[0]), float(x[-1]))
+    return Reduced(mech.drivers[0].name, q0, rng, period, change, np.asarray(steps), Y, dY)
+
+
+def _verified(
+    md: _Model, x: np.ndarray, Y: np.ndarray, dY: np.ndarray, signs: np.ndarray, bridged: np.ndarray
+) -> np.ndarray:
+    """Which cells the interpolant holds to :data:`TABLE_TOL`: checked against the model at every cell's middle.
+
+    ``M`` relative to itself, ``Q_s`` and ``C`` relative to their largest magnitude over the
+    table. A cell fails near a toggle (``M`` grows without bound) or where the model is not
+    smooth; a bridged cell (near a change point, where the direct values are the inaccurate
+    ones) and a middle on a singular position (no direct value) pass.
+    """
+    mid = 0.5 * (x[:-1] + x[1:])
+    q = (mid / md.scale[0])[None]
+    direct = _table_rows(md, _motion(md, q, signs[:, :-1], np.ones_like(q)))[0].T
+    h = x[1] - x[0]
+    interp = 0.5 * (Y[:-1] + Y[1:]) + h * (dY[:-1] - dY[1:]) / 8.0  # the cubic Hermite at t = 1/2
+    with np.errstate(invalid="ignore"):
+        scale = np.maximum(np.abs(direct), np.nanmax(np.abs(Y), axis=0, initial=0.0) * [0.0, 1.0, 1.0])
+        err = np.abs(interp - direct) <= TABLE_TOL * scale + 1e-300
+    rows = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
+    ok: np.ndarray = (np.all(err | ~np.isfinite(direct), axis=1) | bridged[:-1] | bridged[1:]) & rows[:-1] & rows[1:]
+    return ok
+
+
+def _reachable(
+    mech: Mechanism,
+    q0: float,
+    x: np.ndarray,
+    Y: np.ndarray,
+    dY: np.ndarray,
+    good: np.ndarray,
+    period: float | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float | None]:
+    """The table cut to the run of good cells around the pose (then not periodic): its ends stop a motion."""
+    if good.all():
+        return x, Y, dY, period
+    c0 = int(np.clip(np.searchsorted(x, q0) - 1, 0, len(good) - 1))  # the pose's cell
+    if not good[c0]:
+        if np.all(np.nan_to_num(Y[:, 0]) <= 0):
+            raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
+        raise InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
+    bad = np.flatnonzero(~good)
+    lo = int(bad[bad < c0].max(initial=-1)) + 1
+    hi = int(bad[bad > c0].min(initial=len(good)))
+    return x[lo : hi + 1], Y[lo : hi + 1], dY[lo : hi + 1], None
+
+
+def _cells(red: Reduced) -> list[float]:
+    """Per grid cell, the cubic coefficients in ``t`` in [0, 1] of ``M``, ``Q_s``, ``C`` (plain floats: a fast RHS)."""
+    h, Y, dY = red._h, red._Y, red._dY
+    y0, y1, d0, d1 = Y[:-1], Y[1:], dY[:-1] * h, dY[1:] * h
+    c2 = 3 * (y1 - y0) - 2 * d0 - d1
+    c3 = 2 * (y0 - y1) + d0 + d1
+    out: list[float] = np.stack([y0, d0, c2, c3], axis=1).ravel().tolist()  # 12 per cell: M, Q_s, C by power
+    return out
+
+
+# ---------------------------------------------------------------------- integration
+@dataclass(frozen=True)
+class _Run:
+    """A motion at the output times (SI): ``q``, ``w``, ``qdd`` (n_d, n); ``stopped``: why it ended early."""
+
+    t: np.ndarray
+    q: np.ndarray
+    w: np.ndarray
+    qdd: np.ndarray
+    signs: np.ndarray | None
+    stopped: str | None
+
+
+def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
+    """The state derivative ``(w, q'')`` of the tabulated model, in plain floats (microseconds a call)."""
+    cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
+    q_ref, period = x0, red.period
+    T0, W0 = law.T0, law.W0
+
+    def rhs(_t: float, y: Any) -> list[float]:
+        q, w = float(y[0]), float(y[1])
+        if period is not None:
+            q = q_ref + (q - q_ref) % period
+        s = (q - x0) / h
+        i = min(max(int(s), 0), n)
+        t = s - i
+        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[12 * i : 12 * i + 12]
+        M = ((m3 * t + m2) * t + m1) * t + m0
+        dM = ((3 * m3 * t + 2 * m2) * t + m1) / h
+        Qs = ((q3 * t + q2) * t + q1) * t + q0
+        C = ((c3 * t + c2) * t + c1) * t + c0
+        tau = T0 if W0 is None else T0 * (1.0 - w / W0)
+        return [w, (Qs - C * w + tau - 0.5 * dM * w * w) / M]
+
+    return rhs
+
+
+def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float) -> _Run:
+    """One driver: the tabulated model integrated by DOP853; a motion that leaves the table's range stops (a toggle)."""
+    red = reduced(md.mech)
+    rhs = _rhs_reduced(red, law)
+    y0 = [red.q0, w0]
+    if red.period is None:
+        t, y, stop = _with_events(red, rhs, times, y0)
+    else:
+        t, y, stop = times, _dop853(rhs, times, y0), None
+    stopped = None if stop is None else _toggle_message(md, 0, *stop)
+    q, w = y
+    qdd = red.accel(q, w, law(w))
+    signs = red.signs(md.params, q) if md.params.plan.n_signs else None
+    return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def _dop853(rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float]) -> np.ndarray:
+    """The state at every output time by the compiled DOP853 (SciPy's ``ode``): microseconds a step."""
+    from scipy.integrate import ode
+
+    solver = ode(rhs).set_integrator("dop853", rtol=RTOL, atol=ATOL, nsteps=10**9)
+    solver.set_initial_value(y0, times[0])
+    y = np.empty((2, len(times)))
+    y[:, 0] = y0
+    for i in range(1, len(times)):
+        y[:, i] = solver.integrate(times[i])
+        if not solver.successful():
+            raise InputError(f"simulate: the integration failed at t = {solver.t:.6g} s")
+    return y
+
+
+def _with_events(
+    red: Reduced, rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float]
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+    """``solve_ivp``'s DOP853 with the table's ends as terminal events: (times, states, (time, q) of a stop)."""
+    from scipy.integrate import solve_ivp
+
+    lo, hi = red.q_range
+
+    def below(_t: float, y: Any) -> float:
+        return float(y[0]) - lo
+
+    def above(_t: float, y: Any) -> float:
+        return hi - float(y[0])
+
+    below.terminal = above.terminal = True  # type: ignore[attr-defined]
+    span = (times[0], times[-1])
+    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[below, above])
+    if sol.status < 0:
+        raise InputError(f"simulate: the integration failed: {sol.message}")
+    if sol.status == 1:
+        k = 0 if len(sol.t_events[0]) else 1
+        return sol.t, sol.y, (float(sol.t_events[k][0]), float(sol.y_events[k][0][0]))
+    return sol.t, sol.y, None
+
+
+def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
+    """The one line that says where the motion stopped: time and the driver's input (file units)."""
+    d = md.mech.drivers[k]
+    value = q_si / (md.scale[k] * d.input_scale(md.mech))
+    return (
+        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached the end of its range at {value:.6g} "
+        f"{d.input_unit(md.mech)} (a toggle or its stroke's end) that the motion cannot pass"
+    )
+
+
+def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Several drivers: ``q''`` (n_d, n) from ``M``, ``h``, ``Q`` at states (q, w) (n_d, n), SI, the pose's signs.
+
+    One solve of ``n (n_d + 1)`` samples: each state with the unit speed of each driver (the
+    columns of ``J``), then with its own speed and no acceleration (``a0``).  Also returns the
+    conditioning of each state (NaN accelerations where it is singular).
+    """
+    nd, n = q.shape
+    qs = np.tile(q / md.scale[:, None], (1, nd + 1))
+    unit = np.repeat(np.eye(nd), n, axis=1)
+    m = _motion(md, qs, np.repeat(md.params.signs, n * (nd + 1), axis=1), np.concatenate([unit, w], axis=1))
+
+    def split(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(J (n_d, n), the velocity-product part (n,)) of a per-sample array."""
+        r = x.reshape(nd + 1, n)
+        return r[:nd], r[nd]
+
+    g = md.mech.gravity if md.mech.gravity is not None else 0j
+    M, rhs = np.zeros((n, nd, nd)), np.array(tau, float)
+    for (_, mass, inertia, _), (_, v, acc), (om, al) in zip(md.bodies, m.gz, m.body_w, strict=True):
+        (J, _), (_, a0), (jw, _), (_, al0) = split(v), split(acc), split(om), split(al)
+        M += mass * np.einsum("in,jn->nij", np.conj(J), J).real + inertia * np.einsum("in,jn->nij", jw, jw)
+        rhs += mass * np.real(np.conj(J) * (g - a0)) - inertia * jw * al0
+    for (_, force, torque, _), (_, v, _), (om, _) in zip(md.loads, m.lz, m.load_w, strict=True):
+        rhs += np.real(np.conj(force) * split(v)[0]) + torque * split(om)[0]
+    for a, b, k, free in md.springs:
+        L, Lv, _ = _stretch(m, a, b)
+        rhs -= k * (split(L)[1] - free) * split(Lv)[0]
+    for a, b, c in md.dampers:
+        Lq, Lw = split(_stretch(m, a, b)[1])
+        rhs -= c * Lq * Lw
+    good = np.all(m.good.reshape(nd + 1, n), axis=0) & np.all(np.isfinite(M), axis=(1, 2))
+    M[~good] = np.eye(nd)
+    qdd = np.linalg.solve(M, np.nan_to_num(rhs).T[..., None])[..., 0].T
+    qdd[:, ~good] = np.nan
+    return qdd, np.min(m.cond.reshape(nd + 1, n), axis=0)
+
+
+def _integrate_direct(md: _Model, times: np.ndarray, laws: tuple[TorqueLaw, ...], w0: np.ndarray) -> _Run:
+    """Several drivers: ``M``, ``h``, ``Q`` evaluated at every step (slower); stops at a singular position."""
+    from scipy.integrate import solve_ivp
+
+    nd = len(laws)
+
+    def tau(w: np.ndarray) -> np.ndarray:
+        return np.array([law(x) for law, x in zip(laws, w, strict=True)], float).reshape(w.shape)
+
+    def rhs(_t: float, y: np.ndarray) -> np.ndarray:
+        col = y[:, None]
+        return np.concatenate([y[nd:], _direct_accel(md, col[:nd], col[nd:], tau(col[nd:]))[0][:, 0]])
+
+    def singular(_t: float, y: np.ndarray) -> float:
+        col = y[:, None]
+        return float(_direct_accel(md, col[:nd], col[nd:], tau(col[nd:]))[1][0]) - STOP_CONDITION
+
+    singular.terminal = True  # type: ignore[attr-defined]
+    y0 = np.concatenate([md.params.pose_inputs[:, 0] * md.scale, w0])
+    span = (times[0], times[-1])
+    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[singular])
+    t, y = sol.t, sol.y
+    stopped = None
+    if sol.status != 0 or not np.all(np.isfinite(y)):
+        ok = np.all(np.isfinite(y), axis=0)
+        t, y = t[ok], y[:, ok]
+        te = float(sol.t_events[0][0]) if sol.status == 1 else float(t[-1]) if len(t) else float(times[0])
+        stopped = f"simulate: stopped at t = {te:.6g} s: the mechanism reached a singular position it cannot pass"
+    qdd = _direct_accel(md, y[:nd], y[nd:], tau(y[nd:]))[0] if len(t) else np.zeros((nd, 0))
+    return _Run(t, y[:nd], y[nd:], qdd, None, stopped)
+
+
+# ---------------------------------------------------------------------- arguments
+def _times(times: ArrayLike) -> np.ndarray:
+    """The output times: finite, strictly increasing, at least two."""
+    try:
+        t = np.asarray(times, float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("times: expected an array of numbers (s)") from None
+    if t.ndim != 1 or len(t) < 2:
+        raise InputError(f"times: expected at least two times (s) in a 1-D array, got shape {t.shape}")
+    if len(t) > MAX_TIMES:
+        raise InputError(f"times: {len(t)} times, more than linkagekit.dynamics.MAX_TIMES ({MAX_TIMES})")
+    if not np.all(np.isfinite(t)):
+        raise InputError("times: every time must be a finite number")
+    if not np.all(np.diff(t) > 0):
+        raise InputError("times: the times must increase strictly")
+    return t
+
+
+def _number(value: Any, what: str) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{what}: expected a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise InputError(f"{what}: expected a finite number, got {value!r}")
+    return x
+
+
+def _by_driver(mech: Mechanism, value: Any, what: str) -> dict[str, Any]:
+    """A value per driver from one value (one driver) or a mapping by name."""
+    names = [d.name for d in mech.drivers]
+    if value is None:
+        return {}
+    if not names:
+        raise InputError(f"{what}: {mech.source} has no driver to apply it to")
+    if isinstance(value, Mapping):
+        for k in value:
+            if k not in names:
+                raise InputError(f"{what}: no driver named {k!r} (drivers: {', '.join(names)})")
+        return dict(value)
+    if len(names) != 1:
+        raise InputError(f"{what}: this mechanism has drivers {', '.join(names)}: give one value per driver by name")
+    return {names[0]: value}
+
+
+def _laws(md: _Model, torque: Any, motor: Any) -> tuple[TorqueLaw, ...]:
+    """Each driver's law in SI (none given: no torque)."""
+    mech = md.mech
+    tq, mt = _by_driver(mech, torque, "torque"), _by_driver(mech, motor, "motor")
+    out = []
+    for k, d in enumerate(mech.drivers):
+        if d.name in tq and d.name in mt:
+            raise InputError(f"driver '{d.name}': give a torque or a motor curve, not both")
+        if d.name in mt:
+            try:
+                t0, w0 = mt[d.name]
+            except (TypeError, ValueError):
+                raise InputError(f"motor[{d.name}]: expected (T0, W0), got {mt[d.name]!r}") from None
+            T0, W0 = _number(t0, f"motor[{d.name}] T0"), _number(w0, f"motor[{d.name}] W0")
+            if W0 == 0:
+                raise InputError(f"motor[{d.name}]: the no-load speed W0 must not be zero")
+            out.append(TorqueLaw(T0, W0 * md.scale[k]))
+        else:
+            out.append(TorqueLaw(_number(tq.get(d.name, 0.0), f"torque[{d.name}]")))
+    return tuple(out)
+
+
+def _start_speeds(md: _Model, speed: Any) -> np.ndarray:
+    sp = _by_driver(md.mech, speed, "speed")
+    out: np.ndarray = np.array([_number(sp.get(d.name, 0.0), f"speed[{d.name}]") for d in md.mech.drivers]) * md.scale
+    return out
+
+
+# ---------------------------------------------------------------------- simulate
+def simulate(
+    mech: Mechanism,
+    times: ArrayLike,
+    *,
+    torque: float | Mapping[str, float] | None = None,
+    motor: tuple[float, float] | Mapping[str, tuple[float, float]] | None = None,
+    speed: float | Mapping[str, float] | None = None,
+) -> Result:
+    """The motion under a torque law, from the pose at rest (or at ``speed``): spec section 7.
+
+    Parameters
+    ----------
+    mech : Mechanism
+        With masses or inertias; gravity, loads, springs, dampers and flywheels as the file gives them.
+    times : array_like
+        Output times (s), strictly increasing; the motion starts at the first.
+    torque : float or mapping of driver name to float, optional
+        A constant driver torque (N*m; N for a slider or cylinder driver).
+    motor : (T0, W0) or mapping of driver name to (T0, W0), optional
+        The linear motor curve ``T0 (1 - w / W0)``, ``W0`` in rad/s (length unit/s for a slider or cylinder).
+    speed : float or mapping, optional
+        The starting speed (rad/s, or length unit/s); default 0.
+
+    Returns
+    -------
+    Result
+        One sample per output time, ``time`` the times; ``stopped`` a one-line message when
+        the motion met a toggle it cannot pass (the rows then end there), else None.
+    """
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"expected a linkagekit Mechanism (lk.load(...)), got {type(mech).__name__}")
+    t = _times(times)
+    if not mech.drivers:
+        raise InputError(f"{mech.source}: the mechanism has no driver: nothing to simulate")
+    md = _model(mech)
+    laws, w0 = _laws(md, torque, motor), _start_speeds(md, speed)
+    if len(mech.drivers) == 1:
+        run = _integrate_reduced(md, t, laws[0], float(w0[0]))
+    else:
+        run = _integrate_direct(md, t, laws, w0)
+    return _result(md, run)
+
+
+def _result(md: _Model, run: _Run) -> Result:
+    """The motion analysed at its samples in one call: every catalogue column, with the time axis."""
+    mech = md.mech
+    if len(run.t) == 0:
+        raise InputError(run.stopped or "simulate: no output time reached")
+    factor = {d.name: md.scale[k] * d.input_scale(mech) for k, d in enumerate(mech.drivers)}
+    inputs = {d.name: run.q[k] / factor[d.name] for k, d in enumerate(mech.drivers)}
+    speed = {d.name: run.w[k] / md.scale[k] for k, d in enumerate(mech.drivers)}
+    accel = {d.name: run.qdd[k] / md.scale[k] for k, d in enumerate(mech.drivers)}
+    res = analyze(mech, inputs, speed=speed, acceleration=accel, signs=run.signs)
+    return replace(res, time=frozen(run.t), stopped=run.stopped)

@@ -1,0 +1,258 @@
+"""Forward dynamics (spec section 7): every number against an independent computation.
+
+* energy: kinetic + potential (gravity, springs) from the Result's own velocities and
+  positions, conserved to 1e-8 of the energy exchanged, without dampers or motors;
+* kinetostatics: the driver torque ``lk.analyze`` needs for the simulated q, q', q'' is the
+  applied law, to 1e-8 (one driver and two);
+* a crank with a spring, a damper and a flywheel: the one-coordinate equation written here
+  by hand, integrated by SciPy, gives the same motion;
+* a motor-driven four-bar from rest settles into a periodic motion;
+* a parallelogram stays a parallelogram through its flat positions;
+* a toggle stops the motion with one line (exit 1 after the output); bad input exit 2.
+"""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from scipy.integrate import solve_ivp
+
+import linkagekit as lk
+from linkagekit.cli import main
+from linkagekit.dynamics import reduced
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _example(name, **extra):
+    doc = yaml.safe_load((EXAMPLES / name).read_text())
+    doc.update(extra)
+    return doc
+
+
+def _bar(doc, link, mass, a, b):
+    """A uniform bar from joint a to joint b: mass, cg at the middle, m l^2 / 12."""
+    za, zb = (np.array(doc["joints"][j], float) for j in (a, b))
+    si = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}[doc["units"]["length"]]
+    entry = doc["links"][link]
+    entry.update(mass=mass, cg=((za + zb) / 2).tolist(), inertia=float(mass * (np.linalg.norm(zb - za) * si) ** 2 / 12))
+
+
+def _fourbar(spring=True):
+    """Seed 000's four-bar (cm), uniform bars, gravity, and a spring from the frame to the coupler."""
+    doc = _example("seed000_fourbar.yaml", gravity=[0, -9.81])
+    for link, a, b, m in (("crank", "A", "C", 0.3), ("coupler", "C", "D", 1.0), ("rocker", "B", "D", 0.8)):
+        _bar(doc, link, m, a, b)
+    if spring:
+        doc["springs"] = [{"between": ["A", "D"], "stiffness": 60.0, "free_length": 4.0}]
+    return lk.Mechanism.from_dict(doc)
+
+
+def _energy(mech, res):
+    """Kinetic + potential energy (J) along a Result, from its joint positions and velocities only."""
+    si, g = mech.length_to_si, mech.gravity
+    E = np.zeros(res.n)
+    for ln in mech.links:
+        if ln.name == "ground" or ln.mass == 0 and ln.inertia == 0:
+            continue
+        a, b = ln.joints[:2]
+        rho = (ln.cg - ln.shape[a]) / (ln.shape[b] - ln.shape[a])
+        zg = (res.point(a) + rho * (res.point(b) - res.point(a))) * si
+        vg = (res.velocity(a) + rho * (res.velocity(b) - res.velocity(a))) * si
+        E += 0.5 * ln.mass * np.abs(vg) ** 2 + 0.5 * ln.inertia * res.omega(ln.name) ** 2
+        E -= ln.mass * np.real(np.conj(g) * zg)
+    for s in mech.springs:
+        L = np.abs(res.point(s.between[1]) - res.point(s.between[0])) * si
+        E += 0.5 * s.stiffness * (L - s.free_length * si) ** 2
+    return E
+
+
+def test_energy_is_conserved_without_dampers_or_motors():
+    mech = _fourbar()
+    res = lk.simulate(mech, np.linspace(0.0, 2.0, 401), speed=3.0)
+    assert res.stopped is None and np.all(res.assembled)
+    E = _energy(mech, res)
+    w = res.speeds["crank"]
+    assert np.ptp(w) > 100.0  # the energy goes back and forth between kinetic and potential
+    assert np.max(np.abs(E - E[0])) <= 1e-8 * abs(E[0])
+
+
+def test_kinetostatics_of_the_simulated_motion_needs_the_applied_torque():
+    mech = _fourbar()
+    res = lk.simulate(mech, np.linspace(0.0, 1.0, 201), motor=(2.0, 20.0))
+    w = res.speeds["crank"]
+    applied = 2.0 * (1 - w / 20.0)
+    needed = res.forces.driver_torque["crank"]
+    assert np.max(np.abs(needed - applied)) <= 1e-8 * 2.0
+    signs = np.array([res.signs[j] for j in res.signs])
+    again = lk.analyze(mech, res.inputs, speed=res.speeds, acceleration=res.accelerations, signs=signs)
+    assert np.allclose(again.forces.driver_torque["crank"], applied, rtol=0, atol=2e-8)
+
+
+def test_a_crank_with_spring_damper_and_flywheel_follows_the_hand_written_equation():
+    arm, r, m, ig, fly, k, L0, c, g = 0.3, 0.15, 2.0, 0.02, 0.01, 200.0, 0.2, 0.5, 9.81
+    S = np.array([0.0, 0.5])
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {"O": [0, 0], "A": [arm, 0], "S": S.tolist()},
+        "links": {"ground": ["O", "S"], "crank": {"joints": ["O", "A"], "mass": m, "cg": [r, 0], "inertia": ig}},
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        "gravity": [0, -g],
+        "springs": [{"between": ["S", "A"], "stiffness": k, "free_length": L0}],
+        "dampers": [{"between": ["S", "A"], "damping": c}],
+        "flywheels": [{"link": "crank", "inertia": fly}],
+    }
+    mech = lk.Mechanism.from_dict(doc)
+    M = ig + m * r * r + fly  # about O: the crank's own inertia, parallel axes, the flywheel
+
+    def rhs(_t, y):
+        q, w = y
+        A = arm * np.array([math.cos(q), math.sin(q)])
+        dA = arm * np.array([-math.sin(q), math.cos(q)])
+        L = np.linalg.norm(A - S)
+        dL = (A - S) @ dA / L
+        Q = -m * g * r * math.cos(q) - k * (L - L0) * dL - c * dL * dL * w + 0.7
+        return [w, Q / M]
+
+    t = np.linspace(0.0, 1.5, 151)
+    ref = solve_ivp(rhs, (0, 1.5), [0.0, 1.0], method="DOP853", t_eval=t, rtol=1e-12, atol=1e-12)
+    res = lk.simulate(mech, t, torque=0.7, speed=1.0)
+    q = np.radians(res.inputs["crank"])
+    assert np.ptp(ref.y[0]) > 1.0
+    assert np.max(np.abs(q - ref.y[0])) < 1e-8
+    assert np.max(np.abs(res.speeds["crank"] - ref.y[1])) < 1e-7
+    assert np.max(np.abs(res.forces.driver_torque["crank"] - 0.7)) < 1e-8  # kinetostatics with spring and damper
+    red, heavier = reduced(mech), reduced(mech, flywheel=0.5)  # a flywheel on a crank adds its inertia to M
+    assert red.mass(np.linspace(0, 7, 5)) == pytest.approx(M, rel=1e-12)
+    assert heavier.mass(np.linspace(0, 7, 5)) == pytest.approx(M + 0.5, rel=1e-12)
+    assert red.force(1.0, 2.0) == pytest.approx(rhs(0, [1.0, 2.0])[1] * M - 0.7, rel=1e-9)
+
+
+def test_a_motor_driven_fourbar_from_rest_reaches_a_periodic_steady_state():
+    mech = _fourbar(spring=False)
+    t = np.linspace(0.0, 6.0, 6001)
+    res = lk.simulate(mech, t, motor=(1.5, 12.0))
+    q = np.radians(res.inputs["crank"]) - np.radians(res.inputs["crank"][0])
+    w = res.speeds["crank"]
+    turns = np.floor(q / (2 * np.pi)).astype(int)
+    last = turns[-1] - 1
+    # speed as a function of the crank angle over the last two whole turns: the same curve
+    grid = np.linspace(0.1, 2 * np.pi - 0.1, 50)
+    w1, w2 = (np.interp(grid, q[turns == n] - 2 * np.pi * n, w[turns == n]) for n in (last - 1, last))
+    first = np.interp(grid, q[turns == 0], w[turns == 0])
+    assert np.max(np.abs(w1 - w2)) < 1e-3 * np.max(w2) < np.max(np.abs(first - w2))
+
+
+def test_a_parallelogram_stays_a_parallelogram_through_its_flat_positions():
+    doc = _example("seed003_ex22.yaml", gravity=[0, -9.81])
+    for link, a, b in (("crank", "O1", "A"), ("coupler", "A", "B"), ("rocker", "O2", "B")):
+        _bar(doc, link, 1.0, a, b)
+    mech = lk.Mechanism.from_dict(doc)
+    res = lk.simulate(mech, np.linspace(0.0, 2.0, 201), speed=12.0)
+    assert res.stopped is None
+    assert np.ptp(res.inputs["crank"]) > 720  # two turns: four flat positions
+    coupler = res.point("B") - res.point("A")
+    assert np.max(np.abs(coupler - 1000.0)) < 1e-6  # parallel to the frame all along
+    # no torque applied, none needed: to 1e-8 of the gravity torque (9.8 N*m) away from the flat positions,
+    # where the rates solver's accelerations lose digits (condition < 1e-2: within about half a degree)
+    T, well = np.abs(res.forces.driver_torque["crank"]), res.condition > 1e-2
+    assert well.sum() > 0.9 * res.n and np.max(T[well]) < 1e-8 * 9.81
+    assert np.max(T) < 1e-4 * 9.81
+
+
+def _rocker_file(tmp_path):
+    """A non-Grashof four-bar: the crank cannot turn fully (its toggles at the ends of its range)."""
+    C = np.array([3 * math.cos(math.radians(60)), 3 * math.sin(math.radians(60))])
+    B = np.array([4.0, 0.0])
+    d = np.linalg.norm(B - C)
+    a = (4.0 - 6.25 + d * d) / (2 * d)  # |CD| = 2, |BD| = 2.5
+    h = math.sqrt(4.0 - a * a)
+    u = (B - C) / d
+    D = C + a * u + h * np.array([-u[1], u[0]])
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {"A": [0, 0], "B": B.tolist(), "C": C.tolist(), "D": D.tolist()},
+        "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D"]},
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+    }
+    for link, j1, j2 in (("crank", "A", "C"), ("coupler", "C", "D"), ("rocker", "B", "D")):
+        doc["links"][link] = {"joints": [j1, j2]}
+        _bar(doc, link, 1.0, j1, j2)
+    path = tmp_path / "rocker.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return path
+
+
+def test_a_toggle_stops_the_motion_with_one_line_and_exit_1(tmp_path, capsys):
+    path = _rocker_file(tmp_path)
+    mech = lk.load(path)
+    res = lk.simulate(mech, np.linspace(0.0, 3.0, 301), torque=20.0)
+    assert res.stopped is not None and "toggle" in res.stopped and 1 < res.n < 301
+    assert res.to_dict()["stopped"] == res.stopped and "stopped" not in lk.simulate(mech, [0.0, 0.1]).to_dict()
+    hi = lk.check(mech).to_dict()["input_range"][0][1]
+    assert res.inputs["crank"][-1] < hi
+    out = tmp_path / "out.csv"
+    assert main(["simulate", str(path), "--time", "0:3:0.01", "--torque", "20", "--format", "csv", "-o", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "t = " in err[0] and "crank" in err[0]
+    rows = out.read_text().strip().splitlines()
+    assert rows[0].startswith("time") and len(rows) == res.n + 1
+
+
+def test_two_drivers_kinetostatics_agrees(tmp_path):
+    doc = _example("fivebar_two_drivers.yaml", gravity=[0, -9.81])
+    for link, a, b in (("crank1", "A", "C"), ("crank2", "B", "D"), ("link1", "C", "E"), ("link2", "D", "E")):
+        _bar(doc, link, 0.2, a, b)
+    mech = lk.Mechanism.from_dict(doc)
+    res = lk.simulate(mech, np.linspace(0.0, 0.2, 9), torque={"crank1": 0.05, "crank2": -0.02})
+    # the two links of the dyad at E come into line at t = 0.1238 s: a singular position the motion cannot pass
+    assert res.stopped is not None and "singular" in res.stopped and res.n == 5
+    assert res.condition[-1] > 1e-3
+    T = res.forces.driver_torque
+    assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
+    assert np.ptp(res.inputs["crank1"]) > 1.0
+
+
+def test_cli_json_has_the_time_beside_the_inputs(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    code = main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.02:0.01", "--motor", "2,100",
+                 "--format", "json", "-o", str(out)])  # fmt: skip
+    assert code == 0
+    doc = json.loads(out.read_text())
+    assert doc["time"] == pytest.approx([0.0, 0.01, 0.02]) and len(doc["inputs"]["crank"]) == 3
+    assert doc["speeds"]["crank"][0] == 0.0
+    entry = next(q for q in doc["quantities"] if q["name"] == "time")  # the time axis is a catalogue entry
+    assert entry["unit"] == "s" and entry["path"] == ["time"] and entry["owner"] == "mechanism"
+    assert [q["name"] for q in doc["quantities"]][:2] == ["time", "input:crank"]
+    assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.02:0.01"]) == 0
+    assert "time [s]" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--time", "0:1:0"], "--time"),
+        (["--time", "0:0:1"], "times"),
+        (["--time", "0:1:0.1", "--torque", "nan"], "--torque"),
+        (["--time", "0:1:0.1", "--motor", "1"], "--motor"),
+        (["--time", "0:1:0.1", "--motor", "1,0"], "W0"),
+        (["--time", "0:1:0.1", "--torque", "1", "--motor", "1,2"], "not both"),
+        (["--time", "0:1:0.1", "--torque", "rod=1"], "rod"),
+    ],
+)
+def test_bad_input_one_line_exit_2(args, words, capsys):
+    assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+
+
+def test_no_driver_or_no_inertia_is_refused():
+    with pytest.raises(lk.InputError, match="inertia"):
+        lk.simulate(lk.load(EXAMPLES / "seed000_fourbar.yaml"), [0.0, 1.0], torque=1.0)
+    with pytest.raises(lk.InputError, match="times"):
+        lk.simulate(_fourbar(), [0.0, np.nan])
