@@ -766,6 +766,9 @@ class Group(Step):
     def jacobian(self, P: np.ndarray, nums: Nums, n_slots: int) -> np.ndarray:
         """d residual / d [x, y] of every slot: (B, n_eq, 2 n_slots)."""
         _, R = self._stack(nums, P.shape[1])
+        if R.shape[1] > 1 and np.array_equal(R, np.broadcast_to(R[:, :1], R.shape)):  # one design: built once
+            J_lin = np.broadcast_to(self._lin_jacobian(R[:, :1], n_slots), (R.shape[1], self.n_eq, 2 * n_slots))
+            return self._jac(P, J_lin, R)
         return self._jac(P, self._lin_jacobian(R, n_slots), R)
 
     def _design_nums(self, nums: Nums, d: np.ndarray) -> Nums:
