@@ -128,8 +128,8 @@ problem's size (samples x designs, designs) and on the column's own iteration
 samples' columns still iterating after ``VECTOR_ITER`` go on together, every chunk's in one
 LAPACK batch (:meth:`Group._newton_samples`). *One design's numbers are broadcast*, not
 copied per column (:meth:`_Arrays.take`; the rates' constant linear rows likewise, in
-:meth:`Group.jacobian`): a chunk's copy of them was 0.6 MB of fresh memory, whose page faults
-cost more than its Newton's factorizations. Measured (``benchmarks/bench_group.py``, best of
+:meth:`Group.jacobian`): a chunk's copy of them was 0.6 MB of fresh memory, copied again by
+each Jacobian. Measured (``benchmarks/bench_group.py``, best of
 3, run alternately with the code before): a triad at 10^4 samples 2.28-2.33 -> 2.11-2.15 us a
 sample (positions; 2.84 -> 2.16 us in a fresh process, where every chunk's copy faults),
 5.67 -> 5.20-5.26 us with rates; 10^3 designs x 360 samples 2.95-3.01 us and outside the
