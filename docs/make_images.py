@@ -66,6 +66,20 @@ COMMANDS = [
         "-o",
         "docs/images/plot_quantities_slider_crank.png",
     ],
+    [
+        "plot",
+        "examples/slider_crank.yaml",
+        "--time",
+        "0:0.3:0.001",
+        "--motor",
+        "3,60",
+        "-q",
+        "crank.omega",
+        "-q",
+        "T[crank]",
+        "-o",
+        "docs/images/plot_simulate_slider_crank.png",
+    ],
 ]
 
 if __name__ == "__main__":

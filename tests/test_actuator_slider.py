@@ -16,7 +16,7 @@ import pytest
 
 import linkagekit as lk
 from linkagekit.checks import input_range
-from linkagekit.errors import LinkageError, MechanismFileError
+from linkagekit.errors import LinkageError
 from linkagekit.plan import make_plan
 
 TOL = 1e-12  # of the mechanism's size, of the force scale
@@ -242,10 +242,14 @@ def _body_rates(mech, res, link, u, du, ddu):
     return ("K" if link == "bucket_barrel" else "G"), w_line - w_rel, al_line - al_rel
 
 
-def test_unfixable_actuator_is_refused_with_a_clear_message(tmp_path):
-    """An actuator whose rod's pin is on a link nothing places (inside a triad): one located line."""
+def test_actuator_inside_a_triad_is_placed_by_the_numerical_group(tmp_path):
+    """An actuator whose rod's pin is on a link no closed-form step places (inside a triad): refused with
+    "slides on a link that nothing fixes" before groups took slider drivers (issue 29); now the group holds
+    it: the pins are sqrt(17) + u apart (the slide is the line through both pins), every link keeps its lengths, the
+    pose comes back at 0 and a sample beyond the stroke is flagged (tests/test_group_cylinders.py checks the
+    numbers against the cylinder form and an independent solve)."""
     text = """
-joints: {A: [0, 0], B: [4, 0], C: [2, -1], X: [0.5, 2], Y: [3.5, 2], G: [2, 3], CH: [2, 0]}
+joints: {A: [0, 0], B: [4, 0], C: [1, -1], X: [0.5, 2], Y: [3.5, 2], G: [2, 3], CH: [1.25, 0]}
 links:
   ground: [A, B, C]
   l1: [A, X]
@@ -253,17 +257,20 @@ links:
   plate: [X, Y, G]
   barrel: [C, CH]
   rod: [G]
-sliders: [{link: rod, on: barrel, through: G, direction: [0, 1]}]
+sliders: [{link: rod, on: barrel, through: G, direction: [1, 4]}]
 drivers: [{slider: 0, stroke: [-0.5, 0.5]}]
 """
     path = tmp_path / "triad_actuator.yaml"
     path.write_text(text)
-    mech = lk.load(path)
-    with pytest.raises(MechanismFileError) as err:
-        lk.analyze(mech)
-    msg = str(err.value)
-    assert "drivers[0]: slider 0 slides on a link that nothing fixes before it" in msg and "'barrel'" in msg
-    assert "\n" not in msg
+    mech = lk.load(path)  # (with C at [2, -1] under G the pose is a dead point: G moves square to the slide)
+    u = np.array([-0.55, -0.45, -0.2, 0.0, 0.04, 0.2])  # it assembles for u in [-0.5 (stroke), 0.0501 (dead point)]
+    res = lk.analyze(mech, {"rod": u})
+    assert res.assembled.tolist() == [False, True, True, True, True, False]
+    z = {j: res.xy(j)[1:5] @ [1, 1j] for j in mech.joint_names}
+    np.testing.assert_allclose(np.abs(z["G"] - z["C"]), np.sqrt(17) + u[1:5], rtol=0, atol=1e-10)
+    for a, b in (("A", "X"), ("B", "Y"), ("X", "Y"), ("X", "G"), ("Y", "G"), ("C", "CH")):
+        np.testing.assert_allclose(np.abs(z[a] - z[b]), abs(mech.joints[a] - mech.joints[b]), rtol=0, atol=1e-10)
+    assert all(abs(z[j][2] - mech.joints[j]) <= 1e-12 for j in mech.joint_names)
 
 
 @pytest.mark.parametrize(

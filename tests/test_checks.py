@@ -947,3 +947,23 @@ def test_a_dyad_that_stays_tangent_is_not_a_change_point_at_every_sample():
     changes = [d for d in dead if d["kind"] == "change point"]
     assert 1 <= len(changes) <= 3, [round(d["input"], 4) for d in changes]
     assert any(abs(d["input"] - 180) < 1e-6 for d in changes)  # the rhombus's own flat position
+
+
+def test_a_resting_rocker_has_no_limit_positions_from_rounding(tmp_path, capsys):
+    """A rhombus (ground and every side 1) in its pose's mode: a parallelogram for crank in (0, 180) deg, where
+    the rocker turns with the crank (rocker angle = crank angle), then folded into a kite, D on A, the rocker
+    resting at 180 deg until the crank reaches the ground again.  By hand: no zero crossing of the rocker's speed
+    (it rises, then rests), and a swing of 180 deg.  The rounding of the resting rocker's speed (1e-15) used to
+    flip sign at hundreds of samples, each listed as a limit position at +-180 deg, and the swing came out 0."""
+    from helpers import fourbar_dict
+
+    C = np.exp(1j * np.radians(60.0))
+    mech = lk.Mechanism.from_dict(fourbar_dict(0j, 1 + 0j, C, C + 1, C + 0.5 + 0.7j))
+    fb = lk.check(mech)["fourbars"][0]
+    assert fb["limit_positions"] == []
+    assert fb["swing"] == pytest.approx(180.0, abs=0.01)  # the dense samples' range (0.05 deg grid)
+    path = tmp_path / "rhombus.json"
+    path.write_text(json.dumps(mech.to_dict()))
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Limit positions of rocker: none" in out and len(out.splitlines()) < 40

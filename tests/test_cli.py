@@ -203,8 +203,9 @@ drivers: [{link: crank, pivot: A, toward: C}]
     )
 
 
-def test_unsolvable_mechanism_gets_a_clear_message(tmp_path, capsys):
-    # a triad whose third leg is a cylinder: a cylinder driver inside a class-3 group
+def test_a_cylinder_inside_a_class3_group_is_solved(tmp_path, capsys):
+    # a triad whose third leg is a cylinder: a cylinder driver inside a class-3 group, refused (exit 1, "no
+    # triangulation order") until the group took cylinders; tests/test_group_cylinders.py checks its numbers
     text = """
 joints: {A: [0,0], B: [6,0], G: [3,8], C: [1,1], D: [2,4], E: [5,4], F: [3.5,6]}
 links:
@@ -215,8 +216,14 @@ links:
   tri: [D, E, F]
 drivers: [{link: crank, pivot: A, toward: C}, {cylinder: [G, F], name: lift}]
 """
-    code, _, err = run(["check", write(tmp_path, text)], capsys)
-    assert code == 1 and "no triangulation order" in err and err.count("\n") == 1
+    code, out, err = run(["check", write(tmp_path, text)], capsys)
+    assert code == 0 and not err and "D, E, F placed numerically" in out and "cylinder G-F" in out
+    code, out, _ = run(
+        ["analyze", write(tmp_path, text), "--at", "crank=45", "--at", "lift=2.2", "--format", "json"], capsys
+    )
+    doc = json.loads(out)
+    assert code == 0 and doc["assembled"] == [True]
+    assert abs(complex(doc["joints"]["F"]["x"][0] - 3, doc["joints"]["F"]["y"][0] - 8)) == pytest.approx(2.2, abs=1e-10)
 
 
 def test_real_executable_prints_no_traceback(tmp_path):

@@ -165,3 +165,29 @@ def test_min_transmission_bounds_the_angle_between_the_pairs():
     assert free.transmission[0] < 80 and fit.valid  # the bound binds
     assert mu.min() >= 80 - 1e-6 and mu.max() <= 100 + 1e-6
     assert fit.max_error > free.max_error + 0.01
+
+
+def test_one_branch_check_sees_the_extremes_inside_the_range():
+    """`assembles_between` against a dense sampling of `|B - C|^2` within `[(b - c)^2, (b + c)^2]`.
+
+    The intervals cross 0 deg (shortest `BC`) and 180 deg (longest), where the ends alone would
+    pass designs that come apart in between; the sampled check is exact to the sampling's
+    0.1 deg (at most 2e-6 of `|BC|^2`), so designs within 1e-5 of a bound are left out.
+    """
+    from linkagekit.synthesis.function import assembles_between
+
+    rng = np.random.default_rng(7)
+    n = 300
+    abc = rng.uniform(0.2, 2.0, (n, 3))
+    lo = rng.uniform(-200.0, 200.0, n)
+    x = np.radians(np.stack([lo, lo + rng.uniform(5.0, 300.0, n)], axis=1))
+    phi = x[:, :1] + (x[:, 1:] - x[:, :1]) * np.linspace(0.0, 1.0, 3001)  # (n, 3001)
+    a, b, c = abc[:, :1], abc[:, 1:2], abc[:, 2:]
+    r2 = a * a + 1.0 - 2 * a * np.cos(phi)
+    margin = np.minimum(r2 - (b - c) ** 2, (b + c) ** 2 - r2).min(axis=1)
+    clear = np.abs(margin) > 1e-5
+    got = assembles_between(abc, 1.0, x)
+    assert np.array_equal(got[clear], margin[clear] >= 0)
+    # the cases that matter: assembled at both ends, apart in between (0 or 180 deg inside)
+    ends = np.minimum(r2[:, [0, -1]] - (b - c) ** 2, (b + c) ** 2 - r2[:, [0, -1]]).min(axis=1)
+    assert np.sum((ends > 1e-5) & (margin < -1e-5)) >= 10

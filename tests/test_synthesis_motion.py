@@ -225,6 +225,10 @@ def check_frames_drawn(png: Path, poses: np.ndarray) -> None:
     ("rows", "needle"),
     [
         ("x,y,angle\n0,0,0\n1,0,10\n", "at least 3"),
+        ("x,y,angle\n", "0 poses; at least 3"),
+        ("x,y,angle,input\n0,0,0,0\n1,0,10,100\n2,1,20,50\n3,0,30,150\n", "pose 3: the inputs must increase"),
+        ("x,y,angle,input\n0,0,0,0\n1,0,10,10\n2,1,20,10\n", "pose 3: the inputs must increase"),
+        ("x,y,angle,input\n0,0,0,0\n1,0,10,1000\n2,1,20,2000\n", "within one turn"),
         ("x,y,angle\n0,0,0\n1,nan,10\n2,1,20\n", "not finite"),
         ("x,y,angle\n0,0,0\n1,0,10\n1,0,10\n2,1,20\n", "repeats pose 2"),
         ("x,y,angle\n0,0,0\n1,0,400\n2,1,20\n", "out of range"),
@@ -305,3 +309,178 @@ def test_random_four_bars_are_recovered():
         out = synthesize_motion(poses, seconds=5)
         pos, ang = errors_by_analyze(out.best.mechanism, poses, out.best.inputs)
         assert out.best.one_branch and np.max(pos) < 1e-8 * out.diagonal and np.max(np.abs(ang)) < 1e-6
+
+
+def test_the_exact_route_keeps_the_transmission_bound(monkeypatch):
+    """Burmester's four-bars know no transmission bound: one below ``min_transmission`` is never the answer.
+
+    The five poses' exact four-bars have smallest transmission angles of about 45.4, 41.0, 17.7
+    and 17.2 deg (measured here by ``lk.analyze``); the approximate route is stubbed out (it
+    finds nothing), so a bound of 50 deg leaves no answer, and one of 42 deg the 45.4 deg one.
+    """
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    import linkagekit.synthesis.run as run
+
+    monkeypatch.setattr(run, "_engine_seeds", lambda *a: np.zeros((0, motion.FB_DIM)))
+    monkeypatch.setattr(motion, "approximate", lambda *a, **k: [])
+    poses = traced_poses(known_fourbar(), 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+
+    def smallest(f) -> float:  # folded to [0, 90], over the sweep, by lk.analyze
+        res = lk.analyze(f.mechanism, {"crank": np.linspace(f.inputs[0], f.inputs[-1], 721)})
+        u, v = res.point("A1") - res.point("B1"), res.point("B0") - res.point("B1")
+        mu = np.degrees(np.abs(np.angle(v / u)))
+        return float(np.min(np.minimum(mu, 180.0 - mu)))
+
+    free = synthesize_motion(poses)
+    best = smallest(free.best)
+    assert 40.0 < best < 50.0 and best == pytest.approx(free.best.min_transmission, abs=0.05)
+    assert min(smallest(f) for f in free.fourbars if f.one_branch) < 20.0
+    with pytest.raises(lk.LinkageError, match="transmission angle within"):
+        synthesize_motion(poses, min_transmission=50.0)
+    bounded = synthesize_motion(poses, min_transmission=42.0)
+    assert bounded.best.one_branch and smallest(bounded.best) >= 42.0
+
+
+def test_full_turn_keeps_the_four_bars_whose_crank_turns_fully(tmp_path, capsys):
+    """``--full-turn`` (spec section 6): the written crank sweeps a whole turn and assembles all of it.
+
+    Judged by ``lk.analyze`` of each listed four-bar over a whole turn: without the option
+    some exact four-bars meet the poses on one branch yet stop short of a turn; with it every
+    one listed as one branch turns fully, and the best still meets the poses exactly.
+    """
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    poses = traced_poses(known_fourbar(), 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+
+    def turns(f) -> bool:
+        way = 1.0 if f.inputs[-1] >= f.inputs[0] else -1.0
+        crank = f.inputs[0] + way * np.linspace(0.0, 360.0, 1441)
+        return bool(np.all(lk.analyze(f.mechanism, {"crank": crank}).assembled))
+
+    free = synthesize_motion(poses)
+    assert not all(turns(f) for f in free.fourbars if f.one_branch)
+    src = write_poses(tmp_path / "poses.csv", poses)
+    assert main(["synthesize", str(src), "--task", "motion", "--full-turn", "-o", str(tmp_path / "o.yaml")]) == 0
+    assert "one branch" in capsys.readouterr().out
+    written = lk.load(tmp_path / "o.yaml")
+    sweep = written.drivers[0].sweep
+    assert abs(abs(sweep.stop - sweep.start) - 360.0) < 1e-9
+    assert np.all(lk.analyze(written, {"crank": np.linspace(sweep.start, sweep.stop, 1441)}).assembled)
+    full = synthesize_motion(poses, full_turn=True)
+    assert full.best.one_branch and all(turns(f) for f in full.fourbars if f.one_branch)
+    pos, ang = errors_by_analyze(full.best.mechanism, poses, full.best.inputs)
+    assert np.max(pos) < 1e-9 * full.diagonal and np.max(np.abs(ang)) < 1e-7
+
+
+def test_an_unknown_unit_is_refused_before_the_search(tmp_path, capsys):
+    src = write_poses(tmp_path / "poses.csv", traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 280.0, 7)))
+    assert main(["synthesize", str(src), "--task", "motion", "--units", "furlong", "-o", str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(ERROR_PREFIX) and "\n" not in err and "--units" in err and "furlong" in err
+    assert not (tmp_path / "o.yaml").exists()
+
+
+def shared_exact5() -> np.ndarray:
+    """Hsieh's generating four-bar's five poses (public benchmark data), as ``x, y, angle``."""
+    path = Path("/work/shared/benchmarks/motion-function/targets.json")
+    if not path.exists():
+        pytest.skip("the shared benchmark data is absent")
+    q = np.array(json.loads(path.read_text())["hsieh2_generating_mechanism"]["exact5_poses"]["poses"])
+    return np.stack([q[:, 0], q[:, 1], np.degrees(np.arctan2(q[:, 3], q[:, 2]))], axis=1)
+
+
+@pytest.mark.parametrize("which", ["known", "hsieh2"])
+def test_one_branch_flags_agree_with_analyze_of_each_written_four_bar(which):
+    """Every listed four-bar's ``one_branch`` against ``lk.analyze`` of its own file.
+
+    Independently: the file's mode (its reference pose's signs) kept, the crank swept every
+    1/4 degree from the first pose to the last, it assembles all the way and puts ``P``, ``Q``
+    on every pose. Both kinds of exact four-bars occur here (met in order, and met only by
+    changing mode or across a gap), so a check that ignores either is caught.
+    """
+    pytest.importorskip("linkagekit.synthesis.burmester")
+    if which == "known":
+        poses = traced_poses(known_fourbar(), 41.6 + np.array([0.0, 50.0, 110.0, 170.0, 240.0]))
+    else:
+        poses = shared_exact5()
+    out = synthesize_motion(poses)
+    verdicts = []
+    for f in out.fourbars:
+        a, b = f.inputs[0], f.inputs[-1]
+        dense = lk.analyze(f.mechanism, {"crank": np.linspace(a, b, int(4 * abs(b - a)) + 2)})
+        pos, ang = errors_by_analyze(f.mechanism, poses, f.inputs)
+        met = bool(np.all(dense.assembled) and np.max(pos) < 1e-7 * out.diagonal and np.max(np.abs(ang)) < 1e-5)
+        verdicts.append(met)
+        assert f.one_branch == met
+    assert any(verdicts) and not all(verdicts)
+
+
+def test_the_dense_check_sees_a_gap_between_poses():
+    """``sweep_check`` on a non-Grashof four-bar (Hsieh's: crank 12, coupler 4, rocker 9, ground 5).
+
+    Its crank assembles within 90 deg of the ground line only (``|p2 - p3| <= 13``); poses at
+    0, 50 and -40 deg from it are met turning one way through 0 -> 50 -> 320, across the gap,
+    and at -50, 0, 50 without one. ``lk.analyze`` of the same four-bar agrees at 180 deg.
+    """
+    g = 0.2
+    ga, gb = complex(-2, -3), complex(-2, -3) + 5 * np.exp(1j * g)
+    F = np.array([[ga.real, ga.imag, 0.0, 0.0, 12.0, gb.real, gb.imag, 4.0, 0.0, 9.0]])
+    s = np.array([1.0])
+    across = motion.sweep_check(F, g + np.radians([[0.0, 50.0, -40.0]]), s, closed=False)
+    within = motion.sweep_check(F, g + np.radians([[-50.0, 0.0, 50.0]]), s, closed=False)
+    assert not across.assembled[0] and within.assembled[0]
+    A0, A1 = ga, ga + 12 * np.exp(1j * g)
+    B1 = A1 + 4 * np.exp(1j * np.angle(gb - A1) + 1j * np.arccos((16 + abs(gb - A1) ** 2 - 81) / (8 * abs(gb - A1))))
+    mech = Mechanism.from_dict(
+        {"format": "linkagekit/1", "joints": {"A0": [A0.real, A0.imag], "A1": [A1.real, A1.imag],
+         "B1": [B1.real, B1.imag], "B0": [gb.real, gb.imag]},
+         "links": {"ground": ["A0", "B0"], "crank": ["A0", "A1"], "coupler": ["A1", "B1"], "rocker": ["B0", "B1"]},
+         "drivers": [{"link": "crank", "pivot": "A0", "toward": "A1"}]}, "<hsieh2>")  # fmt: skip
+    res = lk.analyze(mech, {"crank": np.degrees(g) + np.array([-50.0, 0.0, 50.0, 180.0])})
+    assert list(res.assembled) == [True, True, True, False]
+
+
+def test_the_judge_holds_the_transmission_bound():
+    """``judge`` (the engine's dense check of a motion design) against the bound, by ``lk.analyze``.
+
+    The known four-bar's smallest transmission angle between its first and last pose is
+    measured by ``lk.analyze`` (every 1/4 degree); the judge passes it under a bound 1 deg
+    below and fails it under one 1 deg above.
+    """
+    mech = known_fourbar()
+    crank = 41.6 + np.linspace(0.0, 280.0, 7)
+    poses = traced_poses(mech, crank)
+    p = motion.motion_poses(poses[:, 0], poses[:, 1], np.radians(poses[:, 2]))
+    res = lk.analyze(mech, {"crank": np.linspace(crank[0], crank[-1], 1121)})
+    u, v = res.point("A1") - res.point("B1"), res.point("B0") - res.point("B1")
+    mu = np.degrees(np.abs(np.angle(v / u)))
+    smallest = float(np.min(np.minimum(mu, 180.0 - mu)))
+    at = lk.analyze(mech, {"crank": crank[:1]})
+    P0, frame = at.point("P")[0], np.exp(1j * np.radians(poses[0, 2]))
+
+    def body(j: str) -> complex:
+        return complex((at.point(j)[0] - P0) / frame / p.scale)
+
+    def ground(j: str) -> complex:
+        return complex((at.point(j)[0] - p.center) / p.scale)
+
+    ga, gb, a, b = ground("A0"), ground("B0"), body("A1"), body("B1")
+    ra, rb = abs(at.point("A1")[0] - at.point("A0")[0]) / p.scale, abs(at.point("B1")[0] - at.point("B0")[0]) / p.scale
+    F = np.array([[ga.real, ga.imag, a.real, a.imag, ra, gb.real, gb.imag, b.real, b.imag, rb]])
+    t, s = motion.crank_angles(p, F), motion.first_mode(p, F)
+    for bound, violation in ((smallest - 1.0, 0.0), (smallest + 1.0, 1.0)):
+        score = motion.judge(p, F, t, s, motion.MotionObjective(p, min_transmission=bound))
+        assert score.violation[0] == violation and score.error[0] < 1e-9
+
+
+def test_the_engine_options_reach_motions_search(tmp_path):
+    """--checkpoint, --workers, --restarts ... were accepted for motion and did nothing (found by review):
+    the engine's search of seeds now takes them, and the run is the same whether resumed or not."""
+    mech = known_fourbar()
+    poses = traced_poses(mech, 41.6 + np.linspace(0.0, 280.0, 7))
+    ck = tmp_path / "ck.npz"
+    engine = {"checkpoint": str(ck), "restarts": 1, "generations": 5}
+    first = synthesize_motion(poses, seconds=5, engine=engine)
+    assert ck.is_file()  # the engine wrote its checkpoint
+    again = synthesize_motion(poses, seconds=5, engine=engine)  # a finished checkpoint replays
+    assert first.best.mechanism.to_dict() == again.best.mechanism.to_dict()
+    assert first.best.max_position_error < 1e-8 * first.diagonal

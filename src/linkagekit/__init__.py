@@ -75,8 +75,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .api import analyze, analyze_chunks, reference_signs
     from .checks import check, modes
     from .dynamics import reduced, simulate
-    from .flywheel import size_flywheel
     from .files import load, save
+    from .flywheel import size_flywheel
     from .model import Mechanism
     from .result import Result
     from .synthesis.run import synthesize

@@ -22,7 +22,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from types import MappingProxyType
@@ -30,10 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from .branch import BRANCHES, along_sweep
+from .branch import along_sweep, limits
 from .errors import InputError, LinkageError, shorten
 from .forces import Forces, Kinematics, solve_forces
 from .model import Mechanism
+from .options import BranchMode
 from .params import Body, LoadParams, Params, as_poses, compile
 from .plan import Plan, make_plan
 from .positions import Positions, reference_mode, solve
@@ -192,7 +193,7 @@ class Options:
     dynamics: bool = True
     method: str = "natural"
     static: bool = False
-    branch: str = "pose"
+    branch: str | BranchMode = BranchMode.POSE
 
 
 @dataclass(frozen=True)
@@ -203,8 +204,8 @@ class Request:
     design shares them); ``values``, ``speeds``, ``accels`` are per driver in file units
     (speeds in rad/s or length/s), as the Result shows them; ``w_in``, ``a_in`` are
     (drivers, 1, n).  ``signs`` (sign steps, D or 1, n or 1) and ``mirrors`` (mirror links,
-    ...) are None when the pose's own are used.  ``branch``: ``"pose"`` (the pose's signs) or
-    ``"continuous"`` (followed through change points, :mod:`linkagekit.branch`).
+    ...) are None when the pose's own are used.  ``branch``: the pose's signs, or followed
+    through change points (:class:`~linkagekit.options.BranchMode`).
     """
 
     mech: Mechanism
@@ -223,7 +224,7 @@ class Request:
     method: str
     rates: bool
     forces: bool
-    branch: str = "pose"
+    branch: BranchMode = BranchMode.POSE
 
 
 def _check_kinds(mech: Mechanism, o: Options) -> None:
@@ -347,16 +348,15 @@ def _modes(params: Params, o: Options, n: int) -> tuple[np.ndarray | None, np.nd
         raise InputError(f"method: expected 'natural', 'vector-loop' or 'numerical', got {o.method!r}")
     if o.method == "vector-loop" and (o.poses is not None or sg is not None or mr is not None):
         raise InputError("method 'vector-loop' solves one design in the pose's mode: no poses, signs or mirrors")
-    _check_branch(o, sg)
     return sg, mr
 
 
-def _check_branch(o: Options, sg: np.ndarray | None) -> None:
-    """The ``branch`` option: one of :data:`linkagekit.branch.BRANCHES`, and not with given signs or the vector loop."""
-    if not isinstance(o.branch, str) or o.branch not in BRANCHES:
-        raise InputError(f"branch: expected 'pose' or 'continuous', got {o.branch!r}")
-    if o.branch == "continuous" and (sg is not None or o.method == "vector-loop"):
+def _branch_mode(o: Options, sg: np.ndarray | None) -> BranchMode:
+    """The ``branch`` option parsed (:class:`BranchMode`), and not continuous with given signs or the vector loop."""
+    mode = BranchMode.parse(o.branch)
+    if mode is BranchMode.CONTINUOUS and (sg is not None or o.method == "vector-loop"):
         raise InputError("branch 'continuous' chooses the signs itself: not with signs= or method='vector-loop'")
+    return mode
 
 
 def request(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None, o: Options) -> Request:
@@ -373,15 +373,17 @@ def request(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike | None,
     w_in = np.array([speeds[d.name] for d in mech.drivers])[:, None, :]
     a_in = np.array([accels[d.name] for d in mech.drivers])[:, None, :]
     sg, mr = _modes(params, o, n)
+    mode = _branch_mode(o, sg)
     forces = bool(o.rates and o.dynamics and mech.has_dynamics)
     return Request(
-        mech, params, poses, D, n, values, q, speeds, accels, w_in, a_in, sg, mr, o.method, o.rates, forces, o.branch
+        mech, params, poses, D, n, values, q, speeds, accels, w_in, a_in, sg, mr, o.method, o.rates, forces, mode
     )
 
 
 def solve_request(req: Request) -> Result:
     """Solve a request chunk of designs by chunk of designs (bounded working memory) into one Result."""
-    out = _Outputs(req.mech, req.params.plan, req.n_designs, req.n, req.rates, req.branch == "continuous")
+    continuous = req.branch is BranchMode.CONTINUOUS
+    out = _Outputs(req.mech, req.params.plan, req.n_designs, req.n, req.rates, continuous)
     chunk = max(1, CHUNK_SAMPLES // max(req.n, 1))
     for start in range(0, req.n_designs, chunk):  # every chunk writes its slice
         sl = slice(start, min(start + chunk, req.n_designs))
@@ -395,18 +397,38 @@ def solve_request(req: Request) -> Result:
         if req.method == "vector-loop":
             pos, rt = _vector_loop(req.mech, req.params, req.q, req.w_in, req.a_in)
         else:
-            sg, continuous = cut(req.signs), req.branch == "continuous"
-            if continuous:
-                sg = along_sweep(p, cut(req.q), tuple(d.type.cyclic for d in req.mech.drivers)).signs  # type: ignore[arg-type]
-                assert out.signs is not None
-                out.signs[:, sl] = sg
-            pos = solve(p, cut(req.q), sg, cut(req.mirrors), out=out.z[:, sl], continuous=continuous)  # type: ignore[arg-type]
-            if out.v is not None and out.a is not None:
-                rt = solve_rates(p, pos, req.w_in, req.a_in, out=(out.v[:, sl], out.a[:, sl]))
+            pos, rt = _solve_chunk(req, p, cut, out, sl, continuous)
         out.write(sl, p, pos, rt)
         if req.forces:
             out.write_forces(sl, _forces(req.mech, p, out, sl, req.speeds))
     return _result(req, out)
+
+
+def _solve_chunk(
+    req: Request,
+    p: Params,
+    cut: Callable[[np.ndarray | None], np.ndarray | None],
+    out: _Outputs,
+    sl: slice,
+    continuous: bool,
+) -> tuple[Positions, Rates | None]:
+    """Positions and rates of one chunk of designs (``p``), written into ``out``: the pose's signs, or the
+    continuous branch's (signs followed along the path, and the branch's limit at samples on a change point)."""
+    sg, q = cut(req.signs), cut(req.q)
+    assert q is not None
+    angular = tuple(d.type.cyclic for d in req.mech.drivers)
+    br = along_sweep(p, q, angular) if continuous else None
+    if br is not None:
+        sg = br.signs
+        assert out.signs is not None
+        out.signs[:, sl] = sg
+    pos = solve(p, q, sg, cut(req.mirrors), out=out.z[:, sl], continuous=continuous)
+    rt = None
+    if out.v is not None and out.a is not None:
+        rt = solve_rates(p, pos, req.w_in, req.a_in, out=(out.v[:, sl], out.a[:, sl]))
+    if br is not None:
+        pos, rt = limits(p, q, (req.w_in, req.a_in), cut(req.mirrors), br, angular, pos, rt)
+    return pos, rt
 
 
 # ---------------------------------------------------------------------- analyze
@@ -423,7 +445,7 @@ def analyze(
     dynamics: bool = True,
     method: str = "natural",
     static: bool = False,
-    branch: str = "pose",
+    branch: str | BranchMode = "pose",
 ) -> Result:
     """Positions, velocities and accelerations (and forces, when the file has masses or loads).
 
@@ -460,9 +482,9 @@ def analyze(
     static : bool
         Zero speed and acceleration for every driver: the forces are then the static ones
         that balance gravity and the loads (not to be combined with ``speed``/``acceleration``).
-    branch : {"pose", "continuous"}
-        ``"pose"`` (default): the pose's signs at every input; ``"continuous"``: followed through
-        change points from the pose's input (:mod:`linkagekit.branch`), ``Result.signs`` per sample.
+    branch : {"pose", "continuous"} or BranchMode
+        ``"pose"`` (default): the pose's signs; ``"continuous"``: followed through change points
+        (:mod:`linkagekit.branch`; ``Result.signs`` per sample; on a change point, the branch's limit).
 
     Returns
     -------

@@ -10,8 +10,9 @@ means flipping the sign there, so that the motion goes on smoothly.
 :func:`follow` decides it along a path given in order (a simulation calls it with its time
 steps); :func:`along_sweep` builds the path of a sweep (from the pose's input up to the
 largest input and down to the smallest, through every requested input and a fixed grid)
-and calls it.  The work is vectorized over samples and designs and sequential only over
-the sign steps (a step's candidates depend on the signs chosen before it).  Derivation:
+and calls it; :func:`limits` gives a sample exactly on a change point the branch's limit.
+The work is vectorized over samples and designs and sequential only over the sign steps
+(a step's candidates depend on the signs chosen before it).  Derivation:
 ``docs/method.md``, "Following a branch through change points".
 
 Examples
@@ -28,15 +29,17 @@ Examples
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from .errors import InputError
 from .params import Params
-from .positions import WALK_STEP, Positions, solve
-from .rates import solve_rates
+from .positions import WALK_STEP, Positions, _take_samples, solve
+from .rates import Rates, solve_rates
 from .steps import Pivot, Step, is_sign_step
 
 #: at a meeting, a flip is taken only where the flipped sign's defect (:func:`_defect`) is below
@@ -56,9 +59,13 @@ MAX_PATH = 200_000
 #: design-samples of path solved at once (bounds the working memory of a batch)
 BLOCK = 1 << 18
 
-BRANCHES = ("pose", "continuous")
+#: the half-step ``e`` (radians of the path driver; for a length, this share of a radian's worth of its grid step) of
+#: the symmetric combination that gives a branch's limit at a sample on a change point (:func:`limits`)
+LIMIT_STEP = 1e-3
+#: a sample takes the limit only where the one-sided extrapolations from either side agree to this (relative)
+LIMIT_AGREE = 1e-3
 
-__all__ = ["BRANCHES", "Branch", "PathTooLongError", "along_sweep", "follow"]
+__all__ = ["Branch", "PathTooLongError", "along_sweep", "follow", "limits"]
 
 
 class PathTooLongError(InputError):
@@ -78,11 +85,14 @@ class Branch:
         the design, and the path driver's input there (solver units), sorted by input.
     driver : int
         The driver the path follows (the one that moves most).
+    step : float
+        The path's grid step in that driver's input (solver units; 0 when nothing moves).
     """
 
     signs: np.ndarray
     points: tuple[np.ndarray, np.ndarray, np.ndarray]
     driver: int = 0
+    step: float = 0.0
 
 
 def _state(step: Step, pos: object, rt: object, i: int) -> tuple[np.ndarray, np.ndarray]:
@@ -344,7 +354,14 @@ def _joined(found: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> tuple[np.
     return s, d, x
 
 
-def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], continuous: bool = True) -> Branch:
+def along_sweep(
+    params: Params,
+    q: np.ndarray,
+    angular: tuple[bool, ...],
+    continuous: bool = True,
+    driver: int | None = None,
+    step: float | None = None,
+) -> Branch:
     """The signs at requested inputs ``q`` (n_drivers, D or 1, n), following the branch from each design's pose.
 
     The path runs along the driver that moves most, from the pose's input (its value as read
@@ -353,16 +370,19 @@ def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], contin
     the multiples of ``WALK_STEP`` (of 1/360 of the span for a length) in between, so the
     signs at an input do not depend on which other inputs are asked.  The other drivers
     move along it as they do between the requested samples.  ``points`` are in the path
-    driver's input.  Designs go through in blocks of about ``BLOCK`` design-samples of path;
+    driver's input.  ``driver`` and ``step`` fix the path's driver and grid step (as an
+    earlier call's ``Branch.driver``, ``Branch.step``: then the signs agree with that call's
+    at any input).  Designs go through in blocks of about ``BLOCK`` design-samples of path;
     a path longer than ``MAX_PATH`` samples is refused.
     """
     D, n = params.n_designs, q.shape[-1]
     x0 = params.pose_inputs  # (n_drivers, D)
     span = np.ptp(np.concatenate([q.reshape(q.shape[0], -1), x0], axis=1), axis=1)
-    d = int(np.argmax(span))
-    if span[d] == 0 or params.plan.n_signs == 0:
-        return Branch(np.repeat(params.signs[:, :, None], n, axis=2), _joined([]), d)
-    step = WALK_STEP if d < len(angular) and angular[d] else float(span[d]) / 360.0
+    d = int(np.argmax(span)) if driver is None else driver
+    if step is None:
+        step = WALK_STEP if d < len(angular) and angular[d] else float(span[d]) / 360.0
+    if span[d] == 0 or params.plan.n_signs == 0 or step == 0:
+        return Branch(np.repeat(params.signs[:, :, None], n, axis=2), _joined([]), d, step)
     x = q[d, 0]
     lo, hi = min(x.min(), x0[d].min()), max(x.max(), x0[d].max())
     if (hi - lo) / step > MAX_PATH:
@@ -379,7 +399,7 @@ def along_sweep(params: Params, q: np.ndarray, angular: tuple[bool, ...], contin
         parts.append(_along(params.take(sl), q[:, sl] if q.shape[1] > 1 else q, d, u, step, continuous))
     signs = np.concatenate([p.signs for p in parts], axis=1)
     found = [(p.points[0], p.points[1] + k * per, p.points[2]) for k, p in enumerate(parts)]
-    return Branch(signs, _joined(found), d)
+    return Branch(signs, _joined(found), d, step)
 
 
 def _along(params: Params, q: np.ndarray, d: int, u: np.ndarray, step: float, continuous: bool) -> Branch:
@@ -408,3 +428,175 @@ def _along(params: Params, q: np.ndarray, d: int, u: np.ndarray, step: float, co
     s, dd, where = _joined(points)
     order = np.lexsort((s, where, dd))
     return Branch(signs, (s[order], dd[order], where[order]), d)
+
+
+def _columns(a: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """An array over (..., samples) taken at ``cols``, each four times (the sides of :func:`limits`); as is when it
+    has one column."""
+    if np.shape(a)[-1] == 1:
+        return a
+    return np.repeat(np.asarray(a)[..., cols], 4, axis=-1)
+
+
+def _sides(f: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The values at ``u - 2e, u - e, u + e, u + 2e`` of an array over (..., D, 4K): four arrays (..., D, K)."""
+    g = f.reshape(*f.shape[:-1], -1, 4)
+    return tuple(g[..., k] for k in range(4))
+
+
+def _limit(f: np.ndarray) -> np.ndarray:
+    """The symmetric fourth-order combination ``A1 + (A1 - A2) / 3`` (``A_k`` the mean of ``f(u +- k e)``): ``f(u)``.
+
+    With ``f(u +- e)`` the branch's own values (signs followed on each side), the odd terms
+    cancel and ``A_k = f + (k e)^2 f''/2 + (k e)^4 f''''/24 + ...``, so the combination is
+    ``f(u) - e^4 f''''(u)/6 + O(e^6)``; a constant comes back exactly.
+    """
+    f0, f1, f2, f3 = _sides(f)
+    a1: np.ndarray = (f1 + f2) / 2
+    a2: np.ndarray = (f0 + f3) / 2
+    out: np.ndarray = a1 + (a1 - a2) / 3
+    return out
+
+
+def _one_sided_gap(f: np.ndarray) -> np.ndarray:
+    """``|(2 f(u - e) - f(u - 2e)) - (2 f(u + e) - f(u + 2e))|``, largest over the first axis: the left and right
+    linear extrapolations to ``u`` differ by ``O(e^2)`` on a smooth branch, by the jump across a kink or a jump."""
+    f0, f1, f2, f3 = _sides(f)
+    gap: np.ndarray = np.max(np.abs((2 * f1 - f0) - (2 * f2 - f3)), axis=0)
+    return gap
+
+
+def _patched(value: Any, side: Any, take: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> Any:
+    """``value`` (a scalar or an array over (D, n)) with its limit from ``side`` (over (D, 4K)) where ``take``."""
+    if np.ndim(side) == 0 or np.shape(side)[-1] != 4 * len(cols):
+        return value
+    full = np.array(np.broadcast_to(value, shape))
+    lim = np.broadcast_to(_limit(np.asarray(side)), (shape[0], len(cols)))
+    d, k = np.nonzero(take)
+    full[d, cols[k]] = lim[d, k]
+    return full
+
+
+def _side_solves(
+    params: Params,
+    q: np.ndarray,
+    qs: np.ndarray,
+    mirrors: np.ndarray | None,
+    br: Branch,
+    angular: tuple[bool, ...],
+    cols: np.ndarray,
+) -> Positions:
+    """Positions at the side inputs ``qs`` (the signs followed on ``br``'s path), solved together with the samples
+    ``q`` themselves: a numerical group then walks the same grid as for the samples (its walk is fixed by the
+    inputs it is given), so the sides lie on the branch the samples do."""
+    n = q.shape[-1]
+    qb = np.broadcast_to(q, (q.shape[0], qs.shape[1], n))
+    both = np.concatenate([qb, qs], axis=-1)
+    signs = np.concatenate([br.signs, along_sweep(params, qs, angular, driver=br.driver, step=br.step).signs], axis=-1)
+    mr = None if mirrors is None else _columns(mirrors, cols)
+    if mirrors is not None and np.shape(mirrors)[-1] > 1:
+        mr = np.concatenate([mirrors, _columns(mirrors, cols)], axis=-1)
+    full = solve(params, both, signs, mr, continuous=True)
+    side = _take_samples(full, np.arange(n, both.shape[-1]))
+    if params.plan.numerical:  # Newton near a change point may land on either root: the walk alone must agree
+        alone = solve(params, qs, signs[..., n:], None if mirrors is None else _columns(mirrors, cols), continuous=True)
+        size = np.max(np.abs(side.z - np.mean(side.z, axis=0)), axis=0)
+        with np.errstate(invalid="ignore"):
+            same = np.max(np.abs(alone.z - side.z), axis=0) <= LIMIT_AGREE * size
+        side = replace(side, assembled=side.assembled & same)
+    return side
+
+
+def _candidates_at(pos: Positions, singular: np.ndarray) -> np.ndarray:
+    """The samples that may lie on a change point, (D, n): singular ones, and those that do not assemble where no
+    sign step fails by more than ``CHANGE_TOL`` (coincident circles: a rhombus's crank over its ground pivot).
+
+    A gap (a step's margin well below zero) and a numerical group's sample out of its range are left alone (they
+    are not change points, and a group's sample out of range is costly)."""
+    flat: np.ndarray = singular & pos.assembled
+    if pos.margin.shape[0] == 0:
+        return flat
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN samples: every step after a failed one
+        worst = np.nanmin(pos.margin, axis=0)
+    out: np.ndarray = flat | (~pos.assembled & ~(worst < -CHANGE_TOL))
+    return out
+
+
+def limits(
+    params: Params,
+    q: np.ndarray,
+    rates: tuple[np.ndarray, np.ndarray],
+    mirrors: np.ndarray | None,
+    br: Branch,
+    angular: tuple[bool, ...],
+    pos: Positions,
+    rt: Rates | None,
+) -> tuple[Positions, Rates | None]:
+    """Samples exactly at a change point given the followed branch's limit there: positions and rates.
+
+    Where a sample along the continuous branch is singular or does not assemble (the dyad's
+    circles touch, or coincide as over a rhombus's ground pivot), the branch itself goes on
+    smoothly through it; its value there is taken as ``A1 + (A1 - A2) / 3`` of solves at
+    ``u +- e`` and ``u +- 2e`` (``A_k`` the mean of the pair ``k``; ``e = LIMIT_STEP``, the signs
+    followed on each side by :func:`along_sweep` on ``br``'s path), whose error is
+    ``e^4 |f''''| / 6`` plus the solves' rounding ``~ eps / e``: both about 1e-13 of the size at
+    ``e = 1e-3`` (``docs/method.md``).  It is taken only where all four solves assemble and
+    are regular, and the left and right linear extrapolations agree to ``LIMIT_AGREE`` (of the
+    size for positions, of the largest speed for velocities at unit input speed): the branch
+    is smooth there (a lock, a gap or a kink keep the sample as solved).  ``singular`` stays as
+    it was; ``Rates.limit`` marks the samples whose rates are such limits.  Every other sample
+    is untouched.  ``rates`` are the drivers' speeds and accelerations (n_drivers, 1, n or 1).
+    """
+    w_in, a_in = rates
+    sing = rt.singular if rt is not None else solve_rates(params, pos, w_in, a_in).singular
+    cand = _candidates_at(pos, sing)
+    if not cand.any() or br.step == 0:
+        return pos, rt
+    cols = np.flatnonzero(cand.any(axis=0))
+    e = LIMIT_STEP * br.step / WALK_STEP
+    qs = np.repeat(q[..., cols], 4, axis=-1)
+    qs[br.driver] += np.tile(np.array([-2.0, -1.0, 1.0, 2.0]) * e, len(cols))
+    ps = _side_solves(params, q, qs, mirrors, br, angular, cols)
+    unit = np.zeros((q.shape[0], 1, 1))
+    unit[br.driver] = 1.0
+    smooth = solve_rates(params, ps, unit, np.zeros_like(unit))  # dz/du: the test of smoothness
+    good = np.logical_and.reduce(_sides(ps.assembled & ~smooth.singular))
+    size = np.max(np.abs(ps.z - np.mean(ps.z, axis=0)), axis=0)
+    speed = np.max(np.abs(smooth.v), axis=0)
+    with np.errstate(invalid="ignore"):
+        ok = good & (_one_sided_gap(ps.z) <= LIMIT_AGREE * _sides(size)[1])
+        ok &= _one_sided_gap(smooth.v) <= LIMIT_AGREE * _sides(speed)[1]
+    take = cand[:, cols] & ok
+    if not take.any():
+        return pos, rt
+    return _take_limits(pos, rt, ps, params, rates, take, cols)
+
+
+def _take_limits(
+    pos: Positions,
+    rt: Rates | None,
+    ps: Positions,
+    params: Params,
+    rates: tuple[np.ndarray, np.ndarray],
+    take: np.ndarray,
+    cols: np.ndarray,
+) -> tuple[Positions, Rates | None]:
+    """``pos`` and ``rt`` with the limits of the side solves ``ps`` at the samples ``take`` (D, K) of ``cols``."""
+    d, k = np.nonzero(take)
+    shape = pos.assembled.shape
+    pos.z[:, d, cols[k]] = _limit(ps.z)[:, d, k]
+    assembled = pos.assembled.copy()
+    assembled[d, cols[k]] = True
+    rot = {name: _patched(v, ps.rot.get(name, v), take, cols, shape) for name, v in pos.rot.items()}
+    new_pos = replace(pos, assembled=assembled, rot=rot)
+    if rt is None:
+        return new_pos, None
+    side = solve_rates(params, ps, _columns(rates[0], cols), _columns(rates[1], cols))
+    rt.v[:, d, cols[k]] = _limit(side.v)[:, d, k]
+    rt.a[:, d, cols[k]] = _limit(side.a)[:, d, k]
+    omega = {name: _patched(v, side.omega.get(name, v), take, cols, shape) for name, v in rt.omega.items()}
+    alpha = {name: _patched(v, side.alpha.get(name, v), take, cols, shape) for name, v in rt.alpha.items()}
+    limit = np.zeros(shape, bool)
+    limit[d, cols[k]] = True
+    return new_pos, replace(rt, omega=omega, alpha=alpha, limit=limit)

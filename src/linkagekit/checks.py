@@ -46,6 +46,8 @@ MAX_MODE_SLOTS = 12
 N_BISECT = 60
 #: a sign step's |determinant| at a sample below which a local minimum is refined as a possible change point
 TOUCH = 0.05
+#: a rocker whose angular velocity stays within this share of its largest is at rest (the rest is rounding)
+REST = 1e-9
 #: check warns when a four-bar's transmission angle goes below this (degrees; synthesize's --min-transmission default)
 MIN_TRANSMISSION = 20.0
 #: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
@@ -705,12 +707,20 @@ def _run(
 
 
 def _limit_brackets(run: _Run, li: int) -> list[_Bracket]:
-    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours."""
+    """Limit positions of loop ``li``: where its rocker's angular velocity changes sign between neighbours.
+
+    Not where it only flickers about zero while the rocker rests (both neighbours within ``REST`` of the largest
+    speed: a rhombus folded into a kite holds its rocker still for half a turn, and the rounding of its speed
+    changed sign at hundreds of samples).
+    """
     sw, row = run.sw, run.q.w(li)
     w = run.rows[row]
     ia = np.flatnonzero(sw.has_next)
     wa, wb = w[ia], w[sw.next[ia]]
     hit = np.isfinite(wa) & np.isfinite(wb) & (wa != 0) & (np.sign(wb) != np.sign(wa))
+    if hit.any():
+        rest = REST * float(np.nanmax(np.abs(w)))
+        hit &= (np.abs(wa) > rest) | (np.abs(wb) > rest)
     return [_Bracket(sw.x[k], sw.nx[k], row, int(k), float(np.sign(w[k]))) for k in ia[hit]]
 
 
@@ -786,7 +796,7 @@ def _end_dead_points(run: _Run, fin: _Final, ends: list[float]) -> list[tuple[fl
         margins = fin.state.margin[:, col]
         k = int(np.nanargmin(margins)) if np.isfinite(margins).any() else 0
         info: dict[str, Any] = {"input": float(v / run.factor), "kind": "end of range"}
-        if (stroke_end := _slide_stroke_end(run, v)) is not None:
+        if (stroke_end := _slide_stroke_end(run, v) or _group_stroke_end(run, v)) is not None:
             info.update(stroke_end)
         elif params.plan.numerical and not (np.isfinite(margins).any() and np.nanmin(margins) <= 1e-6):
             info.update(_group_end(params))
@@ -813,6 +823,26 @@ def _slide_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
     end = "min" if abs(v - lo) <= abs(v - hi) else "max"
     detail = f"slider driver '{plan.drivers[run.driver]}' at the end of its stroke ({end})"
     return {"links": [step.block], "detail": detail}
+
+
+def _group_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
+    """A cylinder driver of a numerical group at an end of its stroke there (None: not such an end)."""
+    plan = run.params.plan
+    for st, nums in zip(plan.steps, run.params.steps, strict=True):
+        if not isinstance(st, Group):
+            continue
+        for i, (d, (lo_a, hi_a)) in enumerate(zip(st.input_drivers, nums[5], strict=True)):
+            lo, hi = float(lo_a[0, 0]), float(hi_a[0, 0])
+            if d != run.driver or min(abs(v - lo), abs(v - hi)) > 1e-9 * max(abs(v), abs(lo), abs(hi)):
+                continue
+            links = [gl.name for gl in st.links]
+            if i < len(st.cylinders):
+                end = "shortest" if abs(v - lo) <= abs(v - hi) else "longest"
+                detail = f"cylinder '{plan.drivers[d]}' at the end of its stroke ({end})"
+                return {"links": links, "cylinder": plan.drivers[d], "detail": detail}
+            end = "min" if abs(v - lo) <= abs(v - hi) else "max"
+            return {"links": links, "detail": f"slider driver '{plan.drivers[d]}' at the end of its stroke ({end})"}
+    return None
 
 
 def _change_dead_points(

@@ -39,11 +39,12 @@ from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
 from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten, shorten_path
+from .options import BranchMode
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
     import numpy as np
 
-    from linkagekit import Mechanism
+    from linkagekit import Mechanism, Result
 
     from .catalogue import Catalogue
 
@@ -327,8 +328,8 @@ def _analyze_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--branch",
-        choices=("pose", "continuous"),
-        default="pose",
+        choices=BranchMode.words(),
+        default=BranchMode.POSE.value,
         help="pose: every joint keeps the reference pose's assembly sign; continuous: follow the branch "
         "through change points (a parallelogram stays a parallelogram) from the pose's input up and down "
         "(default: %(default)s)",
@@ -345,6 +346,13 @@ def _simulate_arguments(p: argparse.ArgumentParser) -> None:
         help="instead of a motion, print the smallest extra inertia (kg*m^2) on the driver's crank that keeps "
         "the periodic steady state's coefficient of speed fluctuation at most CS",
     )
+    _law_options(p)
+    _format_option(p, "table", "csv", "json")
+    _output_option(p)
+
+
+def _law_options(p: argparse.ArgumentParser) -> None:
+    """``--torque``, ``--motor``, ``--speed``: what drives a simulated motion and how it starts."""
     p.add_argument(
         "--torque",
         action="append",
@@ -364,8 +372,64 @@ def _simulate_arguments(p: argparse.ArgumentParser) -> None:
         metavar="V",
         help="starting speed, rad/s (length unit/s for a slider or cylinder); NAME=V per driver; default 0",
     )
-    _format_option(p, "table", "csv", "json")
-    _output_option(p)
+
+
+def _motion_options(p: argparse.ArgumentParser) -> None:
+    """``--time`` and the torque law: draw a simulated motion (as ``simulate`` computes it) instead of a sweep."""
+    p.add_argument(
+        "--time",
+        metavar="START:STOP:STEP",
+        help="instead of a sweep, the motion that 'simulate' computes at these times, s (plots run along time)",
+    )
+    _law_options(p)
+
+
+def _timed(args: argparse.Namespace) -> bool:
+    """Whether a picture command draws a simulated motion (``--time``); refuses options that do not go with it."""
+    if args.time is None:
+        given = [o for o, v in (("--torque", args.torque), ("--motor", args.motor), ("--speed", args.speed)) if v]
+        if given:
+            raise InputError(f"{given[0]} drives a simulated motion: give --time START:STOP:STEP too")
+        return False
+    if args.angles:
+        raise InputError("--time draws a simulated motion, --angles a sweep: give one of them")
+    return True
+
+
+def _motion(mech: Mechanism, args: argparse.Namespace, times: np.ndarray | None = None) -> Result | None:
+    """The simulated motion ``--time`` asks for (at ``times``, when given), or None for a sweep."""
+    import linkagekit as lk
+
+    if not _timed(args):
+        return None
+    if times is None:
+        times = _range(args.time, "--time")
+    torque, motor = _torque_law(mech, args)
+    speed = _by_driver(mech, args.speed, "--speed", _one_number) if args.speed else None
+    return lk.simulate(mech, times, torque=torque, motor=motor, speed=speed)
+
+
+def _solved(mech: Mechanism, args: argparse.Namespace) -> Result:
+    """What a picture command draws: the simulated motion of ``--time``, else the sweep (``--angles`` or the file's)."""
+    import linkagekit as lk
+
+    res = _motion(mech, args)
+    return lk.analyze(mech, _sweep(mech, args.angles)) if res is None else res
+
+
+def _torque_law(mech: Mechanism, args: argparse.Namespace) -> tuple[dict[str, float] | None, dict[str, Any] | None]:
+    """``--torque`` and ``--motor`` by driver (None where not given)."""
+    torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
+    motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    return torque, motor
+
+
+def _stopped(res: Result) -> int:
+    """Exit status of a picture of ``res``: 1, with its one line, when a simulated motion stopped at a toggle."""
+    if res.stopped:
+        print(f"{PROG}: {res.stopped}", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _motor_curve(text: str, what: str) -> tuple[float, float]:
@@ -403,8 +467,7 @@ def _simulate(args: argparse.Namespace) -> int:
     import linkagekit as lk
 
     mech = lk.load(args.file)
-    torque = _by_driver(mech, args.torque, "--torque", _one_number) if args.torque else None
-    motor = _by_driver(mech, args.motor, "--motor", _motor_curve) if args.motor else None
+    torque, motor = _torque_law(mech, args)
     if args.flywheel is not None:
         return _flywheel(args, mech, torque, motor)
     times = _range(args.time, "--time")
@@ -422,10 +485,7 @@ def _simulate(args: argparse.Namespace) -> int:
             res.columns(), units, analysis_sections(cat, mech.name or ""), inputs=shown, width=terminal_width()
         )
         _emit(text, args.output)
-    if res.stopped:
-        print(f"{PROG}: {res.stopped}", file=sys.stderr)
-        return 1
-    return 0
+    return _stopped(res)
 
 
 def _modes_arguments(p: argparse.ArgumentParser) -> None:
@@ -473,23 +533,26 @@ def _plot_arguments(p: argparse.ArgumentParser) -> None:
         "-q",
         action="append",
         metavar="NAME[,NAME...]",
-        help="plot these columns of 'analyze --format csv' against the input, one plot per option "
-        "(e.g. coupler.omega or 'T[crank]'), or a group: " + ", ".join(_QUANTITY_GROUPS),
+        help="plot these columns of 'analyze --format csv' against the input (with --time: against time), "
+        "one plot per option (e.g. coupler.omega or 'T[crank]'), or a group: " + ", ".join(_QUANTITY_GROUPS),
     )
+    _motion_options(p)
 
 
 def _animate_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
     _output_option(p, "the animation: .gif or .mp4")
     _sweep_option(p)
-    p.add_argument("--frames", metavar="N", help="this many frames, evenly over the sweep")
+    p.add_argument("--frames", metavar="N", help="this many frames, evenly over the sweep (or over --time)")
     p.add_argument("--fps", metavar="F", default="24", help="frames per second (default: %(default)s)")
+    _motion_options(p)
 
 
 def _report_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
     _output_option(p, "the page: .html")
     _sweep_option(p)
+    _motion_options(p)
 
 
 def _edit_arguments(p: argparse.ArgumentParser) -> None:
@@ -560,6 +623,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         metavar="W",
         help="motion: one radian of orientation error weighs as much as W diagonals of position error (default 0.05)",
     )
+    p.add_argument("--full-turn", action="store_true", help="motion: the crank turns fully through the poses")
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
 
@@ -984,6 +1048,12 @@ def _analyze(args: argparse.Namespace) -> int:
     mech = lk.load(args.file)
     if args.static and (args.speed or args.acceleration):
         raise InputError("--static: do not give --speed or --acceleration with it")
+    branch = BranchMode.parse(args.branch)
+    if branch is BranchMode.CONTINUOUS and args.method == "vector-loop":
+        raise InputError(
+            "--branch continuous chooses the signs itself; --method vector-loop solves in the pose's mode: "
+            "give one of them"
+        )
     inputs = _inputs(mech, args.at, args.angles)
     if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
         raise InputError(
@@ -997,7 +1067,7 @@ def _analyze(args: argparse.Namespace) -> int:
         acceleration=_rates(mech, args.acceleration, "--acceleration"),
         method=args.method,
         static=args.static,
-        branch=args.branch,
+        branch=branch,
     )
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
@@ -1093,6 +1163,8 @@ def _plot(args: argparse.Namespace) -> int:
         raise InputError("--modes draws one input (--at), not a sweep: leave out --angles")
     if args.quantity and args.at:
         raise InputError("--quantity plots over the sweep (--angles), not at --at")
+    if args.time is not None and (args.modes or args.at):
+        raise InputError(f"--time draws a simulated motion, not {'--modes' if args.modes else '--at'}")
     if args.modes:
         at: Any = None
         if args.at:
@@ -1104,7 +1176,7 @@ def _plot(args: argparse.Namespace) -> int:
         _check_pixels(fig)
         draw.save_figure(fig, args.output)
         return 0
-    res = lk.analyze(mech, _sweep(mech, args.angles))
+    res = _solved(mech, args)
     if args.quantity:
         from .viz.scene import build_scene
 
@@ -1112,15 +1184,15 @@ def _plot(args: argparse.Namespace) -> int:
         groups = [_quantities(res.catalogue, item) for item in args.quantity]
         fig = draw.quantities_figure(scene, groups, **picture)
         _check_pixels(fig)
-        draw.save_figure(fig, args.output)
-        return 0
+        draw.save_figure(fig, args.output, fig.axes[0])  # a PNG maps the first plot's (x, value) to pixels
+        return _stopped(res)
     poses = None
     if args.at:
         poses = lk.analyze(mech, {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()})
     fig = draw.mechanism_figure(res, poses, **picture)
     _check_pixels(fig)
     draw.save_figure(fig, args.output, fig.axes[0])
-    return 0
+    return _stopped(res)
 
 
 def _check_pixels(fig: Any) -> None:
@@ -1168,21 +1240,23 @@ def _animate(args: argparse.Namespace) -> int:
         raise InputError(f"--fps: a GIF plays at most {MAX_GIF_FPS:g} frames per second (write an .mp4 for more)")
     wanted = _frames(args.frames) if args.frames is not None else None
     mech = lk.load(args.file)
-    inputs = _sweep(mech, args.angles)
+    timed = _timed(args)
+    inputs = {"time": _range(args.time, "--time")} if timed else _sweep(mech, args.angles)
     values = inputs or {d.name: d.sweep.values() for d in mech.drivers}
     n = max(len(v) for v in values.values())
     frames = wanted or (n if n >= MIN_FRAMES else MIN_FRAMES)
     if frames > MAX_FRAMES:
         raise InputError(
-            f"the sweep has {n} samples, more frames than an animation takes ({MAX_FRAMES}): "
-            "give --frames N or a coarser --angles"
+            f"the {'motion' if timed else 'sweep'} has {n} samples, more frames than an animation takes "
+            f"({MAX_FRAMES}): give --frames N or a coarser {'--time' if timed else '--angles'}"
         )
-    if frames != n:  # evenly over each driver's sweep, ends included
+    if frames != n:  # evenly over each driver's sweep (or over the times), ends included
         values = {k: np.linspace(v[0], v[-1], frames) for k, v in values.items()}
-    res = lk.analyze(mech, values)
+    res = _motion(mech, args, values["time"]) if timed else lk.analyze(mech, values)
+    assert res is not None
     with _progress("frames") as tick:
         animate(res, args.output, fps=fps, progress=tick)
-    return 0
+    return _stopped(res)
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -1193,9 +1267,9 @@ def _report(args: argparse.Namespace) -> int:
 
     _suffix(args.output, (".html", ".htm"))
     mech = lk.load(args.file)
-    res = lk.analyze(mech, _sweep(mech, args.angles))
+    res = _solved(mech, args)
     write_report(res, args.output, source=_source_text(args.file))
-    return 0
+    return _stopped(res)
 
 
 def _source_text(path: str) -> str | None:
@@ -1323,7 +1397,9 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
     x, y = read_pairs(args.targets)
     engine = {
-        k: v for k, v in _search_options(args).items() if k in ("seconds", "seed", "restarts", "generations", "workers")
+        k: v
+        for k, v in _search_options(args).items()
+        if k in ("seconds", "seed", "restarts", "generations", "workers", "scheduler", "checkpoint")
     }
     if args.seconds == _DEFAULT_SECONDS:
         engine["seconds"] = FUNCTION_SECONDS
@@ -1415,9 +1491,12 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
 
     from .synthesis.motion import read_poses
     from .synthesis.run import synthesize_motion
+    from .units import LENGTH_UNITS
 
     if args.topology != "fourbar":
         _motion_template(args.topology)
+    if args.units not in LENGTH_UNITS:  # before the search, not when the file is built
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     seconds = _one_number(args.seconds, "--seconds")
     if not 0 < seconds <= 1e7:
         raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
@@ -1433,6 +1512,8 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
         units=args.units,
         seed=_integer(args.seed, "--seed", 0, 2**32 - 1),
         seconds=seconds,
+        full_turn=args.full_turn,
+        engine=_motion_engine(args),
     )
     best = out.best
     described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"
@@ -1440,7 +1521,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
     if args.plot:
         from .viz import draw
 
-        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed)
+        fig = draw.motion_figure(best.mechanism, pf.poses, best.inputs, closed=pf.closed or args.full_turn)
         draw.save_figure(fig, args.plot, fig.axes[0])
     print(motion_text(out, pf.poses, args.units, args.output))
     return 0
@@ -1553,8 +1634,16 @@ def _synthesize_command(args: argparse.Namespace) -> str:
         words.append("--ordered")
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
+        words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
         words += ["--angle-weight", str(args.angle_weight)] if args.angle_weight is not None else []
     return " ".join(shlex.quote(w) for w in words)
+
+
+def _motion_engine(args: argparse.Namespace) -> dict[str, Any]:
+    """The engine options given on the command line for motion's search of seeds (the rest: its short default)."""
+    options = _search_options(args)
+    defaults = {"restarts": 32, "generations": 500, "workers": 1, "scheduler": None, "checkpoint": None}
+    return {k: options[k] for k, d in defaults.items() if options[k] != d}
 
 
 def _search_options(args: argparse.Namespace) -> dict[str, Any]:

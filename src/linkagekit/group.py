@@ -46,6 +46,23 @@ terms are ``gamma = 2 Im(w' conj(u'))`` and ``2 Im(e_o' conj(c e'))`` (``w' = v_
 e'``, ``u' = dhat e'``, ``e' = v_c1 - v_c0``; zero on the ground). Scales: the group's mean
 link length on a line row, ``|s_o1 - s_o0|^2`` on a lock row.
 
+Cylinders and slider drivers
+----------------------------
+A cylinder driver whose ends are joints of the group (or one a known joint) adds the row
+``|z_b - z_a|^2 - s^2 = 0`` (:class:`GroupCylinder`), ``s`` its length: the driver's input.
+A slider driver between two moving links (an actuator's barrel and rod) whose slider is the
+group's, its guide the carrier, adds the *displacement row* ``Re(w conj(u)) - x = 0``
+(:class:`GroupSliderDrive`; ``w``, ``u`` as the line row's, ``x`` the displacement). The input
+is a *held value*: a slot after the known joints (its real part the input, :meth:`Group.held`),
+which the walk moves exactly as it moves the known joints (linearly between states), so the
+continuation is unchanged. Gradients: ``2 e`` on ``b``, ``-2 e`` on ``a``, ``-2 s`` on ``s``
+(``e = z_b - z_a``); ``u`` on ``k``, ``conj(rho - 1) u - w conj(dhat)`` on ``c0``, ``-conj(rho)
+u + w conj(dhat)`` on ``c1``, ``-1`` on ``x`` (``Re(a dz)`` has ``G = conj(a)``, ``Re(g
+conj(dz))`` has ``G = g``). The held values' rates are the drivers' speeds and accelerations,
+and ``gamma = 2 |e'|^2 - 2 s'^2`` and ``2 Re(w' conj(u'))``. Scales: ``s0^2`` (the pose's
+length) and the mean link length. A sample beyond a driver's stroke is flagged as the
+closed-form steps flag it (:meth:`Group._beyond_stroke`).
+
 Continuation on a fixed grid
 ----------------------------
 Newton converges to the root nearest its start, which may belong to another assembly
@@ -97,6 +114,27 @@ twice the longest minus the sum. A configuration Newton accepts keeps every edge
 failed at once (no Newton, sub-steps or restarts), as it would have been after all of them.
 This is the gap of a dyad (two circles that do not meet).
 
+*Small linear systems as array operations.* LAPACK costs about 1 us per small matrix (a
+6x6 solve 0.3-0.5 us, its determinant 0.25 us more), whatever its size. Where many columns
+are solved at once (the samples of ``VECTOR_SAMPLES`` samples x designs or more, the walk
+of ``VECTOR_DESIGNS`` designs or more, the rates of as many samples) Newton's systems are
+solved by :func:`_gauss`, Gaussian elimination with partial pivoting written as about
+``n^2`` array operations over the columns, which gives the determinant (the product of the
+pivots, with the sign of the swaps) for free: :meth:`Group._newton_vector` factors the
+Jacobian at every residual it evaluates, so a column that converges has its determinant at
+its solution from that factorization. Which solver a column gets depends only on the
+problem's size (samples x designs, designs) and on the column's own iteration
+(``VECTOR_ITER``), never on the other columns of its batch: batching stays exact. The
+samples' columns still iterating after ``VECTOR_ITER`` go on together, every chunk's in one
+LAPACK batch (:meth:`Group._newton_samples`). *One design's numbers are broadcast*, not
+copied per column (:meth:`_Arrays.take`; the rates' constant linear rows likewise, in
+:meth:`Group.jacobian`): a chunk's copy of them was 0.6 MB of fresh memory, copied again by
+each Jacobian. Measured (``benchmarks/bench_group.py``, best of
+3, run alternately with the code before): a triad at 10^4 samples 2.28-2.33 -> 2.11-2.15 us a
+sample (positions; 2.84 -> 2.16 us in a fresh process, where every chunk's copy faults),
+5.67 -> 5.20-5.26 us with rates; 10^3 designs x 360 samples 2.95-3.01 us and outside the
+range 2.4-2.5 us unchanged.
+
 Rates
 -----
 Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J_k a_k -
@@ -116,7 +154,7 @@ from typing import Any
 import numpy as np
 
 from .geometry import NAN_POINT, FloatArray, link_rates
-from .steps import Kin, Nums, Rate, Source, Step, WalkGrid
+from .steps import Kin, Nums, Rate, Source, Step, WalkGrid, _stroke_margin
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
 NEWTON_TOL = 1e-12
@@ -130,6 +168,14 @@ SUBSTEP_ITER = 6
 COND_EXACT = 1e-3
 #: samples solved at once in chunks of this many (their arrays stay in the cache)
 FILL_CHUNK = 2048
+#: from this many designs on, the walk's Newton runs as array operations over them (:func:`_gauss`), below
+#: by LAPACK per matrix (cheaper for a few: ~1 us a matrix against ~n^2 array operations a step)
+VECTOR_DESIGNS = 64
+#: ... and the samples' Newton from this many samples x designs on
+VECTOR_SAMPLES = 4096
+#: ... and for this many iterations (the few columns still iterating after them cost less by LAPACK; a column's
+#: numbers still depend only on its own iterations, not on the other columns)
+VECTOR_ITER = 2
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
@@ -187,6 +233,52 @@ class GroupSlider:
 
 
 @dataclass(frozen=True)
+class GroupCylinder:
+    """A cylinder driver of a group: its two ends (joints of the group, or one a known joint) are the
+    driver's input apart, a length that changes from sample to sample.
+
+    The length enters the group as a *held value* after the known joints (slot ``m + len(known) +
+    i``, its real part the length): the walk moves it with the known joints, linearly between
+    states, which is a homotopy in the length as in the joints (see :meth:`Group.held`).
+    """
+
+    driver: int  # index in the file's `drivers`
+    ends: tuple[int, int]  # its ends as slots
+    end_joints: tuple[int, int]  # ... as plan indices
+
+
+@dataclass(frozen=True)
+class GroupSliderDrive:
+    """A slider driver of a group (an actuator written as a barrel, a rod and a slider): the point of one of the
+    group's sliders is the driver's input (a displacement from its reference position) along the line.
+
+    The displacement is a held value after the cylinders' lengths, as theirs (:class:`GroupCylinder`).
+    """
+
+    driver: int  # index in the file's `drivers`
+    slider: int  # the slider's position in the group's `sliders`
+
+
+@dataclass(frozen=True)
+class _CRows:
+    """Where a group's cylinder equations sit (after the sliders' rows), per cylinder."""
+
+    a: np.ndarray  # (n_cyl,) the slot of its first end
+    b: np.ndarray  # (n_cyl,) ... of its second
+    s: np.ndarray  # (n_cyl,) the slot of its length (a held value)
+    row: np.ndarray  # (n_cyl,) the row of its distance equation
+
+
+@dataclass(frozen=True)
+class _DRows:
+    """Where a group's slider drivers' equations sit (after the cylinders' rows), per slider driver."""
+
+    slider: np.ndarray  # (n_drv,) its slider's position in the group's sliders
+    s: np.ndarray  # (n_drv,) the slot of its displacement (a held value)
+    row: np.ndarray  # (n_drv,) the row of its equation
+
+
+@dataclass(frozen=True)
 class _SRows:
     """Where a group's slider equations sit (after the links' rows), per slider; ``-1``: none (the ground)."""
 
@@ -231,6 +323,17 @@ class _Arrays:
     J_lin: FloatArray
 
     def take(self, cols: np.ndarray) -> _Arrays:
+        """The columns ``cols`` (indices or a mask). Numbers of one design (one column, or broadcast from one)
+        are broadcast, not copied: they are only read, and a chunk of 2048 samples' linear rows is 0.6 MB."""
+        if self.J_lin.shape[0] == 1 or self.J_lin.strides[0] == 0:
+            n = int(np.count_nonzero(cols)) if cols.dtype == bool else len(cols)
+            L, R, tol, J = self.L[:, :1], self.R[:, :1], self.tol[:, :1], self.J_lin[:1]
+            return _Arrays(
+                np.broadcast_to(L, (len(L), n)),
+                np.broadcast_to(R, (len(R), n)),
+                np.broadcast_to(tol, (len(tol), n)),
+                np.broadcast_to(J, (n, *J.shape[1:])),
+            )
         return _Arrays(self.L[:, cols], self.R[:, cols], self.tol[:, cols], self.J_lin[cols])
 
 
@@ -248,6 +351,8 @@ class _Walk:
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
     K0: np.ndarray  # (k, D) the known joints the start was solved with
     any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
+    vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
+    fill_vector: bool = False  # ... and the samples' (many samples and designs)
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
@@ -265,9 +370,15 @@ class Group(Step):
     keep_rotation: tuple[str, ...] = ()
     angular: tuple[bool, ...] = ()  # per driver: an angle (the walk's added samples are 1 degree apart)
     sliders: tuple[GroupSlider, ...] = ()
+    cylinders: tuple[GroupCylinder, ...] = ()
+    drives: tuple[GroupSliderDrive, ...] = ()
 
     # ------------------------------------------------------------------ numbers
     def numbers(self, src: Source) -> Nums:
+        """``(lengths, rhos, bases, zu, zk, strokes)``: the links' lengths, their further joints' rhos (then the
+        sliders' and the cylinders' numbers, :meth:`_slider_numbers`, the cylinders' pose lengths), the links'
+        bases, the pose's group and known joints, and the stroke ``(lo, hi)`` of each driver the group reads
+        (:attr:`input_drivers`)."""
         lengths, rhos, bases = [], [], []
         for gl in self.links:
             s = [src.shape(gl.name, j) for j in gl.joints]
@@ -277,9 +388,93 @@ class Group(Step):
             with np.errstate(divide="ignore", invalid="ignore"):
                 rhos.append(tuple((sk - s[0]) / base for sk in s[2:]))
         rhos.extend(self._slider_numbers(src))
+        rhos.extend((np.abs(src.pose(gc.end_joints[1]) - src.pose(gc.end_joints[0])) + 0j,) for gc in self.cylinders)
         zu = np.stack([src.pose(j) for j in self.joints])  # (m, D, 1)
         zk = np.stack([src.pose(j) for j in self.known]) if self.known else np.zeros((0, *zu.shape[1:]), complex)
-        return tuple(lengths), tuple(rhos), tuple(bases), zu, zk
+        strokes = tuple(src.stroke(d) for d in self.input_drivers)
+        return tuple(lengths), tuple(rhos), tuple(bases), zu, zk, strokes
+
+    @property
+    def input_drivers(self) -> tuple[int, ...]:
+        """The drivers whose input the group's equations read, in held order: its cylinders, then its slider
+        drivers."""
+        return tuple(gc.driver for gc in self.cylinders) + tuple(gd.driver for gd in self.drives)
+
+    @property
+    def n_held(self) -> int:
+        """The held values the equations read after the group's joints: the known joints, then the inputs of
+        :attr:`input_drivers` (a cylinder's length, a slider driver's displacement)."""
+        return len(self.known) + len(self.input_drivers)
+
+    def held(self, z: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """The held values (n_held, ...) at joint positions ``z`` (n_joints, ...): the known joints, then each
+        input (complex, real) of :attr:`input_drivers`: ``q[driver]`` (``q`` (n_drivers, D or 1, n) broadcast to
+        ``z``'s samples) or, without ``q``, a cylinder's ends' distance in ``z`` and 0 for a slider driver's
+        displacement (its rows' Jacobian and acceleration terms do not read it; :meth:`inputs_at` does)."""
+        known = z[list(self.known)] if self.known else np.zeros((0, *z.shape[1:]), complex)
+        if not self.input_drivers:
+            return known
+        if q is None:
+            ins = [np.abs(z[gc.end_joints[1]] - z[gc.end_joints[0]]) for gc in self.cylinders]
+            ins += [np.zeros(z.shape[1:]) for _ in self.drives]
+        else:
+            ins = [np.broadcast_to(q[d], z.shape[1:]) for d in self.input_drivers]
+        return np.concatenate([known, np.array(ins, float).astype(complex)])
+
+    def inputs_at(self, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The inputs of :attr:`input_drivers` (n_in, B) that slot positions ``P`` (n_slots, B; its held inputs
+        not read) realise with numbers ``R``: the cylinders' ends' distances, the slider drivers' displacements
+        ``Re(w conj(u))`` (see the module's docstring)."""
+        cr = self._crows
+        ins = [np.abs(P[cr.b] - P[cr.a])]
+        if self.drives:
+            dr = self._drows
+            rho, dhat, _, _ = self._snums(R)
+            A, e = self._frames(P)
+            i = dr.slider
+            ins.append(((P[self._srows.k[i]] - A[i] - rho[i] * e[i]) * np.conj(dhat[i] * e[i])).real)
+        return np.concatenate(ins)
+
+    def stroke_margins(self, z: np.ndarray, nums: Nums) -> np.ndarray:
+        """How far each input of :attr:`input_drivers` is inside its stroke at positions ``z`` (n_joints, D, n):
+        (n_in, D, n), negative outside; a cylinder's relative to its length (as the closed-form cylinder steps'
+        margins), a slider driver's relative to the group's mean link length."""
+        D, n = z.shape[1:]
+        P = np.concatenate([z[list(self.joints)], self.held(z)]).reshape(-1, D * n)
+        L, R = self._stack(self._design_nums(nums, np.repeat(np.arange(D), n)), D * n)
+        ins = self.inputs_at(P, R).reshape(-1, D, n)
+        size = np.mean(L, axis=0).reshape(D, n)
+        out = []
+        for i, (lo, hi) in enumerate(nums[5]):
+            if i < len(self.cylinders):
+                out.append(_stroke_margin(ins[i], lo, hi, 0.0))
+            else:
+                with np.errstate(invalid="ignore"):
+                    out.append(np.minimum(ins[i] - lo, hi - ins[i]) / size)
+        return np.array(out, float).reshape(len(out), D, n)
+
+    def _pose_held(self, zu: np.ndarray, zk: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The held values of a start (the group's joints ``zu`` and known joints ``zk``): its inputs are those
+        the start realises (:meth:`inputs_at`)."""
+        if not self.input_drivers:
+            return zk
+        P = np.concatenate([zu, zk, np.zeros((len(self.input_drivers), *zk.shape[1:]), complex)])
+        return np.concatenate([zk, self.inputs_at(P, R) + 0j])
+
+    def _beyond_stroke(self, q: np.ndarray, strokes: Nums, eps: float, shape: tuple[int, ...]) -> np.ndarray:
+        """The samples (D, n) where an input is beyond its stroke: a cylinder's length (or not positive) as the
+        closed-form cylinder steps flag it, a slider driver's displacement as :class:`~linkagekit.steps.SliderDrive`
+        does (beyond ``eps`` of the stroke's larger end)."""
+        out = np.zeros(shape, bool)
+        n_cyl = len(self.cylinders)
+        for i, (d, (lo, hi)) in enumerate(zip(self.input_drivers, strokes, strict=True)):
+            u = np.broadcast_to(q[d], shape)
+            if i < n_cyl:
+                out |= _stroke_margin(u, lo, hi, eps) < 0
+            else:
+                slack = eps * np.maximum(np.abs(lo), np.abs(hi))  # no stroke: lo - slack = -inf, hi + slack = inf
+                out |= (u < lo - slack) | (u > hi + slack)
+        return out
 
     def _slider_numbers(self, src: Source) -> list[tuple[np.ndarray, ...]]:
         """Per slider ``(rho, dhat, c, ell)``: its line ``A + rho e`` along ``dhat e`` (``A``, ``e``: the carrier's
@@ -309,7 +504,10 @@ class Group(Step):
         sign, so there a sample it cannot reach by continuation stays flagged).
         """
         on_two = sum(
-            sum(j in gl.joints for gl in self.links) + sum(j == gs.point_joint for gs in self.sliders) >= 2
+            sum(j in gl.joints for gl in self.links)
+            + sum(j == gs.point_joint for gs in self.sliders)
+            + sum(j in gc.end_joints for gc in self.cylinders)
+            >= 2
             for j in self.joints
         )
         return on_two == 1
@@ -353,6 +551,82 @@ class Group(Step):
             row += 1
         return _SRows(*(np.array(x, dtype=np.intp) for x in (c0, c1, k, line, locked, o0, o1, lock)))
 
+    @cached_property
+    def _crows(self) -> _CRows:
+        row = self._crows_start
+        first = len(self.joints) + len(self.known)
+        a = [gc.ends[0] for gc in self.cylinders]
+        b = [gc.ends[1] for gc in self.cylinders]
+        n = len(self.cylinders)
+        out = (a, b, list(range(first, first + n)), list(range(row, row + n)))
+        return _CRows(*(np.array(x, dtype=np.intp) for x in out))
+
+    @cached_property
+    def _drows(self) -> _DRows:
+        first = self._crows_start + len(self.cylinders)
+        slot = len(self.joints) + len(self.known) + len(self.cylinders)
+        n = len(self.drives)
+        sl = [gd.slider for gd in self.drives]
+        return _DRows(*(np.array(x, dtype=np.intp) for x in (sl, range(slot, slot + n), range(first, first + n))))
+
+    @property
+    def _crows_start(self) -> int:
+        """The first row after the links' and the sliders'."""
+        return sum(1 + 2 * (len(gl.slots) - 2) for gl in self.links) + sum(gs.n_rows for gs in self.sliders)
+
+    def _drive_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
+        """The slider drivers' residuals into ``res``: ``Re(w conj(u)) - x``, ``x`` the displacement (a held value)."""
+        dr = self._drows
+        res[dr.row] = self.inputs_at(P, R)[len(self.cylinders) :] - P[dr.s].real
+
+    def _drive_jac(self, P: np.ndarray, R: np.ndarray, J: FloatArray) -> None:
+        """The slider drivers' Jacobian rows into ``J``: the real part's gradients of the slider's line row (``u``
+        on ``k``, ``conj(rho - 1) u - w conj(dhat)`` on ``c0``, ``-conj(rho) u + w conj(dhat)`` on ``c1``; none on
+        the ground) and ``-1`` on the displacement's slot."""
+        dr, sr = self._drows, self._srows
+        i = dr.slider
+        rho, dhat, _, _ = self._snums(R)
+        A, e = self._frames(P)
+        rho, dhat, A, e = rho[i], dhat[i], A[i], e[i]
+        u, w = dhat * e, P[sr.k[i]] - A - rho * e
+        wd = w * np.conj(dhat)
+        n_cols = J.shape[2] // 2
+        _add(J, dr.row, sr.k[i], u, n_cols)
+        _add(J, dr.row, sr.c0[i], np.conj(rho - 1) * u - wd, n_cols)
+        _add(J, dr.row, sr.c1[i], -np.conj(rho) * u + wd, n_cols)
+        _add(J, dr.row, dr.s, -np.ones_like(u), n_cols)
+
+    def _drive_gamma(self, V: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The slider drivers' acceleration terms (n_drives, B) at velocities ``V``: ``2 Re(w' conj(u'))``."""
+        dr, sr = self._drows, self._srows
+        i = dr.slider
+        rho, dhat, _, _ = self._snums(R)
+        vA, ve = self._frames(V, rates=True)
+        out: np.ndarray = 2 * ((V[sr.k[i]] - vA[i] - rho[i] * ve[i]) * np.conj(dhat[i] * ve[i])).real
+        return out
+
+    def _cnums(self, R: np.ndarray) -> np.ndarray:
+        """The cylinders' pose lengths (n_cyl, B) from ``R`` (after the links' rhos and the sliders' numbers)."""
+        n = len(self._rows.k) + 4 * len(self.sliders)
+        return R[n : n + len(self.cylinders)].real
+
+    def _cyl_res(self, P: np.ndarray, res: FloatArray) -> None:
+        """The cylinders' residuals into ``res``: ``|z_b - z_a|^2 - s^2``, ``s`` the length (a held value)."""
+        cr = self._crows
+        e = P[cr.b] - P[cr.a]
+        s = P[cr.s].real
+        res[cr.row] = e.real * e.real + e.imag * e.imag - s * s
+
+    def _cyl_jac(self, P: np.ndarray, J: FloatArray) -> None:
+        """The cylinders' Jacobian rows into ``J``: ``2 e`` on ``b``, ``-2 e`` on ``a`` (``e = z_b - z_a``), and
+        ``-2 s`` on the length's slot (its real part: the length)."""
+        cr = self._crows
+        e = P[cr.b] - P[cr.a]
+        n_cols = J.shape[2] // 2
+        _add(J, cr.row, cr.b, 2 * e, n_cols)
+        _add(J, cr.row, cr.a, -2 * e, n_cols)
+        _add(J, cr.row, cr.s, -2 * P[cr.s].real + 0j, n_cols)
+
     def _frames(self, P: np.ndarray, rates: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Each slider's carrier frame ``(A, e)`` (n_sl, B) at ``P``: its first joint and base (``0, 1`` on the
         ground); with ``rates`` (``P`` velocities or accelerations) their derivatives (``0, 0`` on the ground)."""
@@ -365,7 +639,8 @@ class Group(Step):
     def _snums(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The sliders' numbers ``(rho, dhat, c, ell)``, each (n_sl, B), from ``R`` (after the links' rhos)."""
         n = len(self._rows.k)
-        return R[n::4], R[n + 1 :: 4], R[n + 2 :: 4], R[n + 3 :: 4]
+        end = n + 4 * len(self.sliders)
+        return R[n:end:4], R[n + 1 : end : 4], R[n + 2 : end : 4], R[n + 3 : end : 4]
 
     def _slider_res(self, P: np.ndarray, R: np.ndarray, res: FloatArray) -> None:
         """The sliders' residuals into ``res``: ``Im(w conj(u))`` (line) and ``Im(e_o conj(c e))`` (lock)."""
@@ -426,6 +701,10 @@ class Group(Step):
             res[rw.lin], res[rw.lin + 1] = c.real, c.imag
         if self.sliders:
             self._slider_res(P, R, res)
+        if self.cylinders:
+            self._cyl_res(P, res)
+        if self.drives:
+            self._drive_res(P, R, res)
         return res
 
     def _scale(self, L: FloatArray, R: np.ndarray) -> FloatArray:
@@ -439,6 +718,10 @@ class Group(Step):
             sr = self._srows
             scale[sr.line] = np.mean(L, axis=0)
             scale[sr.lock] = self._snums(R)[3][sr.locked].real ** 2
+        if self.cylinders:
+            scale[self._crows.row] = self._cnums(R) ** 2
+        if self.drives:
+            scale[self._drows.row] = np.mean(L, axis=0)
         return scale
 
     def _lin_jacobian(self, R: np.ndarray, n_cols: int) -> FloatArray:
@@ -470,6 +753,10 @@ class Group(Step):
             J[:, rows, cols + 1] = (f * e.imag[on]).T
         if self.sliders:
             self._slider_jac(P, R, J)
+        if self.cylinders:
+            self._cyl_jac(P, J)
+        if self.drives:
+            self._drive_jac(P, R, J)
         return J
 
     def residual(self, P: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray]:
@@ -486,6 +773,9 @@ class Group(Step):
     def jacobian(self, P: np.ndarray, nums: Nums, n_slots: int) -> np.ndarray:
         """d residual / d [x, y] of every slot: (B, n_eq, 2 n_slots)."""
         _, R = self._stack(nums, P.shape[1])
+        if R.shape[1] > 1 and np.array_equal(R, np.broadcast_to(R[:, :1], R.shape)):  # one design: built once
+            J_lin = np.broadcast_to(self._lin_jacobian(R[:, :1], n_slots), (R.shape[1], self.n_eq, 2 * n_slots))
+            return self._jac(P, J_lin, R)
         return self._jac(P, self._lin_jacobian(R, n_slots), R)
 
     def _design_nums(self, nums: Nums, d: np.ndarray) -> Nums:
@@ -504,20 +794,29 @@ class Group(Step):
         return _Arrays(L, R, NEWTON_TOL * self._scale(L, R), self._lin_jacobian(R, len(self.joints)))
 
     def newton(
-        self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER
+        self, U: np.ndarray, K: np.ndarray, nums: Nums, iters: int = NEWTON_ITER, vector: bool = False
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Newton from ``U`` (m, B) with knowns ``K`` (k, B): (solution, converged, det sign).
 
         Each column is iterated until its residual passes (then it is left as it is), for at
         most ``iters`` steps; only the columns still iterating are computed (a column whose
-        step is not finite is NaN from the next step on: it is dropped, NaN).
+        step is not finite is NaN from the next step on: it is dropped, NaN). ``vector``: the
+        linear algebra as array operations over the columns (:func:`_gauss`), else LAPACK.
         """
-        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters)
+        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters, vector)
 
     def _newton(
-        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER
+        self,
+        U: np.ndarray,
+        K: np.ndarray,
+        ar: _Arrays,
+        iters: int = NEWTON_ITER,
+        vector: bool = False,
+        work: FloatArray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`newton` with the numbers as arrays."""
+        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace)."""
+        if vector:
+            return self._newton_vector(U, K, ar, iters, work)
         U = U.copy()
         conv = np.zeros(U.shape[1], bool)
         act = np.arange(U.shape[1])
@@ -542,6 +841,53 @@ class Group(Step):
             det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
             conv &= np.isfinite(det) & (det != 0)
         return U, conv, np.sign(det)
+
+    def _newton_vector(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, work: FloatArray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
+
+        The Jacobian is factored at every residual evaluated: a column that converges has its
+        determinant (at its solution) from that factorization, one still iterating its step.
+        Only the first ``VECTOR_ITER`` iterations are vectorized (the few columns left cost less
+        by LAPACK; a column's numbers depend only on its own iterations, not on the others).
+        """
+        U = U.copy()
+        conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
+        act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for it in range(iters + 1):
+                P = np.concatenate([Ua, Ka]) if len(K) else Ua
+                res = self._res(P, ara.L, ara.R)
+                passed = np.all(np.abs(res) <= ara.tol, axis=0)
+                done = passed | (it == iters)
+                J = self._jac(P, ara.J_lin, ara.R)
+                dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER, work)
+                conv[act[passed]] = True
+                go = ~done & np.all(np.isfinite(dx), axis=1)  # a step not finite: the column is NaN, dropped
+                U[:, act[~go]] = np.where(done, Ua, NAN_POINT)[:, ~go]
+                det[act[~done & ~go]] = 0.0
+                if not go.any():
+                    break
+                if not go.all():
+                    act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
+                    dx = dx[go]
+                Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+            self._lapack_det_where_zero(U, K, ar, conv, det)
+        conv &= np.isfinite(det) & (det != 0)
+        return U, conv, np.sign(det)
+
+    def _lapack_det_where_zero(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, conv: np.ndarray, det: FloatArray
+    ) -> None:
+        """Where a converged column's pivots give an exactly zero determinant (an exactly singular position, such
+        as a parallelogram's flat one), its determinant by LAPACK as :meth:`_newton` takes it (its rounding is
+        what decides there), written into ``det``."""
+        zero = np.flatnonzero(conv & (det == 0))
+        if len(zero):
+            P = np.concatenate([U[:, zero], K[:, zero]]) if len(K) else U[:, zero]
+            J = self._jac(P, ar.J_lin[zero], ar.R[:, zero])
+            det[zero] = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
 
     # ------------------------------------------------------------------ chains between held joints
     @cached_property
@@ -612,9 +958,9 @@ class Group(Step):
         _, D, n = z.shape
         m = len(self.joints)
         zu0 = np.broadcast_to(nums[3][:, :, 0], (m, D))
-        zk0 = np.broadcast_to(nums[4][:, :, 0], (len(self.known), D))
         dn = self._design_nums(nums, np.arange(D))
-        K_all = z[list(self.known)] if self.known else np.zeros((0, D, n), complex)
+        zk0 = self._pose_held(zu0, np.broadcast_to(nums[4][:, :, 0], (len(self.known), D)), self._stack(dn, D)[1])
+        K_all = self.held(z, k.q)  # the known joints, then the cylinders' lengths (the drivers' inputs)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
         lo, hi, mg = self._reach(dn, D)
@@ -631,6 +977,8 @@ class Group(Step):
             (lo, hi, mg),
             zk0,
             k.continuous,
+            D >= VECTOR_DESIGNS,
+            D * n >= VECTOR_SAMPLES,
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -639,6 +987,8 @@ class Group(Step):
         else:
             places = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
+        if self.input_drivers:
+            w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
         if self.keep_rotation:
@@ -836,10 +1186,10 @@ class Group(Step):
             dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
         V = np.full((m, D, G), NAN_POINT)
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
-        if not len(d) or not len(self.known):
+        if not len(d) or not self.n_held:
             return V
         P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
-        J = self.jacobian(P, self._design_nums(w.nums, d), m + len(self.known))
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
         dk = dK[:, d, j]
         vk = np.stack([dk.real, dk.imag], axis=-1).transpose(1, 0, 2).reshape(len(d), -1)
         rhs = -np.einsum("bij,bj->bi", J[:, :, 2 * m :], vk)
@@ -898,7 +1248,7 @@ class Group(Step):
         if U_prev2 is not None:
             quad = 3 * U - 3 * U_prev + U_prev2
             guess = np.where(np.isfinite(quad), quad, guess)
-        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs))
+        U_new, conv, sg = self._newton(guess, K, w.arrays.take(designs), vector=w.vector)
         return U_new, self._accept(U_new, conv, sg, U, STEP_LIMIT * w.size[designs], w, designs)
 
     def _restart_lost(
@@ -923,15 +1273,42 @@ class Group(Step):
     def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
         """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
         ok = np.zeros(len(r), bool)
-        can = np.flatnonzero(w.ok[c, r])  # the others cannot converge
-        for first in range(0, len(can), FILL_CHUNK):  # in chunks that stay in the cache
-            i = can[first : first + FILL_CHUNK]
-            ri, ci, gi = r[i], c[i], g[:, i]
-            sol, conv, sg = self._newton(gi, w.K[:, ci, ri], w.arrays.take(ci))
-            good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
-            w.out[:, ci[good], ri[good]] = sol[:, good]
-            ok[i] = good
+        i = np.flatnonzero(w.ok[c, r])  # the others cannot converge
+        ri, ci, gi = r[i], c[i], g[:, i]
+        sol, conv, sg = self._newton_samples(gi, w.K[:, ci, ri], ci, w)
+        good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
+        w.out[:, ci[good], ri[good]] = sol[:, good]
+        ok[i] = good
         return ok
+
+    def _newton_samples(
+        self, U: np.ndarray, K: np.ndarray, d: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Newton on the samples' columns (designs ``d``): vectorized (``w.fill_vector``), its first ``VECTOR_ITER``
+        iterations chunk by chunk, then the few columns still iterating all together by LAPACK (each column's
+        arithmetic is that of one Newton of ``NEWTON_ITER`` iterations; the tail of every chunk in one batch)."""
+        if not w.fill_vector:
+            return self._newton_chunks(U, K, d, w, NEWTON_ITER, False)
+        sol, conv, sg = self._newton_chunks(U, K, d, w, VECTOR_ITER, True)
+        tail = np.flatnonzero(~conv & np.all(np.isfinite(sol), axis=0))
+        if len(tail):
+            sol[:, tail], conv[tail], sg[tail] = self._newton_chunks(
+                sol[:, tail], K[:, tail], d[tail], w, NEWTON_ITER - VECTOR_ITER, False
+            )
+        return sol, conv, sg
+
+    def _newton_chunks(
+        self, U: np.ndarray, K: np.ndarray, d: np.ndarray, w: _Walk, iters: int, vector: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_newton` on columns of designs ``d`` in chunks of ``FILL_CHUNK`` (their arrays stay in the cache;
+        vectorized, they share one workspace)."""
+        B = U.shape[1]
+        sol, conv, sg = np.empty_like(U), np.zeros(B, bool), np.zeros(B)
+        work = np.empty(_gauss_size(self.n_eq, min(FILL_CHUNK, B))) if vector else None
+        for first in range(0, B, FILL_CHUNK):
+            i = slice(first, first + FILL_CHUNK)
+            sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
+        return sol, conv, sg
 
     def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
         """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
@@ -956,7 +1333,7 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, w.vector)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
@@ -982,7 +1359,9 @@ class Group(Step):
         rng = np.random.default_rng(12345)
         noise = rng.standard_normal((RESTARTS, m, 1)) + 1j * rng.standard_normal((RESTARTS, m, 1))
         # half the starts about the last good configuration, half about the held joints
-        centre = np.where(np.arange(RESTARTS)[:, None, None] % 2 == 0, U[None], np.mean(K, axis=0)[None, None, :])
+        centre = np.where(
+            np.arange(RESTARTS)[:, None, None] % 2 == 0, U[None], np.mean(K[: len(self.known)], axis=0)[None, None, :]
+        )
         starts = centre + 2 * np.max(lengths, axis=0)[None, None, :] * noise  # (R, m, B)
         Ub = np.concatenate([U[None], starts]).transpose(1, 0, 2).reshape(m, -1)
         Kb = np.repeat(K[:, None, :], RESTARTS + 1, axis=1).reshape(K.shape[0], -1)
@@ -1001,12 +1380,12 @@ class Group(Step):
 
     # ------------------------------------------------------------------ rates
     def rates(self, r: Rate, nums: Nums) -> None:
-        m, nk = len(self.joints), len(self.known)
+        m, nk = len(self.joints), self.n_held
         _, D, n = r.z.shape
-        slots = list(self.joints) + list(self.known)
-        P = r.z[slots].reshape(m + nk, D * n)
-        V = r.v[list(self.known)].reshape(nk, D * n) if nk else np.zeros((0, D * n), complex)
-        A = r.a[list(self.known)].reshape(nk, D * n) if nk else np.zeros((0, D * n), complex)
+        P = np.concatenate([r.z[list(self.joints)], self.held(r.z)]).reshape(m + nk, D * n)
+        # the held values' rates: the known joints', then each cylinder's length's (its driver's speed, acceleration)
+        V = self.held(r.v, r.w_in).reshape(nk, D * n)
+        A = self.held(r.a, r.a_in).reshape(nk, D * n)
         d = np.repeat(np.arange(D), n)
         dn = self._design_nums(nums, d)
         J = self.jacobian(P, dn, m + nk)
@@ -1019,7 +1398,8 @@ class Group(Step):
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
         Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe)
-        vu = np.linalg.solve(Ju_solve, rhs_v[..., None])[..., 0]
+        work = np.empty(_gauss_size(2 * m, FILL_CHUNK))  # both solves' workspace
+        vu = _solve_rates(Ju_solve, rhs_v, work)
         vu[sing] = np.nan
         # gamma: 2 |v_a - v_b|^2 on each distance row
         Vall = np.concatenate([(vu[:, 0::2] + 1j * vu[:, 1::2]).T, V]) if nk else (vu[:, 0::2] + 1j * vu[:, 1::2]).T
@@ -1032,8 +1412,14 @@ class Group(Step):
         if self.sliders:  # 2 Im(w' conj(u')) on a line row, 2 Im(e_o' conj(c e')) on a lock row
             line, lock = self._slider_gamma(P, Vall, self._stack(dn, D * n)[1])
             gamma[:, self._srows.line], gamma[:, self._srows.lock] = line.T, lock.T
+        if self.cylinders:  # d2/dt2 (|e|^2 - s^2) = 2 e.e'' + 2 |e'|^2 - 2 s s'' - 2 s'^2: gamma 2 |e'|^2 - 2 s'^2
+            cr = self._crows
+            de = Vall[cr.b] - Vall[cr.a]
+            gamma[:, cr.row] = (2 * (de.real**2 + de.imag**2) - 2 * Vall[cr.s].real ** 2).T
+        if self.drives:  # 2 Re(w' conj(u')), the line row's real part
+            gamma[:, self._drows.row] = self._drive_gamma(Vall, self._stack(dn, D * n)[1]).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
-        au = np.linalg.solve(Ju_solve, rhs_a[..., None])[..., 0]
+        au = _solve_rates(Ju_solve, rhs_a, work)
         au[sing] = np.nan
         for i, j in enumerate(self.joints):
             r.v[j] = (vu[:, 2 * i] + 1j * vu[:, 2 * i + 1]).reshape(D, n)
@@ -1055,6 +1441,8 @@ class Group(Step):
         if self.sliders:
             sr = self._srows
             scale[:, sr.lock] = 1.0 / self._snums(self._stack(dn, B)[1])[3][sr.locked].real.T
+        if self.cylinders:
+            scale[:, self._crows.row] = 1.0 / (2 * self._cnums(self._stack(dn, B)[1])).T
         return scale
 
     def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
@@ -1077,6 +1465,13 @@ class Group(Step):
         links = ", ".join(f"'{gl.name}'" for gl in self.links)
         held = ", ".join(names[j] for j in self.known) or "nothing"
         sliding = "".join(f", slider {gs.slider} ('{gs.other}' on '{gs.carrier}')" for gs in self.sliders)
+        sliding += "".join(
+            f", cylinder {names[gc.end_joints[0]]}-{names[gc.end_joints[1]]} (driver {gc.driver})"
+            for gc in self.cylinders
+        )
+        sliding += "".join(
+            f", slider driver {gd.driver} on slider {self.sliders[gd.slider].slider}" for gd in self.drives
+        )
         return (
             f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}{sliding}, "
             f"held by {held}; the mode is the pose's"
@@ -1117,6 +1512,85 @@ def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
                 with contextlib.suppress(np.linalg.LinAlgError):
                     dx[i] = np.linalg.solve(J[i], -r[i])
     return dx
+
+
+def _solve_small(
+    J: FloatArray, res: FloatArray, done: np.ndarray, vector: bool, work: FloatArray | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """Newton's steps ``dx`` (B, n) with ``J dx = -res`` (``J`` (B, n, n), ``res`` (n, B)) where not ``done``, and
+    the determinants of ``J`` (B,) where ``done``: by :func:`_gauss` (``vector``; both everywhere), else by LAPACK
+    per matrix (NaN steps where singular or not finite; a non-finite ``J``'s determinant is its finite part's)."""
+    if vector:
+        return _gauss(J, res, work)
+    dx, det = np.full((J.shape[0], J.shape[2]), np.nan), np.zeros(J.shape[0])
+    if not done.all():
+        dx[~done] = _newton_step(J[~done], res[:, ~done])
+    if done.any():
+        Jd = J[done]
+        det[done] = np.linalg.det(np.where(np.isfinite(Jd), Jd, 0.0))
+    return dx, det
+
+
+def _solve_rates(J: FloatArray, rhs: FloatArray, work: FloatArray | None = None) -> FloatArray:
+    """``x`` (B, n) with ``J x = rhs`` (``J`` (B, n, n) nonsingular, ``rhs`` (B, n)): by :func:`_gauss` from
+    ``VECTOR_SAMPLES`` systems on (in chunks of ``FILL_CHUNK`` sharing the workspace ``work``), else LAPACK."""
+    if len(J) >= VECTOR_SAMPLES:
+        x = np.empty(rhs.shape)
+        work = np.empty(_gauss_size(J.shape[1], FILL_CHUNK)) if work is None else work
+        for first in range(0, len(J), FILL_CHUNK):
+            i = slice(first, first + FILL_CHUNK)
+            x[i] = _gauss(J[i], -rhs[i].T, work)[0]
+        return x
+    y: np.ndarray = np.linalg.solve(J, rhs[..., None])[..., 0]
+    return y
+
+
+def _gauss_size(n: int, B: int) -> int:
+    """The workspace :func:`_gauss` needs for ``B`` systems of ``n`` equations (floats)."""
+    return (n * (n + 1) + (n - 1) * n) * B
+
+
+def _gauss(J: FloatArray, res: FloatArray, work: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
+    """:func:`_solve_small` as array operations over the columns: Gaussian elimination with partial pivoting.
+
+    Each entry of the ``n x (n + 1)`` augmented matrices is an array over the columns, so the
+    cost is about ``n^2`` array operations whatever the number of columns (LAPACK costs about
+    1 us per small matrix). A column's numbers are computed by the same scalar operations
+    whatever else is in the batch. The determinant is the product of the pivots, negated for
+    each row swap; a zero pivot (a singular matrix) gives a zero determinant and a step that is
+    not finite, a non-finite ``J`` or ``res`` NaN. ``work``: a workspace of :func:`_gauss_size` floats or more
+    (reused across calls, it spares the page faults of fresh large arrays).
+    """
+    B, n, _ = J.shape
+    work = np.empty(_gauss_size(n, B)) if work is None else work
+    A = work[: n * (n + 1) * B].reshape(n, n + 1, B)
+    scratch = work[n * (n + 1) * B :]
+    A[:, :n] = J.transpose(1, 2, 0)
+    A[:, n] = -res
+    det = np.ones(B)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for k in range(n):
+            p = np.argmax(np.abs(A[k:, k]), axis=0)
+            counts = np.bincount(p, minlength=n - k)
+            for i in np.flatnonzero(counts[1:]) + k + 1:  # row i's pivot is the largest: swap rows k and i
+                if counts[i - k] == B:  # in every column (often: the rows' structure decides)
+                    A[k, k:], A[i, k:] = A[i, k:].copy(), A[k, k:].copy()
+                    det = -det
+                else:
+                    sw = p == i - k
+                    top = np.where(sw, A[i, k:], A[k, k:])
+                    A[i, k:] = np.where(sw, A[k, k:], A[i, k:])
+                    A[k, k:] = top
+                    det = np.where(sw, -det, det)
+            det *= A[k, k]
+            if k < n - 1:  # in place: large temporaries cost page faults
+                upd = scratch[: (n - k - 1) * (n - k) * B].reshape(n - k - 1, n - k, B)
+                np.multiply((A[k + 1 :, k] / A[k, k])[:, None, :], A[k, None, k + 1 :, :], out=upd)
+                A[k + 1 :, k + 1 :] -= upd
+        x = np.empty((n, B))
+        for k in range(n - 1, -1, -1):
+            x[k] = (A[k, n] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
+    return x.T, det
 
 
 @dataclass

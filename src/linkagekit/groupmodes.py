@@ -151,8 +151,9 @@ def restarted(params: Params, z: np.ndarray, q: np.ndarray) -> Params:
 
 
 def _group_start(nums: Nums, zu: np.ndarray, zk: np.ndarray) -> Nums:
-    """A group's numbers with the start of its walk replaced (``Group.numbers``: lengths, rhos, bases, zu, zk)."""
-    return (*nums[:3], np.asarray(zu, complex)[:, :, None], np.asarray(zk, complex)[:, :, None])
+    """A group's numbers with the start of its walk replaced (``Group.numbers``: lengths, rhos, bases, zu, zk,
+    strokes)."""
+    return (*nums[:3], np.asarray(zu, complex)[:, :, None], np.asarray(zk, complex)[:, :, None], *nums[5:])
 
 
 def _driver_inputs(params: Params, driver: int, x: np.ndarray) -> np.ndarray:
@@ -277,7 +278,9 @@ def _indicator(params: Params, margin: np.ndarray, z: np.ndarray) -> np.ndarray:
 
     The smallest of the sign steps' margins (relative distances from a flat triangle) and
     of each group's conditioning squared (its smallest singular value goes like the square
-    root of the distance to a fold); NaN where it does not assemble.
+    root of the distance to a fold) and of its cylinders' stroke margins (relative distances of
+    their lengths from the stroke's ends, as the closed-form cylinder steps' margins); NaN where
+    it does not assemble.
     """
     D, n = z.shape[1:]
     vals = [np.min(margin, axis=0)] if margin.shape[0] else []
@@ -285,6 +288,7 @@ def _indicator(params: Params, margin: np.ndarray, z: np.ndarray) -> np.ndarray:
     for st, nums in zip(params.plan.steps, params.steps, strict=True):
         if isinstance(st, Group):
             vals.append((group_condition(st, nums, flat) ** 2).reshape(D, n))
+            vals += list(st.stroke_margins(z, nums))
     out = np.min(vals, axis=0) if vals else np.full((D, n), np.inf)
     return np.where(np.all(np.isfinite(z), axis=0), out, np.nan)
 
@@ -296,9 +300,9 @@ def group_condition(st: Group, nums: Nums, z: np.ndarray) -> np.ndarray:
     conditioning the rates report).
     """
     m = len(st.joints)
-    P = np.concatenate([z[list(st.joints)], z[list(st.known)]]) if st.known else z[list(st.joints)]
+    P = np.concatenate([z[list(st.joints)], st.held(z)])
     dn = st._design_nums(nums, np.zeros(z.shape[1], int))
-    J = st.jacobian(P, dn, m + len(st.known))[:, :, : 2 * m]
+    J = st.jacobian(P, dn, m + st.n_held)[:, :, : 2 * m]
     scale = st.row_scale(dn, J.shape[0])
     J = np.where(np.isfinite(J), J * scale[:, :, None], 0.0)
     s = np.linalg.svd(J, compute_uv=False)
@@ -502,6 +506,8 @@ def reduction(mech: Mechanism, plan: Plan, index: int) -> Reduction | None:
     """
     st = plan.steps[index]
     assert isinstance(st, Group)
+    if st.input_drivers:  # an input inside the group: the cut mechanism would need it as a driver too (not written)
+        return None
     names = plan.joint_names
     m = len(st.joints)
     unknown = [names[j] for j in st.joints]
@@ -882,10 +888,7 @@ def enumerate_modes(
         red = reduction(mech, plan, gi)
         label = ", ".join(names[j] for j in st.joints)
         if red is None:
-            notes.append(
-                f"the modes of group {label} are not enumerated (no cut of one of its binary links makes it "
-                f"closed-form): only the mode continued from the pose is listed"
-            )
+            notes.append(_not_enumerated(mech, st, label))
             gmode = np.concatenate([gmode, np.full((1, len(col)), -1)])
             gcount = np.concatenate([gcount, np.full((1, len(col)), -1)])
             continue
@@ -900,6 +903,16 @@ def enumerate_modes(
     z = _solve_rows(params, q, signs[:, col], None if mirrors is None else mirrors[:, col], starts)
     assembled = np.all(np.isfinite(z), axis=0) if z.shape[0] else np.ones(len(col), bool)
     return ModeTable(z, assembled, col, gmode, gcount, gsteps, tuple(notes))
+
+
+def _not_enumerated(mech: Mechanism, st: Group, label: str) -> str:
+    """The note that group ``label``'s modes are not enumerated, and why."""
+    why = (
+        f"it holds driver {', '.join(mech.drivers[d].name for d in st.input_drivers)}"
+        if st.input_drivers
+        else "no cut of one of its binary links makes it closed-form"
+    )
+    return f"the modes of group {label} are not enumerated ({why}): only the mode continued from the pose is listed"
 
 
 def _rows_per_mode(red: Reduction, K: np.ndarray, nums: Nums) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

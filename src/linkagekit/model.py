@@ -1056,18 +1056,7 @@ class _Builder:
 
     def _cylinder_length(self, key: str, a: str, b: str) -> float:
         """The pose's length of a cylinder between joints ``a`` and ``b`` (known, on two links, apart)."""
-        for i, j in enumerate((a, b)):
-            if j not in self.joints:
-                raise self.fail(f"{key}.cylinder[{i}]", f"unknown joint '{j}' (not under joints)")
-        if a == b:
-            raise self.fail(f"{key}.cylinder", f"both ends are joint '{a}': a cylinder joins two different joints")
-        common = next((ln.name for ln in self.by_name.values() if a in ln.joints and b in ln.joints), None)
-        if common is not None:
-            raise self.fail(
-                f"{key}.cylinder",
-                f"joints '{a}' and '{b}' are both on link '{common}': a cylinder between two joints of one link "
-                f"cannot move it (attach its ends to two different links)",
-            )
+        self._two_ends(f"{key}.cylinder", (a, b), "cylinder", "cannot move it")
         length = abs(self.joints[b] - self.joints[a])
         if length <= LENGTH_RTOL * self.scale:
             raise self.fail(
@@ -1142,18 +1131,25 @@ class _Builder:
 
     def _element_ends(self, key: str, between: tuple[str, str], what: str) -> tuple[str, str]:
         """A spring's or damper's two joints: known, different, not on one link (it would do nothing)."""
-        a, b = between
+        return self._two_ends(f"{key}.between", between, what, "does nothing")
+
+    def _two_ends(self, key: str, ends: tuple[str, str], what: str, idle: str) -> tuple[str, str]:
+        """Two joints ``ends`` under ``key`` of a ``what`` (cylinder, spring, damper): known, different, on two links.
+
+        ``idle``: what such an element between two joints of one link would do (the message says it).
+        """
+        a, b = ends
         for i, j in enumerate((a, b)):
             if j not in self.joints:
-                raise self.fail(f"{key}.between[{i}]", f"unknown joint '{j}' (not under joints)")
+                raise self.fail(f"{key}[{i}]", f"unknown joint '{j}' (not under joints)")
         if a == b:
-            raise self.fail(f"{key}.between", f"both ends are joint '{a}': a {what} joins two different joints")
+            raise self.fail(key, f"both ends are joint '{a}': a {what} joins two different joints")
         common = next((ln.name for ln in self.by_name.values() if a in ln.joints and b in ln.joints), None)
         if common is not None:
             raise self.fail(
-                f"{key}.between",
+                key,
                 f"joints '{a}' and '{b}' are both on link '{common}': a {what} between two joints of one link "
-                f"does nothing (attach its ends to two different links)",
+                f"{idle} (attach its ends to two different links)",
             )
         return a, b
 

@@ -14,7 +14,10 @@ without solving anything: a greedy search for a triangulation order,
    fits its slot (``LineLine``: two lines, no sign);
 3. otherwise find one joint of two links that each have one known joint (``Dyad``: two
    circles), of a slider block and a link (``CircleLine``), or turn a guide about its one
-   known joint through a known block joint (``Pivot``); each of these reads one sign.
+   known joint through a known block joint (``Pivot``); each of these reads one sign;
+4. otherwise place the smallest group of joints that the links, sliders, cylinder drivers
+   and actuators (slider drivers between two moving links) among them fix, numerically
+   (:class:`~linkagekit.group.Group`).
 
 A mechanism for which this stops before every joint is known has no triangulation order
 (an Assur group of class 3 or more).
@@ -41,7 +44,7 @@ from itertools import combinations
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple, assert_never
 
 from .errors import MechanismFileError, NotSolvableError
-from .group import Group, GroupLink, GroupSlider
+from .group import Group, GroupCylinder, GroupLink, GroupSlider, GroupSliderDrive
 from .model import CrankType, CylinderType, SliderType
 from .steps import (
     ActuatorDyad,
@@ -209,7 +212,17 @@ class _Planner:
 
     def plan(self) -> Plan:
         """Apply the rules until none applies, check every joint is placed, and return the plan."""
-        while self._place_links() or self._drive() or self._cylinder() or self._line_line() or self._sign_or_group():
+        # with ``numerical`` a cylinder's end, or an actuator's pin, goes into a numerical group when one holds it
+        closed = not self.numerical
+        while (
+            self._place_links()
+            or self._drive(actuators=closed)
+            or (closed and self._cylinder())
+            or self._line_line()
+            or self._sign_or_group()
+            or self._cylinder()
+            or self._drive()
+        ):
             pass
         self._check_complete()
         needs = {link for st in self.steps for link in st.rotation_needs()}
@@ -257,7 +270,7 @@ class _Planner:
             return self.slider_of[link][1].on
         return None
 
-    def _drive(self) -> bool:
+    def _drive(self, actuators: bool = True) -> bool:
         """Apply every crank whose pivot is known and every slider driver whose guide is placed."""
         acted = False
         for di, t in list(self.drives):
@@ -265,7 +278,7 @@ class _Planner:
                 case CrankType():
                     done = self._crank(di, t)
                 case SliderType():
-                    done = self._slider_drive(di, t)
+                    done = self._slider_drive(di, t, actuators)
                 case _:
                     assert_never(t)
             if done:
@@ -287,7 +300,7 @@ class _Planner:
         self.known.add(t.toward)
         return True
 
-    def _slider_drive(self, di: int, t: SliderType) -> bool:
+    def _slider_drive(self, di: int, t: SliderType, actuator: bool = True) -> bool:
         """Driver ``di`` pushes a block along its placed guide: the block placed (:class:`SliderDrive`)."""
         d, s = self.mech.drivers[di], self.mech.sliders[t.slider]
         if d.link in self.placed:
@@ -296,7 +309,7 @@ class _Planner:
                 f"mechanism; the drivers do not match its freedom"
             )
         if s.on not in self.rot_known or s.on not in self.placed:
-            return self._actuator(di, t)
+            return actuator and self._actuator(di, t)
         blk = self.links[s.link]
         joints = tuple(self.idx[j] for j in blk.joints)
         self.steps.append(SliderDrive(di, t.slider, s.link, s.on, self.anchors.get(s.on), joints))
@@ -452,6 +465,9 @@ class _Planner:
             return False
         self.steps.append(group)
         self.known.update(self.names[j] for j in group.joints)
+        inner = set(group.input_drivers)
+        self.cylinders = [(ci, c) for ci, c in self.cylinders if ci not in inner]
+        self.drives = [(di, t) for di, t in self.drives if di not in inner]
         for gl in group.links:
             self.placed.add(gl.name)
             self.rot_known.add(gl.name)
@@ -520,13 +536,22 @@ class _Planner:
         A link counts ``2 n - 3`` equations (its rigidity, natural coordinates; see
         :mod:`linkagekit.group`) once all its joints are known or in the set; a slider between
         two such sides counts 1 (a point on a line) or 2 (and a rotation lock) equations
-        (:meth:`_group_slider`). Sets are tried by size, then in file order, so the plan is
-        deterministic. Links a pending driver turns or pushes are left to the closed-form steps.
-        None when no set fits.
+        (:meth:`_group_slider`), and a pending cylinder driver with an end in the set and the other
+        in it or known counts 1 (its ends' distance is its input). Sets are tried by size, then in
+        file order, so the plan is deterministic. Links a pending driver turns or pushes are left to
+        the closed-form steps. None when no set fits.
         """
         mech, known = self.mech, self.known
         unknown = [j for j in mech.joints if j not in known]
-        driven = {mech.drivers[di].link for di, _ in self.drives}
+        # a slider driver between two moving links (an actuator) may be in a group: its displacement is one row
+        actuators = {
+            t.slider: di
+            for di, t in self.drives
+            if isinstance(t, SliderType) and mech.sliders[t.slider].on not in self.placed
+        }
+        driven = {
+            mech.drivers[di].link for di, t in self.drives if not (isinstance(t, SliderType) and t.slider in actuators)
+        }
         free = [
             (ln, set(ln.joints)) for ln in mech.links if ln.name not in self.placed | driven and len(ln.joints) >= 2
         ]
@@ -544,8 +569,14 @@ class _Planner:
                 if False in found:
                     continue
                 gsl = [g for g in found if g]
-                if sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl) == 2 * size:
-                    return self._group(subset, links, gsl)
+                cyl = [(ci, c.ends) for ci, c in self.cylinders if set(c.ends) & inside and set(c.ends) <= reach]
+                # an actuator's displacement: along the line its guide carries (the guide is the carrier)
+                drv = [(actuators[g.slider], g.slider) for g in gsl if g.slider in actuators]
+                if any(mech.sliders[si].on != next(g.carrier for g in gsl if g.slider == si) for _, si in drv):
+                    continue
+                rows = sum(2 * len(ln.joints) - 3 for ln in links) + sum(1 + (g.lock is not None) for g in gsl)
+                if rows + len(cyl) + len(drv) == 2 * size:
+                    return self._group(subset, links, gsl, cyl, drv)
         return None
 
     def _group_slider(
@@ -588,11 +619,20 @@ class _Planner:
             return _Side.FRAME if name in names or name in self.placed else None
         return _Side.TURNED if name in self.rot_known else _Side.POINT
 
-    def _group(self, subset: tuple[str, ...], links: list[Link], sliders: list[_SliderSpec]) -> Group:
-        """The numerical group placing the joints ``subset`` by the rigidity of ``links`` and by ``sliders``."""
+    def _group(
+        self,
+        subset: tuple[str, ...],
+        links: list[Link],
+        sliders: list[_SliderSpec],
+        cylinders: list[tuple[int, tuple[str, str]]],
+        drives: list[tuple[int, int]],
+    ) -> Group:
+        """The numerical group placing the joints ``subset`` by the rigidity of ``links``, by ``sliders``, by
+        the ``cylinders`` (driver index, ends) and by the slider ``drives`` (driver index, slider index)."""
         inside = set(subset)
         slots = {j: i for i, j in enumerate(subset)}
         around = [j for ln in links for j in ln.joints] + [j for g in sliders for j in g.joints]
+        around += [j for _, ends in cylinders for j in ends]
         held = list(dict.fromkeys(j for j in around if j not in inside))
         slots.update({j: len(subset) + i for i, j in enumerate(held)})
         group_links = []
@@ -618,9 +658,12 @@ class _Planner:
             )
             for g in sliders
         )
+        group_cylinders = tuple(GroupCylinder(ci, (slots[a], slots[b]), (idx[a], idx[b])) for ci, (a, b) in cylinders)
+        in_group = [g.slider for g in sliders]
+        group_drives = tuple(GroupSliderDrive(di, in_group.index(si)) for di, si in drives)
         cyclic = tuple(d.type.cyclic for d in self.mech.drivers)
         joints, known = tuple(idx[j] for j in subset), tuple(idx[j] for j in held)
-        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders)
+        return Group(joints, known, tuple(group_links), (), cyclic, group_sliders, group_cylinders, group_drives)
 
     # ------------------------------------------------------------------ the end
     def _check_complete(self) -> None:
@@ -646,8 +689,8 @@ class _Planner:
         if missing:
             raise NotSolvableError(
                 f"{mech.source}: no triangulation order places {', '.join(missing)}, and no numerical group does: "
-                f"the numerical solver takes groups of links and sliders whose equations fix their joints (a "
-                f"cylinder driver inside an Assur group of class 3 or more is not handled yet)"
+                f"the numerical solver takes groups of links, sliders and cylinder drivers whose equations fix "
+                f"their joints"
             )
 
 

@@ -10,7 +10,9 @@ The determinant of each sign step, made dimensionless (for a dyad ``cross(p, q) 
 the sine of the angle at the joint), measures how well the step conditions its rates.
 Where it is below ``SINGULAR_TOL`` in magnitude (a flat triangle: dead point, change
 point, toggle) the rates are not defined: every rate of that sample is NaN and the
-sample is flagged ``singular``.
+sample is flagged ``singular``.  (Following a branch continuously, a sample exactly on a
+change point gets the branch's limit, rates included, and stays flagged:
+:func:`linkagekit.branch.limits`.)
 """
 
 from __future__ import annotations
@@ -37,7 +39,9 @@ class Rates:
 
     ``omega``/``alpha``: angular rates of the links the steps knew them for; ``condition``
     (n_signs + n_groups, D, n) the dimensionless conditioning of each sign step, then of each
-    numerical group; ``singular`` (D, n).
+    numerical group; ``singular`` (D, n); ``limit`` (D, n) or None: the samples whose rates are
+    the followed branch's limit at a change point (:func:`linkagekit.branch.limits`), defined
+    although ``singular``.
     """
 
     v: np.ndarray
@@ -46,6 +50,7 @@ class Rates:
     alpha: dict[str, Any]
     condition: np.ndarray
     singular: np.ndarray
+    limit: np.ndarray | None = None
 
 
 def solve_rates(
@@ -113,7 +118,10 @@ def link_motion(params: Params, pos: Positions, rates: Rates | None, links: Any)
     """
     names = params.plan.joint_names
     z = pos.z
-    bad = ~pos.assembled if rates is None else (rates.singular | ~pos.assembled)
+    if rates is None:
+        bad = ~pos.assembled
+    else:  # a branch's limit at a change point has rates although singular
+        bad = (rates.singular if rates.limit is None else rates.singular & ~rates.limit) | ~pos.assembled
     out: dict[str, LinkMotion] = {}
     for ln in links:
         if ln.name == "ground":

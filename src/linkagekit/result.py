@@ -3,7 +3,9 @@
 Every array has the shape ``(*batch, n_samples)`` (points ``(*batch, n_samples, 2)`` as
 floats, or complex with :meth:`Result.point`), where ``batch`` is ``()`` for one mechanism
 and ``(n_designs,)`` for ``analyze(..., poses=...)``.  NaN marks a sample that does not
-assemble (positions and rates) or sits at a singular position (rates and forces).
+assemble (positions and rates) or sits at a singular position (rates and forces; with
+``branch="continuous"`` a sample on a change point has the branch's limit for its rates, and
+stays ``singular``).
 
 Units: positions in the file's length unit, velocities per second, accelerations per
 second squared, link angles in the file's angle unit, ``omega`` in rad/s, ``alpha`` in

@@ -49,6 +49,8 @@ from ..checks import FourBar, grashof
 from ..errors import InputError, MethodNotApplicableError
 from ..geometry import ArrayLike, BoolArray, ComplexArray, FloatArray, IntArray, cis, cross
 from ..model import Mechanism
+from .motion import JOINTS as motion_joints
+from .motion import guided_fourbar
 
 #: two poses closer than this (relative to the poses' size, and in radians) are one pose
 SAME_POSE = 1e-9
@@ -59,7 +61,7 @@ FAR = 1e2
 #: a dyad is kept when its circle point's positions are on one circle to this much of its size
 MISFIT = 1e-10
 #: joint names of the written four-bar, in the order of :meth:`BurmesterFourBar.pose_array`
-JOINTS = ("A0", "A1", "B1", "B0", "P", "Q")
+JOINTS = motion_joints  # the written four-bar's joints (motion.JOINTS)
 #: crank steps per degree when a sweep is checked densely
 CHECK_STEPS_PER_DEG = 4
 
@@ -681,28 +683,8 @@ def _joints(p: Poses, crank: Dyad, rocker: Dyad) -> ComplexArray:
 
 
 def _mechanism(p: Poses, crank: Dyad, rocker: Dyad, inputs: FloatArray, unit: str, name: str) -> Mechanism:
-    z = _joints(p, crank, rocker)[0]
     start, stop = (float(np.degrees(inputs[i])) for i in (0, -1))
-    steps = max(1, math.ceil(abs(stop - start) - 1e-9))
-    step = (stop - start) / steps if stop != start else 1.0
-    return Mechanism.from_dict(
-        {
-            "format": "linkagekit/1",
-            "name": name,
-            "units": {"length": unit, "angle": "deg"},
-            "joints": {j: [float(v.real), float(v.imag)] for j, v in zip(JOINTS, z, strict=True)},
-            "links": {
-                "ground": ["A0", "B0"],
-                "crank": ["A0", "A1"],
-                "coupler": ["A1", "B1", "P", "Q"],
-                "rocker": ["B0", "B1"],
-            },
-            "drivers": [
-                {"link": "crank", "pivot": "A0", "toward": "A1", "angles": {"start": start, "stop": stop, "step": step}}
-            ],
-        },
-        "<Burmester four-bar>",
-    )
+    return guided_fourbar(_joints(p, crank, rocker)[0], start, stop, unit, name, "<Burmester four-bar>")
 
 
 def _turn(phi: FloatArray) -> tuple[int, FloatArray]:

@@ -70,11 +70,14 @@ def synthesize_function(
     workers: int = 1,
     source: str = "pairs",
     min_transmission: float = 0.0,
+    scheduler: str | None = None,
+    checkpoint: str | None = None,
 ) -> FunctionSynthesis:
     """A four-bar whose output angle follows ``outputs`` at ``inputs`` (degrees from the ground line), minimax.
 
     The engine's options (``seed``, ``seconds``, ``restarts``, ``generations``, ``workers``) are
-    :func:`~linkagekit.synthesis.run.search`'s; see the module's description for the method.
+    :func:`~linkagekit.synthesis.optimize.search`'s (and ``scheduler``, ``checkpoint``); the module's
+    description says the method.
     ``min_transmission`` (degrees, default 0): the transmission angle stays within
     ``[min, 180 - min]`` from the first pair to the last.
     """
@@ -91,8 +94,9 @@ def synthesize_function(
     if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
         return FunctionSynthesis(first, _mechanism(first, units), None)
     opt = search(
-        objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, goal=GOAL, workers=workers
-    )
+        objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, goal=GOAL, workers=workers,
+        scheduler=scheduler, checkpoint=checkpoint,
+    )  # fmt: skip
     fit = solve(
         inputs,
         outputs,

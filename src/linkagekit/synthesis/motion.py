@@ -43,6 +43,7 @@ Route (docs/method.md, "Motion generation")
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -102,6 +103,17 @@ class MotionPoses:
         return self.d + self.u * c
 
 
+def _check_timing(th: FloatArray, source: str) -> None:
+    """The crank meets the poses in their order within one turn: ``th`` (radians) strictly monotone, spanning < 2 pi."""
+    steps = np.diff(th)
+    if not (np.all(steps > 0) or np.all(steps < 0)):
+        k = int(np.argmax(steps * np.sign(np.sum(steps)) <= 0)) + 2
+        raise InputError(f"{source}: pose {k}: the inputs must increase (or decrease) along the poses")
+    if abs(th[-1] - th[0]) >= 2 * np.pi:
+        span = abs(float(np.degrees(th[-1] - th[0])))
+        raise InputError(f"{source}: the inputs span {span:g} deg; the crank meets the poses within one turn")
+
+
 def motion_poses(
     x: FloatArray,
     y: FloatArray,
@@ -139,6 +151,7 @@ def motion_poses(
         th = np.asarray(inputs, float).reshape(-1)
         if th.shape != x.shape or not np.all(np.isfinite(th)):
             raise InputError(f"{source}: one finite input angle per pose is needed")
+        _check_timing(th, source)
     return MotionPoses(d, angle, center, scale, th, closed)
 
 
@@ -168,6 +181,8 @@ def read_poses(path: str) -> PoseFile:
     cols, table = read_table(path, [("x", "y", "angle"), ("x", "y", "angle", "input")], "pose")
     P = table[:, [cols.index(c) for c in ("x", "y", "angle")]]
     ins = table[:, cols.index("input")] if "input" in cols else None
+    if len(P) < 3:  # before the size below, which a header with no rows would break
+        raise InputError(f"{path}: {len(P)} poses; at least 3 are needed")
     bad = np.flatnonzero(np.abs(P[:, 2]) > MAX_ANGLE)
     if len(bad):
         raise InputError(f"{path}: pose {bad[0] + 1}: angle {P[bad[0], 2]:g} is out of range [-360, 360] degrees")
@@ -656,8 +671,6 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
     ``P`` is the body frame's origin (the pose point), ``Q`` a tenth of the poses' diagonal
     along the body's line; the crank sweeps from the first pose's angle to the last one's.
     """
-    from ..model import Mechanism as _M
-
     v = d.vector
     ga, a, ra, gb, b, rb = v[0] + 1j * v[1], v[2] + 1j * v[3], v[4], v[5] + 1j * v[6], v[7] + 1j * v[8], v[9]
     F = np.array([[ga.real, ga.imag, a.real, a.imag, ra, gb.real, gb.imag, b.real, b.imag, rb]])
@@ -669,27 +682,30 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
     stop = start + (360.0 if p.closed else float(np.degrees(d.inputs[-1])) - start) * (
         1 if not p.closed or d.inputs[-1] >= d.inputs[0] else -1
     )
+    return guided_fourbar(z, start, stop, unit, name, "<motion synthesis>")
+
+
+def guided_fourbar(z: Sequence[complex], start: float, stop: float, unit: str, name: str, source: str) -> Mechanism:
+    """The four-bar a motion synthesis writes: joints ``A0, A1, B1, B0, P, Q`` (``z``, complex), its coupler
+    carrying ``P`` and ``Q`` (spec section 6), the crank sweeping from ``start`` to ``stop`` (degrees, steps of
+    at most 1 degree)."""
+    from ..model import Mechanism as _Mechanism
+
     steps = max(1, math.ceil(abs(stop - start) - 1e-9))
-    return _M.from_dict(
-        {
-            "format": "linkagekit/1",
-            "name": name,
-            "units": {"length": unit, "angle": "deg"},
-            "joints": {j: [float(w.real), float(w.imag)] for j, w in zip(JOINTS, z, strict=True)},
-            "links": {
-                "ground": ["A0", "B0"],
-                "crank": ["A0", "A1"],
-                "coupler": ["A1", "B1", "P", "Q"],
-                "rocker": ["B0", "B1"],
-            },
-            "drivers": [
-                {
-                    "link": "crank",
-                    "pivot": "A0",
-                    "toward": "A1",
-                    "angles": {"start": start, "stop": stop, "step": (stop - start) / steps},
-                }
-            ],
+    step = (stop - start) / steps if stop != start else 1.0
+    doc = {
+        "format": "linkagekit/1",
+        "name": name,
+        "units": {"length": unit, "angle": "deg"},
+        "joints": {j: [float(w.real), float(w.imag)] for j, w in zip(JOINTS, z, strict=True)},
+        "links": {
+            "ground": ["A0", "B0"],
+            "crank": ["A0", "A1"],
+            "coupler": ["A1", "B1", "P", "Q"],
+            "rocker": ["B0", "B1"],
         },
-        "<motion synthesis>",
-    )
+        "drivers": [
+            {"link": "crank", "pivot": "A0", "toward": "A1", "angles": {"start": start, "stop": stop, "step": step}}
+        ],
+    }
+    return _Mechanism.from_dict(doc, source)

@@ -454,6 +454,8 @@ def synthesize_motion(
     units: str = "m",
     seed: int = 0,
     seconds: float = 20.0,
+    full_turn: bool = False,
+    engine: Mapping[str, Any] | None = None,
 ) -> MotionSynthesis:
     """Four-bars whose coupler passes through (or near) the poses, best first.
 
@@ -463,18 +465,18 @@ def synthesize_motion(
         ``x, y, angle`` per pose (``angle`` in degrees, counter-clockwise from +x).
     inputs : sequence of float, optional
         The crank angle at each pose (degrees): timing, up to one common offset.
-    closed : bool
-        The motion is a cycle (the crank turns fully, back to the first pose).
-    approximate : bool
-        For 3 to 5 poses: the approximate route instead of the exact one (Burmester).
+    closed, approximate : bool
+        The motion is a cycle (the crank turns fully, back to the first pose); for 3 to 5
+        poses, the approximate route instead of the exact one (Burmester).
     weight : float, optional
         The angle weight ``w`` (diagonals per radian, default ``motion.ANGLE_WEIGHT``).
-    min_transmission : float
-        Degrees: the smallest transmission angle allowed over the sweep.
-    units : str
-        The poses' length unit.
-    seed, seconds
-        Of the engine's search that adds seeds (:func:`linkagekit.synthesis.optimize.optimize`).
+    min_transmission, units : float, str
+        Degrees: the smallest transmission angle allowed over the sweep; the poses' length unit.
+    full_turn : bool
+        The crank turns fully in one assembly mode, meeting the poses on the way (as a closed motion's).
+    seed, seconds, engine : int, float, mapping
+        The engine's search that adds seeds: by default short (``ENGINE_SEEDS``, at most 5 s);
+        ``engine`` may set its ``restarts``, ``generations``, ``workers``, ``scheduler``, ``checkpoint``.
 
     Examples
     --------
@@ -490,18 +492,41 @@ def synthesize_motion(
     """
     from . import motion as mo
 
-    P, p, w = _motion_problem(poses, inputs, closed, weight)
+    P, p, w = _motion_problem(poses, inputs, closed or full_turn, weight)  # the approximate route: as a cycle
     found: list[MotionFourBar] = []
     if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
         found = _exact_motion(P, units)
-    if not found or not any(f.one_branch for f in found):
-        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds)
+        found = [_turning_fully(f) for f in found] if full_turn else found
+    if not any(_admissible(f, min_transmission) for f in found):
+        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds, engine or {})
         designs = mo.approximate(p, w, min_transmission, seeds)
         found += [_motion_fourbar(p, d, units) for d in designs]
-    if not found:
-        raise LinkageError("motion: no four-bar meets the poses in order on one branch")
-    found.sort(key=lambda f: (not f.one_branch, max(f.max_position_error / p.scale, w * np.radians(f.max_angle_error))))
-    return MotionSynthesis(found, p.scale, w)
+    return MotionSynthesis(_best_first(found, p.scale, w, min_transmission), p.scale, w)
+
+
+def _best_first(found: list[MotionFourBar], scale: float, w: float, min_transmission: float) -> list[MotionFourBar]:
+    """The four-bars found, the admissible first, each group by ``E`` (:mod:`~.motion`); none admissible: an error."""
+    if not any(_admissible(f, min_transmission) for f in found):
+        bound = f" with a transmission angle within [{min_transmission:g}, {180 - min_transmission:g}] deg"
+        raise LinkageError(
+            f"motion: no four-bar meets the poses in order on one branch{bound * (min_transmission > 0)}"
+        )
+    return sorted(
+        found,
+        key=lambda f: (
+            not _admissible(f, min_transmission),
+            max(f.max_position_error / scale, w * np.radians(f.max_angle_error)),
+        ),
+    )
+
+
+def _admissible(f: MotionFourBar, min_transmission: float) -> bool:
+    """Meets the poses in order on one branch, its transmission angle never below ``min_transmission`` (degrees).
+
+    The exact route (Burmester) knows no bound: its four-bars are judged here, the approximate
+    route's search and polish impose it.
+    """
+    return f.one_branch and not f.min_transmission < min_transmission - 1e-6
 
 
 def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, weight: float | None) -> Any:
@@ -521,9 +546,19 @@ def _motion_problem(poses: Any, inputs: Sequence[float] | None, closed: bool, we
     return P, p, w
 
 
-def _engine_seeds(objective: Any, seed: int, seconds: float) -> np.ndarray:
-    """The engine's best design of the circle-fit objective (a short search), as a four-bar vector (1, 10)."""
-    settings = Settings(seed, min(seconds, 5.0), restarts=2, generations=60, popsize=15, goal=0.0)
+#: motion's search of seeds by default: a short one (the circle fits do most of the work)
+ENGINE_SEEDS: dict[str, Any] = {"restarts": 2, "generations": 60, "popsize": 15, "goal": 0.0}
+
+
+def _engine_seeds(objective: Any, seed: int, seconds: float, engine: Mapping[str, Any]) -> np.ndarray:
+    """The engine's best design of the circle-fit objective, as a four-bar vector (1, 10).
+
+    A short search (:data:`ENGINE_SEEDS`, at most 5 s) unless ``engine`` says otherwise: its
+    restarts, generations, workers, scheduler and checkpoint are the engine's, as for every task.
+    """
+    given = {k: v for k, v in engine.items() if v is not None}
+    budget = seconds if given else min(seconds, 5.0)
+    settings = Settings(seed, budget, **{**ENGINE_SEEDS, **given})
     x = optimize(objective, settings).x
     return np.asarray(objective.fourbars(x[None]), float)
 
@@ -561,6 +596,28 @@ def _smallest_transmission(mech: Mechanism, inputs: np.ndarray) -> float:
     u, v = res.point("A1") - b, res.point("B0") - b
     mu = np.degrees(np.arccos(np.clip(np.abs((np.conj(u) * v).real) / (np.abs(u) * np.abs(v)), 0.0, 1.0)))
     return float(np.nanmin(mu))
+
+
+def _turning_fully(f: MotionFourBar) -> MotionFourBar:
+    """An exact four-bar judged over a whole turn of its crank from the first pose (the pose's mode throughout).
+
+    Its driver then sweeps that turn; ``one_branch`` says whether it assembles all the way
+    (by :func:`linkagekit.analyze`, every 1/4 degree).
+    """
+    from ..api import analyze
+    from ..model import Mechanism
+
+    if not f.one_branch:
+        return f
+    start = float(f.inputs[0])
+    way = 1.0 if f.inputs[-1] >= f.inputs[0] else -1.0
+    data = f.mechanism.to_dict()
+    data["drivers"][0]["angles"] = {"start": start, "stop": start + way * 360.0, "step": way}
+    mech = Mechanism.from_dict(data, "<Burmester four-bar>")
+    res = analyze(mech, {"crank": start + way * np.linspace(0.0, 360.0, 1441)}, rates=False, dynamics=False)
+    turns = bool(np.all(res.assembled))
+    smallest = _smallest_transmission(mech, np.array([start, start + way * 360.0])) if turns else np.nan
+    return replace(f, mechanism=mech, one_branch=turns, min_transmission=smallest)
 
 
 def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:

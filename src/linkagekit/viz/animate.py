@@ -122,7 +122,7 @@ class Frames:
     def render(self, i: int) -> np.ndarray:
         sc = self.scene
         self.canvas.restore_region(self.background)
-        self.label.set_text(self._t(", ".join(f"{k} = {sc.inputs[k][i]:.6g} {sc.input_units[k]}" for k in sc.drivers)))
+        self.label.set_text(self._t(sc.sample_text(i)))
         self.bar.set_xdata([0.0, (i + 1) / sc.n])
         for artist in [*self.drawing.update(i), self.label, self.bar]:
             self.ax.draw_artist(artist)
@@ -266,7 +266,8 @@ def animate(
     Parameters
     ----------
     res : Result or Scene
-        One design's sweep.
+        One design's sweep, or a simulated motion (:func:`linkagekit.simulate`): its frames
+        follow the time axis, one per output time, each labelled with its time.
     path : str or Path
         Ends in ``.gif`` or ``.mp4``; written atomically (a temporary file, then renamed).
     fps : float

@@ -94,21 +94,23 @@ def _axes(ax: Any) -> Axes:
 
 
 def _sample(sc: Scene, at: Any) -> int:
-    """The sample nearest to input ``at`` of the plotted driver (None: the first assembled sample).
+    """The sample nearest to ``at`` along the plots' axis (the plotted driver's input, or a simulation's time).
 
-    ``at`` outside the sweep is refused: the drawing would show another input than asked.
+    None: the first assembled sample.  ``at`` outside the sweep is refused: the drawing would
+    show another input than asked.
     """
     if at is None:
         ok = np.flatnonzero(sc.assembled)
         return int(ok[0]) if ok.size else 0
+    what = "the time" if sc.timed else f"the input of {sc.x_driver}"
     if isinstance(at, bool) or not isinstance(at, numbers.Real) or not math.isfinite(float(at)):
-        raise InputError(f"at: expected a finite number (the input of {sc.x_driver}), got {at!r}")
-    x = sc.inputs[sc.x_driver]
+        raise InputError(f"at: expected a finite number ({what}), got {at!r}")
+    x = sc.x
     lo, hi = float(np.min(x)), float(np.max(x))
     slack = 1e-9 * max(hi - lo, abs(lo), abs(hi), 1.0)
     if not lo - slack <= float(at) <= hi + slack:
         raise InputError(
-            f"at: {float(at):g} is outside the sweep of {sc.x_driver} [{lo:g}, {hi:g}]; analyze a sweep through it"
+            f"at: {float(at):g} is outside the sweep of {sc.x_name} [{lo:g}, {hi:g}]; analyze a sweep through it"
         )
     return int(np.argmin(np.abs(x - float(at))))
 
@@ -385,6 +387,7 @@ def plot_quantity(
 ) -> Axes:
     """Plot one column of :meth:`Result.columns` (or a joint speed ``|v|[J]``) against the first driver's input.
 
+    A simulated motion (:func:`linkagekit.simulate`) is plotted against its time, in seconds.
     Samples that do not assemble (or sit at a singular position, for rates and forces) are
     gaps in the line, shaded grey where the mechanism does not assemble.  A link angle is
     not drawn across its jump from +180 to -180 degrees (or ``period``, for other columns).
@@ -397,7 +400,7 @@ def plot_quantity(
         raise InputError(f"label: expected text, got {type(label).__name__}")
     if period is not None and (isinstance(period, bool) or not isinstance(period, numbers.Real) or not period > 0):
         raise InputError(f"period: expected a positive number, got {period!r}")
-    x = sc.inputs[sc.x_driver]
+    x = sc.x
     y = np.asarray(sc.columns[name], float)
     if period is None and name in sc.catalogue:
         period = sc.catalogue[name].period
@@ -410,8 +413,7 @@ def plot_quantity(
         lo = x[max(a - 1, 0)] if a > 0 else x[0]
         hi = x[min(b + 1, len(x) - 1)]
         ax.axvspan(min(lo, hi), max(lo, hi), color="#e8e8e8", zorder=0, linewidth=0)
-    driver = sc.x_driver
-    ax.set_xlabel(_t(f"{driver} [{sc.input_units[driver]}]"))
+    ax.set_xlabel(_t(f"{sc.x_name} [{sc.x_unit}]"))
     unit = sc.units.get(name, "")
     ax.set_ylabel(_t(f"{name} [{unit}]" if unit else name))
     ax.grid(True, linewidth=0.4, alpha=0.6)
@@ -442,11 +444,12 @@ def mechanism_figure(
     The mechanism is drawn at each sample of ``poses`` (a result at a few inputs; earlier
     ones faded), by default at the reference pose's own input, whether or not the sweep
     passes through it (else, where the pose's input does not assemble, at the first sample
-    that does).  ``size`` is the width in inches, ``dpi`` the pixels per inch, ``pixels``
+    that does); a simulated motion (:func:`linkagekit.simulate`) at its first time.
+    ``size`` is the width in inches, ``dpi`` the pixels per inch, ``pixels``
     an exact size (:func:`figure_inches`).
     """
     sc = build_scene(res)
-    if poses is None:
+    if poses is None and not sc.timed:  # a simulated motion is drawn where it starts, with its time
         poses = _at_pose(res.mechanism)
     pose_scene = build_scene(poses) if poses is not None else None
     bounds = sc.bounds
@@ -472,7 +475,7 @@ def mechanism_figure(
     i = indices[-1]
 
     def inputs_at(i: int) -> str:
-        return ", ".join(f"{k} = {shown.inputs[k][i]:.6g} {shown.input_units[k]}" for k in shown.drivers)
+        return shown.sample_text(i)
 
     # one note for every input drawn that does not assemble (each drawing's own would overlap)
     missing = [inputs_at(k) for k in indices if not shown.assembled[k]]
@@ -735,7 +738,7 @@ def quantities_figure(
     dpi: float = DPI,
     pixels: tuple[int, int | None] | None = None,
 ) -> Figure:
-    """One plot per group of quantities (column names), stacked, against the first driver's input.
+    """One plot per group of quantities (column names), stacked, against the first driver's input (or the time).
 
     ``size`` is the width in inches, ``dpi`` the pixels per inch, ``pixels`` an exact size (:func:`figure_inches`).
     """

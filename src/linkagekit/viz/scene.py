@@ -15,7 +15,10 @@ A :class:`Scene` holds only numbers the solver computed, arranged for drawing:
 * the runs of samples where the mechanism does not assemble;
 * the quantities (every entry of the result's :mod:`~linkagekit.catalogue`: the columns of
   :meth:`Result.columns` plus the plotted speed of each moving joint) and their plots, one
-  per plotted :class:`~linkagekit.catalogue.Group`.
+  per plotted :class:`~linkagekit.catalogue.Group`;
+* the axis the plots run along (:attr:`Scene.x_axis`): the first moving driver's input over
+  a sweep, or the time of a simulated motion (:func:`linkagekit.simulate`), whose samples
+  follow the time axis.
 
 Nothing here solves anything: the viewer in the page and the matplotlib drawing both read
 this scene, so a picture can only show what the solver returned.
@@ -39,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from ..catalogue import Catalogue, Group, Owner, input_units
+from ..catalogue import Catalogue, Group, Needs, Owner, input_units
 from ..errors import InputError
 from ..model import CylinderType, Mechanism
 from ..result import Result
@@ -140,6 +143,11 @@ class Scene:
         mechanism does not assemble somewhere between them (a gap no sample landed in).
     catalogue : Catalogue
         What each column is (owner, unit, group, period): the result's output catalogue.
+    x_axis : str
+        The column the plots run along: ``time`` for a simulated motion, else the input of
+        :attr:`x_driver` (``""``: a drawing without columns, whose x is :attr:`x_driver`'s input).
+    stopped : str or None
+        A simulation that met a toggle: the message of where it stopped (the samples end there).
     """
 
     name: str
@@ -165,6 +173,37 @@ class Scene:
     x_driver: str = ""
     breaks: tuple[int, ...] = ()
     catalogue: Catalogue = field(default=Catalogue(()), repr=False)
+    x_axis: str = ""
+    stopped: str | None = None
+
+    @property
+    def timed(self) -> bool:
+        """Whether the samples are the times of a simulated motion (the plots run along time)."""
+        return self.x_axis in self.catalogue and self.catalogue[self.x_axis].kind.needs is Needs.TIME
+
+    @property
+    def x(self) -> np.ndarray:
+        """The values the plots run along, per sample (:attr:`x_axis`'s column)."""
+        if self.x_axis in self.columns:
+            return np.asarray(self.columns[self.x_axis], float)
+        return np.asarray(self.inputs[self.x_driver], float)
+
+    @property
+    def x_name(self) -> str:
+        """What the plots run along: ``time``, or the driver's name."""
+        return "time" if self.timed else self.x_driver
+
+    @property
+    def x_unit(self) -> str:
+        """The unit of :attr:`x`."""
+        if self.x_axis in self.units:
+            return self.units[self.x_axis]
+        return self.input_units.get(self.x_driver, "")
+
+    def sample_text(self, i: int) -> str:
+        """What sample ``i`` is: each driver's input, after the time of a simulated motion (``t = 0.25 s, ...``)."""
+        inputs = [f"{k} = {self.inputs[k][i]:.6g} {self.input_units[k]}" for k in self.drivers]
+        return ", ".join([f"t = {self.x[i]:.6g} {self.x_unit}"] * self.timed + inputs)
 
     @property
     def n(self) -> int:
@@ -213,6 +252,8 @@ class Scene:
             "gaps": [list(g) for g in self.gaps],
             "breaks": list(self.breaks),
             "x_driver": self.x_driver,
+            "x_axis": {"column": self.x_axis, "name": self.x_name, "unit": self.x_unit, "time": self.timed},
+            "stopped": self.stopped,
             "bounds": list(self.bounds),
             "columns": {k: _json_array(v) for k, v in self.columns.items()},
             "units_of": self.units,
@@ -438,10 +479,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     InputError
         For a batch result, or a result with no samples.
     """
-    if not isinstance(res, Result):
-        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
-    if res.n_designs is not None:
-        raise InputError("a scene draws one design: pass res.design(i)")
+    _check_result(res)
     mech = res.mechanism
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
@@ -455,6 +493,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     drivers = tuple(d.name for d in mech.drivers)
     inputs = {d: np.asarray(columns[cat.find(Owner.DRIVER, d, "input").name], float).copy() for d in drivers}
     x_driver = _x_driver(inputs, drivers)
+    timed = res.time is not None  # a simulated motion: continuous in time (no breaks), plotted along it
     return Scene(
         name=mech.name,
         length_unit=mech.length_unit,
@@ -477,6 +516,16 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         units=units,
         plots=_plots(cat),
         x_driver=x_driver,
-        breaks=_breaks(res, inputs[drivers[0]], input_range) if exact_breaks else (),
+        breaks=_breaks(res, inputs[drivers[0]], input_range) if exact_breaks and not timed else (),
         catalogue=cat,
+        x_axis=cat.find(Owner.MECHANISM, "", "time").name if timed else cat.find(Owner.DRIVER, x_driver, "input").name,
+        stopped=res.stopped,
     )
+
+
+def _check_result(res: Any) -> None:
+    """Raise an InputError unless ``res`` is one design's Result."""
+    if not isinstance(res, Result):
+        raise InputError(f"expected a linkagekit Result (lk.analyze(...)), got {type(res).__name__}")
+    if res.n_designs is not None:
+        raise InputError("a scene draws one design: pass res.design(i)")

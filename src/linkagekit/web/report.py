@@ -1,4 +1,4 @@
-"""The report page: one self-contained HTML file of a solved sweep (spec section 5).
+"""The report page: one self-contained HTML file of a solved sweep or a simulated motion (spec section 5).
 
 The page holds the scene (:mod:`linkagekit.viz.scene`) as JSON, the small SVG viewer
 (``viewer.js``, inlined), its style, the text of ``check`` and the mechanism file.  It
@@ -129,7 +129,9 @@ def report_html(
     Parameters
     ----------
     res : Result
-        From :func:`linkagekit.analyze` (one design).
+        From :func:`linkagekit.analyze` (one design), or a simulated motion from
+        :func:`linkagekit.simulate`: its plots run along time, the slider and Play step
+        through its times, and where it stopped at a toggle is said.
     source : str, optional
         The mechanism file's text, shown on the page (default: the mechanism written as YAML).
     checks_text : str, optional
@@ -156,7 +158,7 @@ def report_html(
 {_head(title, bool(editor))}
 <body data-name="{esc(Path(file_name).stem or "linkage")}">
 <h1>{esc(title)}</h1>
-<p class="sub">{esc(file_name)}{" · " if file_name else ""}{unit_text} · {sc.n} samples ·
+<p class="sub">{esc(file_name)}{" · " if file_name else ""}{unit_text} · {_samples_text(sc)} ·
 linkagekit {esc(__version__)}</p>
 {_top(sc, start, editor, file_name)}
 <h2>Checks</h2>
@@ -212,6 +214,7 @@ def _top(sc: Scene, start: int, editor: dict[str, Any] | None, file_name: str) -
 <button type="button" data-action="csv">Download CSV</button></p>
 <p data-role="message" aria-live="polite"></p>
 <p class="gaps" data-role="gaps"></p>
+{_stopped_text(sc)}
 {_editor_panel(editor, file_name) if editor else ""}
 </section>
 <section id="lk-plots" aria-label="plots"></section>
@@ -231,10 +234,27 @@ def _head(title: str, editor: bool) -> str:
 </head>"""
 
 
+def _samples_text(sc: Scene) -> str:
+    """How many samples, and for a simulated motion over which times."""
+    if not sc.timed or sc.n == 0:
+        return f"{sc.n} samples"
+    t = sc.x
+    return f"simulated motion, t = {t[0]:.6g} to {t[-1]:.6g} {html.escape(sc.x_unit)}, {sc.n} samples"
+
+
+def _stopped_text(sc: Scene) -> str:
+    """Where a simulated motion stopped at a toggle (nothing otherwise)."""
+    return f'<p class="gaps" data-role="stopped">{html.escape(sc.stopped)}</p>' if sc.stopped else ""
+
+
 def _input_controls(sc: Scene, start: int) -> str:
-    """A slider over the samples for each driver, at sample *start*, with the output that shows its input."""
+    """A slider over the samples for each driver, at sample *start*, with the output that shows its input.
+
+    A simulated motion also shows the time of the sample (``data-role="time-value"``).
+    """
     esc = html.escape
-    return "".join(
+    time = '<span>time</span><span></span><output data-role="time-value"></output>' if sc.timed else ""
+    return time + "".join(
         f'<label for="lk-in-{esc(d)}">{esc(d)}</label>'
         f'<input type="range" id="lk-in-{esc(d)}" data-role="input" data-driver="{esc(d)}" '
         f'min="0" max="{sc.n - 1}" step="1" value="{start}">'

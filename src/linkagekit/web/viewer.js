@@ -6,7 +6,9 @@
  * samples. Hooks (spec section 5): [data-joint] with data-x/data-y (Python repr of the
  * float, empty when not assembled), <input type=range data-role=input data-driver> whose
  * value is the sample index, [data-role=input-value], [data-role=plot] with a
- * [data-role=cursor], [data-action=play], [data-action=csv], [data-role=message].
+ * [data-role=cursor], [data-action=play], [data-action=csv], [data-role=message]; for a
+ * simulated motion (scene.x_axis.time) [data-role=time-value]: the plots run along time and
+ * Play steps through the samples at the pace of their times.
  */
 (function () {
   "use strict";
@@ -64,6 +66,13 @@
     throw new Error("linkagekit: the scene has no " + component + " of " + owner + " " + ownerName);
   }
   function inputOf(scene, driver) { return column(scene, "driver", driver, "input"); }
+  /* what the plots run along: {values, name, unit, time} (a simulation's time, or the first moving driver's input) */
+  function xAxisOf(scene) {
+    var ax = scene.x_axis;
+    if (ax && ax.column && scene.columns[ax.column]) return {values: scene.columns[ax.column], name: ax.name, unit: ax.unit, time: ax.time};
+    var d = scene.x_driver || scene.drivers[0];
+    return {values: inputOf(scene, d), name: d, unit: scene.input_units[d], time: false};
+  }
   function assembledOf(scene) { return column(scene, "mechanism", "", "assembled"); }
 
   /* [min, max] of the finite values of several arrays (a loop: spreading a long array into
@@ -269,7 +278,7 @@
     });
     var T = 24 + 14 * rows.length, H = T + PH + B;
     svg.setAttribute("viewBox", "0 0 " + W + " " + H);
-    var driver = scene.x_driver || scene.drivers[0], xs = inputOf(scene, driver);
+    var axis = xAxisOf(scene), xs = axis.values;
     var xe = extent([xs]), x0 = xe[0], x1 = xe[1];
     if (!(x1 > x0)) { x1 = x0 + 1; }
     var ye = extent(spec.series.map(function (k) { return scene.columns[k]; }));
@@ -299,7 +308,7 @@
       t.textContent = fmt(v);
     });
     var xl = el("text", {x: (L + W - R) / 2, y: H - 4, "font-size": 11, "text-anchor": "middle"}, svg);
-    xl.textContent = driver + " [" + scene.input_units[driver] + "]";
+    xl.textContent = axis.name + " [" + axis.unit + "]";
     el("rect", {x: L, y: T, width: W - L - R, height: H - T - B, fill: "none", stroke: "#888", "stroke-width": 0.8}, svg);
     rows.forEach(function (row, r) {
       row.forEach(function (it) {
@@ -360,10 +369,10 @@
   /* ------------------------------------------------------------------ the page */
   function gapText(scene) {
     if (!scene.gaps.length) return "";
-    var d = scene.x_driver || scene.drivers[0], x = inputOf(scene, d);
-    return "Does not assemble at the samples " + d + " in " + scene.gaps.map(function (g) {
+    var axis = xAxisOf(scene), x = axis.values;
+    return "Does not assemble at the samples " + axis.name + " in " + scene.gaps.map(function (g) {
       return g[0] === g[1] ? fmt(x[g[0]]) : "[" + fmt(x[g[0]]) + ", " + fmt(x[g[1]]) + "]";
-    }).join(", ") + " " + scene.input_units[d] + " (the gaps in the curves).";
+    }).join(", ") + " " + axis.unit + " (the gaps in the curves).";
   }
 
   function start() {
@@ -376,6 +385,7 @@
     var controls = document.querySelector(".controls");
     var message = document.querySelector("[data-role=message]");
     var gaps = document.querySelector("[data-role=gaps]");
+    var timeValue = document.querySelector("[data-role=time-value]");
     var scene, viewer, plots, current = 0;
 
     /* draw a scene: everything is rebuilt from it (the editor calls this with each new solve) */
@@ -410,6 +420,11 @@
         v.setAttribute("data-value", pyRepr(x));
         v.textContent = d + " = " + fmt(x, scene.input_units[d]);
       });
+      if (timeValue) {
+        var axis = xAxisOf(scene), t = axis.time ? axis.values[i] : null;
+        timeValue.setAttribute("data-value", pyRepr(t));
+        timeValue.textContent = axis.time ? "t = " + fmt(t, axis.unit) : "";
+      }
       var ok = assembledOf(scene)[i];
       if (message && !api.holdMessage) {
         message.textContent = ok ? "" : "Does not assemble at " + scene.drivers.map(function (d) {
@@ -436,11 +451,18 @@
     }
     sliders.forEach(listen);
     var timer = null, play = document.querySelector("[data-action=play]");
+    /* ms between samples: a simulated motion plays at the pace of its times (within 16 ms to 1 s a
+     * sample), a sweep in about six seconds */
+    function playStep() {
+      var axis = xAxisOf(scene), x = axis.values, n = scene.n;
+      if (!axis.time || n < 2 || !finite(x[0]) || !finite(x[n - 1])) return Math.max(16, Math.round(6000 / n));
+      return Math.min(1000, Math.max(16, Math.round(1000 * (x[n - 1] - x[0]) / (n - 1))));
+    }
     function stop() { if (timer !== null) { clearInterval(timer); timer = null; if (play) play.textContent = "Play"; } }
     if (play) play.addEventListener("click", function () {
       if (timer !== null) { stop(); return; }
       play.textContent = "Pause";
-      timer = setInterval(function () { show((current + 1) % scene.n); }, Math.max(16, Math.round(6000 / scene.n)));
+      timer = setInterval(function () { show((current + 1) % scene.n); }, playStep());
     });
     var csv = document.querySelector("[data-action=csv]");
     if (csv) csv.addEventListener("click", function () {
@@ -453,7 +475,7 @@
     });
     var api = window.linkagekit = {show: show, load: load, stop: stop, pyRepr: pyRepr, fmt: fmt, el: el,
       current: function () { return current; }, niceTicks: niceTicks, extent: extent, holdMessage: false,
-      column: column, inputOf: inputOf};
+      column: column, inputOf: inputOf, xAxisOf: xAxisOf, playStep: function () { return playStep(); }};
     load(JSON.parse(node.textContent));
     var first = assembledOf(scene).indexOf(true);
     show(parseInt(sliders.length ? sliders[0].value : "0", 10) || (first > 0 ? first : 0));
