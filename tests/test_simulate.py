@@ -201,6 +201,7 @@ def test_a_toggle_stops_the_motion_with_one_line_and_exit_1(tmp_path, capsys):
     assert main(["simulate", str(path), "--time", "0:3:0.01", "--torque", "20", "--format", "csv", "-o", str(out)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "t = " in err[0] and "crank" in err[0]
+    assert f"at {hi:.6g} deg" in err[0]  # the line names where check puts the toggle, beside where the motion stopped
     rows = out.read_text().strip().splitlines()
     assert rows[0].startswith("time") and len(rows) == res.n + 1
 

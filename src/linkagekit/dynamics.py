@@ -567,10 +567,29 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     """The one line that says where the motion stopped: time and the driver's input (file units)."""
     d = md.mech.drivers[k]
     value = q_si / (md.scale[k] * d.input_scale(md.mech))
+    unit = d.input_unit(md.mech)
     return (
-        f"simulate: stopped at t = {t:.6g} s: driver '{d.name}' reached the end of its range at {value:.6g} "
-        f"{d.input_unit(md.mech)} (a toggle or its stroke's end) that the motion cannot pass"
+        f"simulate: stopped at t = {t:.6g} s, {d.name} = {value:.6g} {unit}: the end of its range"
+        f"{_range_end(md.mech, k, value)} (a toggle or its stroke's end) that the motion cannot pass"
     )
+
+
+def _range_end(mech: Mechanism, k: int, value: float) -> str:
+    """Where ``check`` puts the range's end nearest ``value`` (file units), as words; "" when there is none.
+
+    The motion stops where its table stops holding to its tolerance, a little before the end
+    itself (the inertia the driver sees grows without bound there), so the line says both.
+    """
+    d = mech.drivers[k]
+    ends = np.array([e for iv in input_range(mech, k) for e in iv], float)
+    if not len(ends):
+        return ""
+    gap = ends - value
+    if d.type.cyclic:
+        turn = 2 * math.pi / d.input_scale(mech)
+        gap = (gap + turn / 2) % turn - turn / 2
+    i = int(np.argmin(np.abs(gap)))
+    return f" is {abs(gap[i]):.3g} {d.input_unit(mech)} on, at {value + gap[i]:.6g} {d.input_unit(mech)}"
 
 
 def _singular_message(md: _Model, t: float, q_si: np.ndarray) -> str:
