@@ -500,17 +500,11 @@ class Spring:
     name: str = ""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "between", tuple(self.between))
-        if not self.name:
-            object.__setattr__(self, "name", element_name(*self.between))
+        _name_element(self)
 
     def to_dict(self) -> dict[str, Any]:
         """The spring as the file writes it."""
-        out: dict[str, Any] = {"between": list(self.between), "stiffness": float(self.stiffness)}
-        out["free_length"] = float(self.free_length)
-        if self.name != element_name(*self.between):
-            out["name"] = self.name
-        return out
+        return _element_dict(self, {"stiffness": float(self.stiffness), "free_length": float(self.free_length)})
 
 
 @dataclass(frozen=True)
@@ -522,16 +516,26 @@ class Damper:
     name: str = ""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "between", tuple(self.between))
-        if not self.name:
-            object.__setattr__(self, "name", element_name(*self.between))
+        _name_element(self)
 
     def to_dict(self) -> dict[str, Any]:
         """The damper as the file writes it."""
-        out: dict[str, Any] = {"between": list(self.between), "damping": float(self.damping)}
-        if self.name != element_name(*self.between):
-            out["name"] = self.name
-        return out
+        return _element_dict(self, {"damping": float(self.damping)})
+
+
+def _name_element(el: Spring | Damper) -> None:
+    """A spring's or damper's ``between`` as a tuple, and its default name ``A-B``."""
+    object.__setattr__(el, "between", tuple(el.between))
+    if not el.name:
+        object.__setattr__(el, "name", element_name(*el.between))
+
+
+def _element_dict(el: Spring | Damper, numbers: dict[str, Any]) -> dict[str, Any]:
+    """A spring or damper as the file writes it: ``between``, its ``numbers``, its name unless the default."""
+    out: dict[str, Any] = {"between": list(el.between), **numbers}
+    if el.name != element_name(*el.between):
+        out["name"] = el.name
+    return out
 
 
 @dataclass(frozen=True)

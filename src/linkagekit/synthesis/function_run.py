@@ -19,6 +19,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -82,14 +83,11 @@ def synthesize_function(
     ``[min, 180 - min]`` from the first pair to the last.
     """
     x, y = check_pairs(inputs, outputs, source)
-    first = solve(
-        inputs,
-        outputs,
-        free_offsets=free_offsets,
-        ground_length=ground_length,
-        source=source,
+    fit_from = partial(
+        solve, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
         min_transmission=min_transmission,
-    )
+    )  # fmt: skip
+    first = fit_from()
     objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units, float(min_transmission))
     if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
         return FunctionSynthesis(first, _mechanism(first, units), None)
@@ -97,15 +95,7 @@ def synthesize_function(
         objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, goal=GOAL, workers=workers,
         scheduler=scheduler, checkpoint=checkpoint,
     )  # fmt: skip
-    fit = solve(
-        inputs,
-        outputs,
-        free_offsets=free_offsets,
-        ground_length=ground_length,
-        source=source,
-        min_transmission=min_transmission,
-        starts=[opt.x],
-    )
+    fit = fit_from(starts=[opt.x])  # the engine's best, polished with the Freudenstein starts
     return FunctionSynthesis(fit, _mechanism(fit, units), opt)
 
 
