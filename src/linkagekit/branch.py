@@ -38,7 +38,7 @@ import numpy as np
 
 from .errors import InputError
 from .params import Params
-from .positions import WALK_STEP, Positions, _take_samples, solve
+from .positions import WALK_STEP, Positions, solve, take_samples
 from .rates import Rates, solve_rates
 from .steps import Pivot, Step, is_sign_step
 
@@ -497,7 +497,7 @@ def _side_solves(
     if mirrors is not None and np.shape(mirrors)[-1] > 1:
         mr = np.concatenate([mirrors, _columns(mirrors, cols)], axis=-1)
     full = solve(params, both, signs, mr, continuous=True)
-    side = _take_samples(full, np.arange(n, both.shape[-1]))
+    side = take_samples(full, np.arange(n, both.shape[-1]))
     if params.plan.numerical:  # Newton near a change point may land on either root: the walk alone must agree
         alone = solve(params, qs, signs[..., n:], None if mirrors is None else _columns(mirrors, cols), continuous=True)
         size = np.max(np.abs(side.z - np.mean(side.z, axis=0)), axis=0)

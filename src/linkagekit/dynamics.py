@@ -719,6 +719,11 @@ def _by_driver(mech: Mechanism, value: Any, what: str) -> dict[str, Any]:
     return {names[0]: value}
 
 
+def torque_laws(mech: Mechanism, torque: Any = None, motor: Any = None) -> tuple[TorqueLaw, ...]:
+    """Each driver's torque law in SI from ``simulate``'s ``torque``/``motor`` (the checks of :func:`simulate`)."""
+    return _laws(_model(mech), torque, motor)
+
+
 def _laws(md: _Model, torque: Any, motor: Any) -> tuple[TorqueLaw, ...]:
     """Each driver's law in SI (none given: no torque)."""
     mech = md.mech

@@ -43,7 +43,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from .dynamics import _laws, _model, reduced
+from .dynamics import reduced, torque_laws
 from .errors import InputError, LinkageError
 from .model import CrankType, Mechanism
 
@@ -574,5 +574,5 @@ def size_flywheel(
         target = float(cs)
     except (TypeError, ValueError):
         raise InputError(f"--flywheel: expected a number, got {cs!r}") from None
-    (law,) = _laws(_model(mech), torque, motor)
+    (law,) = torque_laws(mech, torque, motor)
     return size_flywheel_reduced(reduced(mech), law, target)

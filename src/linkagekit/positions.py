@@ -203,7 +203,7 @@ def _solve_on_grid(
     full = solve(
         params, qg, _dense_choice(signs, n, m), _dense_choice(mirrors, n, m), eps, grid=grid, continuous=continuous
     )
-    got = _take_samples(full, np.arange(n))
+    got = take_samples(full, np.arange(n))
     if out is not None:
         out[...] = got.z
         got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
@@ -270,7 +270,7 @@ def _dense_choice(arr: np.ndarray | None, n: int, n_total: int) -> np.ndarray | 
     return np.concatenate([a, np.repeat(a[..., :1], n_total - n, axis=-1)], axis=-1)
 
 
-def _take_samples(full: Positions, keep: np.ndarray) -> Positions:
+def take_samples(full: Positions, keep: np.ndarray) -> Positions:
     """The given samples of a dense solve."""
     rot = {k: (v[..., keep] if np.ndim(v) and np.shape(v)[-1] > 1 else v) for k, v in full.rot.items()}
     sg = full.signs[..., keep] if full.signs.shape[-1] > 1 else full.signs
