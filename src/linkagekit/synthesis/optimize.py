@@ -134,6 +134,7 @@ class Progress:
     best_error: float
     evaluations: int
     elapsed: float
+    source: str = "search"  # "atlas": the atlas's answer, before any search (synthesis.atlas)
 
 
 @dataclass
@@ -174,12 +175,17 @@ def optimize(
     problem: Objective,
     settings: Settings,
     progress: Callable[[Progress], None] | None = None,
+    initial: np.ndarray | None = None,
 ) -> Outcome:
-    """Search ``problem`` as ``settings`` say; returns the best design found (by :func:`objective.measure`)."""
+    """Search ``problem`` as ``settings`` say; returns the best design found (by :func:`objective.measure`).
+
+    ``initial``: designs (k, dim), best first, that seed the first searches (:func:`_search`).
+    """
     # The searches take turns with the objective's cheaper variants (a path problem's order dropped: a fit
     # found without the order may well be in order); the polish and the choice of the best use the objective.
     variants = problem.variants()
     run = _Run.begin(problem, settings, progress, len(variants))
+    run.initial = initial
     if run.finished is None:  # a finished checkpoint's result is just written again
         with Evaluator(variants, settings.workers, settings.scheduler) as ev:
             run.search(ev, variants)
@@ -279,6 +285,7 @@ class _Run:
     polished: list[np.ndarray] | None = None  # the polish under way: the candidates polished so far
     polish_time: float = 0.0  # seconds of the longest whole polish of a search so far
     generation_time: float = 0.0  # seconds of the last generation
+    initial: np.ndarray | None = None  # designs that seed the first searches, best first
 
     @classmethod
     def begin(
@@ -344,7 +351,8 @@ class _Run:
         def cost(X: np.ndarray, which: int = which) -> np.ndarray:  # X is (designs, dim)
             return ev.cost(X, which)
 
-        search = _search(self.restart, len(variants), self.problem, self.settings, self.seeds[self.restart], cost)
+        seed = self.seeds[self.restart]
+        search = _search(self.restart, len(variants), self.problem, self.settings, seed, cost, self.initial)
         designs, out_of_time = self._resume(search)
         if self.polished is None:  # still searching
             designs, out_of_time = self._generations(search, designs)
@@ -484,15 +492,33 @@ CMA_GROWTH, CMA_DOUBLINGS = 2, 3
 CMA_EVERY = 2
 #: CMA-ES's first population, in multiples of its default 4 + 3 ln n
 CMA_POPULATION = 8
+#: of a seeded differential evolution's population, this share are the seeds (the rest a Latin hypercube)
+SEEDED = 0.2
+#: a seeded CMA-ES's first step size, in unit-box lengths
+CMA_SEEDED_SIGMA = 0.1
 
 
-def _search(restart: int, n_variants: int, problem: Objective, settings: Settings, seed: Any, cost: Cost) -> Search:
-    """The search of restart ``restart``: differential evolution and CMA-ES take turns (after the variants)."""
+def _search(
+    restart: int,
+    n_variants: int,
+    problem: Objective,
+    settings: Settings,
+    seed: Any,
+    cost: Cost,
+    initial: np.ndarray | None = None,
+) -> Search:
+    """The search of restart ``restart``: differential evolution and CMA-ES take turns (after the variants).
+
+    With ``initial`` designs (best first), the first turn's differential evolution has the best
+    ``SEEDED`` of them in its population and the first CMA-ES starts at the best, with a smaller step.
+    """
     rng = np.random.Generator(np.random.PCG64(seed))
     turn = restart // n_variants
+    seeded = initial if initial is not None and len(initial) and turn < CMA_EVERY else None
     if turn % CMA_EVERY != CMA_EVERY - 1:
-        return DESearch(problem, settings, rng, cost)
-    return CMASearch(problem, settings, rng, cost, CMA_GROWTH ** min(turn // CMA_EVERY, CMA_DOUBLINGS))
+        return DESearch(problem, settings, rng, cost, seeded)
+    start = None if seeded is None else seeded[0]
+    return CMASearch(problem, settings, rng, cost, CMA_GROWTH ** min(turn // CMA_EVERY, CMA_DOUBLINGS), start)
 
 
 class Search:
@@ -525,11 +551,19 @@ class Search:
 class DESearch(Search):
     """scipy's differential evolution (``rand1bin``, dithered mutation, deferred updating, vectorized)."""
 
-    def __init__(self, problem: Objective, settings: Settings, rng: np.random.Generator, cost: Cost) -> None:
+    def __init__(
+        self,
+        problem: Objective,
+        settings: Settings,
+        rng: np.random.Generator,
+        cost: Cost,
+        initial: np.ndarray | None = None,
+    ) -> None:
         from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
 
         lo, hi = problem.bounds
         self.settings = settings
+        init: Any = "latinhypercube" if initial is None else _seeded_population(lo, hi, settings.popsize, initial, rng)
         self.solver = DifferentialEvolutionSolver(
             lambda x: cost(np.asarray(x).T),  # scipy's vectorized call: x is (dim, S)
             list(zip(lo, hi, strict=True)),
@@ -541,7 +575,7 @@ class DESearch(Search):
             recombination=0.9,
             rng=rng,
             polish=False,
-            init="latinhypercube",
+            init=init,
             updating="deferred",
             vectorized=True,
         )
@@ -586,6 +620,20 @@ class DESearch(Search):
         self.first = False
 
 
+def _seeded_population(
+    lo: np.ndarray, hi: np.ndarray, popsize: int, initial: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
+    """A first population of ``popsize * dim`` designs: the first ``SEEDED`` share from ``initial``, the rest a
+    Latin hypercube."""
+    dim = len(lo)
+    size = max(popsize * dim, 5)
+    seeds = np.clip(np.asarray(initial, float)[: int(SEEDED * size)], lo, hi)
+    rest = size - len(seeds)
+    strata = np.argsort(rng.uniform(size=(rest, dim)), axis=0)  # one permutation of the strata per coordinate
+    U = (strata + rng.uniform(size=(rest, dim))) / rest
+    return np.concatenate([seeds, lo + U * (hi - lo)])
+
+
 class CMASearch(Search):
     """CMA-ES (:mod:`linkagekit.synthesis.cmaes`) in the unit box, from a random start.
 
@@ -594,7 +642,13 @@ class CMASearch(Search):
     """
 
     def __init__(
-        self, problem: Objective, settings: Settings, rng: np.random.Generator, cost: Cost, growth: int = 1
+        self,
+        problem: Objective,
+        settings: Settings,
+        rng: np.random.Generator,
+        cost: Cost,
+        growth: int = 1,
+        start: np.ndarray | None = None,
     ) -> None:
         from .cmaes import CMAES
 
@@ -602,7 +656,11 @@ class CMASearch(Search):
         n = len(self.lo)
         self.cost = cost
         self.budget = settings.generations * settings.popsize * n
-        self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
+        mean = rng.uniform(0.0, 1.0, n)
+        if start is not None:  # a seed: start there, looking nearby first
+            mean = np.clip((np.asarray(start, float) - self.lo) / (self.hi - self.lo), 0.0, 1.0)
+        sigma = CMA_SIGMA if start is None else CMA_SEEDED_SIGMA
+        self.es = CMAES(mean, sigma, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
 
     def _x(self, U: FloatArray) -> FloatArray:
         X: FloatArray = self.lo + U * (self.hi - self.lo)

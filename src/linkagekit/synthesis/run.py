@@ -224,6 +224,7 @@ def synthesize_path(
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
+    atlas: bool = True,
     **old: Any,
 ) -> Synthesis:
     """Path generation: a mechanism whose tracer point passes near every target (``synthesize``'s ``task="path"``).
@@ -251,6 +252,9 @@ def synthesize_path(
         joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
         See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
+    atlas : bool
+        The built-in four-bar starts from the atlas's nearest designs (:mod:`~linkagekit.synthesis.atlas`;
+        its answer is reported first, with ``Progress.source == "atlas"``).
 
     Returns
     -------
@@ -261,7 +265,30 @@ def synthesize_path(
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
-    return finish(problem, optimize(problem, settings, progress), source)
+    return finish(
+        problem, _from_atlas(problem, settings, progress) if atlas else optimize(problem, settings, progress), source
+    )
+
+
+def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> Outcome:
+    """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has this topology.
+
+    The answer is reported at once; one that meets the goal ends the run (without a checkpoint to write).
+    """
+    from . import atlas
+
+    if not atlas.applies(problem):
+        return optimize(problem, settings, progress)
+    ans = atlas.first_answer(problem)
+    if not len(ans.designs):
+        return optimize(problem, settings, progress)
+    if progress is not None:
+        progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), ans.seconds, source="atlas"))
+    if ans.error <= settings.goal and not settings.checkpoint:
+        history = [(ans.cost, ans.error)]
+        return Outcome(ans.designs[0], ans.cost, 0, 0, len(ans.designs), ans.seconds, "goal", history)
+    rest = replace(settings, seconds=max(settings.seconds - ans.seconds, 1e-3))
+    return optimize(problem, rest, progress, ans.designs)
 
 
 def _units(units: str, old: dict[str, Any]) -> str:
