@@ -36,14 +36,14 @@ import os
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import LinkageError
+from ..errors import InputError, LinkageError
 from . import descriptors as de
 
 if TYPE_CHECKING:
@@ -104,7 +104,7 @@ def size() -> int:
     try:
         n = int(raw) if raw else SIZE
     except ValueError:
-        raise AtlasError(f"LINKAGEKIT_ATLAS_SIZE: expected a whole number, got {raw!r}") from None
+        raise InputError(f"LINKAGEKIT_ATLAS_SIZE: expected a whole number, got {raw!r}") from None
     n = max(n, 64)
     per = chunk_entries(n)
     return (n // per) * per
@@ -267,10 +267,10 @@ def _readable(file: Path, n: int) -> np.ndarray | None:
         arr: np.ndarray = np.load(file, mmap_mode="r", allow_pickle=False)
     except (OSError, ValueError, EOFError):
         return None
-    if arr.dtype != np.float32 or arr.shape != (n + 1, COLUMNS) or not np.all(arr[-1] == MARKER):
+    if arr.dtype != np.float32 or arr.shape != (COLUMNS, n + 1) or not np.all(arr[:, -1] == MARKER):
         return None
     nc = _closed_rows(n)
-    kinds = arr[[0, nc - 1, nc, n - 1], KIND] if nc < n else arr[[0, n - 1], KIND]
+    kinds = arr[KIND, [0, nc - 1, nc, n - 1]] if nc < n else arr[KIND, [0, n - 1]]
     if not np.array_equal(kinds, [0, 0, 1, 1] if nc < n else [0, 0]):
         return None
     return arr
@@ -353,12 +353,12 @@ def _assemble(file: Path, parts: Path, n: int, per: int) -> None:
     tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
     nc, pc = _closed_rows(n), int(round(per * CLOSED_SHARE))
     try:
-        out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.float32, shape=(n + 1, COLUMNS))
+        out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.float32, shape=(COLUMNS, n + 1))
         for i in range(n // per):
             chunk = np.load(_chunk_file(parts, i), allow_pickle=False)
-            out[i * pc : (i + 1) * pc] = chunk[:pc]
-            out[nc + i * (per - pc) : nc + (i + 1) * (per - pc)] = chunk[pc:]
-        out[-1] = MARKER
+            out[:, i * pc : (i + 1) * pc] = chunk[:pc].T
+            out[:, nc + i * (per - pc) : nc + (i + 1) * (per - pc)] = chunk[pc:].T
+        out[:, -1] = MARKER
         out.flush()
         del out
         os.replace(tmp, file)
@@ -372,32 +372,31 @@ def _assemble(file: Path, parts: Path, n: int, per: int) -> None:
 
 @dataclass(frozen=True)
 class Atlas:
-    """A loaded atlas: its rows (memory-mapped, float32) and where its closed rows end."""
+    """A loaded atlas: its columns (``COLUMNS`` x entries + 1, float32, memory-mapped) and where its closed entries end.
 
-    rows: np.ndarray
+    Stored column by column, so each column of a kind is contiguous: a scan reads the
+    descriptors straight from the file's pages, without a copy.
+    """
+
+    data: np.ndarray
     closed: int
     file: Path
-    _scan: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict, repr=False)
 
     def __len__(self) -> int:
-        return len(self.rows) - 1
+        return int(self.data.shape[1]) - 1
 
     def block(self, closed: bool) -> tuple[int, int]:
         """Row range of the closed or the open entries."""
         return (0, self.closed) if closed else (self.closed, len(self))
 
     def scan(self, closed: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Descriptors (contiguous, float32), their squared norms and transmission angles of one kind (read once)."""
-        key = "closed" if closed else "open"
-        if key not in self._scan:
-            lo, hi = self.block(closed)
-            rows = self.rows[lo:hi]
-            self._scan[key] = (
-                np.ascontiguousarray(rows[:, DESC:NORM]),
-                np.ascontiguousarray(rows[:, NORM]),
-                np.ascontiguousarray(rows[:, MU]),
-            )
-        return self._scan[key]
+        """Descriptors ``(NDESC, entries)``, their squared norms and transmission angles of one kind (views)."""
+        lo, hi = self.block(closed)
+        return self.data[DESC:NORM, lo:hi], self.data[NORM, lo:hi], self.data[MU, lo:hi]
+
+    def entries(self, index: np.ndarray) -> np.ndarray:
+        """Rows ``(k, COLUMNS)`` (float64) of the entries ``index``."""
+        return np.asarray(self.data[:, index].T, float)
 
 
 @cache
@@ -462,9 +461,9 @@ def nearest(
     lo, _ = atlas.block(closed)
     D, norm, mu = atlas.scan(closed)
     both = np.stack([q.vector, de.flipped(q.vector)]).astype(np.float32)
-    dots = D @ both.T  # (entries, 2)
-    d0 = norm - 2.0 * dots[:, 0]
-    d1 = norm - 2.0 * dots[:, 1]
+    dots = both @ D  # (2, entries)
+    d0 = norm - 2.0 * dots[0]
+    d1 = norm - 2.0 * dots[1]
     flip = d1 < d0
     best = np.minimum(d0, d1) + float(both[0] @ both[0])  # both descriptors have one norm
     best[mu < min_transmission] = np.inf
@@ -472,7 +471,7 @@ def nearest(
     idx = np.argpartition(best, k - 1)[:k] if k < len(best) else np.arange(len(best))
     idx = idx[np.argsort(best[idx], kind="stable")]
     idx = idx[np.isfinite(best[idx])]
-    sel = np.asarray(atlas.rows[idx + lo], float)
+    sel = atlas.entries(idx + lo)
     J = sel[:, JOINTS:SWEEP].reshape(len(idx), 5, 2) @ np.array([1.0, 1j])
     s = np.where(flip[idx], -q.scale, q.scale)
     placed = q.center + s[:, None] * J
@@ -555,13 +554,13 @@ def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
     return fits
 
 
-def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED, until: float = 1.0) -> Answer:
+def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED, until: float = 0.5) -> Answer:
     """The atlas's answer to ``problem`` (see the module's description); ``until``: seconds for the polish."""
     from .objective import best_index
     from .optimize import polish as local
 
     t0 = time.monotonic()
-    atlas = atlas or load(_plain_tick())
+    atlas = atlas or load(build_report())
     match = nearest(atlas, problem.targets, True, LOOKED_UP, problem.min_transmission)
     X = posed(problem, match.joints[_fits(problem, match.joints)][:NEAREST])
     lo, hi = problem.bounds
@@ -579,7 +578,26 @@ def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POL
     return Answer(designs, float(err[k]), float(cost[k]), time.monotonic() - t0, len(done))
 
 
-def _plain_tick() -> Tick:
+def info() -> dict[str, object]:
+    """What is cached: the file, the format version, the entries (closed, open), whether it is built, its bytes."""
+    n = size()
+    file = path(n)
+    built = _readable(file, n) is not None
+    parts = file.with_name(file.stem + ".parts")
+    chunks = len(list(parts.glob("chunk-*.npy"))) if parts.is_dir() else 0
+    return {
+        "file": str(file),
+        "version": VERSION,
+        "entries": n,
+        "closed": _closed_rows(n),
+        "open": n - _closed_rows(n),
+        "built": built,
+        "bytes": file.stat().st_size if built else 0,
+        "chunks": f"{chunks} of {n // chunk_entries(n)} chunks of an unfinished build" if chunks and not built else "",
+    }
+
+
+def build_report() -> Tick:
     """A progress report of a build on stderr: a bar on a terminal, else a line every tenth."""
     state: dict[str, object] = {}
 
