@@ -254,7 +254,7 @@ def test_recovers_with_prescribed_timing():
 
 def test_same_seed_same_design_and_another_seed_another_search():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
-    kw = dict(units="cm", restarts=1, generations=40, goal=0.0)
+    kw = dict(units="cm", restarts=1, generations=40, goal=0.0, atlas=False)  # the atlas's start is seed-free
     a = synthesize(T, "fourbar", seed=4, **kw)
     b = synthesize(T, "fourbar", seed=4, **kw)
     c = synthesize(T, "fourbar", seed=5, **kw)

@@ -1885,6 +1885,8 @@ def _atlas(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers: expected at least 1, got {args.workers}")
     t0 = time.monotonic()
+    if atlas.size() == 0:
+        raise InputError("LINKAGEKIT_ATLAS_SIZE is 0: the atlas is turned off")
     if args.action == "build":
         atlas.build(tick=atlas.build_report(), workers=args.workers)
     got = atlas.info()

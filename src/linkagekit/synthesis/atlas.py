@@ -23,10 +23,13 @@ Cache (:func:`build`, :func:`load`)
     read with ``allow_pickle=False`` and memory-mapped; a file whose shape, type or marker is
     wrong is rebuilt.
 Seeding a search (:func:`first_answer`)
-    The ``NEAREST`` nearest entries are placed on the targets, posed with the tracer at its
-    point nearest the first target, scored by the problem's own objective; the best few are
-    polished by least squares (:func:`~.optimize.polish`), and the best of all, by the
-    problem's dense check, is the atlas's answer; the designs, best first, seed the search.
+    The ``NEAREST`` nearest entries that fit the problem's bounds are placed on the targets,
+    refitted to them (:func:`refit`), posed with the tracer at its point nearest the first
+    target, scored by the problem's own objective; the best few are polished by least squares
+    (:func:`~.optimize.polish`), and the best of all, by the problem's dense check, is the
+    atlas's answer; the designs, best first, seed the search (``optimize(..., initial=...)``).
+
+``LINKAGEKIT_ATLAS_SIZE=0`` turns the atlas off.
 """
 
 from __future__ import annotations
@@ -75,8 +78,8 @@ COLUMNS = NDESC + 14
 MARKER = np.float32(1000.25 + VERSION)
 #: entries looked up, placed and scored for a search's start; of them, polished
 NEAREST, POLISHED = 256, 3
-#: entries looked up to find ``NEAREST`` that fit the problem's bounds
-LOOKED_UP = 8192
+#: entries looked up to find ``NEAREST`` that fit the problem's bounds; rounds of their refit to the targets
+LOOKED_UP, REFITS = 8192, 3
 #: the box lengths are drawn from (log-uniform, in ground lengths) and the coupler point's frame
 CRANK, LINKS, COUPLER_U, COUPLER_V = (0.05, 3.0), (0.1, 5.0), (-1.5, 2.5), (-2.0, 2.0)
 
@@ -99,12 +102,19 @@ def directory() -> Path:
 
 
 def size() -> int:
-    """Entries of the atlas: ``LINKAGEKIT_ATLAS_SIZE`` or ``SIZE``, rounded down to whole chunks (at least one)."""
+    """Entries of the atlas: ``LINKAGEKIT_ATLAS_SIZE`` or ``SIZE``, rounded down to whole chunks (at least one).
+
+    0 turns the atlas off (searches start as without one).
+    """
     raw = os.environ.get("LINKAGEKIT_ATLAS_SIZE", "")
     try:
         n = int(raw) if raw else SIZE
     except ValueError:
-        raise InputError(f"LINKAGEKIT_ATLAS_SIZE: expected a whole number, got {raw!r}") from None
+        n = -1
+    if n < 0:
+        raise InputError(f"LINKAGEKIT_ATLAS_SIZE: expected a whole number of entries (0: no atlas), got {raw!r}")
+    if n == 0:
+        return 0
     n = max(n, 64)
     per = chunk_entries(n)
     return (n // per) * per
@@ -506,9 +516,49 @@ class Answer:
 
 
 def applies(problem: Problem) -> bool:
-    """The atlas seeds a problem of the built-in four-bar (its joints A, B, C, D, P all free)."""
+    """The atlas seeds a problem of the built-in four-bar (its joints A, B, C, D, P all free), unless it is off."""
     sp = problem.space
-    return sp.topology == "fourbar" and sp.free == ("A", "B", "C", "D", "P")
+    return sp.topology == "fourbar" and sp.free == ("A", "B", "C", "D", "P") and size() > 0
+
+
+def _turn(problem: Problem, joints: np.ndarray, samples: int) -> np.ndarray:
+    """Every joint (5, k, samples) of four-bars ``joints`` (k, 5) over a whole turn of the crank from their poses."""
+    from ..params import compile as compile_params
+    from ..positions import solve
+
+    sp = problem.space
+    X = np.stack([joints.real, joints.imag], axis=-1).reshape(len(joints), 10)
+    params = compile_params(sp.template, sp.poses(X), sp.plan)
+    q = params.pose_inputs[0][:, None] + np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+    z: np.ndarray = solve(params, q[None]).z
+    return z
+
+
+def refit(problem: Problem, joints: np.ndarray, rounds: int = REFITS, samples: int = 180) -> np.ndarray:
+    """Four-bars ``joints`` (k, 5) moved, turned and scaled so that their curves fit the targets better.
+
+    Iterated closest points: each target's nearest curve sample ``N_i``, then the similarity
+    ``c + s z`` of least squares ``sum |T_i - c - s N_i|^2`` (a linear fit in the complex ``c, s``:
+    ``s = sum (T_i - Tm) conj(N_i - Nm) / sum |N_i - Nm|^2``, ``c = Tm - s Nm``), applied to the
+    joints. A descriptor matches whole curves at equal arc-length fractions; a few targets
+    are not spread so, and this places the curve through them instead.
+    """
+    T = problem.targets
+    P = problem.space.joint(problem.space.tracer)
+    for _ in range(rounds):
+        C = _turn(problem, joints, samples)[P]  # (k, samples)
+        C = np.where(np.isfinite(C), C, np.inf)
+        N = np.empty((len(joints), len(T)), complex)
+        for i in range(0, len(T), 64):  # the (k, targets, samples) distances in bounded pieces
+            d = np.abs(C[:, None, :] - T[None, i : i + 64, None])
+            N[:, i : i + 64] = np.take_along_axis(C, np.argmin(d, axis=2), axis=1)
+        Nm, Tm = N.mean(axis=1, keepdims=True), T.mean()
+        with np.errstate(invalid="ignore", divide="ignore"):
+            s = np.sum((T - Tm) * np.conj(N - Nm), axis=1) / np.sum(np.abs(N - Nm) ** 2, axis=1)
+        ok = np.isfinite(s) & (s != 0)
+        s, c = np.where(ok, s, 1.0), np.where(ok, Tm - s * Nm[:, 0], 0.0)
+        joints = c[:, None] + s[:, None] * joints
+    return joints
 
 
 def posed(problem: Problem, joints: np.ndarray, samples: int = 360) -> np.ndarray:
@@ -517,14 +567,8 @@ def posed(problem: Problem, joints: np.ndarray, samples: int = 360) -> np.ndarra
     Turning the crank a whole turn from each pose on its branch, the pose moves to the sample
     where the tracer is nearest the first target (the built-in space keeps the tracer near it).
     """
-    from ..params import compile as compile_params
-    from ..positions import solve
-
     sp = problem.space
-    X = np.stack([joints.real, joints.imag], axis=-1).reshape(len(joints), 10)
-    params = compile_params(sp.template, sp.poses(X), sp.plan)
-    q = params.pose_inputs[0][:, None] + np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
-    z = solve(params, q[None]).z  # (joints, k, samples)
+    z = _turn(problem, joints, samples)  # (joints, k, samples)
     d = np.abs(z[sp.joint(sp.tracer)] - problem.targets[0])
     best = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
     Z = np.take_along_axis(z, best[None, :, None], axis=2)[:, :, 0]  # (joints, k)
@@ -556,13 +600,15 @@ def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
 
 def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED, until: float = 0.5) -> Answer:
     """The atlas's answer to ``problem`` (see the module's description); ``until``: seconds for the polish."""
+    from scipy.optimize import least_squares  # noqa: F401 - loaded before the polish's clock starts
+
     from .objective import best_index
     from .optimize import polish as local
 
     t0 = time.monotonic()
     atlas = atlas or load(build_report())
     match = nearest(atlas, problem.targets, True, LOOKED_UP, problem.min_transmission)
-    X = posed(problem, match.joints[_fits(problem, match.joints)][:NEAREST])
+    X = posed(problem, refit(problem, match.joints[_fits(problem, match.joints)][:NEAREST]))
     lo, hi = problem.bounds
     X = X[np.all((lo <= X) & (hi >= X), axis=1)]
     if len(X) == 0:

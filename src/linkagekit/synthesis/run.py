@@ -16,6 +16,7 @@ A four-bar whose coupler point passes through five points of a known coupler cur
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
@@ -271,24 +272,23 @@ def synthesize_path(
 
 
 def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> Outcome:
-    """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has this topology.
+    """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has the topology.
 
-    The answer is reported at once; one that meets the goal ends the run (without a checkpoint to write).
+    The answer is reported at once (``Progress.source == "atlas"``); one that meets the goal ends the run.
     """
     from . import atlas
 
     if not atlas.applies(problem):
         return optimize(problem, settings, progress)
-    ans = atlas.first_answer(problem)
-    if not len(ans.designs):
-        return optimize(problem, settings, progress)
-    if progress is not None:
-        progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), ans.seconds, source="atlas"))
-    if ans.error <= settings.goal and not settings.checkpoint:
-        history = [(ans.cost, ans.error)]
-        return Outcome(ans.designs[0], ans.cost, 0, 0, len(ans.designs), ans.seconds, "goal", history)
-    rest = replace(settings, seconds=max(settings.seconds - ans.seconds, 1e-3))
-    return optimize(problem, rest, progress, ans.designs)
+
+    def start() -> np.ndarray:
+        t0 = time.monotonic()
+        ans = atlas.first_answer(problem)
+        if progress is not None and len(ans.designs):
+            progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), time.monotonic() - t0, source="atlas"))
+        return ans.designs
+
+    return optimize(problem, settings, progress, start)
 
 
 def _units(units: str, old: dict[str, Any]) -> str:
