@@ -108,7 +108,7 @@ def test_the_atlas_answer_seeds_path_synthesis():
     assert ans.error < 1e-6 and len(ans.designs) >= 1
     out = synthesize(P[0], "fourbar", reach=2.0, goal=1e-5, seconds=5)
     assert out.outcome.stopped_by == "goal" and out.outcome.generations == 0 and out.max_error < 1e-5 * out.diagonal
-    plain = synthesize(P[0], "fourbar", reach=2.0, atlas=False, restarts=1, generations=3, popsize=5)
+    plain = synthesize(P[0], "fourbar", reach=2.0, atlas=False, restarts=1, generations=3, popsize=5, goal=1.0)
     assert plain.outcome.restarts == 1  # without the atlas: a search
 
 
@@ -138,12 +138,27 @@ def test_an_interrupted_build_resumes_and_ends_as_an_uninterrupted_one(monkeypat
     with pytest.raises(KeyboardInterrupt):
         at.build(workers=1)
     assert not at.path().exists() and len(list(tmp_path.glob("a/*.parts/chunk-*.npy"))) == 2
+    assert at.info().chunks == 2 and not at.info().built
     made = _spy(monkeypatch)
     first = np.load(at.build(workers=1), allow_pickle=False)
     assert sorted(made) == [2, 3] and not list(tmp_path.glob("a/*.parts"))
     monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path / "b"))
     again = np.load(at.build(workers=1), allow_pickle=False)
     assert np.array_equal(first, again) and first.shape == (at.COLUMNS, 1025)
+
+
+def test_two_builds_at_once_share_the_work_and_the_file(monkeypatch, tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "1024")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path))
+    with ThreadPoolExecutor(2) as pool:
+        files = list(pool.map(lambda _: at.build(workers=1), range(2)))
+    assert files[0] == files[1] == at.path() and at.info().built
+    assert sorted(p.name for p in tmp_path.iterdir()) == [at.path().name]  # no temporary file, no chunks left
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path / "alone"))
+    assert np.array_equal(np.load(at.build(workers=1)), np.load(files[0]))
 
 
 def test_a_corrupt_stale_or_foreign_file_is_rebuilt_never_trusted(monkeypatch, tmp_path):

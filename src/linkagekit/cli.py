@@ -1890,11 +1890,11 @@ def _atlas(args: argparse.Namespace) -> int:
     if args.action == "build":
         atlas.build(tick=atlas.build_report(), workers=args.workers)
     got = atlas.info()
-    state = f"built, {got['bytes'] / 1e6:.1f} MB" if got["built"] else "not built yet"
-    print(f"four-bar atlas, format {got['version']}: {got['file']} ({state})")
-    print(f"{got['entries']} entries: {got['closed']} closed curves (the crank turns fully), {got['open']} open")
-    if got["chunks"]:
-        print(got["chunks"])
+    state = f"built, {got.bytes / 1e6:.1f} MB" if got.built else "not built yet"
+    print(f"four-bar atlas, format {got.version}: {got.file} ({state})")
+    print(f"{got.entries} entries: {got.closed} closed curves (the crank turns fully), {got.open} open")
+    if got.chunks:
+        print(f"{got.chunks} of {got.entries // atlas.chunk_entries(got.entries)} chunks of an unfinished build")
     if args.action == "build":
         print(f"ready in {time.monotonic() - t0:.1f} s")
     return 0

@@ -37,6 +37,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -298,9 +299,16 @@ def _good_chunk(file: Path, entries: int) -> bool:
     return bool(arr.dtype == np.float32 and arr.shape == (entries, COLUMNS) and np.isfinite(arr[-1, 0]))
 
 
+def _temporary(file: Path) -> Path:
+    """A new temporary file beside ``file``, of this writer alone (another process or thread has its own)."""
+    fd, name = tempfile.mkstemp(dir=file.parent, prefix=f".{file.name}.", suffix=".tmp")
+    os.close(fd)
+    return Path(name)
+
+
 def _write(file: Path, arr: np.ndarray) -> None:
-    """``arr`` to ``file`` through a temporary file of this process, renamed into place."""
-    tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
+    """``arr`` to ``file`` through a temporary file, renamed into place."""
+    tmp = _temporary(file)
     try:
         with open(tmp, "wb") as f:
             np.save(f, arr)
@@ -310,6 +318,7 @@ def _write(file: Path, arr: np.ndarray) -> None:
 
 
 def _build_chunk(parts: Path, index: int, entries: int) -> int:
+    parts.mkdir(parents=True, exist_ok=True)  # another build may have finished, and removed it, meanwhile
     _write(_chunk_file(parts, index), make_chunk(index, entries))
     return index
 
@@ -331,10 +340,16 @@ def build(n: int | None = None, tick: Tick | None = None, workers: int | None = 
         raise AtlasError(f"{parts}: cannot create the atlas's cache ({e.strerror or e})") from None
     per = chunk_entries(n)
     total = n // per
-    todo = [i for i in range(total) if not _good_chunk(_chunk_file(parts, i), per)]
-    _run_chunks(parts, todo, per, total, tick, workers)
-    _assemble(file, parts, n, per)
-    return file
+    for _ in range(2):  # a second time when another build took the chunks away while finishing the same atlas
+        todo = [i for i in range(total) if not _good_chunk(_chunk_file(parts, i), per)]
+        try:
+            _run_chunks(parts, todo, per, total, tick, workers)
+            _assemble(file, parts, n, per)
+        except FileNotFoundError:
+            pass
+        if _readable(file, n) is not None:
+            return file
+    raise AtlasError(f"{file}: the atlas could not be built")
 
 
 def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick | None, workers: int | None) -> None:
@@ -360,7 +375,7 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
 
 def _assemble(file: Path, parts: Path, n: int, per: int) -> None:
     """The chunks into one file (closed rows first, then open; the marker last), renamed over ``file``."""
-    tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
+    tmp = _temporary(file)
     nc, pc = _closed_rows(n), int(round(per * CLOSED_SHARE))
     try:
         out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.float32, shape=(COLUMNS, n + 1))
@@ -624,23 +639,44 @@ def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POL
     return Answer(designs, float(err[k]), float(cost[k]), time.monotonic() - t0, len(done))
 
 
-def info() -> dict[str, object]:
-    """What is cached: the file, the format version, the entries (closed, open), whether it is built, its bytes."""
+@dataclass(frozen=True)
+class Info:
+    """What is cached (:func:`info`).
+
+    Attributes
+    ----------
+    file : Path
+    version : int
+        The format.
+    entries, closed, open : int
+        Entries in all, of closed curves, of open ones.
+    built : bool
+        A whole atlas is there.
+    bytes : int
+        Its size on disk (0 when not built).
+    chunks : int
+        Chunks an unfinished build has written (of ``entries // chunk_entries(entries)``).
+    """
+
+    file: Path
+    version: int
+    entries: int
+    closed: int
+    open: int
+    built: bool
+    bytes: int
+    chunks: int
+
+
+def info() -> Info:
+    """What is cached, never building anything."""
     n = size()
     file = path(n)
     built = _readable(file, n) is not None
     parts = file.with_name(file.stem + ".parts")
-    chunks = len(list(parts.glob("chunk-*.npy"))) if parts.is_dir() else 0
-    return {
-        "file": str(file),
-        "version": VERSION,
-        "entries": n,
-        "closed": _closed_rows(n),
-        "open": n - _closed_rows(n),
-        "built": built,
-        "bytes": file.stat().st_size if built else 0,
-        "chunks": f"{chunks} of {n // chunk_entries(n)} chunks of an unfinished build" if chunks and not built else "",
-    }
+    chunks = len(list(parts.glob("chunk-*.npy"))) if parts.is_dir() and not built else 0
+    nc = _closed_rows(n)
+    return Info(file, VERSION, n, nc, n - nc, built, file.stat().st_size if built else 0, chunks)
 
 
 def build_report() -> Tick:
