@@ -79,8 +79,9 @@ COLUMNS = NDESC + 14
 MARKER = np.float32(1000.25 + VERSION)
 #: entries looked up, placed and scored for a search's start; of them, polished
 NEAREST, POLISHED = 256, 3
-#: entries looked up to find ``NEAREST`` that fit the problem's bounds; rounds of their refit to the targets
-LOOKED_UP, REFITS = 8192, 3
+#: entries looked up to find ``NEAREST`` that fit the problem's bounds (more when too few do); rounds of
+#: their refit to the targets
+LOOKED_UP, REFITS = (8192, 65536), 3
 #: the box lengths are drawn from (log-uniform, in ground lengths) and the coupler point's frame
 CRANK, LINKS, COUPLER_U, COUPLER_V = (0.05, 3.0), (0.1, 5.0), (-1.5, 2.5), (-2.0, 2.0)
 
@@ -622,8 +623,12 @@ def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POL
 
     t0 = time.monotonic()
     atlas = atlas or load(build_report())
-    match = nearest(atlas, problem.targets, True, LOOKED_UP, problem.min_transmission)
-    X = posed(problem, refit(problem, match.joints[_fits(problem, match.joints)][:NEAREST]))
+    for k in LOOKED_UP:
+        match = nearest(atlas, problem.targets, True, k, problem.min_transmission)
+        fits = match.joints[_fits(problem, match.joints)][:NEAREST]
+        if len(fits) == NEAREST:
+            break
+    X = posed(problem, refit(problem, fits))
     lo, hi = problem.bounds
     X = X[np.all((lo <= X) & (hi >= X), axis=1)]
     if len(X) == 0:
