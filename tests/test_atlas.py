@@ -93,7 +93,7 @@ def test_a_design_of_the_atlas_is_its_own_nearest_neighbour():
     assert at.nearest(atlas, P[0][::-1], False, 1).rows[0] == lo + 7
 
 
-def test_the_atlas_answer_seeds_path_synthesis():
+def test_the_atlas_answer_seeds_path_synthesis(monkeypatch):
     atlas = at.load()
     rng = np.random.default_rng(3)
     s, b = 1.5 * np.exp(0.4j), 2 + 1j
@@ -108,7 +108,8 @@ def test_the_atlas_answer_seeds_path_synthesis():
     assert ans.error < 1e-6 and len(ans.designs) >= 1
     out = synthesize(P[0], "fourbar", reach=2.0, goal=1e-5, seconds=5)
     assert out.outcome.stopped_by == "goal" and out.outcome.generations == 0 and out.max_error < 1e-5 * out.diagonal
-    plain = synthesize(P[0], "fourbar", reach=2.0, atlas=False, restarts=1, generations=3, popsize=5, goal=1.0)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "0")  # the atlas off
+    plain = synthesize(P[0], "fourbar", reach=2.0, restarts=1, generations=3, popsize=5, goal=1.0)
     assert plain.outcome.restarts == 1  # without the atlas: a search
 
 
@@ -197,3 +198,11 @@ def test_the_atlas_command(monkeypatch, tmp_path, capsys):
         assert main(["atlas", "info"]) == 2
         assert "LINKAGEKIT_ATLAS_SIZE" in capsys.readouterr().err
     assert not at.applies(make_problem([[0, 0], [1, 0], [0, 1]], "fourbar"))
+
+
+def test_no_entry_fits_the_bounds_no_answer_and_the_search_as_without():
+    atlas = at.load()
+    T = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    problem = make_problem(T, "fourbar", pivots=((100.0, 100.5), (100.0, 100.5)))  # pivots far off every curve
+    ans = at.first_answer(problem, atlas)
+    assert ans.designs.shape == (0, 10) and ans.error == np.inf

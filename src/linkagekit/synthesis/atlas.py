@@ -78,7 +78,7 @@ COLUMNS = NDESC + 14
 #: the last row of a whole file
 MARKER = np.float32(1000.25 + VERSION)
 #: entries looked up, placed and scored for a search's start; of them, polished
-NEAREST, POLISHED = 256, 3
+NEAREST, POLISHED, POLISH_NFEV = 256, 3, 60
 #: entries looked up to find ``NEAREST`` that fit the problem's bounds (more when too few do); rounds of
 #: their refit to the targets
 LOOKED_UP, REFITS = (8192, 65536), 3
@@ -319,7 +319,6 @@ def _write(file: Path, arr: np.ndarray) -> None:
 
 
 def _build_chunk(parts: Path, index: int, entries: int) -> int:
-    parts.mkdir(parents=True, exist_ok=True)  # another build may have finished, and removed it, meanwhile
     _write(_chunk_file(parts, index), make_chunk(index, entries))
     return index
 
@@ -335,22 +334,29 @@ def build(n: int | None = None, tick: Tick | None = None, workers: int | None = 
     if _readable(file, n) is not None:
         return file
     parts = file.with_name(file.stem + ".parts")
-    try:
-        parts.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise AtlasError(f"{parts}: cannot create the atlas's cache ({e.strerror or e})") from None
     per = chunk_entries(n)
     total = n // per
     for _ in range(2):  # a second time when another build took the chunks away while finishing the same atlas
-        todo = [i for i in range(total) if not _good_chunk(_chunk_file(parts, i), per)]
         try:
+            parts.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise AtlasError(f"{parts}: cannot create the atlas's cache ({e.strerror or e})") from None
+        todo = [i for i in range(total) if not _good_chunk(_chunk_file(parts, i), per)]
+        with contextlib.suppress(FileNotFoundError):
             _run_chunks(parts, todo, per, total, tick, workers)
             _assemble(file, parts, n, per)
-        except FileNotFoundError:
-            pass
         if _readable(file, n) is not None:
+            _clean(parts)
             return file
     raise AtlasError(f"{file}: the atlas could not be built")
+
+
+def _clean(parts: Path) -> None:
+    """The chunks and their directory removed (what a build still writing there will find gone: it stops)."""
+    for f in parts.glob("*"):
+        f.unlink(missing_ok=True)
+    with contextlib.suppress(OSError):
+        parts.rmdir()
 
 
 def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick | None, workers: int | None) -> None:
@@ -368,7 +374,8 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     with ProcessPoolExecutor(workers) as pool:
-        for _ in as_completed([pool.submit(_build_chunk, parts, i, per) for i in todo]):
+        for job in as_completed([pool.submit(_build_chunk, parts, i, per) for i in todo]):
+            job.result()  # a chunk that failed fails the build
             done += 1
             if tick:
                 tick(done, total)
@@ -390,10 +397,6 @@ def _assemble(file: Path, parts: Path, n: int, per: int) -> None:
         os.replace(tmp, file)
     finally:
         tmp.unlink(missing_ok=True)
-    for f in parts.glob("chunk-*.npy"):
-        f.unlink(missing_ok=True)
-    with contextlib.suppress(OSError):  # another process's temporary file may still be there
-        parts.rmdir()
 
 
 @dataclass(frozen=True)
@@ -614,10 +617,12 @@ def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
     return fits
 
 
-def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED, until: float = 0.5) -> Answer:
-    """The atlas's answer to ``problem`` (see the module's description); ``until``: seconds for the polish."""
-    from scipy.optimize import least_squares  # noqa: F401 - loaded before the polish's clock starts
+def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED) -> Answer:
+    """The atlas's answer to ``problem`` (see the module's description).
 
+    The same for the same problem and atlas: the polish is bounded by its evaluations, not by the
+    clock, so a run resumed from its checkpoint gets the seeds the uninterrupted run had.
+    """
     from .objective import best_index
     from .optimize import polish as local
 
@@ -628,14 +633,13 @@ def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POL
         fits = match.joints[_fits(problem, match.joints)][:NEAREST]
         if len(fits) == NEAREST:
             break
-    X = posed(problem, refit(problem, fits))
+    X = posed(problem, refit(problem, fits)) if len(fits) else np.zeros((0, problem.dim))
     lo, hi = problem.bounds
     X = X[np.all((lo <= X) & (hi >= X), axis=1)]
     if len(X) == 0:
         return Answer(np.zeros((0, problem.dim)), np.inf, np.inf, time.monotonic() - t0, 0)
     X = X[np.argsort(problem.cost(X), kind="stable")]
-    deadline = time.monotonic() + until
-    done = [local(problem, x, 60, deadline) for x in X[: min(polish, len(X))]]
+    done = [local(problem, x, POLISH_NFEV) for x in X[: min(polish, len(X))]]
     head = np.array(done + list(X[:8]))
     err, cost = problem.measure(head)
     order = np.lexsort((cost, err))

@@ -225,7 +225,6 @@ def synthesize_path(
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
-    atlas: bool = True,
     **old: Any,
 ) -> Synthesis:
     """Path generation: a mechanism whose tracer point passes near every target (``synthesize``'s ``task="path"``).
@@ -252,10 +251,7 @@ def synthesize_path(
         With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``;
         joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
-        See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
-    atlas : bool
-        The built-in four-bar starts from the atlas's nearest designs (:mod:`~linkagekit.synthesis.atlas`;
-        its answer is reported first, with ``Progress.source == "atlas"``).
+        See :class:`~.optimize.Settings`; ``progress`` gets a ``Progress`` per generation (first, :mod:`~.atlas`).
 
     Returns
     -------
@@ -266,15 +262,14 @@ def synthesize_path(
     targets, inputs, units = _unpack(targets, inputs, _units(units, old))
     problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
-    return finish(
-        problem, _from_atlas(problem, settings, progress) if atlas else optimize(problem, settings, progress), source
-    )
+    return finish(problem, _from_atlas(problem, settings, progress), source)
 
 
 def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> Outcome:
     """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has the topology.
 
     The answer is reported at once (``Progress.source == "atlas"``); one that meets the goal ends the run.
+    ``LINKAGEKIT_ATLAS_SIZE=0`` turns the atlas off.
     """
     from . import atlas
 
