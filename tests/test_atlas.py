@@ -2,7 +2,7 @@
 
 Descriptors are checked against their invariances and against an independent numerical
 integral; the atlas only in its tiny test size (the root conftest points the cache at a
-temporary directory and sets ``LINKAGEKIT_ATLAS_SIZE``).
+temporary directory; the fixture below sets ``LINKAGEKIT_ATLAS_SIZE``).
 """
 
 from __future__ import annotations
@@ -14,6 +14,12 @@ from linkagekit.cli import main
 from linkagekit.synthesis import atlas as at
 from linkagekit.synthesis import descriptors as de
 from linkagekit.synthesis.run import make_problem, synthesize
+
+
+@pytest.fixture(autouse=True)
+def _tiny_atlas(monkeypatch):
+    """A 2048-entry atlas (one chunk) in the session's temporary cache (the root conftest turns it off elsewhere)."""
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "2048")
 
 
 def _curve(n: int = 40, seed: int = 1) -> np.ndarray:
@@ -104,9 +110,11 @@ def test_the_atlas_answer_seeds_path_synthesis(monkeypatch):
         problem = make_problem(P[0], "fourbar", reach=2.0)
         if at._fits(problem, J[None])[0] and row[at.MU] > 25:
             break
-    ans = at.first_answer(problem, atlas)
-    assert ans.error < 1e-6 and len(ans.designs) >= 1
-    out = synthesize(P[0], "fourbar", reach=2.0, goal=1e-5, seconds=5)
+    again = [at.first_answer(problem, atlas).designs for _ in range(2)]
+    assert np.array_equal(*again)  # no clock in it: a resumed run gets the seeds the first one had
+    lines = []
+    out = synthesize(P[0], "fourbar", reach=2.0, goal=1e-5, seconds=5, progress=lines.append)
+    assert lines[0].source == "atlas" and lines[0].best_error == out.max_error / out.diagonal  # said first
     assert out.outcome.stopped_by == "goal" and out.outcome.generations == 0 and out.max_error < 1e-5 * out.diagonal
     monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "0")  # the atlas off
     plain = synthesize(P[0], "fourbar", reach=2.0, restarts=1, generations=3, popsize=5, goal=1.0)
@@ -206,3 +214,12 @@ def test_no_entry_fits_the_bounds_no_answer_and_the_search_as_without():
     problem = make_problem(T, "fourbar", pivots=((100.0, 100.5), (100.0, 100.5)))  # pivots far off every curve
     ans = at.first_answer(problem, atlas)
     assert ans.designs.shape == (0, 10) and ans.error == np.inf
+
+
+def test_the_command_says_the_atlas_answer_first(tmp_path, capsys):
+    T = np.array([[0.0, 0.0], [1.0, 0.2], [1.6, 0.9], [1.2, 1.8], [0.3, 1.5], [-0.2, 0.7]])
+    np.savetxt(tmp_path / "t.csv", T, delimiter=",", header="x,y", comments="")
+    assert main(["synthesize", str(tmp_path / "t.csv"), "--goal", "0.5", "-o", str(tmp_path / "a.yaml")]) == 0
+    out, err = capsys.readouterr()
+    assert err.startswith("linkagekit: synthesize: the atlas's nearest four-bar, placed and polished: max error ")
+    assert err.count("\n") == 1 and "stopped by reaching the goal" in out and (tmp_path / "a.yaml").exists()

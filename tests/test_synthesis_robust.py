@@ -41,17 +41,6 @@ ORIGINAL_COST, ORIGINAL_POLISH, ORIGINAL_RESIDUALS = Evaluator.cost, optimize.po
 
 
 @pytest.fixture(scope="module", autouse=True)
-def _no_atlas():
-    """These tests are of the engine (lost workers, Ctrl-C, checkpoints, progress lines): they count its polishes
-    and its lines on stderr exactly, so they run without the atlas's start (its own line and polishes come first;
-    tests/test_atlas.py tests them). Set before the module's fixtures run; subprocesses inherit it."""
-    mp = pytest.MonkeyPatch()
-    mp.setenv("LINKAGEKIT_ATLAS_SIZE", "0")
-    yield
-    mp.undo()
-
-
-@pytest.fixture(scope="module", autouse=True)
 def short_polish():
     """Polishes of a few steps (the defaults take seconds of CPU each): the same code, cheaper."""
     with pytest.MonkeyPatch.context() as mp:
