@@ -1,0 +1,121 @@
+"""``--shape-only`` and ``--partial`` path synthesis, and the smoothing of hand-drawn targets.
+
+Independent checks: the similarity fit against scipy's least squares on its four real
+numbers; a synthesised mechanism's curve recomputed by ``lk.analyze`` on a dense sweep and
+measured to the targets with point-to-segment distances (``helpers.curve_distance``).
+The long searches (random cases, a minute each) are in ``benchmarks/bench_shape.py``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg
+from scipy.optimize import least_squares
+
+import linkagekit as lk
+from helpers import curve_distance, diagonal
+from linkagekit.synthesis.objective import evaluate, plane_fit, similarity
+from linkagekit.synthesis.optimize import Outcome, polish
+from linkagekit.synthesis.run import finish, make_problem
+
+SEED000 = str(Path(__file__).resolve().parents[1] / "examples" / "seed000_fourbar.yaml")
+#: the placement of the targets: turned by 2 rad, scaled 3.7 times, moved
+A0, B0 = 3.7 * np.exp(2j), 40.0 - 25.0j
+
+
+def _z(xy):
+    xy = np.asarray(xy, float)
+    return xy[..., 0] + 1j * xy[..., 1]
+
+
+# ---------------------------------------------------------------------- the similarity fit
+def _lsq_similarity(p, t):
+    """The similarity by linear least squares on (Re a, Im a, Re b, Im b), real rows: an independent computation."""
+    one = np.ones_like(p.real)
+    rows = np.concatenate([np.c_[p.real, -p.imag, one, 0 * one], np.c_[p.imag, p.real, 0 * one, one]])
+    v = scipy.linalg.lstsq(rows, np.concatenate([t.real, t.imag]))[0]
+    return v[0] + 1j * v[1], v[2] + 1j * v[3]
+
+
+def test_similarity_is_the_least_squares_fit():
+    """Closed form (complex Procrustes) against least squares on noisy points, 1e-10; NaN points weigh nothing."""
+    rng = np.random.default_rng(4)
+    p = rng.normal(size=(3, 9)) + 1j * rng.normal(size=(3, 9))
+    t = (0.3 - 1.2j) * p + (2 + 1j) + 0.1 * (rng.normal(size=(3, 9)) + 1j * rng.normal(size=(3, 9)))
+    a, b = similarity(p, t)
+    for i in range(3):
+        a_ref, b_ref = _lsq_similarity(p[i], t[i])
+        assert abs(a[i] - a_ref) < 1e-10 and abs(b[i] - b_ref) < 1e-10
+    p[1, [2, 5]] = np.nan
+    a, b = similarity(p, t)
+    keep = np.isfinite(p[1])
+    a_ref, b_ref = _lsq_similarity(p[1, keep], t[1, keep])
+    assert abs(a[1] - a_ref) < 1e-10 and abs(b[1] - b_ref) < 1e-10
+
+
+def test_plane_fit_is_the_least_squares_fit_to_the_tangent_lines():
+    """plane_fit against least squares on its own objective (distances along the normals + a small point term)."""
+    from linkagekit.synthesis.objective import POINT_WEIGHT
+
+    rng = np.random.default_rng(5)
+    p = rng.normal(size=7) + 1j * rng.normal(size=7)
+    nu = np.exp(1j * rng.uniform(0, 6.3, 7))
+    t = (1.5 + 0.4j) * p - 1j + 0.2 * (rng.normal(size=7) + 1j * rng.normal(size=7))
+
+    def res(v):
+        r = (v[0] + 1j * v[1]) * p + v[2] + 1j * v[3] - t
+        return np.concatenate([(np.conj(nu) * r).real, np.sqrt(POINT_WEIGHT) * r.view(float)])
+
+    ref = least_squares(res, [1, 0, 0, 0], xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    a, b = plane_fit(p[None], nu[None], t)
+    np.testing.assert_allclose([a[0].real, a[0].imag, b[0].real, b[0].imag], ref, atol=1e-8)
+
+
+# ---------------------------------------------------------------------- shape-only
+def _shape_case(timed: bool = False):
+    """Seed 000's coupler curve, turned, scaled and moved, at 12 inputs; the problem and the exact design in it."""
+    mech = lk.load(SEED000)
+    deg = np.arange(0.0, 360.0, 30.0) + 7.0
+    res = lk.analyze(mech, {"crank": deg})
+    T = A0 * _z(res.xy("P")) + B0
+    mech = mech.with_pose(np.array([res.xy(j)[0] for j in mech.joint_names]))  # posed at the first target
+    pb = make_problem(np.c_[T.real, T.imag], "fourbar", units="cm", shape_only=True, inputs=deg if timed else None)
+    z = _z(mech.pose_array())
+    names = mech.joint_names
+    fixed = _z(pb.space.poses(np.zeros((1, pb.dim)))[0])
+    A, B = z[names.index("A")], z[names.index("B")]
+    Af, Bf = fixed[pb.space.joint("A")], fixed[pb.space.joint("B")]
+    zz = Af + (Bf - Af) / (B - A) * (z - A)  # the mechanism with its ground pivots where the space fixes them
+    x = np.concatenate([[zz[names.index(j)].real, zz[names.index(j)].imag] for j in pb.space.free])
+    return pb, x, np.c_[T.real, T.imag]
+
+
+def test_shape_only_space_fixes_the_ground_pivots():
+    pb, x, _ = _shape_case()
+    assert pb.space.free == ("C", "D", "P") and pb.dim == 6
+    e = evaluate(pb, x[None], refine=4)
+    assert np.max(e.errors) < 1e-6 * pb.scale  # the exact design, placed by the fit (converged to ~1e-7)
+    assert e.violation[0] == 0
+
+
+@pytest.mark.parametrize("timed", [False, True], ids=["untimed", "timed"])
+def test_shape_only_matches_a_moved_turned_scaled_curve(timed):
+    """From 1 % of the box away from the exact design, the polish reaches 0.1 % of the diagonal; the written
+    mechanism (moved, turned and scaled) traces a curve through the targets, as printed (lk.analyze, 0.01 deg)."""
+    pb, x, T = _shape_case(timed)
+    lo, hi = pb.bounds
+    start = np.clip(x + np.random.default_rng(1).normal(size=x.size) * 0.01 * (hi - lo), lo, hi)
+    assert np.max(evaluate(pb, start[None], refine=3).errors) > 2e-3 * pb.scale  # a real start
+    xp = polish(pb, start, max_nfev=60)
+    out = finish(pb, Outcome(xp, 0.0, 1, 1, 1, 0.0, "goal"))
+    assert out.max_error <= 1e-3 * out.diagonal and out.feasible
+    d = curve_distance(out.mechanism, T)
+    np.testing.assert_allclose(d, out.errors, atol=1e-6 * diagonal(T))  # what it printed is what it built
+    a, b = out.placement
+    assert abs(abs(a) - 1) > 0.1 or abs(b) > 0.1  # the design really was moved
+    if timed:  # each target at its own input + the printed offset
+        P = lk.analyze(out.mechanism, {"crank": pb.inputs * 180 / np.pi + out.offset}).xy("P")
+        assert np.max(np.hypot(*(P - T).T)) <= 1e-3 * out.diagonal
