@@ -119,3 +119,72 @@ def test_shape_only_matches_a_moved_turned_scaled_curve(timed):
     if timed:  # each target at its own input + the printed offset
         P = lk.analyze(out.mechanism, {"crank": pb.inputs * 180 / np.pi + out.offset}).xy("P")
         assert np.max(np.hypot(*(P - T).T)) <= 1e-3 * out.diagonal
+
+
+# ---------------------------------------------------------------------- partial
+def _rocking_case():
+    """A non-Grashof four-bar (its crank rocks within -89.7..89.7 deg), 11 targets at -40..60 deg, posed at -40."""
+    c = 3 * np.exp(1j)
+    data = {
+        "format": "linkagekit/1",
+        "joints": {"A": [0, 0], "B": [4, 0], "C": [c.real, c.imag], "D": [4.5, 2.0], "P": [3.5, 3.5]},
+        "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D", "P"], "rocker": ["B", "D"]},
+        "drivers": [{"link": "crank", "pivot": "A", "toward": "C", "angles": {"start": 0, "stop": 360, "step": 1}}],
+    }
+    mech = lk.Mechanism.from_dict(data, "<rocking four-bar>")
+    deg = np.arange(-40.0, 61.0, 10.0)
+    res = lk.analyze(mech, {"crank": deg})
+    return mech.with_pose(np.array([res.xy(j)[0] for j in mech.joint_names])), deg, res.xy("P")
+
+
+def test_partial_sweep_covers_targets_on_a_rocking_crank():
+    """Targets on a crank that cannot turn fully: from 1 % of the box away from the exact design (its sweep
+    exactly the targets' 100 deg), the polish meets them; the written sweep is at least 90 deg, lk.analyze
+    assembles over all of it (every 0.01 deg) without a jump (one branch), and the printed errors are the
+    distances to that part of the curve."""
+    mech, deg, T = _rocking_case()
+    assert lk.check(mech).input_ranges["crank"] != [[0.0, 360.0]]  # a full turn is impossible
+    pb = make_problem(T, "fourbar", partial=True, min_transmission=10)
+    assert pb.dim == 12
+    x = np.concatenate([pb.space.vector(mech), np.radians([0.0, deg[-1] - deg[0]])])
+    assert np.max(evaluate(pb, x[None], refine=3).errors) < 1e-9 * pb.scale
+    lo, hi = pb.bounds
+    start = np.clip(x + np.random.default_rng(1).normal(size=x.size) * 0.01 * (hi - lo), lo, hi)
+    out = finish(pb, Outcome(polish(pb, start, max_nfev=100), 0.0, 1, 1, 1, 0.0, "goal"))
+    assert out.feasible and out.max_error <= 1e-4 * out.diagonal
+    a, b = out.sweep
+    sw = out.mechanism.drivers[0].sweep
+    assert b - a >= 90.0 and sw.start == pytest.approx(a) and sw.values()[-1] == pytest.approx(b, abs=1e-9)
+    res = lk.analyze(out.mechanism, {"crank": np.linspace(a, b, int((b - a) * 100) + 1)})
+    assert np.all(res.assembled)
+    P = res.xy("P")
+    assert np.max(np.hypot(*np.diff(P, axis=0).T)) < 1e-3 * out.diagonal  # a smooth motion: no jump
+    seg_a, seg = P[:-1], np.diff(P, axis=0)
+    d = [
+        np.min(
+            np.hypot(*(seg_a + np.clip(np.sum((t - seg_a) * seg, 1) / np.sum(seg * seg, 1), 0, 1)[:, None] * seg - t).T)
+        )
+        for t in T
+    ]
+    np.testing.assert_allclose(d, out.errors, atol=1e-6 * out.diagonal)
+    assert np.all((out.inputs >= a - 1e-9) & (out.inputs <= b + 1e-9))  # each target met within the sweep
+
+
+# ---------------------------------------------------------------------- the command line
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--shape-only", "--task", "motion"], "--shape-only: goes with --task path"),
+        (["--partial", "--task", "function"], "--partial: goes with --task path"),
+        (["--shape-only", "--pivots", "0:1,0:1"], "--pivots: the ground pivots have no place"),
+    ],
+)
+def test_bad_combinations_exit_2_with_one_line(tmp_path, capsys, extra, message):
+    from linkagekit.cli import main
+
+    csv = tmp_path / "t.csv"
+    csv.write_text("x,y\n0,0\n1,0\n1,1\n0,1\n")
+    capsys.readouterr()
+    code = main(["synthesize", str(csv), "-o", str(tmp_path / "o.yaml"), *extra])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
