@@ -1380,9 +1380,12 @@ def _synthesize(args: argparse.Namespace) -> int:
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
     described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
+    described += f"\n{targets.smoothed}" if targets.smoothed else ""
     lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
     if args.plot:
         _plot_synthesis(out, targets, args.plot)
+    if targets.smoothed:
+        print(targets.smoothed)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     return 0
 
