@@ -591,16 +591,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
     p.add_argument("--points", metavar="N", default="40", help="points sampled along an SVG path (default 40)")
     p.add_argument("--ordered", action="store_true", help="meet the targets in their order along the curve")
-    p.add_argument(
-        "--shape-only",
-        action="store_true",
-        help="match the curve up to translation, rotation and scale; the mechanism is placed on the targets",
-    )
-    p.add_argument(
-        "--partial",
-        action="store_true",
-        help="the targets may lie on the part of the curve traced while the crank rocks through a range (>= 90 deg)",
-    )
+    _shape_arguments(p)
     p.add_argument("--free", metavar="J1,J2,...", help="with a template file: the joints that move (default all)")
     p.add_argument("--pivots", metavar="X0:X1,Y0:Y1", help="the region of the ground pivots")
     p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
@@ -636,6 +627,20 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--full-turn", action="store_true", help="motion: the crank turns fully through the poses")
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
+
+
+def _shape_arguments(p: argparse.ArgumentParser) -> None:
+    """``synthesize --shape-only`` and ``--partial`` (spec section 6, path generation)."""
+    p.add_argument(
+        "--shape-only",
+        action="store_true",
+        help="match the curve up to translation, rotation and scale; the mechanism is placed on the targets",
+    )
+    p.add_argument(
+        "--partial",
+        action="store_true",
+        help="the targets may lie on the part of the curve traced while the crank rocks through a range (>= 90 deg)",
+    )
 
 
 #: the tasks of ``synthesize --task`` (spec section 6)

@@ -250,28 +250,20 @@ def synthesize_path(
     targets : array_like, (m, 2) or complex (m,), or Targets
         The points, in ``units`` (a :class:`~linkagekit.synthesis.targets.Targets` as it is).
     topology : str or Mechanism
-        One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move within
-        the targets' neighbourhood, all by default; its tracer is ``P``).
+        One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
     units : str
-        The targets' (and the design's) length unit (:data:`linkagekit.units.LENGTH_UNITS`);
-        ``unit=``, its former name, still works and warns (``DeprecationWarning``).
-    ordered : bool
-        Without timing: meet the targets in their order along the curve.
+        The targets' length unit (:data:`~linkagekit.units.LENGTH_UNITS`; ``unit=``, its former name, warns).
+    ordered, shape_only, partial : bool
+        Meet the targets in their order along the curve; match it up to a similarity (the mechanism placed on
+        the targets); let them lie on the part a crank sweep of 90 degrees or more traces (the driver's sweep).
     min_transmission : float, optional
         Degrees: transmission angles within ``[MIN, 180 - MIN]`` over the turn (default 20).
-    lengths, pivots : (float, float), ((xmin, xmax), (ymin, ymax)), optional
-        Bounds on every link length; the region of the ground pivots (built-in topologies).
-    free, reach : sequence of str or mapping, optional; float
-        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``;
-        joints lie within ``reach`` target diagonals of the targets' centre.
-    shape_only : bool
-        Match the curve up to translation, rotation and uniform scale; the mechanism is placed
-        so that its curve lies on the targets (:class:`~.objective.Problem`).
-    partial : bool
-        The targets may lie on the part of the curve traced while the crank sweeps a range of
-        at least 90 degrees; the mechanism's driver sweeps that range.
+    lengths, pivots, free, reach : optional
+        Bounds on every link length; the region ``((xmin, xmax), (ymin, ymax))`` of the ground pivots
+        (built-in topologies); with a template, the joints that move (default all), or ``joint ->
+        ((x0, x1), (y0, y1))``; joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
         See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
 
@@ -279,23 +271,10 @@ def synthesize_path(
     -------
     Synthesis
     """
-    min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
-    source = getattr(targets, "source", None)
-    targets, inputs, units = _unpack(targets, inputs, _units(units, old))
-    problem = make_problem(
-        targets,
-        topology,
-        inputs,
-        units,
-        ordered,
-        min_transmission,
-        lengths,
-        pivots,
-        free,
-        reach,
-        shape_only=shape_only,
-        partial=partial,
-    )
+    targets, inputs, units, source = _unpack(targets, inputs, _units(units, old))
+    mt = MIN_TRANSMISSION if min_transmission is None else min_transmission
+    args = (targets, topology, inputs, units, ordered, mt, lengths, pivots, free, reach, 180, shape_only, partial)
+    problem = make_problem(*args)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
     return finish(problem, optimize(problem, settings, progress), source)
 
@@ -313,16 +292,18 @@ def _units(units: str, old: dict[str, Any]) -> str:
     return units
 
 
-def _unpack(targets: Any, inputs: Sequence[float] | None, unit: str) -> tuple[Any, Sequence[float] | None, str]:
-    """``(points, inputs, unit)``: a :class:`~linkagekit.synthesis.targets.Targets`'s own, else as given.
+def _unpack(
+    targets: Any, inputs: Sequence[float] | None, unit: str
+) -> tuple[Any, Sequence[float] | None, str, str | None]:
+    """``(points, inputs, unit, source)``: a :class:`~linkagekit.synthesis.targets.Targets`'s own, else as given.
 
     Inputs given explicitly win over the targets' own.
     """
     if hasattr(targets, "xy") and hasattr(targets, "unit"):
         if inputs is None and getattr(targets, "inputs", None) is not None:
             inputs = list(targets.inputs)
-        return targets.xy, inputs, targets.unit
-    return targets, inputs, unit
+        return targets.xy, inputs, targets.unit, getattr(targets, "source", None)
+    return targets, inputs, unit, None
 
 
 def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Synthesis:
