@@ -17,7 +17,7 @@ from scipy.optimize import least_squares
 
 import linkagekit as lk
 from helpers import curve_distance, diagonal
-from linkagekit.synthesis.objective import evaluate, plane_fit, similarity
+from linkagekit.synthesis.objective import check, evaluate, plane_fit, similarity
 from linkagekit.synthesis.optimize import Outcome, polish
 from linkagekit.synthesis.run import finish, make_problem
 
@@ -91,6 +91,53 @@ def _shape_case(timed: bool = False):
     zz = Af + (Bf - Af) / (B - A) * (z - A)  # the mechanism with its ground pivots where the space fixes them
     x = np.concatenate([[zz[names.index(j)].real, zz[names.index(j)].imag] for j in pb.space.free])
     return pb, x, np.c_[T.real, T.imag]
+
+
+#: the first random six-bars of tests/test_synthesis.py (random_designs(topology, 1, seed=11)): cranks turn fully
+SIXBARS = {
+    "watt2": {
+        "A": [-0.479066377811, 0.402663269279], "B": [-0.746567798169, 0.072602281718],
+        "E": [-0.779500648877, 0.080698990619], "C": [0.084247836266, -0.306101325396],
+        "D": [-0.301011116496, 0.422231854559], "F": [-0.037905254354, -0.184724721144],
+        "G": [-0.774571636672, -0.43542003075], "P": [0.694132697896, 0.943971929257],
+    },
+    "stephenson3": {
+        "A": [-0.760033320569, -0.897176357081], "B": [-0.934445865548, -0.849711357655],
+        "F": [-0.807805572616, -0.530528970155], "C": [-0.424076910221, 0.938878161714],
+        "D": [0.604474891077, -0.792933820637], "E": [-0.614241129887, 0.386788344984],
+        "G": [0.20104196217, -0.108212391937], "P": [-0.148811049844, 0.491747253497],
+    },
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("topology, ordered", [("watt2", False), ("stephenson3", True), ("template", False)])
+def test_shape_only_places_exact_designs_of_every_topology(topology, ordered):
+    """A known design of each kind scores 0 once placed by the fit (the dense check: within 1e-6 of the diagonal):
+    six-bars with their ground pivots A, B fixed, with the order asked for, and a template (seed 000 itself,
+    C, D, P free: the fit carries its own frame onto the targets')."""
+    from linkagekit.synthesis.space import builtin_space
+
+    if topology == "template":
+        mech = lk.load(SEED000)
+    else:
+        sp = builtin_space(topology, (0.0, 0.0), 1.0)
+        mech = sp.mechanism(np.concatenate([SIXBARS[topology][j] for j in sp.free]))
+    deg = np.arange(0.0, 360.0, 30.0) + 7.0
+    T = A0 * _z(lk.analyze(mech, {"crank": deg}).xy("P")) + B0
+    T = np.c_[T.real, T.imag]
+    if topology == "template":
+        pb = make_problem(T, mech, units="cm", shape_only=True, free=["C", "D", "P"])
+        x = pb.space.vector(mech)
+    else:
+        pb = make_problem(T, topology, shape_only=True, ordered=ordered)
+        z, names = _z(mech.pose_array()), mech.joint_names
+        fixed = _z(pb.space.poses(np.zeros((1, pb.dim)))[0])
+        A, B = z[names.index("A")], z[names.index("B")]
+        Af, Bf = fixed[pb.space.joint("A")], fixed[pb.space.joint("B")]
+        zz = Af + (Bf - Af) / (B - A) * (z - A)
+        x = np.concatenate([[zz[names.index(j)].real, zz[names.index(j)].imag] for j in pb.space.free])
+    e = check(pb, x[None])
+    assert np.max(e.errors) < 1e-6 * pb.scale and e.violation[0] == 0
 
 
 def test_shape_only_space_fixes_the_ground_pivots():

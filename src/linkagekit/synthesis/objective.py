@@ -90,6 +90,9 @@ MIN_SPAN = np.pi / 2
 #: and every how many samples of the curve they look at (the Newton steps after them see the curve itself);
 #: measured on 8 random four-bars' curves, moved, turned and scaled: the exact placement from 7 of them
 ROTATIONS, ICP_STEPS, ICP_STRIDE = 4, 5, 1
+#: the most samples the starts look at: the dense check's curve is thinned to them, so that its placement
+#: starts from the search's samples and ends in the basin the search chose
+ICP_SAMPLES = 180
 
 
 @dataclass(frozen=True, eq=False)
@@ -318,11 +321,15 @@ def evaluate(
 
 #: samples of the crank turn and Newton steps of the check that measures a result (every 0.1 degree)
 CHECK_SAMPLES, CHECK_REFINE = 3600, 4
+#: more Newton steps of the check with ``shape_only`` (placement and inputs together converge more slowly
+#: where the curve bends sharply: on a Watt II curve 1e-5 of the diagonal after 4 steps, 1e-7 after 16)
+SHAPE_REFINE = 12
 
 
 def check(problem: Problem, X: np.ndarray) -> Evaluation:
     """The evaluation a result is reported by: ``CHECK_SAMPLES`` samples, nearest points refined, no margin."""
-    return evaluate(problem, X, refine=CHECK_REFINE, samples=CHECK_SAMPLES, margin=0.0, strict=True)
+    refine = CHECK_REFINE + SHAPE_REFINE * problem.shape_only
+    return evaluate(problem, X, refine=refine, samples=CHECK_SAMPLES, margin=0.0, strict=True)
 
 
 def measure(problem: Problem, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -543,6 +550,8 @@ def _nearest(
     th = np.take_along_axis(theta, k, axis=-1)  # (N, m)
     pts = np.take_along_axis(P, k, axis=-1)
     spacing = (theta[:, 1] - theta[:, 0])[:, None]
+    if problem.shape_only:  # the placement moves each step: the inputs may have to follow it further
+        spacing = np.maximum(spacing, (theta[:, -1] - theta[:, 0])[:, None] / ICP_SAMPLES)
     lo, hi = (np.asarray(w)[..., None] if np.ndim(w) else w for w in within)
     for _ in range(refine):
         th, pts, a, b = _newton(problem, params, th, (a, b), spacing, (lo, hi))
@@ -598,7 +607,7 @@ def _icp(P: ComplexArray, T: ComplexArray, ordered: bool, closed: bool) -> tuple
     (:func:`similarity` first, then :func:`plane_fit`, which converges in a few rounds where
     point-to-point fits crawl); the start whose fit leaves the least squared distance wins.
     """
-    P = P[:, ::ICP_STRIDE]
+    P = P[:, :: max(ICP_STRIDE, P.shape[1] // ICP_SAMPLES)]  # the check's denser curve: the search's samples
     N, n = P.shape
     ok = np.isfinite(P)
     count = np.maximum(ok.sum(axis=1), 1)
