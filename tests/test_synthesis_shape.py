@@ -279,3 +279,16 @@ def test_synthesize_says_it_smoothed(tmp_path, capsys):
     out = capsys.readouterr().out.splitlines()
     assert sum("hand-drawn" in line for line in out) == 1 and "hand-drawn" in out[0]
     assert "hand-drawn" in lk.load(tmp_path / "o.yaml").description
+
+
+def test_partial_with_timing_sweeps_the_inputs_range():
+    """With timing the sweep is the inputs' own range (no design variables), widened about its middle to 90 deg."""
+    mech, deg, T = _rocking_case()
+    pb = make_problem(T, "fourbar", partial=True, min_transmission=10, inputs=deg)
+    x = pb.space.vector(mech)
+    assert pb.dim == 10
+    e = evaluate(pb, x[None])
+    assert np.max(e.errors) < 1e-9 * pb.scale and e.violation[0] == 0
+    np.testing.assert_allclose(np.degrees(e.sweep[0]), [-40.0, 100.0], atol=1e-9)
+    narrow = make_problem(T[:5], "fourbar", partial=True, min_transmission=10, inputs=deg[:5])  # -40..0 deg
+    np.testing.assert_allclose(np.degrees(evaluate(narrow, x[None]).sweep[0]), [-65.0, 90.0], atol=1e-9)

@@ -355,6 +355,11 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
     )
     if out.offset is not None:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    if out.placement is not None:
+        a, b = out.placement
+        lines.append(f"shape only: the design placed by z -> a z + b, a = {a:.9g}, b = {b:.9g} {unit}")
+    if out.sweep is not None:
+        lines.append(f"partial: the crank rocks from {out.sweep[0]:.6g} to {out.sweep[1]:.6g} deg")
     lines.append(
         f"smallest transmission angle {out.min_transmission:.4g} deg" + ("" if out.feasible else ", INFEASIBLE")
     )
