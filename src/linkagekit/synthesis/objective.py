@@ -126,9 +126,10 @@ class Problem(Objective):
     partial : bool
         Only the part of the curve traced while the crank sweeps ``[start, start + span]``
         counts, ``span >= MIN_SPAN``, and the mechanism need only assemble over it. Without
-        timing ``start`` (relative to the pose's input) and ``span`` are the design vector's
-        last two entries (radians); with timing the sweep is the one the inputs span (widened
-        about its middle to ``MIN_SPAN``).
+        timing the design vector's last two entries are ``f`` in [0, 1] and ``span`` (radians),
+        ``start = theta_pose - f span``: the pose, whose assembly mode is the branch, lies within
+        the sweep; with timing the sweep is the one the inputs span (widened about its middle to
+        ``MIN_SPAN``).
     """
 
     space: DesignSpace
@@ -171,17 +172,17 @@ class Problem(Objective):
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of the design vector (partial, untimed: then the sweep's start and span)."""
+        """Lower and upper bounds of the design vector (partial, untimed: then the sweep's ``f`` and span)."""
         if not self.swept:
             return self.space.lower, self.space.upper
-        return np.append(self.space.lower, [-np.pi, MIN_SPAN]), np.append(self.space.upper, [np.pi, 2 * np.pi])
+        return np.append(self.space.lower, [0.0, MIN_SPAN]), np.append(self.space.upper, [1.0, 2 * np.pi])
 
     def sweep(self, X: FloatArray, q0: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(start, span)`` (N,) of the crank's sweep (radians, in the design's frame), ``q0`` the pose's inputs."""
         if not self.partial:
             return q0, np.full_like(q0, 2 * np.pi)
-        if self.swept:
-            return q0 + X[:, -2], X[:, -1]
+        if self.swept:  # the pose within the sweep: a fraction X[:, -2] of it before the pose
+            return q0 - X[:, -2] * X[:, -1], X[:, -1]
         assert self.inputs is not None
         th = q0[:, None] + (self.inputs - self.inputs[0])[None, :]
         lo, hi = th.min(axis=1), th.max(axis=1)
