@@ -1761,7 +1761,8 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     ]
     if inputs is not None:
         cols.append(Column("input [deg]", format_cells(inputs)))
-    cols.append(Column("crank [deg]", format_cells(out.inputs % 360.0)))
+    crank = out.inputs if getattr(out, "sweep", None) is not None else out.inputs % 360.0  # partial: in its sweep
+    cols.append(Column("crank [deg]", format_cells(crank)))
     cols.append(Column(f"error [{unit}]", format_cells(out.errors)))
     cols.append(Column("error [% diag]", format_cells(100.0 * out.errors / out.diagonal)))
     o = out.outcome
