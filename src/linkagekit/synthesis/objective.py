@@ -28,13 +28,24 @@ search variable and the design vector is the same as without timing.
 within one turn: each target's sample is chosen by the monotone assignment of least total
 squared distance (:func:`_ordered`, dynamic programming), then refined as above.
 
+*Shape only* (``Problem.shape_only``): the curve is first placed on the targets by the
+similarity ``z -> a z + b`` that fits it best (:func:`similarity`, then :func:`plane_fit`
+alternated with the nearest samples from 4 starting turns, :func:`_icp`), and every Newton
+step refits it; ``e_i`` is the distance to the placed curve ``a P + b``.
+
+*Partial* (``Problem.partial``): the curve is the part the crank traces over its sweep
+``[start, start + span]`` (:meth:`Problem.sweep`; both ends sampled), and the nearest points
+stay within it.
+
 Feasibility (penalised by how far from feasible, never by a cliff)
 ----------------------------------------------------------------
-* the crank turns fully: the mean over the sweep of each dyad step's negative margin
-  (``positions.solve``: how far the circles are from meeting, relative);
+* the crank turns fully (partial: assembles over its sweep): the mean over the sweep of each
+  dyad step's negative margin (``positions.solve``: how far the circles are from meeting, relative);
 * every transmission angle ``mu`` of the space stays within ``[MIN, 180 - MIN]``: the largest
   ``|cos mu| - cos MIN`` over the sweep;
-* link lengths within bounds, when given: the largest relative excess.
+* link lengths within bounds, when given: the largest relative excess (of the placed mechanism);
+* the curve's RMS radius at least ``MIN_CURVE_SIZE`` of the joints' (:func:`_too_small`; in the
+  dense check always, in the search with ``shape_only`` or ``partial``).
 
 The score is ``mean_i (e_i / L)^2 + PENALTY * violation``: an exact penalty (linear in the
 violation), so a feasible optimum stays feasible.
