@@ -324,6 +324,52 @@ def test_no_branch_jump_near_a_singular_position():
     assert res.condition[near] < 0.05 * np.nanmax(res.condition)
 
 
+def test_condition_is_the_scaled_jacobians_singular_value_ratio():
+    """The conditioning reported with a triad's rates is 1 / cond_2 of its Jacobian in the group's joints, built
+    here by hand (rows: each link's length over 2 L, so a unit vector; the ternary's third joint as the complex
+    rho of its first two), by ``np.linalg.cond``: 1e-12 relative. Order of rows and columns does not matter."""
+    mech = triad(EXAMPLE)
+    res = lk.analyze(mech, {"crank": np.linspace(-8.0, 86.0, 300)})
+    ok = res.assembled
+    assert ok.sum() > 250
+    p = {j: res.point(j)[ok] for j in mech.joint_names}
+    rho = (EXAMPLE["J3"] - EXAMPLE["J1"]) / (EXAMPLE["J2"] - EXAMPLE["J1"])
+    n = int(ok.sum())
+    J = np.zeros((n, 6, 6))
+    col = {"J1": 0, "J2": 2, "J3": 4}
+    for r, (a, b) in enumerate([("A", "J1"), ("B0", "J2"), ("C0", "J3"), ("J1", "J2")]):
+        u = (p[b] - p[a]) / np.abs(p[b] - p[a])  # d |z_b - z_a|^2 / (2 L): the unit vector on b, minus it on a
+        for j, f in ((b, 1.0), (a, -1.0)):
+            if j in col:
+                J[:, r, col[j]], J[:, r, col[j] + 1] = f * u.real, f * u.imag
+    for j, c in (("J3", 1.0), ("J1", rho - 1.0), ("J2", -rho)):  # z3 - z1 - rho (z2 - z1) = 0
+        J[:, 4, col[j] : col[j] + 2] = [c.real, -c.imag]
+        J[:, 5, col[j] : col[j] + 2] = [c.imag, c.real]
+    want = 1.0 / np.linalg.cond(J)
+    assert np.max(np.abs(res.condition[ok] / want - 1)) <= 1e-12
+
+
+def test_condition_by_newton_on_the_tridiagonal_form_equals_the_svd():
+    """The group's conditioning (Householder to tridiagonal form, Newton to the extreme eigenvalues of J^T J) against
+    the SVD on random 6x6 and 8x8 matrices, with a double and a five-fold largest singular value and nearly
+    dependent columns: relative error below 1e-15 / cond^2 + 1e-13 (the rounding of eigenvalues of J^T J, about
+    1e-16 of the largest, as LAPACK's eigvalsh)."""
+    from linkagekit.group import _condition
+
+    rng = np.random.default_rng(5)
+    for n in (6, 8):
+        A = rng.normal(size=(800, n, n))
+        A[:200, :, 0] = A[:200, :, 1] * (1 + 1e-2 * rng.normal(size=(200, n)))
+        U, s, Vt = np.linalg.svd(A[200:600])
+        s[:200, :2] = 1.0
+        s[200:, :] = 1.0
+        s[200:, -1] = 0.5
+        A[200:600] = U @ (s[..., None] * Vt)
+        sv = np.linalg.svd(A, compute_uv=False)
+        want = sv[:, -1] / sv[:, 0]
+        assert np.all(np.abs(_condition(A) / want - 1) <= 1e-15 / want**2 + 1e-13), n
+
+
 def test_triads_over_the_design_axis_equal_single_solves():
     """Five triad designs in one call (poses=...) give each design's own single solve (1e-10)."""
     base = triad(EXAMPLE)

@@ -166,6 +166,9 @@ SUBSTEP_ITER = 6
 #: a group's conditioning below this is computed by an SVD (above, from the eigenvalues of J^T J: within
 #: 1e-16 / COND_EXACT^2 relative of it)
 COND_EXACT = 1e-3
+#: the extreme eigenvalues of J^T J by Newton (:func:`_extreme_root`): converged at a step below this of the
+#: largest, at most COND_ITER steps (the rest by LAPACK's eigvalsh)
+COND_STEP, COND_ITER = 1e-15, 12
 #: samples solved at once in chunks of this many (their arrays stay in the cache)
 FILL_CHUNK = 2048
 #: from this many designs on, the walk's Newton runs as array operations over them (:func:`_gauss`), below
@@ -183,6 +186,8 @@ MAX_HALVINGS = 10
 STEP_LIMIT = 0.25
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
+#: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively)
+LOOK_AHEAD = 4
 #: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ...
 GRID_STEP = np.radians(3.0)
 #: ... and of a length driver's, times the group's mean link length
@@ -353,6 +358,7 @@ class _Walk:
     any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
     vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
     fill_vector: bool = False  # ... and the samples' (many samples and designs)
+    grid_columns: int = 0  # the walk's grid columns (the last of ``K``'s samples)
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
@@ -979,6 +985,7 @@ class Group(Step):
             k.continuous,
             D >= VECTOR_DESIGNS,
             D * n >= VECTOR_SAMPLES,
+            0 if k.grid is None else len(k.grid.index),
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -1067,11 +1074,13 @@ class Group(Step):
                 np.concatenate([getattr(leg, f)[..., x] for leg, x in zip(legs, steps, strict=True)], axis=-1)
                 for f in ("U", "U_prev", "U_prev2", "Kc", "fresh")
             )
+            ahead: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
             if waiting:
                 U_new, acc, lost = self._substeps(U, Kc, d, s, w)
                 pend = np.zeros(len(d), bool)
             else:
-                U_new, acc, lost, pend = self._grid_step(U, np.stack([U_prev, U_prev2]), fresh, d, s, w)
+                sign = np.concatenate([np.full(len(x), leg.sign) for leg, x in zip(legs, steps, strict=True)])
+                U_new, acc, lost, pend, ahead = self._grid_step(U, np.stack([U_prev, U_prev2]), fresh, d, s, w, sign)
             w.out[:, d[acc], s[acc]] = U_new[:, acc]
             first = 0
             for leg, x in zip(legs, steps, strict=True):
@@ -1086,29 +1095,78 @@ class Group(Step):
                     w.K[:, x[now], s[sl][now]],
                     self.dyad_like,
                 )
+                for U_j, s_j, ok_j in ahead:  # the columns after it the same Newton batch reached
+                    y = np.flatnonzero(ok_j[sl])
+                    w.out[:, x[y], s_j[sl][y]] = U_j[:, sl][:, y]
+                    leg.advance(
+                        x[y],
+                        U_j[:, sl][:, y],
+                        np.ones(len(y), bool),
+                        np.zeros(len(y), bool),
+                        w.K[:, x[y], s_j[sl][y]],
+                        self.dyad_like,
+                    )
                 first += len(x)
 
     def _grid_step(
-        self, U: np.ndarray, before: np.ndarray, fresh: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """One grid step of designs ``d`` to columns ``s`` by a continuation step: (U, accepted, lost, pending).
+        self,
+        U: np.ndarray,
+        before: np.ndarray,
+        fresh: np.ndarray,
+        d: np.ndarray,
+        s: np.ndarray,
+        w: _Walk,
+        sign: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+        """One grid step of designs ``d`` to columns ``s`` by a continuation step: (U, accepted, lost, pending,
+        ahead).
 
         Pending: a step from a solved one that failed, to be retried in sub-steps
         (:meth:`_substeps`). After a failure (dyad-like legs only) there are no sub-steps:
-        lost, and restarted.
+        lost, and restarted. *Ahead*: the same Newton batch also solves the next ``LOOK_AHEAD
+        - 1`` columns of a leg whose last step was solved (``sign``: its direction), each
+        started from the quadratic predictor carried on; ``ahead`` lists, column by column,
+        ``(U, columns, accepted)``, accepted where every step up to it passes the tests of a
+        continuation step from the one before (:meth:`_accept`). A column that fails there is
+        simply stepped to again, as the next grid step, from the last accepted one.
         """
-        U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(len(d), bool), np.ones(len(d), bool)
-        pend = np.zeros(len(d), bool)
-        can = np.flatnonzero(w.ok[d, s])  # the others cannot converge
-        if len(can):
-            cd = d[can]
-            K = w.K[:, cd, s[can]]
-            Un, a = self._plain(U[:, can], before[0][:, can], K, cd, w, before[1][:, can])
-            pend[can] = ~a & fresh[can]
-            lost[can] = ~a
-            self._restart_lost(U[:, can], K, cd, w, Un, a, ~a & ~fresh[can])
-            U_new[:, can], acc[can] = Un, a
-        return U_new, acc, lost, pend
+        N, m = len(d), U.shape[0]
+        U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(N, bool), np.ones(N, bool)
+        pend = np.zeros(N, bool)
+        first, G = w.K.shape[2] - w.grid_columns, w.K.shape[2]
+        k = LOOK_AHEAD
+        cols = s[None, :] + sign[None, :] * np.arange(k)[:, None]  # (k, N)
+        inside = (cols >= first) & (cols < G) & fresh[None, :]
+        inside[0] = True
+        col = np.clip(cols, 0, G - 1)
+        can = inside & w.ok[d[None, :], col]  # the others cannot converge
+        can[1:] &= can[0]
+        j, i = np.nonzero(can)
+        ahead: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        if not len(i):
+            return U_new, acc, lost, pend, ahead
+        guess = _predict(U[:, i], before[0][:, i], before[1][:, i], j + 1.0)
+        sol, conv, sg = self._newton(guess, w.K[:, d[i], col[j, i]], w.arrays.take(d[i]), vector=w.vector)
+        got = np.full((k, m, N), NAN_POINT)
+        got[j, :, i] = sol.T
+        good = np.zeros((k, N), bool)
+        good[j, i] = conv & w.sign_ok(sg, d[i]) & np.all(np.isfinite(sol), axis=0)
+        start = np.concatenate([U[None], got[:-1]])
+        good &= np.max(np.abs(got - start), axis=1) <= STEP_LIMIT * w.size[d][None, :]
+        c0 = np.flatnonzero(can[0])
+        a = good[0, c0]
+        pend[c0] = ~a & fresh[c0]
+        lost[c0] = ~a
+        Un = got[0][:, c0]
+        self._restart_lost(U[:, c0], w.K[:, d[c0], s[c0]], d[c0], w, Un, a, ~a & ~fresh[c0])
+        U_new[:, c0], acc[c0] = Un, a
+        chain = good[0] & fresh
+        for q in range(1, k):
+            chain = chain & good[q]
+            if not chain.any():
+                break
+            ahead.append((got[q], cols[q], chain.copy()))
+        return U_new, acc, lost, pend, ahead
 
     def _substeps(
         self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
@@ -1448,16 +1506,7 @@ class Group(Step):
     def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
         """Smallest over largest singular value of J_u with its rows scaled by :meth:`row_scale`."""
         Js = Ju * self.row_scale(dn, Ju.shape[0])[:, :, None]
-        # the singular values squared are the eigenvalues of Js^T Js (half the cost of an SVD); their
-        # rounding is about 1e-16 of the largest, so below COND_EXACT the ratio is taken from the SVD
-        ev = np.linalg.eigvalsh(Js.transpose(0, 2, 1) @ Js)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            cond: np.ndarray = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
-            low = np.flatnonzero(~(cond >= COND_EXACT))
-            if len(low):
-                sv = np.linalg.svd(Js[low], compute_uv=False)
-                cond[low] = sv[:, -1] / sv[:, 0]
-        return cond
+        return _condition(Js)
 
     # ------------------------------------------------------------------ description
     def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
@@ -1667,6 +1716,15 @@ def grid_places(u: np.ndarray, x0: np.ndarray, step: np.ndarray, cyclic: bool) -
     return near, np.where(near >= 0, near - turn, near + turn)
 
 
+def _predict(U: np.ndarray, U_prev: np.ndarray, U_prev2: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The walk's predictor ``t`` steps on from ``U`` (columns): the quadratic through ``U_prev2``, ``U_prev``, ``U``
+    (at -2, -1, 0) where all three are known, else the line through the last two, else ``U``."""
+    quad = (t + 1) * (t + 2) / 2 * U - t * (t + 2) * U_prev + t * (t + 1) / 2 * U_prev2
+    lin = (t + 1) * U - t * U_prev
+    out: np.ndarray = np.where(np.isfinite(quad), quad, np.where(np.isfinite(lin), lin, U))
+    return out
+
+
 def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Cubic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with motions per cell ``Va``, ``Vb``."""
     t2, t3 = t * t, t * t * t
@@ -1701,3 +1759,107 @@ def _cell_guess(
     with np.errstate(invalid="ignore"):
         bound = 0.5 * np.max(np.abs(move), axis=0) + 1e-9 * np.max(np.abs(np.where(fin[0], Ua, Ub)), axis=0)
     return guess, bound
+
+
+def _condition(Js: FloatArray) -> FloatArray:
+    """Smallest over largest singular value of each matrix of ``Js`` (B, r, n), as ``sqrt(lo / hi)``, ``lo`` and
+    ``hi`` the extreme eigenvalues of ``Js^T Js``.
+
+    The Gram matrices are brought to tridiagonal form (:func:`_gram_tridiagonal`) and their extreme eigenvalues
+    found by Newton on the characteristic polynomial from outside (:func:`_extreme_root`), all as array operations
+    over the batch (LAPACK's ``eigvalsh`` costs about 1.5 us a matrix). Their rounding is about 1e-16 of the
+    largest, as ``eigvalsh``'s: a matrix where Newton has not converged after ``COND_ITER`` steps goes to
+    ``eigvalsh``, one whose ratio is below ``COND_EXACT`` to the SVD.
+
+    >>> import numpy as np
+    >>> A = np.random.default_rng(0).normal(size=(3, 6, 6))
+    >>> s = np.linalg.svd(A, compute_uv=False)
+    >>> bool(np.allclose(_condition(A), s[:, -1] / s[:, 0], rtol=1e-12, atol=0))
+    True
+    """
+    B, _, n = Js.shape
+    cond = np.full(B, np.nan)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        if n >= 2:
+            d, e2 = _gram_tridiagonal(Js)
+            e = np.sqrt(e2)
+            pad = np.zeros((1, B))
+            high = np.max(d + np.concatenate([pad, e]) + np.concatenate([e, pad]), axis=0)  # Gershgorin: >= hi
+            hi, ok_hi = _extreme_root(d, e2, high, high)
+            lo, ok_lo = _extreme_root(d, e2, np.zeros(B), high)
+            cond = np.sqrt(np.maximum(lo, 0.0) / hi)
+            cond[~(ok_hi & ok_lo)] = np.nan
+        slow = np.flatnonzero(~np.isfinite(cond))
+        if len(slow):
+            ev = np.linalg.eigvalsh(Js[slow].transpose(0, 2, 1) @ Js[slow])
+            cond[slow] = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
+        low = np.flatnonzero(~(cond >= COND_EXACT))
+        if len(low):
+            sv = np.linalg.svd(Js[low], compute_uv=False)
+            cond[low] = sv[:, -1] / sv[:, 0]
+    return cond
+
+
+def _gram_tridiagonal(Js: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The symmetric tridiagonal form of ``Js^T Js`` (``Js`` (B, r, n)) by Householder reflections: its diagonal
+    (n, B) and its off-diagonal squared (n - 1, B), with the same eigenvalues.
+
+    Each entry is an array over the batch (about ``n^3`` array operations whatever ``B``). Step ``k`` reflects
+    column ``k`` below the diagonal, ``x``, onto ``alpha e_1`` (``alpha = -sign(x_0) |x|``): with ``v = x - alpha
+    e_1``, ``beta = 2 / |v|^2``, ``p = beta S v``, ``w = p - (beta v.p / 2) v``, the trailing block ``S`` becomes
+    ``S - v w^T - w v^T``.
+    """
+    B, _, n = Js.shape
+    C = np.ascontiguousarray(Js.transpose(2, 1, 0))  # (n, r, B): column i of every matrix
+    S: list[list[Any]] = [[None] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i, n):
+            S[i][j] = S[j][i] = np.sum(C[i] * C[j], axis=0)
+    d, e2 = np.empty((n, B)), np.empty((n - 1, B))
+    for k in range(n - 2):
+        idx = range(k + 1, n)
+        x = [S[i][k] for i in idx]
+        s2 = sum(xi * xi for xi in x)
+        alpha = -np.copysign(np.sqrt(s2), x[0])
+        v = [x[0] - alpha, *x[1:]]
+        vv = 2 * (s2 - alpha * x[0])  # |v|^2
+        beta = np.where(vv > 0, 2 / vv, 0.0)  # nothing to reflect: no reflection
+        p = [beta * sum(S[i][j] * vj for j, vj in zip(idx, v, strict=True)) for i in idx]
+        half = 0.5 * beta * sum(vi * pi for vi, pi in zip(v, p, strict=True))
+        w = [pi - half * vi for pi, vi in zip(p, v, strict=True)]
+        for a, i in enumerate(idx):
+            for b in range(a, len(v)):
+                j = k + 1 + b
+                S[i][j] = S[j][i] = S[i][j] - v[a] * w[b] - w[a] * v[b]
+        d[k], e2[k] = S[k][k], s2
+    d[n - 2], d[n - 1], e2[n - 2] = S[n - 2][n - 2], S[n - 1][n - 1], S[n - 1][n - 2] ** 2
+    return d, e2
+
+
+def _extreme_root(
+    d: FloatArray, e2: FloatArray, x: FloatArray, scale: FloatArray, iters: int = 0
+) -> tuple[FloatArray, np.ndarray]:
+    """The eigenvalue of the tridiagonal (``d``, ``e2`` as :func:`_gram_tridiagonal`'s) nearest ``x`` from
+    outside (``x`` above the largest, or below the smallest): (eigenvalue, converged), (B,) each.
+
+    Newton on ``p(x) = det(T - x I) = prod q_i``, the pivots ``q_0 = d_0 - x``, ``q_i = d_i - x - e_{i-1}^2 /
+    q_{i-1}``, ``p'/p = sum q_i'/q_i`` with ``q_i' = -1 + e_{i-1}^2 q_{i-1}' / q_{i-1}^2``. Every root of ``p`` is
+    real, so from outside Newton moves monotonically to the extreme root (it cannot pass it). Converged: a step
+    below ``COND_STEP`` of ``|x| + scale``; at most ``COND_ITER`` steps (``iters``, when given).
+    """
+    n = len(d)
+    conv = np.zeros(x.shape, bool)
+    for _ in range(iters or COND_ITER):
+        q, dq = d[0] - x, -np.ones_like(x)
+        s = dq / q
+        for i in range(1, n):
+            r = e2[i - 1] / q
+            dq = -1 + r * dq / q
+            q = d[i] - x - r
+            s += dq / q
+        step = np.where(conv, 0.0, 1 / s)
+        x = x - step
+        conv |= np.abs(step) <= COND_STEP * (np.abs(x) + scale)
+        if conv.all():
+            break
+    return x, conv & np.isfinite(x)
