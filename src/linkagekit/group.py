@@ -1456,8 +1456,8 @@ class Group(Step):
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
         Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe)
-        work = np.empty(_gauss_size(2 * m, FILL_CHUNK))  # both solves' workspace
-        vu = _solve_rates(Ju_solve, rhs_v, work)
+        system = _RatesSystem(Ju_solve, rhs_v)  # factored once for both solves
+        vu = system.first
         vu[sing] = np.nan
         # gamma: 2 |v_a - v_b|^2 on each distance row
         Vall = np.concatenate([(vu[:, 0::2] + 1j * vu[:, 1::2]).T, V]) if nk else (vu[:, 0::2] + 1j * vu[:, 1::2]).T
@@ -1477,7 +1477,7 @@ class Group(Step):
         if self.drives:  # 2 Re(w' conj(u')), the line row's real part
             gamma[:, self._drows.row] = self._drive_gamma(Vall, self._stack(dn, D * n)[1]).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
-        au = _solve_rates(Ju_solve, rhs_a, work)
+        au = system.solve(rhs_a)
         au[sing] = np.nan
         for i, j in enumerate(self.joints):
             r.v[j] = (vu[:, 2 * i] + 1j * vu[:, 2 * i + 1]).reshape(D, n)
@@ -1580,18 +1580,63 @@ def _solve_small(
     return dx, det
 
 
-def _solve_rates(J: FloatArray, rhs: FloatArray, work: FloatArray | None = None) -> FloatArray:
-    """``x`` (B, n) with ``J x = rhs`` (``J`` (B, n, n) nonsingular, ``rhs`` (B, n)): by :func:`_gauss` from
-    ``VECTOR_SAMPLES`` systems on (in chunks of ``FILL_CHUNK`` sharing the workspace ``work``), else LAPACK."""
-    if len(J) >= VECTOR_SAMPLES:
+def _gauss_again(A: FloatArray, piv: np.ndarray, rhs: FloatArray) -> FloatArray:
+    """``x`` (n, B) with ``J x = rhs`` (``rhs`` (n, B)) from the factors :func:`_gauss` left (``A`` (n, n + 1, B),
+    its multipliers below the diagonal) and its pivots ``piv``: the operations its right-hand side column went
+    through (the swaps, then ``b_i -= (A_ik / A_kk) b_k``), and the same back-substitution."""
+    n, B = piv.shape
+    b = np.array(rhs, float)
+    cols = np.arange(B)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for k in range(n):
+            p = piv[k]
+            lo, hi = p.min(), p.max()
+            if lo == hi and lo > 0:  # the same swap in every column (often: the rows' structure decides)
+                b[[k, k + lo]] = b[[k + lo, k]]
+            elif hi > 0:
+                rows = k + p
+                top = b[rows, cols]
+                b[rows, cols] = b[k]
+                b[k] = top
+            if k < n - 1:
+                b[k + 1 :] -= (A[k + 1 :, k] / A[k, k]) * b[k]
+        x = np.empty((n, B))
+        for k in range(n - 1, -1, -1):
+            x[k] = (b[k] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
+    return x
+
+
+class _RatesSystem:
+    """``J x = rhs`` for one batch of matrices ``J`` (B, n, n) (nonsingular) and a first right-hand side ``rhs``
+    (B, n), its solution :attr:`first`, then others (:meth:`solve`): from ``VECTOR_SAMPLES`` systems on, by
+    :func:`_gauss` (in chunks of ``FILL_CHUNK``) whose factors then solve the others (:func:`_gauss_again`: the
+    arithmetic a right-hand side goes through in the factorization), else by LAPACK."""
+
+    def __init__(self, J: FloatArray, rhs: FloatArray) -> None:
+        self.J = J
+        self.factors: list[tuple[FloatArray, np.ndarray]] = []
+        if len(J) < VECTOR_SAMPLES:
+            self.first = self.solve(rhs)
+            return
+        B, n, _ = J.shape
+        self.first = np.empty(rhs.shape)
+        for start in range(0, B, FILL_CHUNK):
+            rows = slice(start, start + FILL_CHUNK)
+            Jc = J[rows]
+            work, piv = np.empty(_gauss_size(n, len(Jc))), np.empty((n, len(Jc)), np.intp)
+            self.first[rows] = _gauss(Jc, -rhs[rows].T, work, piv)[0]
+            self.factors.append((work[: n * (n + 1) * len(Jc)].reshape(n, n + 1, len(Jc)), piv))
+
+    def solve(self, rhs: FloatArray) -> FloatArray:
+        """``x`` (B, n) for ``rhs`` (B, n)."""
+        if not self.factors:
+            y: np.ndarray = np.linalg.solve(self.J, rhs[..., None])[..., 0]
+            return y
         x = np.empty(rhs.shape)
-        work = np.empty(_gauss_size(J.shape[1], FILL_CHUNK)) if work is None else work
-        for first in range(0, len(J), FILL_CHUNK):
-            i = slice(first, first + FILL_CHUNK)
-            x[i] = _gauss(J[i], -rhs[i].T, work)[0]
+        for i, (A, piv) in enumerate(self.factors):
+            rows = slice(i * FILL_CHUNK, i * FILL_CHUNK + piv.shape[1])
+            x[rows] = _gauss_again(A, piv, rhs[rows].T).T
         return x
-    y: np.ndarray = np.linalg.solve(J, rhs[..., None])[..., 0]
-    return y
 
 
 def _gauss_size(n: int, B: int) -> int:
@@ -1599,7 +1644,9 @@ def _gauss_size(n: int, B: int) -> int:
     return (n * (n + 1) + (n - 1) * n) * B
 
 
-def _gauss(J: FloatArray, res: FloatArray, work: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
+def _gauss(
+    J: FloatArray, res: FloatArray, work: FloatArray | None = None, piv: np.ndarray | None = None
+) -> tuple[FloatArray, FloatArray]:
     """:func:`_solve_small` as array operations over the columns: Gaussian elimination with partial pivoting.
 
     Each entry of the ``n x (n + 1)`` augmented matrices is an array over the columns, so the
@@ -1608,7 +1655,9 @@ def _gauss(J: FloatArray, res: FloatArray, work: FloatArray | None = None) -> tu
     whatever else is in the batch. The determinant is the product of the pivots, negated for
     each row swap; a zero pivot (a singular matrix) gives a zero determinant and a step that is
     not finite, a non-finite ``J`` or ``res`` NaN. ``work``: a workspace of :func:`_gauss_size` floats or more
-    (reused across calls, it spares the page faults of fresh large arrays).
+    (reused across calls, it spares the page faults of fresh large arrays). ``piv`` (n, B): where to record each
+    step's pivot row (below the diagonal); with the factors left in ``work`` :func:`_gauss_again` solves for
+    another right-hand side.
     """
     B, n, _ = J.shape
     work = np.empty(_gauss_size(n, B)) if work is None else work
@@ -1620,6 +1669,8 @@ def _gauss(J: FloatArray, res: FloatArray, work: FloatArray | None = None) -> tu
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for k in range(n):
             p = np.argmax(np.abs(A[k:, k]), axis=0)
+            if piv is not None:
+                piv[k] = p
             counts = np.bincount(p, minlength=n - k)
             for i in np.flatnonzero(counts[1:]) + k + 1:  # row i's pivot is the largest: swap rows k and i
                 if counts[i - k] == B:  # in every column (often: the rows' structure decides)
@@ -1814,7 +1865,7 @@ def _gram_tridiagonal(Js: FloatArray) -> tuple[FloatArray, FloatArray]:
     S: list[list[Any]] = [[None] * n for _ in range(n)]
     for i in range(n):
         for j in range(i, n):
-            S[i][j] = S[j][i] = np.sum(C[i] * C[j], axis=0)
+            S[i][j] = S[j][i] = np.einsum("kb,kb->b", C[i], C[j])
     d, e2 = np.empty((n, B)), np.empty((n - 1, B))
     for k in range(n - 2):
         idx = range(k + 1, n)
