@@ -71,7 +71,9 @@ of the driver that moves (:class:`linkagekit.steps.WalkGrid`, appended to the sa
 :func:`linkagekit.positions.solve`): the pose's input plus whole steps of ``GRID_STEP``
 (``GRID_STEP_LENGTH`` of the group's mean link length for a length), in two legs, up and
 down from the pose's input, both legs of every design in one Newton batch per grid step,
-each started from a quadratic predictor. The grid does not depend on the inputs asked; they
+each started from a quadratic predictor; the batch also solves the next ``LOOK_AHEAD - 1``
+columns of a leg, kept while each passes the step's test from the one before (one
+that fails is stepped to again from the last kept). The grid does not depend on the inputs asked; they
 only say how far the legs go. A step is accepted (:meth:`Group._accept`, the one place that
 decides) only when Newton converges (residual below ``NEWTON_TOL`` relative), the
 Jacobian's determinant keeps the pose's sign (a sign change is a passage through a singular
@@ -141,7 +143,9 @@ Differentiating ``Phi(z_u, z_k) = 0``: ``J_u v_u = -J_k v_k`` and ``J_u a_u = -J
 gamma``, ``gamma = 2 |v_a - v_b|^2`` for a distance row, 0 for a linear row (and the
 sliders' above). The conditioning reported with the rates is the smallest singular value of
 ``J_u`` with its distance rows divided by ``2 L`` and its lock rows by ``|s_o1 - s_o0|`` (so
-every row has unit scale) over its largest.
+every row has unit scale) over its largest: from the extreme eigenvalues of ``J_u^T J_u``,
+found as array operations (:func:`_condition`). Both systems are solved with one
+factorization (:class:`_RatesSystem`).
 """
 
 from __future__ import annotations
