@@ -1453,13 +1453,13 @@ class Group(Step):
         J = self.jacobian(P, dn, m + nk)
         Ju, Jk = J[:, :, : 2 * m], J[:, :, 2 * m :]
         ok = np.all(np.isfinite(Ju), axis=(1, 2))
-        Ju_safe = np.where(ok[:, None, None], Ju, np.eye(2 * m))
+        Ju_safe = Ju if ok.all() else np.where(ok[:, None, None], Ju, np.eye(2 * m))  # (copies cost page faults)
         vk = np.stack([V.real, V.imag], axis=-1).reshape(nk, D * n, 2).transpose(1, 0, 2).reshape(D * n, 2 * nk)
         ak = np.stack([A.real, A.imag], axis=-1).reshape(nk, D * n, 2).transpose(1, 0, 2).reshape(D * n, 2 * nk)
         rhs_v = -np.einsum("bij,bj->bi", Jk, vk) if nk else np.zeros((D * n, 2 * m))
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
-        Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe)
+        Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe) if sing.any() else Ju_safe
         system = _RatesSystem(Ju_solve, rhs_v)  # factored once for both solves
         vu = system.first
         vu[sing] = np.nan
