@@ -370,6 +370,47 @@ def test_condition_by_newton_on_the_tridiagonal_form_equals_the_svd():
         assert np.all(np.abs(_condition(A) / want - 1) <= 1e-15 / want**2 + 1e-13), n
 
 
+def test_rates_solve_the_second_system_with_the_first_ones_factors():
+    """The accelerations' system (the velocities' matrix) solved from the velocities' factorization: bit for bit the
+    elimination of that right-hand side itself, and LAPACK's solution to 1e-10 relative."""
+    from linkagekit.group import VECTOR_SAMPLES, _gauss, _RatesSystem
+
+    rng = np.random.default_rng(11)
+    B = VECTOR_SAMPLES + 900  # two chunks, vectorized
+    J = rng.normal(size=(B, 6, 6))
+    J[::3, 0], J[::3, 2] = J[::3, 2].copy(), J[::3, 0].copy()  # pivots that differ from column to column
+    r1, r2 = rng.normal(size=(B, 6)), rng.normal(size=(B, 6))
+    system = _RatesSystem(J, r1)
+    x2 = system.solve(r2)
+    assert np.array_equal(system.first, _RatesSystem(J, r1).first)
+    assert np.array_equal(x2, _RatesSystem(J, r2).first)  # as if eliminated itself
+    assert np.array_equal(x2[:2048], _gauss(J[:2048], -r2[:2048].T)[0])
+    want = np.linalg.solve(J, r2[..., None])[..., 0]
+    assert np.max(np.abs(x2 - want) / (np.abs(want) + 1e-3)) <= 1e-10
+
+
+def test_the_walks_look_ahead_changes_no_flag(monkeypatch):
+    """The walk's Newton batches solving the next columns ahead (``LOOK_AHEAD``) give the walk of one column a
+    batch: the same flags, positions to 1e-10 of the size (Newton from other starts), on triads through gaps
+    and the six-bar of the crank-direction defect."""
+    from linkagekit import group
+
+    mech, _ = sixbar()
+    cases = [
+        (random_triad(1), {"crank": np.arange(-400.0, 400.0, 2.0)}),
+        (triad(EXAMPLE), {"crank": np.linspace(-30.0, 120.0, 301)}),
+        (mech, {"L3": np.arange(-360.0, 360.0, 1.5)}),
+    ]
+    ahead = [lk.analyze(m, i, rates=False) for m, i in cases]
+    monkeypatch.setattr(group, "LOOK_AHEAD", 1)
+    for (m, i), a in zip(cases, ahead, strict=True):
+        b = lk.analyze(m, i, rates=False)
+        assert np.array_equal(a.assembled, b.assembled)
+        assert 0 < a.assembled.sum() < a.assembled.size
+        ok = a.assembled
+        assert np.max(np.abs(points(a)[:, ok] - points(b)[:, ok])) <= 1e-10 * scale_of(m)
+
+
 def test_triads_over_the_design_axis_equal_single_solves():
     """Five triad designs in one call (poses=...) give each design's own single solve (1e-10)."""
     base = triad(EXAMPLE)
