@@ -223,3 +223,11 @@ def test_the_command_says_the_atlas_answer_first(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert err.startswith("linkagekit: synthesize: the atlas's nearest four-bar, placed and polished: max error ")
     assert err.count("\n") == 1 and "stopped by reaching the goal" in out and (tmp_path / "a.yaml").exists()
+
+
+def test_only_whole_turns_of_the_free_four_bar_start_from_the_atlas():
+    T = np.array([[0.0, 0.0], [1.0, 0.2], [1.6, 0.9], [1.2, 1.8], [0.3, 1.5]])
+    assert at.applies(make_problem(T, "fourbar"))
+    assert not at.applies(make_problem(T, "fourbar", partial=True))
+    assert not at.applies(make_problem(T, "fourbar", shape_only=True))
+    assert not at.applies(make_problem(T, "watt2"))

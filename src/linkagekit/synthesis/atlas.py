@@ -535,9 +535,14 @@ class Answer:
 
 
 def applies(problem: Problem) -> bool:
-    """The atlas seeds a problem of the built-in four-bar (its joints A, B, C, D, P all free), unless it is off."""
+    """The atlas seeds a problem of the built-in four-bar over a full turn, unless it is off.
+
+    Its joints A, B, C, D, P all free (``--shape-only`` fixes the ground pivots), no partial sweep
+    (whose design vector holds the sweep too): what :func:`first_answer` places.
+    """
     sp = problem.space
-    return sp.topology == "fourbar" and sp.free == ("A", "B", "C", "D", "P") and size() > 0
+    whole = not getattr(problem, "partial", False)
+    return sp.topology == "fourbar" and sp.free == ("A", "B", "C", "D", "P") and whole and size() > 0
 
 
 def _turn(problem: Problem, joints: np.ndarray, samples: int) -> np.ndarray:
