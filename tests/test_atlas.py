@@ -229,5 +229,20 @@ def test_only_whole_turns_of_the_free_four_bar_start_from_the_atlas():
     T = np.array([[0.0, 0.0], [1.0, 0.2], [1.6, 0.9], [1.2, 1.8], [0.3, 1.5]])
     assert at.applies(make_problem(T, "fourbar"))
     assert not at.applies(make_problem(T, "fourbar", partial=True))
-    assert not at.applies(make_problem(T, "fourbar", shape_only=True))
+    assert at.applies(make_problem(T, "fourbar", shape_only=True))  # its ground pivots fixed: put on them
     assert not at.applies(make_problem(T, "watt2"))
+
+
+def test_a_shape_only_answer_is_an_entry_on_the_fixed_pivots():
+    atlas = at.load()
+    row = atlas.entries(np.array([300]))[0]
+    J = row[at.JOINTS : at.SWEEP].reshape(5, 2) @ np.array([1, 1j])
+    P, _ = at.curves(np.stack([J.real, J.imag], -1).reshape(1, 10), np.array([2 * np.pi]), True, 12)
+    T = 4 - 1j + 2.5 * np.exp(0.7j) * P[0]  # the curve moved, turned and scaled
+    problem = make_problem(np.stack([T.real, T.imag], 1), "fourbar", shape_only=True, min_transmission=10.0)
+    X = at.on_pivots(problem, J[None])
+    pose = problem.space.poses(X)[0] @ np.array([1, 1j])  # A, B where the space fixes them, C D P the entry's shape
+    ratio = (pose[1:] - pose[0]) / (J[1:] - J[0])  # one similarity maps the entry onto the pose, B included
+    assert np.allclose(ratio, ratio[0], rtol=0, atol=1e-12)
+    ans = at.first_answer(problem, atlas)
+    assert ans.error < 1e-6 and ans.designs.shape[1] == 6

@@ -25,7 +25,8 @@ Cache (:func:`build`, :func:`load`)
 Seeding a search (:func:`first_answer`)
     The ``NEAREST`` nearest entries that fit the problem's bounds are placed on the targets,
     refitted to them (:func:`refit`), posed with the tracer at its point nearest the first
-    target, scored by the problem's own objective; the best few are polished by least squares
+    target (with ``shape_only``: put on the fixed ground pivots instead, :func:`on_pivots`),
+    scored by the problem's own objective; the best few are polished by least squares
     (:func:`~.optimize.polish`), and the best of all, by the problem's dense check, is the
     atlas's answer; the designs, best first, seed the search (``optimize(..., initial=...)``).
 
@@ -537,12 +538,28 @@ class Answer:
 def applies(problem: Problem) -> bool:
     """The atlas seeds a problem of the built-in four-bar over a full turn, unless it is off.
 
-    Its joints A, B, C, D, P all free (``--shape-only`` fixes the ground pivots), no partial sweep
-    (whose design vector holds the sweep too): what :func:`first_answer` places.
+    Its joints A, B, C, D, P all free, or C, D, P with ``--shape-only`` (which fixes the ground
+    pivots); no partial sweep (whose design vector holds the sweep too): what :func:`first_answer` places.
     """
     sp = problem.space
     whole = not getattr(problem, "partial", False)
-    return sp.topology == "fourbar" and sp.free == ("A", "B", "C", "D", "P") and whole and size() > 0
+    free = ("C", "D", "P") if _shape_only(problem) else ("A", "B", "C", "D", "P")
+    return sp.topology == "fourbar" and sp.free == free and whole and size() > 0
+
+
+def _shape_only(problem: Problem) -> bool:
+    return bool(getattr(problem, "shape_only", False))
+
+
+def on_pivots(problem: Problem, joints: np.ndarray) -> np.ndarray:
+    """Design vectors (k, 6) of ``--shape-only``'s space: four-bars ``joints`` (k, 5) moved, turned and scaled
+    so that A and B land on the space's fixed ground pivots (the objective places each curve on the targets)."""
+    sp = problem.space
+    base = sp.template.pose_array()
+    A, B = (complex(*base[sp.joint(j)]) for j in "AB")
+    s = (B - A) / (joints[:, 1] - joints[:, 0])
+    J = A + s[:, None] * (joints[:, 2:] - joints[:, :1])
+    return np.stack([J.real, J.imag], axis=-1).reshape(len(joints), 6)
 
 
 def _turn(problem: Problem, joints: np.ndarray, samples: int) -> np.ndarray:
@@ -622,6 +639,27 @@ def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
     return fits
 
 
+def _placed(problem: Problem, atlas: Atlas) -> np.ndarray:
+    """Design vectors of the nearest entries that fit the bounds, placed, refitted and posed on the targets."""
+    for k in LOOKED_UP:
+        match = nearest(atlas, problem.targets, True, k, problem.min_transmission)
+        fits = match.joints[_fits(problem, match.joints)][:NEAREST]
+        if len(fits) == NEAREST:
+            break
+    return posed(problem, refit(problem, fits)) if len(fits) else np.zeros((0, problem.dim))
+
+
+def _shaped(problem: Problem, atlas: Atlas) -> np.ndarray:
+    """``--shape-only``: design vectors of the nearest entries within the bounds, on the fixed pivots."""
+    lo, hi = problem.bounds
+    for k in LOOKED_UP:
+        X = on_pivots(problem, nearest(atlas, problem.targets, True, k, problem.min_transmission).joints)
+        X = X[np.all((lo <= X) & (hi >= X), axis=1)][:NEAREST]
+        if len(X) == NEAREST:
+            break
+    return X
+
+
 def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED) -> Answer:
     """The atlas's answer to ``problem`` (see the module's description).
 
@@ -633,12 +671,7 @@ def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POL
 
     t0 = time.monotonic()
     atlas = atlas or load(build_report())
-    for k in LOOKED_UP:
-        match = nearest(atlas, problem.targets, True, k, problem.min_transmission)
-        fits = match.joints[_fits(problem, match.joints)][:NEAREST]
-        if len(fits) == NEAREST:
-            break
-    X = posed(problem, refit(problem, fits)) if len(fits) else np.zeros((0, problem.dim))
+    X = _shaped(problem, atlas) if _shape_only(problem) else _placed(problem, atlas)
     lo, hi = problem.bounds
     X = X[np.all((lo <= X) & (hi >= X), axis=1)]
     if len(X) == 0:
