@@ -149,3 +149,19 @@ def test_partial_problems_start_from_the_atlas_open_curves(monkeypatch, shape_on
     from linkagekit.synthesis.run import make_problem
 
     assert at.applies(make_problem(np.c_[z.real, z.imag], "fourbar", partial=True, shape_only=shape_only))
+
+
+def test_a_build_killed_while_assembling_leaves_no_file_behind_for_ever(_atlas256):
+    """``linkagekit atlas build`` sent SIGTERM just after its last chunk (LINKAGEKIT_ATLAS_SIZE=262144):
+    ``.fourbar-atlas-v1-262144.npy.5s46xtju.tmp`` (37.7 MB; 151 MB at the default size) stayed in the
+    cache directory; the next build finished beside it and left it there, and every such kill adds
+    another (``finally`` does not run on a signal). Expected: a later build removes temporary files
+    of the atlas that no writer can still own (here: a day old)."""
+    import os
+
+    _atlas256.parent.mkdir(parents=True, exist_ok=True)
+    stale = _atlas256.parent / f".{_atlas256.name}.5s46xtju.tmp"
+    stale.write_bytes(b"\0" * 4096)
+    os.utime(stale, (1.0e9, 1.0e9))  # 2001: no build still running owns it
+    at.build(256, workers=1)
+    assert not stale.exists()
