@@ -106,6 +106,9 @@ class Problem(Objective):
         Bounds on every link length (between any two joints of a link).
     samples : int
         Samples of the crank turn.
+    min_size : float
+        The traced curve's RMS radius is at least this fraction of the RMS distance of the
+        joints (at the pose) from their centroid (spec section 6: ``--topology auto``'s 0.07).
     """
 
     space: DesignSpace
@@ -115,6 +118,7 @@ class Problem(Objective):
     min_transmission: float = MIN_TRANSMISSION
     lengths: tuple[float, float] | None = None
     samples: int = 180
+    min_size: float = 0.0
 
     def __post_init__(self) -> None:
         t = np.asarray(self.targets)
@@ -159,6 +163,8 @@ class Problem(Objective):
             h.update(np.ascontiguousarray(a).tobytes())
         h.update(repr((self.space.topology, self.space.free, self.space.tracer, self.space.transmission)).encode())
         h.update(repr((self.ordered, self.min_transmission, self.lengths, self.samples)).encode())
+        if self.min_size:
+            h.update(repr(self.min_size).encode())
         h.update(repr(self.space.template.to_dict()).encode())
         return h.hexdigest()[:16]
 
@@ -306,6 +312,8 @@ def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: floa
         violation = violation + np.maximum(worst_cos - cos_lim, 0.0)
         if problem.lengths is not None:
             violation = violation + _length_excess(sp, params.pose, *problem.lengths)
+        if problem.min_size > 0:
+            violation = violation + _size_shortfall(z[sp.joint(sp.tracer)], params.pose, problem.min_size)
         # -- errors
         T = problem.targets
         if problem.timed:
@@ -433,3 +441,23 @@ def _length_excess(sp: DesignSpace, pose: np.ndarray, lo: float, hi: float) -> n
                 d = np.abs(pose[a] - pose[b])
                 out = np.maximum(out, np.maximum(lo - d, d - hi) / hi)
     return np.maximum(out, 0.0)
+
+
+def curve_size(P: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """The curve's RMS radius over the RMS distance of the joints from their centroid, per design.
+
+    ``P`` (N, n): the traced curve (NaN samples left out); ``pose`` (n_joints, N): the joints.
+    """
+    import warnings
+
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a design that assembles nowhere: NaN
+        c = np.nanmean(P, axis=-1, keepdims=True)
+        r = np.sqrt(np.nanmean(np.abs(P - c) ** 2, axis=-1))
+        spread = np.sqrt(np.mean(np.abs(pose - pose.mean(axis=0)) ** 2, axis=0))
+        return np.asarray(np.where(spread > 0, r / spread, 0.0))
+
+
+def _size_shortfall(P: np.ndarray, pose: np.ndarray, least: float) -> np.ndarray:
+    """How far (relative) the curve's size falls short of ``least`` (:func:`curve_size`), 0 when it does not."""
+    return np.maximum(least - np.nan_to_num(curve_size(P, pose), nan=0.0), 0.0) / least

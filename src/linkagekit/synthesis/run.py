@@ -66,6 +66,10 @@ class Synthesis:
         The smallest transmission angle over the turn (degrees).
     outcome : Outcome
         How the search went (restarts, generations, evaluations, seconds, what stopped it).
+    topology : str
+        The topology's name (``fourbar``, ``sixbar-3``, ...; a template's source).
+    tried : tuple
+        ``--topology auto``: the topologies searched (:class:`~.auto.Tried`), else empty.
     """
 
     mechanism: Mechanism
@@ -77,6 +81,8 @@ class Synthesis:
     feasible: bool
     min_transmission: float
     outcome: Outcome
+    topology: str = ""
+    tried: tuple[Any, ...] = ()
 
     @property
     def max_error(self) -> float:
@@ -315,6 +321,7 @@ def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Syn
         bool(e.violation[0] == 0),
         float(e.transmission[0]),
         outcome,
+        problem.space.topology,
     )
     return replace(out, mechanism=replace(mech, description=describe(out, problem, source)))
 

@@ -336,25 +336,26 @@ def by_name(name: str) -> Topology:
 def _pose(t: Topology) -> dict[str, list[float]]:
     """A pose where every dyad is well open: ground pivots and points spread, dyad joints off their base.
 
-    Joints are placed in order: ground pivots on a ring, a new point of a link at the middle
-    of its link turned 60 deg, a dyad's joint at the apex of an isosceles triangle over its two
-    places (height 0.6 of the base), ``P`` likewise over its link's first two joints.
+    Joints are placed in order: ground pivots on a ring, a dyad's joint at the apex of an
+    isosceles triangle over its two places (its height a fraction of the base that changes
+    side and size from joint to joint), a new point of a link and ``P`` likewise over the
+    link's first two joints.
     """
     parents = {k: (a, b) for k, a, b in t.transmission}
     links = dict(t.links)
     ground = links["ground"]
     pos: dict[str, complex] = {"A": 0j, "C": 0.3 + 0.1j}
-    for j in t.order[1:]:
+    for k, j in enumerate(t.order[1:]):
         if j in pos:
             continue
         if j in ground:
             g = ground.index(j)
             pos[j] = complex(math.cos(0.9 * g), math.sin(0.9 * g)) * (0.8 + 0.15 * g)
-        elif j in parents:
-            pos[j] = _apex(pos[parents[j][0]], pos[parents[j][1]], 0.6)
+        elif j in parents:  # alternate sides and heights: two dyads on the same two places stay apart
+            pos[j] = _apex(pos[parents[j][0]], pos[parents[j][1]], (0.5 + 0.13 * k) * (-1) ** k)
         else:  # a point of a link, or P
             host = next(ln for name, ln in t.links if j in ln and name != "ground")
-            pos[j] = _apex(pos[host[0]], pos[host[1]], 0.5)
+            pos[j] = _apex(pos[host[0]], pos[host[1]], 0.4 - 0.1 * k)
     return {j: [round(z.real, 6), round(z.imag, 6)] for j, z in pos.items()}
 
 

@@ -73,24 +73,25 @@ class TracerFit:
 
 
 def fit(Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, placement: bool = True) -> TracerFit:
-    """The best ``c`` (and placement ``a, b``) for targets ``T`` (m,) matched to samples ``Xi, Xj`` (N, m).
+    """The best ``c`` (and placement ``a, b``) for targets ``T`` (m,) or (N, m) matched to samples ``Xi, Xj`` (N, m).
 
     ``placement=False``: the curve stays where it is (``a = 0``, ``b = 1``).
     """
-    Xi, Xj, T = np.asarray(Xi, complex), np.asarray(Xj, complex), np.asarray(T, complex)
+    Xi, Xj = np.asarray(Xi, complex), np.asarray(Xj, complex)
+    T = np.broadcast_to(np.asarray(T, complex), Xi.shape)
     D = Xj - Xi
     N = len(Xi)
     zero = np.zeros(N, int)
     if not placement:
-        R = T[None, :] - Xi
+        R = T - Xi
         dd = np.sum(np.abs(D) ** 2, axis=1)
         c = np.sum(np.conj(D) * R, axis=1) / np.where(dd > 0, dd, np.inf)
         sse = np.sum(np.abs(R - c[:, None] * D) ** 2, axis=1)
         return TracerFit(c, np.zeros(N, complex), np.ones(N, complex), _finite(sse), zero, zero + 1)
     B = np.stack([np.ones_like(Xi), Xi, D], axis=1)  # (N, 3, m)
     G = np.einsum("npk,nqk->npq", np.conj(B), B)
-    r = np.einsum("npk,k->np", np.conj(B), T)
-    u, sse = _solve(G, r, float(np.sum(np.abs(T) ** 2)))
+    r = np.einsum("npk,nk->np", np.conj(B), T)
+    u, sse = _solve(G, r, np.sum(np.abs(T) ** 2, axis=1))
     return _placed(u, sse, zero, zero + 1)
 
 
@@ -147,7 +148,7 @@ def _conj_fft(Ff: np.ndarray) -> np.ndarray:
     return np.conj(np.roll(Ff[..., ::-1], 1, axis=-1))
 
 
-def _solve(G: np.ndarray, r: np.ndarray, tt: float) -> tuple[np.ndarray, np.ndarray]:
+def _solve(G: np.ndarray, r: np.ndarray, tt: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``u = G^-1 r`` and the residual ``|T|^2 - Re(r^H u)`` (clipped at 0), with a tiny ridge."""
     scale = np.einsum("...ii->...", G).real[..., None, None]
     Gr = G + RIDGE * np.where(scale > 0, scale, 1.0) * np.eye(3)

@@ -1,0 +1,355 @@
+"""``--topology auto``: path generation over every built-in topology within a joint limit.
+
+The budget is split in two. First a *screen* (:data:`SCREEN` of the time): for every
+topology of :func:`~.topologies.enumerate_topologies` (the four-bar, Watt II and
+Stephenson III first, then the others in a seeded order, until the screen's time is up),
+random designs of its space are solved over a turn, and the tracer's best place on its
+link with the curve's similarity placement is fitted to the targets over every cyclic shift
+of the correspondence (:func:`~.tracer.fit_shifts`). Each topology is ranked by its best
+fit. Then the engine searches the :data:`SEARCHED` best-ranked topologies in turn, each for
+an equal share of the rest of the time; every design it returns has its tracer moved to the
+best place on its link for the targets' nearest points (:func:`place_tracer`, a few rounds
+of nearest points then a linear fit), kept when the measure improves. The best design of
+all, by the problem's measure (feasible first), is written; its topology is named.
+
+Examples
+--------
+>>> import numpy as np
+>>> from linkagekit.synthesis.auto import synthesize_auto
+>>> t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+>>> out = synthesize_auto(np.stack([np.cos(t), 0.6 * np.sin(t)], 1), max_joints=5, seconds=2, restarts=1)
+>>> out.topology, out.feasible
+('fourbar', True)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .base import Objective, Score, digest
+from .objective import PENALTY, Problem, best_index, evaluate
+from .optimize import Outcome, Progress, Settings, optimize
+from .run import Synthesis, _unpack, finish, make_problem
+from .topologies import MAX_JOINTS, Topology, enumerate_topologies
+from .tracer import fit, fit_shifts
+
+#: the fraction of the time the screen of topologies takes
+SCREEN = 0.2
+#: topologies the engine searches after the screen
+SEARCHED = 3
+#: random designs per topology in the screen, and samples of the turn they are solved at
+SCREEN_DESIGNS, SCREEN_SAMPLES = 96, 64
+#: the curve's RMS radius over the joints' RMS spread, at least (spec section 6)
+MIN_CURVE_SIZE = 0.07
+#: rounds of nearest points and tracer fit of :func:`place_tracer`
+PLACE_ROUNDS = 4
+#: the topologies screened first, by name
+FIRST = ("fourbar", "watt2", "stephenson3")
+
+
+@dataclass(frozen=True)
+class Tried:
+    """One topology of an ``auto`` run: its screen figure and, if searched, its result.
+
+    Attributes
+    ----------
+    name : str
+    joints : int
+    screen : float
+        The best screened design's RMS fit / the targets' diagonal (inf: none assembled).
+    error : float
+        The searched design's max error / diagonal (NaN if not searched; inf: infeasible).
+    """
+
+    name: str
+    joints: int
+    screen: float
+    error: float = float("nan")
+
+
+def synthesize_auto(
+    targets: Any,
+    *,
+    max_joints: int = MAX_JOINTS,
+    seconds: float = 60.0,
+    seed: int = 0,
+    restarts: int = 32,
+    generations: int = 500,
+    popsize: int = 15,
+    goal: float = 1e-5,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[Progress], None] | None = None,
+    **problem: Any,
+) -> Synthesis:
+    """Path generation over the built-in topologies of at most ``max_joints`` joints; the best is returned.
+
+    ``problem``: the keywords of :func:`~.run.make_problem` (``units``, ``ordered``,
+    ``min_transmission``, ...). The result's ``topology`` names the topology chosen and
+    ``tried`` lists what was screened and searched (:class:`Tried`).
+    """
+    t0 = time.monotonic()
+    source = getattr(targets, "source", None)
+    xy, inputs, units = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
+    if inputs is not None:
+        raise InputError("--topology auto: targets with input angles (timing) are not supported")
+    partial = bool(problem.pop("partial", False))
+    problem.pop("shape_only", None)  # the projected search always places the curve
+    problem.setdefault("min_transmission", 20.0)
+    topologies = enumerate_topologies(max_joints)
+    rng = np.random.default_rng(seed)
+
+    def make(t: Topology) -> Projected:
+        base = replace(make_problem(xy, t.name, None, units, **problem), min_size=MIN_CURVE_SIZE)
+        return Projected(base, partial)
+
+    screened = screen(topologies, make, rng, t0 + SCREEN * seconds)
+    order = sorted(screened, key=lambda k: screened[k][0])[:SEARCHED]
+    tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
+    found: list[Synthesis] = []
+    for i, name in enumerate(order):
+        share = max((seconds - (time.monotonic() - t0)) / (len(order) - i), 1e-3)
+        proj = make(next(t for t in topologies if t.name == name))
+        settings = Settings(seed, share, restarts, generations, popsize, goal, workers, scheduler)
+        out = optimize(proj, settings, progress)
+        x = _best_of(proj, [out.x, screened[name][1]])
+        syn = written(proj, x, replace(out, x=x), source)
+        tried[name] = replace(tried[name], error=syn.rms_error / syn.diagonal if syn.feasible else np.inf)
+        found.append(syn)
+    best = min(found, key=lambda f: (not f.feasible, f.rms_error))
+    return replace(best, tried=tuple(tried[n] for n in order))
+
+
+def _best_of(problem: Objective, xs: Sequence[np.ndarray | None]) -> np.ndarray:
+    X = np.stack([x for x in xs if x is not None])
+    err, cost = problem.measure(X)
+    return np.asarray(X[best_index(err, cost)])
+
+
+# ------------------------------------------------------------------------------- the screen
+def screen(
+    topologies: Sequence[Topology],
+    make: Callable[[Topology], Projected],
+    rng: np.random.Generator,
+    deadline: float,
+) -> dict[str, tuple[float, np.ndarray]]:
+    """``name -> (best relative RMS fit, its design)`` of the topologies screened before ``deadline``.
+
+    :data:`SCREEN_DESIGNS` random designs of each (:class:`Projected`: the tracer and the
+    placement fitted); the first three (:data:`FIRST`) always, the rest in a random order of ``rng``.
+    """
+    first = [t for t in topologies if t.name in FIRST]
+    rest = [t for t in topologies if t.name not in FIRST]
+    rest = [rest[i] for i in rng.permutation(len(rest))]
+    out: dict[str, tuple[float, np.ndarray]] = {}
+    for t in first + rest:
+        if out and time.monotonic() > deadline and t.name not in FIRST:
+            break
+        proj = make(t)
+        lo, hi = proj.bounds
+        X = lo + rng.random((SCREEN_DESIGNS, len(lo))) * (hi - lo)
+        sc = proj.score(X)
+        rms = np.where(sc.violation > 0, np.inf, sc.error)
+        i = int(np.argmin(np.where(np.isfinite(rms), rms, sc.cost + 1e6)))
+        out[t.name] = (float(rms[i]), X[i])
+    return out
+
+
+def _tracer_base(problem: Problem) -> tuple[int, int]:
+    """Joint indices ``i, j`` of the first two other joints of the tracer's link."""
+    sp = problem.space
+    link = next(ln for ln in sp.template.links if sp.tracer in ln.joints and ln.name != "ground")
+    a, b = [j for j in link.joints if j != sp.tracer][:2]
+    return sp.joint(a), sp.joint(b)
+
+
+def _shape_only(problem: Problem) -> bool:
+    return bool(getattr(problem, "shape_only", False))
+
+
+# ------------------------------------------------------------------ the projected objective
+#: samples of the turn the projected objective solves each design at
+PROJECTED_SAMPLES = 128
+#: the crank ranges (fractions of a turn) a partial curve is fitted over; the least is 90 deg
+PARTIAL_WIDTHS = (0.27, 0.375, 0.5, 0.75)
+
+
+@dataclass(frozen=True, eq=False)
+class Projected(Objective):
+    """Path generation with the tracer and the similarity placement eliminated (variable projection).
+
+    The design vector is the problem's without the tracer. Each design is solved at
+    :data:`PROJECTED_SAMPLES` inputs over a turn; the tracer's place on its link, the curve's
+    placement and the shift of the correspondence come from :func:`~.tracer.fit_shifts`
+    (targets spread evenly in crank angle over the whole turn, or, ``partial``, over each
+    range of :data:`PARTIAL_WIDTHS`). Cost: mean squared placed distance / ``L^2`` plus
+    ``PENALTY`` times the violation (assembly over the turn when closed, transmission angles,
+    the curve's size; a partial design with no range where it assembles: 1).
+    """
+
+    problem: Problem
+    partial: bool = False
+    samples: int = PROJECTED_SAMPLES
+
+    @property
+    def keep(self) -> np.ndarray:
+        """Indices of the problem's design vector this one keeps (all but the tracer's two)."""
+        k = self.problem.space.free.index(self.problem.space.tracer)
+        return np.delete(np.arange(self.problem.dim), [2 * k, 2 * k + 1])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.problem.bounds
+        return lo[self.keep], hi[self.keep]
+
+    @property
+    def scale(self) -> float:
+        return self.problem.scale
+
+    def fingerprint(self) -> str:
+        return digest(self.problem.fingerprint(), self.partial, self.samples)
+
+    def full(self, X: np.ndarray) -> np.ndarray:
+        """The problem's design vectors of ``X``, the tracer anywhere off its link's line (it is fitted later)."""
+        X = np.atleast_2d(X)
+        sp = self.problem.space
+        out = np.zeros((len(X), self.problem.dim))
+        out[:, self.keep] = X
+        k = sp.free.index(sp.tracer)
+        i, j = (sp.free.index(sp.template.joint_names[a]) for a in _tracer_base(self.problem))
+        zi = out[:, 2 * i] + 1j * out[:, 2 * i + 1]
+        zp = zi + (0.5 + 0.5j) * (out[:, 2 * j] + 1j * out[:, 2 * j + 1] - zi)
+        out[:, 2 * k], out[:, 2 * k + 1] = zp.real, zp.imag
+        return out
+
+    def fitted(self, X: np.ndarray) -> tuple[Any, Any, np.ndarray]:
+        """``(params, solution, fit)`` of designs ``X``: the best fit over the shifts (and ranges)."""
+        from ..params import compile as compile_params
+        from ..positions import solve
+
+        sp = self.problem.space
+        params = compile_params(sp.template, sp.poses(self.full(X)), sp.plan)
+        n = self.samples
+        theta = params.pose_inputs[0][:, None] + (2 * np.pi / n) * np.arange(n)
+        sol = solve(params, theta[None])
+        i, j = _tracer_base(self.problem)
+        widths = [int(round(w * n)) for w in PARTIAL_WIDTHS] if self.partial else [n]
+        best, width = None, np.zeros(len(X), int)
+        for w in widths:
+            f = fit_shifts(sol.z[i], sol.z[j], self.problem.targets, w)
+            take = np.ones(len(X), bool) if best is None else f.sse < best.sse
+            best = f if best is None else _choose(take, f, best)
+            width = np.where(take, w, width)
+        return params, sol, (best, width)
+
+    def score(self, X: np.ndarray) -> Score:
+        params, sol, (f, _) = self.fitted(X)
+        m, L = len(self.problem.targets), self.problem.scale
+        mse = f.sse / (m * L * L)
+        viol = self._violation(params, sol, f)
+        err = np.sqrt(mse)
+        return Score(np.where(np.isfinite(mse), mse, 1.0) + PENALTY * viol, np.where(np.isfinite(err), err, np.inf), viol)
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        return np.sqrt(np.maximum(self.cost(X), 0.0))[:, None]
+
+    def _violation(self, params: Any, sol: Any, f: Any) -> np.ndarray:
+        from .objective import _size_shortfall
+
+        sp = self.problem.space
+        z = sol.z
+        with np.errstate(invalid="ignore"):
+            if self.partial:
+                v = np.where(np.isfinite(f.sse), 0.0, 1.0)
+            else:
+                short = np.nan_to_num(np.maximum(-sol.margin, 0.0), nan=0.0)
+                v = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(len(f.sse))
+            v = np.where(params.valid, v, v + 1.0)
+            cos_lim = np.cos(np.radians(self.problem.min_transmission + 0.25))
+            for jn, a, b in sp.transmission:
+                zj = z[sp.joint(jn)]
+                u, w = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj
+                c = np.abs((np.conj(u) * w).real / (np.abs(u) * np.abs(w)))
+                v = v + np.maximum(np.nanmax(np.where(np.isfinite(c), c, 0.0), axis=-1) - cos_lim, 0.0)
+            i, j = _tracer_base(self.problem)
+            P = z[i] + f.c[:, None] * (z[j] - z[i])
+            pose = params.pose.copy()
+            pose[sp.joint(sp.tracer)] = pose[i] + f.c * (pose[j] - pose[i])
+            v = v + _size_shortfall(P, pose, MIN_CURVE_SIZE)
+        return np.asarray(v)
+
+
+def _choose(take: np.ndarray, f: Any, g: Any) -> Any:
+    return type(f)(*(np.where(take, getattr(f, k), getattr(g, k)) for k in f.__dataclass_fields__))
+
+
+#: samples of the dense check of a written design's sweep
+CHECK_SAMPLES = 3601
+
+
+def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None = None) -> Synthesis:
+    """The mechanism of a projected design: tracer placed, moved onto the targets, its sweep, densely checked.
+
+    The sweep is the whole turn, or (partial) the range the targets were fitted over. The
+    check solves :data:`CHECK_SAMPLES` inputs over the sweep: it must assemble at all of them,
+    keep the transmission angles, and its curve's size (:data:`MIN_CURVE_SIZE`); a partial
+    sweep is at least 90 deg by construction (:data:`PARTIAL_WIDTHS`). Each target's error is
+    its distance to the nearest of those samples.
+    """
+    from ..params import compile as compile_params
+    from ..positions import solve
+    from .objective import curve_size
+    from .run import describe
+
+    prob, sp = proj.problem, proj.problem.space
+    params, _, (f, width) = proj.fitted(np.asarray(x, float)[None])
+    i, j = _tracer_base(prob)
+    pose = params.pose[:, 0].copy()
+    pose[sp.joint(sp.tracer)] = pose[i] + f.c[0] * (pose[j] - pose[i])
+    pose = f.a[0] + f.b[0] * pose
+    xfull = np.concatenate([[pose[sp.joint(n)].real, pose[sp.joint(n)].imag] for n in sp.free])
+    placed = compile_params(sp.template, sp.poses(xfull[None]), sp.plan)
+    n, m = proj.samples, len(prob.targets)
+    start = float(placed.pose_inputs[0][0]) + 2 * np.pi * int(f.shift[0]) / n
+    span = 2 * np.pi * ((m - 1) * int(width[0]) // m) / n if proj.partial else 2 * np.pi
+    th = start + np.linspace(0.0, span, CHECK_SAMPLES)
+    z = solve(placed, th[None, None]).z[:, 0, :]
+    P = z[sp.joint(sp.tracer)]
+    d = np.abs(P[None, :] - prob.targets[:, None])
+    near = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
+    errors = d[np.arange(m), near]
+    mu = _smallest_transmission(sp, z)
+    ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
+    ok = ok and float(curve_size(P[None], pose[:, None])[0]) >= MIN_CURVE_SIZE
+    mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
+    out = Synthesis(mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sp.topology)
+    text = f"topology {sp.topology} ({len(sp.template.joint_names)} joints), crank {np.degrees(span):.4g} deg\\n"
+    return replace(out, mechanism=replace(mech, description=text + describe(out, prob, source)))
+
+
+def _smallest_transmission(sp: Any, z: np.ndarray) -> float:
+    """The smallest transmission angle (degrees, folded to [0, 90]) of a space's dyads over the samples ``z``."""
+    mu = 90.0
+    with np.errstate(invalid="ignore"):
+        for jn, a, b in sp.transmission:
+            u, w = z[sp.joint(a)] - z[sp.joint(jn)], z[sp.joint(b)] - z[sp.joint(jn)]
+            c = np.abs((np.conj(u) * w).real / (np.abs(u) * np.abs(w)))
+            mu = min(mu, float(np.degrees(np.arccos(np.clip(np.nanmax(c), 0.0, 1.0)))))
+    return mu
+
+
+def _swept(mech: Any, start: float, stop: float, topology: str) -> Any:
+    """The mechanism with its driver sweeping ``start`` to ``stop`` (degrees), named by its topology."""
+    from ..model import Mechanism
+
+    data = mech.to_dict()
+    step = (stop - start) / max(1, int(np.ceil(abs(stop - start))))
+    data["drivers"][0]["angles"] = {"start": float(start), "stop": float(stop), "step": float(step)}
+    data["name"] = f"synthesised {topology}"
+    return Mechanism.from_dict(data, source=f"synthesised {topology}")
