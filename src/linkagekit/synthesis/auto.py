@@ -254,7 +254,9 @@ class Projected(Objective):
         mse = f.sse / (m * L * L)
         viol = self._violation(params, sol, f)
         err = np.sqrt(mse)
-        return Score(np.where(np.isfinite(mse), mse, 1.0) + PENALTY * viol, np.where(np.isfinite(err), err, np.inf), viol)
+        return Score(
+            np.where(np.isfinite(mse), mse, 1.0) + PENALTY * viol, np.where(np.isfinite(err), err, np.inf), viol
+        )
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
         return np.sqrt(np.maximum(self.cost(X), 0.0))[:, None]
