@@ -176,8 +176,43 @@ def _shape_only(problem: Problem) -> bool:
 # ------------------------------------------------------------------ the projected objective
 #: samples of the turn the projected objective solves each design at
 PROJECTED_SAMPLES = 128
+#: designs scored at once (the nearest points take designs x targets x samples)
+CHUNK = 64
+#: targets the projected search fits at most (a dense drawing is thinned evenly)
+SEARCH_TARGETS = 100
+#: rounds of nearest points and tracer fit after the fit over the shifts
+ICP_ROUNDS = 2
 #: the crank ranges (fractions of a turn) a partial curve is fitted over; the least is 90 deg
 PARTIAL_WIDTHS = (0.27, 0.375, 0.5, 0.75)
+
+
+@dataclass(frozen=True)
+class Placed:
+    """Designs solved over a turn, their tracer and placement fitted (:meth:`Projected.placed`).
+
+    Attributes
+    ----------
+    params, solution : Params, Solution
+        The compiled designs and their joints over the turn (``solution.z``: joints x designs x samples).
+    fit : TracerFit
+        The tracer ``c``, the placement ``a, b``, the shift and direction of the correspondence.
+    window : ndarray (N, n) bool
+        The samples of the range fitted (all of the turn for a closed curve).
+    distance : ndarray (N,)
+        Two-sided mean squared distance between the window's samples and the targets.
+    span : ndarray (N,) int
+        The window's span in samples.
+    parts : ndarray (N, m + n)
+        The squared residuals that sum to ``distance`` (:func:`_chamfer`).
+    """
+
+    params: Any
+    solution: Any
+    fit: Any
+    window: np.ndarray
+    distance: np.ndarray
+    span: np.ndarray
+    parts: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -196,6 +231,12 @@ class Projected(Objective):
     problem: Problem
     partial: bool = False
     samples: int = PROJECTED_SAMPLES
+
+    @property
+    def targets(self) -> np.ndarray:
+        """The targets the search fits: every one, or evenly every k-th down to :data:`SEARCH_TARGETS`."""
+        T = self.problem.targets
+        return T[:: max(1, len(T) // SEARCH_TARGETS)]
 
     @property
     def keep(self) -> np.ndarray:
@@ -242,26 +283,61 @@ class Projected(Objective):
         widths = [int(round(w * n)) for w in PARTIAL_WIDTHS] if self.partial else [n]
         best, width = None, np.zeros(len(X), int)
         for w in widths:
-            f = fit_shifts(sol.z[i], sol.z[j], self.problem.targets, w)
+            f = fit_shifts(sol.z[i], sol.z[j], self.targets, w)
             take = np.ones(len(X), bool) if best is None else f.sse < best.sse
             best = f if best is None else _choose(take, f, best)
             width = np.where(take, w, width)
         return params, sol, (best, width)
 
     def score(self, X: np.ndarray) -> Score:
-        params, sol, (f, _) = self.fitted(X)
-        m, L = len(self.problem.targets), self.problem.scale
-        mse = f.sse / (m * L * L)
-        viol = self._violation(params, sol, f)
+        X = np.atleast_2d(X)
+        parts = [self._score(X[k : k + CHUNK]) for k in range(0, len(X), CHUNK)]
+        return Score(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("cost", "error", "violation")))
+
+    def _score(self, X: np.ndarray) -> Score:
+        p = self.placed(X)
+        viol = self._violation(p.params, p.solution, p.fit, p.window)
+        mse = p.distance / self.problem.scale**2
         err = np.sqrt(mse)
         return Score(
             np.where(np.isfinite(mse), mse, 1.0) + PENALTY * viol, np.where(np.isfinite(err), err, np.inf), viol
         )
 
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        return np.sqrt(np.maximum(self.cost(X), 0.0))[:, None]
+    def placed(self, X: np.ndarray) -> Placed:
+        """The designs ``X`` solved, their tracer and placement fitted and refined on nearest points.
 
-    def _violation(self, params: Any, sol: Any, f: Any) -> np.ndarray:
+        From the fit over the shifts (:meth:`fitted`), :data:`ICP_ROUNDS` rounds of: each
+        target's nearest sample of the placed curve within the window, then :func:`~.tracer.fit`
+        on those pairs; per design the round of least two-sided mean squared distance
+        (targets to the curve's samples plus the window's samples to the targets) is kept.
+        """
+        params, sol, (f, width) = self.fitted(X)
+        N, n = len(X), self.samples
+        m = len(self.targets)
+        last = ((m - 1) * width) // m
+        window = np.mod(np.arange(n)[None, :] - f.shift[:, None], n) <= last[:, None]
+        i, j = _tracer_base(self.problem)
+        Xi, Xj = sol.z[i], sol.z[j]
+        window &= np.isfinite(Xi) & np.isfinite(Xj)
+        best_d, k, parts = _chamfer(f, Xi, Xj, self.targets, window)
+        rows = np.arange(N)[:, None]
+        for _ in range(ICP_ROUNDS):
+            g = replace(fit(Xi[rows, k], Xj[rows, k], self.targets), shift=f.shift, direction=f.direction)
+            d, k2, p2 = _chamfer(g, Xi, Xj, self.targets, window)
+            take = d < best_d
+            f, best_d = _choose(take, g, f), np.where(take, d, best_d)
+            k, parts = np.where(take[:, None], k2, k), np.where(take[:, None], p2, parts)
+        return Placed(params, sol, f, window, best_d, last, parts)
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """Each target's and each window sample's distance (the chamfer's parts) / ``L``, and the penalty's root."""
+        p = self.placed(np.atleast_2d(X))
+        viol = self._violation(p.params, p.solution, p.fit, p.window)
+        r = np.sqrt(np.where(np.isfinite(p.parts), p.parts, 1.0 / p.parts.shape[1])) / self.problem.scale
+        out: np.ndarray = np.concatenate([r, np.sqrt(PENALTY * viol)[:, None]], axis=1)
+        return out
+
+    def _violation(self, params: Any, sol: Any, f: Any, window: np.ndarray) -> np.ndarray:
         from .objective import _size_shortfall
 
         sp = self.problem.space
@@ -278,13 +354,61 @@ class Projected(Objective):
                 zj = z[sp.joint(jn)]
                 u, w = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj
                 c = np.abs((np.conj(u) * w).real / (np.abs(u) * np.abs(w)))
-                v = v + np.maximum(np.nanmax(np.where(np.isfinite(c), c, 0.0), axis=-1) - cos_lim, 0.0)
+                c = np.where(np.isfinite(c) & window, c, 0.0)
+                v = v + np.maximum(np.max(c, axis=-1) - cos_lim, 0.0)
             i, j = _tracer_base(self.problem)
-            P = z[i] + f.c[:, None] * (z[j] - z[i])
+            P = np.where(window, z[i] + f.c[:, None] * (z[j] - z[i]), np.nan)
             pose = params.pose.copy()
             pose[sp.joint(sp.tracer)] = pose[i] + f.c * (pose[j] - pose[i])
             v = v + _size_shortfall(P, pose, MIN_CURVE_SIZE)
         return np.asarray(v)
+
+
+def _chamfer(
+    f: Any, Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, window: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two-sided mean squared distance (N,) between the placed curves' window samples and the targets.
+
+    Also each target's nearest window sample (N, m), and the squared residuals (N, m + n)
+    that sum to the distance: each target's squared distance to the curve (its nearest
+    sample or either chord there) over ``m``, each window sample's to the targets over the
+    window's size. The curve is ``a + b (X_i + c (X_j - X_i))``.
+    """
+    P = f.a[:, None] + f.b[:, None] * (Xi + f.c[:, None] * (Xj - Xi))
+    P = np.where(window & np.isfinite(P), P, 0.0)
+    c = T.mean()
+    Pc, Tc = P - c, T - c
+    d2 = np.stack([Pc.real, Pc.imag], axis=-1) @ np.stack([Tc.real, Tc.imag])  # (N, n, m): one product
+    d2 *= -2.0
+    d2 += (np.abs(Pc) ** 2)[:, :, None]
+    d2 += (np.abs(Tc) ** 2)[None, None, :]
+    d2[~window] = np.inf
+    k = np.argmin(d2, axis=1)  # (N, m)
+    to_curve = np.minimum(np.min(d2, axis=1), _to_segments(P, window, T, k)) / len(T)
+    to_targets = np.where(window, np.min(d2, axis=2), 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
+    parts = np.concatenate([to_curve, to_targets], axis=1)  # (N, m + n): squared residuals
+    d = parts.sum(axis=1)
+    return np.where(np.isfinite(d) & np.isfinite(f.sse), d, np.inf), k, parts
+
+
+def _to_segments(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Squared distance (N, m) from each target to the two chords of the curve at its nearest sample ``k``.
+
+    The samples are coarse (a chord is ~1/100 of the curve): the distance to a sample alone
+    would floor the error at about half a chord.
+    """
+    N, n = P.shape
+    rows = np.arange(N)[:, None]
+    best = np.full(k.shape, np.inf)
+    for step in (-1, 1):
+        k2 = np.mod(k + step, n)
+        ok = window[rows, k] & window[rows, k2]
+        a, b = P[rows, k], P[rows, k2]
+        ab = b - a
+        t = np.clip(((np.conj(ab) * (T[None, :] - a)).real) / np.maximum(np.abs(ab) ** 2, 1e-300), 0.0, 1.0)
+        d = np.abs(a + t * ab - T[None, :]) ** 2
+        best = np.where(ok, np.minimum(best, d), best)
+    return best
 
 
 def _choose(take: np.ndarray, f: Any, g: Any) -> Any:
@@ -310,18 +434,19 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     from .run import describe
 
     prob, sp = proj.problem, proj.problem.space
-    params, _, (f, width) = proj.fitted(np.asarray(x, float)[None])
+    placed = proj.placed(np.asarray(x, float)[None])
+    params, f, last = placed.params, placed.fit, int(placed.span[0])
     i, j = _tracer_base(prob)
     pose = params.pose[:, 0].copy()
     pose[sp.joint(sp.tracer)] = pose[i] + f.c[0] * (pose[j] - pose[i])
     pose = f.a[0] + f.b[0] * pose
     xfull = np.concatenate([[pose[sp.joint(n)].real, pose[sp.joint(n)].imag] for n in sp.free])
-    placed = compile_params(sp.template, sp.poses(xfull[None]), sp.plan)
+    moved = compile_params(sp.template, sp.poses(xfull[None]), sp.plan)
     n, m = proj.samples, len(prob.targets)
-    start = float(placed.pose_inputs[0][0]) + 2 * np.pi * int(f.shift[0]) / n
-    span = 2 * np.pi * ((m - 1) * int(width[0]) // m) / n if proj.partial else 2 * np.pi
+    start = float(moved.pose_inputs[0][0]) + 2 * np.pi * int(f.shift[0]) / n
+    span = 2 * np.pi * last / n if proj.partial else 2 * np.pi
     th = start + np.linspace(0.0, span, CHECK_SAMPLES)
-    z = solve(placed, th[None, None]).z[:, 0, :]
+    z = solve(moved, th[None, None]).z[:, 0, :]
     P = z[sp.joint(sp.tracer)]
     d = np.abs(P[None, :] - prob.targets[:, None])
     near = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
