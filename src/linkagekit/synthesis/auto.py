@@ -86,12 +86,15 @@ def synthesize_auto(
     workers: int = 1,
     scheduler: str | None = None,
     progress: Callable[[Progress], None] | None = None,
+    method: str = "local",
     **problem: Any,
 ) -> Synthesis:
     """Path generation over the built-in topologies of at most ``max_joints`` joints; the best is returned.
 
     ``problem``: the keywords of :func:`~.run.make_problem` (``units``, ``ordered``,
-    ``min_transmission``, ...). The result's ``topology`` names the topology chosen and
+    ``min_transmission``, ...) and ``partial`` (the targets lie on a part of the curve).
+    ``method``: ``"local"`` (:func:`multistart`, the default) or ``"engine"`` (the engine's
+    differential evolution and CMA-ES, with ``restarts`` ... ``scheduler``, ``progress``). The result's ``topology`` names the topology chosen and
     ``tried`` lists what was screened and searched (:class:`Tried`).
     """
     t0 = time.monotonic()
@@ -116,14 +119,77 @@ def synthesize_auto(
     for i, name in enumerate(order):
         share = max((seconds - (time.monotonic() - t0)) / (len(order) - i), 1e-3)
         proj = make(next(t for t in topologies if t.name == name))
-        settings = Settings(seed, share, restarts, generations, popsize, goal, workers, scheduler)
-        out = optimize(proj, settings, progress)
+        if method == "engine":
+            settings = Settings(seed, share, restarts, generations, popsize, goal, workers, scheduler)
+            out = optimize(proj, settings, progress)
+        else:
+            out = multistart(proj, rng, time.monotonic() + share, screened[name][1])
         x = _best_of(proj, [out.x, screened[name][1]])
         syn = written(proj, x, replace(out, x=x), source)
         tried[name] = replace(tried[name], error=syn.rms_error / syn.diagonal if syn.feasible else np.inf)
         found.append(syn)
     best = min(found, key=lambda f: (not f.feasible, f.rms_error))
     return replace(best, tried=tuple(tried[n] for n in order))
+
+
+#: random designs drawn at once by :func:`multistart`; the best few of them start a local search
+BATCH, STARTS = 1024, 4
+#: residual evaluations of one local search at most
+LOCAL_NFEV = 60
+
+
+def multistart(proj: Projected, rng: np.random.Generator, deadline: float, x0: np.ndarray | None = None) -> Outcome:
+    """Local searches from the best of random designs until ``deadline``: the best design found.
+
+    Each round draws :data:`BATCH` designs, scores them at once, and runs :func:`local_search`
+    from the :data:`STARTS` best (the first round also from ``x0``). Bounded least squares
+    from good random starts reach, in seconds, what a population search reaches in tens.
+    """
+    t0 = time.monotonic()
+    lo, hi = proj.bounds
+    best_x, best_cost, starts, designs = None, np.inf, 0, 0
+    while time.monotonic() < deadline or best_x is None:
+        X = lo + rng.random((BATCH, len(lo))) * (hi - lo)
+        if x0 is not None and best_x is None:
+            X[0] = x0
+        cost = proj.cost(X)
+        designs += BATCH
+        for i in np.argsort(cost)[:STARTS]:
+            if time.monotonic() > deadline and best_x is not None:
+                break
+            x, c, n = local_search(proj, X[i])
+            starts, designs = starts + 1, designs + n
+            if c < best_cost:
+                best_x, best_cost = x, c
+    assert best_x is not None
+    return Outcome(best_x, float(best_cost), starts, 0, designs, time.monotonic() - t0, "time")
+
+
+def local_search(proj: Projected, x0: np.ndarray, max_nfev: int = LOCAL_NFEV) -> tuple[np.ndarray, float, int]:
+    """Bounded least squares (scipy's ``trf``) on :meth:`Projected.residuals` from ``x0``: (x, cost, designs).
+
+    The Jacobian by forward differences, every column in one batch of designs.
+    """
+    from scipy.optimize import least_squares
+
+    lo, hi = proj.bounds
+    h = 1e-6 * proj.scale
+    count = [0]
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        count[0] += 1
+        return np.asarray(proj.residuals(x[None])[0])
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        step = np.where(x + h <= hi, h, -h)
+        X = np.vstack([x, x + np.diag(step)])
+        R = proj.residuals(X)
+        count[0] += len(X)
+        return np.asarray(((R[1:] - R[0]) / step[:, None]).T)
+
+    x = np.clip(x0, lo, hi)
+    r = least_squares(fun, x, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev)
+    return r.x, float(proj.cost(r.x[None])[0]), count[0]
 
 
 def _best_of(problem: Objective, xs: Sequence[np.ndarray | None]) -> np.ndarray:
