@@ -70,7 +70,8 @@ def main() -> int:
     ap.add_argument("--max-joints", type=int, default=10)
     ap.add_argument("--letters", default="", help="comma-separated letters (default all 26)")
     a = ap.parse_args()
-    data = json.load(open(os.path.join(LINK_ABC, "letters.json")))
+    with open(os.path.join(LINK_ABC, "letters.json")) as fh:
+        data = json.load(fh)
     want = set(a.letters.split(",")) if a.letters else None
     rows = []
     print(f"{'letter':6} {'ours':>8} {'LInK':>8} {'joints':>6} {'topology':>14} {'crank':>7} {'time':>6}  ok")

@@ -34,11 +34,14 @@ LAYERS = [
         "synthesis.function",
         "synthesis.motion",
         "synthesis.burmester",
+        "synthesis.topologies",
+        "synthesis.tracer",
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
     {"synthesis.function_run"},
     {"synthesis.run"},
+    {"synthesis.auto"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

@@ -33,18 +33,18 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
-from .objective import PENALTY, Problem, best_index, evaluate
+from .objective import PENALTY, Problem, best_index
 from .optimize import Outcome, Progress, Settings, optimize
-from .run import Synthesis, _unpack, finish, make_problem
+from .run import Synthesis, _unpack, make_problem
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
-from .tracer import fit, fit_shifts
+from .tracer import TracerFit, fit, fit_shifts
 
 #: the fraction of the time the screen of topologies takes
 SCREEN = 0.2
 #: topologies the engine searches after the screen
 SEARCHED = 3
-#: random designs per topology in the screen, and samples of the turn they are solved at
-SCREEN_DESIGNS, SCREEN_SAMPLES = 96, 64
+#: random designs per topology in the screen
+SCREEN_DESIGNS = 96
 #: the curve's RMS radius over the joints' RMS spread, at least (spec section 6)
 MIN_CURVE_SIZE = 0.07
 #: rounds of nearest points and tracer fit of :func:`place_tracer`
@@ -94,8 +94,9 @@ def synthesize_auto(
     ``problem``: the keywords of :func:`~.run.make_problem` (``units``, ``ordered``,
     ``min_transmission``, ...) and ``partial`` (the targets lie on a part of the curve).
     ``method``: ``"local"`` (:func:`multistart`, the default) or ``"engine"`` (the engine's
-    differential evolution and CMA-ES, with ``restarts`` ... ``scheduler``, ``progress``). The result's ``topology`` names the topology chosen and
-    ``tried`` lists what was screened and searched (:class:`Tried`).
+    differential evolution and CMA-ES, with ``restarts`` ... ``scheduler``, ``progress``).
+    The result's ``topology`` names the topology chosen and ``tried`` lists what was
+    searched (:class:`Tried`).
     """
     t0 = time.monotonic()
     source = getattr(targets, "source", None)
@@ -335,7 +336,7 @@ class Projected(Objective):
         out[:, 2 * k], out[:, 2 * k + 1] = zp.real, zp.imag
         return out
 
-    def fitted(self, X: np.ndarray) -> tuple[Any, Any, np.ndarray]:
+    def fitted(self, X: np.ndarray) -> tuple[Any, Any, tuple[TracerFit, np.ndarray]]:
         """``(params, solution, fit)`` of designs ``X``: the best fit over the shifts (and ranges)."""
         from ..params import compile as compile_params
         from ..positions import solve
@@ -353,6 +354,7 @@ class Projected(Objective):
             take = np.ones(len(X), bool) if best is None else f.sse < best.sse
             best = f if best is None else _choose(take, f, best)
             width = np.where(take, w, width)
+        assert best is not None
         return params, sol, (best, width)
 
     def score(self, X: np.ndarray) -> Score:

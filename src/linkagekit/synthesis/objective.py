@@ -460,4 +460,5 @@ def curve_size(P: np.ndarray, pose: np.ndarray) -> np.ndarray:
 
 def _size_shortfall(P: np.ndarray, pose: np.ndarray, least: float) -> np.ndarray:
     """How far (relative) the curve's size falls short of ``least`` (:func:`curve_size`), 0 when it does not."""
-    return np.maximum(least - np.nan_to_num(curve_size(P, pose), nan=0.0), 0.0) / least
+    out: np.ndarray = np.maximum(least - np.nan_to_num(curve_size(P, pose), nan=0.0), 0.0) / least
+    return out

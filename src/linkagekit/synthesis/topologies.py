@@ -32,7 +32,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 
 from ..errors import InputError
 
@@ -268,7 +268,7 @@ def _letters(s: _State) -> list[str]:
 _BAR_NAMES = {4: "fourbar", 6: "sixbar", 8: "eightbar", 10: "tenbar", 12: "twelvebar"}
 
 
-@lru_cache(maxsize=None)
+@cache
 def _all(max_joints: int, max_links: int = MAX_LINKS) -> tuple[Topology, ...]:
     found: dict[tuple[object, ...], tuple[_State, int]] = {}
     for s, li in _grow(max_joints, max_links):

@@ -145,7 +145,8 @@ def _corr(Ff: np.ndarray, Fg: np.ndarray) -> np.ndarray:
 
 def _conj_fft(Ff: np.ndarray) -> np.ndarray:
     """``fft(conj f)`` from ``fft(f)``: ``conj(F[-k mod n])``."""
-    return np.conj(np.roll(Ff[..., ::-1], 1, axis=-1))
+    out: np.ndarray = np.conj(np.roll(Ff[..., ::-1], 1, axis=-1))
+    return out
 
 
 def _solve(G: np.ndarray, r: np.ndarray, tt: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
