@@ -22,9 +22,9 @@ smallest adjacency over the orderings within colour classes).
 Examples
 --------
 >>> [t.name for t in enumerate_topologies(6)]
-['fourbar', 'sixbar-1', 'sixbar-2']
->>> [t.n_joints for t in enumerate_topologies(6)]
-[5, 6, 6]
+['fourbar', 'sixbar-1']
+>>> [len(enumerate_topologies(n)) for n in (7, 8, 9, 10)]
+[16, 84, 311, 636]
 """
 
 from __future__ import annotations
