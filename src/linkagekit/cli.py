@@ -598,6 +598,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
     p.add_argument("--points", metavar="N", default="40", help="points sampled along an SVG path (default 40)")
     p.add_argument("--ordered", action="store_true", help="meet the targets in their order along the curve")
+    _shape_arguments(p)
     p.add_argument("--free", metavar="J1,J2,...", help="with a template file: the joints that move (default all)")
     p.add_argument("--pivots", metavar="X0:X1,Y0:Y1", help="the region of the ground pivots")
     p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
@@ -633,6 +634,20 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--full-turn", action="store_true", help="motion: the crank turns fully through the poses")
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
+
+
+def _shape_arguments(p: argparse.ArgumentParser) -> None:
+    """``synthesize --shape-only`` and ``--partial`` (spec section 6, path generation)."""
+    p.add_argument(
+        "--shape-only",
+        action="store_true",
+        help="match the curve up to translation, rotation and scale; the mechanism is placed on the targets",
+    )
+    p.add_argument(
+        "--partial",
+        action="store_true",
+        help="the targets may lie on the part of the curve traced while the crank rocks through a range (>= 90 deg)",
+    )
 
 
 #: the tasks of ``synthesize --task`` (spec section 6)
@@ -1355,6 +1370,9 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    for flag in ("shape_only", "partial"):
+        if getattr(args, flag) and args.task != "path":
+            raise InputError(f"--{flag.replace('_', '-')}: goes with --task path, not --task {args.task}")
     if args.task == "motion":
         return _synthesize_motion(args)
     if args.task == "function":
@@ -1378,9 +1396,12 @@ def _synthesize(args: argparse.Namespace) -> int:
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
     described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
+    described += f"\n{targets.smoothed}" if targets.smoothed else ""
     lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
     if args.plot:
         _plot_synthesis(out, targets, args.plot)
+    if targets.smoothed:
+        print(targets.smoothed)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     return 0
 
@@ -1402,11 +1423,13 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
         search.pop(key, None)
     budget = search["seconds"]
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)
-    search["partial"] = bool(getattr(args, "partial", False))
     with _Search(budget) as progress:
         out = synthesize_auto(targets, max_joints=max_joints, **search, progress=progress)
     described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
+    described += f"\n{targets.smoothed}" if targets.smoothed else ""
     lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
+    if targets.smoothed:
+        print(targets.smoothed)
     text = synthesis_text(out, targets.xy, None, targets.unit, args.output).splitlines()
     a = out.mechanism.to_dict()["drivers"][0]["angles"]
     joints = len(out.mechanism.joint_names)
@@ -1674,8 +1697,7 @@ def _synthesize_command(args: argparse.Namespace) -> str:
             value = "20"
         if value is not None:
             words += ["--" + name.replace("_", "-"), str(value)]
-    if args.ordered:
-        words.append("--ordered")
+    words += [f"--{flag}" for flag in ("ordered", "shape-only", "partial") if getattr(args, flag.replace("-", "_"))]
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
         words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
@@ -1725,6 +1747,7 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
         raise InputError(f"--checkpoint {shorten(args.checkpoint, 80)}: is a directory")
     options["free"] = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
     options.update(ordered=args.ordered, scheduler=args.scheduler, checkpoint=args.checkpoint)
+    options.update(shape_only=args.shape_only, partial=args.partial)
     return options
 
 
@@ -1769,7 +1792,8 @@ def _plot_synthesis(out: Any, targets: Any, path: str) -> None:
 
     from .viz import draw
 
-    res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(0.0, 360.0, 721)})
+    start, stop = out.sweep if out.sweep is not None else (0.0, 360.0)  # a partial sweep: only its range
+    res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(start, stop, 721)})
     fig = draw.synthesis_figure(res, targets.xy, out.errors, closed=targets.closed)
     draw.save_figure(fig, path, fig.axes[0])
 
@@ -1795,7 +1819,11 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     )
     if out.offset is not None:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    lines += _shape_lines(out, unit)
     state = "the crank turns fully" if out.feasible else "CONSTRAINTS NOT MET (the best design found breaks one)"
+    if out.sweep is not None and out.feasible:
+        start, stop = out.sweep
+        state = f"the crank rocks from {start:.4g} to {stop:.4g} deg ({stop - start:.4g} deg) on one branch"
     lines.append(f"{state}; smallest transmission angle {out.min_transmission:.4g} deg")
     why = {"goal": "reaching the goal", "restarts": "the last search", "time": "the time limit"}[o.stopped_by]
     lines.append(
@@ -1804,6 +1832,19 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     )
     lines.append(f"wrote {path}")
     return "\n".join(lines)
+
+
+def _shape_lines(out: Any, unit: str) -> list[str]:
+    """``--shape-only``: the line that says how the design was placed on the targets (none otherwise)."""
+    import cmath
+
+    if out.placement is None:
+        return []
+    a, b = out.placement
+    return [
+        f"placed on the targets (--shape-only): scaled by {abs(a):.6g}, turned by {math.degrees(cmath.phase(a)):.6g} "
+        f"deg, moved by ({b.real:.6g}, {b.imag:.6g}) {unit}"
+    ]
 
 
 class _Search:

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
-from .objective import PENALTY, Problem, best_index
+from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
 from .optimize import Outcome, Progress, Settings, optimize
 from .run import Synthesis, _unpack, make_problem
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
@@ -45,8 +45,6 @@ SCREEN = 0.2
 SEARCHED = 3
 #: random designs per topology in the screen
 SCREEN_DESIGNS = 96
-#: the curve's RMS radius over the joints' RMS spread, at least (spec section 6)
-MIN_CURVE_SIZE = 0.07
 #: rounds of nearest points and tracer fit of :func:`place_tracer`
 PLACE_ROUNDS = 4
 #: the topologies screened first, by name
@@ -99,8 +97,7 @@ def synthesize_auto(
     searched (:class:`Tried`).
     """
     t0 = time.monotonic()
-    source = getattr(targets, "source", None)
-    xy, inputs, units = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
+    xy, inputs, units, source = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
     if inputs is not None:
         raise InputError("--topology auto: targets with input angles (timing) are not supported")
     partial = bool(problem.pop("partial", False))
@@ -110,8 +107,7 @@ def synthesize_auto(
     rng = np.random.default_rng(seed)
 
     def make(t: Topology) -> Projected:
-        base = replace(make_problem(xy, t.name, None, units, **problem), min_size=MIN_CURVE_SIZE)
-        return Projected(base, partial)
+        return Projected(make_problem(xy, t.name, None, units, **problem), partial)
 
     screened = screen(topologies, make, rng, t0 + SCREEN * seconds)
     order = sorted(screened, key=lambda k: screened[k][0])[:SEARCHED]
@@ -406,8 +402,6 @@ class Projected(Objective):
         return out
 
     def _violation(self, params: Any, sol: Any, f: Any, window: np.ndarray) -> np.ndarray:
-        from .objective import _size_shortfall
-
         sp = self.problem.space
         z = sol.z
         with np.errstate(invalid="ignore"):
@@ -428,7 +422,7 @@ class Projected(Objective):
             P = np.where(window, z[i] + f.c[:, None] * (z[j] - z[i]), np.nan)
             pose = params.pose.copy()
             pose[sp.joint(sp.tracer)] = pose[i] + f.c * (pose[j] - pose[i])
-            v = v + _size_shortfall(P, pose, MIN_CURVE_SIZE)
+            v = v + _too_small(P, pose, 1.0) / MIN_CURVE_SIZE
         return np.asarray(v)
 
 
@@ -498,7 +492,6 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     """
     from ..params import compile as compile_params
     from ..positions import solve
-    from .objective import curve_size
     from .run import describe
 
     prob, sp = proj.problem, proj.problem.space
@@ -521,9 +514,12 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     errors = d[np.arange(m), near]
     mu = _smallest_transmission(sp, z)
     ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
-    ok = ok and float(curve_size(P[None], pose[:, None])[0]) >= MIN_CURVE_SIZE
+    ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0
     mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
-    out = Synthesis(mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sp.topology)
+    sweep = (float(np.degrees(start)), float(np.degrees(start + span))) if proj.partial else None
+    out = Synthesis(
+        mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sweep, topology=sp.topology
+    )
     text = f"topology {sp.topology} ({len(sp.template.joint_names)} joints), crank {np.degrees(span):.4g} deg\\n"
     return replace(out, mechanism=replace(mech, description=text + describe(out, prob, source)))
 
