@@ -332,8 +332,8 @@ class Projected(Objective):
         out[:, 2 * k], out[:, 2 * k + 1] = zp.real, zp.imag
         return out
 
-    def fitted(self, X: np.ndarray) -> tuple[Any, Any, tuple[TracerFit, np.ndarray]]:
-        """``(params, solution, fit)`` of designs ``X``: the best fit over the shifts (and ranges)."""
+    def fitted(self, X: np.ndarray) -> tuple[Any, Any, list[tuple[TracerFit, int]]]:
+        """``(params, solution, fits)`` of designs ``X``: the best fit over the shifts, for each range's width."""
         from ..params import compile as compile_params
         from ..positions import solve
 
@@ -344,14 +344,7 @@ class Projected(Objective):
         sol = solve(params, theta[None])
         i, j = _tracer_base(self.problem)
         widths = [int(round(w * n)) for w in PARTIAL_WIDTHS] if self.partial else [n]
-        best, width = None, np.zeros(len(X), int)
-        for w in widths:
-            f = fit_shifts(sol.z[i], sol.z[j], self.targets, w)
-            take = np.ones(len(X), bool) if best is None else f.sse < best.sse
-            best = f if best is None else _choose(take, f, best)
-            width = np.where(take, w, width)
-        assert best is not None
-        return params, sol, (best, width)
+        return params, sol, [(fit_shifts(sol.z[i], sol.z[j], self.targets, w), w) for w in widths]
 
     def score(self, X: np.ndarray) -> Score:
         X = np.atleast_2d(X)
@@ -375,10 +368,31 @@ class Projected(Objective):
         on those pairs; per design the round of least two-sided mean squared distance
         (targets to the curve's samples plus the window's samples to the targets) is kept.
         """
-        params, sol, (f, width) = self.fitted(X)
-        N, n = len(X), self.samples
+        params, sol, fits = self.fitted(X)
+        best: Placed | None = None
+        for f, width in fits:  # each range's width refined, the best kept per design
+            p = self._refined(params, sol, f, width)
+            if best is None:
+                best = p
+                continue
+            take = p.distance < best.distance
+            best = Placed(
+                params,
+                sol,
+                _choose(take, p.fit, best.fit),
+                np.where(take[:, None], p.window, best.window),
+                np.where(take, p.distance, best.distance),
+                np.where(take, p.span, best.span),
+                np.where(take[:, None], p.parts, best.parts),
+            )
+        assert best is not None
+        return best
+
+    def _refined(self, params: Any, sol: Any, f: TracerFit, width: int) -> Placed:
+        """The fit ``f`` over the shifts at one range's ``width``, refined on nearest points."""
+        N, n = len(f.sse), self.samples
         m = len(self.targets)
-        last = ((m - 1) * width) // m
+        last = np.full(N, ((m - 1) * width) // m)
         window = np.mod(np.arange(n)[None, :] - f.shift[:, None], n) <= last[:, None]
         i, j = _tracer_base(self.problem)
         Xi, Xj = sol.z[i], sol.z[j]
