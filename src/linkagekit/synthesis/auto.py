@@ -112,21 +112,54 @@ def synthesize_auto(
     screened = screen(topologies, make, rng, t0 + SCREEN * seconds)
     order = sorted(screened, key=lambda k: screened[k][0])[:SEARCHED]
     tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
+    projs = [make(next(t for t in topologies if t.name == name)) for name in order]
+    left = seconds * (1 - RESERVE) - (time.monotonic() - t0)
+    if method == "engine":
+        outs = [
+            optimize(
+                p, Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler), progress
+            )
+            for p in projs
+        ]
+    else:
+        seeds = rng.integers(0, 2**32, len(projs))
+        outs = local_searches(projs, [int(k) for k in seeds], [screened[n][1] for n in order], left, workers)
     found: list[Synthesis] = []
-    for i, name in enumerate(order):
-        share = max((seconds - (time.monotonic() - t0)) / (len(order) - i), 1e-3)
-        proj = make(next(t for t in topologies if t.name == name))
-        if method == "engine":
-            settings = Settings(seed, share, restarts, generations, popsize, goal, workers, scheduler)
-            out = optimize(proj, settings, progress)
-        else:
-            out = multistart(proj, rng, time.monotonic() + share, screened[name][1])
+    for name, proj, out in zip(order, projs, outs, strict=True):
         x = _best_of(proj, [out.x, screened[name][1]])
         syn = written(proj, x, replace(out, x=x), source)
         tried[name] = replace(tried[name], error=syn.rms_error / syn.diagonal if syn.feasible else np.inf)
         found.append(syn)
     best = min(found, key=lambda f: (not f.feasible, f.rms_error))
     return replace(best, tried=tuple(tried[n] for n in order))
+
+
+#: the fraction of the time kept for the dense checks of the results
+RESERVE = 0.03
+
+
+def local_searches(
+    projs: Sequence[Projected], seeds: Sequence[int], starts: Sequence[np.ndarray], seconds: float, workers: int
+) -> list[Outcome]:
+    """:func:`multistart` on each objective, ``workers`` at a time on local processes, within ``seconds`` in all.
+
+    Each gets ``seconds * min(workers, k) / k`` (``k`` objectives), its own seed and start.
+    """
+    k = len(projs)
+    share = max(seconds * min(workers, k) / k, 1e-3)
+    if workers <= 1 or k == 1:
+        return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    with ProcessPoolExecutor(min(workers, k), mp_context=ctx) as pool:
+        return list(pool.map(_multistart, projs, seeds, [share] * k, starts))
+
+
+def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray) -> Outcome:
+    """:func:`multistart` for ``seconds`` from now (a worker process's task)."""
+    return multistart(proj, np.random.default_rng(seed), time.monotonic() + seconds, x0)
 
 
 #: random designs drawn at once by :func:`multistart`; the best few of them start a local search
