@@ -567,8 +567,8 @@ def _edit_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("targets", metavar="TARGET", help="target points: .csv (x,y[,input]) or .svg (its first path)")
+def _topology_arguments(p: argparse.ArgumentParser) -> None:
+    """``synthesize --topology`` and ``--max-joints``."""
     p.add_argument(
         "--topology",
         default="fourbar",
@@ -582,6 +582,11 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         default=None,
         help="with --topology auto: at most N joints, ground pivots and P included (default 10)",
     )
+
+
+def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("targets", metavar="TARGET", help="target points: .csv (x,y[,input]) or .svg (its first path)")
+    _topology_arguments(p)
     _output_option(p, "the mechanism file to write: .yaml or .json")
     p.add_argument(
         "--seconds", metavar="S", default=_DEFAULT_SECONDS, help="time budget (default 60; 10 for --task function)"

@@ -115,12 +115,8 @@ def synthesize_auto(
     projs = [make(next(t for t in topologies if t.name == name)) for name in order]
     left = seconds * (1 - RESERVE) - (time.monotonic() - t0)
     if method == "engine":
-        outs = [
-            optimize(
-                p, Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler), progress
-            )
-            for p in projs
-        ]
+        each = Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler)
+        outs = [optimize(p, each, progress) for p in projs]
     else:
         seeds = rng.integers(0, 2**32, len(projs))
         outs = local_searches(projs, [int(k) for k in seeds], [screened[n][1] for n in order], left, workers)
