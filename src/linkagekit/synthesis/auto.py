@@ -139,10 +139,11 @@ def local_searches(
 ) -> list[Outcome]:
     """:func:`multistart` on each objective, ``workers`` at a time on local processes, within ``seconds`` in all.
 
-    Each gets ``seconds * min(workers, k) / k`` (``k`` objectives), its own seed and start.
+    Each gets ``seconds / ceil(k / workers)`` (``k`` objectives: that many rounds of
+    ``workers`` at a time), its own seed and start.
     """
     k = len(projs)
-    share = max(seconds * min(workers, k) / k, 1e-3)
+    share = max(seconds / -(-k // max(workers, 1)), 1e-3)
     if workers <= 1 or k == 1:
         return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
     import multiprocessing
@@ -183,7 +184,7 @@ def multistart(proj: Projected, rng: np.random.Generator, deadline: float, x0: n
         for i in np.argsort(cost)[:STARTS]:
             if time.monotonic() > deadline and best_x is not None:
                 break
-            x, c, n = local_search(proj, X[i])
+            x, c, n = local_search(proj, X[i], deadline=deadline)
             starts, designs = starts + 1, designs + n
             if c < best_cost:
                 best_x, best_cost = x, c
@@ -191,31 +192,48 @@ def multistart(proj: Projected, rng: np.random.Generator, deadline: float, x0: n
     return Outcome(best_x, float(best_cost), starts, 0, designs, time.monotonic() - t0, "time")
 
 
-def local_search(proj: Projected, x0: np.ndarray, max_nfev: int = LOCAL_NFEV) -> tuple[np.ndarray, float, int]:
+class _Stop(Exception):
+    """The local search's deadline passed."""
+
+
+def local_search(
+    proj: Projected, x0: np.ndarray, max_nfev: int = LOCAL_NFEV, deadline: float = np.inf
+) -> tuple[np.ndarray, float, int]:
     """Bounded least squares (scipy's ``trf``) on :meth:`Projected.residuals` from ``x0``: (x, cost, designs).
 
-    The Jacobian by forward differences, every column in one batch of designs.
+    The Jacobian by forward differences, every column in one batch of designs. Past
+    ``deadline`` (``time.monotonic``) it stops with the best design it has evaluated.
     """
     from scipy.optimize import least_squares
 
     lo, hi = proj.bounds
     h = 1e-6 * proj.scale
     count = [0]
+    best: list[Any] = [np.inf, np.clip(x0, lo, hi)]
 
     def fun(x: np.ndarray) -> np.ndarray:
+        if time.monotonic() > deadline:
+            raise _Stop
         count[0] += 1
-        return np.asarray(proj.residuals(x[None])[0])
+        r = np.asarray(proj.residuals(x[None])[0])
+        if float(r @ r) < best[0]:
+            best[:] = [float(r @ r), x.copy()]
+        return r
 
     def jac(x: np.ndarray) -> np.ndarray:
+        if time.monotonic() > deadline:
+            raise _Stop
         step = np.where(x + h <= hi, h, -h)
         X = np.vstack([x, x + np.diag(step)])
         R = proj.residuals(X)
         count[0] += len(X)
         return np.asarray(((R[1:] - R[0]) / step[:, None]).T)
 
-    x = np.clip(x0, lo, hi)
-    r = least_squares(fun, x, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev)
-    return r.x, float(proj.cost(r.x[None])[0]), count[0]
+    try:
+        x = least_squares(fun, best[1], jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev).x
+    except _Stop:
+        x = best[1]
+    return x, float(proj.cost(x[None])[0]), count[0]
 
 
 def _best_of(problem: Objective, xs: Sequence[np.ndarray | None]) -> np.ndarray:
