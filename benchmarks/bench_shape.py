@@ -15,7 +15,7 @@ sweep is checked to assemble everywhere (and to be at least 90 degrees when part
 case: the error (% of the diagonal), the time to the first answer within 0.1 % (from the
 progress callback), the whole time, the crank's range.
 
-    python benchmarks/bench_shape.py [K] [SECONDS]     # default 5 cases, 30 s each, one worker
+    python benchmarks/bench_shape.py [K] [SECONDS] [shape,partial]   # default 5 cases, 30 s each, one worker
 """
 
 from __future__ import annotations
@@ -107,17 +107,17 @@ def rocking_fourbar(rng: np.random.Generator) -> tuple[lk.Mechanism, tuple[float
             return mech, (ranges[0][0], ranges[0][1])
 
 
-def main(k: int = 5, seconds: float = 30.0) -> list[dict[str, object]]:
+def main(k: int = 5, seconds: float = 30.0, parts: str = "shape,partial") -> list[dict[str, object]]:
+    """``parts``: which cases run (``shape``, ``partial``); the random cases are the same either way."""
     rng = np.random.default_rng(30)
     rows = []
     print(f"{'case':28s} {'error %':>10s} {'to 0.1 %':>10s} {'time':>8s} {'sweep':>8s}  feas. print stopped by")
-    for i, mech in enumerate(random_designs("fourbar", k, seed=17)):
-        P = lk.analyze(mech, {"crank": np.sort(rng.uniform(0, 360, 12))}).xy("P")
-        rows.append(run(f"shape-only fourbar {i}", similar(P, rng), "fourbar", seconds, shape_only=True))
-    mech = random_designs("watt2", 1, seed=11)[0]
-    P = lk.analyze(mech, {"crank": np.sort(rng.uniform(0, 360, 12))}).xy("P")
-    rows.append(run("shape-only watt2", similar(P, rng), "watt2", seconds, shape_only=True))
-    for i in range(max(2, k // 2)):
+    shapes = [(f"fourbar {i}", "fourbar", mech) for i, mech in enumerate(random_designs("fourbar", k, seed=17))]
+    for name, topology, mech in [*shapes, ("watt2", "watt2", random_designs("watt2", 1, seed=11)[0])]:
+        T = similar(lk.analyze(mech, {"crank": np.sort(rng.uniform(0, 360, 12))}).xy("P"), rng)
+        if "shape" in parts:
+            rows.append(run(f"shape-only {name}", T, topology, seconds, shape_only=True))
+    for i in range(max(2, k // 2) if "partial" in parts else 0):
         mech, (lo, hi) = rocking_fourbar(rng)
         span = rng.uniform(100, min(150, hi - lo - 10))
         start = rng.uniform(lo + 5, hi - 5 - span)
@@ -136,4 +136,5 @@ def main(k: int = 5, seconds: float = 30.0) -> list[dict[str, object]]:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 5, float(sys.argv[2]) if len(sys.argv) > 2 else 30.0)
+    args = sys.argv[1:]
+    main(int(args[0]) if args else 5, float(args[1]) if len(args) > 1 else 30.0, *args[2:3])

@@ -8,6 +8,7 @@ The long searches (random cases, a minute each) are in ``benchmarks/bench_shape.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -279,3 +280,38 @@ def test_synthesize_says_it_smoothed(tmp_path, capsys):
     out = capsys.readouterr().out.splitlines()
     assert sum("hand-drawn" in line for line in out) == 1 and "hand-drawn" in out[0]
     assert "hand-drawn" in lk.load(tmp_path / "o.yaml").description
+
+
+def test_partial_with_timing_sweeps_the_inputs_range():
+    """With timing the sweep is the inputs' own range (no design variables), widened about its middle to 90 deg."""
+    mech, deg, T = _rocking_case()
+    pb = make_problem(T, "fourbar", partial=True, min_transmission=10, inputs=deg)
+    x = pb.space.vector(mech)
+    assert pb.dim == 10
+    e = evaluate(pb, x[None])
+    assert np.max(e.errors) < 1e-9 * pb.scale and e.violation[0] == 0
+    np.testing.assert_allclose(np.degrees(e.sweep[0]), [-40.0, 100.0], atol=1e-9)
+    narrow = make_problem(T[:5], "fourbar", partial=True, min_transmission=10, inputs=deg[:5])  # -40..0 deg
+    np.testing.assert_allclose(np.degrees(evaluate(narrow, x[None]).sweep[0]), [-65.0, 90.0], atol=1e-9)
+
+
+def test_shape_only_length_bounds_hold_for_the_placed_mechanism():
+    """--lengths bounds the written (placed) mechanism's links, not the design's own frame: seed 000 scaled 3.7x
+    has links of 7.4 (crank) to 18.5 cm (coupler); bounds 5..20 hold, 1..10 do not (by (18.5 - 10) / 10)."""
+    pb, x, T = _shape_case()
+    for bounds, excess in (((5.0, 20.0), 0.0), ((1.0, 10.0), 0.85)):
+        e = evaluate(replace(pb, lengths=bounds), x[None], refine=4)
+        assert e.violation[0] == pytest.approx(excess, abs=1e-6)
+
+
+def test_partial_ordered_follows_the_open_curve():
+    """With the order asked for, the exact partial design still scores 0 (the monotone assignment runs along the
+    open curve); the targets reversed are met too (the other direction), shuffled they are not."""
+    mech, deg, T = _rocking_case()
+    pb = make_problem(T, "fourbar", partial=True, min_transmission=10, ordered=True)
+    x = np.concatenate([pb.space.vector(mech), np.radians([0.0, deg[-1] - deg[0]])])
+    assert np.max(evaluate(pb, x[None], refine=3).errors) < 1e-9 * pb.scale
+    back = replace(pb, targets=pb.targets[::-1])
+    assert np.max(evaluate(back, x[None], refine=3).errors) < 1e-9 * pb.scale
+    shuffled = replace(pb, targets=pb.targets[[0, 5, 2, 8, 1, 9, 3, 7, 4, 6, 10]])
+    assert np.max(evaluate(shuffled, x[None], refine=3).errors) > 1e-2 * pb.scale

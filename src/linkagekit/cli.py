@@ -1812,7 +1812,8 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     ]
     if inputs is not None:
         cols.append(Column("input [deg]", format_cells(inputs)))
-    cols.append(Column("crank [deg]", format_cells(out.inputs % 360.0)))
+    crank = out.inputs if getattr(out, "sweep", None) is not None else out.inputs % 360.0  # partial: in its sweep
+    cols.append(Column("crank [deg]", format_cells(crank)))
     cols.append(Column(f"error [{unit}]", format_cells(out.errors)))
     cols.append(Column("error [% diag]", format_cells(100.0 * out.errors / out.diagonal)))
     o = out.outcome
@@ -1896,6 +1897,14 @@ class _Search:
     def update(self, p: Any) -> None:
         import time
 
+        if p.source == "atlas":  # the atlas's answer, before any search: said at once
+            line = (
+                f"the atlas's nearest four-bar, placed and polished: {self.best(p)} ({p.elapsed:.1f} s); searching on"
+            )
+            if self.bar is not None:
+                self.bar.console.print(line)
+            else:
+                print(f"{PROG}: synthesize: {line}", file=sys.stderr, flush=True)
         if self.bar is not None:
             self.bar.update(
                 self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
@@ -1949,6 +1958,37 @@ class _progress:
     def __exit__(self, *exc: object) -> None:
         if self.bar is not None:
             self.bar.stop()
+
+
+def _atlas_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "action", choices=("build", "info"), help="build the atlas now (unless cached), or say what is cached"
+    )
+    p.add_argument("--workers", type=int, metavar="N", help="processes that build it (default: every core)")
+
+
+def _atlas(args: argparse.Namespace) -> int:
+    """``linkagekit atlas build|info``."""
+    import time
+
+    from .synthesis import atlas
+
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers: expected at least 1, got {args.workers}")
+    t0 = time.monotonic()
+    if atlas.size() == 0:
+        raise InputError("LINKAGEKIT_ATLAS_SIZE is 0: the atlas is turned off")
+    if args.action == "build":
+        atlas.build(tick=atlas.build_report(), workers=args.workers)
+    got = atlas.info()
+    state = f"built, {got.bytes / 1e6:.1f} MB" if got.built else "not built yet"
+    print(f"four-bar atlas, format {got.version}: {got.file} ({state})")
+    print(f"{got.entries} entries: {got.closed} closed curves (the crank turns fully), {got.open} open")
+    if got.chunks:
+        print(f"{got.chunks} of {got.entries // atlas.chunk_entries(got.entries)} chunks of an unfinished build")
+    if args.action == "build":
+        print(f"ready in {time.monotonic() - t0:.1f} s")
+    return 0
 
 
 #: every command, in the order ``linkagekit --help`` lists them
@@ -2036,6 +2076,16 @@ _COMMANDS = (
         "polish; the same --seed gives the same result (unless --seconds stops the run).",
         _synthesize_arguments,
         _synthesize,
+    ),
+    _Command(
+        "atlas",
+        "build the atlas of four-bar curves that synthesis starts from, or say what is cached",
+        "The atlas: about a million four-bars, each with the normalised descriptor of its tracer's curve, "
+        "that path synthesis with the built-in four-bar looks up first. It is built on first use (or by "
+        "'atlas build', on every core) into the user's cache directory (LINKAGEKIT_CACHE_DIR overrides it), "
+        "once per release; an interrupted build resumes.",
+        _atlas_arguments,
+        _atlas,
     ),
 )
 

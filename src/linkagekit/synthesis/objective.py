@@ -28,13 +28,24 @@ search variable and the design vector is the same as without timing.
 within one turn: each target's sample is chosen by the monotone assignment of least total
 squared distance (:func:`_ordered`, dynamic programming), then refined as above.
 
+*Shape only* (``Problem.shape_only``): the curve is first placed on the targets by the
+similarity ``z -> a z + b`` that fits it best (:func:`similarity`, then :func:`plane_fit`
+alternated with the nearest samples from 4 starting turns, :func:`_icp`), and every Newton
+step refits it; ``e_i`` is the distance to the placed curve ``a P + b``.
+
+*Partial* (``Problem.partial``): the curve is the part the crank traces over its sweep
+``[start, start + span]`` (:meth:`Problem.sweep`; both ends sampled), and the nearest points
+stay within it.
+
 Feasibility (penalised by how far from feasible, never by a cliff)
 ----------------------------------------------------------------
-* the crank turns fully: the mean over the sweep of each dyad step's negative margin
-  (``positions.solve``: how far the circles are from meeting, relative);
+* the crank turns fully (partial: assembles over its sweep): the mean over the sweep of each
+  dyad step's negative margin (``positions.solve``: how far the circles are from meeting, relative);
 * every transmission angle ``mu`` of the space stays within ``[MIN, 180 - MIN]``: the largest
   ``|cos mu| - cos MIN`` over the sweep;
-* link lengths within bounds, when given: the largest relative excess.
+* link lengths within bounds, when given: the largest relative excess (of the placed mechanism);
+* the curve's RMS radius at least ``MIN_CURVE_SIZE`` of the joints' (:func:`_too_small`; in the
+  dense check always, in the search with ``shape_only`` or ``partial``).
 
 The score is ``mean_i (e_i / L)^2 + PENALTY * violation``: an exact penalty (linear in the
 violation), so a feasible optimum stays feasible.
@@ -126,9 +137,10 @@ class Problem(Objective):
     partial : bool
         Only the part of the curve traced while the crank sweeps ``[start, start + span]``
         counts, ``span >= MIN_SPAN``, and the mechanism need only assemble over it. Without
-        timing ``start`` (relative to the pose's input) and ``span`` are the design vector's
-        last two entries (radians); with timing the sweep is the one the inputs span (widened
-        about its middle to ``MIN_SPAN``).
+        timing the design vector's last two entries are ``f`` in [0, 1] and ``span`` (radians),
+        ``start = theta_pose - f span``: the pose, whose assembly mode is the branch, lies within
+        the sweep; with timing the sweep is the one the inputs span (widened about its middle to
+        ``MIN_SPAN``).
     """
 
     space: DesignSpace
@@ -171,17 +183,17 @@ class Problem(Objective):
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of the design vector (partial, untimed: then the sweep's start and span)."""
+        """Lower and upper bounds of the design vector (partial, untimed: then the sweep's ``f`` and span)."""
         if not self.swept:
             return self.space.lower, self.space.upper
-        return np.append(self.space.lower, [-np.pi, MIN_SPAN]), np.append(self.space.upper, [np.pi, 2 * np.pi])
+        return np.append(self.space.lower, [0.0, MIN_SPAN]), np.append(self.space.upper, [1.0, 2 * np.pi])
 
     def sweep(self, X: FloatArray, q0: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(start, span)`` (N,) of the crank's sweep (radians, in the design's frame), ``q0`` the pose's inputs."""
         if not self.partial:
             return q0, np.full_like(q0, 2 * np.pi)
-        if self.swept:
-            return q0 + X[:, -2], X[:, -1]
+        if self.swept:  # the pose within the sweep: a fraction X[:, -2] of it before the pose
+            return q0 - X[:, -2] * X[:, -1], X[:, -1]
         assert self.inputs is not None
         th = q0[:, None] + (self.inputs - self.inputs[0])[None, :]
         lo, hi = th.min(axis=1), th.max(axis=1)

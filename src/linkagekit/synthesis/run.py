@@ -16,6 +16,7 @@ A four-bar whose coupler point passes through five points of a known coupler cur
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
@@ -271,7 +272,7 @@ def synthesize_path(
         (built-in topologies); with a template, the joints that move (default all), or ``joint ->
         ((x0, x1), (y0, y1))``; joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
-        See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation.
+        See :class:`~.optimize.Settings`; ``progress`` gets a ``Progress`` per generation (first, :mod:`~.atlas`).
 
     Returns
     -------
@@ -282,7 +283,28 @@ def synthesize_path(
     args = (targets, topology, inputs, units, ordered, mt, lengths, pivots, free, reach, 180, shape_only, partial)
     problem = make_problem(*args)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
-    return finish(problem, optimize(problem, settings, progress), source)
+    return finish(problem, _from_atlas(problem, settings, progress), source)
+
+
+def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> Outcome:
+    """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has the topology.
+
+    The answer is reported at once (``Progress.source == "atlas"``); one that meets the goal ends the run.
+    ``LINKAGEKIT_ATLAS_SIZE=0`` turns the atlas off.
+    """
+    from . import atlas
+
+    if not atlas.applies(problem):
+        return optimize(problem, settings, progress)
+
+    def start() -> np.ndarray:
+        t0 = time.monotonic()
+        ans = atlas.first_answer(problem)
+        if progress is not None and len(ans.designs):
+            progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), time.monotonic() - t0, source="atlas"))
+        return ans.designs
+
+    return optimize(problem, settings, progress, start)
 
 
 def _units(units: str, old: dict[str, Any]) -> str:
@@ -362,6 +384,11 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
     )
     if out.offset is not None:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    if out.placement is not None:
+        a, b = out.placement
+        lines.append(f"shape only: the design placed by z -> a z + b, a = {a:.9g}, b = {b:.9g} {unit}")
+    if out.sweep is not None:
+        lines.append(f"partial: the crank rocks from {out.sweep[0]:.6g} to {out.sweep[1]:.6g} deg")
     lines.append(
         f"smallest transmission angle {out.min_transmission:.4g} deg" + ("" if out.feasible else ", INFEASIBLE")
     )
