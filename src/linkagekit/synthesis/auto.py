@@ -17,7 +17,7 @@ Examples
 >>> import numpy as np
 >>> from linkagekit.synthesis.auto import synthesize_auto
 >>> t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
->>> out = synthesize_auto(np.stack([np.cos(t), 0.6 * np.sin(t)], 1), max_joints=5, seconds=2, restarts=1)
+>>> out = synthesize_auto(np.stack([np.cos(t), 0.6 * np.sin(t)], 1), max_joints=5, seconds=1)
 >>> out.topology, out.feasible
 ('fourbar', True)
 """
