@@ -34,6 +34,8 @@ LAYERS = [
         "synthesis.function",
         "synthesis.motion",
         "synthesis.burmester",
+        "synthesis.topologies",
+        "synthesis.tracer",
         "synthesis.descriptors",
     },
     {"synthesis.distribute"},
@@ -41,6 +43,7 @@ LAYERS = [
     {"synthesis.atlas"},
     {"synthesis.function_run"},
     {"synthesis.run"},
+    {"synthesis.auto"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

@@ -72,6 +72,10 @@ class Synthesis:
     placement : (complex, complex) or None
         With ``shape_only``: the similarity ``z -> a z + b`` that moved, turned and scaled the
         design ``x`` onto the targets (the mechanism is the placed one).
+    topology : str
+        The topology's name (``fourbar``, ``sixbar-3``, ...; a template's source).
+    tried : tuple
+        ``--topology auto``: the topologies searched (:class:`~.auto.Tried`), else empty.
     """
 
     mechanism: Mechanism
@@ -85,6 +89,8 @@ class Synthesis:
     outcome: Outcome
     sweep: tuple[float, float] | None = None
     placement: tuple[complex, complex] | None = None
+    topology: str = ""
+    tried: tuple[Any, ...] = ()
 
     @property
     def max_error(self) -> float:
@@ -358,6 +364,7 @@ def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Syn
         outcome,
         (float(start), float(start + span)) if problem.partial else None,
         (complex(e.a[0]), complex(e.b[0])) if problem.shape_only else None,
+        problem.space.topology,
     )
     return replace(out, mechanism=replace(mech, description=describe(out, problem, source)))
 
