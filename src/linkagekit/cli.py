@@ -1975,6 +1975,8 @@ def _atlas(args: argparse.Namespace) -> int:
 
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers: expected at least 1, got {args.workers}")
+    if args.workers is not None and args.action != "build":
+        raise InputError("--workers: only 'atlas build' builds; 'atlas info' never does")
     t0 = time.monotonic()
     if atlas.size() == 0:
         raise InputError("LINKAGEKIT_ATLAS_SIZE is 0: the atlas is turned off")
@@ -1982,6 +1984,8 @@ def _atlas(args: argparse.Namespace) -> int:
         atlas.build(tick=atlas.build_report(), workers=args.workers)
     got = atlas.info()
     state = f"built, {got.bytes / 1e6:.1f} MB" if got.built else "not built yet"
+    if got.damaged:
+        state = f"damaged: a {got.bytes / 1e6:.1f} MB file that is not a whole atlas; the next use rebuilds it"
     print(f"four-bar atlas, format {got.version}: {got.file} ({state})")
     print(f"{got.entries} entries: {got.closed} closed curves (the crank turns fully), {got.open} open")
     if got.chunks:

@@ -21,7 +21,9 @@ Cache (:func:`build`, :func:`load`)
     into place (an interrupted build resumes from its chunks; two processes building at once
     write the same chunks), then assembled into a temporary file renamed over the atlas. It is
     read with ``allow_pickle=False`` and memory-mapped; a file whose shape, type or marker is
-    wrong is rebuilt.
+    wrong is rebuilt. Temporary files of the atlas older than ``STALE`` seconds (left by a
+    build killed by a signal, where ``finally`` never runs) are removed by the next build or load;
+    a directory where the atlas file goes is an :class:`AtlasError` before anything is built.
 Seeding a search (:func:`first_answer`)
     The ``NEAREST`` nearest entries that fit the problem's bounds are placed on the targets,
     refitted to them (:func:`refit`), posed with the tracer at its point nearest the first
@@ -83,6 +85,9 @@ NEAREST, POLISHED, POLISH_NFEV = 256, 3, 60
 #: entries looked up to find ``NEAREST`` that fit the problem's bounds (more when too few do); rounds of
 #: their refit to the targets
 LOOKED_UP, REFITS = (8192, 65536), 3
+#: a temporary file of the atlas this old (seconds since written) has no writer left: a chunk is written,
+#: and the atlas assembled, in seconds
+STALE = 15 * 60.0
 #: the box lengths are drawn from (log-uniform, in ground lengths) and the coupler point's frame
 CRANK, LINKS, COUPLER_U, COUPLER_V = (0.05, 3.0), (0.1, 5.0), (-1.5, 2.5), (-2.0, 2.0)
 
@@ -105,9 +110,17 @@ def directory() -> Path:
 
 
 def size() -> int:
-    """Entries of the atlas: ``LINKAGEKIT_ATLAS_SIZE`` or ``SIZE``, rounded down to whole chunks (at least one).
+    """Entries of the atlas: ``LINKAGEKIT_ATLAS_SIZE`` or ``SIZE``, rounded down to whole chunks of ``CHUNK``.
 
-    0 turns the atlas off (searches start as without one).
+    Below ``CHUNK`` entries the atlas is one chunk of them (at least 64). 0 turns the atlas off
+    (searches start as without one).
+
+    >>> saved = os.environ.get("LINKAGEKIT_ATLAS_SIZE")
+    >>> os.environ["LINKAGEKIT_ATLAS_SIZE"] = str(2 * CHUNK + 100); size() == 2 * CHUNK
+    True
+    >>> os.environ["LINKAGEKIT_ATLAS_SIZE"] = "1000"; size()
+    1000
+    >>> _ = os.environ.pop("LINKAGEKIT_ATLAS_SIZE") if saved is None else os.environ.update(LINKAGEKIT_ATLAS_SIZE=saved)
     """
     raw = os.environ.get("LINKAGEKIT_ATLAS_SIZE", "")
     try:
@@ -301,6 +314,26 @@ def _good_chunk(file: Path, entries: int) -> bool:
     return bool(arr.dtype == np.float32 and arr.shape == (entries, COLUMNS) and np.isfinite(arr[-1, 0]))
 
 
+def _place(file: Path) -> None:
+    """Refuse a ``file`` path taken by something that is no file (a directory): one line, before any work."""
+    if file.exists() and not file.is_file():
+        raise AtlasError(f"{file}: is a directory, not the atlas file (remove it, or set LINKAGEKIT_CACHE_DIR)")
+
+
+def _remove_stale(file: Path) -> None:
+    """Temporary files of the atlas ``file`` and of its chunks that are older than ``STALE`` seconds, removed.
+
+    A build killed by a signal leaves its temporary file (up to the atlas's size); no writer still owns
+    one that old, so it would stay for ever.
+    """
+    parts = file.with_name(file.stem + ".parts")
+    old = time.time() - STALE
+    for tmp in [*file.parent.glob(f".{file.name}.*.tmp"), *parts.glob(".chunk-*.npy.*.tmp")]:
+        with contextlib.suppress(OSError):  # gone already, or not ours to remove
+            if tmp.stat().st_mtime < old:
+                tmp.unlink()
+
+
 def _temporary(file: Path) -> Path:
     """A new temporary file beside ``file``, of this writer alone (another process or thread has its own)."""
     fd, name = tempfile.mkstemp(dir=file.parent, prefix=f".{file.name}.", suffix=".tmp")
@@ -332,6 +365,8 @@ def build(n: int | None = None, tick: Tick | None = None, workers: int | None = 
     """
     n = size() if n is None else n
     file = path(n)
+    _place(file)
+    _remove_stale(file)
     if _readable(file, n) is not None:
         return file
     parts = file.with_name(file.stem + ".parts")
@@ -439,6 +474,8 @@ def load(tick: Tick | None = None, workers: int | None = None) -> Atlas:
     """The atlas of :func:`size` entries: the cached one, or built now (a file that is not a whole atlas is rebuilt)."""
     n = size()
     file = path(n)
+    _place(file)
+    _remove_stale(file)
     for _ in range(2):
         try:
             mtime = file.stat().st_mtime
@@ -699,8 +736,11 @@ class Info:
         Entries in all, of closed curves, of open ones.
     built : bool
         A whole atlas is there.
+    damaged : bool
+        A file is there that is not a whole atlas (cut short, another shape, not an atlas): the next
+        use deletes and rebuilds it.
     bytes : int
-        Its size on disk (0 when not built).
+        The file's size on disk (0 when there is none).
     chunks : int
         Chunks an unfinished build has written (of ``entries // chunk_entries(entries)``).
     """
@@ -711,6 +751,7 @@ class Info:
     closed: int
     open: int
     built: bool
+    damaged: bool
     bytes: int
     chunks: int
 
@@ -719,11 +760,13 @@ def info() -> Info:
     """What is cached, never building anything."""
     n = size()
     file = path(n)
+    _place(file)
     built = _readable(file, n) is not None
+    there = file.is_file()
     parts = file.with_name(file.stem + ".parts")
     chunks = len(list(parts.glob("chunk-*.npy"))) if parts.is_dir() and not built else 0
     nc = _closed_rows(n)
-    return Info(file, VERSION, n, nc, n - nc, built, file.stat().st_size if built else 0, chunks)
+    return Info(file, VERSION, n, nc, n - nc, built, there and not built, file.stat().st_size if there else 0, chunks)
 
 
 def build_report() -> Tick:
