@@ -225,10 +225,11 @@ def test_the_command_says_the_atlas_answer_first(tmp_path, capsys):
     assert err.count("\n") == 1 and "stopped by reaching the goal" in out and (tmp_path / "a.yaml").exists()
 
 
-def test_only_whole_turns_of_the_free_four_bar_start_from_the_atlas():
+def test_only_the_free_four_bar_with_its_sweep_free_starts_from_the_atlas():
     T = np.array([[0.0, 0.0], [1.0, 0.2], [1.6, 0.9], [1.2, 1.8], [0.3, 1.5]])
     assert at.applies(make_problem(T, "fourbar"))
-    assert not at.applies(make_problem(T, "fourbar", partial=True))
+    assert at.applies(make_problem(T, "fourbar", partial=True))  # from the open entries (review of issue 30)
+    assert not at.applies(make_problem(T, "fourbar", inputs=[0, 20, 40, 60, 80], partial=True))  # timed: no sweep
     assert at.applies(make_problem(T, "fourbar", shape_only=True))  # its ground pivots fixed: put on them
     assert not at.applies(make_problem(T, "watt2"))
 
@@ -246,3 +247,44 @@ def test_a_shape_only_answer_is_an_entry_on_the_fixed_pivots():
     assert np.allclose(ratio, ratio[0], rtol=0, atol=1e-12)
     ans = at.first_answer(problem, atlas)
     assert ans.error < 1e-6 and ans.designs.shape[1] == 6
+
+
+def _arc(x: np.ndarray, n: int = 4001) -> np.ndarray:
+    """The tracer's curve of a partial design ``x`` (joints at the pose, then ``f`` and the span) over its sweep.
+
+    Two arcs from the pose (``at.curves`` turns the crank from a pose): back by ``f`` of the span, on by the rest.
+    """
+    X, f, w = x[None, :10], x[10], x[11]
+    back, _ = at.curves(X, np.array([-f * w]), False, n)
+    on, _ = at.curves(X, np.array([(1 - f) * w]), False, n)
+    return np.concatenate([back[0][::-1], on[0]])
+
+
+@pytest.mark.parametrize("shape_only", [False, True])
+def test_a_partial_problem_on_an_open_entry_is_answered_by_it(shape_only):
+    """Targets exactly on an open entry's arc (moved, turned, scaled): the first answer is exact.
+
+    Checked apart from the objective: the answer's arc over its sweep (solved from its design's
+    ``f`` and span as Problem.sweep defines them) passes within 1e-6 of the diagonal of every target.
+    """
+    atlas = at.load()
+    lo, hi = atlas.block(False)
+    s, b = 1.5 * np.exp(0.4j), 2 + 1j
+    for r in range(lo, hi):  # the first open entry that fits the bounds of its own targets
+        row = atlas.entries(np.array([r]))[0]
+        J = b + s * (row[at.JOINTS : at.SWEEP].reshape(5, 2) @ np.array([1, 1j]))
+        P, _ = at.curves(np.stack([J.real, J.imag], -1).reshape(1, 10), row[None, at.SWEEP], False, 14)
+        T = np.stack([P[0].real, P[0].imag], 1)
+        problem = make_problem(T, "fourbar", reach=2.0, partial=True, shape_only=shape_only, min_transmission=10.0)
+        if (shape_only or at._fits(problem, J[None])[0]) and row[at.MU] > 25:
+            break
+    ans = at.first_answer(problem, atlas)
+    assert ans.error < 1e-6 and ans.designs.shape[1] == problem.dim == (8 if shape_only else 12)
+    x = ans.designs[0]
+    assert np.pi / 2 <= x[-1] <= 2 * np.pi and 0 <= x[-2] <= 1
+    if not shape_only:  # placed by the design itself (shape-only: by the objective's fitted similarity)
+        diag = np.hypot(*np.ptp(T, axis=0))
+        arc = _arc(x)  # each target's distance to the polyline of its dense samples
+        a, d, p = arc[:-1][None, :], np.diff(arc)[None, :], P[0][:, None]
+        t = np.clip(((p - a) * np.conj(d)).real / np.maximum(np.abs(d) ** 2, 1e-300), 0.0, 1.0)
+        assert np.max(np.min(np.abs(a + t * d - p), axis=1)) / diag < 1e-6

@@ -31,6 +31,8 @@ Seeding a search (:func:`first_answer`)
     scored by the problem's own objective; the best few are polished by least squares
     (:func:`~.optimize.polish`), and the best of all, by the problem's dense check, is the
     atlas's answer; the designs, best first, seed the search (``optimize(..., initial=...)``).
+    A partial problem (its sweep free) looks up the open entries: each one's sweep becomes the
+    span of the design's sweep, its pose the share ``f`` of it (:func:`posed`).
 
 ``LINKAGEKIT_ATLAS_SIZE=0`` turns the atlas off.
 """
@@ -85,6 +87,8 @@ NEAREST, POLISHED, POLISH_NFEV = 256, 3, 60
 #: entries looked up to find ``NEAREST`` that fit the problem's bounds (more when too few do); rounds of
 #: their refit to the targets
 LOOKED_UP, REFITS = (8192, 65536), 3
+#: entries nearest in shape that the dense check measures whatever their search cost
+CHECKED_NEAREST = 4
 #: a temporary file of the atlas this old (seconds since written) has no writer left: a chunk is written,
 #: and the atlas assembled, in seconds
 STALE = 15 * 60.0
@@ -573,15 +577,18 @@ class Answer:
 
 
 def applies(problem: Problem) -> bool:
-    """The atlas seeds a problem of the built-in four-bar over a full turn, unless it is off.
+    """The atlas seeds a problem of the built-in four-bar, unless it is off.
 
     Its joints A, B, C, D, P all free, or C, D, P with ``--shape-only`` (which fixes the ground
-    pivots); no partial sweep (whose design vector holds the sweep too): what :func:`first_answer` places.
+    pivots); over a full turn (from the closed entries) or, ``partial`` and untimed, over a sweep
+    whose start and span are design variables (from the open entries: an entry's sweep is the
+    span, its pose within it the fraction ``f``). A partial problem with inputs (timed) takes
+    its sweep from them, which no entry's sweep need match: not seeded.
     """
     sp = problem.space
-    whole = not getattr(problem, "partial", False)
+    swept = not getattr(problem, "partial", False) or bool(getattr(problem, "swept", False))
     free = ("C", "D", "P") if _shape_only(problem) else ("A", "B", "C", "D", "P")
-    return sp.topology == "fourbar" and sp.free == free and whole and size() > 0
+    return sp.topology == "fourbar" and sp.free == free and swept and size() > 0
 
 
 def _shape_only(problem: Problem) -> bool:
@@ -599,21 +606,29 @@ def on_pivots(problem: Problem, joints: np.ndarray) -> np.ndarray:
     return np.stack([J.real, J.imag], axis=-1).reshape(len(joints), 6)
 
 
-def _turn(problem: Problem, joints: np.ndarray, samples: int) -> np.ndarray:
-    """Every joint (5, k, samples) of four-bars ``joints`` (k, 5) over a whole turn of the crank from their poses."""
+def _turn(problem: Problem, joints: np.ndarray, samples: int, span: np.ndarray | None = None) -> np.ndarray:
+    """Every joint (5, k, samples) of four-bars ``joints`` (k, 5) over a whole turn of the crank from their poses.
+
+    With ``span`` (k,): over each one's sweep from its pose instead, both ends sampled.
+    """
     from ..params import compile as compile_params
     from ..positions import solve
 
     sp = problem.space
     X = np.stack([joints.real, joints.imag], axis=-1).reshape(len(joints), 10)
     params = compile_params(sp.template, sp.poses(X), sp.plan)
-    q = params.pose_inputs[0][:, None] + np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+    turn = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)[None, :]
+    q = params.pose_inputs[0][:, None] + (turn if span is None else span[:, None] * np.linspace(0.0, 1.0, samples))
     z: np.ndarray = solve(params, q[None]).z
     return z
 
 
-def refit(problem: Problem, joints: np.ndarray, rounds: int = REFITS, samples: int = 180) -> np.ndarray:
+def refit(
+    problem: Problem, joints: np.ndarray, rounds: int = REFITS, samples: int = 180, span: np.ndarray | None = None
+) -> np.ndarray:
     """Four-bars ``joints`` (k, 5) moved, turned and scaled so that their curves fit the targets better.
+
+    Their curves over a whole turn, or with ``span`` (k,) over each one's sweep from its pose.
 
     Iterated closest points: each target's nearest curve sample ``N_i``, then the similarity
     ``c + s z`` of least squares ``sum |T_i - c - s N_i|^2`` (a linear fit in the complex ``c, s``:
@@ -624,7 +639,7 @@ def refit(problem: Problem, joints: np.ndarray, rounds: int = REFITS, samples: i
     T = problem.targets
     P = problem.space.joint(problem.space.tracer)
     for _ in range(rounds):
-        C = _turn(problem, joints, samples)[P]  # (k, samples)
+        C = _turn(problem, joints, samples, span)[P]  # (k, samples)
         C = np.where(np.isfinite(C), C, np.inf)
         N = np.empty((len(joints), len(T)), complex)
         for i in range(0, len(T), 64):  # the (k, targets, samples) distances in bounded pieces
@@ -639,19 +654,23 @@ def refit(problem: Problem, joints: np.ndarray, rounds: int = REFITS, samples: i
     return joints
 
 
-def posed(problem: Problem, joints: np.ndarray, samples: int = 360) -> np.ndarray:
+def posed(problem: Problem, joints: np.ndarray, samples: int = 360, span: np.ndarray | None = None) -> np.ndarray:
     """Design vectors of ``problem``'s space for four-bars ``joints`` (k, 5), posed with P nearest the first target.
 
     Turning the crank a whole turn from each pose on its branch, the pose moves to the sample
     where the tracer is nearest the first target (the built-in space keeps the tracer near it).
+    With ``span`` (k,), a partial problem's: along each one's sweep from its pose instead, and the
+    design vector ends with the sweep's variables ``f`` (the share of the sweep before the new
+    pose: the sample's) and the span (:meth:`~.objective.Problem.sweep`).
     """
     sp = problem.space
-    z = _turn(problem, joints, samples)  # (joints, k, samples)
+    z = _turn(problem, joints, samples, span)  # (joints, k, samples)
     d = np.abs(z[sp.joint(sp.tracer)] - problem.targets[0])
     best = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
     Z = np.take_along_axis(z, best[None, :, None], axis=2)[:, :, 0]  # (joints, k)
     order = [sp.joint(j) for j in sp.free]
-    return np.stack([Z[order].real, Z[order].imag], axis=-1).transpose(1, 0, 2).reshape(len(joints), -1)
+    X = np.stack([Z[order].real, Z[order].imag], axis=-1).transpose(1, 0, 2).reshape(len(joints), -1)
+    return X if span is None else np.c_[X, best / (samples - 1), span]
 
 
 def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
@@ -676,25 +695,45 @@ def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
     return fits
 
 
+def _nearest_fitting(problem: Problem, atlas: Atlas, keep: Callable[[Match], np.ndarray]) -> Match:
+    """Up to ``NEAREST`` nearest entries (closed, or open for a partial problem) that ``keep`` accepts.
+
+    ``LOOKED_UP`` entries are looked up, more when too few are kept.
+    """
+    for k in LOOKED_UP:
+        m = nearest(atlas, problem.targets, not problem.partial, k, problem.min_transmission)
+        ok = np.flatnonzero(keep(m))[:NEAREST]
+        if len(ok) == NEAREST:
+            break
+    return Match(m.joints[ok], m.sweep[ok], m.transmission[ok], m.distance[ok], m.rows[ok])
+
+
 def _placed(problem: Problem, atlas: Atlas) -> np.ndarray:
     """Design vectors of the nearest entries that fit the bounds, placed, refitted and posed on the targets."""
-    for k in LOOKED_UP:
-        match = nearest(atlas, problem.targets, True, k, problem.min_transmission)
-        fits = match.joints[_fits(problem, match.joints)][:NEAREST]
-        if len(fits) == NEAREST:
-            break
-    return posed(problem, refit(problem, fits)) if len(fits) else np.zeros((0, problem.dim))
+    m = _nearest_fitting(problem, atlas, lambda m: _fits(problem, m.joints))
+    if len(m.rows) == 0:
+        return np.zeros((0, problem.dim))
+    span = m.sweep if problem.partial else None
+    return posed(problem, refit(problem, m.joints, span=span), span=span)
 
 
 def _shaped(problem: Problem, atlas: Atlas) -> np.ndarray:
-    """``--shape-only``: design vectors of the nearest entries within the bounds, on the fixed pivots."""
+    """``--shape-only``: design vectors of the nearest entries within the bounds, on the fixed pivots.
+
+    A partial problem's start at the sweep's start (``f = 0``) with the entry's span.
+    """
     lo, hi = problem.bounds
-    for k in LOOKED_UP:
-        X = on_pivots(problem, nearest(atlas, problem.targets, True, k, problem.min_transmission).joints)
-        X = X[np.all((lo <= X) & (hi >= X), axis=1)][:NEAREST]
-        if len(X) == NEAREST:
-            break
-    return X
+
+    def vectors(m: Match) -> np.ndarray:
+        X = on_pivots(problem, m.joints)
+        return np.c_[X, np.zeros(len(X)), m.sweep] if problem.partial else X
+
+    def inside(m: Match) -> np.ndarray:
+        X = vectors(m)
+        ok: np.ndarray = np.all((lo <= X) & (hi >= X), axis=1)
+        return ok
+
+    return vectors(_nearest_fitting(problem, atlas, inside))
 
 
 def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED) -> Answer:
@@ -713,12 +752,16 @@ def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POL
     X = X[np.all((lo <= X) & (hi >= X), axis=1)]
     if len(X) == 0:
         return Answer(np.zeros((0, problem.dim)), np.inf, np.inf, time.monotonic() - t0, 0)
-    X = X[np.argsort(problem.cost(X), kind="stable")]
-    done = [local(problem, x, POLISH_NFEV) for x in X[: min(polish, len(X))]]
-    head = np.array(done + list(X[:8]))
+    # the best by the search's cost, and the nearest few by shape whatever theirs: the search's placement
+    # of a partial arc (shape-only) can miss a curve that the dense check places exactly
+    by_cost = np.argsort(problem.cost(X), kind="stable")
+    done = [local(problem, x, POLISH_NFEV) for x in X[by_cost[:polish]]]
+    near = np.arange(min(CHECKED_NEAREST, len(X)))
+    shown = np.concatenate([by_cost[:8], near[~np.isin(near, by_cost[:8])]])
+    head = np.array(done + list(X[shown]))
     err, cost = problem.measure(head)
     order = np.lexsort((cost, err))
-    designs = np.concatenate([head[order], X[8:]])
+    designs = np.concatenate([head[order], X[by_cost[~np.isin(by_cost, shown)]]])
     k = best_index(err, cost)
     return Answer(designs, float(err[k]), float(cost[k]), time.monotonic() - t0, len(done))
 
