@@ -201,6 +201,11 @@ def test_the_atlas_command(monkeypatch, tmp_path, capsys):
     assert main(["atlas", "build", "--workers", "1"]) == 0
     out = capsys.readouterr().out
     assert f"fourbar-atlas-v{at.VERSION}-256.npy (built, 0.0 MB)" in out and "128 closed curves" in out
+    assert main(["atlas", "info", "--workers", "3"]) == 2  # info never builds: no workers to give it
+    assert capsys.readouterr().err.count("\n") == 1
+    at.path().write_bytes(b"not an atlas")
+    assert main(["atlas", "info"]) == 0
+    assert "(damaged: a 0.0 MB file that is not a whole atlas; the next use rebuilds it)" in capsys.readouterr().out
     for bad in ("many", "-5", "0"):  # 0 turns the atlas off: there is none to build
         monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", bad)
         assert main(["atlas", "info"]) == 2
