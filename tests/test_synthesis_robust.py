@@ -33,7 +33,7 @@ from linkagekit.synthesis.run import make_problem, synthesize
 ROOT = Path(__file__).resolve().parents[1]
 SEED000 = ROOT / "examples" / "seed000_fourbar.yaml"
 TARGETS = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
-SMALL = dict(units="cm", restarts=2, generations=12, popsize=5, goal=0.0, seconds=1000.0, seed=3)
+SMALL = dict(units="cm", restarts=2, generations=12, popsize=5, goal=0.0, seconds=1000.0, seed=3, workers=1)
 ERROR_PREFIX = "linkagekit: error: "
 
 
@@ -382,7 +382,7 @@ def test_progress_lines_when_stderr_is_not_a_terminal_and_the_file_records_targe
     csv = write_csv(tmp_path / "t.csv")
     out = tmp_path / "o.yaml"
     args = ["synthesize", str(csv), "-o", str(out), "--units", "cm", "--restarts", "1", "--generations", "6"]
-    code = main([*args, "--seed", "2", "--goal", "0"])
+    code = main([*args, "--seed", "2", "--goal", "0", "--workers", "1"])  # one process: a line per generation
     captured = capsys.readouterr()
     assert code == 0, captured.err
     lines = captured.err.splitlines()

@@ -81,6 +81,8 @@ CHUNK = 1 << 16
 MARGIN = 0.25
 #: central-difference step of the refinement (radians)
 H_THETA = 1e-4
+#: the highest transmission bound of --pareto's searches (degrees)
+RAISED_MAX = 80.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -196,6 +198,15 @@ class Problem(Objective):
 
     def mechanism(self, x: FloatArray) -> Mechanism:
         return self.space.mechanism(np.asarray(x, float))
+
+    def transmission(self, X: FloatArray) -> FloatArray:
+        """The smallest transmission angle (degrees) over the turn, by :func:`check`."""
+        return check(self, np.atleast_2d(X)).transmission
+
+    def raised(self, degrees: float) -> Objective | None:
+        """The problem with ``min_transmission`` ``degrees`` higher, at most ``RAISED_MAX`` (None: no higher)."""
+        bound = min(self.min_transmission + degrees, RAISED_MAX)
+        return replace(self, min_transmission=bound) if bound > self.min_transmission else None
 
 
 @dataclass(frozen=True)
