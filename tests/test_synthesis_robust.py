@@ -149,6 +149,8 @@ def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, err
+    # the plain progress lines (the first after 1 s, on a loaded machine before the Ctrl-C) are not errors
+    err = "".join(ln for ln in err.splitlines(keepends=True) if not ln.startswith("linkagekit: synthesize: search "))
     assert err.count("\n") == 1 and "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert err == "linkagekit: interrupted; the search is saved in ck.npz: the same command resumes it\n"
     with np.load(tmp_path / "ck.npz", allow_pickle=False) as z:
