@@ -130,3 +130,28 @@ def test_the_first_progress_line_comes_after_a_second_with_an_error(monkeypatch,
     assert main([*args, "--restarts", "1", "--generations", "6", "--seed", "2", "--goal", "0"]) == 0
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("linkagekit: synthesize: search 1, generation 1, best max error ")
+
+
+def test_an_objective_that_does_not_pickle_runs_here_by_default():
+    """Every core by default, but a user's objective defined where pickle cannot find it (here: in a function) is
+    searched in this process instead of failing to reach the workers; asked for two workers, it reaches them
+    anyway where processes fork (the workers are given the objectives when they start, not with each search)."""
+    from linkagekit.synthesis.base import Objective, Score
+
+    class Nearest(Objective):
+        bounds = (np.zeros(2), np.ones(2))
+
+        def score(self, X):  # noqa: ANN001, ANN202
+            r = X - [0.3, 0.7]
+            return Score(np.sum(r * r, axis=1), np.abs(r).max(axis=1), np.zeros(len(X)))
+
+        def residuals(self, X):  # noqa: ANN001, ANN202
+            return X - [0.3, 0.7]
+
+        def fingerprint(self):  # noqa: ANN202
+            return "nearest"
+
+    out = optimize.search(Nearest(), restarts=2, generations=3)
+    assert out.error < 1e-9 and out.outcome.stopped_by == "goal"
+    two = optimize.search(Nearest(), restarts=2, generations=3, workers=2)
+    assert np.array_equal(two.x, out.x)

@@ -88,6 +88,11 @@ class Channel:
         return out
 
 
+def installed() -> tuple[Objective, ...]:
+    """In a local worker process: the problems it was started with."""
+    return _PROBLEMS
+
+
 def channel() -> Channel | None:
     """In a local worker process: its :class:`Channel` to the parent (None elsewhere)."""
     return _CHANNEL

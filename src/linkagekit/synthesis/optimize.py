@@ -254,7 +254,8 @@ def search(
 ) -> Optimum:
     """Search any objective with the synthesis engine (``synthesize(objective=...)`` calls this).
 
-    ``workers``: local processes, every core by default (:func:`default_workers`).
+    ``workers``: local processes, by default every core (:func:`default_workers`) if the objective
+    pickles (a class defined where pickle cannot find it again runs in this process).
 
     Examples
     --------
@@ -272,7 +273,8 @@ def search(
     >>> bool(out.error < 1e-9), out.mechanism is None
     (True, True)
     """
-    workers = default_workers() if workers is None else workers
+    if workers is None:  # every core, if the objective can be sent to worker processes
+        workers = default_workers() if _picklable(objective) else 1
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
     outcome = optimize(objective, settings, progress)
     s = objective.check(outcome.x[None])
@@ -289,6 +291,17 @@ def search(
 RAISES = (10.0, 20.0, 30.0)
 #: seconds between two measures of the best design of the search under way (for the progress)
 MEASURE_EVERY = 1.0
+
+
+def _picklable(objective: Objective) -> bool:
+    """Whether ``objective`` can be sent to a worker process."""
+    import pickle
+
+    try:
+        pickle.dumps(objective)
+    except (pickle.PicklingError, AttributeError, TypeError):
+        return False
+    return True
 
 
 @dataclass
@@ -631,9 +644,22 @@ class _Run:
         return self.restart < lanes.goal_at and lanes.stopped_by != "time"
 
     def _child(self, restart: int) -> _Run:
-        """What a worker needs to run restart ``restart`` (:func:`_restart_on_worker`)."""
+        """What a worker needs to run restart ``restart`` (:func:`_restart_on_worker`).
+
+        Not the objectives: the worker has them since it started (``distribute._install``; with
+        fork not even pickled, so an objective pickle cannot find again still runs on workers).
+        """
         return replace(
-            self, restart=restart, done=[], front=[], generation=0, polished=None, evaluations=0, progress=None
+            self,
+            problem=_Placeholder(),
+            objectives=(),
+            restart=restart,
+            done=[],
+            front=[],
+            generation=0,
+            polished=None,
+            evaluations=0,
+            progress=None,
         )
 
     def _lane_done(self, lanes: _Lanes, r: int, result: dict[str, Any]) -> None:
@@ -700,17 +726,31 @@ class _WorkerLane:
         return bool(self.line.stop.value) or restart >= self.line.limit.value
 
 
+class _Placeholder(Objective):
+    """Stands for the objective in a restart sent to a worker (which has the objectives already)."""
+
+    bounds = (np.zeros(0), np.zeros(0))
+
+    def score(self, X: FloatArray) -> Any:
+        raise AssertionError("a placeholder is never scored")
+
+    def fingerprint(self) -> str:
+        return "placeholder"
+
+
 class _Dropped(Exception):
     """A lane's restart stopped: a restart before it met the goal, or the run ends."""
 
 
 def _restart_on_worker(run: _Run) -> dict[str, Any]:
     """Restart ``run.restart`` whole, on a local worker process: its result, or ``done`` None if it was dropped."""
-    from .distribute import channel
+    from .distribute import channel, installed
 
     line = channel()
     assert line is not None
     r = run.restart
+    run.objectives = installed()
+    run.problem = run.objectives[0]  # the variants come first, the problem itself the first of them
 
     def tell(p: Progress) -> None:
         line.queue.put((r, p.generation, float(p.best_cost), float(p.best_error), int(p.evaluations)))
