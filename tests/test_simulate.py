@@ -284,3 +284,20 @@ def test_two_drivers_spring_and_damper_agree_with_kinetostatics():
     assert np.ptp(res.to_dict()["springs"]["P-B"]["force"]) > 0.5  # N: the spring works along the motion
     T = res.forces.driver_torque
     assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
+
+
+def test_a_motion_too_fast_for_its_time_span_is_refused_in_one_line(monkeypatch, capsys):
+    # --speed 1e9 over 0.1 s is ~1.6e7 turns: before the step budget this ran for hours. The budget is made
+    # small here so the refusal is quick; the message gives the speed reached (near the start speed: 1e6 rad/s)
+    import linkagekit.dynamics as dyn
+
+    monkeypatch.setattr(dyn, "MAX_STEPS", 2000)
+    args = ["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.1:0.01", "--speed", "1e6"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "more than 2000 integration steps" in err[0] and "rad/s" in err[0]
+    w = float(re.search(r"moves at (\S+) rad/s", err[0]).group(1))
+    assert 0.5e6 < w < 1.5e6
+    # the same motion at a sane speed still runs under the real budget
+    monkeypatch.setattr(dyn, "MAX_STEPS", 200_000)
+    assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.1:0.01", "--speed", "100"]) == 0

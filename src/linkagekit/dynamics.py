@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -49,6 +50,7 @@ from .params import Params
 from .positions import solve
 from .rates import link_motion, solve_rates
 from .result import Result, frozen
+from .units import UnitKind
 
 #: relative and absolute tolerances of the integration (SI state: rad or m, rad/s or m/s)
 RTOL = 1e-12
@@ -68,6 +70,11 @@ TABLE_TOL = 1e-8
 STOP_CONDITION = 1e-3
 #: the most output times one simulation gives
 MAX_TIMES = 1_000_000
+#: the most integration steps of a one-driver simulation (about 10 a turn: a motion of 20 000 turns, some
+#: seconds of work); a faster or longer motion is refused with a line instead of running for hours
+MAX_STEPS = 200_000
+#: right-hand-side evaluations of one DOP853 step
+_EVALS_PER_STEP = 12
 
 __all__ = ["ATOL", "POINTS", "RTOL", "Reduced", "TorqueLaw", "reduced", "simulate"]
 
@@ -515,7 +522,7 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     if red.period is None:
         t, y, stop = _with_events(red, rhs, times, y0)
     else:
-        t, y, stop = times, _dop853(rhs, times, y0), None
+        t, y, stop = times, _dop853(rhs, times, y0, partial(_speed_text, md)), None
     stopped = None if stop is None else _toggle_message(md, 0, *stop)
     q, w = y
     qdd = red.accel(q, w, law(w))
@@ -523,16 +530,44 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
 
 
-def _dop853(rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float]) -> np.ndarray:
-    """The state at every output time by the compiled DOP853 (SciPy's ``ode``): microseconds a step."""
+def _speed_text(md: _Model, w_si: float) -> str:
+    """A one-driver state's speed (rad/s or m/s) as ``--speed`` takes it: rad/s, or the file's length unit a second."""
+    d = md.mech.drivers[0]
+    unit = "rad/s" if d.type.input_kind is UnitKind.ANGLE else f"{md.mech.length_unit}/s"
+    return f"{w_si / md.scale[0]:.3g} {unit}"
+
+
+def _dop853(
+    rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float], speed: Callable[[float], str]
+) -> np.ndarray:
+    """The state at every output time by the compiled DOP853 (SciPy's ``ode``): microseconds a step.
+
+    At most :data:`MAX_STEPS` steps in all (counted by the right-hand side's evaluations); ``speed``
+    formats the state's speed for the message that refuses more.
+    """
+    import warnings
+
     from scipy.integrate import ode
 
-    solver = ode(rhs).set_integrator("dop853", rtol=RTOL, atol=ATOL, nsteps=10**9)
+    calls = [0]
+
+    def counted(t: float, y: Any) -> list[float]:
+        calls[0] += 1
+        return rhs(t, y)
+
+    solver = ode(counted).set_integrator("dop853", rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
     solver.set_initial_value(y0, times[0])
     y = np.empty((2, len(times)))
     y[:, 0] = y0
     for i in range(1, len(times)):
-        y[:, i] = solver.integrate(times[i])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said below
+            y[:, i] = solver.integrate(times[i])
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() == -2:
+            raise InputError(
+                f"simulate: more than {MAX_STEPS} integration steps by t = {solver.t:.6g} s (the driver moves at"
+                f" {speed(solver.y[1])}): shorten the time span or lower the speed"
+            )
         if not solver.successful():
             raise InputError(f"simulate: the integration failed at t = {solver.t:.6g} s")
     return y
