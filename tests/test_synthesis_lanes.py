@@ -106,6 +106,14 @@ def test_pareto_list_is_non_dominated_sorted_and_its_angles_are_the_written_mech
         smallest = min(ta["min"], 180.0 - ta["max"])
         assert smallest == pytest.approx(mu[i], abs=2e-3), (i, ta, mu[i])  # printed to 6 digits; 0.1 deg samples
     assert "smallest transmission angle" in out and "deg above the bound 20 deg" in out
+    assert " --pareto" in lk.load(tmp_path / "o.yaml").description  # the command that gives it again
+
+
+def test_pareto_is_refused_for_motion_and_function(tmp_path, capsys):
+    for task in ("motion", "function"):
+        assert main(["synthesize", str(tmp_path / "p.csv"), "--task", task, "--pareto", "-o", "o.yaml"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--pareto: only for paths" in err, err
 
 
 def test_the_margin_is_the_smallest_angle_above_the_bound():

@@ -1360,6 +1360,8 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
+    if args.pareto and args.task != "path":
+        raise InputError(f"--pareto: only for paths (--task path), not --task {args.task}")
     if args.task == "motion":
         return _synthesize_motion(args)
     if args.task == "function":
@@ -1679,6 +1681,8 @@ def _synthesize_command(args: argparse.Namespace) -> str:
             words += ["--" + name.replace("_", "-"), str(value)]
     if args.ordered:
         words.append("--ordered")
+    if args.task == "path" and args.pareto:
+        words.append("--pareto")  # it decides the searches (every other one at a raised bound)
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
         words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
