@@ -54,10 +54,19 @@ class _Reached(Exception):
     pass
 
 
-def time_to_goal(T: np.ndarray, workers: int, cap: float, seed: int = 0) -> tuple[float, float]:
-    """Seconds until the best design is within ``GOAL`` of the diagonal (``inf`` if not within ``cap``), and
-    the best error reached (relative)."""
-    t0 = time.monotonic()
+def cpu() -> float:
+    """CPU seconds of this process and of its children that ended (the worker processes of a finished run)."""
+    import resource
+
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def time_to_goal(T: np.ndarray, workers: int, cap: float, seed: int = 0) -> tuple[float, float, float]:
+    """Seconds until the best design is within ``GOAL`` of the diagonal (``inf`` if not within ``cap``), the
+    best error reached (relative), and the CPU seconds the run got per second of it (a shared machine gives
+    a session its share, however many processes it runs: Linux's autogroup)."""
+    t0, c0 = time.monotonic(), cpu()
     best = [np.inf]
 
     def watch(p: Progress) -> None:
@@ -70,20 +79,21 @@ def time_to_goal(T: np.ndarray, workers: int, cap: float, seed: int = 0) -> tupl
         out = synthesize(T, "fourbar", seconds=cap, workers=workers, seed=seed, progress=watch)
         best[0] = min(best[0], out.max_error / out.diagonal)
     except _Reached:
-        return time.monotonic() - t0, best[0]
+        took = time.monotonic() - t0
+        return took, best[0], (cpu() - c0) / took
     took = time.monotonic() - t0
-    return (took if best[0] <= GOAL else np.inf), best[0]
+    return (took if best[0] <= GOAL else np.inf), best[0], (cpu() - c0) / took
 
 
 def cores(k: int, cap: float) -> bool:
     print(f"== cores: {k} random crank-rockers, 12 targets; time to 0.1 % of the diagonal ({load()})")
-    print(f"{'case':>4s} {'1 worker [s]':>13s} {'2 workers [s]':>14s}   best error % (1, 2)")
+    print(f"{'case':>4s} {'1 worker [s]':>13s} {'2 workers [s]':>14s}   best error % (1, 2)   cores busy (1, 2)")
     rows = []
     for i, mech in enumerate(random_designs("fourbar", k, seed=11)):
         T = lk.analyze(mech, {"crank": np.linspace(0.0, 360.0, 12, endpoint=False) + 7.0}).xy("P")
-        (t1, e1), (t2, e2) = time_to_goal(T, 1, cap), time_to_goal(T, 2, cap)
+        (t1, e1, c1), (t2, e2, c2) = time_to_goal(T, 1, cap), time_to_goal(T, 2, cap)
         rows.append((t1, t2))
-        print(f"{i:4d} {t1:13.2f} {t2:14.2f}   {100 * e1:.4f}, {100 * e2:.4f}", flush=True)
+        print(f"{i:4d} {t1:13.2f} {t2:14.2f}   {100 * e1:.4f}, {100 * e2:.4f}   {c1:.2f}, {c2:.2f}", flush=True)
     m1, m2 = (float(np.median([r[j] for r in rows])) for j in (0, 1))
     ok = m2 <= 0.7 * m1
     print(f"median: 1 worker {m1:.2f} s, 2 workers {m2:.2f} s: ratio {m2 / m1:.2f} (goal <= 0.7) ({load()})")
