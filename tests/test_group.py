@@ -324,6 +324,93 @@ def test_no_branch_jump_near_a_singular_position():
     assert res.condition[near] < 0.05 * np.nanmax(res.condition)
 
 
+def test_condition_is_the_scaled_jacobians_singular_value_ratio():
+    """The conditioning reported with a triad's rates is 1 / cond_2 of its Jacobian in the group's joints, built
+    here by hand (rows: each link's length over 2 L, so a unit vector; the ternary's third joint as the complex
+    rho of its first two), by ``np.linalg.cond``: 1e-12 relative. Order of rows and columns does not matter."""
+    mech = triad(EXAMPLE)
+    res = lk.analyze(mech, {"crank": np.linspace(-8.0, 86.0, 300)})
+    ok = res.assembled
+    assert ok.sum() > 250
+    p = {j: res.point(j)[ok] for j in mech.joint_names}
+    rho = (EXAMPLE["J3"] - EXAMPLE["J1"]) / (EXAMPLE["J2"] - EXAMPLE["J1"])
+    n = int(ok.sum())
+    J = np.zeros((n, 6, 6))
+    col = {"J1": 0, "J2": 2, "J3": 4}
+    for r, (a, b) in enumerate([("A", "J1"), ("B0", "J2"), ("C0", "J3"), ("J1", "J2")]):
+        u = (p[b] - p[a]) / np.abs(p[b] - p[a])  # d |z_b - z_a|^2 / (2 L): the unit vector on b, minus it on a
+        for j, f in ((b, 1.0), (a, -1.0)):
+            if j in col:
+                J[:, r, col[j]], J[:, r, col[j] + 1] = f * u.real, f * u.imag
+    for j, c in (("J3", 1.0), ("J1", rho - 1.0), ("J2", -rho)):  # z3 - z1 - rho (z2 - z1) = 0
+        J[:, 4, col[j] : col[j] + 2] = [c.real, -c.imag]
+        J[:, 5, col[j] : col[j] + 2] = [c.imag, c.real]
+    want = 1.0 / np.linalg.cond(J)
+    assert np.max(np.abs(res.condition[ok] / want - 1)) <= 1e-12
+
+
+def test_condition_by_newton_on_the_tridiagonal_form_equals_the_svd():
+    """The group's conditioning (Householder to tridiagonal form, Newton to the extreme eigenvalues of J^T J) against
+    the SVD on random 6x6 and 8x8 matrices, with a double and a five-fold largest singular value and nearly
+    dependent columns: relative error below 1e-15 / cond^2 + 1e-13 (the rounding of eigenvalues of J^T J, about
+    1e-16 of the largest, as LAPACK's eigvalsh)."""
+    from linkagekit.group import _condition
+
+    rng = np.random.default_rng(5)
+    for n in (6, 8):
+        A = rng.normal(size=(800, n, n))
+        A[:200, :, 0] = A[:200, :, 1] * (1 + 1e-2 * rng.normal(size=(200, n)))
+        U, s, Vt = np.linalg.svd(A[200:600])
+        s[:200, :2] = 1.0
+        s[200:, :] = 1.0
+        s[200:, -1] = 0.5
+        A[200:600] = U @ (s[..., None] * Vt)
+        sv = np.linalg.svd(A, compute_uv=False)
+        want = sv[:, -1] / sv[:, 0]
+        assert np.all(np.abs(_condition(A) / want - 1) <= 1e-15 / want**2 + 1e-13), n
+
+
+def test_rates_solve_the_second_system_with_the_first_ones_factors():
+    """The accelerations' system (the velocities' matrix) solved from the velocities' factorization: bit for bit the
+    elimination of that right-hand side itself, and LAPACK's solution to 1e-10 relative."""
+    from linkagekit.group import VECTOR_SAMPLES, _gauss, _RatesSystem
+
+    rng = np.random.default_rng(11)
+    B = VECTOR_SAMPLES + 900  # two chunks, vectorized
+    J = rng.normal(size=(B, 6, 6))
+    J[::3, 0], J[::3, 2] = J[::3, 2].copy(), J[::3, 0].copy()  # pivots that differ from column to column
+    r1, r2 = rng.normal(size=(B, 6)), rng.normal(size=(B, 6))
+    system = _RatesSystem(J, r1)
+    x2 = system.solve(r2)
+    assert np.array_equal(system.first, _RatesSystem(J, r1).first)
+    assert np.array_equal(x2, _RatesSystem(J, r2).first)  # as if eliminated itself
+    assert np.array_equal(x2[:2048], _gauss(J[:2048], -r2[:2048].T)[0])
+    want = np.linalg.solve(J, r2[..., None])[..., 0]
+    assert np.max(np.abs(x2 - want) / (np.abs(want) + 1e-3)) <= 1e-10
+
+
+def test_the_walks_look_ahead_changes_no_flag(monkeypatch):
+    """The walk's Newton batches solving the next columns ahead (``LOOK_AHEAD``) give the walk of one column a
+    batch: the same flags, positions to 1e-10 of the size (Newton from other starts), on triads through gaps
+    and the six-bar of the crank-direction defect."""
+    from linkagekit import group
+
+    mech, _ = sixbar()
+    cases = [
+        (random_triad(1), {"crank": np.arange(-400.0, 400.0, 2.0)}),
+        (triad(EXAMPLE), {"crank": np.linspace(-30.0, 120.0, 301)}),
+        (mech, {"L3": np.arange(-360.0, 360.0, 1.5)}),
+    ]
+    ahead = [lk.analyze(m, i, rates=False) for m, i in cases]
+    monkeypatch.setattr(group, "LOOK_AHEAD", 1)
+    for (m, i), a in zip(cases, ahead, strict=True):
+        b = lk.analyze(m, i, rates=False)
+        assert np.array_equal(a.assembled, b.assembled)
+        assert 0 < a.assembled.sum() < a.assembled.size
+        ok = a.assembled
+        assert np.max(np.abs(points(a)[:, ok] - points(b)[:, ok])) <= 1e-10 * scale_of(m)
+
+
 def test_triads_over_the_design_axis_equal_single_solves():
     """Five triad designs in one call (poses=...) give each design's own single solve (1e-10)."""
     base = triad(EXAMPLE)

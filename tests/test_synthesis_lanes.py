@@ -113,7 +113,7 @@ def test_pareto_is_refused_for_motion_and_function(tmp_path, capsys):
     for task in ("motion", "function"):
         assert main(["synthesize", str(tmp_path / "p.csv"), "--task", task, "--pareto", "-o", "o.yaml"]) == 2
         err = capsys.readouterr().err
-        assert err.count("\n") == 1 and "--pareto: only for paths" in err, err
+        assert err.count("\n") == 1 and "--pareto: goes with --task path" in err, err
 
 
 def test_the_margin_is_the_smallest_angle_above_the_bound():

@@ -601,6 +601,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
     p.add_argument("--points", metavar="N", default="40", help="points sampled along an SVG path (default 40)")
     p.add_argument("--ordered", action="store_true", help="meet the targets in their order along the curve")
+    _shape_arguments(p)
     p.add_argument("--free", metavar="J1,J2,...", help="with a template file: the joints that move (default all)")
     p.add_argument("--pivots", metavar="X0:X1,Y0:Y1", help="the region of the ground pivots")
     p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
@@ -638,6 +639,20 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--full-turn", action="store_true", help="motion: the crank turns fully through the poses")
     p.add_argument("--free-offsets", action="store_true", help="function: each angle scale may start anywhere")
     p.add_argument("--ground-length", metavar="L", help="function: distance between the ground pivots (default 1)")
+
+
+def _shape_arguments(p: argparse.ArgumentParser) -> None:
+    """``synthesize --shape-only`` and ``--partial`` (spec section 6, path generation)."""
+    p.add_argument(
+        "--shape-only",
+        action="store_true",
+        help="match the curve up to translation, rotation and scale; the mechanism is placed on the targets",
+    )
+    p.add_argument(
+        "--partial",
+        action="store_true",
+        help="the targets may lie on the part of the curve traced while the crank rocks through a range (>= 90 deg)",
+    )
 
 
 #: the tasks of ``synthesize --task`` (spec section 6)
@@ -1360,8 +1375,9 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
-    if args.pareto and args.task != "path":
-        raise InputError(f"--pareto: only for paths (--task path), not --task {args.task}")
+    for flag in ("shape_only", "partial", "pareto"):
+        if getattr(args, flag) and args.task != "path":
+            raise InputError(f"--{flag.replace('_', '-')}: goes with --task path, not --task {args.task}")
     if args.task == "motion":
         return _synthesize_motion(args)
     if args.task == "function":
@@ -1383,9 +1399,12 @@ def _synthesize(args: argparse.Namespace) -> int:
     paths = pareto_paths(args.output, len(out.pareto))
     for design, path in zip(out.pareto or (out,), paths, strict=True):
         described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
+        described += f"\n{targets.smoothed}" if targets.smoothed else ""
         lk.save(dataclasses.replace(design.mechanism, description=described), path)
     if args.plot:
         _plot_synthesis(out, targets, args.plot)
+    if targets.smoothed:
+        print(targets.smoothed)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     if out.pareto:
         print(pareto_text(out, targets.unit, paths))
@@ -1679,10 +1698,8 @@ def _synthesize_command(args: argparse.Namespace) -> str:
             value = "20"
         if value is not None:
             words += ["--" + name.replace("_", "-"), str(value)]
-    if args.ordered:
-        words.append("--ordered")
-    if args.task == "path" and args.pareto:
-        words.append("--pareto")  # it decides the searches (every other one at a raised bound)
+    flags = ("ordered", "shape-only", "partial", "pareto")  # --pareto decides the searches (half at raised bounds)
+    words += [f"--{flag}" for flag in flags if getattr(args, flag.replace("-", "_"))]
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
         words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
@@ -1733,6 +1750,7 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
         raise InputError(f"--checkpoint {shorten(args.checkpoint, 80)}: is a directory")
     options["free"] = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
     options.update(ordered=args.ordered, scheduler=args.scheduler, checkpoint=args.checkpoint)
+    options.update(shape_only=args.shape_only, partial=args.partial)
     return options
 
 
@@ -1777,7 +1795,8 @@ def _plot_synthesis(out: Any, targets: Any, path: str) -> None:
 
     from .viz import draw
 
-    res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(0.0, 360.0, 721)})
+    start, stop = out.sweep if out.sweep is not None else (0.0, 360.0)  # a partial sweep: only its range
+    res = lk.analyze(out.mechanism, {out.mechanism.drivers[0].name: np.linspace(start, stop, 721)})
     fig = draw.synthesis_figure(res, targets.xy, out.errors, closed=targets.closed)
     draw.save_figure(fig, path, fig.axes[0])
 
@@ -1791,7 +1810,8 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     ]
     if inputs is not None:
         cols.append(Column("input [deg]", format_cells(inputs)))
-    cols.append(Column("crank [deg]", format_cells(out.inputs % 360.0)))
+    crank = out.inputs if getattr(out, "sweep", None) is not None else out.inputs % 360.0  # partial: in its sweep
+    cols.append(Column("crank [deg]", format_cells(crank)))
     cols.append(Column(f"error [{unit}]", format_cells(out.errors)))
     cols.append(Column("error [% diag]", format_cells(100.0 * out.errors / out.diagonal)))
     o = out.outcome
@@ -1805,7 +1825,11 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
     from .synthesis.run import transmission_line
 
+    lines += _shape_lines(out, unit)
     state = "the crank turns fully" if out.feasible else "CONSTRAINTS NOT MET (the best design found breaks one)"
+    if out.sweep is not None and out.feasible:
+        start, stop = out.sweep
+        state = f"the crank rocks from {start:.4g} to {stop:.4g} deg ({stop - start:.4g} deg) on one branch"
     lines.append(f"{state}; {transmission_line(out)}")
     why = {"goal": "reaching the goal", "restarts": "the last search", "time": "the time limit"}[o.stopped_by]
     lines.append(
@@ -1814,6 +1838,19 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     )
     lines.append(f"wrote {path}")
     return "\n".join(lines)
+
+
+def _shape_lines(out: Any, unit: str) -> list[str]:
+    """``--shape-only``: the line that says how the design was placed on the targets (none otherwise)."""
+    import cmath
+
+    if out.placement is None:
+        return []
+    a, b = out.placement
+    return [
+        f"placed on the targets (--shape-only): scaled by {abs(a):.6g}, turned by {math.degrees(cmath.phase(a)):.6g} "
+        f"deg, moved by ({b.real:.6g}, {b.imag:.6g}) {unit}"
+    ]
 
 
 class _Search:
@@ -1861,6 +1898,14 @@ class _Search:
     def update(self, p: Any) -> None:
         import time
 
+        if p.source == "atlas":  # the atlas's answer, before any search: said at once
+            line = (
+                f"the atlas's nearest four-bar, placed and polished: {self.best(p)} ({p.elapsed:.1f} s); searching on"
+            )
+            if self.bar is not None:
+                self.bar.console.print(line)
+            else:
+                print(f"{PROG}: synthesize: {line}", file=sys.stderr, flush=True)
         if self.bar is not None:
             self.bar.update(
                 self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
@@ -1914,6 +1959,37 @@ class _progress:
     def __exit__(self, *exc: object) -> None:
         if self.bar is not None:
             self.bar.stop()
+
+
+def _atlas_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "action", choices=("build", "info"), help="build the atlas now (unless cached), or say what is cached"
+    )
+    p.add_argument("--workers", type=int, metavar="N", help="processes that build it (default: every core)")
+
+
+def _atlas(args: argparse.Namespace) -> int:
+    """``linkagekit atlas build|info``."""
+    import time
+
+    from .synthesis import atlas
+
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers: expected at least 1, got {args.workers}")
+    t0 = time.monotonic()
+    if atlas.size() == 0:
+        raise InputError("LINKAGEKIT_ATLAS_SIZE is 0: the atlas is turned off")
+    if args.action == "build":
+        atlas.build(tick=atlas.build_report(), workers=args.workers)
+    got = atlas.info()
+    state = f"built, {got.bytes / 1e6:.1f} MB" if got.built else "not built yet"
+    print(f"four-bar atlas, format {got.version}: {got.file} ({state})")
+    print(f"{got.entries} entries: {got.closed} closed curves (the crank turns fully), {got.open} open")
+    if got.chunks:
+        print(f"{got.chunks} of {got.entries // atlas.chunk_entries(got.entries)} chunks of an unfinished build")
+    if args.action == "build":
+        print(f"ready in {time.monotonic() - t0:.1f} s")
+    return 0
 
 
 #: every command, in the order ``linkagekit --help`` lists them
@@ -2001,6 +2077,16 @@ _COMMANDS = (
         "polish; the same --seed gives the same result (unless --seconds stops the run).",
         _synthesize_arguments,
         _synthesize,
+    ),
+    _Command(
+        "atlas",
+        "build the atlas of four-bar curves that synthesis starts from, or say what is cached",
+        "The atlas: about a million four-bars, each with the normalised descriptor of its tracer's curve, "
+        "that path synthesis with the built-in four-bar looks up first. It is built on first use (or by "
+        "'atlas build', on every core) into the user's cache directory (LINKAGEKIT_CACHE_DIR overrides it), "
+        "once per release; an interrupted build resumes.",
+        _atlas_arguments,
+        _atlas,
     ),
 )
 

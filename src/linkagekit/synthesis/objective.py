@@ -28,13 +28,24 @@ search variable and the design vector is the same as without timing.
 within one turn: each target's sample is chosen by the monotone assignment of least total
 squared distance (:func:`_ordered`, dynamic programming), then refined as above.
 
+*Shape only* (``Problem.shape_only``): the curve is first placed on the targets by the
+similarity ``z -> a z + b`` that fits it best (:func:`similarity`, then :func:`plane_fit`
+alternated with the nearest samples from 4 starting turns, :func:`_icp`), and every Newton
+step refits it; ``e_i`` is the distance to the placed curve ``a P + b``.
+
+*Partial* (``Problem.partial``): the curve is the part the crank traces over its sweep
+``[start, start + span]`` (:meth:`Problem.sweep`; both ends sampled), and the nearest points
+stay within it.
+
 Feasibility (penalised by how far from feasible, never by a cliff)
 ----------------------------------------------------------------
-* the crank turns fully: the mean over the sweep of each dyad step's negative margin
-  (``positions.solve``: how far the circles are from meeting, relative);
+* the crank turns fully (partial: assembles over its sweep): the mean over the sweep of each
+  dyad step's negative margin (``positions.solve``: how far the circles are from meeting, relative);
 * every transmission angle ``mu`` of the space stays within ``[MIN, 180 - MIN]``: the largest
   ``|cos mu| - cos MIN`` over the sweep;
-* link lengths within bounds, when given: the largest relative excess.
+* link lengths within bounds, when given: the largest relative excess (of the placed mechanism);
+* the curve's RMS radius at least ``MIN_CURVE_SIZE`` of the joints' (:func:`_too_small`; in the
+  dense check always, in the search with ``shape_only`` or ``partial``).
 
 The score is ``mean_i (e_i / L)^2 + PENALTY * violation``: an exact penalty (linear in the
 violation), so a feasible optimum stays feasible.
@@ -54,7 +65,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -81,6 +92,18 @@ CHUNK = 1 << 16
 MARGIN = 0.25
 #: central-difference step of the refinement (radians)
 H_THETA = 1e-4
+#: spec section 6: the traced curve's RMS radius is at least this fraction of the RMS distance of the
+#: joints (at the pose) from their centroid, for every written mechanism
+MIN_CURVE_SIZE = 0.07
+#: spec section 6: a partial sweep turns the crank through at least this angle (radians)
+MIN_SPAN = np.pi / 2
+#: ``--shape-only``: the similarity's starting rotations (evenly spaced), nearest-point/fit rounds from each,
+#: and every how many samples of the curve they look at (the Newton steps after them see the curve itself);
+#: measured on 8 random four-bars' curves, moved, turned and scaled: the exact placement from 7 of them
+ROTATIONS, ICP_STEPS, ICP_STRIDE = 4, 5, 1
+#: the most samples the starts look at: the dense check's curve is thinned to them, so that its placement
+#: starts from the search's samples and ends in the basin the search chose
+ICP_SAMPLES = 180
 #: the highest transmission bound of --pareto's searches (degrees)
 RAISED_MAX = 80.0
 
@@ -107,7 +130,19 @@ class Problem(Objective):
     lengths : (float, float), optional
         Bounds on every link length (between any two joints of a link).
     samples : int
-        Samples of the crank turn.
+        Samples of the crank turn (or of the partial sweep).
+    shape_only : bool
+        The curve is matched up to translation, rotation and uniform scale: each design's
+        curve is placed on the targets by the similarity ``z -> a z + b`` that fits it best
+        (:func:`similarity`, alternated with the nearest-point search); errors are distances
+        to the placed curve.
+    partial : bool
+        Only the part of the curve traced while the crank sweeps ``[start, start + span]``
+        counts, ``span >= MIN_SPAN``, and the mechanism need only assemble over it. Without
+        timing the design vector's last two entries are ``f`` in [0, 1] and ``span`` (radians),
+        ``start = theta_pose - f span``: the pose, whose assembly mode is the branch, lies within
+        the sweep; with timing the sweep is the one the inputs span (widened about its middle to
+        ``MIN_SPAN``).
     """
 
     space: DesignSpace
@@ -117,6 +152,8 @@ class Problem(Objective):
     min_transmission: float = MIN_TRANSMISSION
     lengths: tuple[float, float] | None = None
     samples: int = 180
+    shape_only: bool = False
+    partial: bool = False
 
     def __post_init__(self) -> None:
         t = np.asarray(self.targets)
@@ -138,19 +175,43 @@ class Problem(Objective):
         return self.inputs is not None
 
     @property
+    def swept(self) -> bool:
+        """The sweep's start and span are design variables (partial, untimed)."""
+        return self.partial and not self.timed
+
+    @property
     def dim(self) -> int:
-        return self.space.dim
+        return self.space.dim + 2 * self.swept
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of the design vector."""
-        return self.space.lower, self.space.upper
+        """Lower and upper bounds of the design vector (partial, untimed: then the sweep's ``f`` and span)."""
+        if not self.swept:
+            return self.space.lower, self.space.upper
+        return np.append(self.space.lower, [0.0, MIN_SPAN]), np.append(self.space.upper, [1.0, 2 * np.pi])
+
+    def sweep(self, X: FloatArray, q0: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``(start, span)`` (N,) of the crank's sweep (radians, in the design's frame), ``q0`` the pose's inputs."""
+        if not self.partial:
+            return q0, np.full_like(q0, 2 * np.pi)
+        if self.swept:  # the pose within the sweep: a fraction X[:, -2] of it before the pose
+            return q0 - X[:, -2] * X[:, -1], X[:, -1]
+        assert self.inputs is not None
+        th = q0[:, None] + (self.inputs - self.inputs[0])[None, :]
+        lo, hi = th.min(axis=1), th.max(axis=1)
+        widen = np.maximum(MIN_SPAN - (hi - lo), 0.0)
+        return lo - widen / 2, hi - lo + widen
 
     def offset(self, X: np.ndarray) -> np.ndarray:
-        """With timing: the input offset ``delta`` (radians) of each design, ``theta_pose - phi_0``."""
+        """With timing: the input offset ``delta`` (radians) of each design, ``theta_pose - phi_0``.
+
+        With ``shape_only`` the placement turns the crank too: its rotation ``arg a`` is added.
+        """
         assert self.inputs is not None
-        params = compile_params(self.space.template, self.space.poses(np.atleast_2d(X)), self.space.plan)
-        return np.asarray(params.pose_inputs[0] - self.inputs[0])
+        X = np.atleast_2d(X)
+        params = compile_params(self.space.template, self.space.poses(X), self.space.plan)
+        turn = np.angle(evaluate(self, X, refine=0).a) if self.shape_only else 0.0
+        return np.asarray(params.pose_inputs[0] + turn - self.inputs[0])
 
     def fingerprint(self) -> str:
         """A digest of everything that defines the problem (to match a checkpoint to its run)."""
@@ -161,6 +222,7 @@ class Problem(Objective):
             h.update(np.ascontiguousarray(a).tobytes())
         h.update(repr((self.space.topology, self.space.free, self.space.tracer, self.space.transmission)).encode())
         h.update(repr((self.ordered, self.min_transmission, self.lengths, self.samples)).encode())
+        h.update(repr((self.shape_only, self.partial)).encode() if self.shape_only or self.partial else b"")
         h.update(repr(self.space.template.to_dict()).encode())
         return h.hexdigest()[:16]
 
@@ -196,8 +258,19 @@ class Problem(Objective):
         """With the order asked for, also the problem without it (cheaper; a fit found without it may be in order)."""
         return (self, replace(self, ordered=False)) if self.ordered else (self,)
 
-    def mechanism(self, x: FloatArray) -> Mechanism:
-        return self.space.mechanism(np.asarray(x, float))
+    def mechanism(self, x: FloatArray, name: str | None = None) -> Mechanism:
+        """The design as a mechanism: placed on the targets (``shape_only``), its driver sweeping its range."""
+        x = np.asarray(x, float)
+        if not (self.shape_only or self.partial):
+            return self.space.mechanism(x, name)
+        e = check(self, x[None])
+        a, b = complex(e.a[0]), complex(e.b[0])
+        sweep = None
+        if self.partial:
+            start, span = float(e.sweep[0, 0] + np.angle(a)), float(e.sweep[0, 1])
+            steps = int(np.ceil(np.degrees(span) - 1e-9))  # about one degree a step, the last one on the stop
+            sweep = (start, start + span, span / steps)
+        return self.space.mechanism(x, name, (a, b), sweep)
 
     def transmission(self, X: FloatArray) -> FloatArray:
         """The smallest transmission angle (degrees) over the turn, by :func:`check`."""
@@ -226,6 +299,10 @@ class Evaluation:
         0 for a feasible design.
     transmission : ndarray (N,)
         The smallest transmission angle over the sampled turn (degrees; NaN if none assembles).
+    a, b : ndarray complex (N,)
+        The placement ``z -> a z + b`` of each design's curve on the targets (1 and 0 unless ``shape_only``).
+    sweep : ndarray (N, 2)
+        The start and span (radians) of each design's crank sweep, in the design's own frame.
     """
 
     cost: np.ndarray
@@ -233,33 +310,49 @@ class Evaluation:
     theta: np.ndarray
     violation: np.ndarray
     transmission: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    sweep: np.ndarray
 
 
 def evaluate(
-    problem: Problem, X: np.ndarray, refine: int = 1, samples: int | None = None, margin: float = MARGIN
+    problem: Problem,
+    X: np.ndarray,
+    refine: int = 1,
+    samples: int | None = None,
+    margin: float = MARGIN,
+    strict: bool = False,
 ) -> Evaluation:
     """Score the design vectors ``X`` (N, dim) of ``problem`` (see the module's description).
 
     ``refine``: Newton iterations on each target's nearest input (untimed problems);
     ``samples``: samples of the crank turn (default ``problem.samples``); ``margin``: degrees
-    added to the transmission-angle limit.
+    added to the transmission-angle limit; ``strict``: the curve's size rule (:func:`_too_small`)
+    counts even where the search leaves it out (absolute placement, full turn: there a curve
+    on the targets cannot be small against joints held near them, and leaving it out keeps
+    the searches of those problems as they were).
     """
     X = np.atleast_2d(np.asarray(X, float))
     n = int(samples or problem.samples)
     m = len(problem.targets)
-    per_design = n + m * (3 * refine + 1)
+    per_design = (n + m * (3 * refine + 1)) * (1 + (ROTATIONS - 1) * problem.shape_only)
     step = max(1, CHUNK // per_design)
-    parts = [_evaluate(problem, X[s : s + step], refine, n, margin) for s in range(0, len(X), step)]
+    sized = strict or problem.shape_only or problem.partial
+    parts = [_evaluate(problem, X[s : s + step], refine, n, margin, sized) for s in range(0, len(X), step)]
     return Evaluation(*(np.concatenate([getattr(p, f) for p in parts]) for f in Evaluation.__dataclass_fields__))
 
 
 #: samples of the crank turn and Newton steps of the check that measures a result (every 0.1 degree)
 CHECK_SAMPLES, CHECK_REFINE = 3600, 4
+#: more Newton steps of the check with ``shape_only`` (placement and inputs together converge more slowly
+#: where the curve bends sharply: on a Watt II curve 1e-5 of the diagonal after 4 steps, 1e-7 after 16)
+SHAPE_REFINE = 12
 
 
 def check(problem: Problem, X: np.ndarray) -> Evaluation:
     """The evaluation a result is reported by: ``CHECK_SAMPLES`` samples, nearest points refined, no margin."""
-    return evaluate(problem, X, refine=CHECK_REFINE, samples=CHECK_SAMPLES, margin=0.0)
+    refine = CHECK_REFINE + SHAPE_REFINE * problem.shape_only
+    return evaluate(problem, X, refine=refine, samples=CHECK_SAMPLES, margin=0.0, strict=True)
 
 
 def measure(problem: Problem, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -289,45 +382,164 @@ def best_index(max_error: np.ndarray, cost: np.ndarray) -> int:
     return int(np.lexsort((np.asarray(cost, float), np.asarray(max_error, float)))[0])
 
 
-def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: float) -> Evaluation:
+def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: float, sized: bool) -> Evaluation:
     sp = problem.space
-    N = len(X)
-    L = problem.scale
     params = compile_params(sp.template, sp.poses(X), sp.plan)
     q0 = params.pose_inputs[0]  # (N,) the crank's input at each pose
-    theta = q0[:, None] + (2 * np.pi / n) * np.arange(n)
+    start, span = problem.sweep(X, q0)
+    theta = start[:, None] + span[:, None] * (np.arange(n) / (n - problem.partial))  # a partial sweep: both ends
     sol = solve(params, theta[None])
-    z = sol.z
+    P = sol.z[sp.joint(sp.tracer)]
     with np.errstate(invalid="ignore"):
-        # -- feasibility: assembly over the whole turn, transmission angles, lengths
-        short = np.nan_to_num(np.maximum(-sol.margin, 0.0), nan=0.0)
-        violation = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(N)
-        violation = np.where(params.valid, violation, violation + 1.0)
-        cos_lim = np.cos(np.radians(min(problem.min_transmission + margin, 89.0)))
-        worst_cos = np.zeros(N)
-        mu_min = np.full(N, np.nan)
-        for j, a, b in sp.transmission:
-            zj = z[sp.joint(j)]
-            u, v = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj
-            c = (np.conj(u) * v).real / (np.abs(u) * np.abs(v))
-            worst = np.nanmax(np.where(np.isfinite(c), np.abs(c), -np.inf), axis=-1)
-            worst_cos = np.maximum(worst_cos, worst)
-            mu = np.degrees(np.arccos(np.clip(worst, -1.0, 1.0)))
-            mu_min = np.where(np.isfinite(worst), np.fmin(mu_min, mu), mu_min)
-        violation = violation + np.maximum(worst_cos - cos_lim, 0.0)
-        if problem.lengths is not None:
-            violation = violation + _length_excess(sp, params.pose, *problem.lengths)
-        # -- errors
-        T = problem.targets
+        violation, mu_min = _feasibility(problem, params, sol.z, sol.margin, margin)
+        if sized:
+            violation = violation + _too_small(P, params.pose, margin)
         if problem.timed:
-            assert problem.inputs is not None
-            th = q0[:, None] + (problem.inputs - problem.inputs[0])[None, :]
-            err = np.abs(_tracer(params, sp, th) - T[None, :])
+            th, err, a, b = _timed(problem, params, q0)
         else:
-            th, err = _nearest(params, sp, z[sp.joint(sp.tracer)], theta, T, refine, n, problem.ordered)
-        rel = np.where(np.isfinite(err), err / L, 1.0)
+            within = (start, start + span) if problem.partial else (-np.inf, np.inf)
+            th, err, a, b = _nearest(problem, params, P, theta, within, refine)
+        if problem.lengths is not None:
+            violation = violation + _length_excess(sp, params.pose * np.abs(a)[None, :], *problem.lengths)
+        rel = np.where(np.isfinite(err), err / problem.scale, 1.0)
         cost = np.mean(rel * rel, axis=1) + PENALTY * violation
-    return Evaluation(cost, err, th, violation, mu_min)
+    return Evaluation(cost, err, th, violation, mu_min, a, b, np.stack([start, span], axis=1))
+
+
+def _feasibility(
+    problem: Problem, params: Params, z: ComplexArray, margins: FloatArray, margin: float
+) -> tuple[FloatArray, FloatArray]:
+    """``(violation, smallest transmission angle)`` (N,) of the sweep: assembly everywhere, transmission angles."""
+    sp = problem.space
+    short = np.nan_to_num(np.maximum(-margins, 0.0), nan=0.0)
+    violation = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(z.shape[1])
+    violation = np.where(params.valid, violation, violation + 1.0)
+    cos_lim = np.cos(np.radians(min(problem.min_transmission + margin, 89.0)))
+    worst_cos = np.zeros(z.shape[1])
+    mu_min = np.full(z.shape[1], np.nan)
+    for j, a, b in sp.transmission:
+        zj = z[sp.joint(j)]
+        u, v = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj
+        c = (np.conj(u) * v).real / (np.abs(u) * np.abs(v))
+        worst = np.nanmax(np.where(np.isfinite(c), np.abs(c), -np.inf), axis=-1)
+        worst_cos = np.maximum(worst_cos, worst)
+        mu = np.degrees(np.arccos(np.clip(worst, -1.0, 1.0)))
+        mu_min = np.where(np.isfinite(worst), np.fmin(mu_min, mu), mu_min)
+    return violation + np.maximum(worst_cos - cos_lim, 0.0), mu_min
+
+
+def _too_small(P: ComplexArray, pose: ComplexArray, margin: float) -> FloatArray:
+    r"""How far (N,) the curve's size breaks the spec's rule: ``max(0, MIN_CURVE_SIZE - R_curve / R_joints)``.
+
+    ``R_curve``: the RMS distance of the tracer's samples ``P`` (N, n) from their mean (the
+    assembled ones); ``R_joints``: that of the joints of the ``pose`` (n_joints, N). Both move
+    with a similarity alike, so the rule holds for a placed curve as for the design's own.
+    While searching (``margin > 0``) the limit is 2 % higher, for the dense check's sake.
+    """
+    ok = np.isfinite(P)
+    count = np.maximum(ok.sum(axis=1), 1)
+    Pz = np.where(ok, P, 0.0)
+    centre = Pz.sum(axis=1) / count
+    r_curve = np.sqrt(np.where(ok, abs2(Pz - centre[:, None]), 0.0).sum(axis=1) / count)
+    r_joints = np.sqrt(np.mean(abs2(pose - pose.mean(axis=0)), axis=0))
+    limit = MIN_CURVE_SIZE * (1.02 if margin > 0 else 1.0)
+    ratio = r_curve / np.where(r_joints > 0, r_joints, 1.0)
+    return np.asarray(np.maximum(limit - ratio, 0.0))
+
+
+def similarity(p: ComplexArray, t: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+    r"""The similarity ``z -> a z + b`` (complex ``a``, ``b``: no reflection) that maps points ``p`` onto ``t`` best.
+
+    ``p`` (N, m) per design, ``t`` (m,) or (N, m); a non-finite ``p_i`` weighs nothing
+    (``w_i = 0``, else 1). Minimising ``F = sum w_i |a p_i + b - t_i|^2``: ``dF/d conj(b) = 0``
+    gives ``b = t_bar - a p_bar`` (weighted means); with ``u = p - p_bar`` and ``v = t - t_bar``,
+    ``F = |a|^2 sum w|u|^2 - 2 Re(a sum w u conj(v)) + sum w|v|^2``, and ``dF/d conj(a) = 0`` gives
+
+    .. math:: a = \frac{\sum_i w_i\,\overline{u_i}\,v_i}{\sum_i w_i\,|u_i|^2}
+
+    (weighted Procrustes / Umeyama in complex numbers). Fewer than two distinct finite points:
+    ``a = 1, b = 0``.
+
+    >>> p = np.array([[0, 1, 1j]])
+    >>> a, b = similarity(p, 2j * p[0] + (3 - 1j))
+    >>> bool(abs(a[0] - 2j) < 1e-12 and abs(b[0] - (3 - 1j)) < 1e-12)
+    True
+    """
+    w = np.isfinite(p)
+    t = np.broadcast_to(t, p.shape)
+    count = np.maximum(w.sum(axis=-1), 1)
+    pm = np.where(w, p, 0.0).sum(axis=-1) / count
+    tm = np.where(w, t, 0.0).sum(axis=-1) / count
+    u = np.where(w, p - pm[:, None], 0.0)
+    v = np.where(w, t - tm[:, None], 0.0)
+    den = abs2(u).sum(axis=-1)
+    ok = den > 1e-300
+    a = np.where(ok, (np.conj(u) * v).sum(axis=-1) / np.where(ok, den, 1.0), 1.0)
+    b = np.where(ok, tm - a * pm, 0.0)
+    return a, b
+
+
+#: ``plane_fit``'s weight of the point-to-point distances beside the distances along the normals
+POINT_WEIGHT = 1e-6
+
+
+def plane_fit(p: ComplexArray, nu: ComplexArray, t: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+    r"""The similarity ``a, b`` (N,) that brings the points ``p`` (N, m) onto the curve's tangent lines through ``t``.
+
+    ``nu`` (N, m): the unit normals of the placed curve at ``p``. Minimises
+    ``sum_i Re(conj(nu_i) (a p_i + b - t_i))^2 + POINT_WEIGHT |a p_i + b - t_i|^2``: the first
+    term is the distance of ``t_i`` from the tangent line at the placed point (Gauss-Newton's
+    model of the distance to the curve), the second keeps the fit determined where the normals
+    alone leave a direction free (a circle's rotation). Both are linear in the four real
+    numbers ``(Re a, Im a, Re b, Im b)``: a 4 x 4 normal-equation solve per design. At the
+    nearest points (``a p_i + b - t_i`` along ``nu_i``) its minimum is :func:`similarity`'s.
+
+    >>> p = np.array([[1, 1j, -1, -1j]])
+    >>> a, b = plane_fit(p, -p / abs(p), 3 * p[0] + 1j)
+    >>> bool(abs(a[0] - 3) < 1e-12 and abs(b[0] - 1j) < 1e-12)
+    True
+    """
+    ok = np.isfinite(p) & np.isfinite(nu)
+    pz, nz = np.where(ok, p, 0.0), np.where(ok, nu, 0.0)
+    t = np.where(ok, np.broadcast_to(t, p.shape), 0.0)
+    basis = np.stack([pz, 1j * pz, ok.astype(float), 1j * ok], axis=-1)  # d(a p + b)/d(Re a, Im a, Re b, Im b)
+    Jn = (np.conj(nz)[..., None] * basis).real
+    M = np.einsum("nmk,nml->nkl", Jn, Jn)
+    M += POINT_WEIGHT * (
+        np.einsum("nmk,nml->nkl", basis.real, basis.real) + np.einsum("nmk,nml->nkl", basis.imag, basis.imag)
+    )
+    r = np.einsum("nmk,nm->nk", Jn, (np.conj(nz) * t).real)
+    r += POINT_WEIGHT * (np.einsum("nmk,nm->nk", basis.real, t.real) + np.einsum("nmk,nm->nk", basis.imag, t.imag))
+    few = ok.sum(axis=-1) < 2
+    M[few], r[few] = np.eye(4), [1.0, 0.0, 0.0, 0.0]
+    M += (1e-15 * np.trace(M, axis1=1, axis2=2) + 1e-300)[:, None, None] * np.eye(4)  # coincident points
+    x = np.linalg.solve(M, r[..., None])[..., 0]
+    return x[:, 0] + 1j * x[:, 1], x[:, 2] + 1j * x[:, 3]
+
+
+def _tangents(P: ComplexArray, closed: bool) -> ComplexArray:
+    """Tangents (N, n) of sampled curves ``P`` (N, n) by central differences (one-sided at an open curve's ends)."""
+    if closed:
+        return np.roll(P, -1, axis=-1) - np.roll(P, 1, axis=-1)
+    return np.gradient(P, axis=-1)
+
+
+def _normals(tangent: ComplexArray) -> ComplexArray:
+    """Unit normals ``i tangent / |tangent|`` (NaN where the tangent is 0 or not finite)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(np.abs(tangent) > 0, 1j * tangent / np.abs(tangent), np.nan)
+
+
+def _timed(
+    problem: Problem, params: Params, q0: FloatArray
+) -> tuple[FloatArray, FloatArray, ComplexArray, ComplexArray]:
+    """``(inputs, errors, a, b)`` with timing: each target against the tracer at its input (placed if shape-only)."""
+    assert problem.inputs is not None
+    T = problem.targets
+    th = q0[:, None] + (problem.inputs - problem.inputs[0])[None, :]
+    Z = _tracer(params, problem.space, th)
+    a, b = similarity(Z, T) if problem.shape_only else (np.ones(len(th), complex), np.zeros(len(th), complex))
+    return th, np.abs(a[:, None] * Z + b[:, None] - T[None, :]), a, b
 
 
 def _tracer(params: Params, sp: DesignSpace, th: FloatArray) -> ComplexArray:
@@ -337,40 +549,121 @@ def _tracer(params: Params, sp: DesignSpace, th: FloatArray) -> ComplexArray:
 
 
 def _nearest(
+    problem: Problem,
     params: Params,
-    sp: DesignSpace,
-    P: np.ndarray,
-    theta: np.ndarray,
-    T: np.ndarray,
+    P: ComplexArray,
+    theta: FloatArray,
+    within: tuple[Any, Any],
     refine: int,
-    n: int,
-    ordered: bool = False,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(inputs, distances) of the nearest curve point to every target, (N, m) each."""
-    d2 = _distances2(P, T)  # (N, m, n)
-    k = _ordered(d2) if ordered else np.argmin(d2.transpose(1, 0, 2), axis=-1).T  # over d2's memory order
+) -> tuple[FloatArray, FloatArray, ComplexArray, ComplexArray]:
+    """``(inputs, distances, a, b)``: the nearest point of the (placed) curve to every target, (N, m) each.
+
+    ``P`` (N, n): the curve's samples at ``theta``; ``within``: the inputs the points stay in
+    (a partial sweep's ends). With ``shape_only`` the placement ``a, b`` (N,) is fitted from
+    the nearest samples (:func:`_icp`) and again before every Newton step.
+    """
+    T = problem.targets
+    N, n = P.shape
+    closed = not problem.partial
+    if problem.shape_only:
+        a, b = _icp(P, T, problem.ordered, closed)
+    else:
+        a, b = np.ones(N, complex), np.zeros(N, complex)
+    k = _assign(_distances2(a[:, None] * P + b[:, None], T), problem.ordered, closed)
     th = np.take_along_axis(theta, k, axis=-1)  # (N, m)
-    best = np.abs(np.take_along_axis(P, k, axis=-1) - T[None, :]) ** 2  # exactly, not by the expansion
-    best = np.where(np.isfinite(best), best, np.inf)
-    spacing = 2 * np.pi / n
+    pts = np.take_along_axis(P, k, axis=-1)
+    spacing = (theta[:, 1] - theta[:, 0])[:, None]
+    if problem.shape_only:  # the placement moves each step: the inputs may have to follow it further
+        spacing = np.maximum(spacing, (theta[:, -1] - theta[:, 0])[:, None] / ICP_SAMPLES)
+    lo, hi = (np.asarray(w)[..., None] if np.ndim(w) else w for w in within)
+    for _ in range(refine):
+        th, pts, a, b = _newton(problem, params, th, (a, b), spacing, (lo, hi))
+    d = np.abs(a[:, None] * pts + b[:, None] - T[None, :])
+    return th, np.where(np.isfinite(d), d, np.nan), a, b
+
+
+def _newton(
+    problem: Problem,
+    params: Params,
+    th: FloatArray,
+    place: tuple[ComplexArray, ComplexArray],
+    spacing: FloatArray,
+    within: tuple[Any, Any],
+) -> tuple[FloatArray, ComplexArray, ComplexArray, ComplexArray]:
+    """One Gauss-Newton step on each target's input ``th`` and (``shape_only``) on the placement ``a, b``.
+
+    The curve's points, tangents and second derivatives at ``th`` (central differences);
+    with ``shape_only`` the placement is refitted first by :func:`plane_fit` on them (the
+    joint Gauss-Newton step of inputs and placement, the inputs eliminated); then a Newton
+    step on each input towards the nearest point of the placed curve, clipped to one sample
+    ``spacing`` and to ``within``, kept only where it brings the point nearer. Returns the
+    inputs, their (unplaced) points and the placement.
+    """
+    a, b = place
+    T = problem.targets
     h = H_THETA
     m = len(T)
-    for _ in range(refine):
-        Z = _tracer(params, sp, np.concatenate([th - h, th, th + h], axis=1))
-        Pm, P0, Pp = Z[:, :m], Z[:, m : 2 * m], Z[:, 2 * m :]
-        r = P0 - T[None, :]
-        d1 = (Pp - Pm) / (2 * h)
-        dd = (Pp - 2 * P0 + Pm) / (h * h)
-        g = (np.conj(r) * d1).real
-        gp = np.abs(d1) ** 2 + (np.conj(r) * dd).real
-        gp = np.where(gp > 0, gp, np.abs(d1) ** 2)  # not convex here: a gradient step of Gauss-Newton's size
-        step = np.clip(-g / gp, -spacing, spacing)
-        cand = th + np.where(np.isfinite(step), step, 0.0)
-        dc = np.abs(_tracer(params, sp, cand) - T[None, :]) ** 2
-        better = np.isfinite(dc) & (dc < best)
-        th = np.where(better, cand, th)
-        best = np.where(better, dc, best)
-    return th, np.where(np.isfinite(best), np.sqrt(best), np.nan)
+    Z = _tracer(params, problem.space, np.concatenate([th - h, th, th + h], axis=1))
+    Pm, P0, Pp = Z[:, :m], Z[:, m : 2 * m], Z[:, 2 * m :]
+    d1, dd = (Pp - Pm) / (2 * h), (Pp - 2 * P0 + Pm) / (h * h)
+    if problem.shape_only:
+        a, b = plane_fit(P0, _normals(a[:, None] * d1), T)
+    A, B = a[:, None], b[:, None]
+    r = A * P0 + B - T[None, :]
+    g = (np.conj(r) * A * d1).real
+    gp = abs2(A * d1) + (np.conj(r) * A * dd).real
+    gp = np.where(gp > 0, gp, abs2(A * d1))  # not convex here: a gradient step of Gauss-Newton's size
+    step = np.clip(-g / gp, -spacing, spacing)
+    cand = np.clip(th + np.where(np.isfinite(step), step, 0.0), *within)
+    Pc = _tracer(params, problem.space, cand)
+    dc = abs2(A * Pc + B - T[None, :])
+    better = np.isfinite(dc) & ~(dc >= abs2(r))  # nearer, or the old point had none
+    return np.where(better, cand, th), np.where(better, Pc, P0), a, b
+
+
+def _icp(P: ComplexArray, T: ComplexArray, ordered: bool, closed: bool) -> tuple[ComplexArray, ComplexArray]:
+    """The placement ``a, b`` (N,) of each curve ``P`` (N, n) on the targets: nearest samples and fits in turn.
+
+    From ``ROTATIONS`` starts (the curve's samples' centroid and RMS radius on the targets',
+    turned by ``2 pi k / ROTATIONS``), ``ICP_STEPS`` rounds each of: the nearest samples of
+    the placed curve (in order, if asked), then a fit of those samples onto the targets
+    (:func:`similarity` first, then :func:`plane_fit`, which converges in a few rounds where
+    point-to-point fits crawl); the start whose fit leaves the least squared distance wins.
+    """
+    P = P[:, :: max(ICP_STRIDE, P.shape[1] // ICP_SAMPLES)]  # the check's denser curve: the search's samples
+    N, n = P.shape
+    ok = np.isfinite(P)
+    count = np.maximum(ok.sum(axis=1), 1)
+    Pz = np.where(ok, P, 0.0)
+    cP = Pz.sum(axis=1) / count
+    rP = np.sqrt(np.where(ok, abs2(Pz - cP[:, None]), 0.0).sum(axis=1) / count)
+    cT = T.mean()
+    rT = np.sqrt(np.mean(abs2(T - cT)))
+    turns = np.exp(2j * np.pi * np.arange(ROTATIONS) / ROTATIONS)
+    a = (turns[:, None] * (rT / np.where(rP > 0, rP, 1.0))[None, :]).ravel()  # (ROTATIONS * N,)
+    b = cT - a * np.tile(cP, ROTATIONS)
+    PP = np.tile(P, (ROTATIONS, 1))
+    tangents = _tangents(PP, closed)
+    for step in range(ICP_STEPS + 1):
+        k = _assign(_distances2(a[:, None] * PP + b[:, None], T), ordered, closed)
+        pts = np.take_along_axis(PP, k, axis=-1)
+        if step == ICP_STEPS:  # the fits are judged by the samples nearest to their own placement
+            break
+        if step == 0:
+            a, b = similarity(pts, T)
+        else:
+            a, b = plane_fit(pts, _normals(a[:, None] * np.take_along_axis(tangents, k, axis=-1)), T)
+    sse = abs2(a[:, None] * pts + b[:, None] - T[None, :]).sum(axis=1)
+    best = np.argmin(np.where(np.isfinite(sse), sse, np.inf).reshape(ROTATIONS, N), axis=0) * N + np.arange(N)
+    return a[best], b[best]
+
+
+def _assign(d2: FloatArray, ordered: bool, closed: bool) -> np.ndarray:
+    """Each target's sample (N, m) from squared distances ``d2`` (N, m, n): the nearest, or in order."""
+    if ordered:
+        return _ordered(d2, closed)
+    k: np.ndarray = np.argmin(d2.transpose(1, 0, 2), axis=-1).T  # over d2's memory order
+    return k
 
 
 def _distances2(P: np.ndarray, T: np.ndarray) -> np.ndarray:
@@ -396,13 +689,14 @@ def _distances2(P: np.ndarray, T: np.ndarray) -> np.ndarray:
     return d2.transpose(1, 0, 2)
 
 
-def _ordered(d2: np.ndarray) -> np.ndarray:
+def _ordered(d2: np.ndarray, closed: bool = True) -> np.ndarray:
     """Sample indices (N, m) of the targets met in order: the monotone assignment of least total ``d2``.
 
-    ``d2`` (N, m, n): squared distance of each target to each sample of the closed curve.
-    The curve is unrolled from the sample nearest the first target, once forwards and once
-    backwards; along it the targets' samples must not decrease (dynamic programming with a
-    running minimum: ``acc_i(j) = d2_i(j) + min_{j' <= j} acc_{i-1}(j')``), and the cheaper
+    ``d2`` (N, m, n): squared distance of each target to each sample of the curve. A closed
+    curve is unrolled from the sample nearest the first target, once forwards and once
+    backwards (an open one, a partial sweep's, is taken as it is, forwards and backwards);
+    along it the targets' samples must not decrease (dynamic programming with a running
+    minimum: ``acc_i(j) = d2_i(j) + min_{j' <= j} acc_{i-1}(j')``), and the cheaper
     direction wins. The total is a minimum of sums of continuous functions of the design,
     so it is continuous too.
     """
@@ -412,7 +706,8 @@ def _ordered(d2: np.ndarray) -> np.ndarray:
     best_total = np.full(N, np.inf)
     best_k = np.zeros((N, m), np.intp)
     for direction in (1, -1):
-        idx = np.mod(k0[:, None] + direction * np.arange(n)[None, :], n)  # (N, n) unrolled -> sample
+        first = k0 if closed else np.full(N, 0 if direction == 1 else n - 1)
+        idx = np.mod(first[:, None] + direction * np.arange(n)[None, :], n)  # (N, n) unrolled -> sample
         D = d2[rows, np.arange(m)[None, :, None], idx[:, None, :]]  # (N, m, n)
         acc = np.empty_like(D)
         acc[:, 0] = D[:, 0]

@@ -150,6 +150,7 @@ class Progress:
     best_error: float
     evaluations: int
     elapsed: float
+    source: str = "search"  # "atlas": the atlas's answer, before any search (synthesis.atlas)
 
 
 @dataclass
@@ -195,8 +196,14 @@ def optimize(
     problem: Objective,
     settings: Settings,
     progress: Callable[[Progress], None] | None = None,
+    initial: Callable[[], np.ndarray] | None = None,
 ) -> Outcome:
-    """Search ``problem`` as ``settings`` say; returns the best design found (by :func:`objective.measure`)."""
+    """Search ``problem`` as ``settings`` say; returns the best design found (by :func:`objective.measure`).
+
+    ``initial()``: designs (k, dim), best first, that seed the first searches (:func:`_search`); called
+    once the run is set up (its checkpoint read, its workers started), its time within the budget. When
+    the first of them meets the goal, it is the run's result.
+    """
     # The searches take turns with the objective's cheaper variants (a path problem's order dropped: a fit
     # found without the order may well be in order); the polish and the choice of the best use the objective.
     # With --pareto, every other search is of the objective at a raised transmission bound (RAISES, in turn).
@@ -206,7 +213,8 @@ def optimize(
     run = _Run.begin(problem, settings, progress, len(variants), objectives)
     if run.finished is None:  # a finished checkpoint's result is just written again
         with Evaluator(objectives, settings.workers, settings.scheduler) as ev:
-            run.search(ev)
+            if not run.seed(initial):
+                run.search(ev)
         run.finished = run.stopped_by
         if settings.checkpoint:
             run.save()
@@ -336,6 +344,8 @@ class _Run:
     seen: float = np.inf  # the smallest max error measured so far, a search under way's best included
     measured: float = MEASURE_EVERY / 2 - MEASURE_EVERY  # clock() of the last such measure (the first: at 0.5 s)
     lane: Any = None  # on a worker running a lane's restart: its line to the parent (_WorkerLane)
+    initial: np.ndarray | None = None  # designs that seed the first searches, best first
+    close: bool = False  # the first of them is within SEED_LIMIT: differential evolution is seeded too
 
     @classmethod
     def begin(
@@ -360,7 +370,7 @@ class _Run:
             run.keep(np.array([d["x"] for d in run.done]))
         return run
 
-    def seed(self, restart: int) -> np.random.SeedSequence:
+    def seed_of(self, restart: int) -> np.random.SeedSequence:
         """Restart ``restart``'s seed: the ``restart``-th child of ``SeedSequence(seed)`` (as ``spawn`` makes it)."""
         return np.random.SeedSequence(self.settings.seed, spawn_key=(restart,))
 
@@ -384,7 +394,23 @@ class _Run:
 
     def template(self, restart: int) -> Search:
         """The search of ``restart`` as it starts (what a checkpoint of it must match)."""
-        return _search(self.plan(restart)[1], self.problem, self.settings, self.seed(restart), _no_cost)
+        return _search(self.plan(restart)[1], self.problem, self.settings, self.seed_of(restart), _no_cost)
+
+    def seed(self, initial: Callable[[], np.ndarray] | None) -> bool:
+        """Take the seeds of the first searches; True when the first of them meets the goal (a new run's result)."""
+        X = None if initial is None else initial()
+        if X is None or not len(X):
+            return False
+        self.initial = np.asarray(X, float)
+        err, cost = self.problem.measure(self.initial[:1])
+        self.close = bool(err[0] <= SEED_LIMIT)
+        if self.done or self.state is not None or not err[0] <= self.settings.goal:  # a checkpoint's run: under way
+            return False
+        entry = {"x": self.initial[0], "cost": float(cost[0]), "max_error": float(err[0])}
+        self.done.append({**entry, "generations": 0, "designs": len(X), "deep": True})
+        self.evaluations, self.restart, self.stopped_by = len(X), 1, "goal"
+        self.report()
+        return True
 
     def clock(self) -> float:
         """Seconds of the run, the checkpointed ones included."""
@@ -432,7 +458,8 @@ class _Run:
         def cost(X: np.ndarray, which: int = which) -> np.ndarray:  # X is (designs, dim)
             return ev.cost(X, which)
 
-        search = _search(turn, self.problem, self.settings, self.seed(self.restart), cost)
+        seed = self.seed_of(self.restart)
+        search = _search(turn, self.problem, self.settings, seed, cost, self.initial, self.close)
         designs, out_of_time = self._resume(search)
         if self.polished is None:  # still searching
             designs, out_of_time = self._generations(search, designs)
@@ -519,7 +546,8 @@ class _Run:
             self.report(designs, search.best)
         if fresh and time.monotonic() < self.deadline():  # a whole polish, not one cut by the clock
             self.polish_time = max(self.polish_time, self.clock() - t0)
-        cands = np.array(self.polished + picked)
+        seeds = [] if self.initial is None or self.restart >= self.n_variants else [self.initial[0]]
+        cands = np.array(self.polished + picked + seeds)  # the first searches end no worse than their seed
         err, cost = self.problem.measure(cands)
         if self.settings.pareto:
             self.keep(cands, err)
@@ -783,14 +811,36 @@ CMA_GROWTH, CMA_DOUBLINGS = 2, 3
 CMA_EVERY = 2
 #: CMA-ES's first population, in multiples of its default 4 + 3 ln n
 CMA_POPULATION = 8
+#: a seeded differential evolution's first population holds this many seeds (the rest a Latin hypercube)
+SEEDED = 5
+#: seeds whose best misses a target by more than this (relative to the targets' diagonal) are not given to
+#: differential evolution: farther seeds pulled its population into their basin (the first CMA-ES still starts there)
+SEED_LIMIT = 1e-3
+#: a seeded CMA-ES's first step size, in unit-box lengths
+CMA_SEEDED_SIGMA = 0.1
 
 
-def _search(turn: int, problem: Objective, settings: Settings, seed: Any, cost: Cost) -> Search:
-    """The search of a restart at its ``turn`` (:meth:`_Run.plan`): differential evolution and CMA-ES take turns."""
+def _search(
+    turn: int,
+    problem: Objective,
+    settings: Settings,
+    seed: Any,
+    cost: Cost,
+    initial: np.ndarray | None = None,
+    close: bool = False,
+) -> Search:
+    """The search of a restart at its ``turn`` (:meth:`_Run.plan`): differential evolution and CMA-ES take turns.
+
+    With ``initial`` designs (best first), the first CMA-ES starts at the best, with a smaller step;
+    when they are ``close`` (the best within ``SEED_LIMIT``), the first differential evolution
+    has the best ``SEEDED`` of them in its first population too.
+    """
     rng = np.random.Generator(np.random.PCG64(seed))
+    seeded = initial if initial is not None and len(initial) and turn < CMA_EVERY else None
     if turn % CMA_EVERY != CMA_EVERY - 1:
-        return DESearch(problem, settings, rng, cost)
-    return CMASearch(problem, settings, rng, cost, CMA_GROWTH ** min(turn // CMA_EVERY, CMA_DOUBLINGS))
+        return DESearch(problem, settings, rng, cost, seeded if close else None)
+    start = None if seeded is None else seeded[0]
+    return CMASearch(problem, settings, rng, cost, CMA_GROWTH ** min(turn // CMA_EVERY, CMA_DOUBLINGS), start)
 
 
 class Search:
@@ -823,11 +873,19 @@ class Search:
 class DESearch(Search):
     """scipy's differential evolution (``rand1bin``, dithered mutation, deferred updating, vectorized)."""
 
-    def __init__(self, problem: Objective, settings: Settings, rng: np.random.Generator, cost: Cost) -> None:
+    def __init__(
+        self,
+        problem: Objective,
+        settings: Settings,
+        rng: np.random.Generator,
+        cost: Cost,
+        initial: np.ndarray | None = None,
+    ) -> None:
         from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
 
         lo, hi = problem.bounds
         self.settings = settings
+        init: Any = "latinhypercube" if initial is None else _seeded_population(lo, hi, settings.popsize, initial, rng)
         self.solver = DifferentialEvolutionSolver(
             lambda x: cost(np.asarray(x).T),  # scipy's vectorized call: x is (dim, S)
             list(zip(lo, hi, strict=True)),
@@ -839,7 +897,7 @@ class DESearch(Search):
             recombination=0.9,
             rng=rng,
             polish=False,
-            init="latinhypercube",
+            init=init,
             updating="deferred",
             vectorized=True,
         )
@@ -884,6 +942,19 @@ class DESearch(Search):
         self.first = False
 
 
+def _seeded_population(
+    lo: np.ndarray, hi: np.ndarray, popsize: int, initial: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
+    """A first population of ``popsize * dim``: the first ``SEEDED`` of ``initial``, the rest a Latin hypercube."""
+    dim = len(lo)
+    size = max(popsize * dim, 5)
+    seeds = np.clip(np.asarray(initial, float)[:SEEDED], lo, hi)
+    rest = size - len(seeds)
+    strata = np.argsort(rng.uniform(size=(rest, dim)), axis=0)  # one permutation of the strata per coordinate
+    U = (strata + rng.uniform(size=(rest, dim))) / rest
+    return np.concatenate([seeds, lo + U * (hi - lo)])
+
+
 class CMASearch(Search):
     """CMA-ES (:mod:`linkagekit.synthesis.cmaes`) in the unit box, from a random start.
 
@@ -892,7 +963,13 @@ class CMASearch(Search):
     """
 
     def __init__(
-        self, problem: Objective, settings: Settings, rng: np.random.Generator, cost: Cost, growth: int = 1
+        self,
+        problem: Objective,
+        settings: Settings,
+        rng: np.random.Generator,
+        cost: Cost,
+        growth: int = 1,
+        start: np.ndarray | None = None,
     ) -> None:
         from .cmaes import CMAES
 
@@ -900,7 +977,11 @@ class CMASearch(Search):
         n = len(self.lo)
         self.cost = cost
         self.budget = settings.generations * settings.popsize * n
-        self.es = CMAES(rng.uniform(0.0, 1.0, n), CMA_SIGMA, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
+        mean = rng.uniform(0.0, 1.0, n)
+        if start is not None:  # a seed: start there, looking nearby first
+            mean = np.clip((np.asarray(start, float) - self.lo) / (self.hi - self.lo), 0.0, 1.0)
+        sigma = CMA_SIGMA if start is None else CMA_SEEDED_SIGMA
+        self.es = CMAES(mean, sigma, rng, (4 + int(3 * np.log(n))) * CMA_POPULATION * growth)
 
     def _x(self, U: FloatArray) -> FloatArray:
         X: FloatArray = self.lo + U * (self.hi - self.lo)

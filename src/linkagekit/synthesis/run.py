@@ -16,6 +16,7 @@ A four-bar whose coupler point passes through five points of a known coupler cur
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
@@ -28,7 +29,7 @@ from .base import Objective
 from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
 from .optimize import Optimum, Outcome, Progress, Settings, default_workers, optimize, search
-from .space import TOPOLOGIES, DesignSpace, builtin_space, template_space
+from .space import TOPOLOGIES, DesignSpace, builtin_space, fixed, template_space
 
 if TYPE_CHECKING:
     from ..model import Mechanism
@@ -66,6 +67,11 @@ class Synthesis:
         The smallest transmission angle over the turn (degrees).
     outcome : Outcome
         How the search went (restarts, generations, evaluations, seconds, what stopped it).
+    sweep : (float, float) or None
+        With ``partial``: the crank's range ``(start, stop)`` in degrees (the written driver's sweep).
+    placement : (complex, complex) or None
+        With ``shape_only``: the similarity ``z -> a z + b`` that moved, turned and scaled the
+        design ``x`` onto the targets (the mechanism is the placed one).
     bound : float
         The transmission bound the design was searched under (degrees; ``--min-transmission``).
     pareto : tuple of Synthesis
@@ -83,6 +89,8 @@ class Synthesis:
     feasible: bool
     min_transmission: float
     outcome: Outcome
+    sweep: tuple[float, float] | None = None
+    placement: tuple[complex, complex] | None = None
     bound: float = MIN_TRANSMISSION
     pareto: tuple[Synthesis, ...] = ()
 
@@ -114,12 +122,16 @@ def make_problem(
     free: Sequence[str] | Mapping[str, Any] | None = None,
     reach: float = 1.0,
     samples: int = 180,
+    shape_only: bool = False,
+    partial: bool = False,
     **old: Any,
 ) -> Problem:
     """The :class:`Problem` of ``targets`` ((m, 2) array or complex (m,)) in a topology or a template.
 
     ``units`` is the targets' length unit (``unit=``, its former name, still works with a
-    :class:`DeprecationWarning`).
+    :class:`DeprecationWarning`). ``shape_only``: a built-in topology's ground pivots are fixed
+    half a diagonal apart below the targets' centre (:func:`~.space.fixed`; the placement does
+    the rest), ``pivots`` cannot be given, and the tracer is not held near the first target.
     """
     units = _units(units, old)
     t = np.asarray(targets)
@@ -142,7 +154,11 @@ def make_problem(
         raise InputError("targets: the points span no distance")
     center = (float((lo[0] + hi[0]) / 2), float((lo[1] + hi[1]) / 2))
     space: DesignSpace
-    if isinstance(topology, str):
+    if shape_only and pivots is not None:
+        raise InputError("--pivots: the ground pivots have no place of their own with --shape-only")
+    if isinstance(topology, str) and shape_only:
+        space = fixed(builtin_space(topology, center, size / 2, units, 2 * reach), ("A", "B"))  # ground: L / 2
+    elif isinstance(topology, str):
         first = np.array([z[0].real, z[0].imag])
         box = (first - TRACER_BOX * size, first + TRACER_BOX * size)
         space = builtin_space(topology, center, size, units, reach, box, pivots)
@@ -153,7 +169,7 @@ def make_problem(
         th = np.radians(np.asarray(inputs, float).reshape(-1))
         if th.shape != z.shape or not np.all(np.isfinite(th)):
             raise InputError("targets: one finite input angle per target is needed")
-    return Problem(space, z, th, ordered, float(min_transmission), lengths, samples)
+    return Problem(space, z, th, ordered, float(min_transmission), lengths, samples, shape_only, partial)
 
 
 def synthesize(
@@ -227,6 +243,8 @@ def synthesize_path(
     pivots: tuple[tuple[float, float], tuple[float, float]] | None = None,
     free: Sequence[str] | Mapping[str, Any] | None = None,
     reach: float = 1.0,
+    shape_only: bool = False,
+    partial: bool = False,
     seed: int = 0,
     seconds: float = 60.0,
     restarts: int = 1000,
@@ -247,24 +265,22 @@ def synthesize_path(
     targets : array_like, (m, 2) or complex (m,), or Targets
         The points, in ``units`` (a :class:`~linkagekit.synthesis.targets.Targets` as it is).
     topology : str or Mechanism
-        One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move within
-        the targets' neighbourhood, all by default; its tracer is ``P``).
+        One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move; its tracer is ``P``).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
     units : str
-        The targets' (and the design's) length unit (:data:`linkagekit.units.LENGTH_UNITS`);
-        ``unit=``, its former name, still works and warns (``DeprecationWarning``).
-    ordered : bool
-        Without timing: meet the targets in their order along the curve.
+        The targets' length unit (:data:`~linkagekit.units.LENGTH_UNITS`; ``unit=``, its former name, warns).
+    ordered, shape_only, partial : bool
+        Meet the targets in their order along the curve; match it up to a similarity (the mechanism placed on
+        the targets); let them lie on the part a crank sweep of 90 degrees or more traces (the driver's sweep).
     min_transmission : float, optional
         Degrees: transmission angles within ``[MIN, 180 - MIN]`` over the turn (default 20).
-    lengths, pivots : (float, float), ((xmin, xmax), (ymin, ymax)), optional
-        Bounds on every link length; the region of the ground pivots (built-in topologies).
-    free, reach : sequence of str or mapping, optional; float
-        With a template: the joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``;
-        joints lie within ``reach`` target diagonals of the targets' centre.
+    lengths, pivots, free, reach : optional
+        Bounds on every link length; the region ``((xmin, xmax), (ymin, ymax))`` of the ground pivots
+        (built-in topologies); with a template, the joints that move (default all), or ``joint ->
+        ((x0, x1), (y0, y1))``; joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
-        See :class:`~linkagekit.synthesis.optimize.Settings`; ``progress`` gets a ``Progress`` per generation;
+        See :class:`~.optimize.Settings`; ``progress`` gets a ``Progress`` per generation (first, :mod:`~.atlas`);
         ``workers``: every core by default (:func:`~linkagekit.synthesis.optimize.default_workers`).
     pareto : bool
         Also search at transmission bounds 10, 20 and 30 degrees higher, and return in ``pareto`` a
@@ -274,13 +290,34 @@ def synthesize_path(
     -------
     Synthesis
     """
-    min_transmission = MIN_TRANSMISSION if min_transmission is None else min_transmission
-    source = getattr(targets, "source", None)
-    targets, inputs, units = _unpack(targets, inputs, _units(units, old))
-    problem = make_problem(targets, topology, inputs, units, ordered, min_transmission, lengths, pivots, free, reach)
+    targets, inputs, units, source = _unpack(targets, inputs, _units(units, old))
+    mt = MIN_TRANSMISSION if min_transmission is None else min_transmission
+    args = (targets, topology, inputs, units, ordered, mt, lengths, pivots, free, reach, 180, shape_only, partial)
+    problem = make_problem(*args)
     workers = default_workers() if workers is None else workers
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, pareto)
-    return finish(problem, optimize(problem, settings, progress), source)
+    return finish(problem, _from_atlas(problem, settings, progress), source)
+
+
+def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> Outcome:
+    """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has the topology.
+
+    The answer is reported at once (``Progress.source == "atlas"``); one that meets the goal ends the run.
+    ``LINKAGEKIT_ATLAS_SIZE=0`` turns the atlas off.
+    """
+    from . import atlas
+
+    if not atlas.applies(problem):
+        return optimize(problem, settings, progress)
+
+    def start() -> np.ndarray:
+        t0 = time.monotonic()
+        ans = atlas.first_answer(problem)
+        if progress is not None and len(ans.designs):
+            progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), time.monotonic() - t0, source="atlas"))
+        return ans.designs
+
+    return optimize(problem, settings, progress, start)
 
 
 def _units(units: str, old: dict[str, Any]) -> str:
@@ -296,16 +333,18 @@ def _units(units: str, old: dict[str, Any]) -> str:
     return units
 
 
-def _unpack(targets: Any, inputs: Sequence[float] | None, unit: str) -> tuple[Any, Sequence[float] | None, str]:
-    """``(points, inputs, unit)``: a :class:`~linkagekit.synthesis.targets.Targets`'s own, else as given.
+def _unpack(
+    targets: Any, inputs: Sequence[float] | None, unit: str
+) -> tuple[Any, Sequence[float] | None, str, str | None]:
+    """``(points, inputs, unit, source)``: a :class:`~linkagekit.synthesis.targets.Targets`'s own, else as given.
 
     Inputs given explicitly win over the targets' own.
     """
     if hasattr(targets, "xy") and hasattr(targets, "unit"):
         if inputs is None and getattr(targets, "inputs", None) is not None:
             inputs = list(targets.inputs)
-        return targets.xy, inputs, targets.unit
-    return targets, inputs, unit
+        return targets.xy, inputs, targets.unit, getattr(targets, "source", None)
+    return targets, inputs, unit, None
 
 
 def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Synthesis:
@@ -331,23 +370,27 @@ def _finish(problem: Problem, outcome: Outcome, x: np.ndarray, source: str | Non
     """The :class:`Synthesis` of design ``x``."""
     e = check(problem, x[None])
     err = e.errors[0]
+    turn = float(np.angle(e.a[0]))  # the placement turns the crank's angles too
     offset = float(np.degrees(problem.offset(x)[0])) if problem.timed else None
     unit = problem.space.template.length_unit
     name = f"synthesised {problem.space.topology}"
     max_err = float(np.max(err)) if np.all(np.isfinite(err)) else float("nan")
     if np.isfinite(max_err):
         name += f": max error {max_err:.4g} {unit} ({100 * max_err / problem.scale:.3g} % of the targets' diagonal)"
-    mech = problem.space.mechanism(x, name)
+    mech = problem.mechanism(x, name)
+    start, span = np.degrees(e.sweep[0, 0] + turn), np.degrees(e.sweep[0, 1])
     out = Synthesis(
         mech,
         x,
         err,
-        np.degrees(e.theta[0]),
+        np.degrees(e.theta[0] + turn),
         offset,
         problem.scale,
         bool(e.violation[0] == 0),
         float(e.transmission[0]),
         outcome,
+        (float(start), float(start + span)) if problem.partial else None,
+        (complex(e.a[0]), complex(e.b[0])) if problem.shape_only else None,
         problem.min_transmission,
     )
     return replace(out, mechanism=replace(mech, description=describe(out, problem, source)))
@@ -377,6 +420,11 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
     )
     if out.offset is not None:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    if out.placement is not None:
+        a, b = out.placement
+        lines.append(f"shape only: the design placed by z -> a z + b, a = {a:.9g}, b = {b:.9g} {unit}")
+    if out.sweep is not None:
+        lines.append(f"partial: the crank rocks from {out.sweep[0]:.6g} to {out.sweep[1]:.6g} deg")
     lines.append(transmission_line(out) + ("" if out.feasible else ", INFEASIBLE"))
     lines.append(
         f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs; stopped by {o.stopped_by}"

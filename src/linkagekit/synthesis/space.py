@@ -177,16 +177,33 @@ class DesignSpace:
         names = mech.joint_names
         return np.concatenate([pose[names.index(j)] for j in self.free])
 
-    def mechanism(self, x: np.ndarray, name: str | None = None) -> Mechanism:
-        """The mechanism of one design vector (the template with the candidate's pose, lengths from it)."""
+    def mechanism(
+        self,
+        x: np.ndarray,
+        name: str | None = None,
+        place: tuple[complex, complex] = (1.0, 0.0),
+        sweep: tuple[float, float, float] | None = None,
+    ) -> Mechanism:
+        """The mechanism of one design vector (the template with the candidate's pose, lengths from it).
+
+        ``place``: ``(a, b)``, the pose is moved, turned and scaled to ``a z + b`` (complex
+        ``z = x + iy``); ``sweep``: the driver's ``angles`` ``(start, stop, step)`` in radians
+        (written in the template's angle unit).
+        """
         from ..model import Mechanism as _M
+        from ..units import ANGLE_UNITS
 
         data = self.template.to_dict()
         pose = self.poses(np.asarray(x, float)[None])[0]
-        data["joints"] = {j: [float(pose[i, 0]), float(pose[i, 1])] for j, i in self._index.items()}
+        z = place[0] * (pose[:, 0] + 1j * pose[:, 1]) + place[1]
+        data["joints"] = {j: [float(z[i].real), float(z[i].imag)] for j, i in self._index.items()}
         for link in data["links"].values():
             if isinstance(link, dict):
                 link.pop("lengths", None)
+        if sweep is not None:
+            per_radian = 1.0 / ANGLE_UNITS[self.template.angle_unit]
+            start, stop, step = (v * per_radian for v in sweep)
+            data["drivers"][0]["angles"] = {"start": start, "stop": stop, "step": step}
         if name is not None:
             data["name"] = name
         return _M.from_dict(data, source=name or "<synthesis>")
@@ -239,6 +256,25 @@ def builtin_space(
         lo[2 * i : 2 * i + 2] = box[0][0], box[1][0]
         hi[2 * i : 2 * i + 2] = box[0][1], box[1][1]
     return DesignSpace(mech, free, lo, hi, "P", tuple(t["transmission"]), topology)
+
+
+def fixed(space: DesignSpace, joints: Sequence[str]) -> DesignSpace:
+    """``space`` with ``joints`` no longer free: they stay at the template's pose.
+
+    ``--shape-only`` fixes a built-in topology's ground pivots ``A`` and ``B`` so: a curve is
+    matched up to a similarity, which moves, turns and scales the ground line anyway, so
+    their four coordinates would only add a flat valley of equal designs to the search.
+
+    >>> sp = fixed(builtin_space("fourbar", (0.0, 0.0), 1.0), ["A", "B"])
+    >>> sp.free, sp.dim, sp.poses(np.zeros((1, 6)))[0, :2].tolist()
+    (('C', 'D', 'P'), 6, [[-0.5, -0.5], [0.5, -0.5]])
+    """
+    keep = [i for i, j in enumerate(space.free) if j not in joints]
+    cols = [c for i in keep for c in (2 * i, 2 * i + 1)]
+    free = tuple(space.free[i] for i in keep)
+    return DesignSpace(
+        space.template, free, space.lower[cols], space.upper[cols], space.tracer, space.transmission, space.topology
+    )
 
 
 def template_space(

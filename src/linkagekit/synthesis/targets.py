@@ -99,6 +99,8 @@ class Targets:
         The targets describe a closed curve (the last point is not a copy of the first).
     source : str
         The file name, for messages (``"<memory>"`` for arrays).
+    smoothed : str
+        Empty, or the line that says how hand-drawn targets were smoothed (:func:`smooth`).
 
     Examples
     --------
@@ -114,6 +116,7 @@ class Targets:
     unit: str
     closed: bool
     source: str
+    smoothed: str = ""
 
     def __post_init__(self) -> None:
         source = str(self.source)
@@ -357,7 +360,63 @@ def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 4
     text = _read_text(Path(name), name)
     if name.lower().endswith(".svg"):
         return _svg_targets(text, name, units, count)
-    return _csv_targets(text, name, units)
+    targets = _csv_targets(text, name, units)
+    if len(targets) > DENSE_POINTS and not targets.timed:
+        return _smoothed(targets, targets.xy)
+    return targets
+
+
+#: more target points than this in a CSV file, or segments in an SVG path, are hand-drawn: they are smoothed
+#: (12 to 40 points is what a designer lists by hand; a digitised sketch or a pen's path has hundreds)
+DENSE_POINTS = 40
+#: harmonics kept by :func:`smooth` (a curve of the LINK-ABC letters' detail needs about 10 to 16)
+SMOOTH_HARMONICS = 16
+#: points an SVG path of many segments is sampled at before it is smoothed and its ``points`` taken
+SMOOTH_SAMPLES = 512
+
+
+def smooth(xy: np.ndarray, closed: bool, harmonics: int = SMOOTH_HARMONICS) -> np.ndarray:
+    """Hand-drawn points (m, 2) with their wiggles removed: a low-pass Fourier filter along the point sequence.
+
+    A closed curve is periodic: of its discrete Fourier series the harmonics ``|k| <= harmonics``
+    are kept. An open one has its chord (the straight line from its first point to its last,
+    linear in the index) taken off, so that both ends are 0, and is extended by its odd mirror
+    image (``d_0 .. d_{m-1}, -d_{m-2} .. -d_1``): a periodic sequence whose value and slope
+    are continuous, so cutting it off leaves no ringing at the ends; of its twice as long
+    period the harmonics ``|k| <= 2 harmonics`` are kept, and the chord is added back. The
+    ends of an open curve stay where they were.
+
+    >>> t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    >>> circle = np.c_[np.cos(t), np.sin(t)]
+    >>> float(np.max(np.abs(smooth(circle, closed=True) - circle))) < 1e-12
+    True
+    """
+    z = xy[:, 0] + 1j * xy[:, 1]
+    m = len(z)
+    if closed:
+        ext, keep, chord = z, harmonics, np.zeros(m)
+    else:
+        chord = z[0] + (z[-1] - z[0]) * np.arange(m) / (m - 1)
+        d = z - chord
+        ext, keep = np.concatenate([d, -d[-2:0:-1]]), 2 * harmonics
+    F = np.fft.fft(ext)
+    F[np.abs(np.fft.fftfreq(len(ext), 1.0 / len(ext))) > keep] = 0.0
+    out = np.fft.ifft(F)[:m] + chord
+    return np.column_stack([out.real, out.imag])
+
+
+def _smoothed(targets: Targets, dense: np.ndarray, count: int | None = None) -> Targets:
+    """``targets`` replaced by the smoothed ``dense`` points (``count`` of them taken evenly), with the note."""
+    xy = smooth(dense, targets.closed)
+    moved = float(np.max(np.hypot(*(xy - dense).T)))
+    if count is not None:
+        idx = np.linspace(0, len(xy), count, endpoint=False) if targets.closed else np.linspace(0, len(xy) - 1, count)
+        xy = xy[np.round(idx).astype(int)]
+    note = (
+        f"{targets.source}: hand-drawn (more than {DENSE_POINTS} points): smoothed, Fourier harmonics above "
+        f"{SMOOTH_HARMONICS} removed (points moved by at most {moved:.3g} {targets.unit})"
+    )
+    return Targets(xy, targets.inputs, targets.unit, targets.closed, targets.source, note)
 
 
 def _check_points(points: Any, source: str) -> int:
@@ -520,9 +579,11 @@ def _svg_targets(text: str, name: str, units: str, count: int) -> Targets:
     label = f"<path id={_quote(path_id)}>" if path_id else "<path>"
     d = element.get("d") or ""
     segments, ends_closed = _segments(d, name, label)
-    xy, closed = _sample(segments, ends_closed, count, name, label)
+    drawn = len(segments) > DENSE_POINTS  # a pen's path: many short segments
+    xy, closed = _sample(segments, ends_closed, max(count, SMOOTH_SAMPLES) if drawn else count, name, label)
     xy[:, 1] = 0.0 - xy[:, 1]  # SVG's y axis points down (0.0 - y: no negative zeros)
-    return Targets(xy=xy, inputs=None, unit=units, closed=closed, source=name)
+    targets = Targets(xy=xy, inputs=None, unit=units, closed=closed, source=name)
+    return _smoothed(targets, xy, count) if drawn else targets
 
 
 def _first_path(root: ET.Element) -> tuple[ET.Element | None, list[ET.Element]]:

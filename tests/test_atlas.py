@@ -1,0 +1,248 @@
+"""The atlas of normalised four-bar curves (synthesis/descriptors.py, synthesis/atlas.py).
+
+Descriptors are checked against their invariances and against an independent numerical
+integral; the atlas only in its tiny test size (the root conftest points the cache at a
+temporary directory; the fixture below sets ``LINKAGEKIT_ATLAS_SIZE``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from linkagekit.cli import main
+from linkagekit.synthesis import atlas as at
+from linkagekit.synthesis import descriptors as de
+from linkagekit.synthesis.run import make_problem, synthesize
+
+
+@pytest.fixture(autouse=True)
+def _tiny_atlas(monkeypatch):
+    """A 2048-entry atlas (one chunk) in the session's temporary cache (the root conftest turns it off elsewhere)."""
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "2048")
+
+
+def _curve(n: int = 40, seed: int = 1) -> np.ndarray:
+    """A closed polygon with uneven vertices, no symmetry."""
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    return np.exp(1j * t) * (1 + 0.3 * np.cos(3 * t)) + 0.4 * np.exp(-1j * t) + 0.2 * np.exp(2j * t)
+
+
+def _dense_coefficients(z: np.ndarray, closed: bool, H: int, m: int = 1 << 16) -> np.ndarray:
+    """The Fourier coefficients of a polygon by resampling it at ``m`` equal arc-length steps and an FFT."""
+    if not closed:
+        z = np.concatenate([z, z[-2:0:-1]])
+    zz = np.append(z, z[0])
+    s = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(zz)))])
+    u = np.arange(m) * s[-1] / m
+    w = np.interp(u, s, zz.real) + 1j * np.interp(u, s, zz.imag)
+    F = np.fft.fft(w) / m
+    return np.concatenate([F[1 : H + 1], F[-1 : -H - 1 : -1]])
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_coefficients_are_the_polygons_fourier_series(closed):
+    z = _curve()
+    _, Z = de.coefficients(z, closed, 6)
+    # sampled trapezoidally on 2^16 points: the error of that sum is O(h^2) at the corners
+    assert np.max(np.abs(Z - _dense_coefficients(z, closed, 6))) < 1e-6
+
+
+def test_descriptor_ignores_position_rotation_scale_start_and_direction():
+    z = _curve()
+    d = de.describe(z)
+    s, b = 0.3 - 1.2j, 5 + 2j
+    split = np.insert(z, 5, 0.3 * z[5] + 0.7 * z[4])  # started within a segment, another vertex on it
+    for other in (b + s * np.roll(z, 11), b + s * z[::-1], np.roll(split, 3), 7 * np.conj(np.conj(z))):
+        assert np.max(np.abs(de.describe(other).vector - d.vector)) < 1e-10
+    mirrored = de.describe(np.conj(z)).vector  # a mirror image is another shape (the atlas holds mirrored designs)
+    assert np.max(np.abs(mirrored - d.vector)) > 1e-2
+    e = de.describe(b + s * np.roll(z, 11))  # the removed similarity puts one curve onto the other
+    assert np.max(np.abs(e.center + e.scale * (z - d.center) / d.scale - (b + s * z))) < 1e-12
+    assert np.max(np.abs(e.place(((z - d.center) / d.scale)[None])[0] - (b + s * z))) < 1e-12
+
+
+def test_open_curves_and_the_other_descriptor():
+    z = _curve()[:25]
+    d = de.describe(z, closed=False)
+    e = de.describe(2 - 1j + (0.4 + 0.9j) * z[::-1], closed=False)  # the same arc from its other end
+    assert np.max(np.abs(d.vector - e.vector)) < 1e-10
+    # the flipped descriptor is that of (psi, phi) + (pi, pi): Z_k times (-1)^(k+1), i.e. the curve
+    # restarted half a period later and turned by pi
+    W, _ = de.normalise(*de.coefficients(_curve(), True, 6))
+    k = np.concatenate([np.arange(1, 7), -np.arange(1, 7)])
+    other = de.vector(W * np.exp(1j * np.pi * (1 + k)))
+    assert np.max(np.abs(de.flipped(de.vector(W)) - other)) < 1e-12
+    assert de.size() == len(d.vector) == 22
+
+
+def test_a_design_of_the_atlas_is_its_own_nearest_neighbour():
+    atlas = at.load()
+    assert len(atlas) == 2048 and atlas.closed == 1024 and atlas.file.parent == at.directory()
+    row = atlas.entries(np.array([100]))[0]
+    J = row[at.JOINTS : at.SWEEP].reshape(5, 2) @ np.array([1, 1j])
+    s, b = 0.7 + 2j, 3 - 1j
+    Jq = b + s * J
+    X = np.stack([Jq.real, Jq.imag], -1).reshape(1, 10)
+    P, mu = at.curves(X, np.array([2 * np.pi]), True)
+    assert abs(mu[0] - row[at.MU]) < 1e-4  # the stored transmission angle, recomputed
+    m = at.nearest(atlas, np.roll(P[0], 17), True, 3)
+    assert m.rows[0] == 100 and m.distance[0] < 1e-3 < m.distance[1]
+    # float32 storage: the placed joints agree to its rounding, relative to the design's size
+    assert np.max(np.abs(m.joints[0] - Jq)) < 1e-5 * abs(s) * np.max(np.abs(J))
+    # an open entry's arc, from either end
+    lo, _ = atlas.block(False)
+    row = atlas.entries(np.array([lo + 7]))[0]
+    Jo = row[at.JOINTS : at.SWEEP].reshape(5, 2) @ np.array([1, 1j])
+    P, _ = at.curves(np.stack([Jo.real, Jo.imag], -1).reshape(1, 10), np.array([row[at.SWEEP]]), False)
+    assert at.nearest(atlas, P[0][::-1], False, 1).rows[0] == lo + 7
+
+
+def test_the_atlas_answer_seeds_path_synthesis(monkeypatch):
+    atlas = at.load()
+    rng = np.random.default_rng(3)
+    s, b = 1.5 * np.exp(0.4j), 2 + 1j
+    for r in rng.permutation(atlas.closed):  # the first entry that fits the bounds of its own targets
+        row = atlas.entries(np.array([r]))[0]
+        J = b + s * (row[at.JOINTS : at.SWEEP].reshape(5, 2) @ np.array([1, 1j]))
+        P, _ = at.curves(np.stack([J.real, J.imag], -1).reshape(1, 10), np.array([2 * np.pi]), True, 12)
+        problem = make_problem(P[0], "fourbar", reach=2.0)
+        if at._fits(problem, J[None])[0] and row[at.MU] > 25:
+            break
+    again = [at.first_answer(problem, atlas).designs for _ in range(2)]
+    assert np.array_equal(*again)  # no clock in it: a resumed run gets the seeds the first one had
+    lines = []
+    out = synthesize(P[0], "fourbar", reach=2.0, goal=1e-5, seconds=5, progress=lines.append)
+    assert lines[0].source == "atlas" and lines[0].best_error == out.max_error / out.diagonal  # said first
+    assert out.outcome.stopped_by == "goal" and out.outcome.generations == 0 and out.max_error < 1e-5 * out.diagonal
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "0")  # the atlas off
+    plain = synthesize(P[0], "fourbar", reach=2.0, restarts=1, generations=3, popsize=5, goal=1.0)
+    assert plain.outcome.restarts == 1  # without the atlas: a search
+
+
+MAKE_CHUNK = at.make_chunk
+
+
+def _spy(monkeypatch, stop_after: int | None = None) -> list[int]:
+    """Record the chunks made; with ``stop_after``, interrupt the build after that many."""
+    made: list[int] = []
+    real = MAKE_CHUNK
+
+    def make(index: int, entries: int) -> np.ndarray:
+        if stop_after is not None and len(made) == stop_after:
+            raise KeyboardInterrupt
+        made.append(index)
+        return real(index, entries)
+
+    monkeypatch.setattr(at, "make_chunk", make)
+    return made
+
+
+def test_an_interrupted_build_resumes_and_ends_as_an_uninterrupted_one(monkeypatch, tmp_path):
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "1024")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path / "a"))
+    _spy(monkeypatch, stop_after=2)
+    with pytest.raises(KeyboardInterrupt):
+        at.build(workers=1)
+    assert not at.path().exists() and len(list(tmp_path.glob("a/*.parts/chunk-*.npy"))) == 2
+    assert at.info().chunks == 2 and not at.info().built
+    made = _spy(monkeypatch)
+    first = np.load(at.build(workers=1), allow_pickle=False)
+    assert sorted(made) == [2, 3] and not list(tmp_path.glob("a/*.parts"))
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path / "b"))
+    again = np.load(at.build(workers=1), allow_pickle=False)
+    assert np.array_equal(first, again) and first.shape == (at.COLUMNS, 1025)
+
+
+def test_two_builds_at_once_share_the_work_and_the_file(monkeypatch, tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "1024")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path))
+    with ThreadPoolExecutor(2) as pool:
+        files = list(pool.map(lambda _: at.build(workers=1), range(2)))
+    assert files[0] == files[1] == at.path() and at.info().built
+    assert sorted(p.name for p in tmp_path.iterdir()) == [at.path().name]  # no temporary file, no chunks left
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path / "alone"))
+    assert np.array_equal(np.load(at.build(workers=1)), np.load(files[0]))
+
+
+def test_a_corrupt_stale_or_foreign_file_is_rebuilt_never_trusted(monkeypatch, tmp_path):
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "256")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path))
+    file = at.path()
+    good = np.load(at.build(workers=1), allow_pickle=False)
+    bad = [
+        lambda: file.write_bytes(file.read_bytes()[:-1000]),  # cut short
+        lambda: file.write_bytes(b"not an atlas"),
+        lambda: np.save(file, np.array([{"a": 1}], dtype=object), allow_pickle=True),  # a pickle: never loaded
+        lambda: np.save(file, np.where(good == at.MARKER, 0, good)),  # right shape, no marker
+        lambda: np.save(file, good.astype(np.float64)),
+    ]
+    for spoil in bad:
+        spoil()
+        made = _spy(monkeypatch)
+        atlas = at.load()
+        assert made == [0] and np.array_equal(np.asarray(atlas.data), good)
+    monkeypatch.setattr(at, "VERSION", 2)  # a new release: a new file, built anew
+    made = _spy(monkeypatch)
+    assert at.load().file.name == "fourbar-atlas-v2-256.npy" and made == [0] and file.exists()
+
+
+def test_the_atlas_command(monkeypatch, tmp_path, capsys):
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "256")
+    assert main(["atlas", "info"]) == 0
+    assert "not built yet" in capsys.readouterr().out
+    assert main(["atlas", "build", "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert f"fourbar-atlas-v{at.VERSION}-256.npy (built, 0.0 MB)" in out and "128 closed curves" in out
+    for bad in ("many", "-5", "0"):  # 0 turns the atlas off: there is none to build
+        monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", bad)
+        assert main(["atlas", "info"]) == 2
+        assert "LINKAGEKIT_ATLAS_SIZE" in capsys.readouterr().err
+    assert not at.applies(make_problem([[0, 0], [1, 0], [0, 1]], "fourbar"))
+
+
+def test_no_entry_fits_the_bounds_no_answer_and_the_search_as_without():
+    atlas = at.load()
+    T = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    problem = make_problem(T, "fourbar", pivots=((100.0, 100.5), (100.0, 100.5)))  # pivots far off every curve
+    ans = at.first_answer(problem, atlas)
+    assert ans.designs.shape == (0, 10) and ans.error == np.inf
+
+
+def test_the_command_says_the_atlas_answer_first(tmp_path, capsys):
+    T = np.array([[0.0, 0.0], [1.0, 0.2], [1.6, 0.9], [1.2, 1.8], [0.3, 1.5], [-0.2, 0.7]])
+    np.savetxt(tmp_path / "t.csv", T, delimiter=",", header="x,y", comments="")
+    assert main(["synthesize", str(tmp_path / "t.csv"), "--goal", "0.5", "-o", str(tmp_path / "a.yaml")]) == 0
+    out, err = capsys.readouterr()
+    assert err.startswith("linkagekit: synthesize: the atlas's nearest four-bar, placed and polished: max error ")
+    assert err.count("\n") == 1 and "stopped by reaching the goal" in out and (tmp_path / "a.yaml").exists()
+
+
+def test_only_whole_turns_of_the_free_four_bar_start_from_the_atlas():
+    T = np.array([[0.0, 0.0], [1.0, 0.2], [1.6, 0.9], [1.2, 1.8], [0.3, 1.5]])
+    assert at.applies(make_problem(T, "fourbar"))
+    assert not at.applies(make_problem(T, "fourbar", partial=True))
+    assert at.applies(make_problem(T, "fourbar", shape_only=True))  # its ground pivots fixed: put on them
+    assert not at.applies(make_problem(T, "watt2"))
+
+
+def test_a_shape_only_answer_is_an_entry_on_the_fixed_pivots():
+    atlas = at.load()
+    row = atlas.entries(np.array([300]))[0]
+    J = row[at.JOINTS : at.SWEEP].reshape(5, 2) @ np.array([1, 1j])
+    P, _ = at.curves(np.stack([J.real, J.imag], -1).reshape(1, 10), np.array([2 * np.pi]), True, 12)
+    T = 4 - 1j + 2.5 * np.exp(0.7j) * P[0]  # the curve moved, turned and scaled
+    problem = make_problem(np.stack([T.real, T.imag], 1), "fourbar", shape_only=True, min_transmission=10.0)
+    X = at.on_pivots(problem, J[None])
+    pose = problem.space.poses(X)[0] @ np.array([1, 1j])  # A, B where the space fixes them, C D P the entry's shape
+    ratio = (pose[1:] - pose[0]) / (J[1:] - J[0])  # one similarity maps the entry onto the pose, B included
+    assert np.allclose(ratio, ratio[0], rtol=0, atol=1e-12)
+    ans = at.first_answer(problem, atlas)
+    assert ans.error < 1e-6 and ans.designs.shape[1] == 6
