@@ -19,6 +19,9 @@ them, as the timings are wall-clock ones on a machine that may be shared):
     transmission angles differ by at least 10 degrees.
 
     python benchmarks/bench_cores.py [cores|ellipse|pareto ...] [--k K] [--cap S]
+
+With the atlas (``synthesis/atlas.py``) the searches start from its answer; ``LINKAGEKIT_ATLAS_SIZE=0``
+measures the engine alone (the numbers in benchmarks/README.md were measured so).
 """
 
 from __future__ import annotations
