@@ -35,6 +35,8 @@ LAYERS = [
         "synthesis.motion",
         "synthesis.burmester",
         "synthesis.front",
+        "synthesis.topologies",
+        "synthesis.tracer",
         "synthesis.descriptors",
     },
     {"synthesis.distribute"},
@@ -42,6 +44,7 @@ LAYERS = [
     {"synthesis.atlas"},
     {"synthesis.function_run"},
     {"synthesis.run"},
+    {"synthesis.auto"},
     {"cli"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}

@@ -567,14 +567,26 @@ def _edit_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("targets", metavar="TARGET", help="target points: .csv (x,y[,input]) or .svg (its first path)")
+def _topology_arguments(p: argparse.ArgumentParser) -> None:
+    """``synthesize --topology`` and ``--max-joints``."""
     p.add_argument(
         "--topology",
         default="fourbar",
         metavar="NAME|FILE",
-        help="fourbar (default), watt2, stephenson3, or a mechanism file used as a template (see --free)",
+        help="fourbar (default), watt2, stephenson3, auto (every built-in topology up to --max-joints), "
+        "or a mechanism file used as a template (see --free)",
     )
+    p.add_argument(
+        "--max-joints",
+        metavar="N",
+        default=None,
+        help="with --topology auto: at most N joints, ground pivots and P included (default 10)",
+    )
+
+
+def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("targets", metavar="TARGET", help="target points: .csv (x,y[,input]) or .svg (its first path)")
+    _topology_arguments(p)
     _output_option(p, "the mechanism file to write: .yaml or .json")
     p.add_argument(
         "--seconds", metavar="S", default=_DEFAULT_SECONDS, help="time budget (default 60; 10 for --task function)"
@@ -1385,6 +1397,10 @@ def _synthesize(args: argparse.Namespace) -> int:
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
+    if args.topology == "auto":
+        return _synthesize_auto(args, targets, search, t0)
+    if args.max_joints is not None:
+        raise InputError("--max-joints goes with --topology auto")
     topology = _topology(args, targets.unit)
     budget = search["seconds"]
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)  # the command's start counts too
@@ -1435,6 +1451,40 @@ def pareto_text(out: Any, unit: str, paths: list[str]) -> str:
     ]
     head = f"{len(out.pareto)} designs from the most accurate to the best-transmitting (none better in both):"
     return "\n".join(["", head, *render_table(cols)])
+
+
+def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, Any], t0: float) -> int:
+    """``synthesize --topology auto``: the best of the built-in topologies up to ``--max-joints``; names it."""
+    import dataclasses
+    import time
+
+    import linkagekit as lk
+
+    from .synthesis.auto import synthesize_auto
+    from .synthesis.topologies import MAX_JOINTS
+
+    if args.free or args.checkpoint or args.pareto or search.get("pivots") or search.get("lengths"):
+        raise InputError("--topology auto: --free, --pivots, --lengths, --checkpoint and --pareto do not apply")
+    max_joints = MAX_JOINTS if args.max_joints is None else _integer(args.max_joints, "--max-joints", 5, 10)
+    for key in ("free", "checkpoint", "pivots", "lengths", "reach"):
+        search.pop(key, None)
+    budget = search["seconds"]
+    search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)
+    with _Search(budget) as progress:
+        out = synthesize_auto(targets, max_joints=max_joints, **search, progress=progress)
+    described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
+    described += f"\n{targets.smoothed}" if targets.smoothed else ""
+    lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
+    if targets.smoothed:
+        print(targets.smoothed)
+    text = synthesis_text(out, targets.xy, None, targets.unit, args.output).splitlines()
+    a = out.mechanism.to_dict()["drivers"][0]["angles"]
+    joints = len(out.mechanism.joint_names)
+    tried = ", ".join(f"{t.name} {100 * t.error:.3g} %" for t in out.tried)
+    text.insert(-1, f"topology {out.topology} ({joints} joints), crank {a['start']:.6g} to {a['stop']:.6g} deg")
+    text.insert(-1, f"searched: {tried} (rms error / diagonal)")
+    print("\n".join(text))
+    return 0
 
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
@@ -1666,6 +1716,7 @@ def _synthesize_source(path: str) -> str:
 #: the options of ``synthesize`` that decide its result (those that say where it runs or writes do not)
 _SYNTHESIZE_DECIDING = (
     "topology",
+    "max_joints",
     "units",
     "seed",
     "seconds",

@@ -72,6 +72,10 @@ class Synthesis:
     placement : (complex, complex) or None
         With ``shape_only``: the similarity ``z -> a z + b`` that moved, turned and scaled the
         design ``x`` onto the targets (the mechanism is the placed one).
+    topology : str
+        The topology's name (``fourbar``, ``sixbar-3``, ...; a template's source).
+    tried : tuple
+        ``--topology auto``: the topologies searched (:class:`~.auto.Tried`), else empty.
     bound : float
         The transmission bound the design was searched under (degrees; ``--min-transmission``).
     pareto : tuple of Synthesis
@@ -91,6 +95,8 @@ class Synthesis:
     outcome: Outcome
     sweep: tuple[float, float] | None = None
     placement: tuple[complex, complex] | None = None
+    topology: str = ""
+    tried: tuple[Any, ...] = ()
     bound: float = MIN_TRANSMISSION
     pareto: tuple[Synthesis, ...] = ()
 
@@ -391,7 +397,8 @@ def _finish(problem: Problem, outcome: Outcome, x: np.ndarray, source: str | Non
         outcome,
         (float(start), float(start + span)) if problem.partial else None,
         (complex(e.a[0]), complex(e.b[0])) if problem.shape_only else None,
-        problem.min_transmission,
+        problem.space.topology,
+        bound=problem.min_transmission,
     )
     return replace(out, mechanism=replace(mech, description=describe(out, problem, source)))
 

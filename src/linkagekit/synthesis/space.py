@@ -225,11 +225,9 @@ def builtin_space(
     targets' box with a margin) when given; ground pivots within ``pivot_box``
     ``((xmin, xmax), (ymin, ymax))`` when given.
     """
-    if topology not in _TEMPLATES:
-        raise InputError(f"--topology: unknown topology '{topology}' (built in: {', '.join(TOPOLOGIES)}, or a file)")
     from ..model import Mechanism
 
-    t = _TEMPLATES[topology]
+    t = _template(topology)
     joints = {j: [center[0] + size * (x - 0.5), center[1] + size * (y - 0.5)] for j, (x, y) in t["joints"].items()}
     data = {
         "format": "linkagekit/1",
@@ -256,6 +254,36 @@ def builtin_space(
         lo[2 * i : 2 * i + 2] = box[0][0], box[1][0]
         hi[2 * i : 2 * i + 2] = box[0][1], box[1][1]
     return DesignSpace(mech, free, lo, hi, "P", tuple(t["transmission"]), topology)
+
+
+def is_builtin(topology: str) -> bool:
+    """A built-in topology's name: ``TOPOLOGIES``, or an enumerated one of :mod:`.topologies` (``sixbar-3``)."""
+    from .topologies import by_name
+
+    if topology in _TEMPLATES:
+        return True
+    try:
+        by_name(topology)
+    except InputError:
+        return False
+    return True
+
+
+def _template(topology: str) -> dict[str, Any]:
+    """Joints in a unit pose, links and transmission angles of a built-in topology (hand-drawn or enumerated)."""
+    if topology in _TEMPLATES:
+        return _TEMPLATES[topology]
+    if not is_builtin(topology):
+        raise InputError(f"--topology: unknown topology '{topology}' (built in: {', '.join(TOPOLOGIES)}, or a file)")
+    from .topologies import by_name
+
+    t = by_name(topology)
+    pose = t.pose()
+    return {
+        "joints": {j: [0.5 + 0.5 * pose[j][0], 0.5 + 0.5 * pose[j][1]] for j in t.order},
+        "links": {name: list(joints) for name, joints in t.links},
+        "transmission": list(t.transmission),
+    }
 
 
 def fixed(space: DesignSpace, joints: Sequence[str]) -> DesignSpace:

@@ -1,0 +1,608 @@
+"""``--topology auto``: path generation over every built-in topology within a joint limit.
+
+The budget is split in two. First a *screen* (:data:`SCREEN` of the time): for every
+topology of :func:`~.topologies.enumerate_topologies` (the four-bar, Watt II and
+Stephenson III first, then the others in a seeded order, until the screen's time is up),
+random designs of its space are solved over a turn, and the tracer's best place on its
+link with the curve's similarity placement is fitted to the targets over every cyclic shift
+of the correspondence (:func:`~.tracer.fit_shifts`). Each topology is ranked by its best
+fit. Then the engine searches the :data:`SEARCHED` best-ranked topologies in turn, each for
+an equal share of the rest of the time; every design it returns has its tracer moved to the
+best place on its link for the targets' nearest points (:func:`place_tracer`, a few rounds
+of nearest points then a linear fit), kept when the measure improves. The best design of
+all, by the problem's measure (feasible first), is written; its topology is named.
+
+Examples
+--------
+>>> import numpy as np
+>>> from linkagekit.synthesis.auto import synthesize_auto
+>>> t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+>>> out = synthesize_auto(np.stack([np.cos(t), 0.6 * np.sin(t)], 1), max_joints=5, seconds=1)
+>>> out.topology, out.feasible
+('fourbar', True)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .base import Objective, Score, digest
+from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
+from .optimize import Outcome, Progress, Settings, optimize
+from .run import Synthesis, _unpack, make_problem
+from .topologies import MAX_JOINTS, Topology, enumerate_topologies
+from .tracer import TracerFit, fit, fit_shifts
+
+#: the fraction of the time the screen of topologies takes
+SCREEN = 0.2
+#: topologies the engine searches after the screen
+SEARCHED = 3
+#: random designs per topology in the screen
+SCREEN_DESIGNS = 96
+#: rounds of nearest points and tracer fit of :func:`place_tracer`
+PLACE_ROUNDS = 4
+#: the topologies screened first, by name
+FIRST = ("fourbar", "watt2", "stephenson3")
+
+
+@dataclass(frozen=True)
+class Tried:
+    """One topology of an ``auto`` run: its screen figure and, if searched, its result.
+
+    Attributes
+    ----------
+    name : str
+    joints : int
+    screen : float
+        The best screened design's RMS fit / the targets' diagonal (inf: none assembled).
+    error : float
+        The searched design's max error / diagonal (NaN if not searched; inf: infeasible).
+    """
+
+    name: str
+    joints: int
+    screen: float
+    error: float = float("nan")
+
+
+def synthesize_auto(
+    targets: Any,
+    *,
+    max_joints: int = MAX_JOINTS,
+    seconds: float = 60.0,
+    seed: int = 0,
+    restarts: int = 32,
+    generations: int = 500,
+    popsize: int = 15,
+    goal: float = 1e-5,
+    workers: int = 1,
+    scheduler: str | None = None,
+    progress: Callable[[Progress], None] | None = None,
+    method: str = "local",
+    **problem: Any,
+) -> Synthesis:
+    """Path generation over the built-in topologies of at most ``max_joints`` joints; the best is returned.
+
+    ``problem``: the keywords of :func:`~.run.make_problem` (``units``, ``ordered``,
+    ``min_transmission``, ...) and ``partial`` (the targets lie on a part of the curve).
+    ``method``: ``"local"`` (:func:`multistart`, the default) or ``"engine"`` (the engine's
+    differential evolution and CMA-ES, with ``restarts`` ... ``scheduler``, ``progress``).
+    The result's ``topology`` names the topology chosen and ``tried`` lists what was
+    searched (:class:`Tried`).
+    """
+    t0 = time.monotonic()
+    xy, inputs, units, source = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
+    if inputs is not None:
+        raise InputError("--topology auto: targets with input angles (timing) are not supported")
+    partial = bool(problem.pop("partial", False))
+    problem.pop("shape_only", None)  # the projected search always places the curve
+    problem.setdefault("min_transmission", 20.0)
+    topologies = enumerate_topologies(max_joints)
+    rng = np.random.default_rng(seed)
+
+    def make(t: Topology) -> Projected:
+        return Projected(make_problem(xy, t.name, None, units, **problem), partial)
+
+    screened = screen(topologies, make, rng, t0 + SCREEN * seconds)
+    order = sorted(screened, key=lambda k: screened[k][0])[:SEARCHED]
+    tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
+    projs = [make(next(t for t in topologies if t.name == name)) for name in order]
+    left = seconds * (1 - RESERVE) - (time.monotonic() - t0)
+    if method == "engine":
+        each = Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler)
+        outs = [optimize(p, each, progress) for p in projs]
+    else:
+        seeds = rng.integers(0, 2**32, len(projs))
+        outs = local_searches(projs, [int(k) for k in seeds], [screened[n][1] for n in order], left, workers)
+    found: list[Synthesis] = []
+    for name, proj, out in zip(order, projs, outs, strict=True):
+        x = _best_of(proj, [out.x, screened[name][1]])
+        syn = written(proj, x, replace(out, x=x), source)
+        tried[name] = replace(tried[name], error=syn.rms_error / syn.diagonal if syn.feasible else np.inf)
+        found.append(syn)
+    best = min(found, key=lambda f: (not f.feasible, f.rms_error))
+    return replace(best, tried=tuple(tried[n] for n in order))
+
+
+#: the fraction of the time kept for the dense checks of the results
+RESERVE = 0.03
+
+
+def local_searches(
+    projs: Sequence[Projected], seeds: Sequence[int], starts: Sequence[np.ndarray], seconds: float, workers: int
+) -> list[Outcome]:
+    """:func:`multistart` on each objective, ``workers`` at a time on local processes, within ``seconds`` in all.
+
+    Each gets ``seconds / ceil(k / workers)`` (``k`` objectives: that many rounds of
+    ``workers`` at a time), its own seed and start.
+    """
+    k = len(projs)
+    share = max(seconds / -(-k // max(workers, 1)), 1e-3)
+    if workers <= 1 or k == 1:
+        return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    with ProcessPoolExecutor(min(workers, k), mp_context=ctx) as pool:
+        return list(pool.map(_multistart, projs, seeds, [share] * k, starts))
+
+
+def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray) -> Outcome:
+    """:func:`multistart` for ``seconds`` from now (a worker process's task)."""
+    return multistart(proj, np.random.default_rng(seed), time.monotonic() + seconds, x0)
+
+
+#: random designs drawn at once by :func:`multistart`; the best few of them start a local search
+BATCH, STARTS = 1024, 4
+#: residual evaluations of one local search at most
+LOCAL_NFEV = 60
+
+
+def multistart(proj: Projected, rng: np.random.Generator, deadline: float, x0: np.ndarray | None = None) -> Outcome:
+    """Local searches from the best of random designs until ``deadline``: the best design found.
+
+    Each round draws :data:`BATCH` designs, scores them at once, and runs :func:`local_search`
+    from the :data:`STARTS` best (the first round also from ``x0``). Bounded least squares
+    from good random starts reach, in seconds, what a population search reaches in tens.
+    """
+    t0 = time.monotonic()
+    lo, hi = proj.bounds
+    best_x, best_cost, starts, designs = None, np.inf, 0, 0
+    while time.monotonic() < deadline or best_x is None:
+        X = lo + rng.random((BATCH, len(lo))) * (hi - lo)
+        if x0 is not None and best_x is None:
+            X[0] = x0
+        cost = proj.cost(X)
+        designs += BATCH
+        for i in np.argsort(cost)[:STARTS]:
+            if time.monotonic() > deadline and best_x is not None:
+                break
+            x, c, n = local_search(proj, X[i], deadline=deadline)
+            starts, designs = starts + 1, designs + n
+            if c < best_cost:
+                best_x, best_cost = x, c
+    assert best_x is not None
+    return Outcome(best_x, float(best_cost), starts, 0, designs, time.monotonic() - t0, "time")
+
+
+class _Stop(Exception):
+    """The local search's deadline passed."""
+
+
+def local_search(
+    proj: Projected, x0: np.ndarray, max_nfev: int = LOCAL_NFEV, deadline: float = np.inf
+) -> tuple[np.ndarray, float, int]:
+    """Bounded least squares (scipy's ``trf``) on :meth:`Projected.residuals` from ``x0``: (x, cost, designs).
+
+    The Jacobian by forward differences, every column in one batch of designs. Past
+    ``deadline`` (``time.monotonic``) it stops with the best design it has evaluated.
+    """
+    from scipy.optimize import least_squares
+
+    lo, hi = proj.bounds
+    h = 1e-6 * proj.scale
+    count = [0]
+    best: list[Any] = [np.inf, np.clip(x0, lo, hi)]
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        if time.monotonic() > deadline:
+            raise _Stop
+        count[0] += 1
+        r = np.asarray(proj.residuals(x[None])[0])
+        if float(r @ r) < best[0]:
+            best[:] = [float(r @ r), x.copy()]
+        return r
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        if time.monotonic() > deadline:
+            raise _Stop
+        step = np.where(x + h <= hi, h, -h)
+        X = np.vstack([x, x + np.diag(step)])
+        R = proj.residuals(X)
+        count[0] += len(X)
+        return np.asarray(((R[1:] - R[0]) / step[:, None]).T)
+
+    try:
+        x = least_squares(fun, best[1], jac=jac, bounds=(lo, hi), method="trf", x_scale="jac", max_nfev=max_nfev).x
+    except _Stop:
+        x = best[1]
+    return x, float(proj.cost(x[None])[0]), count[0]
+
+
+def _best_of(problem: Objective, xs: Sequence[np.ndarray | None]) -> np.ndarray:
+    X = np.stack([x for x in xs if x is not None])
+    err, cost = problem.measure(X)
+    return np.asarray(X[best_index(err, cost)])
+
+
+# ------------------------------------------------------------------------------- the screen
+def screen(
+    topologies: Sequence[Topology],
+    make: Callable[[Topology], Projected],
+    rng: np.random.Generator,
+    deadline: float,
+) -> dict[str, tuple[float, np.ndarray]]:
+    """``name -> (best relative RMS fit, its design)`` of the topologies screened before ``deadline``.
+
+    :data:`SCREEN_DESIGNS` random designs of each (:class:`Projected`: the tracer and the
+    placement fitted); the first three (:data:`FIRST`) always, the rest in a random order of ``rng``.
+    """
+    first = [t for t in topologies if t.name in FIRST]
+    rest = [t for t in topologies if t.name not in FIRST]
+    rest = [rest[i] for i in rng.permutation(len(rest))]
+    out: dict[str, tuple[float, np.ndarray]] = {}
+    for t in first + rest:
+        if out and time.monotonic() > deadline and t.name not in FIRST:
+            break
+        proj = make(t)
+        lo, hi = proj.bounds
+        X = lo + rng.random((SCREEN_DESIGNS, len(lo))) * (hi - lo)
+        sc = proj.score(X)
+        rms = np.where(sc.violation > 0, np.inf, sc.error)
+        i = int(np.argmin(np.where(np.isfinite(rms), rms, sc.cost + 1e6)))
+        out[t.name] = (float(rms[i]), X[i])
+    return out
+
+
+def _tracer_base(problem: Problem) -> tuple[int, int]:
+    """Joint indices ``i, j`` of the first two other joints of the tracer's link."""
+    sp = problem.space
+    link = next(ln for ln in sp.template.links if sp.tracer in ln.joints and ln.name != "ground")
+    a, b = [j for j in link.joints if j != sp.tracer][:2]
+    return sp.joint(a), sp.joint(b)
+
+
+def _shape_only(problem: Problem) -> bool:
+    return bool(getattr(problem, "shape_only", False))
+
+
+# ------------------------------------------------------------------ the projected objective
+#: samples of the turn the projected objective solves each design at
+PROJECTED_SAMPLES = 128
+#: designs scored at once (the nearest points take designs x targets x samples)
+CHUNK = 64
+#: targets the projected search fits at most (a dense drawing is thinned evenly)
+SEARCH_TARGETS = 100
+#: rounds of nearest points and tracer fit after the fit over the shifts
+ICP_ROUNDS = 2
+#: the crank ranges (fractions of a turn) a partial curve is fitted over; the least is 90 deg
+PARTIAL_WIDTHS = (0.27, 0.375, 0.5, 0.75)
+
+
+@dataclass(frozen=True)
+class Placed:
+    """Designs solved over a turn, their tracer and placement fitted (:meth:`Projected.placed`).
+
+    Attributes
+    ----------
+    params, solution : Params, Solution
+        The compiled designs and their joints over the turn (``solution.z``: joints x designs x samples).
+    fit : TracerFit
+        The tracer ``c``, the placement ``a, b``, the shift and direction of the correspondence.
+    window : ndarray (N, n) bool
+        The samples of the range fitted (all of the turn for a closed curve).
+    distance : ndarray (N,)
+        Two-sided mean squared distance between the window's samples and the targets.
+    span : ndarray (N,) int
+        The window's span in samples.
+    parts : ndarray (N, m + n)
+        The squared residuals that sum to ``distance`` (:func:`_chamfer`).
+    """
+
+    params: Any
+    solution: Any
+    fit: Any
+    window: np.ndarray
+    distance: np.ndarray
+    span: np.ndarray
+    parts: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Projected(Objective):
+    """Path generation with the tracer and the similarity placement eliminated (variable projection).
+
+    The design vector is the problem's without the tracer. Each design is solved at
+    :data:`PROJECTED_SAMPLES` inputs over a turn; the tracer's place on its link, the curve's
+    placement and the shift of the correspondence come from :func:`~.tracer.fit_shifts`
+    (targets spread evenly in crank angle over the whole turn, or, ``partial``, over each
+    range of :data:`PARTIAL_WIDTHS`). Cost: mean squared placed distance / ``L^2`` plus
+    ``PENALTY`` times the violation (assembly over the turn when closed, transmission angles,
+    the curve's size; a partial design with no range where it assembles: 1).
+    """
+
+    problem: Problem
+    partial: bool = False
+    samples: int = PROJECTED_SAMPLES
+
+    @property
+    def targets(self) -> np.ndarray:
+        """The targets the search fits: every one, or evenly every k-th down to :data:`SEARCH_TARGETS`."""
+        T = self.problem.targets
+        return T[:: max(1, len(T) // SEARCH_TARGETS)]
+
+    @property
+    def keep(self) -> np.ndarray:
+        """Indices of the problem's design vector this one keeps (all but the tracer's two)."""
+        k = self.problem.space.free.index(self.problem.space.tracer)
+        return np.delete(np.arange(self.problem.dim), [2 * k, 2 * k + 1])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self.problem.bounds
+        return lo[self.keep], hi[self.keep]
+
+    @property
+    def scale(self) -> float:
+        return self.problem.scale
+
+    def fingerprint(self) -> str:
+        return digest(self.problem.fingerprint(), self.partial, self.samples)
+
+    def full(self, X: np.ndarray) -> np.ndarray:
+        """The problem's design vectors of ``X``, the tracer anywhere off its link's line (it is fitted later)."""
+        X = np.atleast_2d(X)
+        sp = self.problem.space
+        out = np.zeros((len(X), self.problem.dim))
+        out[:, self.keep] = X
+        k = sp.free.index(sp.tracer)
+        i, j = (sp.free.index(sp.template.joint_names[a]) for a in _tracer_base(self.problem))
+        zi = out[:, 2 * i] + 1j * out[:, 2 * i + 1]
+        zp = zi + (0.5 + 0.5j) * (out[:, 2 * j] + 1j * out[:, 2 * j + 1] - zi)
+        out[:, 2 * k], out[:, 2 * k + 1] = zp.real, zp.imag
+        return out
+
+    def fitted(self, X: np.ndarray) -> tuple[Any, Any, list[tuple[TracerFit, int]]]:
+        """``(params, solution, fits)`` of designs ``X``: the best fit over the shifts, for each range's width."""
+        from ..params import compile as compile_params
+        from ..positions import solve
+
+        sp = self.problem.space
+        params = compile_params(sp.template, sp.poses(self.full(X)), sp.plan)
+        n = self.samples
+        theta = params.pose_inputs[0][:, None] + (2 * np.pi / n) * np.arange(n)
+        sol = solve(params, theta[None])
+        i, j = _tracer_base(self.problem)
+        widths = [int(round(w * n)) for w in PARTIAL_WIDTHS] if self.partial else [n]
+        return params, sol, [(fit_shifts(sol.z[i], sol.z[j], self.targets, w), w) for w in widths]
+
+    def score(self, X: np.ndarray) -> Score:
+        X = np.atleast_2d(X)
+        parts = [self._score(X[k : k + CHUNK]) for k in range(0, len(X), CHUNK)]
+        return Score(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("cost", "error", "violation")))
+
+    def _score(self, X: np.ndarray) -> Score:
+        p = self.placed(X)
+        viol = self._violation(p.params, p.solution, p.fit, p.window)
+        mse = p.distance / self.problem.scale**2
+        err = np.sqrt(mse)
+        return Score(
+            np.where(np.isfinite(mse), mse, 1.0) + PENALTY * viol, np.where(np.isfinite(err), err, np.inf), viol
+        )
+
+    def placed(self, X: np.ndarray) -> Placed:
+        """The designs ``X`` solved, their tracer and placement fitted and refined on nearest points.
+
+        From the fit over the shifts (:meth:`fitted`), :data:`ICP_ROUNDS` rounds of: each
+        target's nearest sample of the placed curve within the window, then :func:`~.tracer.fit`
+        on those pairs; per design the round of least two-sided mean squared distance
+        (targets to the curve's samples plus the window's samples to the targets) is kept.
+        """
+        params, sol, fits = self.fitted(X)
+        best: Placed | None = None
+        for f, width in fits:  # each range's width refined, the best kept per design
+            p = self._refined(params, sol, f, width)
+            if best is None:
+                best = p
+                continue
+            take = p.distance < best.distance
+            best = Placed(
+                params,
+                sol,
+                _choose(take, p.fit, best.fit),
+                np.where(take[:, None], p.window, best.window),
+                np.where(take, p.distance, best.distance),
+                np.where(take, p.span, best.span),
+                np.where(take[:, None], p.parts, best.parts),
+            )
+        assert best is not None
+        return best
+
+    def _refined(self, params: Any, sol: Any, f: TracerFit, width: int) -> Placed:
+        """The fit ``f`` over the shifts at one range's ``width``, refined on nearest points."""
+        N, n = len(f.sse), self.samples
+        m = len(self.targets)
+        last = np.full(N, ((m - 1) * width) // m)
+        window = np.mod(np.arange(n)[None, :] - f.shift[:, None], n) <= last[:, None]
+        i, j = _tracer_base(self.problem)
+        Xi, Xj = sol.z[i], sol.z[j]
+        window &= np.isfinite(Xi) & np.isfinite(Xj)
+        best_d, k, parts = _chamfer(f, Xi, Xj, self.targets, window)
+        rows = np.arange(N)[:, None]
+        for _ in range(ICP_ROUNDS):
+            g = replace(fit(Xi[rows, k], Xj[rows, k], self.targets), shift=f.shift, direction=f.direction)
+            d, k2, p2 = _chamfer(g, Xi, Xj, self.targets, window)
+            take = d < best_d
+            f, best_d = _choose(take, g, f), np.where(take, d, best_d)
+            k, parts = np.where(take[:, None], k2, k), np.where(take[:, None], p2, parts)
+        return Placed(params, sol, f, window, best_d, last, parts)
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """Each target's and each window sample's distance (the chamfer's parts) / ``L``, and the penalty's root."""
+        p = self.placed(np.atleast_2d(X))
+        viol = self._violation(p.params, p.solution, p.fit, p.window)
+        r = np.sqrt(np.where(np.isfinite(p.parts), p.parts, 1.0 / p.parts.shape[1])) / self.problem.scale
+        out: np.ndarray = np.concatenate([r, np.sqrt(PENALTY * viol)[:, None]], axis=1)
+        return out
+
+    def _violation(self, params: Any, sol: Any, f: Any, window: np.ndarray) -> np.ndarray:
+        sp = self.problem.space
+        z = sol.z
+        with np.errstate(invalid="ignore"):
+            if self.partial:
+                v = np.where(np.isfinite(f.sse), 0.0, 1.0)
+            else:
+                short = np.nan_to_num(np.maximum(-sol.margin, 0.0), nan=0.0)
+                v = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(len(f.sse))
+            v = np.where(params.valid, v, v + 1.0)
+            cos_lim = np.cos(np.radians(self.problem.min_transmission + 0.25))
+            for jn, a, b in sp.transmission:
+                zj = z[sp.joint(jn)]
+                u, w = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj
+                c = np.abs((np.conj(u) * w).real / (np.abs(u) * np.abs(w)))
+                c = np.where(np.isfinite(c) & window, c, 0.0)
+                v = v + np.maximum(np.max(c, axis=-1) - cos_lim, 0.0)
+            i, j = _tracer_base(self.problem)
+            P = np.where(window, z[i] + f.c[:, None] * (z[j] - z[i]), np.nan)
+            pose = params.pose.copy()
+            pose[sp.joint(sp.tracer)] = pose[i] + f.c * (pose[j] - pose[i])
+            v = v + _too_small(P, pose, 1.0) / MIN_CURVE_SIZE
+        return np.asarray(v)
+
+
+def _chamfer(
+    f: Any, Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, window: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two-sided mean squared distance (N,) between the placed curves' window samples and the targets.
+
+    Also each target's nearest window sample (N, m), and the squared residuals (N, m + n)
+    that sum to the distance: each target's squared distance to the curve (its nearest
+    sample or either chord there) over ``m``, each window sample's to the targets over the
+    window's size. The curve is ``a + b (X_i + c (X_j - X_i))``.
+    """
+    P = f.a[:, None] + f.b[:, None] * (Xi + f.c[:, None] * (Xj - Xi))
+    P = np.where(window & np.isfinite(P), P, 0.0)
+    c = T.mean()
+    Pc, Tc = P - c, T - c
+    d2 = np.stack([Pc.real, Pc.imag], axis=-1) @ np.stack([Tc.real, Tc.imag])  # (N, n, m): one product
+    d2 *= -2.0
+    d2 += (np.abs(Pc) ** 2)[:, :, None]
+    d2 += (np.abs(Tc) ** 2)[None, None, :]
+    d2[~window] = np.inf
+    k = np.argmin(d2, axis=1)  # (N, m)
+    to_curve = np.minimum(np.min(d2, axis=1), _to_segments(P, window, T, k)) / len(T)
+    to_targets = np.where(window, np.min(d2, axis=2), 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
+    parts = np.concatenate([to_curve, to_targets], axis=1)  # (N, m + n): squared residuals
+    d = parts.sum(axis=1)
+    return np.where(np.isfinite(d) & np.isfinite(f.sse), d, np.inf), k, parts
+
+
+def _to_segments(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Squared distance (N, m) from each target to the two chords of the curve at its nearest sample ``k``.
+
+    The samples are coarse (a chord is ~1/100 of the curve): the distance to a sample alone
+    would floor the error at about half a chord.
+    """
+    N, n = P.shape
+    rows = np.arange(N)[:, None]
+    best = np.full(k.shape, np.inf)
+    for step in (-1, 1):
+        k2 = np.mod(k + step, n)
+        ok = window[rows, k] & window[rows, k2]
+        a, b = P[rows, k], P[rows, k2]
+        ab = b - a
+        t = np.clip(((np.conj(ab) * (T[None, :] - a)).real) / np.maximum(np.abs(ab) ** 2, 1e-300), 0.0, 1.0)
+        d = np.abs(a + t * ab - T[None, :]) ** 2
+        best = np.where(ok, np.minimum(best, d), best)
+    return best
+
+
+def _choose(take: np.ndarray, f: Any, g: Any) -> Any:
+    return type(f)(*(np.where(take, getattr(f, k), getattr(g, k)) for k in f.__dataclass_fields__))
+
+
+#: samples of the dense check of a written design's sweep
+CHECK_SAMPLES = 3601
+
+
+def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None = None) -> Synthesis:
+    """The mechanism of a projected design: tracer placed, moved onto the targets, its sweep, densely checked.
+
+    The sweep is the whole turn, or (partial) the range the targets were fitted over. The
+    check solves :data:`CHECK_SAMPLES` inputs over the sweep: it must assemble at all of them,
+    keep the transmission angles, and its curve's size (:data:`MIN_CURVE_SIZE`); a partial
+    sweep is at least 90 deg by construction (:data:`PARTIAL_WIDTHS`). Each target's error is
+    its distance to the nearest of those samples.
+    """
+    from ..params import compile as compile_params
+    from ..positions import solve
+    from .run import describe
+
+    prob, sp = proj.problem, proj.problem.space
+    placed = proj.placed(np.asarray(x, float)[None])
+    params, f, last = placed.params, placed.fit, int(placed.span[0])
+    i, j = _tracer_base(prob)
+    pose = params.pose[:, 0].copy()
+    pose[sp.joint(sp.tracer)] = pose[i] + f.c[0] * (pose[j] - pose[i])
+    pose = f.a[0] + f.b[0] * pose
+    xfull = np.concatenate([[pose[sp.joint(n)].real, pose[sp.joint(n)].imag] for n in sp.free])
+    moved = compile_params(sp.template, sp.poses(xfull[None]), sp.plan)
+    n, m = proj.samples, len(prob.targets)
+    start = float(moved.pose_inputs[0][0]) + 2 * np.pi * int(f.shift[0]) / n
+    span = 2 * np.pi * last / n if proj.partial else 2 * np.pi
+    th = start + np.linspace(0.0, span, CHECK_SAMPLES)
+    z = solve(moved, th[None, None]).z[:, 0, :]
+    P = z[sp.joint(sp.tracer)]
+    d = np.abs(P[None, :] - prob.targets[:, None])
+    near = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
+    errors = d[np.arange(m), near]
+    mu = _smallest_transmission(sp, z)
+    ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
+    ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0
+    mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
+    sweep = (float(np.degrees(start)), float(np.degrees(start + span))) if proj.partial else None
+    out = Synthesis(
+        mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sweep, topology=sp.topology,
+        bound=prob.min_transmission,
+    )  # fmt: skip
+    text = f"topology {sp.topology} ({len(sp.template.joint_names)} joints), crank {np.degrees(span):.4g} deg\\n"
+    return replace(out, mechanism=replace(mech, description=text + describe(out, prob, source)))
+
+
+def _smallest_transmission(sp: Any, z: np.ndarray) -> float:
+    """The smallest transmission angle (degrees, folded to [0, 90]) of a space's dyads over the samples ``z``."""
+    mu = 90.0
+    with np.errstate(invalid="ignore"):
+        for jn, a, b in sp.transmission:
+            u, w = z[sp.joint(a)] - z[sp.joint(jn)], z[sp.joint(b)] - z[sp.joint(jn)]
+            c = np.abs((np.conj(u) * w).real / (np.abs(u) * np.abs(w)))
+            mu = min(mu, float(np.degrees(np.arccos(np.clip(np.nanmax(c), 0.0, 1.0)))))
+    return mu
+
+
+def _swept(mech: Any, start: float, stop: float, topology: str) -> Any:
+    """The mechanism with its driver sweeping ``start`` to ``stop`` (degrees), named by its topology."""
+    from ..model import Mechanism
+
+    data = mech.to_dict()
+    step = (stop - start) / max(1, int(np.ceil(abs(stop - start))))
+    data["drivers"][0]["angles"] = {"start": float(start), "stop": float(stop), "step": float(step)}
+    data["name"] = f"synthesised {topology}"
+    return Mechanism.from_dict(data, source=f"synthesised {topology}")

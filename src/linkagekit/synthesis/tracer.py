@@ -1,0 +1,177 @@
+r"""The tracer's best place on its link, and the curve's similarity placement, by linear least squares.
+
+For given motions of two joints ``X_i``, ``X_j`` of the link that carries the tracer (complex
+numbers, one per sample), every point of that link is ``X_i + c (X_j - X_i)`` for one
+complex ``c`` (the link is rigid: ``c`` is the point in the frame the two joints span). A
+similarity placement of the curve maps ``z`` to ``a + b z`` (translation ``a``, rotation and
+scale ``b``). With targets ``T_k`` matched to samples ``k``, the placed tracer
+
+.. math:: a + b X_i + e D, \qquad D = X_j - X_i, \quad e = b c,
+
+is linear in ``u = (a, b, e)``: the best ``u`` solves the normal equations ``G u = r``,
+``G_{pq} = \sum_k \overline{B_p} B_q``, ``r_p = \sum_k \overline{B_p} T_k`` over the basis
+``B = (1, X_i, D)``, and the residual is ``|T|^2 - r^H G^{-1} r``; then ``c = e / b``
+(:func:`fit`). Without the placement (``a = 0``, ``b = 1``) only ``c`` is free:
+``c = \sum \overline{D} (T - X_i) / \sum |D|^2``.
+
+Over cyclic shifts of the correspondence (:func:`fit_shifts`): target ``k`` at sample
+``(p_k + s) mod n`` (``p_k = floor(k n / m)``: the targets spread evenly over ``w`` of the
+``n`` samples, ``w = n`` for a closed curve), for every shift ``s`` at once. With the targets
+scattered onto the samples (``t_p``: the target at sample ``p``, 0 elsewhere; ``w_p``: how
+many), each sum is a cyclic correlation ``\sum_p f_p g_{p+s}``:
+``G_{pq}(s) = corr(w, \overline{B_p} B_q)``, ``r_p(s) = corr(t, \overline{B_p})``, each one FFT
+product (``corr(f, g) = ifft(fft(g) conj(fft(conj f)))``), so all ``n`` shifts cost
+``O(n log n)`` per design; both directions along the curve are tried (the targets reversed).
+A shift that puts a target on a sample where the design does not assemble is ruled out
+(the correlation of ``w`` with the missing samples is positive there).
+
+Examples
+--------
+>>> import numpy as np
+>>> t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+>>> Xi = np.exp(1j * t)[None]
+>>> Xj = Xi + 0.5 * np.exp(-2j * t)[None]                           # a link that turns as it goes
+>>> T = 2 + 3j * (Xi[0] + (0.2 + 0.4j) * (Xj[0] - Xi[0]))          # a placed point of it
+>>> f = fit(Xi, Xj, T)
+>>> np.round(f.c, 9), bool(f.sse[0] < 1e-8)  # exact, but for the ridge (about 1e-10)
+(array([0.2+0.4j]), True)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: relative ridge on the normal equations (keeps a degenerate link's fit finite)
+RIDGE = 1e-12
+
+
+@dataclass(frozen=True)
+class TracerFit:
+    """The best tracer and placement of N designs.
+
+    Attributes
+    ----------
+    c : ndarray (N,) complex
+        The tracer ``X_i + c (X_j - X_i)`` on its link.
+    a, b : ndarray (N,) complex
+        The placement ``z -> a + b z`` (``0`` and ``1`` when not asked for).
+    sse : ndarray (N,)
+        Sum of squared distances from the targets to their placed samples (inf: no fit).
+    shift : ndarray (N,) int
+        :func:`fit_shifts`: the shift ``s`` (sample of the first target); 0 for :func:`fit`.
+    direction : ndarray (N,) int
+        :func:`fit_shifts`: ``+1`` targets along increasing samples, ``-1`` the other way.
+    """
+
+    c: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    sse: np.ndarray
+    shift: np.ndarray
+    direction: np.ndarray
+
+
+def fit(Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, placement: bool = True) -> TracerFit:
+    """The best ``c`` (and placement ``a, b``) for targets ``T`` (m,) or (N, m) matched to samples ``Xi, Xj`` (N, m).
+
+    ``placement=False``: the curve stays where it is (``a = 0``, ``b = 1``).
+    """
+    Xi, Xj = np.asarray(Xi, complex), np.asarray(Xj, complex)
+    T = np.broadcast_to(np.asarray(T, complex), Xi.shape)
+    D = Xj - Xi
+    N = len(Xi)
+    zero = np.zeros(N, int)
+    if not placement:
+        R = T - Xi
+        dd = np.sum(np.abs(D) ** 2, axis=1)
+        c = np.sum(np.conj(D) * R, axis=1) / np.where(dd > 0, dd, np.inf)
+        sse = np.sum(np.abs(R - c[:, None] * D) ** 2, axis=1)
+        return TracerFit(c, np.zeros(N, complex), np.ones(N, complex), _finite(sse), zero, zero + 1)
+    B = np.stack([np.ones_like(Xi), Xi, D], axis=1)  # (N, 3, m)
+    G = np.einsum("npk,nqk->npq", np.conj(B), B)
+    r = np.einsum("npk,nk->np", np.conj(B), T)
+    u, sse = _solve(G, r, np.sum(np.abs(T) ** 2, axis=1))
+    return _placed(u, sse, zero, zero + 1)
+
+
+def fit_shifts(
+    Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, width: int | None = None, directions: tuple[int, ...] = (1, -1)
+) -> TracerFit:
+    """The best ``c``, placement and cyclic shift for targets ``T`` (m,) on samples ``Xi, Xj`` (N, n) of a turn.
+
+    Target ``k`` goes to sample ``(floor(k width / m) + s) mod n`` (``width``: samples the
+    targets span, default ``n``: a closed curve over the whole turn); NaN samples (the design
+    does not assemble) are never matched. See the module's description.
+    """
+    Xi, Xj, T = np.asarray(Xi, complex), np.asarray(Xj, complex), np.asarray(T, complex)
+    N, n = Xi.shape
+    m = len(T)
+    width = n if width is None else int(width)
+    missing = ~(np.isfinite(Xi) & np.isfinite(Xj))
+    Xi, D = np.where(missing, 0, Xi), np.where(missing, 0, Xj - Xi)
+    B = [np.ones_like(Xi), Xi, D]
+    p = (np.arange(m) * width) // m
+    spread = np.fft.fft(np.bincount(p, minlength=n).astype(complex))  # w
+    Fprod = {(i, j): np.fft.fft(np.conj(B[i]) * B[j], axis=1) for i in range(3) for j in range(i, 3)}
+    Fconj = [np.fft.fft(np.conj(b), axis=1) for b in B]
+    bad = _corr(spread, np.fft.fft(missing.astype(float), axis=1)).real > 0.5  # (N, n)
+    G = np.empty((N, n, 3, 3), complex)
+    for (i, j), F in Fprod.items():
+        G[:, :, i, j] = _corr(spread, F)
+        G[:, :, j, i] = np.conj(G[:, :, i, j])
+    best: TracerFit | None = None
+    for d in directions:
+        Td = T if d > 0 else T[::-1]
+        t = np.fft.fft(np.bincount(p, weights=Td.real, minlength=n) + 1j * np.bincount(p, weights=Td.imag, minlength=n))
+        r = np.stack([_corr(t, F) for F in Fconj], axis=-1)  # (N, n, 3)
+        u, sse = _solve(G, r, float(np.sum(np.abs(T) ** 2)))
+        sse = np.where(bad, np.inf, sse)
+        s = np.argmin(sse, axis=1)
+        rows = np.arange(N)
+        f = _placed(u[rows, s], sse[rows, s], s, np.full(N, d))
+        best = f if best is None else _better(best, f)
+    assert best is not None
+    return best
+
+
+def _corr(Ff: np.ndarray, Fg: np.ndarray) -> np.ndarray:
+    """``sum_p f_p g_{p+s}`` over the shifts ``s``, from ``fft(f)`` (n,) and ``fft(g)`` (N, n).
+
+    Its DFT is ``fft(g) * conj(fft(conj f))``.
+    """
+    return np.fft.ifft(Fg * np.conj(_conj_fft(Ff)), axis=-1)
+
+
+def _conj_fft(Ff: np.ndarray) -> np.ndarray:
+    """``fft(conj f)`` from ``fft(f)``: ``conj(F[-k mod n])``."""
+    out: np.ndarray = np.conj(np.roll(Ff[..., ::-1], 1, axis=-1))
+    return out
+
+
+def _solve(G: np.ndarray, r: np.ndarray, tt: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``u = G^-1 r`` and the residual ``|T|^2 - Re(r^H u)`` (clipped at 0), with a tiny ridge."""
+    scale = np.einsum("...ii->...", G).real[..., None, None]
+    Gr = G + RIDGE * np.where(scale > 0, scale, 1.0) * np.eye(3)
+    u = np.linalg.solve(Gr, r[..., None])[..., 0]
+    sse = tt - np.einsum("...p,...p->...", np.conj(r), u).real
+    return u, np.maximum(_finite(sse), 0.0)
+
+
+def _placed(u: np.ndarray, sse: np.ndarray, shift: np.ndarray, direction: np.ndarray) -> TracerFit:
+    """``(a, b, e)`` as a fit: ``c = e / b`` (inf residual where ``b`` vanishes)."""
+    a, b, e = u[..., 0], u[..., 1], u[..., 2]
+    ok = np.abs(b) > 1e-12 * (np.abs(a) + np.abs(e) + 1e-300)
+    c = np.where(ok, e / np.where(ok, b, 1.0), 0.0)
+    return TracerFit(c, a, b, np.where(ok, sse, np.inf), np.asarray(shift), np.asarray(direction))
+
+
+def _better(x: TracerFit, y: TracerFit) -> TracerFit:
+    """Per design, the fit with the smaller residual."""
+    take = y.sse < x.sse
+    return TracerFit(*(np.where(take, getattr(y, f), getattr(x, f)) for f in TracerFit.__dataclass_fields__))
+
+
+def _finite(v: np.ndarray) -> np.ndarray:
+    return np.where(np.isfinite(v), v, np.inf)

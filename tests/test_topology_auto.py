@@ -1,0 +1,132 @@
+"""``--topology auto``: the enumeration of dyad topologies, the tracer fit, and the command."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import linkagekit as lk
+from linkagekit.cli import main
+from linkagekit.errors import InputError
+from linkagekit.params import compile as compile_params
+from linkagekit.positions import solve
+from linkagekit.synthesis.space import builtin_space
+from linkagekit.synthesis.topologies import enumerate_topologies
+from linkagekit.synthesis.tracer import fit, fit_shifts
+
+
+def test_counts_by_hand_for_five_and_six_joints() -> None:
+    """5 joints: the four-bar only. 6 joints: one more joint is one more dyad on two joints already there.
+
+    Of the pairs of {A, B, C, D} not on one body only (A, D) and (B, C) remain; with (B, C) the
+    new joint's links are B-E (a ground pivot: no tracer) and C-E, whose motion does not
+    depend on D (a four-bar C-E-B in disguise): so one six-bar, E on A and D, P on D-E.
+    """
+    assert [t.name for t in enumerate_topologies(5)] == ["fourbar"]
+    six = enumerate_topologies(6)
+    assert [t.name for t in six] == ["fourbar", "sixbar-1"]
+    links = {frozenset(j) for _, j in six[1].links}
+    assert {frozenset("AB"), frozenset("AC"), frozenset("CD"), frozenset("BD"), frozenset("AE")} <= links
+    assert frozenset("DEP") in links
+
+
+def test_named_six_bars_are_found_again_and_counts_grow() -> None:
+    eight = enumerate_topologies(8)
+    names = [t.name for t in eight]
+    assert {"watt2", "stephenson3"} <= set(names)
+    assert len(names) == len(set(names))
+    assert [len(enumerate_topologies(n)) for n in (5, 6, 7, 8)] == [1, 2, 16, 84]
+
+
+def test_every_template_assembles_at_its_pose_with_one_driver() -> None:
+    """All of up to 7 joints, and every 10th of 8 joints (each takes a plan and a compile)."""
+    seven = enumerate_topologies(7)
+    for t in seven + enumerate_topologies(8)[len(seven) :: 10]:
+        sp = builtin_space(t.name, (0.0, 0.0), 1.0)  # from_dict: refused unless the drivers match the dof
+        assert [d.name for d in sp.template.drivers] == ["crank"]
+        assert len(sp.template.joint_names) == t.n_joints <= 8
+        pose = sp.template.pose_array()
+        params = compile_params(sp.template, pose[None], sp.plan)
+        z = solve(params, params.pose_inputs[0][None, :, None]).z[:, 0, 0]
+        np.testing.assert_allclose(z, pose[:, 0] + 1j * pose[:, 1], atol=1e-9, err_msg=t.name)
+
+
+@pytest.mark.parametrize("n", [3, 4, 11])
+def test_max_joints_out_of_range(n: int) -> None:
+    with pytest.raises(InputError, match="--max-joints"):
+        enumerate_topologies(n)
+
+
+def _brute(Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, width: int) -> tuple[float, complex]:
+    """Every shift and direction by numpy's least squares: (least SSE, its c)."""
+    n, m = len(Xi), len(T)
+    p = (np.arange(m) * width) // m
+    best = (np.inf, 0j)
+    for Td in (T, T[::-1]):
+        for s in range(n):
+            k = (p + s) % n
+            A = np.stack([np.ones(m), Xi[k], Xj[k] - Xi[k]], 1)
+            if not np.all(np.isfinite(A)):
+                continue
+            u = np.linalg.lstsq(A, Td, rcond=None)[0]
+            sse = float(np.sum(np.abs(A @ u - Td) ** 2))
+            best = min(best, (sse, u[2] / u[1]), key=lambda b: b[0])
+    return best
+
+
+@pytest.mark.parametrize("width", [24, 13])
+def test_tracer_fit_over_shifts_matches_brute_force(width: int) -> None:
+    rng = np.random.default_rng(3)
+    Xi = rng.normal(size=(3, 24)) + 1j * rng.normal(size=(3, 24))
+    Xj = rng.normal(size=(3, 24)) + 1j * rng.normal(size=(3, 24))
+    Xi[1, 4] = np.nan  # a sample where design 1 does not assemble
+    T = rng.normal(size=9) + 1j * rng.normal(size=9)
+    f = fit_shifts(Xi, Xj, T, width)
+    for d in range(3):
+        sse, c = _brute(Xi[d], Xj[d], T, width)
+        assert f.sse[d] == pytest.approx(sse, rel=1e-8)
+        assert abs(f.c[d] - c) < 1e-8 * (1 + abs(c))
+
+
+def test_tracer_fit_recovers_a_placed_coupler_point() -> None:
+    """A four-bar's coupler point, moved, turned and scaled, sampled from another shift: found exactly."""
+    mech = lk.load("examples/seed000_fourbar.yaml")
+    res = lk.analyze(mech, {"crank": np.arange(0.0, 360.0, 10.0)})
+    C, D, P = (res.point(j) for j in "CDP")
+    c_true = (P[0] - C[0]) / (D[0] - C[0])
+    T = np.roll(0.3 - 2j + (0.5 + 0.8j) * P, -7)  # target k is sample k + 7
+    f = fit_shifts(C[None], D[None], T)
+    assert f.sse[0] < 1e-10 * np.sum(np.abs(T) ** 2) and f.shift[0] == 7 and f.direction[0] == 1
+    assert abs(f.c[0] - c_true) < 1e-8 and abs(f.b[0] - (0.5 + 0.8j)) < 1e-8  # the ridge: ~1e-10
+    g = fit(C[None], D[None], P, placement=False)  # where it is: c alone
+    assert abs(g.c[0] - c_true) < 1e-10
+
+
+def test_auto_writes_a_valid_mechanism_and_names_its_topology(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    csv = tmp_path / "ellipse.csv"
+    np.savetxt(csv, np.stack([np.cos(t), 0.6 * np.sin(t)], 1), delimiter=",", header="x,y", comments="")
+    out = tmp_path / "out.yaml"
+    code = main(["synthesize", str(csv), "--topology", "auto", "--max-joints", "5", "--seconds", "1.5", "-o", str(out)])
+    text = capsys.readouterr().out
+    assert code == 0
+    assert "topology fourbar (5 joints)" in text
+    mech = lk.load(out)
+    a = mech.to_dict()["drivers"][0]["angles"]
+    res = lk.analyze(mech, {"crank": np.linspace(a["start"], a["stop"], 1441)})
+    assert np.all(res.assembled)
+    P = res.xy("P")
+    d = np.min(np.hypot(P[:, 0][None] - np.cos(t)[:, None], P[:, 1][None] - 0.6 * np.sin(t)[:, None]), axis=1)
+    assert np.max(d) < 0.05 * np.hypot(2, 1.2)  # near every target
+
+
+@pytest.mark.parametrize(
+    "extra", [["--max-joints", "3"], ["--max-joints", "x"], ["--topology", "fourbar", "--max-joints", "6"]]
+)
+def test_bad_max_joints_is_one_line_exit_2(extra: list[str], tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    csv = tmp_path / "t.csv"
+    csv.write_text("x,y\n0,0\n1,0\n0,1\n")
+    args = ["synthesize", str(csv), "--topology", "auto", *extra, "-o", str(tmp_path / "o.yaml")]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--max-joints" in err
