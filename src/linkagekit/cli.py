@@ -1468,6 +1468,10 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     max_joints = MAX_JOINTS if args.max_joints is None else _integer(args.max_joints, "--max-joints", 5, 10)
     for key in ("free", "checkpoint", "pivots", "lengths", "reach"):
         search.pop(key, None)
+    if search.get("workers") is None:  # every core by default, as for one topology
+        from .synthesis.optimize import default_workers
+
+        search["workers"] = default_workers()
     budget = search["seconds"]
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)
     with _Search(budget) as progress:
