@@ -34,6 +34,7 @@ LAYERS = [
         "synthesis.function",
         "synthesis.motion",
         "synthesis.burmester",
+        "synthesis.front",
         "synthesis.topologies",
         "synthesis.tracer",
         "synthesis.descriptors",

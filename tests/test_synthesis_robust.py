@@ -33,7 +33,7 @@ from linkagekit.synthesis.run import make_problem, synthesize
 ROOT = Path(__file__).resolve().parents[1]
 SEED000 = ROOT / "examples" / "seed000_fourbar.yaml"
 TARGETS = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
-SMALL = dict(units="cm", restarts=2, generations=12, popsize=5, goal=0.0, seconds=1000.0, seed=3)
+SMALL = dict(units="cm", restarts=2, generations=12, popsize=5, goal=0.0, seconds=1000.0, seed=3, workers=1)
 ERROR_PREFIX = "linkagekit: error: "
 
 
@@ -149,6 +149,8 @@ def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, err
+    # the plain progress lines (the first after 1 s, on a loaded machine before the Ctrl-C) are not errors
+    err = "".join(ln for ln in err.splitlines(keepends=True) if not ln.startswith("linkagekit: synthesize: search "))
     assert err.count("\n") == 1 and "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert err == "linkagekit: interrupted; the search is saved in ck.npz: the same command resumes it\n"
     with np.load(tmp_path / "ck.npz", allow_pickle=False) as z:
@@ -382,7 +384,7 @@ def test_progress_lines_when_stderr_is_not_a_terminal_and_the_file_records_targe
     csv = write_csv(tmp_path / "t.csv")
     out = tmp_path / "o.yaml"
     args = ["synthesize", str(csv), "-o", str(out), "--units", "cm", "--restarts", "1", "--generations", "6"]
-    code = main([*args, "--seed", "2", "--goal", "0"])
+    code = main([*args, "--seed", "2", "--goal", "0", "--workers", "1"])  # one process: a line per generation
     captured = capsys.readouterr()
     assert code == 0, captured.err
     lines = captured.err.splitlines()

@@ -597,7 +597,17 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         metavar="DEG",
         help="smallest transmission angle, degrees (default 20; 0 with --task motion or function)",
     )
-    p.add_argument("--workers", metavar="N", default="1", help="evaluate each generation on N local processes")
+    p.add_argument(
+        "--workers",
+        metavar="N",
+        help="local processes, each running its own searches (default: every core of this machine)",
+    )
+    p.add_argument(
+        "--pareto",
+        action="store_true",
+        help="also search at raised transmission bounds and list designs from the most accurate to the "
+        "best-transmitting (-o OUT.yaml: the most accurate; OUT-2.yaml, ...: the others in that order)",
+    )
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
     p.add_argument("--checkpoint", metavar="FILE", help="save the search after every generation; resume from it")
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
@@ -610,7 +620,9 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--reach", metavar="R", default="1", help="joints lie within R target diagonals of the targets (default 1)"
     )
-    p.add_argument("--restarts", metavar="N", default="32", help="independent searches at most (default 32)")
+    p.add_argument(
+        "--restarts", metavar="N", default=_DEFAULT_RESTARTS, help="independent searches at most (default 1000)"
+    )
     p.add_argument(
         "--generations", metavar="N", default="500", help="differential-evolution generations per search (default 500)"
     )
@@ -1375,7 +1387,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
-    for flag in ("shape_only", "partial"):
+    for flag in ("shape_only", "partial", "pareto"):
         if getattr(args, flag) and args.task != "path":
             raise InputError(f"--{flag.replace('_', '-')}: goes with --task path, not --task {args.task}")
     if args.task == "motion":
@@ -1394,21 +1406,51 @@ def _synthesize(args: argparse.Namespace) -> int:
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)  # the command's start counts too
     try:
         with _Search(budget) as progress:
-            out = synthesize_path(targets, topology, **search, progress=progress)
+            out = synthesize_path(targets, topology, **search, progress=progress, pareto=args.pareto)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; {_synthesize_resume(args)}", file=sys.stderr)
         return 1
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
-    described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
-    described += f"\n{targets.smoothed}" if targets.smoothed else ""
-    lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
+    paths = pareto_paths(args.output, len(out.pareto))
+    for design, path in zip(out.pareto or (out,), paths, strict=True):
+        described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
+        described += f"\n{targets.smoothed}" if targets.smoothed else ""
+        lk.save(dataclasses.replace(design.mechanism, description=described), path)
     if args.plot:
         _plot_synthesis(out, targets, args.plot)
     if targets.smoothed:
         print(targets.smoothed)
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
+    if out.pareto:
+        print(pareto_text(out, targets.unit, paths))
     return 0
+
+
+def pareto_paths(output: str, n: int) -> list[str]:
+    """Where ``--pareto`` writes its ``n`` designs: ``OUT.yaml`` the most accurate, then ``OUT-2.yaml``, ...
+
+    >>> pareto_paths("d/out.yaml", 3)
+    ['d/out.yaml', 'd/out-2.yaml', 'd/out-3.yaml']
+    """
+    import os
+
+    stem, ext = os.path.splitext(output)
+    return [output] + [f"{stem}-{i}{ext}" for i in range(2, n + 1)]
+
+
+def pareto_text(out: Any, unit: str, paths: list[str]) -> str:
+    """``--pareto``'s list: each design's error and smallest transmission angle, the most accurate first."""
+    cols = [
+        Column("design", [str(i + 1) for i in range(len(out.pareto))]),
+        Column(f"max error [{unit}]", format_cells([d.max_error for d in out.pareto])),
+        Column("error [% diag]", format_cells([100 * d.max_error / d.diagonal for d in out.pareto])),
+        Column("smallest transmission [deg]", format_cells([d.min_transmission for d in out.pareto])),
+        Column("above the bound [deg]", format_cells([d.margin for d in out.pareto])),
+        Column("file", paths),
+    ]
+    head = f"{len(out.pareto)} designs from the most accurate to the best-transmitting (none better in both):"
+    return "\n".join(["", head, *render_table(cols)])
 
 
 def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, Any], t0: float) -> int:
@@ -1421,11 +1463,15 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     from .synthesis.auto import synthesize_auto
     from .synthesis.topologies import MAX_JOINTS
 
-    if args.free or args.checkpoint or search.get("pivots") or search.get("lengths"):
-        raise InputError("--topology auto: --free, --pivots, --lengths and --checkpoint do not apply")
+    if args.free or args.checkpoint or args.pareto or search.get("pivots") or search.get("lengths"):
+        raise InputError("--topology auto: --free, --pivots, --lengths, --checkpoint and --pareto do not apply")
     max_joints = MAX_JOINTS if args.max_joints is None else _integer(args.max_joints, "--max-joints", 5, 10)
     for key in ("free", "checkpoint", "pivots", "lengths", "reach"):
         search.pop(key, None)
+    if search.get("workers") is None:  # every core by default, as for one topology
+        from .synthesis.optimize import default_workers
+
+        search["workers"] = default_workers()
     budget = search["seconds"]
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)
     with _Search(budget) as progress:
@@ -1447,6 +1493,9 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
 _DEFAULT_SECONDS, FUNCTION_SECONDS = "60", 10.0
+#: ``synthesize --restarts``' default: more than fit in the time (the clock or the goal ends the run);
+#: ``--task function``'s when it is not given
+_DEFAULT_RESTARTS, FUNCTION_RESTARTS = "1000", 32
 
 
 def _synthesize_function(args: argparse.Namespace) -> int:
@@ -1474,6 +1523,8 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     }
     if args.seconds == _DEFAULT_SECONDS:
         engine["seconds"] = FUNCTION_SECONDS
+    if args.restarts == _DEFAULT_RESTARTS:
+        engine["restarts"] = FUNCTION_RESTARTS
     given = args.min_transmission is not None  # the task imposes no bound unless asked
     engine["min_transmission"] = _one_number(args.min_transmission, "--min-transmission") if given else 0.0
     out = synthesize_function(
@@ -1702,7 +1753,8 @@ def _synthesize_command(args: argparse.Namespace) -> str:
             value = "20"
         if value is not None:
             words += ["--" + name.replace("_", "-"), str(value)]
-    words += [f"--{flag}" for flag in ("ordered", "shape-only", "partial") if getattr(args, flag.replace("-", "_"))]
+    flags = ("ordered", "shape-only", "partial", "pareto")  # --pareto decides the searches (half at raised bounds)
+    words += [f"--{flag}" for flag in flags if getattr(args, flag.replace("-", "_"))]
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])
         words += ["--full-turn"] if args.task == "motion" and args.full_turn else []
@@ -1713,7 +1765,8 @@ def _synthesize_command(args: argparse.Namespace) -> str:
 def _motion_engine(args: argparse.Namespace) -> dict[str, Any]:
     """The engine options given on the command line for motion's search of seeds (the rest: its short default)."""
     options = _search_options(args)
-    defaults = {"restarts": 32, "generations": 500, "workers": 1, "scheduler": None, "checkpoint": None}
+    defaults = {"restarts": int(_DEFAULT_RESTARTS), "generations": 500, "workers": None}
+    defaults.update(scheduler=None, checkpoint=None)
     return {k: options[k] for k, d in defaults.items() if options[k] != d}
 
 
@@ -1731,7 +1784,7 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
         "seconds": seconds,
         "seed": _integer(args.seed, "--seed", 0, 2**32 - 1),
         "min_transmission": _one_number(args.min_transmission or "20", "--min-transmission"),
-        "workers": _integer(args.workers, "--workers", 1, 1024),
+        "workers": None if args.workers is None else _integer(args.workers, "--workers", 1, 1024),
     }
     options["points"] = _integer(
         args.points, "--points", 3, 100_000
@@ -1825,12 +1878,14 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
     )
     if out.offset is not None:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    from .synthesis.run import transmission_line
+
     lines += _shape_lines(out, unit)
     state = "the crank turns fully" if out.feasible else "CONSTRAINTS NOT MET (the best design found breaks one)"
     if out.sweep is not None and out.feasible:
         start, stop = out.sweep
         state = f"the crank rocks from {start:.4g} to {stop:.4g} deg ({stop - start:.4g} deg) on one branch"
-    lines.append(f"{state}; smallest transmission angle {out.min_transmission:.4g} deg")
+    lines.append(f"{state}; {transmission_line(out)}")
     why = {"goal": "reaching the goal", "restarts": "the last search", "time": "the time limit"}[o.stopped_by]
     lines.append(
         f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs evaluated in "
@@ -1854,9 +1909,10 @@ def _shape_lines(out: Any, unit: str) -> list[str]:
 
 
 class _Search:
-    """The synthesis progress on stderr: a bar on a terminal, else a plain line every ``every`` seconds."""
+    """The synthesis progress on stderr: a bar on a terminal, else a plain line after ``first`` seconds, then
+    every ``every`` seconds."""
 
-    every = 5.0
+    every, first = 5.0, 1.0
 
     def __init__(self, seconds: float) -> None:
         self.seconds = seconds
@@ -1882,7 +1938,7 @@ class _Search:
         else:
             import time
 
-            self.last = time.monotonic()  # the first line after ``every`` seconds
+            self.last = time.monotonic() - self.every + min(self.first, self.every)  # the first after ``first`` s
         return self.update
 
     @staticmethod

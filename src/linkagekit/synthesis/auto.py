@@ -579,8 +579,9 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
     sweep = (float(np.degrees(start)), float(np.degrees(start + span))) if proj.partial else None
     out = Synthesis(
-        mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sweep, topology=sp.topology
-    )
+        mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sweep, topology=sp.topology,
+        bound=prob.min_transmission,
+    )  # fmt: skip
     text = f"topology {sp.topology} ({len(sp.template.joint_names)} joints), crank {np.degrees(span):.4g} deg\\n"
     return replace(out, mechanism=replace(mech, description=text + describe(out, prob, source)))
 

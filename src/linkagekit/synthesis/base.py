@@ -150,6 +150,14 @@ class Objective(ABC):
         """The objective and cheaper versions of it that searches may use in turn (default: itself only)."""
         return (self,)
 
+    def transmission(self, X: FloatArray) -> FloatArray:
+        """The smallest transmission angle (degrees) of designs ``X`` by the dense check; NaN: none (``--pareto``)."""
+        return np.full(len(np.atleast_2d(X)), np.nan)
+
+    def raised(self, degrees: float) -> Objective | None:
+        """The objective with its transmission bound ``degrees`` higher (``--pareto``'s searches); None: no bound."""
+        return None
+
     def mechanism(self, x: FloatArray) -> Mechanism:
         """The design ``x`` (dim,) as a mechanism (needed by the task that writes a file)."""
         raise NotImplementedError(f"{type(self).__name__} does not build a mechanism")

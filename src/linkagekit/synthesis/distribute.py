@@ -25,6 +25,8 @@ from .base import Objective
 
 #: the problems a worker process evaluates (set once per process by the pool's initializer)
 _PROBLEMS: tuple[Objective, ...] = ()
+#: a worker's line to the parent while it runs a whole search (:meth:`Evaluator.submit`): see :class:`Channel`
+_CHANNEL: Channel | None = None
 #: designs per chunk at most (bounds each call's memory; see objective.CHUNK)
 MAX_CHUNK = 4096
 #: glibc's mallopt parameters (malloc.h)
@@ -65,14 +67,103 @@ def keep_freed_memory() -> None:
     mallopt(M_TRIM_THRESHOLD, 1 << 30)
 
 
-def _install(problems: tuple[Objective, ...]) -> None:
+class Channel:
+    """What the parent and its local workers share while the workers run whole searches.
+
+    ``queue``: the workers' progress messages (any picklable value) to the parent; ``limit``: a
+    number the parent sets and the workers read (the optimizer's first restart to drop);
+    ``stop``: set by the parent when every search is to end now.
+    """
+
+    def __init__(self, ctx: Any) -> None:
+        self.queue = ctx.SimpleQueue()
+        self.limit = ctx.Value("q", 1 << 62, lock=False)
+        self.stop = ctx.Value("b", 0, lock=False)
+
+    def messages(self) -> list[Any]:
+        """The progress messages that arrived (in the parent)."""
+        out = []
+        while not self.queue.empty():
+            out.append(self.queue.get())
+        return out
+
+
+def installed() -> tuple[Objective, ...]:
+    """In a local worker process: the problems it was started with."""
+    return _PROBLEMS
+
+
+def channel() -> Channel | None:
+    """In a local worker process: its :class:`Channel` to the parent (None elsewhere)."""
+    return _CHANNEL
+
+
+def _install(problems: tuple[Objective, ...], line: Channel | None = None) -> None:
     """A local worker process's start: Ctrl-C is the parent's to handle (no traceback per worker), its problems."""
-    global _PROBLEMS
+    global _PROBLEMS, _CHANNEL
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent()
+    one_blas_thread()
     keep_freed_memory()
-    _PROBLEMS = problems
+    _PROBLEMS, _CHANNEL = problems, line
+
+
+#: OpenBLAS's call that sets its threads, under the names its builds export (scipy-openblas, plain)
+_BLAS_THREADS = ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads", "openblas_set_num_threads")
+
+
+def one_blas_thread() -> None:
+    """OpenBLAS told to use one thread in this process (a worker; elsewhere nothing happens).
+
+    The engine's BLAS calls are small (the polish's least-squares steps), but after each one
+    OpenBLAS's threads spin: measured, a one-worker run of 2.0 s burned 2.7 CPU-s, and two
+    workers (each with its own spinning threads) ran two searches in 2.4 s where with one
+    BLAS thread each they took 1.9 s, as one search alone does. NumPy and SciPy each bring
+    their own OpenBLAS: both are set, found among the libraries this process has loaded
+    (``/proc/self/maps``), through ctypes.
+    """
+    import ctypes
+
+    import scipy.linalg  # noqa: F401 -- loads SciPy's own OpenBLAS (the polish's), which NumPy's does not cover
+
+    try:
+        with open("/proc/self/maps") as f:
+            libs = {line.split()[-1] for line in f if "openblas" in line.lower() and ".so" in line}
+    except OSError:  # not Linux
+        return
+    for path in sorted(libs):
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError:
+            continue
+        fn = next((getattr(lib, n) for n in _BLAS_THREADS if hasattr(lib, n)), None)
+        if fn is not None:
+            fn.argtypes = [ctypes.c_int]
+            fn(1)
+
+
+#: Linux's prctl option: the signal a process gets when its parent dies (linux/prctl.h)
+PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """A worker process killed with its parent (Linux; elsewhere nothing happens).
+
+    A worker waits for its next task; if the parent is killed (SIGKILL: no clean-up), nothing
+    would end it, and it would hold the parent's stderr open, so that whoever reads it (a pipe,
+    a test) waits forever.
+    """
+    import ctypes
+    import ctypes.util
+    import signal
+
+    try:
+        prctl = ctypes.CDLL(ctypes.util.find_library("c"), use_errno=True).prctl
+    except (OSError, AttributeError, TypeError):  # not Linux
+        return
+    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
 def _cost_here(which: int, X: np.ndarray) -> np.ndarray:
@@ -132,6 +223,7 @@ class Evaluator:
         self.workers = workers
         keep_freed_memory()
         self._pool: Any = None
+        self.channel: Channel | None = None  # with local workers: the parent's side of their Channel
         self._handlers: list[tuple[Any, int]] = []  # Dask's log handlers and their levels, while quiet
         self._client: Any = None
         self._remote: Any = None
@@ -178,7 +270,23 @@ class Evaluator:
         # guard (spawn re-imports the main module); the workers only evaluate NumPy over arrays
         methods = multiprocessing.get_all_start_methods()
         ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-        return ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_install, initargs=(self.problems,))
+        self.channel = self.channel or Channel(ctx)
+        args = (self.problems, self.channel)
+        return ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_install, initargs=args)
+
+    @property
+    def local(self) -> bool:
+        """Whether the designs are scored on local worker processes (not here, not on a cluster)."""
+        return self._pool is not None
+
+    def renew(self) -> None:
+        """A new pool for one that lost a process."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._pool = self._new_pool()
+
+    def submit(self, fn: Any, *args: Any) -> Any:
+        """``fn(*args)`` on a local worker process (a :class:`concurrent.futures.Future`): a whole search."""
+        return self._pool.submit(fn, *args)
 
     @property
     def where(self) -> str:
@@ -247,8 +355,12 @@ class Evaluator:
             elif time.monotonic() - alone > NO_WORKER_WAIT:
                 raise WorkersLost(f"no Dask worker for {NO_WORKER_WAIT:.0f} s")
 
-    def close(self) -> None:
+    def close(self, kill: bool = False) -> None:
+        """Shut the workers down (``kill``: at once, not after what they are computing)."""
         if self._pool is not None:
+            if kill:
+                for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
+                    proc.kill()
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
         if self._client is not None:
@@ -261,5 +373,5 @@ class Evaluator:
     def __enter__(self) -> Evaluator:
         return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def __exit__(self, kind: object, *exc: object) -> None:
+        self.close(kill=kind is not None)  # Ctrl-C or an error: the workers' searches are not waited for

@@ -68,7 +68,7 @@ def synthesize_function(
     seconds: float = 10.0,
     restarts: int = 4,
     generations: int = 200,
-    workers: int = 1,
+    workers: int | None = None,
     source: str = "pairs",
     min_transmission: float = 0.0,
     scheduler: str | None = None,

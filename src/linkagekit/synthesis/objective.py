@@ -104,6 +104,8 @@ ROTATIONS, ICP_STEPS, ICP_STRIDE = 4, 5, 1
 #: the most samples the starts look at: the dense check's curve is thinned to them, so that its placement
 #: starts from the search's samples and ends in the basin the search chose
 ICP_SAMPLES = 180
+#: the highest transmission bound of --pareto's searches (degrees)
+RAISED_MAX = 80.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -269,6 +271,15 @@ class Problem(Objective):
             steps = int(np.ceil(np.degrees(span) - 1e-9))  # about one degree a step, the last one on the stop
             sweep = (start, start + span, span / steps)
         return self.space.mechanism(x, name, (a, b), sweep)
+
+    def transmission(self, X: FloatArray) -> FloatArray:
+        """The smallest transmission angle (degrees) over the turn, by :func:`check`."""
+        return check(self, np.atleast_2d(X)).transmission
+
+    def raised(self, degrees: float) -> Objective | None:
+        """The problem with ``min_transmission`` ``degrees`` higher, at most ``RAISED_MAX`` (None: no higher)."""
+        bound = min(self.min_transmission + degrees, RAISED_MAX)
+        return replace(self, min_transmission=bound) if bound > self.min_transmission else None
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,7 @@ import json
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import InputError, LinkageError, shorten
 from ..geometry import FloatArray
 from .base import Objective
-from .distribute import Evaluator
+from .distribute import RETRIES, Evaluator, WorkersLost
 from .objective import best_index
 
 if TYPE_CHECKING:
@@ -88,23 +88,39 @@ class Settings:
     goal : float
         Stop once every target is within ``goal * L`` (relative to the targets' diagonal).
     workers : int
+        Local processes. With two or more (and no ``scheduler`` or ``checkpoint``), as many
+        searches run at once, each generation of one of them on one process (see :class:`_Run`);
+        otherwise the searches run one after another, each generation split over the processes.
     scheduler : str, optional
     checkpoint : str, optional
+    pareto : bool
+        Also search at raised transmission bounds (``Objective.raised``) and keep the designs not
+        beaten in both the error and the smallest transmission angle (``Outcome.front``).
     """
 
     seed: int = 0
     seconds: float = 60.0
-    restarts: int = 32
+    restarts: int = 1000
     generations: int = 500
     popsize: int = 15
     goal: float = 1e-5
     workers: int = 1
     scheduler: str | None = None
     checkpoint: str | None = None
+    pareto: bool = False
 
     def key(self) -> dict[str, Any]:
         """What a checkpoint must agree on to be continued."""
-        return {"seed": self.seed, "restarts": self.restarts, "generations": self.generations, "popsize": self.popsize}
+        key = {"seed": self.seed, "restarts": self.restarts, "generations": self.generations, "popsize": self.popsize}
+        return {**key, "pareto": True} if self.pareto else key
+
+
+def default_workers() -> int:
+    """Every core this process may run on (``os.sched_getaffinity``, else ``os.cpu_count()``): the default workers."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # no affinity on this platform
+        return max(1, os.cpu_count() or 1)
 
 
 @dataclass
@@ -159,6 +175,10 @@ class Outcome:
         What ended the run: ``"goal"``, ``"restarts"`` or ``"time"``.
     history : list of (float, float)
         ``(cost, max error / L)`` of each restart's best design.
+    front : list of (ndarray, float, float)
+        With ``Settings.pareto``: ``(x, max error / L, smallest transmission angle)`` of every polished
+        design no other beats in both (:func:`~linkagekit.synthesis.front.non_dominated`), the most
+        accurate first; otherwise empty.
     """
 
     x: np.ndarray
@@ -169,6 +189,7 @@ class Outcome:
     seconds: float
     stopped_by: str  # "goal", "restarts" or "time"
     history: list[tuple[float, float]] = field(default_factory=list)  # (cost, max error / L) per restart
+    front: list[tuple[np.ndarray, float, float]] = field(default_factory=list)
 
 
 def optimize(
@@ -185,12 +206,15 @@ def optimize(
     """
     # The searches take turns with the objective's cheaper variants (a path problem's order dropped: a fit
     # found without the order may well be in order); the polish and the choice of the best use the objective.
+    # With --pareto, every other search is of the objective at a raised transmission bound (RAISES, in turn).
     variants = problem.variants()
-    run = _Run.begin(problem, settings, progress, len(variants))
+    raised = tuple(r for r in (problem.raised(d) for d in RAISES) if r is not None) if settings.pareto else ()
+    objectives = variants + raised
+    run = _Run.begin(problem, settings, progress, len(variants), objectives)
     if run.finished is None:  # a finished checkpoint's result is just written again
-        with Evaluator(variants, settings.workers, settings.scheduler) as ev:
+        with Evaluator(objectives, settings.workers, settings.scheduler) as ev:
             if not run.seed(initial):
-                run.search(ev, variants)
+                run.search(ev)
         run.finished = run.stopped_by
         if settings.checkpoint:
             run.save()
@@ -227,16 +251,19 @@ def search(
     *,
     seed: int = 0,
     seconds: float = 60.0,
-    restarts: int = 32,
+    restarts: int = 1000,
     generations: int = 500,
     popsize: int = 15,
     goal: float = 1e-5,
-    workers: int = 1,
+    workers: int | None = None,
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
 ) -> Optimum:
     """Search any objective with the synthesis engine (``synthesize(objective=...)`` calls this).
+
+    ``workers``: local processes, by default every core (:func:`default_workers`) if the objective
+    pickles (a class defined where pickle cannot find it again runs in this process).
 
     Examples
     --------
@@ -254,6 +281,8 @@ def search(
     >>> bool(out.error < 1e-9), out.mechanism is None
     (True, True)
     """
+    if workers is None:  # every core, if the objective can be sent to worker processes
+        workers = default_workers() if _picklable(objective) else 1
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
     outcome = optimize(objective, settings, progress)
     s = objective.check(outcome.x[None])
@@ -266,16 +295,40 @@ def search(
     return Optimum(outcome.x, error, float(s.cost[0]), feasible, mech, outcome)
 
 
+#: degrees above the transmission bound of --pareto's searches
+RAISES = (10.0, 20.0, 30.0)
+#: seconds between two measures of the best design of the search under way (for the progress)
+MEASURE_EVERY = 1.0
+
+
+def _picklable(objective: Objective) -> bool:
+    """Whether ``objective`` can be sent to a worker process."""
+    import pickle
+
+    try:
+        pickle.dumps(objective)
+    except (pickle.PicklingError, AttributeError, TypeError):
+        return False
+    return True
+
+
 @dataclass
 class _Run:
-    """One :func:`optimize` run: its restarts so far, the one under way, the clock (continued from a checkpoint)."""
+    """One :func:`optimize` run: its restarts so far, the one under way, the clock (continued from a checkpoint).
+
+    Restart ``r`` is planned by its number alone (:meth:`plan`, :meth:`seed`), so the searches do
+    not depend on where or in which order they run. With several local workers and no checkpoint,
+    as many restarts run at once, each whole on one worker process (a *lane*: :meth:`in_lanes`);
+    the restarts kept are those one worker would have finished (up to the first that meets the
+    goal), so a run that the clock does not stop gives the same result on any number of workers.
+    """
 
     problem: Objective
     settings: Settings
     progress: Callable[[Progress], None] | None
     start: float
-    seeds: list[np.random.SeedSequence]
     n_variants: int = 1
+    objectives: tuple[Objective, ...] = ()  # what the searches score: the variants, then the raised bounds
     state: dict[str, Any] | None = None  # a checkpoint's, until its unfinished search is restored
     done: list[dict[str, Any]] = field(default_factory=list)  # the finished restarts
     restart: int = 0
@@ -287,16 +340,24 @@ class _Run:
     polished: list[np.ndarray] | None = None  # the polish under way: the candidates polished so far
     polish_time: float = 0.0  # seconds of the longest whole polish of a search so far
     generation_time: float = 0.0  # seconds of the last generation
+    front: list[tuple[np.ndarray, float, float]] = field(default_factory=list)  # --pareto's designs
+    seen: float = np.inf  # the smallest max error measured so far, a search under way's best included
+    measured: float = MEASURE_EVERY / 2 - MEASURE_EVERY  # clock() of the last such measure (the first: at 0.5 s)
+    lane: Any = None  # on a worker running a lane's restart: its line to the parent (_WorkerLane)
     initial: np.ndarray | None = None  # designs that seed the first searches, best first
     close: bool = False  # the first of them is within SEED_LIMIT: differential evolution is seeded too
 
     @classmethod
     def begin(
-        cls, problem: Objective, settings: Settings, progress: Callable[[Progress], None] | None, n_variants: int = 1
+        cls,
+        problem: Objective,
+        settings: Settings,
+        progress: Callable[[Progress], None] | None,
+        n_variants: int = 1,
+        objectives: tuple[Objective, ...] = (),
     ) -> _Run:
         """A new run, or the checkpoint's when there is one."""
-        seeds = np.random.SeedSequence(settings.seed).spawn(settings.restarts)
-        run = cls(problem, settings, progress, time.monotonic(), seeds, n_variants)
+        run = cls(problem, settings, progress, time.monotonic(), n_variants, objectives or (problem,))
         state = _load(settings, problem, run.template) if settings.checkpoint else None
         if state is not None:
             run.state, run.done, run.restart = state, state["done"], state["restart"]
@@ -305,11 +366,35 @@ class _Run:
             run.stopped_by = run.finished or run.stopped_by
         if run.finished is None and any(d["max_error"] <= settings.goal for d in run.done):
             run.stopped_by, run.restart = "goal", settings.restarts
+        if settings.pareto and run.done:  # a checkpoint's: its searches' best designs (their other ones are gone)
+            run.keep(np.array([d["x"] for d in run.done]))
         return run
+
+    def seed_of(self, restart: int) -> np.random.SeedSequence:
+        """Restart ``restart``'s seed: the ``restart``-th child of ``SeedSequence(seed)`` (as ``spawn`` makes it)."""
+        return np.random.SeedSequence(self.settings.seed, spawn_key=(restart,))
+
+    def plan(self, restart: int) -> tuple[int, int]:
+        """Restart ``restart``'s objective (an index into ``objectives``) and its turn of the two strategies.
+
+        The variants take turns; with raised bounds (--pareto), every other restart is of one of
+        them, in turn (its polish too).
+        """
+        nv, raised = self.n_variants, len(self.objectives) - self.n_variants
+        if raised and restart % 2:
+            k = restart // 2
+            return nv + k % raised, k // raised
+        r = restart // 2 if raised else restart
+        return r % nv, r // nv
+
+    def polished_by(self, restart: int) -> int:
+        """The objective (index) whose residuals polish restart ``restart``: the problem, or its raised bound."""
+        which, _ = self.plan(restart)
+        return which if which >= self.n_variants else 0
 
     def template(self, restart: int) -> Search:
         """The search of ``restart`` as it starts (what a checkpoint of it must match)."""
-        return _search(restart, self.n_variants, self.problem, self.settings, self.seeds[restart], _no_cost)
+        return _search(self.plan(restart)[1], self.problem, self.settings, self.seed_of(restart), _no_cost)
 
     def seed(self, initial: Callable[[], np.ndarray] | None) -> bool:
         """Take the seeds of the first searches; True when the first of them meets the goal (a new run's result)."""
@@ -350,10 +435,13 @@ class _Run:
         d = self.done[self.best()]
         return d["cost"], d["max_error"]
 
-    def search(self, ev: Evaluator, variants: tuple[Objective, ...]) -> None:
+    def search(self, ev: Evaluator) -> None:
         """Restarts until the goal, the last one or the clock, then the best polished longer; time left: more."""
+        lanes = ev.workers if ev.local and not self.settings.checkpoint else 1
         while True:
-            while self.restart < self.settings.restarts and not self.search_once(ev, variants):
+            if lanes > 1:
+                self.in_lanes(ev, lanes)
+            while lanes == 1 and self.restart < self.settings.restarts and not self.search_once(ev):
                 pass
             if self.stopped_by == "goal":
                 return
@@ -363,15 +451,15 @@ class _Run:
                 return
             self.stopped_by = "restarts"  # the last polish ended early: the time left goes to another search
 
-    def search_once(self, ev: Evaluator, variants: tuple[Objective, ...]) -> bool:
+    def search_once(self, ev: Evaluator) -> bool:
         """Restart ``self.restart``: its search, then its polish; True when the run is to stop."""
-        which = self.restart % len(variants)
+        which, turn = self.plan(self.restart)
 
         def cost(X: np.ndarray, which: int = which) -> np.ndarray:  # X is (designs, dim)
             return ev.cost(X, which)
 
-        seed = self.seeds[self.restart]
-        search = _search(self.restart, len(variants), self.problem, self.settings, seed, cost, self.initial, self.close)
+        seed = self.seed_of(self.restart)
+        search = _search(turn, self.problem, self.settings, seed, cost, self.initial, self.close)
         designs, out_of_time = self._resume(search)
         if self.polished is None:  # still searching
             designs, out_of_time = self._generations(search, designs)
@@ -395,12 +483,18 @@ class _Run:
             return False
         return True
 
-    def report(self, designs: int = 0, best: float = np.inf) -> None:
-        """Tell the progress callback where the run is."""
-        if self.progress is not None:
-            cost, err = self.best_so_far()
-            n = self.evaluations + designs
-            self.progress(Progress(self.restart, self.generation, min(cost, best), err, n, self.clock()))
+    def report(self, designs: int = 0, best: float = np.inf, search: Search | None = None) -> None:
+        """Tell the progress callback where the run is (the best design under way measured every second)."""
+        if self.progress is None:
+            return
+        if search is not None and np.isfinite(best) and self.clock() - self.measured >= MEASURE_EVERY:
+            self.measured = self.clock()
+            self.seen = min(self.seen, float(self.problem.measure(search.candidates()[0][:1])[0][0]))
+        cost, err = self.best_so_far()
+        if np.isfinite(self.seen) and not err <= self.seen:  # NaN (nothing polished yet) or worse
+            err = self.seen
+        n = self.evaluations + designs
+        self.progress(Progress(self.restart, self.generation, min(cost, best), err, n, self.clock()))
 
     def _resume(self, search: Search) -> tuple[int, bool]:
         """A checkpoint's unfinished search restored: (the designs it has scored, out of time); else (0, False)."""
@@ -423,9 +517,11 @@ class _Run:
             designs += search.step()
             self.generation += 1
             self.generation_time = time.monotonic() - t0
-            self.report(designs, search.best)
+            self.report(designs, search.best, search)
             if self.settings.checkpoint:
                 self.save(search.capture(), designs)
+            if self.lane is not None and self.lane.dropped(self.restart):
+                raise _Dropped
             if self.clock() + self.reserve() > self.settings.seconds:  # leave time to polish within the budget
                 return designs, True
         return designs, False
@@ -435,13 +531,16 @@ class _Run:
 
         The best is chosen by the printed measure (:func:`objective.measure`): the least-squares
         polish lowers the cost (the mean squared error), the result is the smallest max error.
+        A restart at a raised bound (--pareto) is polished at that bound.
         """
         assert self.polished is not None
         t0, fresh = self.clock(), not self.polished
+        k = self.polished_by(self.restart)
+        objective = self.objectives[k]
         picked = _picked(self.problem, *search.candidates())
         tasks = [(p, m) for p in picked for m in _both_methods(self.problem)]
         for p, m in tasks[len(self.polished) :]:
-            self.polished.append(polish(self.problem, p, POLISH_NFEV, self.deadline(), m))
+            self.polished.append(polish(objective, p, POLISH_NFEV, self.deadline(), m))
             if self.settings.checkpoint:
                 self.save(search.capture(), designs, out_of_time)
             self.report(designs, search.best)
@@ -450,8 +549,23 @@ class _Run:
         seeds = [] if self.initial is None or self.restart >= self.n_variants else [self.initial[0]]
         cands = np.array(self.polished + picked + seeds)  # the first searches end no worse than their seed
         err, cost = self.problem.measure(cands)
-        k = best_index(err, cost)
-        return cands[k], float(cost[k]), float(err[k])
+        if self.settings.pareto:
+            self.keep(cands, err)
+        j = best_index(err, cost)
+        return cands[j], float(cost[j]), float(err[j])
+
+    def keep(self, X: np.ndarray, err: np.ndarray | None = None) -> None:
+        """--pareto: designs ``X`` (k, dim) added to the front (max error by the measure); the beaten ones dropped."""
+        from .front import non_dominated
+
+        err = self.problem.measure(X)[0] if err is None else err
+        mu = self.problem.transmission(X)
+        ok = np.isfinite(err) & np.isfinite(mu)
+        xs = [f[0] for f in self.front] + list(X[ok])
+        e = np.array([f[1] for f in self.front] + list(err[ok]), float)
+        m = np.array([f[2] for f in self.front] + list(mu[ok]), float)
+        keep = non_dominated(e, m)
+        self.front = [(xs[i], float(e[i]), float(m[i])) for i in keep]
 
     def deepen(self) -> None:
         """The best design polished once more, longer, by both methods (unless it meets the goal or was already)."""
@@ -463,6 +577,8 @@ class _Run:
         deep = [polish(self.problem, x, FINAL_POLISH, self.deadline(), m) for m in _both_methods(self.problem)]
         cands = np.array([x, *deep])
         err, cost = self.problem.measure(cands)
+        if self.settings.pareto:
+            self.keep(cands, err)
         j = best_index(err, cost)
         self.done[k] = {**best, "x": cands[j], "cost": float(cost[j]), "max_error": float(err[j]), "deep": True}
         if self.settings.checkpoint:
@@ -496,7 +612,190 @@ class _Run:
             self.clock(),
             self.stopped_by,
             [(float(d["cost"]), float(d["max_error"])) for d in self.done],
+            list(self.front),
         )
+
+    # -- lanes: several restarts at once
+    def in_lanes(self, ev: Evaluator, lanes: int) -> None:
+        """Restarts from ``self.restart`` on, ``lanes`` at a time, until the goal, the last one or the clock.
+
+        Each restart runs whole on a worker process (:func:`_restart_on_worker`: its generations
+        and its polish there, its progress sent back by the :class:`~.distribute.Channel`). Once
+        restart ``g`` meets the goal, the restarts after it are dropped (and stopped), those
+        before it finish: the restarts one worker would have kept.
+        """
+        from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        line = ev.channel
+        assert line is not None
+        line.limit.value, line.stop.value = self.settings.restarts, 0
+        lanes_ = _Lanes(self.settings.restarts)
+        running: dict[Any, int] = {}
+        try:
+            while True:
+                while len(running) < lanes and self._takes(lanes_):
+                    running[ev.submit(_restart_on_worker, self._child(self.restart))] = self.restart
+                    self.restart += 1
+                if not running:
+                    break
+                finished, _ = wait(running, timeout=0.1, return_when=FIRST_COMPLETED)
+                self._relay(lanes_, line.messages())
+                for f in finished:
+                    r = running.pop(f)
+                    try:
+                        self._lane_done(lanes_, r, f.result())
+                    except BrokenProcessPool:  # a worker died: its restarts again, on new processes
+                        running = self._again(ev, lanes_, [r, *running.values()])
+                    line.limit.value = lanes_.goal_at
+        except BaseException:
+            line.stop.value = 1
+            raise
+        self._relay(lanes_, line.messages())
+        kept = sorted((r, d) for r, d in lanes_.finished.items() if r < lanes_.goal_at)
+        self.done += [d for _, d in kept]
+        self.restart = kept[-1][0] + 1 if kept else self.restart
+        self.evaluations += sum(d["designs"] for _, d in kept)
+        self.stopped_by = "goal" if lanes_.goal_at < self.settings.restarts else lanes_.stopped_by
+        self.report()
+
+    def _again(self, ev: Evaluator, lanes: _Lanes, restarts: list[int]) -> dict[Any, int]:
+        """The restarts of a pool that lost a process, sent again to a new one (at most ``RETRIES`` times a run)."""
+        lanes.retries += 1
+        if lanes.retries > RETRIES:
+            raise WorkersLost(f"the local worker processes died {RETRIES + 1} times during one run")
+        ev.renew()
+        return {ev.submit(_restart_on_worker, self._child(r)): r for r in sorted(set(restarts))}
+
+    def _takes(self, lanes: _Lanes) -> bool:
+        """Whether another restart is to start."""
+        return self.restart < lanes.goal_at and lanes.stopped_by != "time"
+
+    def _child(self, restart: int) -> _Run:
+        """What a worker needs to run restart ``restart`` (:func:`_restart_on_worker`).
+
+        Not the objectives: the worker has them since it started (``distribute._install``; with
+        fork not even pickled, so an objective pickle cannot find again still runs on workers).
+        """
+        return replace(
+            self,
+            problem=_Placeholder(),
+            objectives=(),
+            restart=restart,
+            done=[],
+            front=[],
+            generation=0,
+            polished=None,
+            evaluations=0,
+            progress=None,
+        )
+
+    def _lane_done(self, lanes: _Lanes, r: int, result: dict[str, Any]) -> None:
+        """A worker's finished restart ``r`` recorded (None: dropped)."""
+        d = result["done"]
+        if d is None:
+            return
+        lanes.finished[r] = d
+        self.polish_time = max(self.polish_time, result["polish_time"])
+        self.generation_time = result["generation_time"]
+        if self.settings.pareto:
+            self.front_merge(result["front"])
+        if d["max_error"] <= self.settings.goal:
+            lanes.goal_at = min(lanes.goal_at, r + 1)
+        elif result["stop"]:
+            lanes.stopped_by = "time"
+        self._relay(lanes, [])
+
+    def _relay(self, lanes: _Lanes, messages: list[tuple[int, int, float, float, int]]) -> None:
+        """The workers' progress as the run's: the best over every lane, the designs of all."""
+        for r, generation, cost, err, designs in messages:
+            lanes.under_way[r] = (generation, cost, designs)
+            self.seen = min(self.seen, err) if err == err else self.seen
+        if self.progress is None:
+            return
+        done = [v for k, v in lanes.finished.items() if k < lanes.goal_at]
+        for k in lanes.finished:
+            lanes.under_way.pop(k, None)
+        errors = [v["max_error"] for v in done] + ([self.seen] if np.isfinite(self.seen) else [])
+        cost = min([v["cost"] for v in done] + [c for _, c, _ in lanes.under_way.values()] + [np.inf])
+        n = self.evaluations + sum(v["designs"] for v in done) + sum(d for _, _, d in lanes.under_way.values())
+        r = min(lanes.under_way, default=self.restart)
+        generation = lanes.under_way[r][0] if r in lanes.under_way else 0
+        self.progress(Progress(r, generation, cost, min(errors) if errors else np.nan, n, self.clock()))
+
+    def front_merge(self, front: list[tuple[np.ndarray, float, float]]) -> None:
+        """Another run's --pareto designs merged into this run's front."""
+        from .front import non_dominated
+
+        both = self.front + front
+        keep = non_dominated(np.array([f[1] for f in both]), np.array([f[2] for f in both]))
+        self.front = [both[i] for i in keep]
+
+
+@dataclass
+class _Lanes:
+    """Where the restarts running at once (:meth:`_Run.in_lanes`) stand."""
+
+    goal_at: int  # restarts from this number on are dropped (one after the first that met the goal)
+    finished: dict[int, dict[str, Any]] = field(default_factory=dict)  # restart -> its result
+    under_way: dict[int, tuple[int, float, int]] = field(default_factory=dict)  # restart -> generation, cost, designs
+    stopped_by: str = "restarts"
+    retries: int = 0
+
+
+class _WorkerLane:
+    """A restart's view, on a worker process, of the parent's :class:`~.distribute.Channel`."""
+
+    def __init__(self, line: Any) -> None:
+        self.line = line
+
+    def dropped(self, restart: int) -> bool:
+        """Whether ``restart`` is to stop now (a restart before it met the goal, or the run ends)."""
+        return bool(self.line.stop.value) or restart >= self.line.limit.value
+
+
+class _Placeholder(Objective):
+    """Stands for the objective in a restart sent to a worker (which has the objectives already)."""
+
+    bounds = (np.zeros(0), np.zeros(0))
+
+    def score(self, X: FloatArray) -> Any:
+        raise AssertionError("a placeholder is never scored")
+
+    def fingerprint(self) -> str:
+        return "placeholder"
+
+
+class _Dropped(Exception):
+    """A lane's restart stopped: a restart before it met the goal, or the run ends."""
+
+
+def _restart_on_worker(run: _Run) -> dict[str, Any]:
+    """Restart ``run.restart`` whole, on a local worker process: its result, or ``done`` None if it was dropped."""
+    from .distribute import channel, installed
+
+    line = channel()
+    assert line is not None
+    r = run.restart
+    run.objectives = installed()
+    run.problem = run.objectives[0]  # the variants come first, the problem itself the first of them
+
+    def tell(p: Progress) -> None:
+        line.queue.put((r, p.generation, float(p.best_cost), float(p.best_error), int(p.evaluations)))
+
+    run.lane, run.progress = _WorkerLane(line), tell
+    try:
+        with Evaluator(run.objectives, 1) as ev:
+            stop = run.search_once(ev)
+    except _Dropped:
+        return {"done": None}
+    return {
+        "done": run.done[0],
+        "stop": stop,
+        "polish_time": run.polish_time,
+        "generation_time": run.generation_time,
+        "front": run.front,
+    }
 
 
 def _no_cost(X: np.ndarray) -> np.ndarray:
@@ -522,8 +821,7 @@ CMA_SEEDED_SIGMA = 0.1
 
 
 def _search(
-    restart: int,
-    n_variants: int,
+    turn: int,
     problem: Objective,
     settings: Settings,
     seed: Any,
@@ -531,14 +829,13 @@ def _search(
     initial: np.ndarray | None = None,
     close: bool = False,
 ) -> Search:
-    """The search of restart ``restart``: differential evolution and CMA-ES take turns (after the variants).
+    """The search of a restart at its ``turn`` (:meth:`_Run.plan`): differential evolution and CMA-ES take turns.
 
     With ``initial`` designs (best first), the first CMA-ES starts at the best, with a smaller step;
     when they are ``close`` (the best within ``SEED_LIMIT``), the first differential evolution
     has the best ``SEEDED`` of them in its first population too.
     """
     rng = np.random.Generator(np.random.PCG64(seed))
-    turn = restart // n_variants
     seeded = initial if initial is not None and len(initial) and turn < CMA_EVERY else None
     if turn % CMA_EVERY != CMA_EVERY - 1:
         return DESearch(problem, settings, rng, cost, seeded if close else None)
@@ -741,7 +1038,11 @@ def polish_method(problem: Objective) -> str:
 
 
 def polish(
-    problem: Objective, x0: np.ndarray, max_nfev: int = 100, until: float | None = None, method: str | None = None
+    problem: Objective,
+    x0: np.ndarray,
+    max_nfev: int = 100,
+    until: float | None = None,
+    method: str | None = None,
 ) -> np.ndarray:
     """A local least-squares refinement of one design vector within the bounds.
 

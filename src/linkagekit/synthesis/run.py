@@ -28,7 +28,7 @@ from ..errors import InputError, LinkageError
 from .base import Objective
 from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
-from .optimize import Optimum, Outcome, Progress, Settings, optimize, search
+from .optimize import Optimum, Outcome, Progress, Settings, default_workers, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, fixed, template_space
 
 if TYPE_CHECKING:
@@ -76,6 +76,12 @@ class Synthesis:
         The topology's name (``fourbar``, ``sixbar-3``, ...; a template's source).
     tried : tuple
         ``--topology auto``: the topologies searched (:class:`~.auto.Tried`), else empty.
+    bound : float
+        The transmission bound the design was searched under (degrees; ``--min-transmission``).
+    pareto : tuple of Synthesis
+        With ``pareto=True``: a short list of designs from the most accurate (this one) to the
+        best-transmitting, none beaten by another in both the max error and the smallest
+        transmission angle (:mod:`linkagekit.synthesis.front`); otherwise empty.
     """
 
     mechanism: Mechanism
@@ -91,6 +97,13 @@ class Synthesis:
     placement: tuple[complex, complex] | None = None
     topology: str = ""
     tried: tuple[Any, ...] = ()
+    bound: float = MIN_TRANSMISSION
+    pareto: tuple[Synthesis, ...] = ()
+
+    @property
+    def margin(self) -> float:
+        """How far the smallest transmission angle is above the bound (degrees; negative: below it)."""
+        return self.min_transmission - self.bound
 
     @property
     def max_error(self) -> float:
@@ -240,14 +253,15 @@ def synthesize_path(
     partial: bool = False,
     seed: int = 0,
     seconds: float = 60.0,
-    restarts: int = 32,
+    restarts: int = 1000,
     generations: int = 500,
     popsize: int = 15,
     goal: float = 1e-5,
-    workers: int = 1,
+    workers: int | None = None,
     scheduler: str | None = None,
     checkpoint: str | None = None,
     progress: Callable[[Progress], None] | None = None,
+    pareto: bool = False,
     **old: Any,
 ) -> Synthesis:
     """Path generation: a mechanism whose tracer point passes near every target (``synthesize``'s ``task="path"``).
@@ -272,7 +286,11 @@ def synthesize_path(
         (built-in topologies); with a template, the joints that move (default all), or ``joint ->
         ((x0, x1), (y0, y1))``; joints lie within ``reach`` target diagonals of the targets' centre.
     seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
-        See :class:`~.optimize.Settings`; ``progress`` gets a ``Progress`` per generation (first, :mod:`~.atlas`).
+        See :class:`~.optimize.Settings`; ``progress`` gets a ``Progress`` per generation (first, :mod:`~.atlas`);
+        ``workers``: every core by default (:func:`~linkagekit.synthesis.optimize.default_workers`).
+    pareto : bool
+        Also search at transmission bounds 10, 20 and 30 degrees higher, and return in ``pareto`` a
+        short list of designs from the most accurate to the best-transmitting.
 
     Returns
     -------
@@ -282,7 +300,8 @@ def synthesize_path(
     mt = MIN_TRANSMISSION if min_transmission is None else min_transmission
     args = (targets, topology, inputs, units, ordered, mt, lengths, pivots, free, reach, 180, shape_only, partial)
     problem = make_problem(*args)
-    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint)
+    workers = default_workers() if workers is None else workers
+    settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, pareto)
     return finish(problem, _from_atlas(problem, settings, progress), source)
 
 
@@ -335,12 +354,26 @@ def _unpack(
 
 
 def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Synthesis:
-    """The :class:`Synthesis` of the best design: checked densely, as a mechanism.
+    """The :class:`Synthesis` of the best design: checked densely, as a mechanism (with --pareto, its short list).
 
     The mechanism's ``name`` gives its max error with its unit; its ``description`` records the
     targets (``source``: where they came from), the errors and the search.
     """
-    x = outcome.x
+    best = _finish(problem, outcome, outcome.x, source)
+    if not outcome.front:
+        return best
+    from .front import short_list
+
+    xs = [best.x] + [f[0] for f in outcome.front]
+    err = np.array([best.max_error / best.diagonal] + [f[1] for f in outcome.front])
+    mu = np.array([best.min_transmission] + [f[2] for f in outcome.front])
+    more = [i for i in short_list(err, mu) if i != 0 and err[i] >= err[0] and mu[i] > mu[0]]
+    listed = [best] + [_finish(problem, outcome, xs[i], source) for i in more]
+    return replace(best, pareto=tuple(listed))
+
+
+def _finish(problem: Problem, outcome: Outcome, x: np.ndarray, source: str | None) -> Synthesis:
+    """The :class:`Synthesis` of design ``x``."""
     e = check(problem, x[None])
     err = e.errors[0]
     turn = float(np.angle(e.a[0]))  # the placement turns the crank's angles too
@@ -365,8 +398,18 @@ def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Syn
         (float(start), float(start + span)) if problem.partial else None,
         (complex(e.a[0]), complex(e.b[0])) if problem.shape_only else None,
         problem.space.topology,
+        bound=problem.min_transmission,
     )
     return replace(out, mechanism=replace(mech, description=describe(out, problem, source)))
+
+
+def transmission_line(out: Synthesis) -> str:
+    """The smallest transmission angle, and how far it is above the bound (the margin)."""
+    where = "above" if out.margin >= 0 else "below"
+    return (
+        f"smallest transmission angle {out.min_transmission:.4g} deg, {abs(out.margin):.3g} deg {where} "
+        f"the bound {out.bound:g} deg"
+    )
 
 
 #: targets listed one by one in a description, at most
@@ -389,9 +432,7 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
         lines.append(f"shape only: the design placed by z -> a z + b, a = {a:.9g}, b = {b:.9g} {unit}")
     if out.sweep is not None:
         lines.append(f"partial: the crank rocks from {out.sweep[0]:.6g} to {out.sweep[1]:.6g} deg")
-    lines.append(
-        f"smallest transmission angle {out.min_transmission:.4g} deg" + ("" if out.feasible else ", INFEASIBLE")
-    )
+    lines.append(transmission_line(out) + ("" if out.feasible else ", INFEASIBLE"))
     lines.append(
         f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs; stopped by {o.stopped_by}"
     )
