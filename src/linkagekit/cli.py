@@ -612,6 +612,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--checkpoint", metavar="FILE", help="save the search after every generation; resume from it")
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
     p.add_argument("--points", metavar="N", default="40", help="points sampled along an SVG path (default 40)")
+    p.add_argument("--no-smooth", action="store_true", help="take hand-drawn targets (over 40 points) as they are")
     p.add_argument("--ordered", action="store_true", help="meet the targets in their order along the curve")
     _shape_arguments(p)
     p.add_argument("--free", metavar="J1,J2,...", help="with a template file: the joints that move (default all)")
@@ -1387,7 +1388,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
-    for flag in ("shape_only", "partial", "pareto"):
+    for flag in ("shape_only", "partial", "pareto", "no_smooth"):
         if getattr(args, flag) and args.task != "path":
             raise InputError(f"--{flag.replace('_', '-')}: goes with --task path, not --task {args.task}")
     if args.task == "motion":
@@ -1395,7 +1396,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     if args.task == "function":
         return _synthesize_function(args)
     search = _search_options(args)
-    targets = read_targets(args.targets, units=args.units, points=search.pop("points"))
+    targets = read_targets(args.targets, units=args.units, points=search.pop("points"), smooth=not args.no_smooth)
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
     if args.topology == "auto":
         return _synthesize_auto(args, targets, search, t0)
@@ -1753,7 +1754,8 @@ def _synthesize_command(args: argparse.Namespace) -> str:
             value = "20"
         if value is not None:
             words += ["--" + name.replace("_", "-"), str(value)]
-    flags = ("ordered", "shape-only", "partial", "pareto")  # --pareto decides the searches (half at raised bounds)
+    # --pareto decides the searches (half at raised bounds)
+    flags = ("ordered", "shape-only", "partial", "pareto", "no-smooth")
     words += [f"--{flag}" for flag in flags if getattr(args, flag.replace("-", "_"))]
     if args.task != "path":
         words += ["--task", args.task] + (["--approximate"] if args.approximate else [])

@@ -30,6 +30,7 @@ from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
 from .optimize import Optimum, Outcome, Progress, Settings, default_workers, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, fixed, template_space
+from .targets import check_scale
 
 if TYPE_CHECKING:
     from ..model import Mechanism
@@ -153,11 +154,11 @@ def make_problem(
         raise InputError(f"targets: {len(z)} points; at least 3 are needed")
     if not np.all(np.isfinite(z)):
         raise InputError("targets: every coordinate must be a finite number")
-    lo = np.array([z.real.min(), z.imag.min()])
-    hi = np.array([z.real.max(), z.imag.max()])
+    lo, hi = (np.array([f(z.real), f(z.imag)]) for f in (np.min, np.max))
     size = float(np.hypot(*(hi - lo)))
     if size <= 0:
         raise InputError("targets: the points span no distance")
+    check_scale(np.c_[z.real, z.imag], "targets", units)
     center = (float((lo[0] + hi[0]) / 2), float((lo[1] + hi[1]) / 2))
     space: DesignSpace
     if shape_only and pivots is not None:

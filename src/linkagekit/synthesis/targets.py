@@ -20,7 +20,13 @@ SVG (``.svg``)
 
 The targets describe a closed curve when the last point repeats the first (the repeated point
 is dropped; with timing, the inputs must also agree modulo 360 degrees), or for an SVG path
-when it ends with ``Z``/``z`` or where it started.
+when it ends with ``Z``/``z`` or where it started.  A hand-drawn CSV file (more than 40
+points, no timing) is closed too when it goes round a loop without repeating its first point:
+the gap from its last point to its first is at most 1.5 times its longest step between
+consecutive points and at most a tenth of the diagonal (:data:`LOOP_GAP`).
+
+Synthesis works at sizes from :data:`MIN_DIAGONAL` to :data:`MAX_DIAGONAL` (the bounding-box
+diagonal, in the file's unit); :func:`read_targets` refuses other sizes (:func:`check_scale`).
 
 Every problem raises :class:`~linkagekit.errors.InputError` with one line that starts with
 the file name and names the line or the element at fault.
@@ -311,7 +317,7 @@ def targets_from_array(
 
 
 # ---------------------------------------------------------------------- files
-def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 40) -> Targets:
+def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 40, smooth: bool = True) -> Targets:
     """Read target points from a CSV file, or from the first path of an SVG file.
 
     Parameters
@@ -323,6 +329,9 @@ def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 4
         the targets keep it (nothing is converted).
     points : int, default 40
         How many points to sample along an SVG path (3 to 100000); unused for CSV.
+    smooth : bool, default True
+        Smooth hand-drawn targets (more than 40 CSV points, an SVG path of more than 40
+        segments) with :func:`smooth`; False takes every point as it is.
 
     Returns
     -------
@@ -359,11 +368,68 @@ def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 4
     count = _check_points(points, name)
     text = _read_text(Path(name), name)
     if name.lower().endswith(".svg"):
-        return _svg_targets(text, name, units, count)
+        return _svg_targets(text, name, units, count, smooth)
     targets = _csv_targets(text, name, units)
-    if len(targets) > DENSE_POINTS and not targets.timed:
-        return _smoothed(targets, targets.xy)
-    return targets
+    check_scale(targets.xy, name, units)
+    if len(targets) <= DENSE_POINTS or targets.timed:
+        return targets
+    if not targets.closed and _loops(targets.xy):
+        targets = Targets(targets.xy, None, units, True, name)
+    return _smoothed(targets, targets.xy) if smooth else targets
+
+
+#: the smallest and the largest bounding-box diagonal of targets that synthesis takes, in their unit
+#: (far below it, at 1e-12, the solvers' fixed tolerances fail; mechanism files hold no number above 1e12)
+MIN_DIAGONAL, MAX_DIAGONAL = 1e-6, 1e6
+#: the largest magnitude of a target coordinate, in the targets' unit, and in target diagonals
+MAX_COORDINATE, MAX_OFFSET = 1e9, 1e6
+
+
+def check_scale(xy: np.ndarray, source: str, unit: str) -> None:
+    """Refuse targets (m, 2) of a size synthesis does not work at, with one line that starts with ``source``.
+
+    The bounding-box diagonal must be from :data:`MIN_DIAGONAL` to :data:`MAX_DIAGONAL` and
+    every coordinate at most :data:`MAX_COORDINATE`, and at most :data:`MAX_OFFSET` diagonals,
+    in magnitude: the numbers of a file given in another unit (micrometres, kilometres) fit.
+
+    >>> check_scale(np.array([[0.0, 0.0], [1e-3, 0.0], [0.0, 1e-3]]), "a.csv", "m")
+    >>> check_scale(np.array([[0.0, 0.0], [1e-9, 0.0], [0.0, 1e-9]]), "b.csv", "m")
+    Traceback (most recent call last):
+    ...
+    linkagekit.errors.InputError: b.csv: the targets' diagonal is 1.41e-09 m; synthesis takes 1e-06 to 1e+06 ...
+    """
+    diagonal = _diagonal(xy)
+    size = float(np.max(np.abs(xy))) if len(xy) else 0.0
+    if not MIN_DIAGONAL <= diagonal <= MAX_DIAGONAL:
+        raise _error(
+            source,
+            f"the targets' diagonal is {diagonal:.3g} {unit}; synthesis takes {MIN_DIAGONAL:g} to {MAX_DIAGONAL:g} "
+            "(scale the numbers, e.g. give them in another unit)",
+        )
+    if size > MAX_COORDINATE or size > MAX_OFFSET * diagonal:
+        raise _error(
+            source,
+            f"a target coordinate of magnitude {size:.3g} {unit}; synthesis takes at most {MAX_COORDINATE:g} and "
+            f"{MAX_OFFSET:g} target diagonals (move the targets nearer the origin)",
+        )
+
+
+#: a dense list of points is a closed loop when the gap from its last point to its first is at most this
+#: many times its longest step between consecutive points (and at most a tenth of the diagonal)
+LOOP_GAP = 1.5
+
+
+def _loops(xy: np.ndarray) -> bool:
+    """The points, listed without repeating the first at the end, go round a closed loop (:data:`LOOP_GAP`).
+
+    >>> t = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    >>> _loops(np.c_[np.cos(t), np.sin(t)]), _loops(np.c_[np.cos(t[:-3]), np.sin(t[:-3])])
+    (True, False)
+    """
+    pts = (xy - xy.min(axis=0)) / _diagonal(xy)  # scaled first: no overflow for any finite numbers
+    gap = float(np.hypot(*(pts[-1] - pts[0])))
+    longest = float(np.max(np.hypot(*np.diff(pts, axis=0).T)))
+    return gap <= LOOP_GAP * longest and gap <= 0.1
 
 
 #: more target points than this in a CSV file, or segments in an SVG path, are hand-drawn: they are smoothed
@@ -390,8 +456,16 @@ def smooth(xy: np.ndarray, closed: bool, harmonics: int = SMOOTH_HARMONICS) -> n
     >>> circle = np.c_[np.cos(t), np.sin(t)]
     >>> float(np.max(np.abs(smooth(circle, closed=True) - circle))) < 1e-12
     True
+
+    The points are centred and scaled to the unit square first, so any finite numbers work:
+
+    >>> float(np.max(np.abs(smooth(1e307 * circle, closed=False) / 1e307 - circle))) < 0.02
+    True
     """
-    z = xy[:, 0] + 1j * xy[:, 1]
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    centre = lo / 2 + hi / 2  # halves first: no overflow for any finite numbers
+    size = float(np.max(hi / 2 - lo / 2)) or 1.0
+    z = ((xy[:, 0] - centre[0]) + 1j * (xy[:, 1] - centre[1])) / size  # within the unit square: no overflow
     m = len(z)
     if closed:
         ext, keep, chord = z, harmonics, np.zeros(m)
@@ -402,7 +476,8 @@ def smooth(xy: np.ndarray, closed: bool, harmonics: int = SMOOTH_HARMONICS) -> n
     F = np.fft.fft(ext)
     F[np.abs(np.fft.fftfreq(len(ext), 1.0 / len(ext))) > keep] = 0.0
     out = np.fft.ifft(F)[:m] + chord
-    return np.column_stack([out.real, out.imag])
+    smoothed: np.ndarray = np.column_stack([out.real, out.imag]) * size + centre
+    return smoothed
 
 
 def _smoothed(targets: Targets, dense: np.ndarray, count: int | None = None) -> Targets:
@@ -413,7 +488,8 @@ def _smoothed(targets: Targets, dense: np.ndarray, count: int | None = None) -> 
         idx = np.linspace(0, len(xy), count, endpoint=False) if targets.closed else np.linspace(0, len(xy) - 1, count)
         xy = xy[np.round(idx).astype(int)]
     note = (
-        f"{targets.source}: hand-drawn (more than {DENSE_POINTS} points): smoothed, Fourier harmonics above "
+        f"{targets.source}: hand-drawn (more than {DENSE_POINTS} points): smoothed as "
+        f"{'a closed' if targets.closed else 'an open'} curve, Fourier harmonics above "
         f"{SMOOTH_HARMONICS} removed (points moved by at most {moved:.3g} {targets.unit})"
     )
     return Targets(xy, targets.inputs, targets.unit, targets.closed, targets.source, note)
@@ -552,7 +628,7 @@ def _local(tag: Any) -> str:
     return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
 
 
-def _svg_targets(text: str, name: str, units: str, count: int) -> Targets:
+def _svg_targets(text: str, name: str, units: str, count: int, smooth: bool = True) -> Targets:
     declaration = _DECLARATION.search(text)
     if declaration:
         raise _error(
@@ -579,10 +655,11 @@ def _svg_targets(text: str, name: str, units: str, count: int) -> Targets:
     label = f"<path id={_quote(path_id)}>" if path_id else "<path>"
     d = element.get("d") or ""
     segments, ends_closed = _segments(d, name, label)
-    drawn = len(segments) > DENSE_POINTS  # a pen's path: many short segments
+    drawn = smooth and len(segments) > DENSE_POINTS  # a pen's path: many short segments
     xy, closed = _sample(segments, ends_closed, max(count, SMOOTH_SAMPLES) if drawn else count, name, label)
     xy[:, 1] = 0.0 - xy[:, 1]  # SVG's y axis points down (0.0 - y: no negative zeros)
     targets = Targets(xy=xy, inputs=None, unit=units, closed=closed, source=name)
+    check_scale(xy, name, units)
     return _smoothed(targets, xy, count) if drawn else targets
 
 
