@@ -10,10 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import linkagekit as lk
 from linkagekit.cli import main
 from linkagekit.synthesis import atlas as at
 from linkagekit.synthesis import descriptors as de
 from linkagekit.synthesis.run import make_problem, synthesize
+from linkagekit.synthesis.space import builtin_space
 
 
 @pytest.fixture(autouse=True)
@@ -295,3 +297,43 @@ def test_a_partial_problem_on_an_open_entry_is_answered_by_it(shape_only):
         a, d, p = arc[:-1][None, :], np.diff(arc)[None, :], P[0][:, None]
         t = np.clip(((p - a) * np.conj(d)).real / np.maximum(np.abs(d) ** 2, 1e-300), 0.0, 1.0)
         assert np.max(np.min(np.abs(a + t * d - p), axis=1)) / diag < 1e-6
+
+
+def test_turns_fully_agrees_with_the_check_of_the_mechanism():
+    """``atlas.turns_fully`` (the Grashof inequalities of the dyad) against ``lk.check``'s assembly range."""
+    rng = np.random.default_rng(5)
+    sp = builtin_space("fourbar", (0.0, 0.0), 1.0)
+    X = rng.uniform(-1, 1, (40, 10))
+    J = X.reshape(40, 5, 2) @ np.array([1, 1j])
+    got = at.turns_fully(J)
+    for x, g in zip(X, got, strict=True):
+        assert g == _full_turn(sp.mechanism(x)), x
+    assert 5 < got.sum() < 35  # both kinds among them
+
+
+def test_a_full_turn_problem_on_an_arc_is_answered_from_the_open_entries():
+    """Twelve targets on an arc of a crank-rocker's curve (an open entry whose crank turns fully), no --partial:
+    the closed entries' shapes miss a part of a curve, the open ones match it; the answer is a full turn."""
+    atlas = at.load()
+    lo, hi = atlas.block(False)
+    rows = atlas.entries(np.arange(lo, hi))
+    J = rows[:, at.JOINTS : at.SWEEP].reshape(-1, 5, 2) @ np.array([1, 1j])
+    good = np.flatnonzero(at.turns_fully(J) & (rows[:, at.MU] > 25))
+    for r in good:  # the first such entry that fits the bounds of its own targets
+        Jr = 3 - 2j + 2.0 * np.exp(1.1j) * J[r]
+        P, _ = at.curves(np.stack([Jr.real, Jr.imag], -1).reshape(1, 10), rows[None, r, at.SWEEP], False, 12)
+        T = np.stack([P[0].real, P[0].imag], 1)
+        problem = make_problem(T, "fourbar", reach=3.0, min_transmission=10.0)
+        if at._fits(problem, Jr[None])[0]:
+            break
+    X = at._arcs_of_turns(problem, atlas)  # the open entries' candidates, before any polish
+    err, _ = problem.measure(X)
+    best = int(np.argmin(err))
+    assert err[best] < 5e-3 and _full_turn(problem.space.mechanism(X[best]))  # a whole turn, as the problem asks
+    assert at.first_answer(problem, atlas).error <= err[best]
+
+
+def _full_turn(mech) -> bool:
+    """``lk.check`` finds the crank assembling over one whole turn."""
+    r = lk.check(mech).input_range
+    return len(r) == 1 and r[0][1] - r[0][0] >= 360.0 - 1e-9

@@ -634,6 +634,11 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
     )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
+    _task_arguments(p)
+
+
+def _task_arguments(p: argparse.ArgumentParser) -> None:
+    """``synthesize --task`` and the options of motion and function generation (spec section 6)."""
     p.add_argument(
         "--task",
         choices=SYNTHESIS_TASKS,

@@ -695,13 +695,17 @@ def _fits(problem: Problem, joints: np.ndarray) -> np.ndarray:
     return fits
 
 
-def _nearest_fitting(problem: Problem, atlas: Atlas, keep: Callable[[Match], np.ndarray]) -> Match:
-    """Up to ``NEAREST`` nearest entries (closed, or open for a partial problem) that ``keep`` accepts.
+def _nearest_fitting(
+    problem: Problem, atlas: Atlas, keep: Callable[[Match], np.ndarray], closed: bool | None = None
+) -> Match:
+    """Up to ``NEAREST`` nearest entries (closed, or open for a partial problem, or as ``closed`` says) that
+    ``keep`` accepts.
 
     ``LOOKED_UP`` entries are looked up, more when too few are kept.
     """
+    closed = not problem.partial if closed is None else closed
     for k in LOOKED_UP:
-        m = nearest(atlas, problem.targets, not problem.partial, k, problem.min_transmission)
+        m = nearest(atlas, problem.targets, closed, k, problem.min_transmission)
         ok = np.flatnonzero(keep(m))[:NEAREST]
         if len(ok) == NEAREST:
             break
@@ -714,7 +718,33 @@ def _placed(problem: Problem, atlas: Atlas) -> np.ndarray:
     if len(m.rows) == 0:
         return np.zeros((0, problem.dim))
     span = m.sweep if problem.partial else None
-    return posed(problem, refit(problem, m.joints, span=span), span=span)
+    X = posed(problem, refit(problem, m.joints, span=span), span=span)
+    return X if problem.partial else np.concatenate([X, _arcs_of_turns(problem, atlas)])
+
+
+def turns_fully(joints: np.ndarray) -> np.ndarray:
+    """Four-bars ``joints`` (k, 5: A, B, C, D, P) whose crank A-C turns fully.
+
+    ``|C - B|`` takes every value in ``[|d - a|, d + a]`` (crank ``a``, ground ``d``) as the crank
+    turns; the dyad C-D-B closes there iff ``|b - c| <= |C - B| <= b + c`` (coupler ``b``, rocker ``c``).
+
+    >>> turns_fully(np.array([[0, 4, 1 + 0j, 3 + 3j, 0], [0, 2, 1.5 + 0j, 1 + 1j, 0]]))
+    array([ True, False])
+    """
+    A, B, C, D = (joints[:, i] for i in range(4))
+    a, b, c, d = np.abs(C - A), np.abs(D - C), np.abs(D - B), np.abs(B - A)
+    ok: np.ndarray = (d + a <= b + c) & (np.abs(d - a) >= np.abs(b - c))
+    return ok
+
+
+def _arcs_of_turns(problem: Problem, atlas: Atlas) -> np.ndarray:
+    """A full-turn problem whose targets lie on a part of a curve (six points on a line): the open entries nearest
+    to the targets' open polygon whose crank turns fully (arcs of crank-rockers' curves), refitted and posed
+    over a whole turn (the nearest distances over the whole curve are at most those over the arc)."""
+    m = _nearest_fitting(problem, atlas, lambda m: _fits(problem, m.joints) & turns_fully(m.joints), closed=False)
+    if len(m.rows) == 0:
+        return np.zeros((0, problem.dim))
+    return posed(problem, refit(problem, m.joints))
 
 
 def _shaped(problem: Problem, atlas: Atlas) -> np.ndarray:

@@ -271,27 +271,21 @@ def synthesize_path(
     ----------
     targets : array_like, (m, 2) or complex (m,), or Targets
         The points, in ``units`` (a :class:`~linkagekit.synthesis.targets.Targets` as it is).
-    topology : str or Mechanism
-        One of ``TOPOLOGIES``, or a template mechanism (its joints ``free`` move; its tracer is ``P``).
+    topology, units : str or Mechanism, str
+        One of ``TOPOLOGIES`` or a template mechanism (its joints ``free`` move; its tracer is ``P``); the
+        targets' length unit (:data:`~linkagekit.units.LENGTH_UNITS`; ``unit=``, its former name, warns).
     inputs : sequence of float, optional
         The crank angle at each target (degrees): prescribed timing, up to one common offset.
-    units : str
-        The targets' length unit (:data:`~linkagekit.units.LENGTH_UNITS`; ``unit=``, its former name, warns).
     ordered, shape_only, partial : bool
-        Meet the targets in their order along the curve; match it up to a similarity (the mechanism placed on
-        the targets); let them lie on the part a crank sweep of 90 degrees or more traces (the driver's sweep).
-    min_transmission : float, optional
-        Degrees: transmission angles within ``[MIN, 180 - MIN]`` over the turn (default 20).
-    lengths, pivots, free, reach : optional
-        Bounds on every link length; the region ``((xmin, xmax), (ymin, ymax))`` of the ground pivots
-        (built-in topologies); with a template, the joints that move (default all), or ``joint ->
-        ((x0, x1), (y0, y1))``; joints lie within ``reach`` target diagonals of the targets' centre.
-    seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress
-        See :class:`~.optimize.Settings`; ``progress`` gets a ``Progress`` per generation (first, :mod:`~.atlas`);
-        ``workers``: every core by default (:func:`~linkagekit.synthesis.optimize.default_workers`).
-    pareto : bool
-        Also search at transmission bounds 10, 20 and 30 degrees higher, and return in ``pareto`` a
-        short list of designs from the most accurate to the best-transmitting.
+        The targets met in order; matched up to a similarity (placed on them); on a part swept by >= 90 deg.
+    min_transmission, lengths, pivots, free, reach : optional
+        Transmission angles within ``[MIN, 180 - MIN]`` degrees (default 20); bounds on every link length; the
+        region ``((xmin, xmax), (ymin, ymax))`` of the ground pivots (built-in topologies); with a template, the
+        joints that move (default all), or ``joint -> ((x0, x1), (y0, y1))``; joints within ``reach`` diagonals.
+    seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, progress, pareto
+        See :class:`~.optimize.Settings` (``workers``: every core by default); ``progress`` gets a ``Progress``
+        per generation (first, :mod:`~.atlas`); ``pareto``: also search at transmission bounds 10, 20 and 30
+        degrees higher, and return in ``pareto`` designs from the most accurate to the best-transmitting.
 
     Returns
     -------
