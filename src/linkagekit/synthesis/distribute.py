@@ -361,7 +361,9 @@ class Evaluator:
             if kill:
                 for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
                     proc.kill()
-            self._pool.shutdown(cancel_futures=True)
+            # killed: not waited for (a Ctrl-C that lands inside the pool's own bookkeeping, say while a lost
+            # worker is being replaced, can leave its manager thread waiting on a worker that is gone)
+            self._pool.shutdown(wait=not kill, cancel_futures=True)
             self._pool = None
         if self._client is not None:
             self._client.close()
