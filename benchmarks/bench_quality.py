@@ -103,11 +103,14 @@ def line(seconds: float, workers: int | None, tmp: Path) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("parts", nargs="*", default=["crank", "line"], choices=["crank", "line"])
+    ap.add_argument("parts", nargs="*", help="crank, line (default: both)")
     ap.add_argument("--k", type=int, default=10)
     ap.add_argument("--seconds", type=float, default=None, help="the budget of every run (default: 10 and 30)")
     ap.add_argument("--workers", type=int, default=None)
     a = ap.parse_args(argv)
+    a.parts = a.parts or ["crank", "line"]
+    if set(a.parts) - {"crank", "line"}:
+        ap.error(f"unknown parts: {sorted(set(a.parts) - {'crank', 'line'})}")
     ok = True
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
