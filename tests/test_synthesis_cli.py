@@ -42,7 +42,7 @@ from linkagekit.synthesis.distribute import Evaluator
 ROOT = Path(__file__).resolve().parents[1]
 SEED000 = ROOT / "examples" / "seed000_fourbar.yaml"
 ANGLES = np.arange(0.0, 360.0, 40.0)  # nine targets
-SMALL = ["--units", "cm", "--restarts", "2", "--generations", "40", "--seconds", "1000"]
+SMALL = ["--units", "cm", "--restarts", "2", "--generations", "40", "--seconds", "1000", "--reach", "1"]
 TARGET_RGB = np.array([0x00, 0x50, 0xB4])  # draw.TARGET_COLOR
 ERROR_PREFIX = "linkagekit: error: "
 

@@ -192,7 +192,7 @@ def test_partial_sweep_covers_targets_on_a_rocking_crank():
     distances to that part of the curve."""
     mech, deg, T = _rocking_case()
     assert lk.check(mech).input_ranges["crank"] != [[0.0, 360.0]]  # a full turn is impossible
-    pb = make_problem(T, "fourbar", partial=True, min_transmission=10)
+    pb = make_problem(T, "fourbar", partial=True, min_transmission=10, reach=1.0)  # the box the 1 % is of
     assert pb.dim == 12
     x = np.concatenate([pb.space.vector(mech), np.radians([0.0, deg[-1] - deg[0]])])
     assert np.max(evaluate(pb, x[None], refine=3).errors) < 1e-9 * pb.scale

@@ -619,7 +619,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pivots", metavar="X0:X1,Y0:Y1", help="the region of the ground pivots")
     p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
     p.add_argument(
-        "--reach", metavar="R", default="1", help="joints lie within R target diagonals of the targets (default 1)"
+        "--reach", metavar="R", default="3", help="joints lie within R target diagonals of the targets (default 3)"
     )
     p.add_argument(
         "--restarts", metavar="N", default=_DEFAULT_RESTARTS, help="independent searches at most (default 1000)"
