@@ -48,7 +48,7 @@ import operator
 import os
 import re
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -529,18 +529,22 @@ def _read_text(p: Path, name: str) -> str:
 
 
 # ---------------------------------------------------------------------- CSV
-def _csv_targets(text: str, name: str, units: str) -> Targets:
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    columns: list[str] | None = None
-    rows: list[list[float]] = []
-    for number, line in enumerate(lines, start=1):
+def _csv_cells(text: str, name: str) -> Iterator[tuple[int, list[str]]]:
+    """The line number and stripped cells of every CSV row of ``text`` (blank lines and ``#`` comments skipped)."""
+    for number, line in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), start=1):
         stripped = line.strip()
         if not stripped or stripped.startswith("#"):
             continue
         try:
-            cells = [c.strip() for c in next(csv.reader([line], strict=True))]
+            yield number, [c.strip() for c in next(csv.reader([line], strict=True))]
         except (csv.Error, StopIteration) as exc:
             raise _error(name, f"line {number}: not a CSV row ({shorten(str(exc))})") from None
+
+
+def _csv_targets(text: str, name: str, units: str) -> Targets:
+    columns: list[str] | None = None
+    rows: list[list[float]] = []
+    for number, cells in _csv_cells(text, name):
         if columns is None:
             columns = _header(cells, name)
             continue
@@ -577,13 +581,7 @@ def read_table(
     expected = " or ".join(repr(",".join(h)) for h in headers)
     columns: list[str] | None = None
     rows: list[list[float]] = []
-    for number, line in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), start=1):
-        if not line.strip() or line.strip().startswith("#"):
-            continue
-        try:
-            cells = [c.strip() for c in next(csv.reader([line], strict=True))]
-        except (csv.Error, StopIteration) as exc:
-            raise _error(name, f"line {number}: not a CSV row ({shorten(str(exc))})") from None
+    for number, cells in _csv_cells(text, name):
         if columns is None:
             columns = [c.lower() for c in cells]
             if tuple(sorted(columns)) not in allowed:
