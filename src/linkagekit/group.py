@@ -191,6 +191,8 @@ VECTOR_COLUMNS = 512
 #: ... and for this many iterations (the few columns still iterating after them cost less by LAPACK; a column's
 #: numbers still depend only on its own iterations, not on the other columns)
 VECTOR_ITER = 2
+#: a sub-step's Newton gives up on a column whose residual has not halved in a step after this many
+GIVE_UP_AFTER = 2
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
@@ -836,20 +838,30 @@ class Group(Step):
         iters: int = NEWTON_ITER,
         vector: bool = False,
         work: FloatArray | None = None,
+        give_up: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace)."""
+        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace).
+
+        ``give_up``: a column whose residual (relative to its tolerance) has not halved in a step
+        after the first is left as not converged (:data:`GIVE_UP_AFTER`).
+        """
         if vector and U.shape[1] >= VECTOR_COLUMNS:
-            return self._newton_vector(U, K, ar, iters, work)
+            return self._newton_vector(U, K, ar, iters, work, give_up)
         U = U.copy()
         conv = np.zeros(U.shape[1], bool)
         act = np.arange(U.shape[1])
+        worst = np.full(U.shape[1], np.inf)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([U[:, act], K[:, act]]) if len(K) else U[:, act]
                 res = self._res(P, ar.L[:, act], ar.R[:, act])
-                ok = np.all(np.abs(res) <= ar.tol[:, act], axis=0)
+                rel = np.max(np.abs(res) / ar.tol[:, act], axis=0)
+                ok = rel <= 1.0
                 conv[act[ok]] = True
-                act = act[~ok]
+                stuck = ~ok & (rel > 0.5 * worst[act]) if give_up and it >= GIVE_UP_AFTER else np.zeros(len(act), bool)
+                worst[act] = rel
+                act, ok = act[~ok & ~stuck], ok[~stuck]
+                P, res = P[:, ~stuck], res[:, ~stuck]
                 if it == iters or not len(act):
                     break
                 dx = _newton_step(self._jac(P[:, ~ok], ar.J_lin[act], ar.R[:, act]), res[:, ~ok])
@@ -866,7 +878,13 @@ class Group(Step):
         return U, conv, np.sign(det)
 
     def _newton_vector(
-        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, work: FloatArray | None = None
+        self,
+        U: np.ndarray,
+        K: np.ndarray,
+        ar: _Arrays,
+        iters: int = NEWTON_ITER,
+        work: FloatArray | None = None,
+        give_up: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
 
@@ -880,12 +898,17 @@ class Group(Step):
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
         act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
         last: tuple[FloatArray, FloatArray] | None = None  # the active columns' last Jacobian and determinant
+        worst = np.full(len(act), np.inf)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([Ua, Ka]) if len(K) else Ua
                 res = self._res(P, ara.L, ara.R)
-                passed = np.all(np.abs(res) <= ara.tol, axis=0)
+                rel = np.max(np.abs(res) / ara.tol, axis=0)
+                passed = rel <= 1.0
                 done = passed | (it == iters)
+                if give_up and it >= GIVE_UP_AFTER:
+                    done |= rel > 0.5 * worst
+                worst = rel
                 J = self._jac(P, ara.J_lin, ara.R)
                 kept = passed & _same_sign(*last, J) if last is not None else np.zeros(len(act), bool)
                 vec = it < VECTOR_ITER and len(act) >= VECTOR_COLUMNS
@@ -904,7 +927,7 @@ class Group(Step):
                     break
                 dx = dx[go[~kept]]
                 if not go.all():
-                    act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
+                    act, Ua, Ka, ara, worst = act[go], Ua[:, go], Ka[:, go], ara.take(go), worst[go]
                     last = (last[0][go], last[1][go]) if last is not None else None
                 Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
             self._lapack_det_where_zero(U, K, ar, conv, det)
@@ -1451,7 +1474,7 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, w.vector)
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, w.vector, give_up=True)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
