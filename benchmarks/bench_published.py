@@ -35,7 +35,7 @@ Printed: three markdown tables (the cross-check, the comparison with its notes o
 formulations differ, the search), progress on stderr, every number with ``--json``. The
 run is stopped by the clock, so its numbers vary a little with the machine's load.
 
-    python benchmarks/bench_published.py [--seconds 120] [--seed 1] [--reach 1 [3 ...]] [--only NAME ...]
+    python benchmarks/bench_published.py [--seconds 120] [--seed 1] [--reach 1 [3 ...]] [--workers 1] [--only NAME ...]
                                          [--no-fair] [--json FILE]
 """
 
@@ -68,6 +68,7 @@ RTOL = 1e-6
 #: goal of the search (largest target error / diagonal): small, so that the budget decides
 GOAL = 1e-10
 RESTARTS = 10_000  # the clock stops the run first
+WORKERS: list[int | None] = [1]  # ``--workers`` (None: the library's default, every core)
 TEMPLATE = {
     "format": "linkagekit/1",
     "name": "four-bar, crank pivot A fixed at the origin, B on the +x axis",
@@ -375,7 +376,7 @@ def run_ours(
         seconds=seconds,
         restarts=RESTARTS,
         goal=GOAL,
-        workers=1,
+        workers=WORKERS[0],
     )
     wall = time.monotonic() - t0
     out = evaluate_ours(problem, syn, strict=not fixed_frame(problem))
@@ -428,7 +429,7 @@ def run_fixed_frame(
         seconds=seconds,
         restarts=RESTARTS,
         goal=GOAL,
-        workers=1,
+        workers=WORKERS[0],
     )
     wall = time.monotonic() - t0
     out = evaluate_ours(problem, syn, strict=True)
@@ -538,10 +539,14 @@ def main(argv: list[str] | None = None) -> int:
         "--reach", type=float, nargs="+", default=[1.0], help="synthesize's reach, one run per value (default 1)"
     )
     ap.add_argument("--only", nargs="*", help="problem files whose name contains one of these")
+    ap.add_argument(
+        "--workers", type=int, default=1, help="search processes per run (default 1; 0: the library's default)"
+    )
     ap.add_argument("--no-fair", action="store_true", help="skip the fixed-frame variant")
     ap.add_argument("--json", help="write every number to this file")
     ap.add_argument("--from-json", help="print the tables of an earlier --json file (no search)")
     args = ap.parse_args(argv)
+    WORKERS[0] = args.workers or None
 
     problems = load_problems(args.only)
     if args.from_json:

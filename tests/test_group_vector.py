@@ -42,7 +42,6 @@ def _solve_all(monkeypatch, vector: bool) -> list[lk.Result]:
     big = 1 if vector else 10**9
     monkeypatch.setattr(group, "VECTOR_SAMPLES", big)
     monkeypatch.setattr(group, "VECTOR_DESIGNS", big)
-    monkeypatch.setattr(group, "VECTOR_COLUMNS", 1 if vector else big)
     base = random_triad(1)
     poses = base.pose_array()[None] + np.random.default_rng(3).normal(0, 0.3, (5, len(base.joint_names), 2))
     return [

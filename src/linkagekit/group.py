@@ -185,9 +185,6 @@ FILL_CHUNK = 2048
 VECTOR_DESIGNS = 64
 #: ... and the samples' Newton from this many samples x designs on
 VECTOR_SAMPLES = 4096
-#: ... while at least this many columns iterate (below, LAPACK costs less: about 0.3 us a matrix against a fixed
-#: 0.15 ms of array operations)
-VECTOR_COLUMNS = 512
 #: ... and for this many iterations (the few columns still iterating after them cost less by LAPACK; a column's
 #: numbers still depend only on its own iterations, not on the other columns)
 VECTOR_ITER = 2
@@ -845,7 +842,7 @@ class Group(Step):
         ``give_up``: a column whose residual (relative to its tolerance) has not halved in a step
         after the first is left as not converged (:data:`GIVE_UP_AFTER`).
         """
-        if vector and U.shape[1] >= VECTOR_COLUMNS:
+        if vector:
             return self._newton_vector(U, K, ar, iters, work, give_up)
         U = U.copy()
         conv = np.zeros(U.shape[1], bool)
@@ -911,7 +908,7 @@ class Group(Step):
                 worst = rel
                 J = self._jac(P, ara.J_lin, ara.R)
                 kept = passed & _same_sign(*last, J) if last is not None else np.zeros(len(act), bool)
-                vec = it < VECTOR_ITER and len(act) >= VECTOR_COLUMNS
+                vec = it < VECTOR_ITER
                 if kept.any():
                     det[act[kept]] = last[1][kept]  # type: ignore[index]
                     dx, det[act[~kept]] = _solve_small(J[~kept], res[:, ~kept], done[~kept], vec, work)
@@ -1456,7 +1453,9 @@ class Group(Step):
 
         Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
         is accepted (the tests of a continuation step) doubles the next one, a step that is
-        not is halved. A step to knowns a chain rules out fails without Newton.
+        not is halved. A step to knowns a chain rules out fails without Newton. Newton here is
+        LAPACK's, whatever the problem's size (few columns sub-step, and many rounds: array
+        operations' fixed cost would dominate), and gives up early (``give_up``).
         """
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
@@ -1474,7 +1473,7 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, w.vector, give_up=True)
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, give_up=True)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
