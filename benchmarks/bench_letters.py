@@ -8,6 +8,7 @@ ours, LInK's, joints, topology, crank range, time; then the goal counts (issue 3
 
     PYTHONPATH=src python benchmarks/bench_letters.py                 # 60 s a letter, 2 workers: 26 min
     PYTHONPATH=src python benchmarks/bench_letters.py --seconds 5 --letters A,C,O
+    PYTHONPATH=src python benchmarks/bench_letters.py --min-transmission 0   # no transmission bound, as LInK
 """
 
 from __future__ import annotations
@@ -36,13 +37,18 @@ def _score_module() -> Any:
     return mod
 
 
-def run_letter(letter: dict[str, Any], seconds: float, seed: int, workers: int, max_joints: int) -> dict[str, Any]:
-    """Synthesize one letter (shape-only, partial if open) and score its written mechanism."""
+def run_letter(
+    letter: dict[str, Any], seconds: float, seed: int, workers: int, max_joints: int, **problem: Any
+) -> dict[str, Any]:
+    """Synthesize one letter (shape-only, partial if open) and score its written mechanism; ``problem``: further
+    keywords of the synthesis (``min_transmission``)."""
     score = _score_module()
     T = np.asarray(letter["target_xy"], float)
     closed = str(letter["closed"]) == "True"
     t0 = time.monotonic()
-    out = synthesize_auto(T, max_joints=max_joints, seconds=seconds, seed=seed, workers=workers, partial=not closed)
+    out = synthesize_auto(
+        T, max_joints=max_joints, seconds=seconds, seed=seed, workers=workers, partial=not closed, **problem
+    )
     took = time.monotonic() - t0
     mech = out.mechanism
     a = mech.to_dict()["drivers"][0]["angles"]
@@ -69,7 +75,11 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--max-joints", type=int, default=10)
     ap.add_argument("--letters", default="", help="comma-separated letters (default all 26)")
+    ap.add_argument(
+        "--min-transmission", type=float, default=None, help="degrees (default: the library's, 20; LInK has none)"
+    )
     a = ap.parse_args()
+    problem = {} if a.min_transmission is None else {"min_transmission": a.min_transmission}
     with open(os.path.join(LINK_ABC, "letters.json")) as fh:
         data = json.load(fh)
     want = set(a.letters.split(",")) if a.letters else None
@@ -78,7 +88,7 @@ def main() -> int:
     for letter in data["letters"]:
         if want and letter["letter"] not in want:
             continue
-        r = run_letter(letter, a.seconds, a.seed, a.workers, a.max_joints)
+        r = run_letter(letter, a.seconds, a.seed, a.workers, a.max_joints, **problem)
         rows.append(r)
         ok = "yes" if r["assembles"] and r["feasible"] else "NO"
         print(

@@ -195,6 +195,9 @@ MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
 #: (larger steps are halved: over small steps Newton's root is the branch's, not another of one sign)
 STEP_LIMIT = 0.25
+#: a sample starts from the quintic interpolation of its cell where it lies within this fraction of the cell's
+#: move of the cubic one (near a singular position, where the motion's derivatives mean nothing, from the cubic)
+QUINTIC_TRUST = 0.01
 #: a sample farther than this (a fraction of its grid cell) past where the walk's sub-steps into the cell stopped
 #: is not assembled: no sub-steps of its own
 END_MARGIN = 1 / 16
@@ -1254,10 +1257,15 @@ class Group(Step):
             inside = (col >= 0) & (col < G)
             return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
 
-        V = self._grid_slopes(g, w)
+        V, W = self._grid_slopes(g, w)
         Ua, Ub = sol(a), sol(b)
         guess = _hermite(Ua, V[:, c, a], Ub, V[:, c, b], t)
-        bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
+        move = np.max(np.abs(Ub - Ua), axis=0)
+        bound = 0.5 * move + 1e-9 * np.max(np.abs(Ua), axis=0)
+        closer = _hermite5(Ua, V[:, c, a], W[:, c, a], Ub, V[:, c, b], W[:, c, b], t)
+        with np.errstate(invalid="ignore"):  # near a singular position the second differences mean nothing
+            trusted = np.max(np.abs(closer - guess), axis=0) <= QUINTIC_TRUST * move
+        guess = np.where(trusted, closer, guess)
         other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
         if len(other):
             ao, bo, co = a[other], b[other], c[other]
@@ -1298,34 +1306,42 @@ class Group(Step):
             out: np.ndarray = frac > w.reached[c, target] + END_MARGIN
         return out
 
-    def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
-        """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
+    def _grid_slopes(self, g: WalkGrid, w: _Walk) -> tuple[np.ndarray, np.ndarray]:
+        """The group's motion per grid step and its change per step at every solved grid point, (V, W), each
+        (m, D, G); NaN where unknown.
 
-        ``J_u dU = -J_k dK``, the knowns' motion per step ``dK`` from the grid's own knowns by a
-        central difference of fourth order (second at the grid's ends): the solutions are
-        interpolated by cubic Hermite (:func:`_hermite`), far closer than from values alone.
+        ``J_u V = -J_k dK`` and ``J_u W = -J_k d2K - gamma(V, dK)`` (:meth:`_gamma`), the knowns' first and second
+        differences per step ``dK``, ``d2K`` from the grid's own knowns by central differences of fourth order
+        (second at the grid's ends; none at its last points): the solutions are interpolated by quintic Hermite
+        (:func:`_hermite`), far closer than from values alone.
         """
         m, D = w.out.shape[:2]
         Ug, Kg = w.out[:, :, g.n_given :], w.K[:, :, g.n_given :]
         G = Ug.shape[2]
-        dK = np.full_like(Kg, NAN_POINT)
+        dK, d2K = np.full_like(Kg, NAN_POINT), np.full_like(Kg, NAN_POINT)
         if G >= 3:
             dK[:, :, 1:-1] = (Kg[:, :, 2:] - Kg[:, :, :-2]) / 2
+            d2K[:, :, 1:-1] = Kg[:, :, 2:] - 2 * Kg[:, :, 1:-1] + Kg[:, :, :-2]
         if G >= 5:
             dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
-        V = np.full((m, D, G), NAN_POINT)
+            d2K[:, :, 2:-2] = (-Kg[:, :, :-4] + 16 * Kg[:, :, 1:-3] - 30 * Kg[:, :, 2:-2] + 16 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
+        V, W = np.full((m, D, G), NAN_POINT), np.full((m, D, G), NAN_POINT)
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
         if not len(d) or not self.n_held:
-            return V
+            return V, W
         P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
-        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
-        dk = dK[:, d, j]
-        vk = np.stack([dk.real, dk.imag], axis=-1).transpose(1, 0, 2).reshape(len(d), -1)
-        rhs = -np.einsum("bij,bj->bi", J[:, :, 2 * m :], vk)
+        dn = self._design_nums(w.nums, d)
+        J = self.jacobian(P, dn, m + self.n_held)
+        Ju, Jk = J[:, :, : 2 * m], J[:, :, 2 * m :]
+        dk, d2k = dK[:, d, j], d2K[:, d, j]
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            du = _newton_step(J[:, :, : 2 * m], -rhs.T)
-        V[:, d, j] = (du[:, 0::2] + 1j * du[:, 1::2]).T
-        return V
+            du = _newton_step(Ju, np.einsum("bij,bj->bi", Jk, _real_pairs(dk)).T)
+            v = (du[:, 0::2] + 1j * du[:, 1::2]).T
+            gamma = self._gamma(P, np.concatenate([v, dk]), self._stack(dn, len(d))[1])
+            d2u = _newton_step(Ju, gamma + np.einsum("bij,bj->bi", Jk, _real_pairs(d2k)).T)
+        V[:, d, j] = v
+        W[:, d, j] = (d2u[:, 0::2] + 1j * d2u[:, 1::2]).T
+        return V, W
 
     def _from_state(
         self, U0: np.ndarray, K0: np.ndarray, centre: np.ndarray, c: np.ndarray, s: np.ndarray, w: _Walk
@@ -1543,23 +1559,8 @@ class Group(Step):
         system = _RatesSystem(Ju_solve, rhs_v)  # factored once for both solves
         vu = system.first
         vu[sing] = np.nan
-        # gamma: 2 |v_a - v_b|^2 on each distance row
         Vall = np.concatenate([(vu[:, 0::2] + 1j * vu[:, 1::2]).T, V]) if nk else (vu[:, 0::2] + 1j * vu[:, 1::2]).T
-        gamma = np.zeros((D * n, self.n_eq))
-        row = 0
-        for gl in self.links:
-            dv = Vall[gl.slots[1]] - Vall[gl.slots[0]]
-            gamma[:, row] = 2 * (dv.real**2 + dv.imag**2)
-            row += 1 + 2 * (len(gl.slots) - 2)
-        if self.sliders:  # 2 Im(w' conj(u')) on a line row, 2 Im(e_o' conj(c e')) on a lock row
-            line, lock = self._slider_gamma(P, Vall, self._stack(dn, D * n)[1])
-            gamma[:, self._srows.line], gamma[:, self._srows.lock] = line.T, lock.T
-        if self.cylinders:  # d2/dt2 (|e|^2 - s^2) = 2 e.e'' + 2 |e'|^2 - 2 s s'' - 2 s'^2: gamma 2 |e'|^2 - 2 s'^2
-            cr = self._crows
-            de = Vall[cr.b] - Vall[cr.a]
-            gamma[:, cr.row] = (2 * (de.real**2 + de.imag**2) - 2 * Vall[cr.s].real ** 2).T
-        if self.drives:  # 2 Re(w' conj(u')), the line row's real part
-            gamma[:, self._drows.row] = self._drive_gamma(Vall, self._stack(dn, D * n)[1]).T
+        gamma = self._gamma(P, Vall, self._stack(dn, D * n)[1]).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
         au = system.solve(rhs_a)
         au[sing] = np.nan
@@ -1571,6 +1572,29 @@ class Group(Step):
             if gl.name not in r.om:
                 j0, j1 = gl.joints[0], gl.joints[1]
                 r.om[gl.name], r.al[gl.name] = link_rates(r.z[j1] - r.z[j0], r.v[j1] - r.v[j0], r.a[j1] - r.a[j0])
+
+    def _gamma(self, P: np.ndarray, V: np.ndarray, R: np.ndarray) -> FloatArray:
+        """What the constraints' second derivative along a motion adds to ``J P''``, at positions ``P`` and
+        velocities ``V`` (n_slots, B) of every slot: (n_eq, B). Each row is quadratic in the coordinates, so it is
+        the row's constant Hessian on ``V`` twice: ``2 |v_b - v_a|^2`` on a distance row, 0 on a linear row,
+        ``2 Im(w' conj(u'))`` on a slider's line row, ``2 Im(e_o' conj(c e'))`` on its lock row, ``2 |e'|^2 - 2
+        s'^2`` on a cylinder's (``d2/dt2 (|e|^2 - s^2) = 2 e.e'' + 2 |e'|^2 - 2 s s'' - 2 s'^2``), ``2 Re(w'
+        conj(u'))`` on a slider driver's."""
+        gamma = np.zeros((self.n_eq, V.shape[1]))
+        row = 0
+        for gl in self.links:
+            dv = V[gl.slots[1]] - V[gl.slots[0]]
+            gamma[row] = 2 * (dv.real**2 + dv.imag**2)
+            row += 1 + 2 * (len(gl.slots) - 2)
+        if self.sliders:
+            gamma[self._srows.line], gamma[self._srows.lock] = self._slider_gamma(P, V, R)
+        if self.cylinders:
+            cr = self._crows
+            de = V[cr.b] - V[cr.a]
+            gamma[cr.row] = 2 * (de.real**2 + de.imag**2) - 2 * V[cr.s].real ** 2
+        if self.drives:
+            gamma[self._drows.row] = self._drive_gamma(V, R)
+        return gamma
 
     def row_scale(self, dn: Nums, B: int) -> FloatArray:
         """Per row (B, n_eq), what makes its gradient of unit scale: ``1 / (2 L)`` on a distance row, ``1 / ell``
@@ -1886,10 +1910,40 @@ def _predict(U: np.ndarray, U_prev: np.ndarray, U_prev2: np.ndarray, t: np.ndarr
     return out
 
 
+def _real_pairs(z: np.ndarray) -> FloatArray:
+    """Complex (k, B) as real rows (B, 2k): ``[Re z_0, Im z_0, Re z_1, ...]``."""
+    out: FloatArray = np.stack([z.real, z.imag], axis=-1).transpose(1, 0, 2).reshape(z.shape[1], -1)
+    return out
+
+
 def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Cubic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with motions per cell ``Va``, ``Vb``."""
     t2, t3 = t * t, t * t * t
     out: np.ndarray = (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
+    return out
+
+
+def _hermite5(
+    Ua: np.ndarray, Va: np.ndarray, Wa: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, Wb: np.ndarray, t: np.ndarray
+) -> np.ndarray:
+    """Quintic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with first and second derivatives per cell
+    ``Va``, ``Wa`` and ``Vb``, ``Wb``: the polynomial of degree 5 with those six values.
+
+    >>> import numpy as np
+    >>> f = np.polynomial.Polynomial([0.3, -1.0, 0.5, 2.0, -0.7, 0.25])
+    >>> d1, d2 = f.deriv(1), f.deriv(2)
+    >>> t = np.linspace(0, 1, 7)
+    >>> bool(np.allclose(_hermite5(f(0), d1(0), d2(0), f(1), d1(1), d2(1), t), f(t), rtol=0, atol=1e-14))
+    True
+    """
+    t2 = t * t
+    t3 = t2 * t
+    h5 = t3 * (10 - 15 * t + 6 * t2)  # 10 t^3 - 15 t^4 + 6 t^5
+    h1 = t - t3 * (6 - 8 * t + 3 * t2)
+    h4 = -t3 * (4 - 7 * t + 3 * t2)
+    h2 = 0.5 * t2 - 0.5 * t3 * (3 - 3 * t + t2)
+    h3 = 0.5 * t3 * (1 - 2 * t + t2)
+    out: np.ndarray = (1 - h5) * Ua + h5 * Ub + h1 * Va + h4 * Vb + h2 * Wa + h3 * Wb
     return out
 
 
