@@ -66,33 +66,6 @@ def test_the_vectorized_solves_equal_lapacks(monkeypatch):
         assert np.max(np.abs(va[fin] - vb[fin])) <= 1e-8 * s
 
 
-def test_samples_past_the_walks_end_are_what_their_own_sub_steps_give(monkeypatch):
-    """A sample more than ``END_MARGIN`` of a cell past where the walk's sub-steps into its cell stopped is flagged
-    without sub-steps of its own: on 40 perturbed triads sampled every 0.25 deg across both ends of their ranges,
-    the same samples assemble as when every sample takes its own sub-steps, at the same positions (1e-12 of the
-    size), and the rule skips some."""
-    base = triad(EXAMPLE)
-    poses = base.pose_array()[None] + np.random.default_rng(4).normal(0, 0.5, (40, len(base.joint_names), 2))
-    inputs = {"crank": np.arange(-25.0, 100.0, 0.25)}
-    skipped = []
-    real = group.Group._past_end
-
-    def counting(*args):
-        out = real(*args)
-        skipped.append(int(out.sum()))
-        return out
-
-    monkeypatch.setattr(group.Group, "_past_end", staticmethod(counting))
-    fast = lk.analyze(base, inputs, poses=poses, rates=False)
-    monkeypatch.setattr(group, "END_MARGIN", np.inf)
-    slow = lk.analyze(base, inputs, poses=poses, rates=False)
-    assert sum(skipped[: len(skipped) // 2]) > 50
-    assert 0.3 < fast.assembled.mean() < 0.95
-    assert np.array_equal(fast.assembled, slow.assembled)
-    ok = fast.assembled
-    assert np.max(np.abs(points(fast)[:, ok] - points(slow)[:, ok])) <= 1e-12 * scale_of(base)
-
-
 #: a six-bar: a four-bar's coupler point P holds a class-3 triad (J1, J2, J3 on links from P, B0 and C0); its range is
 #: 2.4 degrees, inside the grid cell after the pose's input, where P moves 1.14 and 0.115 off the cell's chord
 COUPLER_TRIAD = {
