@@ -725,3 +725,22 @@ def test_a_cranks_input_is_a_direction(moved):
                 np.concatenate([a[0] for a in alone], axis=1),
                 np.concatenate([a[1] for a in alone]),
             )
+
+
+@pytest.mark.xfail(strict=True, reason="sub-steps hop across a fold onto another root of the pose's sign (review 29)")
+def test_a_sample_past_a_fold_is_not_assembled_by_a_hop_to_another_root():
+    """A class-3 triad whose range ends at a fold at -43.365 deg (``input_range``; an independent fine continuation
+    with scipy finds the determinant going to zero there): inputs 0.24 and 0.94 deg past it are assembled today, at a
+    configuration of the pose's determinant sign on another sheet (the sub-steps from the cell's end accept any
+    converged root within ``STEP_LIMIT``, a quarter of the mean link: 0.93, while the joints at -43.6 deg are 0.22 from
+    those at -43.364 deg, a hair inside the fold)."""
+    from linkagekit.checks import input_range
+
+    p = {"O": -1.0319 + 0.6634j, "A": 1.51 - 0.7844j, "B0": 3.8161 + 7.5343j, "C0": 2.7296 + 2.4825j}
+    p.update({"J1": 2.1925 + 1.8222j, "J2": 3.6188 - 1.2897j, "J3": 4.2453 + 2.4778j})
+    mech = triad(p)
+    ((lo, _),) = input_range(mech)
+    assert abs(lo + 43.3647) < 1e-3
+    res = lk.analyze(mech, {"crank": [-43.0, -43.6, -44.3]}, rates=False)
+    assert res.assembled[0]
+    assert not res.assembled[1:].any()

@@ -123,9 +123,10 @@ of ``VECTOR_DESIGNS`` designs or more, the rates of as many samples) Newton's sy
 solved by :func:`_gauss`, Gaussian elimination with partial pivoting written as about
 ``n^2`` array operations over the columns, which gives the determinant (the product of the
 pivots, with the sign of the swaps) for free: :meth:`Group._newton_vector` factors the
-Jacobian at every residual it evaluates, so a column that converges has its determinant at
-its solution from that factorization. Which solver a column gets depends only on the
-problem's size (samples x designs, designs) and on the column's own iteration
+Jacobian at every residual it evaluates while the column iterates; a column that converges
+keeps the sign of its last factorization where :func:`_same_sign` proves it unchanged at the
+solution, else it is factored there. Sub-steps are LAPACK's whatever the size. Which solver
+a column gets depends only on the problem's size (samples x designs, designs) and on the column's own iteration
 (``VECTOR_ITER``), never on the other columns of its batch: batching stays exact. The
 samples' columns still iterating after ``VECTOR_ITER`` go on together, every chunk's in one
 LAPACK batch (:meth:`Group._newton_samples`). *One design's numbers are broadcast*, not
@@ -156,7 +157,7 @@ factorization (:class:`_RatesSystem`).
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
@@ -198,9 +199,6 @@ STEP_LIMIT = 0.25
 #: a sample starts from the quintic interpolation of its cell where it lies within this fraction of the cell's
 #: move of the cubic one (near a singular position, where the motion's derivatives mean nothing, from the cubic)
 QUINTIC_TRUST = 0.01
-#: a sample farther than this (a fraction of its grid cell) past where the walk's sub-steps into the cell stopped
-#: is not assembled: no sub-steps of its own
-END_MARGIN = 1 / 16
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
 #: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively)
@@ -376,8 +374,6 @@ class _Walk:
     vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
     fill_vector: bool = False  # ... and the samples' (many samples and designs)
     grid_columns: int = 0  # the walk's grid columns (the last of ``K``'s samples)
-    #: (D, G) where a leg's step to a grid column failed, how far its sub-steps got (a fraction of the step)
-    reached: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
@@ -1037,7 +1033,6 @@ class Group(Step):
             D >= VECTOR_DESIGNS,
             D * n >= VECTOR_SAMPLES,
             0 if k.grid is None else len(k.grid.index),
-            np.full((D, 0 if k.grid is None else len(k.grid.index)), np.nan),
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -1226,11 +1221,8 @@ class Group(Step):
         """Grid steps that failed, retried by step halving from the last good state: (U, accepted, lost);
         for a dyad-like group, restarts where that fails too."""
         K = w.K[:, d, s]
-        got = np.empty(len(d))
-        U_new = self._halving(U, Kc, K, w, d, got)
+        U_new = self._halving(U, Kc, K, w, d)
         acc = np.all(np.isfinite(U_new), axis=0)
-        first = w.K.shape[2] - w.grid_columns
-        w.reached[d[~acc], s[~acc] - first] = got[~acc]
         lost = ~acc
         self._restart_lost(U, K, d, w, U_new, acc, lost & w.ok[d, s])
         return U_new, acc, lost
@@ -1276,8 +1268,7 @@ class Group(Step):
         if len(with_guess):
             i = with_guess
             done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w)
-        past = np.zeros(len(c), bool) if self.dyad_like else self._past_end(P, a, b, t, c, w)  # (it restarts)
-        rest = np.flatnonzero(~done & ~past)
+        rest = np.flatnonzero(~done)
         if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
             near = np.where(P[rest] >= 0, a[rest], b[rest])
             far = np.where(P[rest] >= 0, b[rest], a[rest])
@@ -1287,24 +1278,6 @@ class Group(Step):
             U0 = Ug[:, cr, frm]
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
             self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
-
-    @staticmethod
-    def _past_end(P: np.ndarray, a: np.ndarray, b: np.ndarray, t: np.ndarray, c: np.ndarray, w: _Walk) -> np.ndarray:
-        """Samples (places ``P`` in cells ``a``..``b`` at ``t``, of designs ``c``) more than ``END_MARGIN`` of a cell
-        past where the walk's sub-steps into that cell stopped (the end of the range): no sub-steps of their own.
-
-        Where the walk is known at every input, not only at the ones asked: the answer does not
-        depend on the other samples. The walk's sub-steps move the knowns along the chord of the
-        cell, a sample's along its own; the margin is far above what that changes (the chord and
-        the arc of a 3 deg cell differ by about 3e-4 of the radius).
-        """
-        up = P >= 0
-        G = w.reached.shape[1]
-        target = np.clip(np.where(up, b, a), 0, G - 1)
-        frac = np.where(up, t, 1 - t)
-        with np.errstate(invalid="ignore"):
-            out: np.ndarray = frac > w.reached[c, target] + END_MARGIN
-        return out
 
     def _grid_slopes(self, g: WalkGrid, w: _Walk) -> tuple[np.ndarray, np.ndarray]:
         """The group's motion per grid step and its change per step at every solved grid point, (V, W), each
@@ -1324,7 +1297,9 @@ class Group(Step):
             d2K[:, :, 1:-1] = Kg[:, :, 2:] - 2 * Kg[:, :, 1:-1] + Kg[:, :, :-2]
         if G >= 5:
             dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
-            d2K[:, :, 2:-2] = (-Kg[:, :, :-4] + 16 * Kg[:, :, 1:-3] - 30 * Kg[:, :, 2:-2] + 16 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
+            d2K[:, :, 2:-2] = (
+                -Kg[:, :, :-4] + 16 * Kg[:, :, 1:-3] - 30 * Kg[:, :, 2:-2] + 16 * Kg[:, :, 3:-1] - Kg[:, :, 4:]
+            ) / 12
         V, W = np.full((m, D, G), NAN_POINT), np.full((m, D, G), NAN_POINT)
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
         if not len(d) or not self.n_held:
@@ -1455,17 +1430,8 @@ class Group(Step):
             sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
         return sol, conv, sg
 
-    def _halving(
-        self,
-        U: np.ndarray,
-        K0: np.ndarray,
-        K1: np.ndarray,
-        w: _Walk,
-        designs: np.ndarray,
-        reached: FloatArray | None = None,
-    ) -> np.ndarray:
-        """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails (the
-        fraction of the way they got written to ``reached``, when given).
+    def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
+        """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
 
         Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
         is accepted (the tests of a continuation step) doubles the next one, a step that is
@@ -1498,8 +1464,6 @@ class Group(Step):
             dt[good] = np.minimum(2 * dt[good], 1.0)
             dt[bad] /= 2
             alive[bad[dt[bad] < smallest]] = False
-        if reached is not None:
-            reached[:] = t
         return np.where(alive & (t >= 1.0), Uc, NAN_POINT)
 
     def _restart(self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray) -> np.ndarray:
