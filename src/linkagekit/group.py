@@ -196,9 +196,6 @@ MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
 #: (larger steps are halved: over small steps Newton's root is the branch's, not another of one sign)
 STEP_LIMIT = 0.25
-#: a sample starts from the quintic interpolation of its cell where it lies within this fraction of the cell's
-#: move of the cubic one (near a singular position, where the motion's derivatives mean nothing, from the cubic)
-QUINTIC_TRUST = 0.01
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
 #: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively)
@@ -1249,15 +1246,10 @@ class Group(Step):
             inside = (col >= 0) & (col < G)
             return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
 
-        V, W = self._grid_slopes(g, w)
+        V = self._grid_slopes(g, w)
         Ua, Ub = sol(a), sol(b)
         guess = _hermite(Ua, V[:, c, a], Ub, V[:, c, b], t)
-        move = np.max(np.abs(Ub - Ua), axis=0)
-        bound = 0.5 * move + 1e-9 * np.max(np.abs(Ua), axis=0)
-        closer = _hermite5(Ua, V[:, c, a], W[:, c, a], Ub, V[:, c, b], W[:, c, b], t)
-        with np.errstate(invalid="ignore"):  # near a singular position the second differences mean nothing
-            trusted = np.max(np.abs(closer - guess), axis=0) <= QUINTIC_TRUST * move
-        guess = np.where(trusted, closer, guess)
+        bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
         other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
         if len(other):
             ao, bo, co = a[other], b[other], c[other]
@@ -1279,44 +1271,32 @@ class Group(Step):
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
             self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
 
-    def _grid_slopes(self, g: WalkGrid, w: _Walk) -> tuple[np.ndarray, np.ndarray]:
-        """The group's motion per grid step and its change per step at every solved grid point, (V, W), each
-        (m, D, G); NaN where unknown.
+    def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
+        """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
 
-        ``J_u V = -J_k dK`` and ``J_u W = -J_k d2K - gamma(V, dK)`` (:meth:`_gamma`), the knowns' first and second
-        differences per step ``dK``, ``d2K`` from the grid's own knowns by central differences of fourth order
-        (second at the grid's ends; none at its last points): the solutions are interpolated by quintic Hermite
-        (:func:`_hermite`), far closer than from values alone.
+        ``J_u dU = -J_k dK``, the knowns' motion per step ``dK`` from the grid's own knowns by a
+        central difference of fourth order (second at the grid's ends): the solutions are
+        interpolated by cubic Hermite (:func:`_hermite`), far closer than from values alone.
         """
         m, D = w.out.shape[:2]
         Ug, Kg = w.out[:, :, g.n_given :], w.K[:, :, g.n_given :]
         G = Ug.shape[2]
-        dK, d2K = np.full_like(Kg, NAN_POINT), np.full_like(Kg, NAN_POINT)
+        dK = np.full_like(Kg, NAN_POINT)
         if G >= 3:
             dK[:, :, 1:-1] = (Kg[:, :, 2:] - Kg[:, :, :-2]) / 2
-            d2K[:, :, 1:-1] = Kg[:, :, 2:] - 2 * Kg[:, :, 1:-1] + Kg[:, :, :-2]
         if G >= 5:
             dK[:, :, 2:-2] = (Kg[:, :, :-4] - 8 * Kg[:, :, 1:-3] + 8 * Kg[:, :, 3:-1] - Kg[:, :, 4:]) / 12
-            d2K[:, :, 2:-2] = (
-                -Kg[:, :, :-4] + 16 * Kg[:, :, 1:-3] - 30 * Kg[:, :, 2:-2] + 16 * Kg[:, :, 3:-1] - Kg[:, :, 4:]
-            ) / 12
-        V, W = np.full((m, D, G), NAN_POINT), np.full((m, D, G), NAN_POINT)
+        V = np.full((m, D, G), NAN_POINT)
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
         if not len(d) or not self.n_held:
-            return V, W
+            return V
         P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
-        dn = self._design_nums(w.nums, d)
-        J = self.jacobian(P, dn, m + self.n_held)
-        Ju, Jk = J[:, :, : 2 * m], J[:, :, 2 * m :]
-        dk, d2k = dK[:, d, j], d2K[:, d, j]
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
+        rhs = np.einsum("bij,bj->bi", J[:, :, 2 * m :], _real_pairs(dK[:, d, j]))
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            du = _newton_step(Ju, np.einsum("bij,bj->bi", Jk, _real_pairs(dk)).T)
-            v = (du[:, 0::2] + 1j * du[:, 1::2]).T
-            gamma = self._gamma(P, np.concatenate([v, dk]), self._stack(dn, len(d))[1])
-            d2u = _newton_step(Ju, gamma + np.einsum("bij,bj->bi", Jk, _real_pairs(d2k)).T)
-        V[:, d, j] = v
-        W[:, d, j] = (d2u[:, 0::2] + 1j * d2u[:, 1::2]).T
-        return V, W
+            du = _newton_step(J[:, :, : 2 * m], rhs.T)
+        V[:, d, j] = (du[:, 0::2] + 1j * du[:, 1::2]).T
+        return V
 
     def _from_state(
         self, U0: np.ndarray, K0: np.ndarray, centre: np.ndarray, c: np.ndarray, s: np.ndarray, w: _Walk
@@ -1514,8 +1494,7 @@ class Group(Step):
         Ju, Jk = J[:, :, : 2 * m], J[:, :, 2 * m :]
         ok = np.all(np.isfinite(Ju), axis=(1, 2))
         Ju_safe = Ju if ok.all() else np.where(ok[:, None, None], Ju, np.eye(2 * m))  # (copies cost page faults)
-        vk = np.stack([V.real, V.imag], axis=-1).reshape(nk, D * n, 2).transpose(1, 0, 2).reshape(D * n, 2 * nk)
-        ak = np.stack([A.real, A.imag], axis=-1).reshape(nk, D * n, 2).transpose(1, 0, 2).reshape(D * n, 2 * nk)
+        vk, ak = _real_pairs(V), _real_pairs(A)
         rhs_v = -np.einsum("bij,bj->bi", Jk, vk) if nk else np.zeros((D * n, 2 * m))
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
@@ -1884,30 +1863,6 @@ def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: 
     """Cubic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with motions per cell ``Va``, ``Vb``."""
     t2, t3 = t * t, t * t * t
     out: np.ndarray = (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
-    return out
-
-
-def _hermite5(
-    Ua: np.ndarray, Va: np.ndarray, Wa: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, Wb: np.ndarray, t: np.ndarray
-) -> np.ndarray:
-    """Quintic Hermite at ``t`` in [0, 1] between ``Ua`` and ``Ub`` with first and second derivatives per cell
-    ``Va``, ``Wa`` and ``Vb``, ``Wb``: the polynomial of degree 5 with those six values.
-
-    >>> import numpy as np
-    >>> f = np.polynomial.Polynomial([0.3, -1.0, 0.5, 2.0, -0.7, 0.25])
-    >>> d1, d2 = f.deriv(1), f.deriv(2)
-    >>> t = np.linspace(0, 1, 7)
-    >>> bool(np.allclose(_hermite5(f(0), d1(0), d2(0), f(1), d1(1), d2(1), t), f(t), rtol=0, atol=1e-14))
-    True
-    """
-    t2 = t * t
-    t3 = t2 * t
-    h5 = t3 * (10 - 15 * t + 6 * t2)  # 10 t^3 - 15 t^4 + 6 t^5
-    h1 = t - t3 * (6 - 8 * t + 3 * t2)
-    h4 = -t3 * (4 - 7 * t + 3 * t2)
-    h2 = 0.5 * t2 - 0.5 * t3 * (3 - 3 * t + t2)
-    h3 = 0.5 * t3 * (1 - 2 * t + t2)
-    out: np.ndarray = (1 - h5) * Ua + h5 * Ub + h1 * Va + h4 * Vb + h2 * Wa + h3 * Wb
     return out
 
 
