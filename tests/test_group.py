@@ -727,13 +727,12 @@ def test_a_cranks_input_is_a_direction(moved):
             )
 
 
-@pytest.mark.xfail(strict=True, reason="sub-steps hop across a fold onto another root of the pose's sign (review 29)")
 def test_a_sample_past_a_fold_is_not_assembled_by_a_hop_to_another_root():
     """A class-3 triad whose range ends at a fold at -43.365 deg (``input_range``; an independent fine continuation
-    with scipy finds the determinant going to zero there): inputs 0.24 and 0.94 deg past it are assembled today, at a
-    configuration of the pose's determinant sign on another sheet (the sub-steps from the cell's end accept any
-    converged root within ``STEP_LIMIT``, a quarter of the mean link: 0.93, while the joints at -43.6 deg are 0.22 from
-    those at -43.364 deg, a hair inside the fold)."""
+    with scipy finds the determinant going to zero there): inputs 0.24 and 0.94 deg past it are not assembled. Before
+    the way back was checked (``Group._returns``) they were, at a configuration of the pose's determinant sign on
+    another sheet: the sub-steps from the cell's end accepted any converged root within ``STEP_LIMIT``, a quarter of
+    the mean link (0.93), and the joints at -43.6 deg lay 0.22 from those at -43.364 deg, a hair inside the fold."""
     from linkagekit.checks import input_range
 
     p = {"O": -1.0319 + 0.6634j, "A": 1.51 - 0.7844j, "B0": 3.8161 + 7.5343j, "C0": 2.7296 + 2.4825j}
@@ -744,3 +743,19 @@ def test_a_sample_past_a_fold_is_not_assembled_by_a_hop_to_another_root():
     res = lk.analyze(mech, {"crank": [-43.0, -43.6, -44.3]}, rates=False)
     assert res.assembled[0]
     assert not res.assembled[1:].any()
+
+
+def test_the_range_of_a_triad_whose_continuation_hopped_has_its_gap():
+    """A perturbed random triad (``random_triad(29)``, pose -170.03 deg) whose branch ends at -77.04 deg going up and
+    at -404.35 deg (the -44.35 direction) going down: an independent fine continuation (scipy, 0.01 deg steps) stops
+    at both. ``input_range`` used to report the full turn (its continuation hopped across a fold onto another root of
+    the pose's sign); now the gap, its ends to 0.01 deg, and ``analyze`` flags an input inside it."""
+    from linkagekit.checks import input_range
+
+    base = random_triad(29)
+    poses = base.pose_array()[None] + np.random.default_rng(1029).normal(0, 0.5, (20, len(base.joint_names), 2))
+    mech = base.with_pose(poses[11])
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo + 44.347) < 0.01 and abs(hi - (360 - 77.036)) < 0.01
+    res = lk.analyze(mech, {"crank": [-170.0, -60.0, -50.0]}, rates=False)
+    assert res.assembled[0] and not res.assembled[1:].any()

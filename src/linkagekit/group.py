@@ -189,8 +189,10 @@ VECTOR_SAMPLES = 4096
 #: ... and for this many iterations (the few columns still iterating after them cost less by LAPACK; a column's
 #: numbers still depend only on its own iterations, not on the other columns)
 VECTOR_ITER = 2
-#: a sub-step's Newton gives up on a column whose residual has not halved in a step after this many
-GIVE_UP_AFTER = 2
+#: a sub-step that moves a joint more than this times the group's mean link length is accepted only where Newton
+#: from its end, back at its start's knowns, returns to its start (or to a root of the other sign): another root of
+#: the pose's sign lies farther (nearer, it would be a hair from a singular position of its own)
+HOP_MOVE = 1e-3
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: an accepted continuation step moves no joint more than this times the group's mean link length
@@ -831,30 +833,20 @@ class Group(Step):
         iters: int = NEWTON_ITER,
         vector: bool = False,
         work: FloatArray | None = None,
-        give_up: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace).
-
-        ``give_up``: a column whose residual (relative to its tolerance) has not halved in a step
-        after the first is left as not converged (:data:`GIVE_UP_AFTER`).
-        """
+        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace)."""
         if vector:
-            return self._newton_vector(U, K, ar, iters, work, give_up)
+            return self._newton_vector(U, K, ar, iters, work)
         U = U.copy()
         conv = np.zeros(U.shape[1], bool)
         act = np.arange(U.shape[1])
-        worst = np.full(U.shape[1], np.inf)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([U[:, act], K[:, act]]) if len(K) else U[:, act]
                 res = self._res(P, ar.L[:, act], ar.R[:, act])
-                rel = np.max(np.abs(res) / ar.tol[:, act], axis=0)
-                ok = rel <= 1.0
+                ok = np.all(np.abs(res) <= ar.tol[:, act], axis=0)
                 conv[act[ok]] = True
-                stuck = ~ok & (rel > 0.5 * worst[act]) if give_up and it >= GIVE_UP_AFTER else np.zeros(len(act), bool)
-                worst[act] = rel
-                act, ok = act[~ok & ~stuck], ok[~stuck]
-                P, res = P[:, ~stuck], res[:, ~stuck]
+                act = act[~ok]
                 if it == iters or not len(act):
                     break
                 dx = _newton_step(self._jac(P[:, ~ok], ar.J_lin[act], ar.R[:, act]), res[:, ~ok])
@@ -877,7 +869,6 @@ class Group(Step):
         ar: _Arrays,
         iters: int = NEWTON_ITER,
         work: FloatArray | None = None,
-        give_up: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
 
@@ -891,17 +882,12 @@ class Group(Step):
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
         act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
         last: tuple[FloatArray, FloatArray] | None = None  # the active columns' last Jacobian and determinant
-        worst = np.full(len(act), np.inf)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([Ua, Ka]) if len(K) else Ua
                 res = self._res(P, ara.L, ara.R)
-                rel = np.max(np.abs(res) / ara.tol, axis=0)
-                passed = rel <= 1.0
+                passed = np.all(np.abs(res) <= ara.tol, axis=0)
                 done = passed | (it == iters)
-                if give_up and it >= GIVE_UP_AFTER:
-                    done |= rel > 0.5 * worst
-                worst = rel
                 J = self._jac(P, ara.J_lin, ara.R)
                 kept = passed & _same_sign(*last, J) if last is not None else np.zeros(len(act), bool)
                 vec = it < VECTOR_ITER
@@ -920,7 +906,7 @@ class Group(Step):
                     break
                 dx = dx[go[~kept]]
                 if not go.all():
-                    act, Ua, Ka, ara, worst = act[go], Ua[:, go], Ka[:, go], ara.take(go), worst[go]
+                    act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
                     last = (last[0][go], last[1][go]) if last is not None else None
                 Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
             self._lapack_det_where_zero(U, K, ar, conv, det)
@@ -1260,16 +1246,14 @@ class Group(Step):
         if len(with_guess):
             i = with_guess
             done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w)
+        near = np.where(P >= 0, a, b)
+        frm = np.clip(np.where(np.all(np.isfinite(sol(near)), axis=0), near, np.where(P >= 0, b, a)), 0, G - 1)
         rest = np.flatnonzero(~done)
         if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
-            near = np.where(P[rest] >= 0, a[rest], b[rest])
-            far = np.where(P[rest] >= 0, b[rest], a[rest])
             cr = c[rest]
-            frm = np.where(np.all(np.isfinite(sol(near, cr)), axis=0), near, far)
-            frm = np.clip(frm, 0, G - 1)
-            U0 = Ug[:, cr, frm]
+            U0 = Ug[:, cr, frm[rest]]
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
-            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
+            self._from_state(U0, w.K[:, cr, g.n_given + frm[rest]], centre, cr, s[rest], w)
 
     def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
         """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
@@ -1413,11 +1397,12 @@ class Group(Step):
     def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
         """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
 
-        Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
-        is accepted (the tests of a continuation step) doubles the next one, a step that is
-        not is halved. A step to knowns a chain rules out fails without Newton. Newton here is
-        LAPACK's, whatever the problem's size (few columns sub-step, and many rounds: array
-        operations' fixed cost would dominate), and gives up early (``give_up``).
+                Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
+                is accepted (the tests of a continuation step) doubles the next one, a step that is
+                not is halved. A step to knowns a chain rules out fails without Newton. Newton here is
+                LAPACK's, whatever the problem's size (few columns sub-step, and many rounds: array
+                operations' fixed cost would dominate). A sub-step that moves a joint far is checked on the
+        way back (:meth:`_returns`).
         """
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
@@ -1435,8 +1420,11 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER, give_up=True)
+                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
+                back = can[ok[can]]  # the way back must lead to where the step started: no hop to another root
+                K_back = (1 - t[act[back]]) * K0[:, act[back]] + t[act[back]] * K1[:, act[back]]
+                ok[back] = self._returns(Un[:, ok[can]], K_back, Uc[:, act[back]], w, designs[act[back]])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]
@@ -1445,6 +1433,30 @@ class Group(Step):
             dt[bad] /= 2
             alive[bad[dt[bad] < smallest]] = False
         return np.where(alive & (t >= 1.0), Uc, NAN_POINT)
+
+    def _returns(self, U: np.ndarray, K: np.ndarray, U0: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
+        """Whether a move from ``U0`` (with knowns ``K``) to ``U`` is the branch's, not a hop to another root: one
+        that moves no joint more than ``HOP_MOVE`` of the group's size is; for one that moves more, Newton from ``U``
+        with the knowns ``K`` must come back to within a tenth of the move of ``U0``, or converge to a root of the
+        other determinant sign than the pose's (columns of ``designs``).
+
+        Past a fold (the end of a range, where the branch meets the one of opposite sign) a
+        sub-step can converge to a root of the pose's sign on another sheet, near enough to pass
+        the step's tests. The way back tells: from a
+        root of the branch Newton returns to where the move started, or, a hair inside the fold, to
+        its partner of the other sign; from another sheet it converges on that sheet, to a root of
+        the pose's sign, or not at all.
+        """
+        size = w.size[designs]
+        move = np.max(np.abs(U - U0), axis=0)
+        out: np.ndarray = move <= HOP_MOVE * size
+        check = np.flatnonzero(~out)
+        if len(check):
+            d = designs[check]
+            Ub, conv, sg = self._newton(U[:, check], K[:, check], w.arrays.take(d), NEWTON_ITER)
+            home = np.max(np.abs(Ub - U0[:, check]), axis=0) <= 0.1 * move[check]
+            out[check] = conv & (home | (sg == -w.ref[d]))
+        return out
 
     def _restart(self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray) -> np.ndarray:
         """After a gap: the solution at ``K`` with the pose's determinant sign, when it is the only one.
