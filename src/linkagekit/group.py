@@ -1453,7 +1453,7 @@ class Group(Step):
         check = np.flatnonzero(~out)
         if len(check):
             d = designs[check]
-            Ub, conv, sg = self._newton(U[:, check], K[:, check], w.arrays.take(d), NEWTON_ITER)
+            Ub, conv, sg = self._newton(U[:, check], K[:, check], w.arrays.take(d), SUBSTEP_ITER)
             home = np.max(np.abs(Ub - U0[:, check]), axis=0) <= 0.1 * move[check]
             out[check] = conv & (home | (sg == -w.ref[d]))
         return out
