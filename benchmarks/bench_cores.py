@@ -12,8 +12,9 @@ them, as the timings are wall-clock ones on a machine that may be shared):
     on one.
 ``ellipse``
     ``benchmarks/synthesis_problems/ellipse10.yaml`` (default options, seed 1) given 10 s, 20 s and
-    60 s: a run given more time ends no worse, and the 60 s run ends better than the 10 s one or
-    at the best value the problem lists.
+    60 s: a run given more time ends no worse, and the 60 s run ends better than the 10 s one, both
+    by the search's objective (the largest distance to a target; the sum of squares the problem's
+    source minimises is printed beside it: the two need not agree).
 ``pareto``
     ``examples/targets/d_path.csv`` with ``pareto=True`` (60 s): at least 3 designs whose smallest
     transmission angles differ by at least 10 degrees.
@@ -107,20 +108,24 @@ def ellipse() -> bool:
     problem = yaml.safe_load((ROOT / "benchmarks/synthesis_problems/ellipse10.yaml").read_text())
     T = np.array(problem["targets"], float)
     listed = min(r["value"] for r in problem["reported_in_code"])
-    print(f"== ellipse10: default options, seed 1; sum of squared errors (listed best {listed:.4g}) ({load()})")
-    sse = {}
+    print(
+        f"== ellipse10: default options, seed 1; judged by the search's objective, the largest distance to a target "
+        f"(the listed best {listed:.4g} is a sum of squares, printed beside it) ({load()})"
+    )
+    worst = {}
     for seconds in (10.0, 20.0, 60.0):
         out = synthesize(T, "fourbar", seconds=seconds, seed=1)
-        sse[seconds] = float(np.sum(out.errors**2))
+        worst[seconds] = float(out.max_error)
         o = out.outcome
         print(
-            f"{seconds:5.0f} s: SSE {sse[seconds]:.6g}, max error {out.max_error:.4g}, smallest transmission "
-            f"{out.min_transmission:.2f} deg, {o.restarts} searches, {o.seconds:.1f} s, stopped by {o.stopped_by}",
+            f"{seconds:5.0f} s: max error {out.max_error:.6g}, SSE {float(np.sum(out.errors**2)):.6g}, smallest "
+            f"transmission {out.min_transmission:.2f} deg, {o.restarts} searches, {o.seconds:.1f} s, stopped by "
+            f"{o.stopped_by}",
             flush=True,
         )
-    no_worse = sse[20.0] <= sse[10.0] * (1 + 1e-9) and sse[60.0] <= sse[20.0] * (1 + 1e-9)
-    better = sse[60.0] < sse[10.0] or sse[60.0] <= listed
-    print(f"more time no worse: {no_worse}; 60 s better than 10 s (or at the listed best): {better}")
+    no_worse = worst[20.0] <= worst[10.0] * (1 + 1e-9) and worst[60.0] <= worst[20.0] * (1 + 1e-9)
+    better = worst[60.0] < worst[10.0]
+    print(f"more time no worse: {no_worse}; 60 s better than 10 s: {better}")
     return no_worse and better
 
 
