@@ -157,6 +157,7 @@ factorization (:class:`_RatesSystem`).
 from __future__ import annotations
 
 import contextlib
+import threading
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -211,6 +212,8 @@ GRID_MOST = 4096
 #: a chain of link edges rules a sample out only beyond this margin (relative to its lengths): far
 #: above what Newton's tolerance and rounding allow a converged configuration
 CHAIN_MARGIN = 1e-8
+#: workspaces of at most this many floats are kept for the next call in the same thread (:func:`_workspace`)
+WORKSPACE_MOST = 1 << 22
 #: at most this many chains between held joints are checked (and this many search steps to find them)
 MAX_CHAINS, MAX_CHAIN_SEARCH = 64, 4096
 
@@ -1388,7 +1391,7 @@ class Group(Step):
         vectorized, they share one workspace)."""
         B = U.shape[1]
         sol, conv, sg = np.empty_like(U), np.zeros(B, bool), np.zeros(B)
-        work = np.empty(_gauss_size(self.n_eq, min(FILL_CHUNK, B))) if vector else None
+        work = _workspace("newton", _gauss_size(self.n_eq, min(FILL_CHUNK, B))) if vector else None
         for first in range(0, B, FILL_CHUNK):
             i = slice(first, first + FILL_CHUNK)
             sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
@@ -1569,7 +1572,7 @@ class Group(Step):
     def _condition(self, Ju: np.ndarray, dn: Nums) -> np.ndarray:
         """Smallest over largest singular value of J_u with its rows scaled by :meth:`row_scale`."""
         B, r, n = Ju.shape
-        C = np.empty((n, r, B))  # the scaled matrices column by column, in one pass (a fresh array faults its pages)
+        C = _workspace("condition", n * r * B).reshape(n, r, B)  # the scaled matrices column by column, in one pass
         np.multiply(Ju.transpose(2, 1, 0), self.row_scale(dn, B).T[None], out=C)
         return _condition(C.transpose(2, 1, 0))
 
@@ -1590,6 +1593,28 @@ class Group(Step):
             f"{placed} placed numerically (Newton-Raphson, continued from the pose): links {links}{sliding}, "
             f"held by {held}; the mode is the pose's"
         )
+
+
+_WORKSPACES = threading.local()
+
+
+def _workspace(name: str, size: int) -> FloatArray:
+    """A float workspace of ``size`` floats, the one named ``name`` the last call in this thread used when it is
+    large enough (at most ``WORKSPACE_MOST`` floats are kept): a fresh large array faults every page it writes in,
+    which costs as much as the arithmetic done in it. Its contents are undefined; a caller uses it before it calls
+    anything that takes the same name.
+
+    >>> a = _workspace("doc", 10); b = _workspace("doc", 5)
+    >>> bool(np.shares_memory(a, b)), b.size
+    (True, 5)
+    """
+    if size > WORKSPACE_MOST:
+        return np.empty(size)
+    buf: FloatArray | None = getattr(_WORKSPACES, name, None)
+    if buf is None or buf.size < size:
+        buf = np.empty(size)
+        setattr(_WORKSPACES, name, buf)
+    return buf[:size]
 
 
 def _size(dn: Nums) -> FloatArray:
@@ -1711,12 +1736,16 @@ class _RatesSystem:
             return
         B, n, _ = J.shape
         self.first = np.empty(rhs.shape)
+        factors = _workspace("rates", n * (n + 1) * B)  # every chunk's factors, kept for the second solve
+        scratch = _workspace("rates scratch", _gauss_size(n, FILL_CHUNK))
         for start in range(0, B, FILL_CHUNK):
             rows = slice(start, start + FILL_CHUNK)
             Jc = J[rows]
-            work, piv = np.empty(_gauss_size(n, len(Jc))), np.empty((n, len(Jc)), np.intp)
-            self.first[rows] = _gauss(Jc, -rhs[rows].T, work, piv)[0]
-            self.factors.append((work[: n * (n + 1) * len(Jc)].reshape(n, n + 1, len(Jc)), piv))
+            b, piv = len(Jc), np.empty((n, len(Jc)), np.intp)
+            self.first[rows] = _gauss(Jc, -rhs[rows].T, scratch[: _gauss_size(n, b)], piv)[0]
+            A = factors[n * (n + 1) * start : n * (n + 1) * (start + b)].reshape(n, n + 1, b)
+            A[...] = scratch[: n * (n + 1) * b].reshape(n, n + 1, b)
+            self.factors.append((A, piv))
 
     def solve(self, rhs: FloatArray) -> FloatArray:
         """``x`` (B, n) for ``rhs`` (B, n)."""
