@@ -370,33 +370,6 @@ def test_condition_by_newton_on_the_tridiagonal_form_equals_the_svd():
         assert np.all(np.abs(_condition(A) / want - 1) <= 1e-15 / want**2 + 1e-13), n
 
 
-def test_a_converged_columns_determinant_sign_is_kept_only_where_proven():
-    """``_same_sign`` (a converged Newton column keeps the sign of its last factorization): on random 6x6 matrices
-    with rows of scales 1e-3..1e3, moved along a line through a singular matrix, every column it keeps has the sign
-    LAPACK gives at the new matrix; it keeps every tiny move of a well-conditioned matrix, and no move that crosses
-    the singular one."""
-    from linkagekit.group import _same_sign
-
-    rng = np.random.default_rng(11)
-    n, B = 6, 4000
-    S = 10.0 ** rng.uniform(-3, 3, size=(B, n, 1))
-    A = rng.normal(size=(B, n, n))
-    A[:, -1] = np.sum(A[:, :-1] * rng.normal(size=(B, n - 1, 1)), axis=1)  # singular: its last row depends
-    E = rng.normal(size=(B, n, n))
-    t0 = 10.0 ** rng.uniform(-12, 0, (B, 1, 1)) * rng.choice([-1, 1], (B, 1, 1))
-    t1 = t0 * (1 + 10.0 ** rng.uniform(-10, 1, (B, 1, 1)) * rng.choice([-1, 1], (B, 1, 1)))
-    J0, J1 = S * (A + t0 * E), S * (A + t1 * E)
-    det0, det1 = np.linalg.det(J0), np.linalg.det(J1)
-    kept = _same_sign(J0, det0, J1)
-    assert np.all(np.sign(det1[kept]) == np.sign(det0[kept]))
-    assert not np.any(kept & (np.sign(t0) != np.sign(t1)).ravel())
-    assert 0.2 < kept.mean() < 0.8  # both outcomes occur: the test exercises the bound
-    W = S * rng.normal(size=(B, n, n))
-    assert _same_sign(W, np.linalg.det(W), W * (1 + 1e-12 * rng.normal(size=(B, n, n))))[
-        np.linalg.cond(W / np.linalg.norm(W, axis=2, keepdims=True)) < 1e4
-    ].all()
-
-
 def test_rates_solve_the_second_system_with_the_first_ones_factors():
     """The accelerations' system (the velocities' matrix) solved from the velocities' factorization: bit for bit the
     elimination of that right-hand side itself, and LAPACK's solution to 1e-10 relative."""

@@ -123,9 +123,8 @@ of ``VECTOR_DESIGNS`` designs or more, the rates of as many samples) Newton's sy
 solved by :func:`_gauss`, Gaussian elimination with partial pivoting written as about
 ``n^2`` array operations over the columns, which gives the determinant (the product of the
 pivots, with the sign of the swaps) for free: :meth:`Group._newton_vector` factors the
-Jacobian at every residual it evaluates while the column iterates; a column that converges
-keeps the sign of its last factorization where :func:`_same_sign` proves it unchanged at the
-solution, else it is factored there. Sub-steps are LAPACK's whatever the size. Which solver
+Jacobian at every residual it evaluates, so a column that converges has its determinant at
+its solution from that factorization. Sub-steps are LAPACK's whatever the size. Which solver
 a column gets depends only on the problem's size (samples x designs, designs) and on the column's own iteration
 (``VECTOR_ITER``), never on the other columns of its batch: batching stays exact. The
 samples' columns still iterating after ``VECTOR_ITER`` go on together, every chunk's in one
@@ -866,25 +865,18 @@ class Group(Step):
         return U, conv, np.sign(det)
 
     def _newton_vector(
-        self,
-        U: np.ndarray,
-        K: np.ndarray,
-        ar: _Arrays,
-        iters: int = NEWTON_ITER,
-        work: FloatArray | None = None,
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, work: FloatArray | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
 
-        A column that converges takes its determinant's sign from the factorization at its last
-        iterate when :func:`_same_sign` proves the sign unchanged at the solution, else from a
-        factorization there; one still iterating is factored for its step. Only the first
-        ``VECTOR_ITER`` iterations are vectorized (the few columns left cost less by LAPACK; a
-        column's numbers depend only on its own iterations, not on the others).
+        The Jacobian is factored at every residual evaluated: a column that converges has its
+        determinant (at its solution) from that factorization, one still iterating its step.
+        Only the first ``VECTOR_ITER`` iterations are vectorized (the few columns left cost less
+        by LAPACK; a column's numbers depend only on its own iterations, not on the others).
         """
         U = U.copy()
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
         act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
-        last: tuple[FloatArray, FloatArray] | None = None  # the active columns' last Jacobian and determinant
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([Ua, Ka]) if len(K) else Ua
@@ -892,25 +884,16 @@ class Group(Step):
                 passed = np.all(np.abs(res) <= ara.tol, axis=0)
                 done = passed | (it == iters)
                 J = self._jac(P, ara.J_lin, ara.R)
-                kept = passed & _same_sign(*last, J) if last is not None else np.zeros(len(act), bool)
-                vec = it < VECTOR_ITER
-                if kept.any():
-                    det[act[kept]] = last[1][kept]  # type: ignore[index]
-                    dx, det[act[~kept]] = _solve_small(J[~kept], res[:, ~kept], done[~kept], vec, work)
-                else:
-                    dx, det[act] = _solve_small(J, res, done, vec, work)
-                last = (J, det[act]) if vec else None
+                dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER, work)
                 conv[act[passed]] = True
-                go = ~done.copy()
-                go[~kept] &= np.all(np.isfinite(dx), axis=1)  # a step not finite: the column is NaN, dropped
+                go = ~done & np.all(np.isfinite(dx), axis=1)  # a step not finite: the column is NaN, dropped
                 U[:, act[~go]] = np.where(done, Ua, NAN_POINT)[:, ~go]
                 det[act[~done & ~go]] = 0.0
                 if not go.any():
                     break
-                dx = dx[go[~kept]]
                 if not go.all():
                     act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
-                    last = (last[0][go], last[1][go]) if last is not None else None
+                    dx = dx[go]
                 Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
             self._lapack_det_where_zero(U, K, ar, conv, det)
         conv &= np.isfinite(det) & (det != 0)
@@ -1651,32 +1634,6 @@ def _newton_step(J: FloatArray, res: FloatArray) -> FloatArray:
                 with contextlib.suppress(np.linalg.LinAlgError):
                     dx[i] = np.linalg.solve(J[i], -r[i])
     return dx
-
-
-def _same_sign(J0: FloatArray, det0: FloatArray, J1: FloatArray) -> np.ndarray:
-    """Where ``det J1`` surely has the sign of ``det J0`` (each (B, n, n); ``det0`` computed).
-
-    The residuals are at most quadratic in the coordinates, so ``J`` is affine along the step
-    between them, and ``S J`` (``S`` the positive diagonal that makes ``J0``'s rows unit, the
-    same signs of determinants) is singular nowhere on it when ``|S (J1 - J0)|_2 <
-    sigma_min(S J0)``. Hadamard's ratio ``h = |det J0| / prod |row_i|`` bounds it from below:
-    ``sigma_min(S J0) >= h / sigma_max(S J0)^(n - 1) >= h / n^((n - 1) / 2)``; half of that is asked.
-
-    >>> import numpy as np
-    >>> J0 = np.eye(2)[None] * 2.0
-    >>> bool(_same_sign(J0, np.array([4.0]), J0 + 0.1)[0]), bool(_same_sign(J0, np.array([4.0]), J0 + 2.0)[0])
-    (True, False)
-    """
-    n = J0.shape[2]
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
-        rows = np.einsum("bij,bij->bi", J0, J0)  # |row_i|^2
-        D = J1 - J0
-        moved = np.einsum("bij,bij->bi", D, D)
-        moved /= rows
-        prod = np.prod(rows, axis=1)  # (an overflow or underflow keeps nothing: the factorization decides)
-        out: np.ndarray = np.sum(moved, axis=1) * prod * float(n) ** (n - 1) < 0.25 * det0 * det0
-        out &= np.isfinite(prod) & (prod > 0)
-    return out
 
 
 def _solve_small(
