@@ -266,6 +266,36 @@ def test_session_save_writes_file_backup_and_keeps_comments(tmp_path):
     assert lk.load(path).joints["D"] == complex(1.0, 4.7)
 
 
+def test_session_save_keeps_every_comment_where_its_line_is(tmp_path):
+    """Comments between keys, inside the joints block and at the end of lines (one of them on a moved joint's
+    line, one holding a ``#`` inside quotes before it) survive a drag and a save: the saved text is the old text
+    with only the moved joints' coordinates changed, and it reads as the edited mechanism."""
+    path = copy_example(tmp_path)
+    text = path.read_text(encoding="utf-8")
+    text = text.replace("joints:\n", "# where the joints are, in cm\njoints:\n  # the ground pivots\n")
+    text = text.replace("  D: [", "  # the rocker's tip, dragged below\n  D: [")
+    text = text.replace("  B: [4, 1]", "  B: [4, 1]  # ground, right")
+    D_line = next(line for line in text.splitlines() if line.startswith("  D: ["))
+    text = text.replace(D_line, D_line + "   # moved: keep me")
+    text = text.replace("name: Romero-Nunez 2016 four-bar (t1 = +1, t2 = -1)", 'name: "four-bar #1"  # quoted hash')
+    path.write_text(text, encoding="utf-8")
+    s = Session(path)
+    out = s.solve({"doc": lk.load(path).to_dict(), "pose": {"D": [1.25, 4.6], "P": [5.5, 3.25]}})
+    assert s.save({"doc": out["doc"], "base": s.base})["ok"] is True
+    saved = path.read_text(encoding="utf-8")
+    assert lk.load(path) == lk.Mechanism.from_dict(out["doc"])
+    old_lines, new_lines = text.splitlines(), saved.splitlines()
+    assert len(new_lines) == len(old_lines)
+    # every comment line stays where it was, the trailing comments on their lines
+    for i, line in enumerate(old_lines):
+        if line.lstrip().startswith("#"):
+            assert new_lines[i] == line, (i, line, new_lines[i])
+    i = old_lines.index(D_line + "   # moved: keep me")
+    assert new_lines[i] == "  D: [1.25, 4.6]   # moved: keep me"
+    assert "  B: [4, 1]  # ground, right" in new_lines
+    assert next(x for x in new_lines if x.startswith("name:")).endswith("#1'  # quoted hash")
+
+
 def test_session_save_refuses_when_the_file_changed_on_disk(tmp_path):
     path = copy_example(tmp_path)
     s = Session(path)

@@ -126,7 +126,7 @@ def _scalar(text: str, tag: str) -> Any:
         raise ValueError(f"!!{kind} needs a number, got {shorten(repr(text))}") from None
 
 
-def _yaml_data(text: str, source: str) -> Any:
+def yaml_data(text: str, source: str) -> Any:
     """Parse YAML into plain data with YAML 1.2 rules, refusing what a mechanism file has no use for.
 
     PyYAML only composes the node graph (aliases stay shared nodes, nothing is constructed
@@ -329,7 +329,7 @@ def load(path: str | Path) -> Mechanism:
         text = data.decode("utf-8-sig")  # a byte-order mark is dropped, in JSON as in YAML
     except UnicodeDecodeError as exc:
         raise fail(f"not UTF-8 text (byte {exc.start})") from None
-    parsed = _json_data(text, str(p)) if p.suffix.lower() == ".json" else _yaml_data(text, str(p))
+    parsed = _json_data(text, str(p)) if p.suffix.lower() == ".json" else yaml_data(text, str(p))
     return Mechanism.from_dict(parsed, source=str(p))
 
 
@@ -417,6 +417,63 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | No
         width=120,
     )
     return text
+
+
+def _split_comment(line: str) -> tuple[str, str]:
+    """A YAML line as (content, comment): the comment from a ``#`` at the line's start or after a space, outside
+    quotes, to the end (with the spaces before it); ``("", line)`` for a line that is only a comment or blank."""
+    quote = ""
+    for i, ch in enumerate(line):
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "'\"":
+            quote = ch
+        elif ch == "#" and (i == 0 or line[i - 1] in " \t"):
+            content = line[:i].rstrip()
+            return content, line[len(content) :]
+    return (line.rstrip(), "") if line.strip() else ("", line)
+
+
+def merge_comments(old: str, new: str) -> str:
+    r"""``new`` (a YAML text) with the comments of ``old`` (the text it replaces) put back where its lines match.
+
+    The lines of ``new`` are aligned with the content of ``old``'s lines (:mod:`difflib`): a comment
+    line of ``old`` stays before the line it came before, and a line's trailing comment stays on it when
+    the line is unchanged or replaced one for one (a moved joint's coordinates). Comments of removed
+    lines are dropped. The caller checks that the result reads as ``new`` does (a comment put back
+    cannot change what the file says, but a quote the splitting misread could).
+
+    >>> old = "# a four-bar\njoints:\n  A: [0, 0]   # the crank's pivot\n  B: [4, 0]\n"
+    >>> print(merge_comments(old, "joints:\n  A: [0, 0]\n  B: [5, 1]\n"), end="")
+    # a four-bar
+    joints:
+      A: [0, 0]   # the crank's pivot
+      B: [5, 1]
+    """
+    import difflib
+
+    parts = [_split_comment(line) for line in old.splitlines()]
+    content = [c for c, _ in parts if c]
+    before: list[list[str]] = [[]]  # the comment lines before each content line (and after the last)
+    trailing: list[str] = []
+    for c, comment in parts:
+        if c:
+            trailing.append(comment)
+            before.append([])
+        else:
+            before[-1].append(comment)
+    lines = new.splitlines()
+    out: list[str] = []
+    for tag, i1, i2, j1, j2 in difflib.SequenceMatcher(None, content, lines, autojunk=False).get_opcodes():
+        one_for_one = tag == "equal" or (tag == "replace" and i2 - i1 == j2 - j1)
+        for k in range(j2 - j1):
+            if one_for_one:
+                out.extend(before[i1 + k])
+                out.append(lines[j1 + k] + trailing[i1 + k])
+            else:
+                out.append(lines[j1 + k])
+    out.extend(before[len(content)])
+    return "\n".join(out) + "\n"
 
 
 def _json(value: Any, indent: str = "") -> str:

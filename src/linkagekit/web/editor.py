@@ -46,7 +46,7 @@ import numpy as np
 
 from ..catalogue import input_units
 from ..errors import InputError, LinkageError, one_line
-from ..files import atomic_output, dumps, load, stray_temporaries
+from ..files import atomic_output, dumps, load, merge_comments, stray_temporaries, yaml_data
 from ..model import Driver, Mechanism, parse_pair
 from ..result import Result
 
@@ -314,8 +314,8 @@ class Session:
         """Write ``doc`` to the file, if the file is still as the editor last saw it (``base``).
 
         The old file is copied to ``FILE.bak`` first; the new text replaces the file in one
-        step.  Comment lines at the top of the file are kept; other comments are not (the
-        page says so).  The saved file is read back and must give the same mechanism.
+        step.  The file's comments are kept where its lines are (:meth:`_text_to_save`).  The
+        saved file is read back and must give the same mechanism.
         """
         doc = request.get("doc")
         if not isinstance(doc, dict):
@@ -332,9 +332,7 @@ class Session:
                     "(reload the page to edit the file as it is now)"
                 )
             old_text = old.decode("utf-8-sig", errors="replace")
-            body = dumps(mech, self.fmt, like=old_text)
-            head = _leading_comments(old_text) if self.fmt == "yaml" else ""
-            text = head + body
+            text = self._text_to_save(mech, old_text)
             with atomic_output(self.backup) as tmp:
                 tmp.write_bytes(old)
             with atomic_output(self.path) as tmp:
@@ -347,6 +345,21 @@ class Session:
             self.mech = mech
             self.text = data.decode("utf-8")
         return {"ok": True, "base": self.base, "saved": str(self.path), "backup": str(self.backup)}
+
+    def _text_to_save(self, mech: Mechanism, old_text: str) -> str:
+        """The file's new text: :func:`~linkagekit.files.dumps` in the old file's styles, with the old file's
+        comments put back where its lines match (:func:`~linkagekit.files.merge_comments`) when that text reads
+        as the edited mechanism, else with its leading comment lines only."""
+        body = dumps(mech, self.fmt, like=old_text)
+        if self.fmt != "yaml":
+            return body
+        merged = merge_comments(old_text, body)
+        try:
+            if Mechanism.from_dict(yaml_data(merged, str(self.path)), source=str(self.path)) == mech:
+                return merged
+        except LinkageError:
+            pass
+        return _leading_comments(old_text) + body
 
     # ---------------------------------------------------------------- the page
     def page(self, token: str) -> str:

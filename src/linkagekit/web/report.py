@@ -94,7 +94,7 @@ def _editor_panel(editor: dict[str, Any], file_name: str) -> str:
 </p>
 <p class="hint">Drag any joint: the mechanism takes the drawn configuration, with that joint moved, as its
 reference pose (its dimensions change, as if the file had been edited). Saving writes {name} in one step and keeps
-the previous version as {name}.bak; comment lines at the top of the file are kept, other comments are not.
+the previous version as {name}.bak; the file's comments stay where their lines are.
 To add a dyad, add a link from a joint to an empty place, a second link from that new joint to another empty place,
 and mark the last one ground: the steps in between are kept as a dashed draft until the mechanism solves.</p>
 <div class="editor-grid">
