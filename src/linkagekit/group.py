@@ -83,7 +83,10 @@ small step Newton's root is the branch's). A step that fails waits while the oth
 go on; the waiting steps are then retried together in adaptive sub-steps (halved on
 failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known
 joints linearly between the grid points (a homotopy in the group's boundary: each known
-joint moves alone, so the path is well defined). A class-3 leg that still fails stops:
+joint moves alone, so the path is well defined). A sub-step that moves a joint more than
+``HOP_MOVE`` of the size must also find its way back (:meth:`Group._returns`): past a fold,
+where the range ends, Newton could land on a root of the pose's sign on another sheet. A
+class-3 leg that still fails stops:
 after a gap it does not guess (it has up to three roots of one sign; ``modes`` lists every
 mode there). A dyad-like group (one root per sign) goes on past a gap, Newton restarted
 from ``RESTARTS`` points scattered about the last good configuration and about the held
