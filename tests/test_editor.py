@@ -296,6 +296,42 @@ def test_session_save_keeps_every_comment_where_its_line_is(tmp_path):
     assert next(x for x in new_lines if x.startswith("name:")).endswith("#1'  # quoted hash")
 
 
+def test_session_save_keeps_the_leading_comments_before_a_document_start(tmp_path):
+    """A file whose header comments come before ``---`` (or a ``%YAML`` directive) keeps them on save, as it
+    did before comments were merged: the marker lines are not written again, but the comments above them are
+    the file's, not the marker's."""
+    path = copy_example(tmp_path)
+    original = path.read_text(encoding="utf-8")
+    head = leading_comments(original)
+    assert len(head) > 5
+    for marker in ("---\n", "%YAML 1.2\n# between the directive and the start\n---\n"):
+        text = original.replace("format: linkagekit/1", marker + "format: linkagekit/1")
+        text = text.replace("  B: [4, 1]", "  B: [4, 1]  # ground, right")
+        path.write_text(text, encoding="utf-8")
+        s = Session(path)
+        assert s.save({"doc": s.mech.to_dict(), "base": s.base})["ok"] is True
+        saved = path.read_text(encoding="utf-8")
+        assert lk.load(path) == s.mech
+        assert leading_comments(saved) == head + ["# between the directive and the start"] * ("%" in marker), marker
+        assert "  B: [4, 1]  # ground, right" in saved.splitlines(), marker
+
+
+def test_session_save_reads_an_escaped_quote_as_part_of_the_string(tmp_path):
+    """``"a\\"  #b"`` is one double-quoted string (``\\"`` does not end it): the ``#b"`` inside it is not a
+    comment, so it is not written again after the value as if it were one."""
+    path = copy_example(tmp_path)
+    text = path.read_text(encoding="utf-8")
+    name = next(line for line in text.splitlines() if line.startswith("name:"))
+    path.write_text(text.replace(name, 'name: "a\\"  #b"  # real comment'), encoding="utf-8")
+    s = Session(path)
+    assert s.mech.name == 'a"  #b'
+    assert s.save({"doc": s.mech.to_dict(), "base": s.base})["ok"] is True
+    saved = path.read_text(encoding="utf-8")
+    assert lk.load(path) == s.mech
+    line = next(x for x in saved.splitlines() if x.startswith("name:"))
+    assert line.count("#b") == 1 and line.endswith("  # real comment"), line
+
+
 def test_session_save_refuses_when_the_file_changed_on_disk(tmp_path):
     path = copy_example(tmp_path)
     s = Session(path)
