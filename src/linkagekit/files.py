@@ -419,17 +419,18 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | No
     return text
 
 
+#: what a line is scanned for to find its comment: a quoted string (a ``#`` inside is no comment; ``\"`` does not
+#: end a double-quoted one, and ``'it''s'`` reads as two single-quoted ones, the same here) or a ``#`` at the
+#: line's start or after a space or tab
+_QUOTED_OR_HASH = re.compile(r'"(?:\\.|[^"\\])*"?|\'[^\']*\'?|(?<![^ \t])#')
+
+
 def _split_comment(line: str) -> tuple[str, str]:
     """A YAML line as (content, comment): the comment from a ``#`` at the line's start or after a space, outside
     quotes, to the end (with the spaces before it); ``("", line)`` for a line that is only a comment or blank."""
-    quote = ""
-    for i, ch in enumerate(line):
-        if quote:
-            quote = "" if ch == quote else quote
-        elif ch in "'\"":
-            quote = ch
-        elif ch == "#" and (i == 0 or line[i - 1] in " \t"):
-            content = line[:i].rstrip()
+    for match in _QUOTED_OR_HASH.finditer(line):
+        if match.group() == "#":
+            content = line[: match.start()].rstrip()
             return content, line[len(content) :]
     return (line.rstrip(), "") if line.strip() else ("", line)
 
@@ -440,8 +441,10 @@ def merge_comments(old: str, new: str) -> str:
     The lines of ``new`` are aligned with the content of ``old``'s lines (:mod:`difflib`): a comment
     line of ``old`` stays before the line it came before, and a line's trailing comment stays on it when
     the line is unchanged or replaced one for one (a moved joint's coordinates). Comments of removed
-    lines are dropped. The caller checks that the result reads as ``new`` does (a comment put back
-    cannot change what the file says, but a quote the splitting misread could).
+    lines are dropped, except above the first line of ``new``: the file's header comments stay at its top
+    also when lines it began with are not written again (``---``, ``%YAML 1.2``). The caller checks that
+    the result reads as ``new`` does (a comment put back cannot change what the file says, but a quote the
+    splitting misread could).
 
     >>> old = "# a four-bar\njoints:\n  A: [0, 0]   # the crank's pivot\n  B: [4, 0]\n"
     >>> print(merge_comments(old, "joints:\n  A: [0, 0]\n  B: [5, 1]\n"), end="")
@@ -466,6 +469,8 @@ def merge_comments(old: str, new: str) -> str:
     out: list[str] = []
     for tag, i1, i2, j1, j2 in difflib.SequenceMatcher(None, content, lines, autojunk=False).get_opcodes():
         one_for_one = tag == "equal" or (tag == "replace" and i2 - i1 == j2 - j1)
+        if j1 == 0 and not one_for_one:  # old lines before the first new one (`---`): their comment lines stay
+            out.extend(line for i in range(i1, i2) for line in before[i])
         for k in range(j2 - j1):
             if one_for_one:
                 out.extend(before[i1 + k])
