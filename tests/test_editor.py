@@ -332,6 +332,23 @@ def test_session_save_reads_an_escaped_quote_as_part_of_the_string(tmp_path):
     assert line.count("#b") == 1 and line.endswith("  # real comment"), line
 
 
+def test_session_save_keeps_the_sections_in_the_files_order_and_their_comments(tmp_path):
+    """The scotch yoke's file has ``sliders:`` before ``drivers:`` (the model writes them after): a save keeps the
+    sections where the file has them, so the comments on the sliders' lines stay on them."""
+    path = copy_example(tmp_path, "scotch_yoke.yaml")
+    text = path.read_text(encoding="utf-8")
+    text = text.replace("sliders:\n", "# the two prismatic pairs\nsliders:\n")
+    text = text.replace("direction: [1, 0]}", "direction: [1, 0]}  # horizontal guide")
+    path.write_text(text, encoding="utf-8")
+    s = Session(path)
+    assert s.save({"doc": s.mech.to_dict(), "base": s.base})["ok"] is True
+    lines = path.read_text(encoding="utf-8").splitlines()
+    assert lk.load(path) == s.mech
+    assert lines.index("sliders:") < lines.index("drivers:")
+    assert lines[lines.index("sliders:") - 1] == "# the two prismatic pairs"
+    assert lines[lines.index("sliders:") + 1].endswith("direction: [1, 0]}  # horizontal guide")
+
+
 def test_session_save_refuses_when_the_file_changed_on_disk(tmp_path):
     path = copy_example(tmp_path)
     s = Session(path)

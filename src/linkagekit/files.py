@@ -407,7 +407,8 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | No
     styled = _styled(data)
     if like is not None:
         with contextlib.suppress(LinkageError):  # a file that does not parse has no style to keep
-            styled = _like(styled, _yaml_node(like, "the file replaced"))
+            node = _yaml_node(like, "the file replaced")
+            styled = _in_order_of(_like(styled, node), node)
     text: str = yaml.dump(
         styled,
         Dumper=_dumper_class(),
@@ -530,6 +531,19 @@ def _like(value: Any, node: Any) -> Any:
     if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:int" and whole:
         return int(value)
     return value
+
+
+def _in_order_of(value: Any, node: Any) -> Any:
+    """The document ``value`` with its sections (top-level keys) in the order the file it replaces (``node``) has
+    them, the new ones after: a file whose ``sliders:`` come before its ``drivers:`` keeps them there (the order of
+    sections means nothing; inside them it is left as it is)."""
+    import yaml
+
+    if not (isinstance(node, yaml.MappingNode) and isinstance(value, dict)):
+        return value
+    order = {k.value: i for i, (k, _) in enumerate(node.value) if isinstance(k, yaml.ScalarNode)}
+    keys = sorted(value, key=lambda k: (order.get(k, len(order)), list(value).index(k)))
+    return type(value)({k: value[k] for k in keys})
 
 
 def _styled(d: dict[str, Any]) -> dict[str, Any]:
