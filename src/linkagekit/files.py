@@ -535,15 +535,17 @@ def _like(value: Any, node: Any) -> Any:
 
 def _in_order_of(value: Any, node: Any) -> Any:
     """The document ``value`` with its sections (top-level keys) in the order the file it replaces (``node``) has
-    them, the new ones after: a file whose ``sliders:`` come before its ``drivers:`` keeps them there (the order of
-    sections means nothing; inside them it is left as it is)."""
+    them (one the file lacks right after the one the model writes before it): a file whose ``sliders:`` come before
+    its ``drivers:`` keeps them there (the order of sections means nothing; inside them it is left as it is)."""
     import yaml
 
     if not (isinstance(node, yaml.MappingNode) and isinstance(value, dict)):
         return value
     order = {k.value: i for i, (k, _) in enumerate(node.value) if isinstance(k, yaml.ScalarNode)}
-    keys = sorted(value, key=lambda k: (order.get(k, len(order)), list(value).index(k)))
-    return type(value)({k: value[k] for k in keys})
+    place, last = {}, -1.0
+    for k in value:  # a section the file lacks goes right after the one the model writes before it
+        last = place[k] = order.get(k, last + 0.5 if last == int(last) else last)
+    return type(value)({k: value[k] for k in sorted(value, key=lambda k: place[k])})
 
 
 def _styled(d: dict[str, Any]) -> dict[str, Any]:
