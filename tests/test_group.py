@@ -732,3 +732,74 @@ def test_the_range_of_a_triad_whose_continuation_hopped_has_its_gap():
     assert abs(lo + 44.347) < 0.01 and abs(hi - (360 - 77.036)) < 0.01
     res = lk.analyze(mech, {"crank": [-170.0, -60.0, -50.0]}, rates=False)
     assert res.assembled[0] and not res.assembled[1:].any()
+
+
+def test_no_input_past_the_end_of_a_triad_whose_continuation_hopped_is_assembled():
+    """The triad above, every 0.01 deg over 1.6 deg past the end of its range at -44.347 deg: none assembled. The
+    sub-steps walk the held joints along the chord of their cell, which stays on the branch's sheet beyond the
+    input's end, so a sub-step to -44.75 deg is continuous on its chord and its way back heads home; it is rejected
+    because Newton on the way back does not converge within a sub-step's six iterations (accepting a way back that
+    ends within a tenth of the move of its start without converging, which restores the samples
+    ``test_a_sample_a_hair_inside_a_fold_end_is_assembled`` needs, assembled it: review 29b)."""
+    base = random_triad(29)
+    poses = base.pose_array()[None] + np.random.default_rng(1029).normal(0, 0.5, (20, len(base.joint_names), 2))
+    mech = base.with_pose(poses[11])
+    res = lk.analyze(mech, {"crank": np.arange(-46.0, -44.36, 0.01)}, rates=False)
+    assert not res.assembled.any()
+
+
+#: a triad with a slider leg whose line the crank carries (``MOVING`` of tests/test_group_sliders.py, D, E and F moved)
+MOVING_SLIDER_TRIAD = {
+    "format": "linkagekit/1",
+    "joints": {"A": [0, 0], "B": [6, 0], "C": [1, 1], "H": [1.5, 3.0]}
+    | {"D": [2.2124, 3.997], "E": [4.681, 2.6341], "F": [3.5112, 6.5564]},
+    "links": {"ground": ["A", "B"], "crank": ["A", "C", "H"], "l1": ["C", "D"], "l2": ["B", "E"], "block": ["F"]}
+    | {"tri": ["D", "E", "F"]},
+    "sliders": [{"link": "block", "on": "crank", "through": "F", "direction": [1, 0]}],
+    "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+}
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the way back must converge within six iterations: near a fold it does not, and "
+    "the lowest 1.23 deg of this range are flagged (review 29b)",
+)
+def test_the_whole_range_of_a_slider_triad_near_a_fold_is_assembled():
+    """A slider triad whose line the crank carries: ``input_range`` is [8.246186, 45.303072] deg (the test's own scipy
+    continuation of its loop equations reaches every input of it). Before the way back was checked (868b6ea) every
+    input in it assembled, on that continuation's positions (3.5e-13); now the inputs from the lower end to 9.4762
+    deg (1.23 deg of the range, 115 of 576 samples 0.01 deg apart) are flagged: sub-steps of the branch near the fold
+    are rejected because Newton on the way back does not converge within six iterations (108 rejections).
+    Accepting a way back that ends within a tenth of the move of its start without converging assembles them all,
+    but also the stray of ``test_no_input_past_the_end_of_a_triad_whose_continuation_hopped_is_assembled``."""
+    from linkagekit.checks import input_range
+
+    mech = lk.Mechanism.from_dict(MOVING_SLIDER_TRIAD)
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo - 8.246186) < 1e-5 and abs(hi - 45.303072) < 1e-5
+    res = lk.analyze(mech, {"crank": [8.25, 8.5, 9.0, 9.45, 30.0]}, rates=False)
+    assert res.assembled.all()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the way back must converge within six iterations: legitimate sub-steps a hair "
+    "inside a fold are rejected (review 29b)",
+)
+def test_a_sample_a_hair_inside_a_fold_end_is_assembled():
+    """``random_triad(27)``'s range ends at folds, -165.0500215 and 100.6491420 deg (``input_range``; an independent
+    scipy continuation stops within 1e-9 deg of both). Inputs 2e-5 to 3e-5 deg inside the lower end and 4e-5 deg
+    inside the upper one assembled before the way back was checked (868b6ea); now they are flagged. Every sub-step
+    ``Group._returns`` rejected on 40 random triads (four poses each, their ranges and a sweep) was the branch's own
+    step along its chord (an independent continuation from its start reaches its end, 1e-10 of the size): Newton on
+    the way back was within 1e-7 of the move of its start after six iterations but had not yet converged (near a
+    fold it converges linearly); with twelve it converged home. The flagged zone inside a fold end grew from a
+    median 1.8e-5 deg (max 4.2e-5) to 2.4e-5 deg (max 5.6e-5) over 230 ends; ``input_range`` is unchanged."""
+    from linkagekit.checks import input_range
+
+    mech = random_triad(27)
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo + 165.0500215) < 1e-6 and abs(hi - 100.6491420) < 1e-6
+    res = lk.analyze(mech, {"crank": [lo + 2e-5, lo + 2.5e-5, lo + 3e-5, hi - 4e-5]}, rates=False)
+    assert res.assembled.all()
