@@ -1386,12 +1386,12 @@ class Group(Step):
     def _halving(self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
         """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
 
-                Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
-                is accepted (the tests of a continuation step) doubles the next one, a step that is
-                not is halved. A step to knowns a chain rules out fails without Newton. Newton here is
-                LAPACK's, whatever the problem's size (few columns sub-step, and many rounds: array
-                operations' fixed cost would dominate). A sub-step that moves a joint far is checked on the
-        way back (:meth:`_returns`).
+        Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
+        is accepted (the tests of a continuation step) doubles the next one, a step that is
+        not is halved. A step to knowns a chain rules out fails without Newton. Newton here is
+        LAPACK's, whatever the problem's size (few columns sub-step, and many rounds: array
+        operations' fixed cost would dominate). A sub-step that moves a joint far is checked on
+        the way back (:meth:`_returns`).
         """
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
@@ -1426,8 +1426,9 @@ class Group(Step):
     def _returns(self, U: np.ndarray, K: np.ndarray, U0: np.ndarray, w: _Walk, designs: np.ndarray) -> np.ndarray:
         """Whether a move from ``U0`` (with knowns ``K``) to ``U`` is the branch's, not a hop to another root: one
         that moves no joint more than ``HOP_MOVE`` of the group's size is; for one that moves more, Newton from ``U``
-        with the knowns ``K`` must come back to within a tenth of the move of ``U0``, or converge to a root of the
-        other determinant sign than the pose's (columns of ``designs``).
+        with the knowns ``K`` must end (after ``SUBSTEP_ITER`` steps, converged or not: near a fold it converges only
+        linearly) within a tenth of the move of ``U0``, or converge to a root of the other determinant sign than the
+        pose's (columns of ``designs``).
 
         Past a fold (the end of a range, where the branch meets the one of opposite sign) a
         sub-step can converge to a root of the pose's sign on another sheet, near enough to pass
@@ -1444,7 +1445,7 @@ class Group(Step):
             d = designs[check]
             Ub, conv, sg = self._newton(U[:, check], K[:, check], w.arrays.take(d), SUBSTEP_ITER)
             home = np.max(np.abs(Ub - U0[:, check]), axis=0) <= 0.1 * move[check]
-            out[check] = conv & (home | (sg == -w.ref[d]))
+            out[check] = home | (conv & (sg == -w.ref[d]))  # on its way home near a fold it may still creep
         return out
 
     def _restart(self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray) -> np.ndarray:
