@@ -127,7 +127,14 @@ def synthesize_auto(
         tried[name] = replace(tried[name], error=syn.rms_error / syn.diagonal if syn.feasible else np.inf)
         found.append(syn)
     best = min(found, key=lambda f: (not f.feasible, f.rms_error))
-    return replace(best, tried=tuple(tried[n] for n in order))
+    whole = replace(  # how the whole run went: every topology's searches, the time from the start
+        best.outcome,
+        restarts=sum(o.restarts for o in outs),
+        generations=sum(o.generations for o in outs),
+        evaluations=sum(o.evaluations for o in outs),
+        seconds=time.monotonic() - t0,
+    )
+    return replace(best, tried=tuple(tried[n] for n in order), outcome=whole)
 
 
 #: the fraction of the time kept for the dense checks of the results
