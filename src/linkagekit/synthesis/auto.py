@@ -127,14 +127,18 @@ def synthesize_auto(
         tried[name] = replace(tried[name], error=syn.rms_error / syn.diagonal if syn.feasible else np.inf)
         found.append(syn)
     best = min(found, key=lambda f: (not f.feasible, f.rms_error))
-    whole = replace(  # how the whole run went: every topology's searches, the time from the start
-        best.outcome,
+    return replace(best, tried=tuple(tried[n] for n in order), outcome=_whole_run(best.outcome, outs, t0))
+
+
+def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
+    """How the whole run went: the best design's outcome with every topology's searches and the time since ``t0``."""
+    return replace(
+        best,
         restarts=sum(o.restarts for o in outs),
         generations=sum(o.generations for o in outs),
         evaluations=sum(o.evaluations for o in outs),
         seconds=time.monotonic() - t0,
     )
-    return replace(best, tried=tuple(tried[n] for n in order), outcome=whole)
 
 
 #: the fraction of the time kept for the dense checks of the results
