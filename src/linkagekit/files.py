@@ -542,10 +542,12 @@ def _in_order_of(value: Any, node: Any) -> Any:
     if not (isinstance(node, yaml.MappingNode) and isinstance(value, dict)):
         return value
     order = {k.value: i for i, (k, _) in enumerate(node.value) if isinstance(k, yaml.ScalarNode)}
-    place, last = {}, -1.0
-    for k in value:  # a section the file lacks goes right after the one the model writes before it
-        last = place[k] = order.get(k, last + 0.5 if last == int(last) else last)
-    return type(value)({k: value[k] for k in sorted(value, key=lambda k: place[k])})
+    place: dict[str, tuple[int, bool]] = {}
+    anchor = -1  # the file's place of the last section the model wrote that the file has
+    for k in value:
+        anchor = order.get(k, anchor)
+        place[k] = (anchor, k not in order)
+    return type(value)({k: value[k] for k in sorted(value, key=place.__getitem__)})
 
 
 def _styled(d: dict[str, Any]) -> dict[str, Any]:

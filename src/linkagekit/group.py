@@ -127,9 +127,9 @@ solved by :func:`_gauss`, Gaussian elimination with partial pivoting written as 
 ``n^2`` array operations over the columns, which gives the determinant (the product of the
 pivots, with the sign of the swaps) for free: :meth:`Group._newton_vector` factors the
 Jacobian at every residual it evaluates, so a column that converges has its determinant at
-its solution from that factorization. Sub-steps are LAPACK's whatever the size. Which solver
-a column gets depends only on the problem's size (samples x designs, designs) and on the column's own iteration
-(``VECTOR_ITER``), never on the other columns of its batch: batching stays exact. The
+its solution from that factorization. Sub-steps are LAPACK's whatever the size. Which
+solver a column gets depends only on the problem's size (samples x designs, designs) and on
+the column's own iteration (``VECTOR_ITER``), never on the other columns of its batch: batching stays exact. The
 samples' columns still iterating after ``VECTOR_ITER`` go on together, every chunk's in one
 LAPACK batch (:meth:`Group._newton_samples`). *One design's numbers are broadcast*, not
 copied per column (:meth:`_Arrays.take`; the rates' constant linear rows likewise, in
@@ -1235,14 +1235,15 @@ class Group(Step):
         if len(with_guess):
             i = with_guess
             done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w)
-        near = np.where(P >= 0, a, b)
-        frm = np.clip(np.where(np.all(np.isfinite(sol(near)), axis=0), near, np.where(P >= 0, b, a)), 0, G - 1)
         rest = np.flatnonzero(~done)
         if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
+            near = np.where(P[rest] >= 0, a[rest], b[rest])
+            far = np.where(P[rest] >= 0, b[rest], a[rest])
             cr = c[rest]
-            U0 = Ug[:, cr, frm[rest]]
+            frm = np.clip(np.where(np.all(np.isfinite(sol(near, cr)), axis=0), near, far), 0, G - 1)
+            U0 = Ug[:, cr, frm]
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
-            self._from_state(U0, w.K[:, cr, g.n_given + frm[rest]], centre, cr, s[rest], w)
+            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
 
     def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
         """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
@@ -1432,10 +1433,9 @@ class Group(Step):
 
         Past a fold (the end of a range, where the branch meets the one of opposite sign) a
         sub-step can converge to a root of the pose's sign on another sheet, near enough to pass
-        the step's tests. The way back tells: from a
-        root of the branch Newton returns to where the move started, or, a hair inside the fold, to
-        its partner of the other sign; from another sheet it converges on that sheet, to a root of
-        the pose's sign, or not at all.
+        the step's tests. The way back tells: from a root of the branch Newton returns to where the
+        move started, or, a hair inside the fold, to its partner of the other sign; from another
+        sheet it converges on that sheet, to a root of the pose's sign, or not at all.
         """
         size = w.size[designs]
         move = np.max(np.abs(U - U0), axis=0)
