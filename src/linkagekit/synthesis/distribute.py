@@ -198,6 +198,8 @@ class WorkersLost(LinkageError):
 RETRIES = 3
 #: seconds a Dask cluster may go without any worker before the run stops; between looks at it
 NO_WORKER_WAIT, DASK_POLL = 60.0, 1.0
+#: seconds a killed pool's manager thread is given to end before the search's process goes on (or exits)
+KILLED_POOL_WAIT = 5.0
 
 
 class Evaluator:
@@ -361,10 +363,15 @@ class Evaluator:
             if kill:
                 for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
                     proc.kill()
+            manager = getattr(self._pool, "_executor_manager_thread", None)
             # killed: not waited for (a Ctrl-C that lands inside the pool's own bookkeeping, say while a lost
             # worker is being replaced, can leave its manager thread waiting on a worker that is gone)
             self._pool.shutdown(wait=not kill, cancel_futures=True)
             self._pool = None
+            if kill and manager is not None:
+                # but its manager thread given a moment to end: one that closes its wake-up pipe while the
+                # interpreter's exit writes to it prints "Exception ignored ... Bad file descriptor" (Python 3.11)
+                manager.join(KILLED_POOL_WAIT)
         if self._client is not None:
             self._client.close()
             self._client = None
