@@ -142,3 +142,69 @@ def test_bad_max_joints_is_one_line_exit_2(extra: list[str], tmp_path, capsys) -
     assert main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--max-joints" in err
+
+
+def test_the_screen_on_two_workers_screens_each_topology_as_one_worker_does() -> None:
+    """Each topology's random designs come from its own seed: dealt out to two processes, the topologies screened
+    (here the three always screened: the deadline has passed) get the same designs and fits as on one."""
+    import time
+
+    from linkagekit.synthesis.auto import Maker, screen
+
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    make = Maker(np.stack([np.cos(t), 0.6 * np.sin(t)], 1), "m", False, (("min_transmission", 20.0),))
+    tops = enumerate_topologies(8)  # the first to name Watt II and Stephenson III
+    one = screen(tops, make, np.random.default_rng(5), time.monotonic() - 1.0, workers=1)
+    two = screen(tops, make, np.random.default_rng(5), time.monotonic() - 1.0, workers=2)
+    assert set(one) == set(two) == {"fourbar", "watt2", "stephenson3"}
+    for name in one:
+        assert one[name][0] == two[name][0] and np.array_equal(one[name][1], two[name][1]), name
+        assert np.isfinite(one[name][0])  # a fit was found: the comparison is not of two failures
+
+
+@pytest.mark.parametrize("workers, want", [(1, 3), (2, 4), (3, 3), (4, 4), (5, 5)])
+def test_the_topologies_searched_fill_whole_rounds_of_the_workers(workers: int, want: int) -> None:
+    from linkagekit.synthesis.auto import searched
+
+    assert searched(workers) == want
+
+
+def test_a_dense_drawing_is_fitted_along_its_strokes_not_by_its_points() -> None:
+    """A drawing of 150 closely spaced points and one long straight stroke between two of them (as between the
+    strokes of the letter E): the search's 100 targets are spread evenly along the whole line, the stroke included
+    (thinning by index put none on it)."""
+    from linkagekit.synthesis.auto import Projected
+    from linkagekit.synthesis.run import make_problem
+
+    first = np.linspace(0, 1, 75) + 0j
+    second = 1 + 3j + np.linspace(0, 1, 75)  # the stroke from 1 to 1 + 3i is 3 long, the rest 2 in all
+    pts = np.concatenate([first, second])
+    proj = Projected(make_problem(np.stack([pts.real, pts.imag], 1), "fourbar", None, "m"), partial=True)
+    T = proj.targets
+    assert len(T) == 100
+    # each target's place along the line: on the first part, on the stroke, on the second part
+    s = np.where(np.abs(T.imag) < 1e-12, T.real, np.where(np.abs(T.real - 1) < 1e-12, 1 + T.imag, 3 + T.real))
+    assert np.allclose(np.diff(s), 5.0 / 99, rtol=1e-9)  # on the line, evenly along its 5 units
+    assert np.sum(np.abs(T.real - 1) < 1e-12) >= 59  # 3/5 of them on the stroke
+
+
+def test_the_chamfer_parts_are_never_negative_where_samples_lie_on_targets() -> None:
+    """The squared distances come from the expanded square ``|p|^2 - 2 p.t + |t|^2``, a little below 0 by rounding
+    where a sample lies on a target: their square roots (the search's residuals) were NaN with a RuntimeWarning (seen
+    on letter I of the LINK-ABC benchmark). On curves through their targets, far from the origin, none is below 0."""
+    from types import SimpleNamespace
+
+    from linkagekit.synthesis.auto import _chamfer
+
+    rng = np.random.default_rng(0)
+    one = SimpleNamespace(a=np.zeros(1, complex), b=np.ones(1, complex), c=np.zeros(1, complex), sse=np.zeros(1))
+    worst = 0.0
+    for _ in range(50):
+        T = (rng.normal(size=40) + 1j * rng.normal(size=40)) * rng.uniform(0.1, 100) + complex(
+            *rng.uniform(-1e3, 1e3, 2)
+        )
+        P = np.concatenate([T, T[:10] + 1e-3])[None]
+        d, _, parts = _chamfer(one, P, P, T, np.ones(P.shape, bool))
+        worst = min(worst, float(parts.min()))
+        assert d[0] == pytest.approx(10 * 1e-6 / 50, rel=1e-4)  # ten of the 50 samples 1e-3 off a target
+    assert worst == 0.0

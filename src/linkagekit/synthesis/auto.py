@@ -6,10 +6,11 @@ Stephenson III first, then the others in a seeded order, until the screen's time
 random designs of its space are solved over a turn, and the tracer's best place on its
 link with the curve's similarity placement is fitted to the targets over every cyclic shift
 of the correspondence (:func:`~.tracer.fit_shifts`). Each topology is ranked by its best
-fit. Then the engine searches the :data:`SEARCHED` best-ranked topologies in turn, each for
-an equal share of the rest of the time; every design it returns has its tracer moved to the
-best place on its link for the targets' nearest points (:func:`place_tracer`, a few rounds
-of nearest points then a linear fit), kept when the measure improves. The best design of
+fit. Then the engine searches the :data:`SEARCHED` best-ranked topologies (or as many more
+as fill whole rounds of the workers: :func:`searched`), each for an equal share of the rest
+of the time; every design's tracer is at its best place on its link for the targets' nearest
+points (:meth:`Projected.placed`: the fit over the shifts, then :data:`ICP_ROUNDS` rounds of
+nearest points and a linear fit, each kept where it lowers the distance). The best design of
 all, by the problem's measure (feasible first), is written; its topology is named.
 
 Examples
@@ -27,6 +28,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -45,8 +47,6 @@ SCREEN = 0.2
 SEARCHED = 3
 #: random designs per topology in the screen
 SCREEN_DESIGNS = 96
-#: rounds of nearest points and tracer fit of :func:`place_tracer`
-PLACE_ROUNDS = 4
 #: the topologies screened first, by name
 FIRST = ("fourbar", "watt2", "stephenson3")
 
@@ -106,11 +106,9 @@ def synthesize_auto(
     topologies = enumerate_topologies(max_joints)
     rng = np.random.default_rng(seed)
 
-    def make(t: Topology) -> Projected:
-        return Projected(make_problem(xy, t.name, None, units, **problem), partial)
-
-    screened = screen(topologies, make, rng, t0 + SCREEN * seconds)
-    order = sorted(screened, key=lambda k: screened[k][0])[:SEARCHED]
+    make = Maker(xy, units, partial, tuple(problem.items()))
+    screened = screen(topologies, make, rng, t0 + SCREEN * seconds, workers)
+    order = sorted(screened, key=lambda k: screened[k][0])[: searched(workers)]
     tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
     projs = [make(next(t for t in topologies if t.name == name)) for name in order]
     left = seconds * (1 - RESERVE) - (time.monotonic() - t0)
@@ -128,6 +126,35 @@ def synthesize_auto(
         found.append(syn)
     best = min(found, key=lambda f: (not f.feasible, f.rms_error))
     return replace(best, tried=tuple(tried[n] for n in order), outcome=_whole_run(best.outcome, outs, t0))
+
+
+def searched(workers: int) -> int:
+    """How many topologies the search takes from the screen: :data:`SEARCHED`, rounded up to a whole number of
+    rounds of ``workers`` (three on two workers would leave one idle while the third runs alone)."""
+    w = max(workers, 1)
+    return -(-SEARCHED // w) * w
+
+
+@dataclass(frozen=True)
+class Maker:
+    """The projected objective of each topology for the targets (picklable: the screen's workers make their own)."""
+
+    xy: np.ndarray
+    units: str
+    partial: bool
+    problem: tuple[tuple[str, Any], ...]
+
+    def __call__(self, t: Topology) -> Projected:
+        return Projected(make_problem(self.xy, t.name, None, self.units, **dict(self.problem)), self.partial)
+
+
+def _pool(workers: int) -> Any:
+    """``workers`` local processes (forked where the system can: a script needs no ``__main__`` guard)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    return ProcessPoolExecutor(workers, mp_context=ctx)
 
 
 def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
@@ -157,11 +184,7 @@ def local_searches(
     share = max(seconds / -(-k // max(workers, 1)), 1e-3)
     if workers <= 1 or k == 1:
         return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(min(workers, k), mp_context=ctx) as pool:
+    with _pool(min(workers, k)) as pool:
         return list(pool.map(_multistart, projs, seeds, [share] * k, starts))
 
 
@@ -259,22 +282,46 @@ def screen(
     make: Callable[[Topology], Projected],
     rng: np.random.Generator,
     deadline: float,
+    workers: int = 1,
 ) -> dict[str, tuple[float, np.ndarray]]:
     """``name -> (best relative RMS fit, its design)`` of the topologies screened before ``deadline``.
 
     :data:`SCREEN_DESIGNS` random designs of each (:class:`Projected`: the tracer and the
     placement fitted); the first three (:data:`FIRST`) always, the rest in a random order of ``rng``.
+    With ``workers`` (more than one) the list is dealt out to that many local processes
+    (``make`` must pickle, as :class:`Maker` does), each screening its share until the deadline;
+    each topology's designs come from its own seed, so a topology screened is screened alike
+    whatever the number of workers.
     """
     first = [t for t in topologies if t.name in FIRST]
     rest = [t for t in topologies if t.name not in FIRST]
-    rest = [rest[i] for i in rng.permutation(len(rest))]
+    order = first + [rest[i] for i in rng.permutation(len(rest))]
+    seeds = [int(x) for x in rng.integers(0, 2**63, len(order))]
+    w = max(1, min(workers, len(order)))
+    if w == 1:
+        return _screen_share(make, order, seeds, deadline)
+    with _pool(w) as pool:
+        shares = pool.map(_screen_share, [make] * w, [order[k::w] for k in range(w)], [seeds[k::w] for k in range(w)],
+                          [deadline] * w, [k == 0 for k in range(w)])  # fmt: skip
+        return {name: got for share in shares for name, got in share.items()}
+
+
+def _screen_share(
+    make: Callable[[Topology], Projected],
+    topologies: Sequence[Topology],
+    seeds: Sequence[int],
+    deadline: float,
+    one: bool = True,
+) -> dict[str, tuple[float, np.ndarray]]:
+    """:func:`screen` of ``topologies`` in turn, each from its seed, until ``deadline`` (those of :data:`FIRST`
+    always, and with ``one`` at least one; a worker process's task)."""
     out: dict[str, tuple[float, np.ndarray]] = {}
-    for t in first + rest:
-        if out and time.monotonic() > deadline and t.name not in FIRST:
+    for t, seed in zip(topologies, seeds, strict=True):
+        if (out or not one) and time.monotonic() > deadline and t.name not in FIRST:
             break
         proj = make(t)
         lo, hi = proj.bounds
-        X = lo + rng.random((SCREEN_DESIGNS, len(lo))) * (hi - lo)
+        X = lo + np.random.default_rng(seed).random((SCREEN_DESIGNS, len(lo))) * (hi - lo)
         sc = proj.score(X)
         rms = np.where(sc.violation > 0, np.inf, sc.error)
         i = int(np.argmin(np.where(np.isfinite(rms), rms, sc.cost + 1e6)))
@@ -353,11 +400,12 @@ class Projected(Objective):
     partial: bool = False
     samples: int = PROJECTED_SAMPLES
 
-    @property
+    @cached_property
     def targets(self) -> np.ndarray:
-        """The targets the search fits: every one, or evenly every k-th down to :data:`SEARCH_TARGETS`."""
+        """The targets the search fits: every one, or a drawing of more than :data:`SEARCH_TARGETS` points resampled
+        to that many evenly by arc length along it (:func:`along`)."""
         T = self.problem.targets
-        return T[:: max(1, len(T) // SEARCH_TARGETS)]
+        return T if len(T) <= SEARCH_TARGETS else along(T, SEARCH_TARGETS)
 
     @property
     def keep(self) -> np.ndarray:
@@ -498,6 +546,23 @@ class Projected(Objective):
         return np.asarray(v)
 
 
+def along(T: np.ndarray, n: int) -> np.ndarray:
+    """``n`` points evenly spaced in arc length along the polyline through the points ``T`` (complex), from its first
+    point to its last.
+
+    A drawing is a line, not its vertices: where its points are unevenly spaced (a long straight stroke given by its
+    two ends, as between the strokes of a letter E), thinning them by index would leave that part without targets
+    and the search free to draw anything there.
+
+    >>> along(np.array([0, 1, 3 + 0j]), 4).real.tolist()
+    [0.0, 1.0, 2.0, 3.0]
+    """
+    run = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(T)))])
+    s = np.linspace(0.0, run[-1], n)
+    out: np.ndarray = np.interp(s, run, T.real) + 1j * np.interp(s, run, T.imag)
+    return out
+
+
 def _chamfer(
     f: Any, Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, window: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -518,8 +583,9 @@ def _chamfer(
     d2 += (np.abs(Tc) ** 2)[None, None, :]
     d2[~window] = np.inf
     k = np.argmin(d2, axis=1)  # (N, m)
-    to_curve = np.minimum(np.min(d2, axis=1), _to_segments(P, window, T, k)) / len(T)
-    to_targets = np.where(window, np.min(d2, axis=2), 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
+    # the expanded square is a little below 0 by rounding where a sample lies on a target
+    to_curve = np.minimum(np.maximum(np.min(d2, axis=1), 0.0), _to_segments(P, window, T, k)) / len(T)
+    to_targets = np.where(window, np.maximum(np.min(d2, axis=2), 0.0), 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
     parts = np.concatenate([to_curve, to_targets], axis=1)  # (N, m + n): squared residuals
     d = parts.sum(axis=1)
     return np.where(np.isfinite(d) & np.isfinite(f.sse), d, np.inf), k, parts
