@@ -202,6 +202,21 @@ NO_WORKER_WAIT, DASK_POLL = 60.0, 1.0
 KILLED_POOL_WAIT = 5.0
 
 
+def kill_pool(pool: Any) -> None:
+    """A :class:`~concurrent.futures.ProcessPoolExecutor` stopped at once: its processes killed, its pending tasks
+    cancelled (after a Ctrl-C or an error: what the workers compute is not waited for)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.kill()
+    manager = getattr(pool, "_executor_manager_thread", None)
+    # not waited for (a Ctrl-C that lands inside the pool's own bookkeeping, say while a lost worker is being
+    # replaced, can leave its manager thread waiting on a worker that is gone)
+    pool.shutdown(wait=False, cancel_futures=True)
+    if manager is not None:
+        # but its manager thread given a moment to end: one that closes its wake-up pipe while the interpreter's
+        # exit writes to it prints "Exception ignored ... Bad file descriptor" (Python 3.11)
+        manager.join(KILLED_POOL_WAIT)
+
+
 class Evaluator:
     """Scores of a generation, ``cost(X)``, evaluated where asked.
 
@@ -361,17 +376,10 @@ class Evaluator:
         """Shut the workers down (``kill``: at once, not after what they are computing)."""
         if self._pool is not None:
             if kill:
-                for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
-                    proc.kill()
-            manager = getattr(self._pool, "_executor_manager_thread", None)
-            # killed: not waited for (a Ctrl-C that lands inside the pool's own bookkeeping, say while a lost
-            # worker is being replaced, can leave its manager thread waiting on a worker that is gone)
-            self._pool.shutdown(wait=not kill, cancel_futures=True)
+                kill_pool(self._pool)
+            else:
+                self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
-            if kill and manager is not None:
-                # but its manager thread given a moment to end: one that closes its wake-up pipe while the
-                # interpreter's exit writes to it prints "Exception ignored ... Bad file descriptor" (Python 3.11)
-                manager.join(KILLED_POOL_WAIT)
         if self._client is not None:
             self._client.close()
             self._client = None
