@@ -26,8 +26,7 @@ Examples
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -36,7 +35,6 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
-from .distribute import kill_pool
 from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
 from .optimize import Outcome, Progress, Settings, optimize
 from .run import Synthesis, _unpack, make_problem
@@ -150,29 +148,13 @@ class Maker:
         return Projected(make_problem(self.xy, t.name, None, self.units, **dict(self.problem)), self.partial)
 
 
-@contextmanager
-def _pool(workers: int) -> Iterator[Any]:
-    """``workers`` local processes (forked where the system can: a script needs no ``__main__`` guard), that leave
-    Ctrl-C to this one; on the way out of an error or a Ctrl-C, killed at once (not waited for: each would run its
-    task to its share of the time, and start the next)."""
+def _pool(workers: int) -> Any:
+    """``workers`` local processes (forked where the system can: a script needs no ``__main__`` guard)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_leave_ctrl_c)
-    try:
-        yield pool
-    except BaseException:
-        kill_pool(pool)
-        raise
-    pool.shutdown(wait=True)
-
-
-def _leave_ctrl_c() -> None:
-    """A worker's start: Ctrl-C (sent to the whole process group by a terminal) is the parent's to handle."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return ProcessPoolExecutor(workers, mp_context=ctx)
 
 
 def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
