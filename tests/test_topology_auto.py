@@ -208,3 +208,53 @@ def test_the_chamfer_parts_are_never_negative_where_samples_lie_on_targets() -> 
         worst = min(worst, float(parts.min()))
         assert d[0] == pytest.approx(10 * 1e-6 / 50, rel=1e-4)  # ten of the 50 samples 1e-3 off a target
     assert worst == 0.0
+
+
+#: a script whose argv[1] searches on two worker processes take ten minutes each unless stopped: those of the
+#: seeds in argv[2] return at once, the others sleep their share
+_SLOW_SEARCHES = """
+import sys, time
+import linkagekit.synthesis.auto as auto
+quick = {int(s) for s in sys.argv[2].split(",") if s}
+
+def slow(proj, seed, seconds, x0):
+    if seed not in quick:
+        sys.stdout.write("started\\n")  # one write: two workers may start at once
+        sys.stdout.flush()
+        time.sleep(seconds)
+    return seed
+
+auto._multistart = slow
+try:
+    auto.local_searches([None] * int(sys.argv[1]), list(range(int(sys.argv[1]))), [None] * int(sys.argv[1]), 1200, 2)
+except KeyboardInterrupt:
+    sys.exit("interrupted")
+"""
+
+
+@pytest.mark.parametrize(
+    "k, quick",
+    [(4, ""), (2, "0")],
+    ids=["the second round is not started", "an idle worker prints no traceback"],
+)
+def test_ctrl_c_during_the_searches_on_two_workers_ends_them_at_once_in_one_line(k: int, quick: str) -> None:
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) while auto's own worker processes search: the
+    run ends at once (not after the searches queued behind the interrupted ones, each a whole share of the time),
+    and the parent's line is all that is printed (a worker waiting for a task printed its KeyboardInterrupt)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    cmd = [sys.executable, "-c", _SLOW_SEARCHES, str(k), quick]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "started\n"
+        time.sleep(0.3)  # the other worker at its task, or waiting for one
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)  # a hang guard: the searches queued would take ten minutes
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert (proc.returncode, err) == (1, "interrupted\n")

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
+from .distribute import Evaluator
 from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
 from .optimize import Outcome, Progress, Settings, optimize
 from .run import Synthesis, _unpack, make_problem
@@ -148,13 +149,14 @@ class Maker:
         return Projected(make_problem(self.xy, t.name, None, self.units, **dict(self.problem)), self.partial)
 
 
-def _pool(workers: int) -> Any:
-    """``workers`` local processes (forked where the system can: a script needs no ``__main__`` guard)."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+def _pool(workers: int) -> Evaluator:
+    """``workers`` local processes for whole tasks (:meth:`~.distribute.Evaluator.submit`), used as a context.
 
-    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    return ProcessPoolExecutor(workers, mp_context=ctx)
+    The engine's own pool: forked where the system can (a script needs no ``__main__`` guard), its processes
+    deaf to Ctrl-C (the parent's to handle: one line, not a traceback from a process waiting for a task), and on
+    Ctrl-C or an error killed at once, not waited for through the tasks queued behind (whole shares of the time).
+    """
+    return Evaluator((), workers)
 
 
 def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
@@ -185,7 +187,8 @@ def local_searches(
     if workers <= 1 or k == 1:
         return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
     with _pool(min(workers, k)) as pool:
-        return list(pool.map(_multistart, projs, seeds, [share] * k, starts))
+        tasks = [pool.submit(_multistart, p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
+        return [t.result() for t in tasks]
 
 
 def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray) -> Outcome:
@@ -301,9 +304,8 @@ def screen(
     if w == 1:
         return _screen_share(make, order, seeds, deadline)
     with _pool(w) as pool:
-        shares = pool.map(_screen_share, [make] * w, [order[k::w] for k in range(w)], [seeds[k::w] for k in range(w)],
-                          [deadline] * w, [k == 0 for k in range(w)])  # fmt: skip
-        return {name: got for share in shares for name, got in share.items()}
+        tasks = [pool.submit(_screen_share, make, order[k::w], seeds[k::w], deadline, k == 0) for k in range(w)]
+        return {name: got for task in tasks for name, got in task.result().items()}
 
 
 def _screen_share(
