@@ -258,3 +258,25 @@ def test_ctrl_c_during_the_searches_on_two_workers_ends_them_at_once_in_one_line
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert (proc.returncode, err) == (1, "interrupted\n")
+
+
+def test_a_dense_closed_drawing_is_fitted_round_its_whole_loop() -> None:
+    """A closed drawing (the search goes round a whole turn) of 150 points on a half circle, its straight side the
+    stroke from its last point back to its first (a D): the targets are spread evenly round the whole loop, the
+    straight side included (none were put there), the first not repeated at the end; and a list that repeats its
+    first point at the end gives no two targets at one place (one place twice in the turn)."""
+    from linkagekit.synthesis.auto import Projected
+    from linkagekit.synthesis.run import make_problem
+
+    arc = 1j * np.exp(-1j * np.linspace(0, np.pi, 150))  # from i round to -i: the side from -i to i is 2 long
+    for pts in (arc, np.append(arc, arc[0])):
+        proj = Projected(make_problem(np.stack([pts.real, pts.imag], 1), "fourbar", None, "m"), partial=False)
+        T = proj.targets
+        assert len(T) == 100
+        on_side = np.abs(T.real) < 1e-12
+        assert np.all(on_side | (np.abs(np.abs(T) - 1) < 1e-3))  # on the line: the side or the arc
+        gaps = np.abs(np.diff(np.append(T, T[0])))  # round the loop, the last target to the first included
+        loop = 2.0 + 149 * np.abs(arc[1] - arc[0])  # the polygon's length
+        assert np.allclose(gaps[on_side & np.roll(on_side, -1)], loop / 100, rtol=1e-9)
+        assert np.min(gaps) > 0.9 * loop / 100  # chords of the arc a little shorter than its arcs; none 0
+        assert np.sum(on_side) >= 100 * 2.0 / loop - 1

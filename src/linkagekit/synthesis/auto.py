@@ -405,9 +405,10 @@ class Projected(Objective):
     @cached_property
     def targets(self) -> np.ndarray:
         """The targets the search fits: every one, or a drawing of more than :data:`SEARCH_TARGETS` points resampled
-        to that many evenly by arc length along it (:func:`along`)."""
+        to that many evenly by arc length along it (:func:`along`; closed unless ``partial``: the whole turn's
+        curve goes from the last target back to the first)."""
         T = self.problem.targets
-        return T if len(T) <= SEARCH_TARGETS else along(T, SEARCH_TARGETS)
+        return T if len(T) <= SEARCH_TARGETS else along(T, SEARCH_TARGETS, closed=not self.partial)
 
     @property
     def keep(self) -> np.ndarray:
@@ -548,20 +549,24 @@ class Projected(Objective):
         return np.asarray(v)
 
 
-def along(T: np.ndarray, n: int) -> np.ndarray:
+def along(T: np.ndarray, n: int, closed: bool = False) -> np.ndarray:
     """``n`` points evenly spaced in arc length along the polyline through the points ``T`` (complex), from its first
-    point to its last.
+    point to its last; ``closed``: round the loop that goes on from the last back to the first (the first point not
+    repeated at the end: the gap from the last point to the first is a spacing like the others).
 
     A drawing is a line, not its vertices: where its points are unevenly spaced (a long straight stroke given by its
-    two ends, as between the strokes of a letter E), thinning them by index would leave that part without targets
-    and the search free to draw anything there.
+    two ends, as between the strokes of a letter E, or a closed curve's stroke from its last point to its first),
+    thinning them by index would leave that part without targets and the search free to draw anything there.
 
     >>> along(np.array([0, 1, 3 + 0j]), 4).real.tolist()
     [0.0, 1.0, 2.0, 3.0]
+    >>> along(np.array([0, 1, 1 + 1j, 1j]), 8, closed=True).tolist()  # a square's corners: its fourth side too
+    [0j, (0.5+0j), (1+0j), (1+0.5j), (1+1j), (0.5+1j), 1j, 0.5j]
     """
-    run = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(T)))])
-    s = np.linspace(0.0, run[-1], n)
-    out: np.ndarray = np.interp(s, run, T.real) + 1j * np.interp(s, run, T.imag)
+    P = np.append(T, T[:1]) if closed else T
+    run = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(P)))])
+    s = np.linspace(0.0, run[-1], n, endpoint=not closed)
+    out: np.ndarray = np.interp(s, run, P.real) + 1j * np.interp(s, run, P.imag)
     return out
 
 
