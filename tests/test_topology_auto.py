@@ -280,3 +280,24 @@ def test_a_dense_closed_drawing_is_fitted_round_its_whole_loop() -> None:
         assert np.allclose(gaps[on_side & np.roll(on_side, -1)], loop / 100, rtol=1e-9)
         assert np.min(gaps) > 0.9 * loop / 100  # chords of the arc a little shorter than its arcs; none 0
         assert np.sum(on_side) >= 100 * 2.0 / loop - 1
+
+
+def _killed(proj: object, seed: int, seconds: float, x0: object) -> int:
+    """A search whose process is killed (seed 0) or that ends at once."""
+    import os
+    import signal
+
+    if seed == 0:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return seed
+
+
+def test_a_worker_killed_during_the_searches_is_one_line_not_an_internal_error(monkeypatch) -> None:
+    """A worker process killed (the system out of memory, say): WorkersLost, whose line is an error of exit status 1
+    (it was the pool's BrokenProcessPool, an 'internal error' as of a bug)."""
+    import linkagekit.synthesis.auto as auto
+    from linkagekit.synthesis.distribute import WorkersLost
+
+    monkeypatch.setattr(auto, "_multistart", _killed)
+    with pytest.raises(WorkersLost, match="worker process"):
+        auto.local_searches([None] * 2, [0, 1], [None] * 2, 1.0, 2)  # type: ignore[list-item]

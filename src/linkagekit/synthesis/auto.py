@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
-from .distribute import Evaluator
+from .distribute import Evaluator, WorkersLost
 from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
 from .optimize import Outcome, Progress, Settings, optimize
 from .run import Synthesis, _unpack, make_problem
@@ -159,6 +159,17 @@ def _pool(workers: int) -> Evaluator:
     return Evaluator((), workers)
 
 
+def _results(tasks: Sequence[Any]) -> list[Any]:
+    """The results of tasks on :func:`_pool`'s processes; one of them killed (say by the system, out of memory) is
+    :class:`~.distribute.WorkersLost` (one line, exit status 1), not an internal error."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    try:
+        return [t.result() for t in tasks]
+    except BrokenProcessPool:
+        raise WorkersLost("a local worker process of the topology search died (killed?)") from None
+
+
 def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
     """How the whole run went: the best design's outcome with every topology's searches and the time since ``t0``."""
     return replace(
@@ -188,7 +199,7 @@ def local_searches(
         return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
     with _pool(min(workers, k)) as pool:
         tasks = [pool.submit(_multistart, p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
-        return [t.result() for t in tasks]
+        return _results(tasks)
 
 
 def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray) -> Outcome:
@@ -305,7 +316,7 @@ def screen(
         return _screen_share(make, order, seeds, deadline)
     with _pool(w) as pool:
         tasks = [pool.submit(_screen_share, make, order[k::w], seeds[k::w], deadline, k == 0) for k in range(w)]
-        return {name: got for task in tasks for name, got in task.result().items()}
+        return {name: got for share in _results(tasks) for name, got in share.items()}
 
 
 def _screen_share(
