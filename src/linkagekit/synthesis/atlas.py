@@ -411,9 +411,13 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
             if tick:
                 tick(done, total)
         return
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import as_completed
 
-    with ProcessPoolExecutor(workers) as pool:
+    from .distribute import Evaluator
+
+    # the engine's pool: its processes leave Ctrl-C to this one, which kills them (a plain pool, left by `with`,
+    # built every chunk queued before the build stopped: 12 s after a Ctrl-C, and a waiting worker's traceback)
+    with Evaluator((), workers) as pool:
         for job in as_completed([pool.submit(_build_chunk, parts, i, per) for i in todo]):
             job.result()  # a chunk that failed fails the build
             done += 1
