@@ -301,3 +301,39 @@ def test_a_worker_killed_during_the_searches_is_one_line_not_an_internal_error(m
     monkeypatch.setattr(auto, "_multistart", _killed)
     with pytest.raises(WorkersLost, match="worker process"):
         auto.local_searches([None] * 2, [0, 1], [None] * 2, 1.0, 2)  # type: ignore[list-item]
+
+
+def test_scheduler_with_topology_auto_is_one_line_exit_2(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """Its searches run on local processes: a Dask address was accepted and ignored (the run went on locally)."""
+    csv = tmp_path / "t.csv"
+    csv.write_text("x,y\n0,0\n1,0\n0,1\n")
+    args = [
+        "synthesize",
+        str(csv),
+        "--topology",
+        "auto",
+        "--scheduler",
+        "tcp://127.0.0.1:1",
+        "-o",
+        str(tmp_path / "o.yaml"),
+    ]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--scheduler" in err and not (tmp_path / "o.yaml").exists()
+
+
+def test_spare_workers_search_the_topologies_again_each_from_a_seed_of_its_own() -> None:
+    """``--max-joints 5`` has one topology: on two workers the second searched nothing. Fewer objectives than workers
+    are searched again in turn, each replica from another seed and without the screen's start; one objective's
+    outcome is its best search's, with every search counted."""
+    from linkagekit.synthesis.auto import _merged, _replicas
+    from linkagekit.synthesis.optimize import Outcome
+
+    a, b = np.zeros(2), np.ones(2)
+    owner, seeds, starts = _replicas([7, 9], [a, b], 5)
+    assert owner == [0, 1, 0, 1, 0] and len(set(seeds)) == 5 and seeds[:2] == [7, 9]
+    assert starts[0] is a and starts[1] is b and starts[2:] == [None, None, None]
+    assert _replicas([7, 9, 11], [a, b, a], 2) == ([0, 1, 2], [7, 9, 11], [a, b, a])  # enough objectives: as given
+    outs = [Outcome(np.full(2, float(c)), c, 3, 0, 100, 1.0, "time") for c in (0.5, 0.2, 0.9)]
+    m = _merged(outs)
+    assert m.cost == 0.2 and np.array_equal(m.x, outs[1].x) and m.restarts == 9 and m.evaluations == 300

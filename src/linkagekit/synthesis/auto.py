@@ -109,7 +109,7 @@ def synthesize_auto(
 
     make = Maker(xy, units, partial, tuple(problem.items()))
     screened = screen(topologies, make, rng, t0 + SCREEN * seconds, workers)
-    order = sorted(screened, key=lambda k: screened[k][0])[: searched(workers)]
+    order = sorted(screened, key=lambda k: screened[k][0])[: searched(workers if method == "local" else 1)]
     tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
     projs = [make(next(t for t in topologies if t.name == name)) for name in order]
     left = seconds * (1 - RESERVE) - (time.monotonic() - t0)
@@ -191,18 +191,44 @@ def local_searches(
     """:func:`multistart` on each objective, ``workers`` at a time on local processes, within ``seconds`` in all.
 
     Each gets ``seconds / ceil(k / workers)`` (``k`` objectives: that many rounds of
-    ``workers`` at a time), its own seed and start.
+    ``workers`` at a time), its own seed and start. With fewer objectives than workers (one
+    topology within ``--max-joints 5``) the spare workers search them too, from other seeds
+    (:func:`_replicas`): each objective's outcome is its best search's, with every search counted.
     """
     k = len(projs)
     share = max(seconds / -(-k // max(workers, 1)), 1e-3)
-    if workers <= 1 or k == 1:
+    if workers <= 1:
         return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
-    with _pool(min(workers, k)) as pool:
-        tasks = [pool.submit(_multistart, p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
-        return _results(tasks)
+    owner, task_seeds, task_starts = _replicas(seeds, starts, workers)
+    with _pool(min(workers, len(owner))) as pool:
+        jobs = zip(owner, task_seeds, task_starts, strict=True)
+        tasks = [pool.submit(_multistart, projs[i], s, share, x) for i, s, x in jobs]
+        done = _results(tasks)
+    return [_merged([o for o, i in zip(done, owner, strict=True) if i == j]) for j in range(k)]
 
 
-def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray) -> Outcome:
+def _replicas(
+    seeds: Sequence[int], starts: Sequence[np.ndarray], workers: int
+) -> tuple[list[int], list[int], list[np.ndarray | None]]:
+    """The tasks' objectives, seeds and starts: one each, and, with fewer than ``workers``, more of them in turn
+    until every worker has one (each more from a seed of its own, without the screen's start).
+
+    >>> _replicas([7, 9], [None, None], 5)[0]
+    [0, 1, 0, 1, 0]
+    """
+    k = len(seeds)
+    owner = [j % k for j in range(max(k, workers))]
+    task_seeds = [int(seeds[i]) if j < k else int(seeds[i]) + 7919 * (j // k) for j, i in enumerate(owner)]
+    return owner, task_seeds, [starts[i] if j < k else None for j, i in enumerate(owner)]
+
+
+def _merged(outs: Sequence[Outcome]) -> Outcome:
+    """The best of one objective's searches, with all of their searches and designs counted."""
+    best = min(outs, key=lambda o: o.cost)
+    return replace(best, restarts=sum(o.restarts for o in outs), evaluations=sum(o.evaluations for o in outs))
+
+
+def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray | None) -> Outcome:
     """:func:`multistart` for ``seconds`` from now (a worker process's task)."""
     return multistart(proj, np.random.default_rng(seed), time.monotonic() + seconds, x0)
 
