@@ -7,6 +7,9 @@ temporary directory; the fixture below sets ``LINKAGEKIT_ATLAS_SIZE``).
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -362,3 +365,28 @@ def _full_turn(mech) -> bool:
     """``lk.check`` finds the crank assembling over one whole turn."""
     r = lk.check(mech).input_range
     return len(r) == 1 and r[0][1] - r[0][0] >= 360.0 - 1e-9
+
+
+def _chunk_killed(parts: Path, index: int, entries: int) -> int:
+    """A chunk whose worker process is killed (chunk 0) or that ends at once."""
+    import signal
+
+    if index == 0:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return index
+
+
+def test_a_worker_killed_during_a_build_is_one_line_not_an_internal_error(monkeypatch, tmp_path):
+    """A build worker killed (the system out of memory, say) was the pool's BrokenProcessPool, which the command
+    printed as 'internal error' (the line of a bug): now WorkersLost (one line, exit status 1), nothing left running."""
+    import multiprocessing
+
+    from linkagekit.synthesis.distribute import WorkersLost
+
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "1024")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(at, "_build_chunk", _chunk_killed)
+    with pytest.raises(WorkersLost, match="worker process"):
+        at.build(workers=2)
+    assert not multiprocessing.active_children() and not at.info().built
