@@ -390,3 +390,28 @@ def test_a_worker_killed_during_a_build_is_one_line_not_an_internal_error(monkey
     with pytest.raises(WorkersLost, match="worker process"):
         at.build(workers=2)
     assert not multiprocessing.active_children() and not at.info().built
+
+
+def _build_in(cache: str) -> str:
+    """A build on two workers in a daemonic process (a multiprocessing.Pool's worker)."""
+    os.environ["LINKAGEKIT_CACHE_DIR"] = cache
+    try:
+        return str(at.build(workers=2))
+    except BaseException as e:  # noqa: BLE001 - the test shows what was raised there
+        return f"{type(e).__name__}: {e}"
+
+
+def test_a_build_in_a_daemonic_process_builds_its_chunks_itself(monkeypatch, tmp_path):
+    """A ``multiprocessing.Pool``'s worker may not start processes: ``synthesize(..., workers=1)`` there, first using
+    the atlas, failed with 'AssertionError: daemonic processes are not allowed to have children' (the build's
+    workers default to every core). It builds the chunks itself, the same file."""
+    import multiprocessing
+
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "512")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path / "here"))
+    here = np.load(at.build(workers=1), allow_pickle=False)
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply(_build_in, (str(tmp_path / "pool"),))
+    assert got == str(tmp_path / "pool" / at.path().name), got
+    assert np.array_equal(np.load(got, allow_pickle=False), here)

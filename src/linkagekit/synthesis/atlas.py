@@ -404,7 +404,7 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
     if tick:
         tick(done, total)
     workers = min(workers or os.cpu_count() or 1, len(todo))
-    if workers <= 1:
+    if workers <= 1 or _daemonic():
         for i in todo:
             _build_chunk(parts, i, per)
             done += 1
@@ -427,6 +427,14 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
                     tick(done, total)
         except BrokenProcessPool:  # a worker killed (say by the system, out of memory): not a bug's internal error
             raise WorkersLost("a worker process building the atlas died (killed?); run again to resume") from None
+
+
+def _daemonic() -> bool:
+    """Whether this process may not start processes of its own (a :class:`multiprocessing.pool.Pool`'s worker, say,
+    running ``synthesize(..., workers=1)``: its first use of the atlas builds it here, not on workers)."""
+    import multiprocessing
+
+    return bool(multiprocessing.current_process().daemon)
 
 
 def _assemble(file: Path, parts: Path, n: int, per: int) -> None:
