@@ -333,7 +333,9 @@ def test_spare_workers_search_the_topologies_again_each_from_a_seed_of_its_own()
     owner, seeds, starts = _replicas([7, 9], [a, b], 5)
     assert owner == [0, 1, 0, 1, 0] and len(set(seeds)) == 5 and seeds[:2] == [7, 9]
     assert starts[0] is a and starts[1] is b and starts[2:] == [None, None, None]
-    assert _replicas([7, 9, 11], [a, b, a], 2) == ([0, 1, 2], [7, 9, 11], [a, b, a])  # enough objectives: as given
+    assert _replicas([7, 9, 11, 13], [a, b, a, b], 2) == ([0, 1, 2, 3], [7, 9, 11, 13], [a, b, a, b])  # as given
+    owner, seeds, starts = _replicas([7, 9, 11], [a, b, a], 2)  # the second round's idle worker searches the first
+    assert owner == [0, 1, 2, 0] and seeds[3] not in seeds[:3] and starts[3] is None
     outs = [Outcome(np.full(2, float(c)), c, 3, 0, 100, 1.0, "time") for c in (0.5, 0.2, 0.9)]
     m = _merged(outs)
     assert m.cost == 0.2 and np.array_equal(m.x, outs[1].x) and m.restarts == 9 and m.evaluations == 300

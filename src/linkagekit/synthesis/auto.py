@@ -191,9 +191,10 @@ def local_searches(
     """:func:`multistart` on each objective, ``workers`` at a time on local processes, within ``seconds`` in all.
 
     Each gets ``seconds / ceil(k / workers)`` (``k`` objectives: that many rounds of
-    ``workers`` at a time), its own seed and start. With fewer objectives than workers (one
-    topology within ``--max-joints 5``) the spare workers search them too, from other seeds
-    (:func:`_replicas`): each objective's outcome is its best search's, with every search counted.
+    ``workers`` at a time), its own seed and start. A worker a round leaves without one (one
+    topology within ``--max-joints 5``, or three on two workers when the screen got no further)
+    searches one again, from another seed (:func:`_replicas`): each objective's outcome is its
+    best search's, with every search counted.
     """
     k = len(projs)
     share = max(seconds / -(-k // max(workers, 1)), 1e-3)
@@ -210,14 +211,16 @@ def local_searches(
 def _replicas(
     seeds: Sequence[int], starts: Sequence[np.ndarray], workers: int
 ) -> tuple[list[int], list[int], list[np.ndarray | None]]:
-    """The tasks' objectives, seeds and starts: one each, and, with fewer than ``workers``, more of them in turn
-    until every worker has one (each more from a seed of its own, without the screen's start).
+    """The tasks' objectives, seeds and starts: one each, then more of them in turn until every worker has one in
+    every round (each more from a seed of its own, without the screen's start).
 
     >>> _replicas([7, 9], [None, None], 5)[0]
     [0, 1, 0, 1, 0]
+    >>> _replicas([7, 9, 11], [None, None, None], 2)[0]
+    [0, 1, 2, 0]
     """
     k = len(seeds)
-    owner = [j % k for j in range(max(k, workers))]
+    owner = [j % k for j in range(-(-k // workers) * workers)]
     task_seeds = [int(seeds[i]) if j < k else int(seeds[i]) + 7919 * (j // k) for j, i in enumerate(owner)]
     return owner, task_seeds, [starts[i] if j < k else None for j, i in enumerate(owner)]
 
