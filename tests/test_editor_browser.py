@@ -762,6 +762,42 @@ def test_mode_buttons_follow_the_slider(open_editor):
     ep.assert_clean()
 
 
+def test_a_modes_answer_that_lands_after_a_drag_began_leaves_the_editor_idle(open_editor, monkeypatch):
+    """The modes at the shown input are asked 120 ms after the slider moves. When the answer lands after a drag has
+    begun (the drag shows the pose: the shown input is no longer the one asked), it was dropped and the page stayed
+    busy for ever (seen as a 60 s failure of the drag test at 90 deg on a busy machine, in two sessions). The modes
+    answer is made slow here (1 s), the slider moved to 90 deg as that test does: the newest question's answer ends
+    the wait whatever the page shows, and the page becomes idle."""
+    from linkagekit.web.editor import Session
+
+    slow = Session._modes
+
+    def _modes(mech, at):  # type: ignore[no-untyped-def]
+        time.sleep(1.0)
+        return slow(mech, at)
+
+    ep = open_editor("seed000")
+    monkeypatch.setattr(Session, "_modes", staticmethod(_modes))
+    rng = ep.page.locator("input[type=range][data-role=input]").first
+    rng.focus()
+    rng.press("Home")
+    for _ in range(90):
+        rng.press("ArrowRight")
+    time.sleep(0.3)  # the request is out, its answer 1 s away
+    st = ep.state()
+    j = by_name(st)["D"]
+    ep.page.mouse.move(j["u"], j["v"])
+    ep.page.mouse.down()
+    ep.page.mouse.move(j["u"] - 30, j["v"] + 20, steps=8)
+    for when in ("while the joint is held", "after it is released"):
+        deadline = time.monotonic() + 15.0
+        while ep.page.evaluate("() => window.linkagekit.editor.busy()"):
+            assert time.monotonic() < deadline, f"the editor is still busy 15 s on, {when}"
+            time.sleep(0.05)
+        ep.page.mouse.up()
+    assert ep.state()["message"] == ""
+
+
 def test_screenshot_after_a_drag(open_editor, tmp_path):
     """Jansen's leg after a drag: drawing and Edit panel in one picture, not blank.
     LINKAGEKIT_SCREENSHOTS=1 keeps it as docs/images/editor.png."""

@@ -106,16 +106,19 @@
   function afterIdle() { var fs = idle; idle = []; fs.forEach(function (f) { f(); }); }
 
   /* the modes listed are those at the shown input: asked again when the slider moves */
-  var modesTimer = null, modesBusy = false;
+  var modesTimer = null, modesBusy = false, modesAsked = 0;
   function refreshModes() {
     clearTimeout(modesTimer);
     modesBusy = true;
+    var ask = ++modesAsked;
     modesTimer = setTimeout(function () {
       var shownAt = lk.current();
       post("api/solve", {doc: doc, at: atNow(), modes_only: true}).then(function (r) {
         if (r.ok && lk.current() === shownAt) renderModes(r);
-        if (lk.current() === shownAt) modesBusy = false;
-      }, function () { modesBusy = false; /* the drawing is unchanged; the list stays */ });
+        // the newest question's answer ends the wait, whatever the page shows now (a drag shows its pose: the
+        // answer was dropped and the page stayed busy for ever; the drag's own solve lists the modes again)
+        if (ask === modesAsked) modesBusy = false;
+      }, function () { if (ask === modesAsked) modesBusy = false; /* the drawing is unchanged; the list stays */ });
     }, 120);
   }
 
