@@ -412,21 +412,18 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
                 tick(done, total)
         return
     from concurrent.futures import as_completed
-    from concurrent.futures.process import BrokenProcessPool
 
-    from .distribute import Evaluator, WorkersLost
+    from .distribute import Evaluator, workers_lost
 
     # the engine's pool: its processes leave Ctrl-C to this one, which kills them (a plain pool, left by `with`,
     # built every chunk queued before the build stopped: 12 s after a Ctrl-C, and a waiting worker's traceback)
-    with Evaluator((), workers) as pool:
-        try:
-            for job in as_completed([pool.submit(_build_chunk, parts, i, per) for i in todo]):
-                job.result()  # a chunk that failed fails the build
-                done += 1
-                if tick:
-                    tick(done, total)
-        except BrokenProcessPool:  # a worker killed (say by the system, out of memory): not a bug's internal error
-            raise WorkersLost("a worker process building the atlas died (killed?); run again to resume") from None
+    lost = "a worker process building the atlas died (killed?); run again to resume"
+    with Evaluator((), workers) as pool, workers_lost(lost):
+        for job in as_completed([pool.submit(_build_chunk, parts, i, per) for i in todo]):
+            job.result()  # a chunk that failed fails the build
+            done += 1
+            if tick:
+                tick(done, total)
 
 
 def _daemonic() -> bool:

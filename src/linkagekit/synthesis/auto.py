@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
-from .distribute import Evaluator, WorkersLost
+from .distribute import Evaluator, workers_lost
 from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
 from .optimize import Outcome, Progress, Settings, optimize
 from .run import Synthesis, _unpack, make_problem
@@ -162,23 +162,23 @@ def _pool(workers: int) -> Evaluator:
 def _results(tasks: Sequence[Any]) -> list[Any]:
     """The results of tasks on :func:`_pool`'s processes; one of them killed (say by the system, out of memory) is
     :class:`~.distribute.WorkersLost` (one line, exit status 1), not an internal error."""
-    from concurrent.futures.process import BrokenProcessPool
-
-    try:
+    with workers_lost("a local worker process of the topology search died (killed?)"):
         return [t.result() for t in tasks]
-    except BrokenProcessPool:
-        raise WorkersLost("a local worker process of the topology search died (killed?)") from None
 
 
-def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
-    """How the whole run went: the best design's outcome with every topology's searches and the time since ``t0``."""
+def _summed(best: Outcome, outs: Sequence[Outcome]) -> Outcome:
+    """``best`` with the searches, generations and designs of all of ``outs`` counted."""
     return replace(
         best,
         restarts=sum(o.restarts for o in outs),
         generations=sum(o.generations for o in outs),
         evaluations=sum(o.evaluations for o in outs),
-        seconds=time.monotonic() - t0,
     )
+
+
+def _whole_run(best: Outcome, outs: list[Outcome], t0: float) -> Outcome:
+    """How the whole run went: the best design's outcome with every topology's searches and the time since ``t0``."""
+    return replace(_summed(best, outs), seconds=time.monotonic() - t0)
 
 
 #: the fraction of the time kept for the dense checks of the results
@@ -227,8 +227,7 @@ def _replicas(
 
 def _merged(outs: Sequence[Outcome]) -> Outcome:
     """The best of one objective's searches, with all of their searches and designs counted."""
-    best = min(outs, key=lambda o: o.cost)
-    return replace(best, restarts=sum(o.restarts for o in outs), evaluations=sum(o.evaluations for o in outs))
+    return _summed(min(outs, key=lambda o: o.cost), outs)
 
 
 def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray | None) -> Outcome:

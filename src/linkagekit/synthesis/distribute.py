@@ -16,6 +16,8 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -201,6 +203,19 @@ RETRIES = 3
 NO_WORKER_WAIT, DASK_POLL = 60.0, 1.0
 #: seconds a killed pool's manager thread is given to end before the search's process goes on (or exits)
 KILLED_POOL_WAIT = 5.0
+
+
+@contextmanager
+def workers_lost(what: str) -> Iterator[None]:
+    """Within it, a pool that lost a process (killed, say by the system, out of memory) is :class:`WorkersLost`
+    saying ``what`` (one line, exit status 1), not a :class:`~concurrent.futures.process.BrokenProcessPool` shown
+    as an internal error."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    try:
+        yield
+    except BrokenProcessPool:
+        raise WorkersLost(what) from None
 
 
 def kill_pool(pool: Any) -> None:
