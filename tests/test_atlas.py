@@ -415,3 +415,24 @@ def test_a_build_in_a_daemonic_process_builds_its_chunks_itself(monkeypatch, tmp
         got = pool.apply(_build_in, (str(tmp_path / "pool"),))
     assert got == str(tmp_path / "pool" / at.path().name), got
     assert np.array_equal(np.load(got, allow_pickle=False), here)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_search_builds_a_missing_atlas_on_its_own_workers(monkeypatch, tmp_path, workers):
+    """``synthesize(..., workers=1)`` built a missing atlas on every core: a user who gave the search one core (on a
+    shared machine) got all of them taken for the build. The build now runs on the search's workers."""
+    monkeypatch.setattr(at, "CHUNK", 256)
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "512")
+    monkeypatch.setenv("LINKAGEKIT_CACHE_DIR", str(tmp_path))
+    asked: list[int | None] = []
+    real = at._run_chunks
+
+    def spy(parts, todo, per, total, tick, workers):  # noqa: ANN001, ANN202 - the build's own arguments
+        asked.append(workers)
+        return real(parts, todo, per, total, tick, workers)
+
+    monkeypatch.setattr(at, "_run_chunks", spy)
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    targets = np.stack([np.cos(t), 0.6 * np.sin(t)], 1)
+    synthesize(targets, seconds=0.5, restarts=1, generations=2, popsize=5, workers=workers, seed=1)
+    assert asked == [workers] and at.path().exists()

@@ -407,3 +407,37 @@ def test_progress_lines_when_stderr_is_not_a_terminal_and_the_file_records_targe
     table = np.array([[float(v) for v in r.split(",")] for r in rows])
     assert table.shape == (9, 3)
     np.testing.assert_allclose(table[:, :2], TARGETS, rtol=1e-8)
+
+
+def _searches_in_a_pool_worker() -> list[str]:
+    """synthesize and --topology auto asked for two workers, run inside a multiprocessing.Pool's (daemonic) worker."""
+    from linkagekit.synthesis.auto import synthesize_auto
+
+    got = []
+    for run in (
+        lambda: synthesize(TARGETS, **{**SMALL, "workers": 2}),
+        lambda: synthesize_auto(TARGETS, max_joints=5, seconds=1.0, workers=2, units="cm"),
+    ):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                out = run()
+                got.append(f"ok feasible={out.feasible} {[str(w.message) for w in caught]}")
+            except BaseException as e:  # noqa: BLE001 - the test shows what was raised there
+                got.append(f"{type(e).__name__}: {e}")
+    return got
+
+
+def test_a_search_asked_for_workers_in_a_pool_worker_runs_there_with_a_warning(monkeypatch) -> None:
+    """A ``multiprocessing.Pool``'s worker may not start processes: ``synthesize(..., workers=2)`` there failed with
+    Python's 'AssertionError: daemonic processes are not allowed to have children'. It searches in that process, and
+    says so."""
+    import multiprocessing
+
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "0")
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply(_searches_in_a_pool_worker)
+    assert len(got) == 2
+    for line in got:
+        assert line.startswith("ok feasible=True"), line
+        assert "workers=2: this is a daemonic worker process" in line, line

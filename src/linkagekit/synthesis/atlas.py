@@ -404,7 +404,9 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
     if tick:
         tick(done, total)
     workers = min(workers or os.cpu_count() or 1, len(todo))
-    if workers <= 1 or _daemonic():
+    from .distribute import daemonic
+
+    if workers <= 1 or daemonic():  # a Pool's worker running synthesize(): the atlas is built here
         for i in todo:
             _build_chunk(parts, i, per)
             done += 1
@@ -424,14 +426,6 @@ def _run_chunks(parts: Path, todo: list[int], per: int, total: int, tick: Tick |
             done += 1
             if tick:
                 tick(done, total)
-
-
-def _daemonic() -> bool:
-    """Whether this process may not start processes of its own (a :class:`multiprocessing.pool.Pool`'s worker, say,
-    running ``synthesize(..., workers=1)``: its first use of the atlas builds it here, not on workers)."""
-    import multiprocessing
-
-    return bool(multiprocessing.current_process().daemon)
 
 
 def _assemble(file: Path, parts: Path, n: int, per: int) -> None:
@@ -779,17 +773,20 @@ def _shaped(problem: Problem, atlas: Atlas) -> np.ndarray:
     return vectors(_nearest_fitting(problem, atlas, inside))
 
 
-def first_answer(problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED) -> Answer:
+def first_answer(
+    problem: Problem, atlas: Atlas | None = None, polish: int = POLISHED, workers: int | None = None
+) -> Answer:
     """The atlas's answer to ``problem`` (see the module's description).
 
     The same for the same problem and atlas: the polish is bounded by its evaluations, not by the
-    clock, so a run resumed from its checkpoint gets the seeds the uninterrupted run had.
+    clock, so a run resumed from its checkpoint gets the seeds the uninterrupted run had. An atlas
+    not yet cached is built first, on ``workers`` processes (default: every core).
     """
     from .objective import best_index
     from .optimize import polish as local
 
     t0 = time.monotonic()
-    atlas = atlas or load(build_report())
+    atlas = atlas or load(build_report(), workers)
     X = _shaped(problem, atlas) if _shape_only(problem) else _placed(problem, atlas)
     lo, hi = problem.bounds
     X = X[np.all((lo <= X) & (hi >= X), axis=1)]

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import InputError
 from .base import Objective, Score, digest
-from .distribute import Evaluator, workers_lost
+from .distribute import Evaluator, usable, workers_lost
 from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
 from .optimize import Outcome, Progress, Settings, optimize
 from .run import Synthesis, _unpack, make_problem
@@ -98,6 +98,7 @@ def synthesize_auto(
     searched (:class:`Tried`).
     """
     t0 = time.monotonic()
+    workers = usable(workers)  # its shares of the time assume the workers run side by side
     xy, inputs, units, source = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
     if inputs is not None:
         raise InputError("--topology auto: targets with input angles (timing) are not supported")

@@ -36,6 +36,28 @@ M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
 _TUNED = False
 
 
+def daemonic() -> bool:
+    """Whether this process may not start processes of its own (a :class:`multiprocessing.pool.Pool`'s worker)."""
+    import multiprocessing
+
+    return bool(multiprocessing.current_process().daemon)
+
+
+def usable(workers: int) -> int:
+    """``workers``, or 1 (with a warning) in a daemonic process, which cannot start them: the work runs in it.
+
+    A :class:`multiprocessing.pool.Pool`'s worker that calls ``synthesize(..., workers=2)`` got Python's
+    ``AssertionError: daemonic processes are not allowed to have children`` from the first search.
+    """
+    if workers > 1 and daemonic():
+        import warnings
+
+        text = f"workers={workers}: this is a daemonic worker process, which cannot start processes; working in it"
+        warnings.warn(text, RuntimeWarning, stacklevel=3)
+        return 1
+    return workers
+
+
 def chunks(X: np.ndarray, parts: int) -> list[np.ndarray]:
     """``X`` split along its designs into ``parts`` nearly equal chunks (more if a chunk would exceed ``MAX_CHUNK``)."""
     k = max(1, parts, -(-len(X) // MAX_CHUNK))
@@ -253,7 +275,7 @@ class Evaluator:
         if workers < 1:
             raise InputError(f"--workers: expected a positive number of processes, got {workers}")
         self.problems = problem if isinstance(problem, tuple) else (problem,)
-        self.workers = workers
+        self.workers = workers if scheduler is not None else usable(workers)
         keep_freed_memory()
         self._pool: Any = None
         self.channel: Channel | None = None  # with local workers: the parent's side of their Channel
@@ -274,9 +296,9 @@ class Evaluator:
                 raise InputError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({e})") from None
             self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]
             self.parts = max(1, sum(self._client.nthreads().values()))
-        elif workers > 1:
+        elif self.workers > 1:
             self._pool = self._new_pool()
-            self.parts = workers
+            self.parts = self.workers
         else:
             self.parts = 1
 

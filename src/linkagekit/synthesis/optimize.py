@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import InputError, LinkageError, shorten
 from ..geometry import FloatArray
 from .base import Objective
-from .distribute import RETRIES, Evaluator, WorkersLost
+from .distribute import RETRIES, Evaluator, WorkersLost, daemonic
 from .objective import best_index
 
 if TYPE_CHECKING:
@@ -116,7 +116,10 @@ class Settings:
 
 
 def default_workers() -> int:
-    """Every core this process may run on (``os.sched_getaffinity``, else ``os.cpu_count()``): the default workers."""
+    """Every core this process may run on (``os.sched_getaffinity``, else ``os.cpu_count()``): the default workers;
+    1 in a daemonic process (a :class:`multiprocessing.pool.Pool`'s worker), which cannot start processes."""
+    if daemonic():
+        return 1
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # no affinity on this platform

@@ -26,6 +26,7 @@ import numpy as np
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError, LinkageError
 from .base import Objective
+from .distribute import usable
 from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
 from .optimize import Optimum, Outcome, Progress, Settings, default_workers, optimize, search
@@ -295,7 +296,7 @@ def synthesize_path(
     mt = MIN_TRANSMISSION if min_transmission is None else min_transmission
     args = (targets, topology, inputs, units, ordered, mt, lengths, pivots, free, reach, 180, shape_only, partial)
     problem = make_problem(*args)
-    workers = default_workers() if workers is None else workers
+    workers = default_workers() if workers is None else usable(workers)
     settings = Settings(seed, seconds, restarts, generations, popsize, goal, workers, scheduler, checkpoint, pareto)
     return finish(problem, _from_atlas(problem, settings, progress), source)
 
@@ -313,7 +314,7 @@ def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progre
 
     def start() -> np.ndarray:
         t0 = time.monotonic()
-        ans = atlas.first_answer(problem)
+        ans = atlas.first_answer(problem, workers=None if settings.scheduler else settings.workers)
         if progress is not None and len(ans.designs):
             progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), time.monotonic() - t0, source="atlas"))
         return ans.designs
