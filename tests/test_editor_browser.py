@@ -762,6 +762,30 @@ def test_mode_buttons_follow_the_slider(open_editor):
     ep.assert_clean()
 
 
+def test_the_modes_listed_after_play_are_those_where_it_paused(open_editor):
+    """Play moved the input but the list of modes stayed the one of the input before it: the Jansen leg has 8 modes at
+    0 deg and 6 between 166 and 218 deg. Paused in there, the list is lk.modes' at the input shown."""
+    ep = open_editor("jansen")
+    buttons = ep.page.locator("[data-role=modes] [data-action=mode]")
+    mech = lk.load(ep.path)
+    assert buttons.count() == len(expected_modes(mech, ep.state()["inputs"])) == 8
+    play = ep.page.locator("[data-action=play]")
+    play.click()
+    shown = lambda: ep.page.evaluate(
+        "() => window.linkagekit.inputOf(window.linkagekit.scene, 'crank')[window.linkagekit.current()]"
+    )  # noqa: E731, E501
+    assert wait_until(lambda: 180.0 <= shown() <= 200.0), f"Play did not reach 180-200 deg (at {shown()})"
+    play.click()  # Pause
+    ep.wait_idle("pause")
+    st = ep.state()
+    assert 180.0 <= st["inputs"]["crank"] <= 205.0, st["inputs"]
+    want = expected_modes(mech, st["inputs"])
+    assert len(want) == 6 and buttons.count() == 6, (
+        f"paused at {st['inputs']}: {buttons.count()} mode buttons, lk.modes has {len(want)}"
+    )
+    ep.assert_clean()
+
+
 def test_a_modes_answer_that_lands_after_a_drag_began_leaves_the_editor_idle(open_editor, monkeypatch):
     """The modes at the shown input are asked 120 ms after the slider moves. When the answer lands after a drag has
     begun (the drag shows the pose: the shown input is no longer the one asked), it was dropped and the page stayed

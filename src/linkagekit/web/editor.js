@@ -470,6 +470,8 @@
     Array.prototype.forEach.call(document.querySelectorAll("input[data-role=input]"), follow);
     // a new driver gets a new range (viewer.js rebuilds them from the scene)
     document.addEventListener("linkagekit:input-added", function (e) { follow(e.detail); });
+    // Play moves the input too: the draft follows it, the modes are asked for once it rests (120 ms: where paused)
+    document.addEventListener("linkagekit:played", function () { refreshModes(); drawDraft(); });
     lk.editor = {doc: function () { return doc; }, timing: timing,
       busy: function () { return inflight || !!pending || finals.length > 0 || modesBusy; }};
     render(cfg.answer);

@@ -462,7 +462,10 @@
     if (play) play.addEventListener("click", function () {
       if (timer !== null) { stop(); return; }
       play.textContent = "Pause";
-      timer = setInterval(function () { show((current + 1) % scene.n); }, playStep());
+      timer = setInterval(function () {
+        show((current + 1) % scene.n);
+        document.dispatchEvent(new CustomEvent("linkagekit:played", {detail: current}));  // the editor's modes follow
+      }, playStep());
     });
     var csv = document.querySelector("[data-action=csv]");
     if (csv) csv.addEventListener("click", function () {
