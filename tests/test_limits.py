@@ -369,3 +369,29 @@ def test_analyze_answers_far_samples_as_their_direction(capsys):
         a, b = far_row.split(",")[1:], near_row.split(",")[1:]
         assert a[:2] == b[:2] == ["true", "false"]  # assembled, not singular
         assert np.allclose([float(v) for v in a[2:]], [float(v) for v in b[2:]], rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["[" * 25000 + "]" * 25000, "- " * 25000 + "x", "{a: " * 25000 + "1" + "}" * 25000],
+    ids=["flow sequences", "block sequences", "flow maps"],
+)
+def test_yaml_nested_beyond_the_c_parsers_recursion_is_refused_not_a_crash(tmp_path, text):
+    """25000 levels of ``[`` (50 kB) crashed the interpreter: libyaml composes recursively in C (a segmentation
+    fault, exit status 139, no message; ``lk.load`` took a notebook down with it). Refused from the parser's events
+    before anything is composed: one line, exit status 2. (A separate process: a crash must not take pytest's.)"""
+    import subprocess
+    import sys
+
+    f = tmp_path / "deep.yaml"
+    f.write_text(text)
+    p = subprocess.run(
+        [sys.executable, "-c", "from linkagekit.cli import main; import sys; sys.exit(main())", "check", str(f)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert p.returncode == 2, (p.returncode, p.stderr[-300:])
+    assert p.stderr.startswith(f"linkagekit: error: {f} at line 1, column ") and p.stderr.endswith(
+        ": nested too deep (at most 32 levels)\n"
+    ), p.stderr

@@ -184,6 +184,7 @@ def _yaml_node(text: str, source: str) -> Any:
     import yaml
 
     try:
+        _bounded_events(text, source)
         nodes = list(yaml.compose_all(text, Loader=_loader_class()))
     except RecursionError:
         raise MechanismFileError(f"{source}: nested too deep (at most {MAX_DEPTH} levels)") from None
@@ -194,6 +195,32 @@ def _yaml_node(text: str, source: str) -> Any:
     if len(nodes) != 1:
         raise MechanismFileError(f"{source}: expected one YAML document, found {len(nodes)}")
     return nodes[0]
+
+
+def _bounded_events(text: str, source: str) -> None:
+    """Refuse a YAML text nested deeper than :data:`MAX_DEPTH` or with more than :data:`MAX_VALUES` nodes, from its
+    parser's events, before anything is composed: libyaml composes recursively in C, and 25000 levels of ``[``
+    (50 kB) crashed the interpreter (a segmentation fault, no message). The parser itself keeps a stack, not a
+    recursion; aliases are not expanded here (the conversion counts them)."""
+    import yaml
+
+    depth = count = 0
+    for event in yaml.parse(text, Loader=_loader_class()):
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_DEPTH:
+                raise MechanismFileError(
+                    f"{source}{_where(event.start_mark)}: nested too deep (at most {MAX_DEPTH} levels)"
+                )
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
+        elif not isinstance(event, yaml.ScalarEvent):
+            continue
+        count += 1
+        if count > MAX_VALUES:
+            raise MechanismFileError(
+                f"{source}{_where(event.start_mark)}: more than {MAX_VALUES} values: not a mechanism file"
+            )
 
 
 def _json_data(text: str, source: str) -> Any:
