@@ -301,3 +301,61 @@ def test_a_motion_too_fast_for_its_time_span_is_refused_in_one_line(monkeypatch,
     # the same motion at a sane speed still runs under the real budget
     monkeypatch.setattr(dyn, "MAX_STEPS", 200_000)
     assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.1:0.01", "--speed", "100"]) == 0
+
+
+#: an arm on a pivot O lifted by a cylinder from the frame's C to the arm's B, posed fully retracted (1.2 m)
+ARM = {
+    "format": "linkagekit/1",
+    "joints": {"O": [0, 0], "C": [2, 0], "B": [0.89, 0.45596052460711988]},
+    "links": {
+        "ground": ["O", "C"],
+        "arm": {"joints": ["O", "B"], "mass": 20, "cg": [0.445, 0.22798026230355994], "inertia": 1.7},
+    },
+    "drivers": [{"cylinder": ["C", "B"], "name": "lift", "stroke": [1.2, 2.6]}],
+    "gravity": [0, -9.81],
+}
+
+
+def _arm_by_hand(force: float, times: np.ndarray) -> tuple[np.ndarray, float]:
+    """The arm's cylinder length at ``times`` and when it reaches 2.6 m, from the arm's own equation: the angle phi
+    of OB, (I + m |OG|^2) phi'' = the moment of gravity + the cylinder's force along C -> B."""
+    rb, rg, m, inertia = math.hypot(0.89, 0.45596052460711988), math.hypot(0.445, 0.22798026230355994), 20.0, 1.7
+    phi0 = math.atan2(0.45596052460711988, 0.89)
+
+    def length(phi: float) -> float:
+        return math.hypot(rb * math.cos(phi) - 2.0, rb * math.sin(phi))
+
+    def rhs(_t: float, y: list[float]) -> list[float]:
+        phi = y[0]
+        bx, by = rb * math.cos(phi), rb * math.sin(phi)
+        s = length(phi)
+        moment = bx * (force * by / s) - by * (force * (bx - 2.0) / s) - m * 9.81 * rg * math.cos(phi)
+        return [y[1], moment / (inertia + m * rg * rg)]
+
+    def end(_t: float, y: list[float]) -> float:
+        return length(y[0]) - 2.6
+
+    end.terminal = True  # type: ignore[attr-defined]
+    sol = solve_ivp(
+        rhs, (0.0, 1.0), [phi0, 0.0], method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True, events=end
+    )
+    return np.array([length(p) for p in sol.sol(times)[0]]), float(sol.t_events[0][0])
+
+
+def test_a_cylinder_posed_at_its_stroke_end_moves_away_from_it_and_stops_pushed_into_it():
+    """Posed fully retracted (the commonest start of an actuator), the table began 1e-4 of the stroke inside it:
+    pushed out, the motion crossed the table's end from outside and stopped at once at the end behind it; pushed in,
+    it ran on through lengths that do not assemble, with no stop. Pushed out it follows the arm's own equation to the
+    other end; pushed in it stops at once, at 1.2 m."""
+    mech = lk.Mechanism.from_dict(ARM)
+    times = np.array([0.0, 0.1, 0.2, 0.3])
+    res = lk.simulate(mech, times, torque=300.0)
+    want, t_end = _arm_by_hand(300.0, times)
+    assert res.stopped is None
+    np.testing.assert_allclose(res.inputs["lift"], want, rtol=0, atol=1e-8)
+    late = lk.simulate(mech, np.array([0.0, 0.5]), torque=300.0)
+    assert late.stopped is not None and "lift" in late.stopped and "2.6 m" in late.stopped
+    assert abs(float(re.search(r"t = ([0-9.]+) s", late.stopped).group(1)) - t_end) < 1e-4, (late.stopped, t_end)
+    held = lk.simulate(mech, np.array([0.0, 0.1, 0.2]), torque=100.0)  # less than gravity's 114.89 N: pulled in
+    assert held.stopped is not None and "t = 0 s" in held.stopped and "1.2 m" in held.stopped
+    assert held.n == 1 and np.all(held.assembled)

@@ -328,9 +328,9 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
         if d.type.cyclic:  # the pose's angle, within a turn of the interval
             shift = 2 * math.pi * math.floor((x0 - lo * to_si) / (2 * math.pi))
         a, b = lo * to_si + shift, hi * to_si + shift
-        if a <= x0 <= b:
+        if a <= x0 <= b:  # just inside the ends (singular at a toggle), but never leaving the pose out
             margin = span * 1e-4
-            return np.linspace(a + margin, b - margin, points + 1), None
+            return np.linspace(min(a + margin, x0), max(b - margin, x0), points + 1), None
     raise InputError(f"{mech.source}: the mechanism does not assemble at its pose's input")
 
 
@@ -587,7 +587,9 @@ def _with_events(
     def above(_t: float, y: Any) -> float:
         return hi - float(y[0])
 
+    # only a motion leaving the table stops: a pose on its end moving inwards crosses the event's zero the other way
     below.terminal = above.terminal = True  # type: ignore[attr-defined]
+    below.direction = above.direction = -1.0  # type: ignore[attr-defined]
     span = (times[0], times[-1])
     sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[below, above])
     if sol.status < 0:
