@@ -339,3 +339,21 @@ def test_spare_workers_search_the_topologies_again_each_from_a_seed_of_its_own()
     outs = [Outcome(np.full(2, float(c)), c, 3, 0, 100, 1.0, "time") for c in (0.5, 0.2, 0.9)]
     m = _merged(outs)
     assert m.cost == 0.2 and np.array_equal(m.x, outs[1].x) and m.restarts == 9 and m.evaluations == 300
+
+
+def test_a_topology_auto_names_is_a_topology_of_the_command_line_too(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """The docs say every enumerated name ``--topology auto`` prints is a ``--topology`` of its own, and the Python
+    API took them, but the command line refused them ("neither a topology nor a file")."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    csv = tmp_path / "ellipse.csv"
+    np.savetxt(csv, np.stack([np.cos(t), 0.6 * np.sin(t)], 1), delimiter=",", header="x,y", comments="")
+    out = tmp_path / "out.yaml"
+    args = ["synthesize", str(csv), "--topology", "sixbar-1", "--seconds", "1", "--workers", "1", "-o", str(out)]
+    args += ["--restarts", "1", "--generations", "5"]
+    code = main(args)
+    text = capsys.readouterr().out
+    assert code == 0, text
+    mech = lk.load(out)
+    assert len(mech.joint_names) == 6 and "sixbar-1" in mech.name  # A, C, B, D, E and P
+    assert main(["synthesize", str(csv), "--topology", "sixbar-99999", "-o", str(out)]) == 2
+    assert "such as sixbar-1" in capsys.readouterr().err

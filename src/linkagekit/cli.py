@@ -1832,16 +1832,19 @@ def _topology(args: argparse.Namespace, unit: str) -> Any:
 
     import linkagekit as lk
 
-    from .synthesis.space import TOPOLOGIES
+    from .synthesis.space import TOPOLOGIES, is_builtin
 
     name: str = args.topology
-    if name in TOPOLOGIES:
+    if is_builtin(name):  # a hand-drawn one, or an enumerated one that --topology auto names (sixbar-1, ...)
         if args.free:
             raise InputError("--free goes with a template file given as --topology")
         return name
     if not os.path.exists(name):
         known = ", ".join(TOPOLOGIES)
-        raise InputError(f"--topology: '{shorten_path(name)}' is neither a topology ({known}) nor a file")
+        raise InputError(
+            f"--topology: '{shorten_path(name)}' is neither a topology ({known}, or a name --topology auto prints, "
+            "such as sixbar-1) nor a file"
+        )
     template = lk.load(name)
     if template.length_unit != unit:
         raise InputError(
