@@ -614,3 +614,57 @@ def test_timed_targets_print_the_input_offset_that_the_mechanism_confirms(tmp_pa
     assert np.max(np.abs(e - table[:, 5])) <= 1e-5 * L
     assert min(abs((offset - known + 180.0) % 360.0 - 180.0) for known in (25.0, 85.0)) <= 0.05, offset
     assert_buildable(mech)
+
+
+# ------------------------------------------------- a best design that breaks a constraint (a new user's review)
+def _ellipse_csv(tmp_path: Path) -> Path:
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    return write_csv(tmp_path / "ellipse.csv", np.stack([np.cos(t), 0.6 * np.sin(t)], 1))
+
+
+def test_a_best_design_that_breaks_a_constraint_is_written_named_infeasible_and_exits_1(tmp_path, capsys):
+    """The summary said CONSTRAINTS NOT MET but the exit status was 0 and the file's name did not say it: a script
+    took the file for a result. A transmission angle within [89, 91] deg over a whole turn cannot be had: the best
+    design is written, named INFEASIBLE, and the command says so in one line on stderr with exit status 1."""
+    out = tmp_path / "o.yaml"
+    args = ["synthesize", str(_ellipse_csv(tmp_path)), "-o", str(out), "--min-transmission", "89", "--seconds", "1"]
+    code, text, err = run_main([*args, "--workers", "1"], capsys)
+    assert code == 1 and "CONSTRAINTS NOT MET" in text
+    assert err.strip().splitlines()[-1] == (
+        f"linkagekit: synthesize: no design found meets the constraints; {out} holds the best one, INFEASIBLE"
+    )
+    mech = lk.load(out)
+    assert mech.name.startswith("INFEASIBLE synthesised fourbar: max error ")
+    mu = lk.check(mech).to_dict()
+    assert "INFEASIBLE" in mech.description and mu is not None
+
+
+def test_lengths_bound_the_ground_link_too():
+    """``--lengths MIN:MAX`` bounds every link, the docs say, but the ground's pivots were left free: a design whose
+    two pivots were a nanometre apart (a rigid triangle turning about one pivot) was 'feasible'."""
+    from linkagekit.synthesis.objective import _length_excess
+    from linkagekit.synthesis.run import make_problem
+
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    problem = make_problem(np.stack([np.cos(t), 0.6 * np.sin(t)], 1), "fourbar", lengths=(1.0, 2.0))
+    sp = problem.space
+    pose = np.array([complex(*sp.template.pose_array()[k]) for k in range(len(sp.template.joint_names))])[:, None]
+    A, B = sp.joint("A"), sp.joint("B")
+    for j, (a, b) in {"A": (0, 0), "B": (1.5, 0), "C": (0, 1.5), "D": (1.5, 1.5), "P": (0.75, 2.8)}.items():
+        pose[sp.joint(j)] = a + 1j * b
+    assert _length_excess(sp, pose, 1.0, 2.0)[0] == 0.0  # every link, the ground's 1.5 too, within [1, 2]
+    pose[B] = pose[A] + 1e-9
+    assert abs(_length_excess(sp, pose, 1.0, 2.0)[0] - (1.0 - 1e-9) / 2.0) < 1e-12
+
+
+def test_a_template_whose_tracer_is_on_the_ground_is_refused(tmp_path, capsys):
+    """A template with P listed on the ground link wrote a 'curve' of RMS radius 7e-13 m with exit status 0."""
+    tpl = tmp_path / "t.yaml"
+    tpl.write_text(
+        "joints: {A: [0, 0], B: [4, 1], C: [2, 0], D: [0.82, 4.86], P: [5.6, 3.45]}\n"
+        "links: {ground: [A, B, P], crank: [A, C], coupler: [C, D], rocker: [B, D]}\n"
+        "drivers: [{link: crank, pivot: A, toward: C}]\n"
+    )
+    args = ["synthesize", str(_ellipse_csv(tmp_path)), "--topology", str(tpl), "-o", str(tmp_path / "o.yaml")]
+    code, _, err = run_main(args, capsys)
+    assert_one_line_error(code, err, "the tracer P is on the ground link")

@@ -1430,7 +1430,19 @@ def _synthesize(args: argparse.Namespace) -> int:
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     if out.pareto:
         print(pareto_text(out, targets.unit, paths))
-    return 0
+    return _met(out, args.output)
+
+
+def _met(out: Any, path: str) -> int:
+    """The exit status of a path synthesis: 0, or 1 with one line when the best design found breaks a constraint
+    (written all the same, named INFEASIBLE, to be looked at; a script must not take it for a result)."""
+    if out.feasible:
+        return 0
+    print(
+        f"{PROG}: synthesize: no design found meets the constraints; {path} holds the best one, INFEASIBLE",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def pareto_paths(output: str, n: int) -> list[str]:
@@ -1496,7 +1508,7 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     text.insert(-1, f"topology {out.topology} ({joints} joints), crank {a['start']:.6g} to {a['stop']:.6g} deg")
     text.insert(-1, f"searched: {tried} (rms error / diagonal)")
     print("\n".join(text))
-    return 0
+    return _met(out, args.output)
 
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given

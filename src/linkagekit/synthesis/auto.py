@@ -701,6 +701,8 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
     ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0
     mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
+    if not ok:  # as a single topology's search names it: the file says so where a reader looks first
+        mech = replace(mech, name=f"INFEASIBLE {mech.name} (it breaks a constraint)")
     sweep = (float(np.degrees(start)), float(np.degrees(start + span))) if proj.partial else None
     out = Synthesis(
         mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sweep, topology=sp.topology,

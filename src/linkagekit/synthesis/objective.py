@@ -728,11 +728,10 @@ def _ordered(d2: np.ndarray, closed: bool = True) -> np.ndarray:
 
 
 def _length_excess(sp: DesignSpace, pose: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Largest relative excess of a link length (between two joints of one link) outside ``[lo, hi]``."""
+    """Largest relative excess of a link length (between two joints of one link, the ground's pivots too: two pivots
+    a nanometre apart made a 'feasible' four-bar of a rigid triangle) outside ``[lo, hi]``."""
     out = np.zeros(pose.shape[1])
     for ln in sp.template.links:
-        if ln.name == "ground":
-            continue
         ids = [sp.joint(j) for j in ln.joints]
         for i, a in enumerate(ids):
             for b in ids[i + 1 :]:

@@ -379,7 +379,15 @@ def _finish(problem: Problem, outcome: Outcome, x: np.ndarray, source: str | Non
     max_err = float(np.max(err)) if np.all(np.isfinite(err)) else float("nan")
     if np.isfinite(max_err):
         name += f": max error {max_err:.4g} {unit} ({100 * max_err / problem.scale:.3g} % of the targets' diagonal)"
-    mech = problem.mechanism(x, name)
+    if e.violation[0] != 0:  # the best found breaks a constraint: the file says so where a reader looks first
+        name = f"INFEASIBLE {name} (it breaks a constraint)"
+    try:
+        mech = problem.mechanism(x, name)
+    except InputError as exc:  # pushed against its bounds, the best found put two joints at one spot
+        raise LinkageError(
+            f"no design found meets the constraints, and the best one is no mechanism ({exc.args[0].split(': ')[-1]}):"
+            " widen --pivots or --lengths"
+        ) from None
     start, span = np.degrees(e.sweep[0, 0] + turn), np.degrees(e.sweep[0, 1])
     out = Synthesis(
         mech,

@@ -333,6 +333,8 @@ def template_space(
     for j, _ in items:
         if j not in names:
             raise UnknownNameError(f"{mech.source}: --free: no joint named '{j}' (joints: {', '.join(names)})")
+    if any(tracer in ln.joints for ln in mech.links if ln.name == "ground"):
+        raise InputError(f"{mech.source}: the tracer {tracer} is on the ground link: it draws no curve")
     lo = np.array([b[k][0] for _, b in items for k in (0, 1)], float)
     hi = np.array([b[k][1] for _, b in items for k in (0, 1)], float)
     if transmission is None:
