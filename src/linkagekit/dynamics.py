@@ -356,27 +356,42 @@ def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, pe
     ``M``, ``Q`` and ``C`` go on smoothly along the branch; a least-squares polynomial of degree
     :data:`DEGREE` over the samples from ``BRIDGE`` to ``4 BRIDGE`` steps away on both sides
     bridges them (the interpolant's slope divides value errors by the step: they must be tiny).
+    A full-turn table (``period``) starts at the pose, so a change point near its start has one
+    side at the table's other end: the samples are taken from the table repeated a turn either
+    way (a pose 2 deg from a parallelogram's flat position fitted from one side only: ``M`` off
+    by 7e-4).
     """
     h = x[1] - x[0]
     if len(points) == 0:
         return np.zeros(len(x), bool)
     unique = np.unique(np.round(points / h, 3)) * h  # two sign steps may meet at one change point
-    centres = [c for p in unique for c in ((p,) if period is None else (p - period, p, p + period))]
-    near_any = np.zeros(len(x), bool)
-    for c in centres:
-        near_any |= np.abs(x - c) < BRIDGE * h
-    for c in centres:
-        d = np.abs(x - c)
-        near, ring = d < BRIDGE * h, (d <= 4 * BRIDGE * h) & ~near_any
-        if not near.any() or ring.sum() < 4 * DEGREE:
+    images = (0.0,) if period is None else (-period, 0.0, period)
+    xs, Ys = _repeated(x, Y, period)
+    near_any, free = np.zeros(len(x), bool), np.ones(len(xs), bool)
+    for c in unique:
+        for k in images:
+            near_any |= np.abs(x - (c + k)) < BRIDGE * h
+            free &= np.abs(xs - (c + k)) >= BRIDGE * h
+    scale = 4 * BRIDGE * h
+    for c in unique:
+        ring = (np.abs(xs - c) <= scale) & free
+        if ring.sum() < 4 * DEGREE:
             continue
-        scale = 4 * BRIDGE * h
-        V = np.polynomial.chebyshev.chebvander((x[ring] - c) / scale, DEGREE)  # well conditioned on [-1, 1]
-        coef = np.linalg.solve(V.T @ V, V.T @ Y[ring])  # least squares by the (small, tame) normal equations
-        u = (x[near] - c) / scale
-        Y[near] = np.polynomial.chebyshev.chebvander(u, DEGREE) @ coef
-        dY[near] = np.polynomial.chebyshev.chebvander(u, DEGREE - 1) @ np.polynomial.chebyshev.chebder(coef) / scale
+        V = np.polynomial.chebyshev.chebvander((xs[ring] - c) / scale, DEGREE)  # well conditioned on [-1, 1]
+        coef = np.linalg.solve(V.T @ V, V.T @ Ys[ring])  # least squares by the (small, tame) normal equations
+        for k in images:
+            near = np.abs(x - (c + k)) < BRIDGE * h
+            u = (x[near] - (c + k)) / scale
+            Y[near] = np.polynomial.chebyshev.chebvander(u, DEGREE) @ coef
+            dY[near] = np.polynomial.chebyshev.chebvander(u, DEGREE - 1) @ np.polynomial.chebyshev.chebder(coef) / scale
     return near_any
+
+
+def _repeated(x: np.ndarray, Y: np.ndarray, period: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The table's grid and rows, repeated a turn before and after it when it is periodic (its last row is its first)."""
+    if period is None:
+        return x, Y
+    return np.concatenate([x[:-1] - period, x[:-1], x + period]), np.concatenate([Y[:-1], Y[:-1], Y])
 
 
 def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> Reduced:
