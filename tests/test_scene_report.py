@@ -237,3 +237,25 @@ def test_report_bad_arguments_exit_2_with_one_line(argv, words, capsys, monkeypa
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and words in err and "Traceback" not in err
     assert not (ROOT / "out.html").exists() and not (ROOT / "out.txt").exists()
+
+
+def test_the_picture_commands_follow_the_branch_through_change_points_when_asked(tmp_path, capsys):
+    """``analyze --branch continuous`` kept a parallelogram one, but ``report``, ``plot`` and ``animate`` had no
+    ``--branch``: their pictures folded it into a crossed four-bar past 180 deg. The report's columns are now those of
+    ``lk.analyze(..., branch="continuous")`` (the coupler keeps its direction: its angle stays the pose's to 1e-9
+    deg); without the option, those of the pose's signs (it folds); with ``--time`` the option is refused."""
+    path = EX / "seed003_ex22.yaml"
+    mech = lk.load(path)
+    for branch in ("continuous", "pose"):
+        out = tmp_path / f"{branch}.html"
+        assert main(["report", str(path), "-o", str(out), "--branch", branch]) == 0
+        doc = _scene_of(out.read_text(encoding="utf-8"))
+        res = lk.analyze(mech, branch=branch)
+        for col, values in res.columns().items():
+            got = np.array([np.nan if v is None else v for v in doc["columns"][col]], dtype=float)
+            np.testing.assert_array_equal(got, np.asarray(values, float))
+        angle = np.array(doc["columns"]["coupler.angle"], dtype=float)
+        turned = np.nanmax(np.abs(angle - angle[0]))
+        assert (turned < 1e-9) if branch == "continuous" else (turned > 1.0), (branch, turned)
+    assert main(["plot", str(path), "-o", str(tmp_path / "p.png"), "--branch", "continuous", "--time", "0:1:0.5"]) == 2
+    assert "--branch goes with a sweep" in capsys.readouterr().err

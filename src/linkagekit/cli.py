@@ -277,12 +277,14 @@ def _format_option(p: argparse.ArgumentParser, *choices: str) -> None:
 
 
 def _sweep_option(p: argparse.ArgumentParser) -> None:
+    """``--angles`` (and ``--branch``, how the sweep follows its branch) of the picture commands."""
     p.add_argument(
         "--angles",
         action="append",
         metavar="START:STOP:STEP",
         help="the sweep (NAME=START:STOP:STEP per driver; repeatable); default: the file's",
     )
+    _branch_option(p)
 
 
 def _analyze_arguments(p: argparse.ArgumentParser) -> None:
@@ -326,6 +328,11 @@ def _analyze_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="zero input speed and acceleration: the driver torques that balance gravity and the loads",
     )
+    _branch_option(p)
+
+
+def _branch_option(p: argparse.ArgumentParser) -> None:
+    """``--branch`` of ``analyze`` and the picture commands' sweeps."""
     p.add_argument(
         "--branch",
         choices=BranchMode.words(),
@@ -393,6 +400,10 @@ def _timed(args: argparse.Namespace) -> bool:
         return False
     if args.angles:
         raise InputError("--time draws a simulated motion, --angles a sweep: give one of them")
+    if BranchMode.parse(args.branch) is BranchMode.CONTINUOUS:
+        raise InputError(
+            "--branch goes with a sweep: a simulated motion (--time) follows its branch through change points"
+        )
     return True
 
 
@@ -411,10 +422,16 @@ def _motion(mech: Mechanism, args: argparse.Namespace, times: np.ndarray | None 
 
 def _solved(mech: Mechanism, args: argparse.Namespace) -> Result:
     """What a picture command draws: the simulated motion of ``--time``, else the sweep (``--angles`` or the file's)."""
-    import linkagekit as lk
 
     res = _motion(mech, args)
-    return lk.analyze(mech, _sweep(mech, args.angles)) if res is None else res
+    return _swept(mech, args, _sweep(mech, args.angles)) if res is None else res
+
+
+def _swept(mech: Mechanism, args: argparse.Namespace, inputs: Any) -> Result:
+    """The sweep a picture command draws, on the branch ``--branch`` says."""
+    import linkagekit as lk
+
+    return lk.analyze(mech, inputs, branch=BranchMode.parse(args.branch))
 
 
 def _torque_law(mech: Mechanism, args: argparse.Namespace) -> tuple[dict[str, float] | None, dict[str, Any] | None]:
@@ -1297,7 +1314,7 @@ def _animate(args: argparse.Namespace) -> int:
         )
     if frames != n:  # evenly over each driver's sweep (or over the times), ends included
         values = {k: np.linspace(v[0], v[-1], frames) for k, v in values.items()}
-    res = _motion(mech, args, values["time"]) if timed else lk.analyze(mech, values)
+    res = _motion(mech, args, values["time"]) if timed else _swept(mech, args, values)
     assert res is not None
     with _progress("frames") as tick:
         animate(res, args.output, fps=fps, progress=tick)
