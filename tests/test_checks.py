@@ -744,6 +744,49 @@ def test_pressure_angle_of_the_slider_crank(examples):
     assert "Pressure angle (between rod 'rod' and the slide): max 32.1574°" in lk.check(mech).text()
 
 
+def test_a_resting_slider_has_one_dwell_not_hundreds_of_limit_positions(examples, tmp_path, capsys):
+    """An isosceles slider-crank (crank = rod = 50 mm, no offset; review item 5). By hand: in the pose's mode
+    the block is at 100 cos(theta) mm from O for theta in [-90, 90] deg and rests at O for theta in [90, 270]
+    (the rod folded back over the crank), so its limit positions are the max 100 mm at 0 deg and the min at O,
+    held from 90 to 270 deg, and it advances over 90 deg of crank and returns over 90.  The rounding of its
+    resting velocity (1e-10) used to flip sign at hundreds of samples: 627 alternating min and max entries,
+    and no time ratio.  The shipped slider-crank keeps its two exact limit positions and time ratio 1."""
+    s2 = 50 * math.sqrt(0.5)
+    doc = {
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O": [0, 0], "A": [s2, s2], "B": [2 * s2, 0]},
+        "links": {
+            "ground": ["O"],
+            "crank": {"joints": ["O", "A"], "mass": 0.2, "cg": [s2 / 2, s2 / 2], "inertia": 1e-4},
+            "rod": {"joints": ["A", "B"], "mass": 0.2, "cg": [1.5 * s2, s2 / 2], "inertia": 1e-4},
+            "block": {"joints": ["B"], "mass": 0.5, "cg": [2 * s2, 0]},
+        },
+        "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A", "angles": {"start": 0, "stop": 360, "step": 1}}],
+    }
+    (sl,) = lk.check(lk.Mechanism.from_dict(doc)).to_dict()["sliders"]
+    top, rest = sl["limit_positions"]
+    assert top == {"input": pytest.approx(0.0, abs=DEG), "position": pytest.approx(100 - 2 * s2, abs=1e-12),
+                   "extreme": "max"}  # fmt: skip
+    # the dwell's ends: where the block comes within 1e-10 of its stroke of O (slope 100 mm/rad: 1e-10 rad)
+    assert rest == {"input": pytest.approx(90.0, abs=1e-7), "position": pytest.approx(-2 * s2, abs=1e-12),
+                    "extreme": "min", "until": pytest.approx(270.0, abs=1e-7)}  # fmt: skip
+    assert sl["stroke"] == pytest.approx(100.0, abs=1e-9) and sl["time_ratio"] == pytest.approx(1.0, rel=REL)
+    assert sl["input_travel"] == pytest.approx({"rising": 90.0, "falling": 90.0, "rest": 180.0}, abs=1e-7)
+    path = tmp_path / "iso.json"
+    path.write_text(json.dumps(doc))
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "crank = 90.000000 deg to 270.000000 deg: block at -70.710678 mm (min, at rest)" in out
+    assert "90.000000 deg while it returns, 180.000000 deg at rest)" in out and len(out.splitlines()) < 40
+    (sc,) = lk.check(lk.load(examples / "slider_crank.yaml")).to_dict()["sliders"]
+    r, rod, x0 = 0.05, 0.0939414711402797, 0.115  # the block at r + l and l - r from O, at 0 and 180 deg
+    assert [(lim["input"], lim["extreme"]) for lim in sc["limit_positions"]] == [
+        (pytest.approx(0.0, abs=DEG), "max"), (pytest.approx(180.0, abs=DEG), "min")]  # fmt: skip
+    assert [lim["position"] for lim in sc["limit_positions"]] == pytest.approx([r + rod - x0, rod - r - x0], abs=1e-12)
+    assert sc["time_ratio"] == pytest.approx(1.0, rel=REL) and sc["input_travel"] == {"rising": 180.0, "falling": 180.0}
+
+
 def test_a_slider_driver_is_not_a_slider_fact():
     """A slider whose position is the input has nothing to report (its stroke is the sweep)."""
     mech = lk.Mechanism.from_dict(

@@ -8,7 +8,9 @@
   by hand, integrated by SciPy, gives the same motion;
 * a motor-driven four-bar from rest settles into a periodic motion;
 * a parallelogram stays a parallelogram through its flat positions;
-* a toggle stops the motion with one line (exit 1 after the output); bad input exit 2.
+* a toggle stops the motion with one line (exit 1 after the output); bad input exit 2;
+* several drivers: a cylinder's stroke end stops the motion where the motion (its stroke
+  widened) reaches it, whatever the output step.
 """
 
 import json
@@ -20,6 +22,7 @@ import numpy as np
 import pytest
 import yaml
 from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicHermiteSpline
 
 import linkagekit as lk
 from linkagekit.cli import main
@@ -225,6 +228,34 @@ def test_two_drivers_kinetostatics_agrees(tmp_path):
     T = res.forces.driver_torque
     assert np.max(np.abs(T["crank1"] - 0.05)) < 1e-8 and np.max(np.abs(T["crank2"] + 0.02)) < 1e-8
     assert np.ptp(res.inputs["crank1"]) > 1.0
+
+
+def test_two_drivers_stop_at_a_cylinders_stroke_end_whatever_the_output_step(tmp_path, capsys):
+    """The excavator's boom cylinder pushed to its 2.9 m stroke end (review item 3): the stop is that end,
+    when and where the same motion with the stroke widened reaches 2.9 m (its cubic Hermite crossing between
+    outputs 1 ms apart: ~1e-12 s), to the line's 6 digits; before, the line gave the last output time (0.25
+    s with a 0.25 s step, 0.38 s with 0.01) and called it a singular position."""
+    doc = _example("excavator_boom.yaml")
+    torque = {"boom_cylinder": 4e5, "stick_cylinder": 0.0}
+    doc["drivers"][0]["stroke"] = [1.8, 3.0]
+    wide = lk.simulate(lk.Mechanism.from_dict(doc), [0.0, 0.38, 0.381], torque=torque)
+    assert wide.stopped is None
+    t, q, w = wide.time[1:], wide.inputs, wide.speeds
+    boom = CubicHermiteSpline(t, q["boom_cylinder"][1:], w["boom_cylinder"][1:])
+    (t_end,) = boom.solve(2.9, extrapolate=False)
+    stick = CubicHermiteSpline(t, q["stick_cylinder"][1:], w["stick_cylinder"][1:])(t_end)
+    mech = lk.load(EXAMPLES / "excavator_boom.yaml")
+    lines = [lk.simulate(mech, np.arange(0.0, 3.0, step), torque=torque).stopped for step in (0.25, 0.01)]
+    assert lines[0] == lines[1]
+    stop = re.search(r"t = (\S+) s \(boom_cylinder = (\S+) m, stick_cylinder = (\S+) m\): (.*)", lines[0])
+    assert abs(float(stop[1]) - t_end) <= 5e-7 * t_end and float(stop[2]) == 2.9
+    assert abs(float(stop[3]) - stick) <= 5e-6 * stick
+    assert stop[4] == "boom_cylinder reached the upper end of its stroke, 2.9 m, that the motion cannot pass"
+    out = tmp_path / "out.csv"
+    args = ["simulate", str(EXAMPLES / "excavator_boom.yaml"), "--time", "0:3:0.01", "--format", "csv", "-o", str(out)]
+    assert main([*args, "--torque", "boom_cylinder=4e5", "--torque", "stick_cylinder=0"]) == 1
+    assert capsys.readouterr().err.strip().splitlines() == [f"linkagekit: {lines[0]}"]
+    assert out.read_text().strip().splitlines()[-1].startswith("0.38,")  # every output time before the end
 
 
 def test_cli_json_has_the_time_beside_the_inputs(tmp_path, capsys):

@@ -48,6 +48,9 @@ N_BISECT = 60
 TOUCH = 0.05
 #: a rocker whose angular velocity stays within this share of its largest is at rest (the rest is rounding)
 REST = 1e-9
+#: a slider whose position moves less than this share of its stroke over two or more sample steps in a row rests there
+#: (a dwell: its velocity is rounding, whose sign says nothing)
+DWELL = 1e-10
 #: check warns when a four-bar's transmission angle goes below this (degrees; synthesize's --min-transmission default)
 MIN_TRANSMISSION = 20.0
 #: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
@@ -876,12 +879,16 @@ def _change_dead_points(
 
 
 class _Limit(NamedTuple):
-    """A limit position: the input (internal units), the rocker's angle (rad), ``"min"``/``"max"``, the dense sample."""
+    """A limit position: the input (internal units), the rocker's angle (rad), ``"min"``/``"max"``, the dense sample.
+
+    ``until``: for a dwell (a slider at rest at its extreme over an interval), the input where it moves again.
+    """
 
     x: float
     angle: float
     extreme: str
     sample: int
+    until: float | None = None
 
 
 def _transmission(run: _Run, li: int, extremes: dict[int, _Bracket], fin: _Final) -> dict[str, Any]:
@@ -937,16 +944,26 @@ def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -
     return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
 
 
+def _moves_on(t: _Limit) -> float:
+    """Where the output leaves a limit position: the end of its dwell, or the limit position itself."""
+    return t.x if t.until is None else t.until
+
+
 def _time_ratio(run: _Run, limits: list[_Limit]) -> dict[str, Any]:
-    """Over a full turn with one limit position each way: the input's travel each way and their ratio."""
+    """Over a full turn with one limit position each way: the input's travel each way and their ratio.
+
+    A dwell (a slider at rest at an extreme) counts in neither travel.
+    """
     if not (run.cyclic and len(limits) == 2 and {t.extreme for t in limits} == {"min", "max"}):
         return {}
-    vmin = next(t.x for t in limits if t.extreme == "min")
-    vmax = next(t.x for t in limits if t.extreme == "max")
-    rising = float(np.mod(vmax - vmin, run.total))
-    falling = run.total - rising
+    vmin = next(t for t in limits if t.extreme == "min")
+    vmax = next(t for t in limits if t.extreme == "max")
+    rising = float(np.mod(vmax.x - _moves_on(vmin), run.total))
+    falling = run.total - rising - sum(float(np.mod(_moves_on(t) - t.x, run.total)) for t in (vmin, vmax))
+    rest = run.total - rising - falling
     return {
-        "strokes": {"rising": rising / run.factor, "falling": falling / run.factor},
+        "strokes": {"rising": rising / run.factor, "falling": falling / run.factor}
+        | ({"rest": rest / run.factor} if rest else {}),
         "time_ratio": max(rising, falling) / min(rising, falling) if min(rising, falling) > 0 else None,
     }
 
@@ -1022,10 +1039,12 @@ def _turns_fully(run: _Run, angle: np.ndarray) -> bool:
 
 
 def _slider_brackets(run: _Run, k: int) -> tuple[list[_Bracket], dict[int, _Bracket]]:
-    """Slider ``k``'s limit positions (its velocity changes sign) and its pressure angle's extremes."""
+    """Slider ``k``'s limit positions (its velocity changes sign between moving samples) and its pressure angle's
+    extremes.  Where it rests (:func:`_resting`) the sign of its velocity is rounding: :func:`_dwells` says those."""
     sw, row = run.sw, run.q.sv(k)
     v = run.rows[row]
-    ia = np.flatnonzero(sw.has_next)
+    moving = ~_resting(run, run.q.position(run.st)[k])
+    ia = np.flatnonzero(sw.has_next & moving & moving[sw.next])
     va, vb = v[ia], v[sw.next[ia]]
     hit = np.isfinite(va) & np.isfinite(vb) & (va != 0) & (np.sign(vb) != np.sign(va))
     limits = [_Bracket(sw.x[i], sw.nx[i], row, int(i), float(np.sign(v[i]))) for i in ia[hit]]
@@ -1057,6 +1076,7 @@ def _slider_facts(
             lims.append(
                 _Limit(b.x, float(refined[b.col]), "max" if b.sign is not None and b.sign > 0 else "min", b.sample)
             )
+    lims += _dwells(run, k, origin)
     lims.sort(key=lambda t: run.file_value(t.x))
     cand = np.concatenate([dense[np.isfinite(dense)], [t.angle for t in lims]])
     out: dict[str, Any] = {
@@ -1065,7 +1085,7 @@ def _slider_facts(
         "joint": names[sl.joint],
         "driver": mech.drivers[run.driver].name,
         "stroke": float(np.ptp(cand)) if cand.size else None,
-        "limit_positions": [{"input": run.file_value(t.x), "position": t.angle, "extreme": t.extreme} for t in lims],
+        "limit_positions": [_slider_limit(run, t) for t in lims],
     }
     ratio = _time_ratio(run, lims)
     if ratio:
@@ -1075,6 +1095,81 @@ def _slider_facts(
         if "max" in pa:
             out["pressure_angle"] = pa | {"rod": sl.rod}
     return out
+
+
+def _slider_limit(run: _Run, t: _Limit) -> dict[str, Any]:
+    """A slider's limit position as the JSON gives it (a dwell with ``until``, where the slider moves again)."""
+    out = {"input": run.file_value(t.x), "position": t.angle, "extreme": t.extreme}
+    return out if t.until is None else out | {"until": run.file_value(t.until)}
+
+
+def _resting(run: _Run, p: np.ndarray) -> np.ndarray:
+    """Which dense samples rest: in a run of two or more sample steps over which the position ``p`` (n,) moves
+    less than :data:`DWELL` of its range (one such step alone is two samples either side of a smooth extreme)."""
+    sw = run.sw
+    finite = p[np.isfinite(p)]
+    tol = DWELL * float(np.ptp(finite)) if finite.size else 0.0
+    still = sw.has_next & (np.abs(p[sw.next] - p) <= tol)  # the step from each sample to its next
+    held = still & still[sw.prev] & sw.has_prev  # the step before it too: two in a row
+    rest: np.ndarray = held.copy()
+    rest[sw.prev[held]] = True
+    rest[sw.next[held]] = True
+    return rest
+
+
+def _runs(run: _Run, rest: np.ndarray) -> list[np.ndarray]:
+    """The dense samples of each segment in order (a full turn: one, starting at a sample that does not rest)."""
+    sw = run.sw
+    if sw.cyclic:
+        moving = np.flatnonzero(~rest)
+        return [np.roll(np.arange(len(sw.x)), -int(moving[0]))] if moving.size else []
+    return [np.flatnonzero(sw.seg == s) for s in np.unique(sw.seg)]
+
+
+def _dwells(run: _Run, k: int, origin: float) -> list[_Limit]:
+    """Slider ``k`` at rest at an extreme: a run of resting samples between motions in opposite directions.
+
+    One limit position each, at the rest's position (the median there, from ``origin``), from the input where
+    it arrives to the one where it leaves (``until``), each refined by bisection to where the position comes
+    within :data:`DWELL` of its range of the rest's.  Rests at a range's end, or between motions in one
+    direction, are no extremes.
+    """
+    sw, p = run.sw, run.q.position(run.st)[k]
+    rest = _resting(run, p)
+    v = run.rows[run.q.sv(k)]
+    way = np.where(~rest & np.isfinite(v), np.sign(v), 0.0)
+    found: list[tuple[int, int, float, float]] = []  # first, last dense sample, rest position, way before
+    for order in _runs(run, rest):
+        r = rest[order].astype(int)
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], r, [0]])))
+        for a, b in zip(edges[::2], edges[1::2] - 1, strict=True):
+            before, after = way[order[:a]], way[order[b + 1 :]]
+            if sw.cyclic:  # on the turn, what comes after the run comes before it too
+                before = after = np.concatenate([after, before])
+            sb, sa = before[before != 0], after[after != 0]
+            if sb.size and sa.size and sb[-1] * sa[0] < 0:
+                found.append((int(order[a]), int(order[b]), float(np.median(p[order[a : b + 1]])), sb[-1]))
+    if not found:
+        return []
+    first, last, at = (np.array([f[i] for f in found]) for i in range(3))
+    tol = DWELL * float(np.ptp(p[np.isfinite(p)]))
+    arrive = _rest_edge(run, k, sw.px[first], sw.x[first], at, tol)
+    leave = _rest_edge(run, k, sw.nx[last], sw.x[last], at, tol)
+    return [
+        _Limit(float(arrive[i]), f[2] - origin, "max" if f[3] > 0 else "min", f[0], float(leave[i]))
+        for i, f in enumerate(found)
+    ]
+
+
+def _rest_edge(run: _Run, k: int, moving: np.ndarray, resting: np.ndarray, at: np.ndarray, tol: float) -> np.ndarray:
+    """Bisection between inputs where slider ``k`` moves and where it rests at position ``at``: the input
+    nearest the moving side where its position is within ``tol`` of ``at`` (one solve a step for all)."""
+    a, b = np.array(moving, float), np.array(resting, float)
+    for _ in range(N_BISECT):
+        mid = 0.5 * (a + b)
+        near = np.abs(run.q.position(run.state(mid))[k] - at) <= tol
+        a, b = np.where(near, a, mid), np.where(near, mid, b)
+    return b
 
 
 def transmission_angle(
@@ -1753,6 +1848,13 @@ def _rocker_lines(lp: Mapping[str, Any], driver: str | None, rocker: str, fmt: _
     return lines
 
 
+def _dwell_inputs(fmt: _Text, driver: str, lim: Mapping[str, Any]) -> str:
+    """A limit position's input, or the inputs from where a dwell starts to where it ends."""
+    if "until" not in lim:
+        return fmt.inp(driver, lim["input"])
+    return f"{fmt.inp(driver, lim['input'])} to {_num(lim['until'], '.6f')} {fmt.units.get(driver, '')}".rstrip()
+
+
 def _slider_lines_text(sl: Mapping[str, Any], fmt: _Text) -> list[str]:
     """A slider on the frame: stroke, limit positions, time ratio, pressure angle (what its driver's sweep found)."""
     driver, link, lu = sl["driver"], sl["link"], f" {fmt.length}" if fmt.length else ""
@@ -1764,15 +1866,17 @@ def _slider_lines_text(sl: Mapping[str, Any], fmt: _Text) -> list[str]:
     if lims:
         lines.append(f"  Limit positions of {link} (its velocity is zero; position along its line from the pose's):")
         lines += [
-            f"    {fmt.inp(driver, lim['input'])}: {link} at {_num(lim['position'], '.6f')}{lu} ({lim['extreme']})"
+            f"    {_dwell_inputs(fmt, driver, lim)}: {link} at {_num(lim['position'], '.6f')}{lu} ({lim['extreme']}"
+            f"{', at rest' if 'until' in lim else ''})"
             for lim in lims
         ]
     if sl.get("time_ratio") is not None:
         t, unit = sl["input_travel"], fmt.units.get(driver, "")
+        rest = f", {_num(t['rest'], '.6f')} {unit} at rest" if "rest" in t else ""
         lines.append(
             f"  Time ratio {sl['time_ratio']:.6f} at constant input speed ({driver} travels "
             f"{_num(t['rising'], '.6f')} {unit} while {link} advances, {_num(t['falling'], '.6f')} {unit} "
-            "while it returns)"
+            f"while it returns{rest})"
         )
     pa = sl.get("pressure_angle")
     if pa:

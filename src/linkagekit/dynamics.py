@@ -45,7 +45,7 @@ from .branch import along_sweep
 from .checks import input_range
 from .errors import InputError
 from .forces import Kinematics, point_motion
-from .model import Mechanism
+from .model import CylinderType, Mechanism, SliderType
 from .params import Params
 from .positions import solve
 from .rates import link_motion, solve_rates
@@ -644,14 +644,33 @@ def _range_end(mech: Mechanism, k: int, value: float) -> str:
     return f" is {abs(gap[i]):.3g} {d.input_unit(mech)} on, at {value + gap[i]:.6g} {d.input_unit(mech)}"
 
 
-def _singular_message(md: _Model, t: float, q_si: np.ndarray) -> str:
-    """Several drivers: the one line that says where the motion stopped, time and every driver's input (file units)."""
+def _inputs_text(md: _Model, q_si: np.ndarray) -> str:
+    """Every driver's input at SI inputs ``q_si`` (n_d,), in file units: ``"a = 1.2 m, b = 30 deg"``."""
     mech = md.mech
-    at = ", ".join(
+    return ", ".join(
         f"{d.name} = {q_si[k] / (md.scale[k] * d.input_scale(mech)):.6g} {d.input_unit(mech)}"
         for k, d in enumerate(mech.drivers)
     )
-    return f"simulate: stopped at t = {t:.6g} s ({at}): the mechanism reached a singular position it cannot pass"
+
+
+def _singular_message(md: _Model, t: float, q_si: np.ndarray) -> str:
+    """Several drivers: the one line that says where the motion stopped, time and every driver's input (file units)."""
+    return (
+        f"simulate: stopped at t = {t:.6g} s ({_inputs_text(md, q_si)}): the mechanism reached a singular position"
+        " it cannot pass"
+    )
+
+
+def _stroke_message(md: _Model, k: int, side: int, t: float, q_si: np.ndarray) -> str:
+    """Several drivers: the line of a motion stopped by driver ``k`` at its stroke's lower (0) or upper (1) end."""
+    d = md.mech.drivers[k]
+    stroke = d.stroke
+    assert stroke is not None  # only a driver with a stroke has the event
+    return (
+        f"simulate: stopped at t = {t:.6g} s ({_inputs_text(md, q_si)}): {d.name} reached the"
+        f" {('lower', 'upper')[side]} end of its stroke, {stroke[side]:.6g} {d.input_unit(md.mech)},"
+        " that the motion cannot pass"
+    )
 
 
 def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -692,38 +711,90 @@ def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> 
     return qdd, np.min(m.cond.reshape(nd + 1, n), axis=0)
 
 
+def _unbounded(mech: Mechanism) -> Mechanism:
+    """``mech`` with its drivers' strokes lifted: the same dynamics, defined past a stroke's end too."""
+    drivers = tuple(
+        replace(d, type=replace(d.type, stroke=None)) if isinstance(d.type, SliderType | CylinderType) else d
+        for d in mech.drivers
+    )
+    return replace(mech, drivers=drivers)
+
+
+def _past_end(k: int, end: float, sign: float, _t: float, y: np.ndarray) -> float:
+    """How far input ``k`` (SI) is inside a stroke's end ``end``: ``sign`` 1 at the lower end, -1 at the upper."""
+    return sign * (float(y[k]) - end)
+
+
+def _stroke_events(md: _Model) -> list[tuple[int, int, Callable[[float, np.ndarray], float]]]:
+    """Each end of each driver's stroke as ``(driver, 0 lower or 1 upper, a terminal event)``.
+
+    The event falls through zero when the input leaves its stroke there (not when it moves in,
+    so a motion that starts at an end and moves away goes on).
+    """
+    out: list[tuple[int, int, Callable[[float, np.ndarray], float]]] = []
+    for k, d in enumerate(md.mech.drivers):
+        for side, end in enumerate(d.stroke or ()):
+            event = partial(_past_end, k, end * d.input_scale(md.mech) * md.scale[k], (1.0, -1.0)[side])
+            event.terminal, event.direction = True, -1.0  # type: ignore[attr-defined]
+            out.append((k, side, event))
+    return out
+
+
 def _integrate_direct(md: _Model, times: np.ndarray, laws: tuple[TorqueLaw, ...], w0: np.ndarray) -> _Run:
-    """Several drivers: ``M``, ``h``, ``Q`` evaluated at every step (slower); stops at a singular position."""
+    """Several drivers: ``M``, ``h``, ``Q`` evaluated at every step (slower).
+
+    The motion stops at a driver's stroke's end or where the conditioning falls below
+    :data:`STOP_CONDITION` (a singular position): terminal events the integrator locates, so
+    the stop does not depend on the output times.  The right-hand side reads the mechanism
+    with its strokes lifted (:func:`_unbounded`): a trial step past a stroke's end is still
+    the motion, and the event stops it at the end.
+    """
     from scipy.integrate import solve_ivp
 
     nd = len(laws)
+    free = replace(md, params=prepare(_unbounded(md.mech)))
 
     def tau(w: np.ndarray) -> np.ndarray:
         return np.array([law(x) for law, x in zip(laws, w, strict=True)], float).reshape(w.shape)
 
+    def accel(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return _direct_accel(free, y[:nd], y[nd:], tau(y[nd:]))
+
     def rhs(_t: float, y: np.ndarray) -> np.ndarray:
-        col = y[:, None]
-        return np.concatenate([y[nd:], _direct_accel(md, col[:nd], col[nd:], tau(col[nd:]))[0][:, 0]])
+        return np.concatenate([y[nd:], accel(y[:, None])[0][:, 0]])
 
     def singular(_t: float, y: np.ndarray) -> float:
-        col = y[:, None]
-        return float(_direct_accel(md, col[:nd], col[nd:], tau(col[nd:]))[1][0]) - STOP_CONDITION
+        return float(accel(y[:, None])[1][0]) - STOP_CONDITION
 
     singular.terminal = True  # type: ignore[attr-defined]
+    ends = _stroke_events(md)
     y0 = np.concatenate([md.params.pose_inputs[:, 0] * md.scale, w0])
     span = (times[0], times[-1])
-    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[singular])
-    t, y = sol.t, sol.y
-    stopped = None
-    if sol.status != 0 or not np.all(np.isfinite(y)):
-        ok = np.all(np.isfinite(y), axis=0)
-        t, y = t[ok], y[:, ok]
-        te, qe = (float(times[0]), y0[:nd]) if not len(t) else (float(t[-1]), y[:nd, -1])
-        if sol.status == 1:
-            te, qe = float(sol.t_events[0][0]), sol.y_events[0][0][:nd]
-        stopped = _singular_message(md, te, qe)
-    qdd = _direct_accel(md, y[:nd], y[nd:], tau(y[nd:]))[0] if len(t) else np.zeros((nd, 0))
+    events = [singular, *(e for _, _, e in ends)]
+    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=events)
+    ok = np.all(np.isfinite(sol.y), axis=0)
+    t, y = sol.t[ok], sol.y[:, ok]
+    last = (float(t[-1]), y[:nd, -1]) if len(t) else (float(times[0]), y0[:nd])
+    stopped = _direct_stop(md, sol, ends, *last)
+    qdd = accel(y)[0] if len(t) else np.zeros((nd, 0))
     return _Run(t, y[:nd], y[nd:], qdd, None, stopped)
+
+
+def _direct_stop(
+    md: _Model, sol: Any, ends: list[tuple[int, int, Any]], t_last: float, q_last: np.ndarray
+) -> str | None:
+    """Why a several-driver motion ended early (None: it did not): the event that ended it, when and where.
+
+    An integration that failed without an event (the accelerations turned non-finite) is said
+    at the last output time it reached, ``t_last`` with the inputs ``q_last`` (SI).
+    """
+    if sol.status == 0 and np.all(np.isfinite(sol.y)):
+        return None
+    if sol.status == 1:
+        i = next(i for i, te in enumerate(sol.t_events) if len(te))
+        te, qe = float(sol.t_events[i][0]), sol.y_events[i][0][: len(md.mech.drivers)]
+        return _singular_message(md, te, qe) if i == 0 else _stroke_message(md, *ends[i - 1][:2], te, qe)
+    return _singular_message(md, t_last, q_last)
 
 
 # ---------------------------------------------------------------------- arguments
