@@ -771,9 +771,14 @@ def test_the_modes_listed_after_play_are_those_where_it_paused(open_editor):
     assert buttons.count() == len(expected_modes(mech, ep.state()["inputs"])) == 8
     play = ep.page.locator("[data-action=play]")
     play.click()
-    shown = lambda: ep.page.evaluate(
-        "() => window.linkagekit.inputOf(window.linkagekit.scene, 'crank')[window.linkagekit.current()]"
-    )  # noqa: E731, E501
+
+    def shown() -> float:
+        return float(
+            ep.page.evaluate(
+                "() => window.linkagekit.inputOf(window.linkagekit.scene, 'crank')[window.linkagekit.current()]"
+            )
+        )  # noqa: E501
+
     assert wait_until(lambda: 180.0 <= shown() <= 200.0), f"Play did not reach 180-200 deg (at {shown()})"
     play.click()  # Pause
     ep.wait_idle("pause")

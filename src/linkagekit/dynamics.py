@@ -388,7 +388,7 @@ def _bridge(x: np.ndarray, Y: np.ndarray, dY: np.ndarray, points: np.ndarray, pe
 
 
 def _repeated(x: np.ndarray, Y: np.ndarray, period: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """The table's grid and rows, repeated a turn before and after it when it is periodic (its last row is its first)."""
+    """The table's grid and rows, repeated a turn before and after it when periodic (its last row is its first)."""
     if period is None:
         return x, Y
     return np.concatenate([x[:-1] - period, x[:-1], x + period]), np.concatenate([Y[:-1], Y[:-1], Y])
