@@ -429,3 +429,23 @@ def test_a_parallelogram_posed_near_its_flat_position_has_its_exact_model_and_mo
         (0.0, 1.0), [math.radians(pose_deg), 5.0], method="DOP853", rtol=1e-12, atol=1e-12, t_eval=times,
     )  # fmt: skip
     np.testing.assert_allclose(res.inputs["crank"], np.degrees(sol.y[0]), rtol=0, atol=1e-7)
+
+
+@pytest.mark.parametrize("inside", [1e-4, 0.1, 0.3])
+def test_a_crank_posed_next_to_its_toggle_moves_away_under_a_torque_that_pulls_it_out(tmp_path, inside):
+    """The rocker's crank posed ``inside`` deg within the end of its range (a toggle), a torque turning it back: no
+    table holds there (M grows without bound), and the run was refused as "a singular pose" (0.3 deg from the toggle
+    is no singular pose). It runs on the model itself, and the work of the torque is the kinetic energy gained (no
+    gravity), to 1e-8 J."""
+    import dataclasses
+
+    mech = lk.load(_rocker_file(tmp_path))
+    hi = lk.check(mech).to_dict()["input_range"][0][1]
+    at = lk.analyze(mech, {"crank": [hi - inside]}, rates=False)
+    posed = mech.with_pose(np.stack([at.xy(j)[0] for j in mech.joint_names]))
+    res = lk.simulate(posed, np.linspace(0.0, 0.5, 11), torque=-20.0)
+    assert res.stopped is None and np.all(res.assembled) and res.n == 11, res.stopped
+    q = np.radians(res.inputs["crank"])
+    assert np.all(np.diff(q) < 0)  # away from the toggle
+    energy = _energy(dataclasses.replace(posed, gravity=0j), res)
+    np.testing.assert_allclose(energy - energy[0], -20.0 * (q - q[0]), rtol=0, atol=1e-8)

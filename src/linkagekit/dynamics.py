@@ -459,6 +459,11 @@ def _verified(
     return ok
 
 
+class _OffTable(InputError):
+    """The pose lies in a cell the table does not hold to its tolerance, though the model is finite there: next to
+    a toggle, where ``M`` grows without bound (:func:`_integrate_reduced` then integrates the model itself)."""
+
+
 def _reachable(
     mech: Mechanism,
     q0: float,
@@ -475,6 +480,8 @@ def _reachable(
     if not good[c0]:
         if np.all(np.nan_to_num(Y[:, 0]) <= 0):
             raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
+        if np.all(np.isfinite(Y[c0 : c0 + 2]) & np.isfinite(dY[c0 : c0 + 2])) and np.all(Y[c0 : c0 + 2, 0] > 0):
+            raise _OffTable(f"{mech.source}: the pose is where no table holds (next to a toggle)")
         raise InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
     bad = np.flatnonzero(~good)
     lo = int(bad[bad < c0].max(initial=-1)) + 1
@@ -530,8 +537,16 @@ def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[fl
 
 
 def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float) -> _Run:
-    """One driver: the tabulated model integrated by DOP853; a motion that leaves the table's range stops (a toggle)."""
-    red = reduced(md.mech)
+    """One driver: the tabulated model integrated by DOP853; a motion that leaves the table's range stops (a toggle).
+
+    A pose next to a toggle, where no table holds (:class:`_OffTable`), is integrated on the model itself, as several
+    drivers are (:func:`_integrate_direct`: slower, and it stops where the conditioning falls below
+    :data:`STOP_CONDITION`); it stopped at once, or was refused as "a singular pose" 0.3 deg from the toggle.
+    """
+    try:
+        red = reduced(md.mech)
+    except _OffTable:
+        return _integrate_direct(md, times, (law,), np.array([w0], float))
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
     if red.period is None:
