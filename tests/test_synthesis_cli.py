@@ -624,10 +624,13 @@ def _ellipse_csv(tmp_path: Path) -> Path:
 
 def test_a_best_design_that_breaks_a_constraint_is_written_named_infeasible_and_exits_1(tmp_path, capsys):
     """The summary said CONSTRAINTS NOT MET but the exit status was 0 and the file's name did not say it: a script
-    took the file for a result. A transmission angle within [89, 91] deg over a whole turn cannot be had: the best
-    design is written, named INFEASIBLE, and the command says so in one line on stderr with exit status 1."""
+    took the file for a result. A transmission angle within [89, 91] deg over a whole turn cannot be had by a four-bar
+    whose links are 1 to 2 long (without --lengths, two ground pivots at one spot make a rigid triangle of constant
+    transmission angle): the best design is written, named INFEASIBLE, and the command says so in one line on stderr
+    with exit status 1."""
     out = tmp_path / "o.yaml"
     args = ["synthesize", str(_ellipse_csv(tmp_path)), "-o", str(out), "--min-transmission", "89", "--seconds", "1"]
+    args += ["--lengths", "1:2"]
     code, text, err = run_main([*args, "--workers", "1"], capsys)
     assert code == 1 and "CONSTRAINTS NOT MET" in text
     assert err.strip().splitlines()[-1] == (
@@ -668,3 +671,39 @@ def test_a_template_whose_tracer_is_on_the_ground_is_refused(tmp_path, capsys):
     args = ["synthesize", str(_ellipse_csv(tmp_path)), "--topology", str(tpl), "-o", str(tmp_path / "o.yaml")]
     code, _, err = run_main(args, capsys)
     assert_one_line_error(code, err, "the tracer P is on the ground link")
+
+
+@pytest.mark.parametrize(
+    "task, option",
+    [
+        ("motion", ["--pivots", "0:1,0:1"]),
+        ("motion", ["--lengths", "1:5"]),
+        ("function", ["--lengths", "0.5:0.9"]),
+        ("function", ["--pivots", "5:6,5:6"]),
+        ("function", ["--ordered"]),
+        ("function", ["--approximate"]),
+        ("function", ["--full-turn"]),
+        ("path", ["--approximate"]),
+        ("path", ["--angle-weight", "3"]),
+        ("path", ["--full-turn"]),
+        ("path", ["--free-offsets"]),
+        ("path", ["--ground-length", "5"]),
+    ],
+)
+def test_an_option_of_another_task_is_refused_not_ignored(tmp_path, capsys, task, option):
+    """``--pivots`` with ``--task motion`` (and a dozen more) wrote the same file as without it, exit status 0: the
+    user believed the pivots bounded. One line naming the option and the task it goes with, exit status 2."""
+    targets = tmp_path / "t.csv"
+    targets.write_text("x,y\n0,0\n1,0\n1,1\n0,1\n")
+    args = ["synthesize", str(targets), "--task", task, *option, "-o", str(tmp_path / "o.yaml")]
+    code, _, err = run_main(args, capsys)
+    assert_one_line_error(code, err, f"{option[0]}: goes with --task", f"not --task {task}")
+
+
+@pytest.mark.parametrize("task", ["motion", "function"])
+def test_a_topology_those_tasks_do_not_design_is_refused_by_its_name(tmp_path, capsys, task):
+    targets = tmp_path / "t.csv"
+    targets.write_text("x,y\n0,0\n1,0\n1,1\n0,1\n")
+    args = ["synthesize", str(targets), "--task", task, "--topology", "watt2", "-o", str(tmp_path / "o.yaml")]
+    code, _, err = run_main(args, capsys)
+    assert_one_line_error(code, err, "--topology watt2", "generation designs four-bars only")

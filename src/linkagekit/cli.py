@@ -692,6 +692,25 @@ def _shape_arguments(p: argparse.ArgumentParser) -> None:
 
 #: the tasks of ``synthesize --task`` (spec section 6)
 SYNTHESIS_TASKS = ("path", "motion", "function")
+#: the options of one task only: given with another, they are refused, not ignored (a user who gave --pivots to a
+#: motion synthesis believed the pivots were bounded)
+_TASK_OPTIONS = {
+    "path": ("shape_only", "partial", "pareto", "no_smooth", "pivots", "lengths", "free", "ordered", "max_joints"),
+    "motion": ("approximate", "angle_weight", "full_turn"),
+    "function": ("free_offsets", "ground_length"),
+}
+
+
+def _task_options(args: argparse.Namespace) -> None:
+    """Refuse an option of another task than ``--task`` (:data:`_TASK_OPTIONS`), and a topology function generation
+    does not design."""
+    for task, names in _TASK_OPTIONS.items():
+        for name in names:
+            if task != args.task and getattr(args, name) not in (None, False):
+                raise InputError(f"--{name.replace('_', '-')}: goes with --task {task}, not --task {args.task}")
+    if args.task == "function" and args.topology != "fourbar":
+        raise InputError(f"--topology {shorten(args.topology, 80)}: function generation designs four-bars only")
+
 
 #: --quantity groups: the report's plots, by their short name
 _QUANTITY_GROUPS = {g.short: g for g in Group if g.plotted}
@@ -1410,9 +1429,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
-    for flag in ("shape_only", "partial", "pareto", "no_smooth"):
-        if getattr(args, flag) and args.task != "path":
-            raise InputError(f"--{flag.replace('_', '-')}: goes with --task path, not --task {args.task}")
+    _task_options(args)
     if args.task == "motion":
         return _synthesize_motion(args)
     if args.task == "function":
@@ -1693,7 +1710,9 @@ def _motion_template(path: str) -> None:
     import linkagekit as lk
 
     if not os.path.exists(path):
-        raise InputError(f"--topology: '{shorten_path(path)}' is neither fourbar nor a file")
+        raise InputError(
+            f"--topology {shorten_path(path)}: motion generation designs four-bars only (--topology fourbar)"
+        )
     mech = lk.load(path)
     if not any({"P", "Q"} <= set(link.joints) for link in mech.links):
         raise InputError(f"{shorten_path(path)}: a motion template needs tracer joints P and Q on one link")
