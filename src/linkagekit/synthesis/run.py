@@ -29,7 +29,7 @@ from .base import Objective
 from .distribute import usable
 from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
-from .optimize import Optimum, Outcome, Progress, Settings, default_workers, optimize, search
+from .optimize import Optimum, Outcome, Progress, Settings, check_settings, default_workers, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, fixed, template_space
 from .targets import check_scale
 
@@ -584,6 +584,7 @@ def synthesize_motion(
     """
     from . import motion as mo
 
+    check_settings(seconds=seconds)  # the exact route runs no engine, whose settings check it
     P, p, w = _motion_problem(poses, inputs, closed or full_turn, weight)  # the approximate route: as a cycle
     found: list[MotionFourBar] = []
     if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
