@@ -107,6 +107,29 @@ def test_weaving_minimax_beats_least_squares(tmp_path):
     check_plot(png, pairs)
 
 
+@pytest.mark.parametrize("n", [3, 5])
+def test_output_equal_to_input_is_a_parallelogram(n, tmp_path):
+    """psi = phi makes Freudenstein's matrix singular (cos psi = cos phi); the answer is a parallelogram."""
+    x = np.arange(n) * 60.0 / (n - 1)
+    out = tmp_path / "same.yaml"
+    src = write_pairs(tmp_path / "p.csv", np.stack([x, x], axis=1))
+    assert main(["synthesize", str(src), "--task", "function", "-o", str(out)]) == 0
+    mech = lk.load(out)
+    psi = lk.analyze(mech, {"crank": x}).angle("output")  # the ground line is +x, no offsets
+    assert np.max(np.abs((psi - x + 180.0) % 360.0 - 180.0)) <= 1e-9
+    j = mech.joints
+    assert abs(j["C"] - j["A"]) == pytest.approx(abs(j["D"] - j["B"]), rel=1e-9)  # crank = output
+    assert abs(j["D"] - j["C"]) == pytest.approx(abs(j["B"] - j["A"]), rel=1e-9)  # coupler = ground
+
+
+def test_output_against_input_with_free_offsets_is_met():
+    """psi = -phi (also a singular Freudenstein matrix): met to 1e-9 deg once the offsets are free."""
+    x = np.array([0.0, 10.0, 20.0, 30.0])
+    fit = solve(x, -x, free_offsets=True)
+    assert fit.valid and fit.max_error <= 1e-9
+    assert np.max(np.abs(analysed_errors(lk.Mechanism.from_dict(fit.mechanism_dict()), fit))) <= 1e-9
+
+
 def check_plot(png: Path, pairs: np.ndarray) -> None:
     """Each pair is drawn as a ring (target colour) at its place; a blank or shifted figure fails."""
     im = Image.open(png)
@@ -135,6 +158,7 @@ def check_plot(png: Path, pairs: np.ndarray) -> None:
         ("input,output\n1,2\n3,4\n500,6\n", "not an angle"),
         ("input,output\n1,2\n5,4\n3,6\n", "increase (or decrease)"),
         ("x,y\n1,2\n3,4\n5,6\n", "input,output"),
+        ("input,output\n0,0\n10,0\n20,0\n30,0\n", "constant output needs no mechanism"),
     ],
 )
 def test_bad_pairs_get_one_line_and_exit_2(rows, says, tmp_path, capsys):

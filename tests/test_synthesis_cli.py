@@ -555,6 +555,26 @@ def test_template_with_another_length_unit_is_one_line_exit_2(work, tmp_path, ca
     assert_one_line_error(code, err, "tpl_mm.yaml", "mm", "cm")
 
 
+SLIDER_CRANK = """format: linkagekit/1
+units: {length: cm, angle: deg}
+joints: {O: [0, 0], A: [0.3, 0.4], B: [1.15, 0.0], P: [0.8, 0.5]}
+links: {ground: [O], crank: [O, A], rod: [A, B, P], block: [B]}
+sliders: [{link: block, on: ground, through: B, direction: [1, 0]}]
+drivers: [{link: crank, pivot: O, toward: A, angles: {start: 0, stop: 360, step: 1}}]
+"""
+
+
+def test_template_with_a_slider_is_one_line_exit_2(work, tmp_path, capsys, monkeypatch):
+    """A slider's transmission angle is not a pin angle: refused by name (it was a StopIteration traceback)."""
+    (tmp_path / "slider.yaml").write_text(SLIDER_CRANK)
+    monkeypatch.chdir(tmp_path)
+    out_path = tmp_path / "out.yaml"
+    args = ["synthesize", str(work / "t.csv"), "-o", str(out_path), "--topology", "slider.yaml", *SMALL]
+    code, out, err = run_main(args, capsys)
+    assert_one_line_error(code, err, "slider.yaml", "sliders (block)")
+    assert out == "" and not out_path.exists()
+
+
 # ---------------------------------------------------------------------- a template
 def test_template_file_with_free_joints_keeps_the_others(work, tmp_path, capsys):
     tpl = tmp_path / "tpl.yaml"

@@ -97,13 +97,13 @@ def test_timed_poses_keep_their_crank_spacing():
     assert np.max(pos) < 1e-7 * out.diagonal and np.max(np.abs(ang)) < 1e-5
 
 
-def test_minimax_polish_lowers_the_largest_error_of_noisy_poses():
+def noisy_start() -> tuple[motion.MotionPoses, np.ndarray, np.ndarray, float]:
+    """Nine noisy poses of the known four-bar, and that four-bar (normalised) as a polish's start ``(F, t, s)``."""
     rng = np.random.default_rng(3)
     poses = traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 300.0, 9))
     poses[:, :2] += rng.normal(0.0, 0.01, (9, 2))
     poses[:, 2] += rng.normal(0.0, 0.5, 9)
     p = motion.motion_poses(poses[:, 0], poses[:, 1], np.radians(poses[:, 2]))
-    # the generating four-bar, normalised: pivots in the plane, moving pivots in the frame of P -> Q
     z = {k: (complex(*v) - p.center) / p.scale for k, v in KNOWN.items()}
     u0 = (z["Q"] - z["P"]) / abs(z["Q"] - z["P"])
     a, b = (z["A1"] - z["P"]) / u0, (z["B1"] - z["P"]) / u0
@@ -111,15 +111,57 @@ def test_minimax_polish_lowers_the_largest_error_of_noisy_poses():
     F[0, [0, 1, 5, 6]] = [z["A0"].real, z["A0"].imag, z["B0"].real, z["B0"].imag]
     F[0, 4], F[0, 9] = abs(z["A1"] - z["A0"]), abs(z["B1"] - z["B0"])
     t, s = motion.crank_angles(p, F), motion.first_mode(p, F)
-    fit = motion.combined(*motion.pose_errors(p, F, t, s), motion.ANGLE_WEIGHT)[0]
     _, un, _ = motion.unwrap_turn(t, False)
-    Fp, tp = motion.minimax_polish(p, F[0], un[0], float(s[0]), motion.ANGLE_WEIGHT)
-    pos, ang = motion.pose_errors(p, Fp[None], tp[None], s)
+    return p, F[0], un[0], float(s[0])
+
+
+def test_minimax_polish_lowers_the_largest_error_of_noisy_poses():
+    p, F, t, s = noisy_start()  # the generating four-bar, normalised, as the start
+    sv = np.array([s])
+    fit = motion.combined(*motion.pose_errors(p, F[None], t[None], sv), motion.ANGLE_WEIGHT)[0]
+    Fp, tp = motion.minimax_polish(p, F, t, s, motion.ANGLE_WEIGHT)
+    pos, ang = motion.pose_errors(p, Fp[None], tp[None], sv)
     polished = motion.combined(pos, ang, motion.ANGLE_WEIGHT)[0]
     assert polished < 0.7 * fit
     # the minimax optimum equalises: several poses share the largest error (to 1 %)
     e = np.maximum(pos[0], motion.ANGLE_WEIGHT * np.abs(ang[0]))
     assert np.sum(e > 0.99 * polished) >= 3
+
+
+def test_minimax_polish_stops_at_its_deadline(monkeypatch):
+    """Past the deadline the polish keeps its last iterate: the start, or the iterate of the steps it made.
+
+    A clock that ticks once per reading (one reading per SLSQP step) makes it exact: a deadline
+    between the 2nd and 3rd reading gives the same design as a polish of 2 iterations.
+    (300 poses with --seconds 5 took 47 s here, the polish unbounded; now 6.2 s.)
+    """
+    p, F, t, s = noisy_start()
+    w = motion.ANGLE_WEIGHT
+    F0, t0 = motion.minimax_polish(p, F, t, s, w, deadline=-np.inf)
+    assert np.array_equal(F0, F) and np.array_equal(t0, t)
+    two = motion.minimax_polish(p, F, t, s, w, iterations=2)
+    ticks = iter(range(1000))
+    monkeypatch.setattr(motion.time, "monotonic", lambda: float(next(ticks)))
+    stopped = motion.minimax_polish(p, F, t, s, w, deadline=1.5)
+    assert next(ticks) == 3  # read before steps 1 and 2, and once more, past the deadline
+    assert np.array_equal(stopped[0], two[0]) and np.array_equal(stopped[1], two[1])
+    assert not np.array_equal(two[0], F)
+
+
+def test_past_the_deadline_the_best_start_is_kept_unpolished():
+    p, *_ = noisy_start()
+    late = motion.approximate(p, deadline=-np.inf)
+    assert len(late) == 1 and late[0].one_branch  # an answer: the best start in order on one branch, as it was
+
+
+def test_no_four_bar_in_the_time_budget_says_so():
+    from linkagekit.errors import LinkageError
+    from linkagekit.synthesis.run import _best_first
+
+    with pytest.raises(LinkageError, match=r"^motion: no four-bar found in the time budget \(5 s; more may find one\)"):
+        _best_first([], 1.0, 0.05, 0.0, late=5.0)
+    with pytest.raises(LinkageError, match=r"^motion: no four-bar meets the poses in order on one branch$"):
+        _best_first([], 1.0, 0.05, 0.0)
 
 
 # ---------------------------------------------------------------------- the objective interface

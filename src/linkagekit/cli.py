@@ -1673,9 +1673,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
         _motion_template(args.topology)
     if args.units not in LENGTH_UNITS:  # before the search, not when the file is built
         raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
-    seconds = _one_number(args.seconds, "--seconds")
-    if not 0 < seconds <= 1e7:
-        raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
+    seconds = _seconds(args)
     weight = None if args.angle_weight is None else _one_number(args.angle_weight, "--angle-weight")
     pf = read_poses(args.targets)
     out = synthesize_motion(
@@ -1827,6 +1825,21 @@ def _motion_engine(args: argparse.Namespace) -> dict[str, Any]:
     return {k: options[k] for k, d in defaults.items() if options[k] != d}
 
 
+def _seconds(args: argparse.Namespace) -> float:
+    """``--seconds``, within the engine's limit (:data:`~linkagekit.synthesis.optimize.LIMITS`)."""
+    from .synthesis.optimize import LIMITS
+
+    return float(LIMITS["seconds"].check(_one_number(args.seconds, "--seconds"), "--seconds"))
+
+
+def _whole(args: argparse.Namespace, name: str) -> int:
+    """The whole-number search option ``--NAME``, within the engine's limit for ``name``."""
+    from .synthesis.optimize import LIMITS
+
+    limit = LIMITS[name]
+    return _integer(getattr(args, name), f"--{name}", int(limit.low), int(limit.high))
+
+
 def _search_options(args: argparse.Namespace) -> dict[str, Any]:
     """The keyword arguments of :func:`~linkagekit.synthesis.run.synthesize` that the options give, checked.
 
@@ -1834,20 +1847,18 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
     """
     import os
 
-    seconds = _one_number(args.seconds, "--seconds")
-    if not 0 < seconds <= 1e7:
-        raise InputError(f"--seconds: expected a positive time, got {args.seconds}")
+    seconds = _seconds(args)
     options: dict[str, Any] = {
         "seconds": seconds,
         "seed": _integer(args.seed, "--seed", 0, 2**32 - 1),
         "min_transmission": _one_number(args.min_transmission or "20", "--min-transmission"),
-        "workers": None if args.workers is None else _integer(args.workers, "--workers", 1, 1024),
+        "workers": None if args.workers is None else _whole(args, "workers"),
     }
     options["points"] = _integer(
         args.points, "--points", 3, 100_000
     )  # of an SVG path: read_targets's, not synthesize's
-    options["restarts"] = _integer(args.restarts, "--restarts", 1, 10_000)
-    options["generations"] = _integer(args.generations, "--generations", 1, 10_000_000)
+    options["restarts"] = _whole(args, "restarts")
+    options["generations"] = _whole(args, "generations")
     options["goal"] = _one_number(args.goal, "--goal")
     if not 0 <= options["goal"] < 1:
         raise InputError(f"--goal: expected a fraction of the targets' diagonal in [0, 1), got {args.goal}")

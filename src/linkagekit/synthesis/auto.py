@@ -37,7 +37,7 @@ from ..errors import InputError
 from .base import Objective, Score, digest
 from .distribute import Evaluator, usable, workers_lost
 from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
-from .optimize import Outcome, Progress, Settings, optimize
+from .optimize import Outcome, Progress, Settings, check_settings, optimize
 from .run import Synthesis, _unpack, make_problem
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
 from .tracer import TracerFit, fit, fit_shifts
@@ -98,6 +98,8 @@ def synthesize_auto(
     searched (:class:`Tried`).
     """
     t0 = time.monotonic()
+    check_settings(seconds=seconds, restarts=restarts, generations=generations, popsize=popsize, goal=goal)
+    check_settings(workers=workers)
     workers = usable(workers)  # its shares of the time assume the workers run side by side
     xy, inputs, units, source = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
     if inputs is not None:
@@ -113,7 +115,7 @@ def synthesize_auto(
     order = sorted(screened, key=lambda k: screened[k][0])[: searched(workers if method == "local" else 1)]
     tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
     projs = [make(next(t for t in topologies if t.name == name)) for name in order]
-    left = seconds * (1 - RESERVE) - (time.monotonic() - t0)
+    left = max(seconds * (1 - RESERVE) - (time.monotonic() - t0), 1e-3)  # the screening may have used it all
     if method == "engine":
         each = Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler)
         outs = [optimize(p, each, progress) for p in projs]

@@ -77,16 +77,33 @@ def freudenstein_system(x: FloatArray, y: FloatArray) -> tuple[FloatArray, Float
 def freudenstein_exact(x: FloatArray, y: FloatArray) -> FloatArray:
     """``K`` (``(..., 3)``) of the four-bar that meets three pairs exactly (radians, ``(..., 3)``)."""
     M, r = freudenstein_system(x, y)
-    out: FloatArray = np.asarray(np.linalg.solve(M, r[..., None])[..., 0], float)
-    return out
+    return _solve(M, r)
 
 
 def freudenstein_lsq(x: FloatArray, y: FloatArray) -> FloatArray:
     """``K`` (``(..., 3)``) minimising the sum of squared Freudenstein residuals, batched over ``...``."""
     M, r = freudenstein_system(x, y)
     Mt = np.swapaxes(M, -1, -2)
-    out: FloatArray = np.asarray(np.linalg.solve(Mt @ M, Mt @ r[..., None])[..., 0], float)
-    return out
+    return _solve(Mt @ M, (Mt @ r[..., None])[..., 0])
+
+
+def _solve(A: FloatArray, b: FloatArray) -> FloatArray:
+    """``x`` with ``A x = b`` (batched over ``...``), or the minimum-norm least squares when an ``A`` is singular.
+
+    ``A`` is singular when the outputs are the inputs, or their negatives (the ``cos psi``
+    and ``cos phi`` columns are then equal): a whole family of ``K`` fits, the parallelograms
+    among them.  Its minimum-norm member (``np.linalg.pinv``) is one more start, scored like
+    the others; the polish and the generic starts find the rest.
+
+    >>> x = np.radians([0.0, 30.0, 60.0])
+    >>> np.round(freudenstein_lsq(x, x), 9).tolist()  # K1 = K2 is free: the smallest is 0
+    [0.0, 0.0, 1.0]
+    """
+    try:
+        out = np.linalg.solve(A, b[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # only for exactly singular matrices: the others keep LAPACK's solve
+        out = (np.linalg.pinv(A) @ b[..., None])[..., 0]
+    return np.asarray(out, float)
 
 
 def lengths_from_k(K: FloatArray, d: float = 1.0) -> FloatArray:
@@ -226,7 +243,8 @@ def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") ->
     """The pairs as radians, checked: at least 3, finite, within [-360, 360] deg, inputs strictly monotone.
 
     The crank turns through the pairs in their order, so the inputs must increase (or decrease)
-    along the list and span less than a turn.  Raises :class:`~linkagekit.errors.InputError`.
+    along the list and span less than a turn; the outputs must not all be equal.
+    Raises :class:`~linkagekit.errors.InputError`.
 
     >>> check_pairs([1, 2], [3, 4], "p.csv")
     Traceback (most recent call last):
@@ -252,6 +270,8 @@ def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") ->
         raise InputError(f"{source}: pair {row}: the inputs must increase (or decrease) along the list")
     if abs(x[-1] - x[0]) >= 360.0:
         raise InputError(f"{source}: the inputs span {abs(x[-1] - x[0])} deg; a crank meets them within one turn")
+    if np.all(y == y[0]):  # a four-bar's output turns whenever its crank does (or it is folded onto a pivot)
+        raise InputError(f"{source}: every output is {y[0]:g} deg; a constant output needs no mechanism")
     return np.radians(x), np.radians(y)
 
 

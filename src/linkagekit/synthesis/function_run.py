@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from ..geometry import FloatArray
 from .function import FunctionFit, FunctionObjective, check_pairs, solve
-from .optimize import Optimum, search
+from .optimize import Optimum, check_settings, search
 
 if TYPE_CHECKING:
     from ..model import Mechanism
@@ -83,6 +83,7 @@ def synthesize_function(
     ``[min, 180 - min]`` from the first pair to the last.
     """
     x, y = check_pairs(inputs, outputs, source)
+    check_settings(seconds=seconds, restarts=restarts, generations=generations, workers=workers)  # met at once too
     fit_from = partial(
         solve, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
         min_transmission=min_transmission,

@@ -38,12 +38,17 @@ Route (docs/method.md, "Motion generation")
    last one's (a full turn for closed motions) through every pose in order, and the
    four-bar assembles at every 1/4 degree in between (constant assembly mode, so no jump);
    the smallest transmission angle is reported and kept above ``min_transmission``.
+
+Steps 3 and 4 respect the run's deadline (``approximate(..., deadline=)``): past it, no
+further four-bar is polished and a polish under way stops at its last iterate (kept only
+when the dense check finds it better than its start), so the best found so far is returned.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -430,14 +435,14 @@ def minimax_polish(
     weight: float,
     iterations: int = 100,
     min_transmission: float = 0.0,
+    deadline: float = math.inf,
 ) -> tuple[FloatArray, FloatArray]:
     """SLSQP on ``min tau`` s.t. ``p_i <= tau``, ``w |a_i| <= tau``: ``(F, t)`` polished.
 
     Also constrained at the poses' crank angles and half-way between them: the four-bar
     assembles (``cos^2 alpha <= 1``) and, when asked, ``cos^2 mu <= cos^2 min_transmission``.
+    Past ``deadline`` (``time.monotonic()``) it stops at its last iterate (the start if none).
     """
-    from scipy.optimize import minimize
-
     m = p.m
     timed = p.inputs is not None
     k = 1 if timed else m
@@ -471,16 +476,47 @@ def minimax_polish(
         return out
 
     z0 = np.concatenate([F, t[:k], [_start_tau(p, F, t, sv, weight)]])
-    res = minimize(
-        lambda z: z[-1],
-        z0,
-        jac=lambda z: np.eye(len(z))[-1],
-        method="SLSQP",
-        constraints=[{"type": "ineq", "fun": lambda z: cons(z[None])[0], "jac": jac}],
-        options={"maxiter": iterations, "ftol": 1e-12},
-    )
-    Fz, T = unpack(np.asarray(res.x, float)[None])
+    Fz, T = unpack(_slsqp_epigraph(z0, lambda z: cons(z[None])[0], jac, iterations, deadline)[None])
     return Fz[0], T[0]
+
+
+def _slsqp_epigraph(
+    z0: FloatArray,
+    cons: Callable[[FloatArray], FloatArray],
+    jac: Callable[[FloatArray], FloatArray],
+    iterations: int,
+    deadline: float,
+) -> FloatArray:
+    """SLSQP on ``min z[-1]`` s.t. ``cons(z) >= 0`` from ``z0``; past ``deadline``, its last iterate (``z0`` if none).
+
+    The clock is read before each step's constraint Jacobian, its costliest part.
+    """
+    from scipy.optimize import minimize
+
+    def timed_jac(z: FloatArray) -> FloatArray:
+        if time.monotonic() > deadline:
+            raise _Late
+        return jac(z)
+
+    last = [z0]
+    try:
+        res = minimize(
+            lambda z: z[-1],
+            z0,
+            jac=lambda z: np.eye(len(z))[-1],
+            method="SLSQP",
+            constraints=[{"type": "ineq", "fun": cons, "jac": timed_jac}],
+            options={"maxiter": iterations, "ftol": 1e-12},
+            callback=lambda z: last.append(np.array(z, float)),
+        )
+        last.append(np.asarray(res.x, float))
+    except _Late:
+        pass
+    return last[-1]
+
+
+class _Late(Exception):
+    """The minimax polish's deadline has passed (raised inside SLSQP, caught by :func:`minimax_polish`)."""
 
 
 def _start_tau(p: MotionPoses, F: FloatArray, t: FloatArray, sv: FloatArray, weight: float) -> float:
@@ -620,10 +656,14 @@ def approximate(
     weight: float = ANGLE_WEIGHT,
     min_transmission: float = 0.0,
     seeds: FloatArray | None = None,
+    deadline: float = math.inf,
 ) -> list[MotionDesign]:
     """Four-bars for the poses by the route of the module's description, best first (one branch each).
 
     ``seeds``: four-bar vectors (k, 10), normalised (e.g. the engine's best), tried as well.
+    ``deadline`` (``time.monotonic()``): past it, a polish under way stops at its last iterate
+    and no more four-bars are polished once one is found (until then, the starts are judged
+    as they are).
     """
     o = MotionObjective(p, weight, min_transmission)
     crank = search_dyads(p, timed=p.inputs is not None)
@@ -643,22 +683,30 @@ def approximate(
     found: list[tuple[float, FloatArray, FloatArray, float]] = []
     for k in order[: 2 * POLISHED]:
         best = min((f[0] for f in found), default=np.inf)
-        if best <= EXACT or len(found) >= POLISHED:
+        if best <= EXACT or len(found) >= POLISHED or (found and time.monotonic() > deadline):
             break
         if start[k] <= HOPELESS * best:  # one far worse than a polished one is seldom worth its time
-            found += _polished(p, o, F[k], t[k], float(s[k]), score.error[k] if score.violation[k] == 0 else None)
+            valid = score.error[k] if score.violation[k] == 0 else None
+            found += _polished(p, o, F[k], t[k], float(s[k]), valid, deadline)
     found.sort(key=lambda f: f[0])
     return [design(p, Fk, tk, sk) for _, Fk, tk, sk in found]
 
 
 def _polished(
-    p: MotionPoses, o: MotionObjective, F: FloatArray, t: FloatArray, s: float, error: float | None
+    p: MotionPoses,
+    o: MotionObjective,
+    F: FloatArray,
+    t: FloatArray,
+    s: float,
+    error: float | None,
+    deadline: float = math.inf,
 ) -> list[tuple[float, FloatArray, FloatArray, float]]:
     """``[(E, F, t, s)]`` of a four-bar after the minimax polish, or as it was (``error``: its E if valid), or none."""
     _, un, _ = unwrap_turn(t[None], p.closed)
     start = (F, un[0])
     polish = error is None or error > EXACT
-    Fk, tk = minimax_polish(p, F, un[0], s, o.weight, min_transmission=o.min_transmission) if polish else start
+    mt = o.min_transmission
+    Fk, tk = minimax_polish(p, F, un[0], s, o.weight, min_transmission=mt, deadline=deadline) if polish else start
     polished = judge(p, Fk[None], tk[None], np.array([s]), o)
     if polished.violation[0] == 0 and (error is None or polished.error[0] <= error):
         return [(float(polished.error[0]), Fk, tk, s)]

@@ -163,6 +163,10 @@ class Problem(Objective):
             raise InputError(f"--min-transmission: {self.min_transmission:g} is not within [0, 90) degrees")
         if self.samples < 8:
             raise InputError("samples: at least 8 samples of the crank turn are needed")
+        if self.lengths is not None:
+            bounds = np.asarray(self.lengths, float).ravel()
+            if len(bounds) != 2 or not (0 <= bounds[0] < bounds[1] < np.inf):  # NaN fails too
+                raise InputError(f"lengths: expected (low, high) with 0 <= low < high, got {self.lengths!r}")
 
     @cached_property
     def scale(self) -> float:

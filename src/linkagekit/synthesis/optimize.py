@@ -70,6 +70,63 @@ Cost = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
+class Limit:
+    """The values one search setting may take: a number from ``low`` to ``high``, whole or not.
+
+    ``low`` is excluded when ``low_open`` (a time must be over 0); NaN is never within.
+
+    >>> LIMITS["seconds"].check(float("nan"), "seconds")
+    Traceback (most recent call last):
+    ...
+    linkagekit.errors.InputError: seconds: expected a positive time up to 1e7 s, got nan
+    >>> LIMITS["restarts"].check(0, "restarts")
+    Traceback (most recent call last):
+    ...
+    linkagekit.errors.InputError: restarts: expected a whole number from 1 to 10000, got 0
+    """
+
+    low: float
+    high: float
+    whole: bool = False
+    low_open: bool = False
+    what: str = ""
+
+    def check(self, value: Any, name: str) -> Any:
+        """``value`` when it is within; otherwise an :class:`InputError` naming ``name`` (the argument or option)."""
+        number = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+        whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+        above = number and (value > self.low if self.low_open else value >= self.low)
+        if not (above and value <= self.high and (whole or not self.whole)):
+            kind = self.what or f"{'a whole number' if self.whole else 'a number'} from {self.low:g} to {self.high:g}"
+            raise InputError(f"{name}: expected {kind}, got {shorten(repr(value))}")
+        return value
+
+
+#: what each search setting may be: :class:`Settings` (the Python API) and the command line's options check these
+LIMITS: dict[str, Limit] = {
+    "seconds": Limit(0.0, 1e7, low_open=True, what="a positive time up to 1e7 s"),
+    "restarts": Limit(1, 10_000, whole=True),
+    "generations": Limit(1, 10_000_000, whole=True),
+    "popsize": Limit(1, 10_000, whole=True),
+    "goal": Limit(0.0, 1e300, what="a finite error, at least 0"),
+    "workers": Limit(1, 1024, whole=True),
+}
+
+
+def check_settings(**values: Any) -> None:
+    """Each of ``values`` (search settings by name, None: the default) within its :data:`LIMITS`.
+
+    For the ways in that do not always build :class:`Settings` (which checks its own), so
+    that a bad argument is refused even when the engine is not run.
+
+    >>> check_settings(seconds=5.0, workers=None)
+    """
+    for name, value in values.items():
+        if value is not None:
+            LIMITS[name].check(value, name)
+
+
+@dataclass(frozen=True)
 class Settings:
     """How to search.
 
@@ -108,6 +165,10 @@ class Settings:
     scheduler: str | None = None
     checkpoint: str | None = None
     pareto: bool = False
+
+    def __post_init__(self) -> None:
+        for name, limit in LIMITS.items():  # every way into the engine passes here: checked once, by the argument
+            limit.check(getattr(self, name), name)
 
     def key(self) -> dict[str, Any]:
         """What a checkpoint must agree on to be continued."""

@@ -29,7 +29,7 @@ from .base import Objective
 from .distribute import usable
 from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
-from .optimize import Optimum, Outcome, Progress, Settings, default_workers, optimize, search
+from .optimize import LIMITS, Optimum, Outcome, Progress, Settings, default_workers, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, fixed, template_space
 from .targets import check_scale
 
@@ -592,6 +592,7 @@ def synthesize_motion(
     """
     from . import motion as mo
 
+    deadline = time.monotonic() + LIMITS["seconds"].check(seconds, "seconds")  # checked: the exact route runs no engine
     P, p, w = _motion_problem(poses, inputs, closed or full_turn, weight)  # the approximate route: as a cycle
     found: list[MotionFourBar] = []
     if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
@@ -599,18 +600,22 @@ def synthesize_motion(
         found = [_turning_fully(f) for f in found] if full_turn else found
     if not any(_admissible(f, min_transmission) for f in found):
         seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds, engine or {})
-        designs = mo.approximate(p, w, min_transmission, seeds)
-        found += [_motion_fourbar(p, d, units) for d in designs]
-    return MotionSynthesis(_best_first(found, p.scale, w, min_transmission), p.scale, w)
+        found += [_motion_fourbar(p, d, units) for d in mo.approximate(p, w, min_transmission, seeds, deadline)]
+    late = seconds if time.monotonic() > deadline else 0.0
+    return MotionSynthesis(_best_first(found, p.scale, w, min_transmission, late), p.scale, w)
 
 
-def _best_first(found: list[MotionFourBar], scale: float, w: float, min_transmission: float) -> list[MotionFourBar]:
-    """The four-bars found, the admissible first, each group by ``E`` (:mod:`~.motion`); none admissible: an error."""
+def _best_first(
+    found: list[MotionFourBar], scale: float, w: float, min_transmission: float, late: float = 0.0
+) -> list[MotionFourBar]:
+    """The four-bars found, the admissible first, each group by ``E`` (:mod:`~.motion`); none admissible: an error.
+
+    ``late``: the time budget (seconds) when it ran out before the polish was done (0: it did not).
+    """
     if not any(_admissible(f, min_transmission) for f in found):
         bound = f" with a transmission angle within [{min_transmission:g}, {180 - min_transmission:g}] deg"
-        raise LinkageError(
-            f"motion: no four-bar meets the poses in order on one branch{bound * (min_transmission > 0)}"
-        )
+        what = f"no four-bar found in the time budget ({late:g} s; more may find one)" if late else "no four-bar"
+        raise LinkageError(f"motion: {what} meets the poses in order on one branch{bound * (min_transmission > 0)}")
     return sorted(
         found,
         key=lambda f: (

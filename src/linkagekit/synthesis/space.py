@@ -320,7 +320,14 @@ def template_space(
     or a list of joints that each move within ``reach * size`` of ``center``. The other joints
     stay where the template has them. ``transmission`` defaults to every joint of two binary
     links whose other ends are both placed before it (the joint where a dyad closes).
+    A template with sliders is refused (:class:`~linkagekit.errors.InputError`): the bound on
+    the transmission angle is checked at pin joints only, so a slider's would go unchecked.
     """
+    if mech.sliders:  # the dyads' transmission angles are pin angles: a slider's has no (joint, a, b) form
+        raise InputError(
+            f"{mech.source}: a template with sliders ({', '.join(s.link for s in mech.sliders)}) cannot be"
+            " synthesized: its transmission angle would go unchecked (pin-jointed templates only)"
+        )
     names = mech.joint_names
     if isinstance(free, Mapping):
         items = [(j, free[j]) for j in free]
@@ -352,7 +359,7 @@ def _dyad_angles(mech: Mechanism) -> list[tuple[str, str, str]]:
     grounded = {j for ln in mech.links if ln.name == "ground" for j in ln.joints}
     for j in mech.joint_names:
         links = [ln for ln in mech.links if j in ln.joints]
-        if len(links) != 2 or j in grounded or any(ln.name == "ground" for ln in links):
+        if len(links) != 2 or j in grounded or any(ln.name == "ground" or len(ln.joints) < 2 for ln in links):
             continue
         a, b = (next(o for o in ln.joints if o != j) for ln in links)
         if any(len(ln.joints) == 2 for ln in links) and a != b and not (a in grounded and b in grounded):

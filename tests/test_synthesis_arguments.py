@@ -1,0 +1,79 @@
+"""The Python API's search arguments are checked once, at the boundary, against the limits the command line uses.
+
+A NaN time budget used to remove the limit, a negative one or a negative goal was taken,
+``lengths=(5, 1)`` gave an infeasible run and ``restarts=0`` raised a bare IndexError (found by
+a new-user review).  Each is now an :class:`~linkagekit.errors.InputError` naming the argument,
+raised before any search; the runs that would otherwise start are kept tiny.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import linkagekit as lk
+from linkagekit.errors import InputError, LinkageError
+from linkagekit.synthesis.auto import synthesize_auto
+from linkagekit.synthesis.optimize import LIMITS
+
+ARC = np.array([[0, 0], [1, 0.5], [2, 0.8], [3, 0.9], [4, 0.8], [5, 0.5], [6, 0]], float)
+TINY = {"restarts": 1, "generations": 2, "workers": 1}
+NAN = float("nan")
+
+
+@pytest.fixture(autouse=True)
+def no_atlas(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("LINKAGEKIT_ATLAS_SIZE", "0")  # the path runs that should not start stay short
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"seconds": NAN},
+        {"seconds": -1.0},
+        {"seconds": 0.0},
+        {"goal": -1.0},
+        {"goal": NAN},
+        {"restarts": 0},
+        {"generations": 2.5},
+        {"workers": 0},
+        {"lengths": (5.0, 1.0)},
+        {"lengths": (1.0, NAN)},
+    ],
+)
+def test_path_arguments_out_of_range_are_input_errors_naming_them(bad):
+    name = next(iter(bad))
+    with pytest.raises(InputError, match=rf"^{name}: expected "):
+        lk.synthesize(ARC, "fourbar", **{**TINY, **bad})
+
+
+@pytest.mark.parametrize("bad", [{"seconds": NAN}, {"restarts": 0}, {"workers": 0}])
+def test_function_arguments_are_checked_even_when_three_pairs_need_no_search(bad):
+    name = next(iter(bad))
+    with pytest.raises(InputError, match=rf"^{name}: expected "):
+        lk.synthesize([[30, 75], [75, 90], [135, 135]], task="function", **bad)
+
+
+def test_motion_time_is_checked_even_on_the_exact_route():
+    poses = [[0, 0, 0], [1, 0.2, 10], [2, 0.1, 25], [3, -0.3, 35]]  # four poses: Burmester, no engine
+    with pytest.raises(InputError, match=r"^seconds: expected a positive time"):
+        lk.synthesize(poses, task="motion", seconds=NAN)
+
+
+@pytest.mark.parametrize("bad", [{"seconds": NAN}, {"restarts": 0}, {"goal": -1.0}])
+def test_auto_arguments_are_checked_before_the_screening(bad):
+    name = next(iter(bad))
+    with pytest.raises(InputError, match=rf"^{name}: expected "):
+        synthesize_auto(ARC, max_joints=5, **bad)
+
+
+def test_the_command_line_refuses_by_the_same_limits(tmp_path, capsys):
+    from linkagekit.cli import main
+
+    csv = tmp_path / "arc.csv"
+    csv.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in ARC))
+    over = int(LIMITS["restarts"].high) + 1
+    assert main(["synthesize", str(csv), "-o", str(tmp_path / "o.yaml"), "--restarts", str(over)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--restarts: expected 1 to {over - 1}, got {over}" in err
+    assert issubclass(InputError, LinkageError)
