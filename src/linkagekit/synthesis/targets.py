@@ -369,12 +369,17 @@ def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 4
     text = _read_text(Path(name), name)
     if name.lower().endswith(".svg"):
         return _svg_targets(text, name, units, count, smooth)
-    targets = _csv_targets(text, name, units)
-    check_scale(targets.xy, name, units)
+    return _drawing(_csv_targets(text, name, units), smooth)
+
+
+def _drawing(targets: Targets, smooth: bool) -> Targets:
+    """CSV targets as they are (a few, or timed), or a hand-drawn curve: closed if it loops, smoothed (``smooth``)
+    and, beyond :data:`SMOOTHED_POINTS`, taken at that many points along it."""
+    check_scale(targets.xy, targets.source, targets.unit)
     if len(targets) <= DENSE_POINTS or targets.timed:
         return targets
     if not targets.closed and _loops(targets.xy):
-        targets = Targets(targets.xy, None, units, True, name)
+        targets = Targets(targets.xy, None, targets.unit, True, targets.source)
     if not smooth:
         return targets
     return _smoothed(targets, targets.xy, SMOOTHED_POINTS if len(targets) > SMOOTHED_POINTS else None)
