@@ -727,3 +727,19 @@ def test_a_topology_those_tasks_do_not_design_is_refused_by_its_name(tmp_path, c
     args = ["synthesize", str(targets), "--task", task, "--topology", "watt2", "-o", str(tmp_path / "o.yaml")]
     code, _, err = run_main(args, capsys)
     assert_one_line_error(code, err, "--topology watt2", "generation designs four-bars only")
+
+
+@pytest.mark.parametrize("which", ["-o", "--plot"])
+def test_an_output_into_a_missing_directory_is_refused_before_the_search(tmp_path, capsys, which):
+    """``-o`` into a directory that is not there failed only after the whole search (the result lost), and a bad
+    ``--plot`` path after the file was written. Both are one line before any work, exit status 2."""
+    targets = tmp_path / "t.csv"
+    targets.write_text("x,y\n0,0\n1,0\n1,1\n0,1\n")
+    out = {"-o": str(tmp_path / "o.yaml"), "--plot": str(tmp_path / "p.png")}
+    out[which] = str(tmp_path / "missing" / ("o.yaml" if which == "-o" else "p.png"))
+    args = ["synthesize", str(targets), "-o", out["-o"], "--plot", out["--plot"], "--seconds", "1000"]
+    t0 = time.monotonic()
+    code, _, err = run_main(args, capsys)
+    assert time.monotonic() - t0 < 60  # refused at once, not after the 1000 s search (a hang's bound only)
+    assert_one_line_error(code, err, f"{which} ", "no directory")
+    assert not (tmp_path / "o.yaml").exists()

@@ -1207,11 +1207,18 @@ def _check(args: argparse.Namespace) -> int:
 
 
 def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
+    """Refuse an output path, before any work, whose suffix is not ``allowed`` or whose directory is not there (a
+    synthesis into a missing directory failed only after its whole search, and the result was lost)."""
     import os
 
     ext = os.path.splitext(path)[1].lower()
     if ext not in allowed:
         raise InputError(f"{option} {shorten_path(path, 80)}: expected a file ending in {', '.join(allowed)}")
+    folder = os.path.dirname(path) or "."
+    if not os.path.isdir(folder):
+        raise InputError(
+            f"{option} {shorten_path(path, 80)}: cannot write there: no directory {shorten_path(folder, 80)}"
+        )
 
 
 def _sweep(mech: Mechanism, angles: list[str] | None) -> dict[str, np.ndarray] | None:
