@@ -698,3 +698,26 @@ def test_bad_dpi_or_size_is_one_line(tmp_path, capsys, args, needle):
     err = capsys.readouterr().err
     assert code == 2 and needle in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x.png").exists()
+
+
+def test_a_quantity_that_is_rounding_is_drawn_flat_not_zoomed_into():
+    """The parallelogram's coupler only translates: its angular velocity is 0 and its angle constant, to rounding
+    (1e-13). ``plot -q`` zoomed into the rounding: full-height jags under a '1e-13' offset label (the tables print 0).
+    Drawn as the constant it is: the zero on a (-1, 1) axis, a constant within 5 % of its size, no offset; a quantity
+    that moves keeps matplotlib's own range."""
+    from linkagekit.viz import draw
+
+    res = lk.analyze(lk.load(EXAMPLES / "seed003_ex22.yaml"), {"crank": np.arange(0.0, 171.0, 1.0)})
+    omega = np.asarray(res.columns()["coupler.omega"], float)
+    assert 0 < np.nanmax(np.abs(omega)) < 1e-9  # rounding, not exactly 0
+    fig = draw.quantities_figure(res, [["coupler.omega"], ["coupler.angle"], ["crank.angle"]])
+    a, b, c = fig.axes[:3]
+    assert a.get_ylim() == (-1.0, 1.0)
+    angle = np.asarray(res.columns()["coupler.angle"], float)
+    lo, hi = b.get_ylim()
+    if np.nanmax(np.abs(angle)) >= draw.PLOT_ROUNDOFF:
+        assert abs((lo + hi) / 2 - np.nanmean(angle)) < 1e-9 and abs(hi - lo - 0.1 * np.nanmax(np.abs(angle))) < 1e-9
+    else:
+        assert (lo, hi) == (-1.0, 1.0)
+    lo, hi = c.get_ylim()
+    assert lo < 1.0 and hi > 169.0 and (lo, hi) != (-1.0, 1.0)  # the crank turns 170 deg: drawn as matplotlib does

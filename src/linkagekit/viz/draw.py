@@ -429,7 +429,30 @@ def plot_quantities(ax: Axes, res: Result | Scene, names: Sequence[str]) -> Axes
     if len(names) > 1:
         ax.set_ylabel(" / ".join(sorted(units)) if units != {""} else "")
         ax.legend(fontsize=7, loc="best")
+    _roundoff_range(ax, np.concatenate([np.asarray(sc.columns[n], float) for n in names]))
     return ax
+
+
+#: values whose spread is below this fraction of their magnitude (or, all below it in magnitude, in display units)
+#: are drawn as the constant they are, not zoomed into: as the tables print round-off as 0
+PLOT_ROUNDOFF = 1e-9
+
+
+def _roundoff_range(ax: Axes, y: np.ndarray) -> None:
+    """A y-range that shows rounding as rounding: a constant (a coupler that only translates, a constant force) drew
+    its last digits' noise as full-height jags under a '1e-13' or '1e-9+4e2' offset label."""
+    y = y[np.isfinite(y)]
+    if not len(y):
+        return
+    top = float(np.max(np.abs(y)))
+    if top < PLOT_ROUNDOFF:  # zero, to rounding
+        ax.set_ylim(-1.0, 1.0)
+    elif float(np.ptp(y)) < PLOT_ROUNDOFF * top:  # a constant, to rounding
+        mid = float(np.mean(y))
+        ax.set_ylim(mid - 0.05 * top, mid + 0.05 * top)
+    else:
+        return
+    ax.ticklabel_format(axis="y", useOffset=False)
 
 
 def mechanism_figure(
