@@ -427,3 +427,24 @@ def test_a_dense_drawing_is_taken_at_400_points_evenly_along_its_smoothed_curve(
     whole = smooth(np.loadtxt(f, delimiter=",", skiprows=1), closed=True)
     np.testing.assert_allclose(got.xy, whole[::5], rtol=0, atol=1e-12)
     assert read_targets(f, smooth=False).xy.shape == (2000, 2)  # --no-smooth: every point as it is
+
+
+@pytest.mark.parametrize(
+    "body, words",
+    [
+        ("x,y,input\n0,0,0\n1,1,0\n2,0,0\n", "targets 1 and 2 are at different places with one input (0 deg)"),
+        ("x,y,input\n0,0,10\n1,1,90\n2,0,370\n", "targets 1 and 3 are at different places with one input (10 deg)"),
+        ("x,y,input\n0,0,0\n1,1,1e300\n2,0,20\n", "target 2: an input of 1e+300 deg (at most 360000)"),
+    ],
+)
+def test_timed_targets_a_mechanism_cannot_meet_are_refused(tmp_path: Path, body: str, words: str) -> None:
+    """Timed targets all at one input were accepted (no mechanism meets two places at one input), and an input of
+    1e300 made the table print every other input as 0. One line naming the targets, exit 2."""
+    msg = expect_error(write(tmp_path, "t.csv", body))
+    assert words in msg, msg
+
+
+def test_timed_targets_at_one_place_and_one_input_are_fine(tmp_path: Path) -> None:
+    """The same target twice (one place, one input modulo 360) is no contradiction."""
+    t = read_targets(write(tmp_path, "t.csv", "x,y,input\n0,0,0\n1,1,90\n0,0,360\n2,0,180\n"))
+    assert len(t) == 4 and t.timed

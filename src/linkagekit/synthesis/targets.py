@@ -155,6 +155,7 @@ class Targets:
             if inputs.shape != (m,):
                 raise _error(source, f"the inputs must have shape ({m},) like the points, got {inputs.shape}")
             _check_finite(inputs[:, None], source, ("input",))
+            _check_timing(xy, inputs, source)
             inputs.setflags(write=False)
             object.__setattr__(self, "inputs", inputs)
 
@@ -233,6 +234,29 @@ def _diagonal(xy: np.ndarray) -> float:
     width = float(xy[:, 0].max()) - float(xy[:, 0].min())
     height = float(xy[:, 1].max()) - float(xy[:, 1].min())
     return math.hypot(width, height)
+
+
+#: the largest magnitude of a target's input angle, degrees (a thousand turns; 1e300 made every other input print 0)
+MAX_INPUT = 360_000.0
+
+
+def _check_timing(xy: np.ndarray, inputs: np.ndarray, source: str) -> None:
+    """Refuse inputs beyond :data:`MAX_INPUT`, and two targets at different places with one input (modulo 360
+    degrees): the tracer is at one place at one input, so no mechanism meets them (all at one input were taken)."""
+    big = np.flatnonzero(np.abs(inputs) > MAX_INPUT)
+    if len(big):
+        raise _error(source, f"target {big[0] + 1}: an input of {_num(inputs[big[0]])} deg (at most {MAX_INPUT:g})")
+    turn = np.mod(inputs, 360.0)
+    order = np.argsort(turn, kind="stable")
+    gaps = np.diff(np.append(turn[order], turn[order[0]] + 360.0))
+    apart = np.hypot(*(xy[np.roll(order, -1)] - xy[order]).T) > CLOSE_TOL * _diagonal(xy)
+    clash = np.flatnonzero((gaps <= INPUT_TOL) & apart)
+    if len(clash):
+        a, b = sorted((int(order[clash[0]]) + 1, int(np.roll(order, -1)[clash[0]]) + 1))
+        raise _error(
+            source, f"targets {a} and {b} are at different places with one input ({_num(inputs[a - 1])} deg): "
+            "the tracer is at one place at one input"
+        )  # fmt: skip
 
 
 def _repeats_first(xy: np.ndarray, inputs: np.ndarray | None) -> bool:
