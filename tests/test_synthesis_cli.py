@@ -743,3 +743,20 @@ def test_an_output_into_a_missing_directory_is_refused_before_the_search(tmp_pat
     assert time.monotonic() - t0 < 60  # refused at once, not after the 1000 s search (a hang's bound only)
     assert_one_line_error(code, err, f"{which} ", "no directory")
     assert not (tmp_path / "o.yaml").exists()
+
+
+@pytest.mark.parametrize(
+    "task, body, extra, words",
+    [
+        ("motion", "x,y,angle\n0,0,0\n1e300,1,10\n2,0,20\n3,1,30\n", [], "m.csv: the targets' diagonal is 1e+300"),
+        ("function", "input,output\n0,0\n30,30\n60,60\n", ["--ground-length", "1e13"], "--ground-length: at most"),
+    ],
+)
+def test_absurd_numbers_are_refused_naming_the_file_or_option(tmp_path, capsys, task, body, extra, words):
+    """Poses at 1e300 and a ground length of 1e13 were refused by the mechanism they made, naming no file or option
+    ('<motion synthesis>: joints.A0[0]: ... too large', '<dict>: joints.B[0]: ...')."""
+    f = tmp_path / "m.csv"
+    f.write_text(body)
+    args = ["synthesize", str(f), "--task", task, *extra, "-o", str(tmp_path / "o.yaml")]
+    code, _, err = run_main(args, capsys)
+    assert_one_line_error(code, err, words)

@@ -690,6 +690,8 @@ def _shape_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+#: ``--ground-length``'s largest value (a mechanism file holds no number above 1e12; targets' diagonals are at most 1e6)
+MAX_GROUND_LENGTH = 1e6
 #: the tasks of ``synthesize --task`` (spec section 6)
 SYNTHESIS_TASKS = ("path", "motion", "function")
 #: the options of one task only: given with another, they are refused, not ignored (a user who gave --pivots to a
@@ -1576,6 +1578,8 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     if args.units not in LENGTH_UNITS:
         raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
+    if length > MAX_GROUND_LENGTH:  # 1e13 named no option: '<dict>: joints.B[0]: ...'
+        raise InputError(f"--ground-length: at most {MAX_GROUND_LENGTH:g}, got {shorten(args.ground_length)}")
     x, y = read_pairs(args.targets)
     engine = {
         k: v

@@ -181,7 +181,7 @@ def read_poses(path: str) -> PoseFile:
     input (fewer than 3 poses, a value not a finite number, an angle beyond 360 degrees, two
     equal poses) raises :class:`~linkagekit.errors.InputError` with one line naming the file.
     """
-    from .targets import read_table
+    from .targets import check_scale, read_table
 
     cols, table = read_table(path, [("x", "y", "angle"), ("x", "y", "angle", "input")], "pose")
     P = table[:, [cols.index(c) for c in ("x", "y", "angle")]]
@@ -191,6 +191,7 @@ def read_poses(path: str) -> PoseFile:
     bad = np.flatnonzero(np.abs(P[:, 2]) > MAX_ANGLE)
     if len(bad):
         raise InputError(f"{path}: pose {bad[0] + 1}: angle {P[bad[0], 2]:g} is out of range [-360, 360] degrees")
+    check_scale(P[:, :2], path, "length units")  # 1e300 named no file: '<motion synthesis>: joints.A0[0]: too large'
     size = float(np.hypot(np.ptp(P[:, 0]), np.ptp(P[:, 1])))
     turn = abs(np.angle(np.exp(1j * np.radians(P[-1, 2] - P[0, 2]))))
     closed = len(P) > 3 and bool(np.hypot(*(P[-1, :2] - P[0, :2])) <= SAME_POSE * size and turn <= SAME_POSE)
