@@ -241,3 +241,22 @@ def test_crank_alone_report_scene_has_a_constant_speed_plot():
     sc = build_scene(res)
     v = sc.columns["|v|[C]"]
     assert np.ptp(v) < 1e-12 and np.ptp(v) > 0  # constant up to round-off: the case that hung the page
+
+
+def test_a_long_name_is_a_title_of_several_lines_within_the_picture():
+    """At 800 px a long name was one title line cut off on both sides. It is broken into lines that fit: every line
+    of the drawn title lies inside the figure."""
+    import yaml as _yaml
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from linkagekit.viz import draw
+
+    doc = _yaml.safe_load((Path(__file__).resolve().parents[1] / "examples" / "seed000_fourbar.yaml").read_text())
+    doc["name"] = "A rather long mechanism name that a user might write to describe the four-bar of a packaging machine"
+    fig = draw.mechanism_figure(lk.analyze(lk.Mechanism.from_dict(doc)), pixels=(800, None))
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    title = fig._suptitle
+    box = title.get_window_extent(canvas.get_renderer())
+    assert title.get_text().count("\n") >= 1
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width and box.y1 <= fig.bbox.height

@@ -81,6 +81,14 @@ def _t(text: str) -> str:
     return text.replace("$", r"\$")
 
 
+def _title(fig: Figure, text: str, size: float = 10) -> None:
+    """``fig``'s title, broken into lines that fit its width (a long name was cut off on both sides at 800 px)."""
+    import textwrap
+
+    per_line = max(20, int(fig.get_figwidth() * 72 / (0.6 * size)))
+    fig.suptitle(_t(textwrap.fill(text, per_line)), fontsize=size)
+
+
 def _scene(obj: Result | Scene) -> Scene:
     if isinstance(obj, Scene):
         return obj
@@ -503,7 +511,7 @@ def mechanism_figure(
     # one note for every input drawn that does not assemble (each drawing's own would overlap)
     missing = [inputs_at(k) for k in indices if not shown.assembled[k]]
     d.note.set_text(_t("does not assemble at " + "; ".join(missing)) if missing else "")
-    fig.suptitle(_t(f"{sc.name or 'mechanism'}  ({inputs_at(i)})"), fontsize=10)
+    _title(fig, f"{sc.name or 'mechanism'}  ({inputs_at(i)})")
     return fig
 
 
@@ -542,10 +550,7 @@ def synthesis_figure(
     if errors is not None:
         e = np.asarray(errors, float)
         kind = "closed" if closed else "open"
-        fig.suptitle(
-            _t(f"{len(t)} targets ({kind}): max error {np.max(e):.4g}, rms {np.sqrt(np.mean(e * e)):.4g}"),
-            fontsize=10,
-        )
+        _title(fig, f"{len(t)} targets ({kind}): max error {np.max(e):.4g}, rms {np.sqrt(np.mean(e * e)):.4g}")
     return fig
 
 
@@ -573,7 +578,7 @@ def function_figure(curve: Any, pairs: Any, errors: Any, title: str = "", size: 
     bottom.set_ylim(-1.25 * worst - 1e-12, 1.25 * worst + 1e-12)
     bottom.set_xlabel("input [deg]")
     bottom.set_ylabel("error [deg]")
-    fig.suptitle(_t(title or f"{len(p)} pairs: max error {worst:.4g} deg"), fontsize=10)
+    _title(fig, title or f"{len(p)} pairs: max error {worst:.4g} deg")
     return fig, top
 
 
@@ -626,7 +631,7 @@ def motion_figure(
     ax.set_xlim(min(x0, z.real.min() - pad), max(x1, z.real.max() + pad))
     ax.set_ylim(min(y0, z.imag.min() - pad), max(y1, z.imag.max() + pad))
     kind = "closed" if closed else "open"
-    fig.suptitle(_t(f"{len(P)} poses ({kind}): {mech.name}"), fontsize=10)
+    _title(fig, f"{len(P)} poses ({kind}): {mech.name}")
     return fig
 
 
@@ -692,7 +697,7 @@ def modes_figure(
             signs += f" {g} " + (f"{gi['index'] + 1}/{gi['of']}" if gi["of"] > 0 else "(continued)")
         signs = signs.strip()
         ax.set_title(_t(f"{k + 1}: {signs or 'the only mode'}{' (pose)' if m.reference else ''}"), fontsize=9)
-    fig.suptitle(_t(f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}"), fontsize=10)
+    _title(fig, f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}")
     return fig
 
 
@@ -770,7 +775,7 @@ def quantities_figure(
     axes = fig.subplots(len(groups), 1, squeeze=False)[:, 0]
     for ax, names in zip(axes, groups, strict=True):
         plot_quantities(ax, sc, names)
-    fig.suptitle(_t(sc.name or "mechanism"), fontsize=10)
+    _title(fig, sc.name or "mechanism")
     fig.tight_layout()
     return fig
 
