@@ -315,3 +315,27 @@ def test_partial_ordered_follows_the_open_curve():
     assert np.max(evaluate(back, x[None], refine=3).errors) < 1e-9 * pb.scale
     shuffled = replace(pb, targets=pb.targets[[0, 5, 2, 8, 1, 9, 3, 7, 4, 6, 10]])
     assert np.max(evaluate(shuffled, x[None], refine=3).errors) > 1e-2 * pb.scale
+
+
+def test_a_placement_whose_system_is_singular_to_rounding_is_solved_not_an_internal_error():
+    """``synthesize E.csv --shape-only --partial`` (the letter E) ended in 'internal error: LinAlgError: Singular
+    matrix': one design's 4 x 4 placement system (its curve's samples at one spot) was singular to rounding despite the
+    ridge, and the batch's solve raised for all 64 designs. The matrix found there: its answer is the pseudo-inverse's
+    (finite, M x = r to 1e-9 of |r|), the other designs' as before, and a system that overflowed is NaN."""
+    from linkagekit.synthesis.objective import _solved
+
+    singular = [
+        [417.7009033078995, 462.57859920065385, 40.29130926605185, -286.211062231303],
+        [462.57859920065385, 512.2800156901401, 44.62093550473931, -316.9621336511956],
+        [40.29130926605185, 44.62093550473931, 3.8867501578246797, -27.608056060422633],
+        [-286.211062231303, -316.9621336511956, -27.608056060422633, 196.11364984217693],
+    ]
+    r0 = [29.423852105240474, 32.585135178021936, 2.8382130159662875, -20.161389983863504]
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.solve(np.array(singular), np.array(r0))
+    M = np.array([singular, np.diag([2.0, 4.0, 1.0, 8.0]), np.full((4, 4), np.inf)])
+    r = np.array([r0, [2.0, 4.0, 3.0, 8.0], [1.0, 1.0, 1.0, 1.0]])
+    x = _solved(M, r)
+    assert np.all(np.isfinite(x[:2])) and np.all(np.isnan(x[2]))
+    assert np.linalg.norm(M[0] @ x[0] - r[0]) < 1e-9 * np.linalg.norm(r[0])
+    np.testing.assert_allclose(x[1], [1.0, 1.0, 3.0, 1.0], rtol=1e-15)

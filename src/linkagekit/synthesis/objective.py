@@ -517,8 +517,28 @@ def plane_fit(p: ComplexArray, nu: ComplexArray, t: ComplexArray) -> tuple[Compl
     few = ok.sum(axis=-1) < 2
     M[few], r[few] = np.eye(4), [1.0, 0.0, 0.0, 0.0]
     M += (1e-15 * np.trace(M, axis1=1, axis2=2) + 1e-300)[:, None, None] * np.eye(4)  # coincident points
-    x = np.linalg.solve(M, r[..., None])[..., 0]
+    # a design whose curve runs off to ~1e160 overflows its sums: no placement (its cost is infinite); neither it nor
+    # a singular system is a LinAlgError for the whole batch ('Singular matrix' ended a shape-only partial search)
+    x = _solved(M, r)
     return x[:, 0] + 1j * x[:, 1], x[:, 2] + 1j * x[:, 3]
+
+
+def _solved(M: FloatArray, r: FloatArray) -> FloatArray:
+    """``M^-1 r`` for each design (N, k, k), (N, k): NaN where ``M`` or ``r`` is not finite (a curve that overflowed),
+    the pseudo-inverse's answer where ``M`` is singular to rounding (the solve raised for the whole batch).
+
+    >>> M = np.array([[[1.0, 1.0], [1.0, 1.0]], [[2.0, 0.0], [0.0, 4.0]], [[np.inf, 0.0], [0.0, 1.0]]])
+    >>> np.round(_solved(M, np.array([[2.0, 2.0], [2.0, 4.0], [1.0, 1.0]])), 12).tolist()
+    [[1.0, 1.0], [1.0, 1.0], [nan, nan]]
+    """
+    bad = ~(np.all(np.isfinite(M), axis=(1, 2)) & np.all(np.isfinite(r), axis=1))
+    M, r = np.where(bad[:, None, None], np.eye(M.shape[1]), M), np.where(bad[:, None], 0.0, r)
+    try:
+        x: FloatArray = np.asarray(np.linalg.solve(M, r[..., None])[..., 0], np.float64)
+    except np.linalg.LinAlgError:  # rank 2 to rounding (a curve's samples at one spot): the ridge rounds to a 0 pivot
+        x = np.asarray(np.einsum("nij,nj->ni", np.linalg.pinv(M), r), np.float64)
+    x[bad] = np.nan
+    return x
 
 
 def _tangents(P: ComplexArray, closed: bool) -> ComplexArray:
