@@ -463,3 +463,11 @@ def test_a_crank_posed_where_the_conditioning_is_below_the_stop_is_refused_not_i
     posed = mech.with_pose(np.stack([at.xy(j)[0] for j in mech.joint_names]))
     with pytest.raises(lk.InputError, match="a singular pose"):
         lk.simulate(posed, np.linspace(0.0, 2.0, 21), torque=torque)
+
+
+def test_a_parallelogram_posed_next_to_its_flat_position_off_the_table_is_refused_not_stopped_moving_away():
+    """Posed 0.01 deg from flat, the pose's cell fails the table's check and the model's conditioning is below the
+    stop: the fallback integrated the model and said it 'reached a singular position it cannot pass' after 1.7e-4 s,
+    moving away from the flat position at 0.057 deg (the conditioning rising through the threshold)."""
+    with pytest.raises(lk.InputError, match="a singular pose"):
+        lk.simulate(_parallelogram(0.01), np.array([0.0, 0.25]), speed=5.0)
