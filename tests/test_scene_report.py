@@ -259,3 +259,32 @@ def test_the_picture_commands_follow_the_branch_through_change_points_when_asked
         assert (turned < 1e-9) if branch == "continuous" else (turned > 1.0), (branch, turned)
     assert main(["plot", str(path), "-o", str(tmp_path / "p.png"), "--branch", "continuous", "--time", "0:1:0.5"]) == 2
     assert "--branch goes with a sweep" in capsys.readouterr().err
+
+
+def test_plot_draws_its_at_poses_on_the_sweeps_branch(tmp_path, monkeypatch):
+    """``plot --branch continuous --at`` drew the sweep as a parallelogram but its ``--at`` poses on the pose's signs
+    (folded past the flat position): the poses are now ``lk.analyze(..., branch=...)``'s, for either branch."""
+    from linkagekit.viz import draw
+
+    path = EX / "seed003_ex22.yaml"
+    mech = lk.load(path)
+    drawn = {}
+
+    def capture(res, poses=None, **kw):
+        drawn["poses"] = poses
+        raise SystemExit(0)  # the figure itself is not needed
+
+    monkeypatch.setattr(draw, "mechanism_figure", capture)
+    name = mech.drivers[0].name
+    sweeps = {branch: lk.analyze(mech, branch=branch) for branch in ("continuous", "pose")}
+    apart = [np.linalg.norm(sweeps["continuous"].xy(j) - sweeps["pose"].xy(j), axis=-1) for j in mech.joint_names]
+    i = int(np.nanargmax(np.nanmax(apart, axis=0)))  # past the flat position, where the branches differ most
+    assert np.nanmax(apart, axis=0)[i] > 1.0
+    for branch, res in sweeps.items():
+        value = float(res.inputs[name][i])
+        with pytest.raises(SystemExit):
+            main(["plot", str(path), "-o", str(tmp_path / "p.png"), "--branch", branch, "--at", f"{name}={value!r}"])
+        want = lk.analyze(mech, {name: [value]}, branch=branch)
+        for j in mech.joint_names:
+            np.testing.assert_allclose(drawn["poses"].xy(j), want.xy(j), rtol=0, atol=1e-9)
+            np.testing.assert_allclose(want.xy(j)[0], res.xy(j)[i], rtol=0, atol=1e-9)  # the sweep's own pose there

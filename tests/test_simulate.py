@@ -449,3 +449,25 @@ def test_a_crank_posed_next_to_its_toggle_moves_away_under_a_torque_that_pulls_i
     assert np.all(np.diff(q) < 0)  # away from the toggle
     energy = _energy(dataclasses.replace(posed, gravity=0j), res)
     np.testing.assert_allclose(energy - energy[0], -20.0 * (q - q[0]), rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize("torque", [20.0, -20.0])
+def test_a_crank_posed_where_the_conditioning_is_below_the_stop_is_refused_not_integrated(tmp_path, torque):
+    """Posed 1e-6 deg within its toggle (conditioning 2.9e-4, below STOP_CONDITION), no table holds and the model
+    itself is past the stop: the singular event cannot fall through zero, so pushed in the integration ran on for
+    minutes (it was refused before the fallback), and pulled out it stopped at once as 'a singular position' when
+    the conditioning rose through the threshold. Refused as a singular pose, as before."""
+    mech = lk.load(_rocker_file(tmp_path))
+    hi = lk.check(mech).to_dict()["input_range"][0][1]
+    at = lk.analyze(mech, {"crank": [hi - 1e-6]}, rates=False)
+    posed = mech.with_pose(np.stack([at.xy(j)[0] for j in mech.joint_names]))
+    with pytest.raises(lk.InputError, match="a singular pose"):
+        lk.simulate(posed, np.linspace(0.0, 2.0, 21), torque=torque)
+
+
+def test_a_parallelogram_posed_next_to_its_flat_position_off_the_table_is_refused_not_stopped_moving_away():
+    """Posed 0.01 deg from flat, the pose's cell fails the table's check and the model's conditioning is below the
+    stop: the fallback integrated the model and said it 'reached a singular position it cannot pass' after 1.7e-4 s,
+    moving away from the flat position at 0.057 deg (the conditioning rising through the threshold)."""
+    with pytest.raises(lk.InputError, match="a singular pose"):
+        lk.simulate(_parallelogram(0.01), np.array([0.0, 0.25]), speed=5.0)

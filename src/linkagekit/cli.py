@@ -1278,7 +1278,8 @@ def _plot(args: argparse.Namespace) -> int:
         return _stopped(res)
     poses = None
     if args.at:
-        poses = lk.analyze(mech, {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()})
+        at = {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()}
+        poses = _swept(mech, args, at)  # on the sweep's branch: a parallelogram past flat stays one
     fig = draw.mechanism_figure(res, poses, **picture)
     _check_pixels(fig)
     draw.save_figure(fig, args.output, fig.axes[0])

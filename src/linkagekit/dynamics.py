@@ -545,7 +545,13 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     """
     try:
         red = reduced(md.mech)
-    except _OffTable:
+    except _OffTable as off:
+        q0 = md.params.pose_inputs[:, :1] * md.scale[:, None]
+        if not _direct_accel(md, q0, np.array([[w0]]), np.array([[law(w0)]]))[1][0] >= STOP_CONDITION:
+            # already past the stop: the singular event can never fall through zero (pushed in, it ran on for ever)
+            raise InputError(
+                f"{md.mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)"
+            ) from off
         return _integrate_direct(md, times, (law,), np.array([w0], float))
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
