@@ -395,3 +395,13 @@ def test_yaml_nested_beyond_the_c_parsers_recursion_is_refused_not_a_crash(tmp_p
     assert p.stderr.startswith(f"linkagekit: error: {f} at line 1, column ") and p.stderr.endswith(
         ": nested too deep (at most 32 levels)\n"
     ), p.stderr
+
+
+def test_yaml_collections_count_once_against_the_values_limit(tmp_path):
+    """The parser's events were counted with each collection's end as a second value: 110000 empty lists (a
+    file the composed count accepts) were refused as 'more than 200000 values'. Ends do not count."""
+    from linkagekit.files import MAX_VALUES, _bounded_events
+
+    _bounded_events("[" + ", ".join(["[]"] * 110_000) + "]", "f.yaml")  # 110001 values: fine
+    with pytest.raises(lk.MechanismFileError, match=f"more than {MAX_VALUES} values"):
+        _bounded_events("[" + ", ".join(["[]"] * 200_000) + "]", "f.yaml")

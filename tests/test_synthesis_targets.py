@@ -411,10 +411,10 @@ def test_svg_trailing_move_is_ignored(tmp_path: Path) -> None:
     np.testing.assert_allclose(t.xy, np.array(expected), atol=1e-9)
 
 
-def test_a_dense_drawing_is_taken_at_400_points_evenly_along_its_smoothed_curve(tmp_path):
+def test_a_dense_drawing_is_taken_at_400_of_its_smoothed_points(tmp_path):
     """A CSV drawing of 2000 points made a 10 s synthesis take 22 s (10^5 points: 1.5 GB), every evaluation costing
-    in proportion to the targets. Smoothed (its 16 harmonics), it is taken at 400 points evenly along it, said in the
-    note; each lies on the smoothed curve of all 2000 to rounding."""
+    in proportion to the targets. Smoothed (its 16 harmonics), it is taken at 400 of its points, evenly by index,
+    said in the note: every fifth of the 2000 smoothed points, to rounding."""
     from linkagekit.synthesis.targets import SMOOTHED_POINTS, read_targets, smooth
 
     t = np.linspace(0, 2 * np.pi, 2000, endpoint=False)
@@ -423,7 +423,7 @@ def test_a_dense_drawing_is_taken_at_400_points_evenly_along_its_smoothed_curve(
     np.savetxt(f, xy, delimiter=",", header="x,y", comments="")
     got = read_targets(f)
     assert SMOOTHED_POINTS == 400 and got.xy.shape == (400, 2) and got.closed
-    assert got.smoothed.endswith("; 400 of them taken evenly along it")
+    assert got.smoothed.endswith("; 400 of them taken, evenly by index")
     whole = smooth(np.loadtxt(f, delimiter=",", skiprows=1), closed=True)
     np.testing.assert_allclose(got.xy, whole[::5], rtol=0, atol=1e-12)
     assert read_targets(f, smooth=False).xy.shape == (2000, 2)  # --no-smooth: every point as it is

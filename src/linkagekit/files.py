@@ -214,6 +214,7 @@ def _bounded_events(text: str, source: str) -> None:
                 )
         elif isinstance(event, yaml.CollectionEndEvent):
             depth -= 1
+            continue
         elif not isinstance(event, yaml.ScalarEvent):
             continue
         count += 1

@@ -398,7 +398,7 @@ def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 4
 
 def _drawing(targets: Targets, smooth: bool) -> Targets:
     """CSV targets as they are (a few, or timed), or a hand-drawn curve: closed if it loops, smoothed (``smooth``)
-    and, beyond :data:`SMOOTHED_POINTS`, taken at that many points along it."""
+    and, beyond :data:`SMOOTHED_POINTS`, taken at that many of its points, evenly by index."""
     check_scale(targets.xy, targets.source, targets.unit)
     if len(targets) <= DENSE_POINTS or targets.timed:
         return targets
@@ -470,7 +470,7 @@ DENSE_POINTS = 40
 SMOOTH_HARMONICS = 16
 #: points an SVG path of many segments is sampled at before it is smoothed and its ``points`` taken
 SMOOTH_SAMPLES = 512
-#: a smoothed CSV drawing of more points is taken at this many, evenly along it: its 16 harmonics need far fewer,
+#: a smoothed CSV drawing of more points is taken at this many, evenly by index: its 16 harmonics need far fewer,
 #: and every evaluation of a search costs in proportion (2000 points made a 10 s run take 22 s, 10^5 points 1.5 GB)
 SMOOTHED_POINTS = 400
 
@@ -521,7 +521,7 @@ def _smoothed(targets: Targets, dense: np.ndarray, count: int | None = None) -> 
     if count is not None:
         idx = np.linspace(0, len(xy), count, endpoint=False) if targets.closed else np.linspace(0, len(xy) - 1, count)
         xy = xy[np.round(idx).astype(int)]
-    taken = f"; {count} of them taken evenly along it" if count is not None and count < len(dense) else ""
+    taken = f"; {count} of them taken, evenly by index" if count is not None and count < len(dense) else ""
     note = (
         f"{targets.source}: hand-drawn (more than {DENSE_POINTS} points): smoothed as "
         f"{'a closed' if targets.closed else 'an open'} curve, Fourier harmonics above "
