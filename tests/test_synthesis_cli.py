@@ -708,6 +708,9 @@ def test_a_template_whose_tracer_is_on_the_ground_is_refused(tmp_path, capsys):
         ("path", ["--full-turn"]),
         ("path", ["--free-offsets"]),
         ("path", ["--ground-length", "5"]),
+        ("function", ["--reach", "50"]),
+        ("motion", ["--points", "7"]),
+        ("function", ["--goal", "0.5"]),
     ],
 )
 def test_an_option_of_another_task_is_refused_not_ignored(tmp_path, capsys, task, option):

@@ -628,16 +628,14 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
     p.add_argument("--checkpoint", metavar="FILE", help="save the search after every generation; resume from it")
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
-    p.add_argument("--points", metavar="N", default="40", help="points sampled along an SVG path (default 40)")
+    p.add_argument("--points", metavar="N", help="points sampled along an SVG path (default 40)")
     p.add_argument("--no-smooth", action="store_true", help="take hand-drawn targets (over 40 points) as they are")
     p.add_argument("--ordered", action="store_true", help="meet the targets in their order along the curve")
     _shape_arguments(p)
     p.add_argument("--free", metavar="J1,J2,...", help="with a template file: the joints that move (default all)")
     p.add_argument("--pivots", metavar="X0:X1,Y0:Y1", help="the region of the ground pivots")
     p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
-    p.add_argument(
-        "--reach", metavar="R", default="3", help="joints lie within R target diagonals of the targets (default 3)"
-    )
+    p.add_argument("--reach", metavar="R", help="joints lie within R target diagonals of the targets (default 3)")
     p.add_argument(
         "--restarts", metavar="N", default=_DEFAULT_RESTARTS, help="independent searches at most (default 1000)"
     )
@@ -647,7 +645,6 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--goal",
         metavar="F",
-        default="1e-5",
         help="stop once every target is within F target diagonals of the curve (default 1e-5; 0: search to the end)",
     )
     p.add_argument("--plot", metavar="OUT", help="draw the targets on the achieved curve: .png, .svg or .pdf")
@@ -697,10 +694,21 @@ SYNTHESIS_TASKS = ("path", "motion", "function")
 #: the options of one task only: given with another, they are refused, not ignored (a user who gave --pivots to a
 #: motion synthesis believed the pivots were bounded)
 _TASK_OPTIONS = {
-    "path": ("shape_only", "partial", "pareto", "no_smooth", "pivots", "lengths", "free", "ordered", "max_joints"),
+    "path": ("shape_only", "partial", "pareto", "no_smooth", "pivots", "lengths", "free", "ordered", "max_joints")
+    + ("points", "reach", "goal"),
     "motion": ("approximate", "angle_weight", "full_turn"),
     "function": ("free_offsets", "ground_length"),
 }
+
+
+#: path generation's options whose defaults are applied when they are read (given with another task: refused)
+_PATH_DEFAULTS = {"points": "40", "reach": "3", "goal": "1e-5"}
+
+
+def _path_option(args: argparse.Namespace, name: str) -> str:
+    """``--NAME`` as given, or its default (:data:`_PATH_DEFAULTS`)."""
+    value = getattr(args, name)
+    return _PATH_DEFAULTS[name] if value is None else str(value)
 
 
 def _task_options(args: argparse.Namespace) -> None:
@@ -1814,7 +1822,7 @@ def _synthesize_command(args: argparse.Namespace) -> str:
     words = [PROG, "synthesize", os.path.basename(args.targets)]
     deciding = _MOTION_DECIDING if args.task == "motion" else _SYNTHESIZE_DECIDING
     for name in deciding:
-        value = getattr(args, name)
+        value = _path_option(args, name) if name in _PATH_DEFAULTS else getattr(args, name)
         if name == "min_transmission" and value is None and args.task == "path":
             value = "20"
         if value is not None:
@@ -1867,14 +1875,14 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
         "workers": None if args.workers is None else _whole(args, "workers"),
     }
     options["points"] = _integer(
-        args.points, "--points", 3, 100_000
+        _path_option(args, "points"), "--points", 3, 100_000
     )  # of an SVG path: read_targets's, not synthesize's
     options["restarts"] = _whole(args, "restarts")
     options["generations"] = _whole(args, "generations")
-    options["goal"] = _one_number(args.goal, "--goal")
+    options["goal"] = _one_number(_path_option(args, "goal"), "--goal")
     if not 0 <= options["goal"] < 1:
         raise InputError(f"--goal: expected a fraction of the targets' diagonal in [0, 1), got {args.goal}")
-    options["reach"] = _one_number(args.reach, "--reach")
+    options["reach"] = _one_number(_path_option(args, "reach"), "--reach")
     if not 0 < options["reach"] <= 100:
         raise InputError(f"--reach: expected a positive number up to 100, got {args.reach}")
     options["pivots"] = _pivots(args.pivots) if args.pivots else None
