@@ -392,9 +392,10 @@ def test_yaml_nested_beyond_the_c_parsers_recursion_is_refused_not_a_crash(tmp_p
         timeout=120,
     )
     assert p.returncode == 2, (p.returncode, p.stderr[-300:])
-    assert p.stderr.startswith(f"linkagekit: error: {f} at line 1, column ") and p.stderr.endswith(
-        ": nested too deep (at most 32 levels)\n"
-    ), p.stderr
+    # ours, or (PyYAML 6.0.4 and later, flow collections) its scanner's own limit of 1000, met first
+    line = p.stderr.splitlines()
+    assert len(line) == 1 and line[0].startswith(f"linkagekit: error: {f}"), p.stderr
+    assert "nested too deep (at most 32 levels)" in line[0] or "exceeded maximum nesting depth" in line[0], p.stderr
 
 
 def test_yaml_collections_count_once_against_the_values_limit(tmp_path):
