@@ -459,6 +459,11 @@ def _verified(
     return ok
 
 
+def _singular_pose(mech: Mechanism) -> InputError:
+    """The refusal of a pose the motion cannot leave along its branch (the table's, and the model's own)."""
+    return InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
+
+
 class _OffTable(InputError):
     """The pose lies in a cell the table does not hold to its tolerance, though the model is finite there: next to
     a toggle, where ``M`` grows without bound (:func:`_integrate_reduced` then integrates the model itself)."""
@@ -482,7 +487,7 @@ def _reachable(
             raise InputError(f"{mech.source}: no inertia along the driver's motion: give the links masses or inertias")
         if np.all(np.isfinite(Y[c0 : c0 + 2]) & np.isfinite(dY[c0 : c0 + 2])) and np.all(Y[c0 : c0 + 2, 0] > 0):
             raise _OffTable(f"{mech.source}: the pose is where no table holds (next to a toggle)")
-        raise InputError(f"{mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)")
+        raise _singular_pose(mech)
     bad = np.flatnonzero(~good)
     lo = int(bad[bad < c0].max(initial=-1)) + 1
     hi = int(bad[bad > c0].min(initial=len(good)))
@@ -549,9 +554,7 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
         q0 = md.params.pose_inputs[:, :1] * md.scale[:, None]
         if not _direct_accel(md, q0, np.array([[w0]]), np.array([[law(w0)]]))[1][0] >= STOP_CONDITION:
             # already past the stop: the singular event can never fall through zero (pushed in, it ran on for ever)
-            raise InputError(
-                f"{md.mech.source}: the mechanism cannot move from its pose along its branch (a singular pose)"
-            ) from off
+            raise _singular_pose(md.mech) from off
         return _integrate_direct(md, times, (law,), np.array([w0], float))
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
