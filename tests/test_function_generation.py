@@ -17,9 +17,10 @@ from PIL import Image
 
 import linkagekit as lk
 from linkagekit.cli import main
-from linkagekit.synthesis.function import solve
+from linkagekit.synthesis.function import MIN_LINK_RATIO, solve
 from linkagekit.viz import draw
 
+ROOT = Path(__file__).resolve().parents[1]
 TARGETS = Path("/work/shared/benchmarks/motion-function/targets.json")
 
 
@@ -215,3 +216,20 @@ def test_one_branch_check_sees_the_extremes_inside_the_range():
     # the cases that matter: assembled at both ends, apart in between (0 or 180 deg inside)
     ends = np.minimum(r2[:, [0, -1]] - (b - c) ** 2, (b + c) ** 2 - r2[:, [0, -1]]).min(axis=1)
     assert np.sum((ends > 1e-5) & (margin < -1e-5)) >= 10
+
+
+def test_an_unmeetable_transmission_bound_is_said_infeasible_never_met_by_a_degenerate_design(tmp_path, capsys):
+    """Within 88 deg of transmission no four-bar follows log10 between the pairs but a crank of 5e12 ground lengths
+    (it failed to write: joints beyond 1e12) or of 2e-8 (written, exit 0). No link may be shorter than
+    ``MIN_LINK_RATIO`` of the longest; the best design found is written, named INFEASIBLE, and the exit is 1."""
+    src = ROOT / "examples" / "targets" / "log_function.csv"
+    out = tmp_path / "f.yaml"
+    args = ["synthesize", str(src), "--task", "function", "--min-transmission", "88", "-o", str(out)]
+    assert main([*args, "--seconds", "1", "--restarts", "2", "--generations", "30", "--workers", "1"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "INFEASIBLE" in err and "f.yaml" in err
+    mech = lk.load(out)
+    assert mech.name.startswith("INFEASIBLE")
+    z = mech.joints  # complex positions
+    lengths = [abs(z[a] - z[b]) for a, b in ("AB", "AC", "CD", "BD")]
+    assert min(lengths) >= MIN_LINK_RATIO * max(lengths)

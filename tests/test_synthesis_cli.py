@@ -763,3 +763,32 @@ def test_absurd_numbers_are_refused_naming_the_file_or_option(tmp_path, capsys, 
     args = ["synthesize", str(f), "--task", task, *extra, "-o", str(tmp_path / "o.yaml")]
     code, _, err = run_main(args, capsys)
     assert_one_line_error(code, err, words)
+
+
+def test_a_four_bar_whose_ground_pivots_coincide_is_not_feasible_without_length_bounds():
+    """Without ``--lengths`` a 'four-bar' whose pivots are 1e-6 apart is a rigid triangle turning about them: its
+    curve is a circle met exactly, its transmission angle a constant 26.6 deg, and it was measured feasible with error
+    0. No two joints of one link may be closer than ``MIN_LINK`` of the joints' spread (the tracer aside)."""
+    from linkagekit.synthesis.objective import MIN_LINK, degenerate, measure
+    from linkagekit.synthesis.run import make_problem
+
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    P = 0.5 + 1j  # on the triangle A C D, A = (0, 0), C = (1, 0), D = (0, 2)
+    circle = abs(P) * np.exp(1j * (t + np.angle(P)))
+    problem = make_problem(np.stack([circle.real, circle.imag], 1), "fourbar")
+    sp = problem.space
+    joints = {"A": 0j, "B": 1e-6 + 0j, "C": 1 + 0j, "D": 2j, "P": P}
+    x = np.concatenate([[joints[j].real, joints[j].imag] for j in sp.free])
+    err, _ = measure(problem, x[None])
+    assert err[0] == np.inf
+    joints["B"] = 0.3 + 0j  # a real four-bar of these links: the rule does not bind
+    x_ok = np.concatenate([[joints[j].real, joints[j].imag] for j in sp.free])
+    pose = sp.poses(np.stack([x, x_ok]))
+    spread = np.sqrt(
+        np.mean(
+            np.abs((pose[..., 0] + 1j * pose[..., 1]) - (pose[..., 0] + 1j * pose[..., 1]).mean(1, keepdims=True)) ** 2,
+            1,
+        )
+    )
+    d = degenerate(sp, (pose[..., 0] + 1j * pose[..., 1]).T)
+    assert abs(d[0] - (MIN_LINK - 1e-6 / spread[0])) < 1e-15 and d[1] == 0.0

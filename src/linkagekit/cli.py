@@ -1482,13 +1482,13 @@ def _synthesize(args: argparse.Namespace) -> int:
     print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
     if out.pareto:
         print(pareto_text(out, targets.unit, paths))
-    return _met(out, args.output)
+    return _met(out.feasible, args.output)
 
 
-def _met(out: Any, path: str) -> int:
-    """The exit status of a path synthesis: 0, or 1 with one line when the best design found breaks a constraint
+def _met(feasible: bool, path: str) -> int:
+    """The exit status of a synthesis: 0, or 1 with one line when the best design found breaks a constraint
     (written all the same, named INFEASIBLE, to be looked at; a script must not take it for a result)."""
-    if out.feasible:
+    if feasible:
         return 0
     print(
         f"{PROG}: synthesize: no design found meets the constraints; {path} holds the best one, INFEASIBLE",
@@ -1560,7 +1560,7 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     text.insert(-1, f"topology {out.topology} ({joints} joints), crank {a['start']:.6g} to {a['stop']:.6g} deg")
     text.insert(-1, f"searched: {tried} (rms error / diagonal)")
     print("\n".join(text))
-    return _met(out, args.output)
+    return _met(out.feasible, args.output)
 
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
@@ -1618,7 +1618,7 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     if args.plot:
         _plot_function(mech, fit, args.plot)
     print(function_text(out, args.units, args.output))
-    return 0
+    return _met(fit.valid, args.output)
 
 
 def _plot_function(mech: Any, fit: Any, path: str) -> None:

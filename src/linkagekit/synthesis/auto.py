@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import InputError
 from .base import Objective, Score, digest
 from .distribute import Evaluator, usable, workers_lost
-from .objective import MIN_CURVE_SIZE, PENALTY, Problem, _too_small, best_index
+from .objective import MIN_CURVE_SIZE, MIN_LINK, PENALTY, Problem, _too_small, best_index, degenerate
 from .optimize import Outcome, Progress, Settings, check_settings, optimize
 from .run import Synthesis, _unpack, make_problem
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
@@ -653,7 +653,7 @@ class Projected(Objective):
             P = np.where(window, z[i] + f.c[:, None] * (z[j] - z[i]), np.nan)
             pose = params.pose.copy()
             pose[sp.joint(sp.tracer)] = pose[i] + f.c * (pose[j] - pose[i])
-            v = v + _too_small(P, pose, 1.0) / MIN_CURVE_SIZE
+            v = v + _too_small(P, pose, 1.0) / MIN_CURVE_SIZE + degenerate(sp, pose) / MIN_LINK
         return np.asarray(v)
 
 
@@ -767,7 +767,7 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     errors = d[np.arange(m), near]
     mu = _smallest_transmission(sp, z)
     ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
-    ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0
+    ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0 and not degenerate(sp, pose[:, None])[0]
     mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
     if not ok:  # as a single topology's search names it: the file says so where a reader looks first
         mech = replace(mech, name=f"INFEASIBLE {mech.name} (it breaks a constraint)")

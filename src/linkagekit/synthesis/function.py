@@ -299,6 +299,11 @@ def read_pairs(path: str | Path) -> tuple[FloatArray, FloatArray]:
 
 
 # ---------------------------------------------------------------------- designs as vectors
+#: a valid design's shortest link (the ground included) is at least this fraction of its longest: a crank of
+#: 2e-8 ground lengths (kept at 89 deg transmission by barely moving) is no mechanism
+MIN_LINK_RATIO = 1e-3
+
+
 @dataclass(frozen=True)
 class _Pairs:
     """Pairs (radians), the ground length, whether the offsets are free, and the branch."""
@@ -335,10 +340,23 @@ class _Pairs:
         return out
 
     def valid(self, z: FloatArray) -> BoolArray:
-        """Whether each design assembles over the whole path from the first pair to the last."""
+        """Whether each design assembles over the whole path from the first pair to the last, and is buildable."""
         abc, off = self.unpack(z)
         ok: BoolArray = assembles_between(abc, self.d, self.x, off, self.mu) & np.all(np.isfinite(abc), axis=-1)
-        return ok
+        return ok & self.buildable(z)
+
+    def buildable(self, z: FloatArray) -> BoolArray:
+        """Whether no link of each design (the ground included) is shorter than :data:`MIN_LINK_RATIO` of the
+        longest."""
+        abc = self.unpack(z)[0]
+        longest = np.maximum(np.max(abc, axis=-1), self.d)
+        out: BoolArray = np.minimum(np.min(abc, axis=-1), self.d) >= MIN_LINK_RATIO * longest
+        return out
+
+    def penalty(self, z: FloatArray) -> FloatArray:
+        """What a design's score adds to its largest error: nothing when valid; an unbuildable one ranks last."""
+        out: FloatArray = 2 * UNASSEMBLED * ((~self.valid(z)).astype(float) + (~self.buildable(z)).astype(float))
+        return out
 
 
 # ---------------------------------------------------------------------- starts and polish
@@ -379,14 +397,14 @@ def _starts(p: _Pairs) -> tuple[FloatArray, FloatArray, FloatArray]:
     z = np.concatenate([z, _generic(p)])  # when no fit has positive lengths, these still start the polish
     z = np.concatenate([z, z])
     sigma = np.repeat([1.0, -1.0], len(z) // 2)
-    score = np.max(np.abs(p.errors(z, sigma)), axis=-1) + np.where(p.valid(z), 0.0, 2 * UNASSEMBLED)
+    score = np.max(np.abs(p.errors(z, sigma)), axis=-1) + p.penalty(z)
     order = np.argsort(score, kind="stable")
     return z[order], sigma[order], score[order]
 
 
 def _score(p: _Pairs, z: FloatArray, sigma: float) -> float:
-    """The largest absolute error of one design (degrees), UNASSEMBLED-penalised when not valid."""
-    return float(np.max(np.abs(p.errors(z, sigma)))) + (0.0 if bool(p.valid(z)) else 2 * UNASSEMBLED)
+    """The largest absolute error of one design (degrees), penalised when not valid (:meth:`_Pairs.penalty`)."""
+    return float(np.max(np.abs(p.errors(z, sigma))) + p.penalty(z))
 
 
 def _least_squares(p: _Pairs, z: FloatArray, sigma: float) -> FloatArray:
@@ -501,7 +519,8 @@ class FunctionFit:
         start, stop = (round(float(self.inputs[k] + self.offsets[0]), 9) for k in (0, -1))
         return {
             "format": "linkagekit/1",
-            "name": f"Function generator ({len(self.inputs)} pairs, {self.method})",
+            "name": ("" if self.valid else "INFEASIBLE ")
+            + f"Function generator ({len(self.inputs)} pairs, {self.method})",
             "units": {"length": unit, "angle": "deg"},
             "joints": self.joints(),
             "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "output": ["B", "D"]},

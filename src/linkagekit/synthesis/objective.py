@@ -45,7 +45,9 @@ Feasibility (penalised by how far from feasible, never by a cliff)
   ``|cos mu| - cos MIN`` over the sweep;
 * link lengths within bounds, when given: the largest relative excess (of the placed mechanism);
 * the curve's RMS radius at least ``MIN_CURVE_SIZE`` of the joints' (:func:`_too_small`; in the
-  dense check always, in the search with ``shape_only`` or ``partial``).
+  dense check always, in the search with ``shape_only`` or ``partial``);
+* no link degenerate: two joints of one link (the ground's pivots too; the tracer aside) at
+  least ``MIN_LINK`` of the joints' RMS spread apart (:func:`degenerate`).
 
 The score is ``mean_i (e_i / L)^2 + PENALTY * violation``: an exact penalty (linear in the
 violation), so a feasible optimum stays feasible.
@@ -95,6 +97,9 @@ H_THETA = 1e-4
 #: spec section 6: the traced curve's RMS radius is at least this fraction of the RMS distance of the
 #: joints (at the pose) from their centroid, for every written mechanism
 MIN_CURVE_SIZE = 0.07
+#: the shortest distance between two joints of one link (the tracer aside), as a fraction of the RMS distance of
+#: the joints from their centroid: two ground pivots 1e-6 apart made a "four-bar" of a rigid triangle
+MIN_LINK = 1e-3
 #: spec section 6: a partial sweep turns the crank through at least this angle (radians)
 MIN_SPAN = np.pi / 2
 #: ``--shape-only``: the similarity's starting rotations (evenly spaced), nearest-point/fit rounds from each,
@@ -398,6 +403,7 @@ def _evaluate(problem: Problem, X: np.ndarray, refine: int, n: int, margin: floa
         violation, mu_min = _feasibility(problem, params, sol.z, sol.margin, margin)
         if sized:
             violation = violation + _too_small(P, params.pose, margin)
+        violation = violation + degenerate(sp, params.pose)
         if problem.timed:
             th, err, a, b = _timed(problem, params, q0)
         else:
@@ -749,6 +755,28 @@ def _ordered(d2: np.ndarray, closed: bool = True) -> np.ndarray:
         best_total = np.where(better, total, best_total)
         best_k = np.where(better[:, None], k, best_k)
     return best_k
+
+
+def degenerate(sp: DesignSpace, pose: np.ndarray) -> FloatArray:
+    """How far (N,) the ``pose`` (n_joints, N) breaks the rule that no link is degenerate: ``max(0, MIN_LINK - d /
+    R)``, ``d`` the shortest distance between two joints of one link (the tracer aside: it may sit on a joint),
+    ``R`` the joints' RMS distance from their centroid.
+
+    >>> from linkagekit.synthesis.space import builtin_space
+    >>> sp = builtin_space("fourbar", (0.0, 0.0), 4.0)
+    >>> xy = sp.poses(np.array([[0, 0, 1e-9, 0, 2, 0, 0.8, 4.9, 5.6, 3.5]]))  # A, B, C, D, P: A and B 1e-9 apart
+    >>> pose = (xy[..., 0] + 1j * xy[..., 1]).T
+    >>> bool(degenerate(sp, pose)[0] > 0.9 * MIN_LINK)
+    True
+    """
+    spread = np.sqrt(np.mean(abs2(pose - pose.mean(axis=0)), axis=0))
+    shortest = np.full(pose.shape[1], np.inf)
+    for ln in sp.template.links:
+        ids = [sp.joint(j) for j in ln.joints if j != sp.tracer]
+        for i, a in enumerate(ids):
+            for b in ids[i + 1 :]:
+                shortest = np.fmin(shortest, np.abs(pose[a] - pose[b]))
+    return np.asarray(np.maximum(MIN_LINK - shortest / np.where(spread > 0, spread, 1.0), 0.0))
 
 
 def _length_excess(sp: DesignSpace, pose: np.ndarray, lo: float, hi: float) -> np.ndarray:
