@@ -18,6 +18,7 @@ Examples
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING
@@ -88,16 +89,31 @@ def synthesize_function(
         solve, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
         min_transmission=min_transmission,
     )  # fmt: skip
+    t0 = time.monotonic()
     first = fit_from()
     objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units, float(min_transmission))
     if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
         return FunctionSynthesis(first, _mechanism(first, units), None)
+    polish = time.monotonic() - t0  # the last polish repeats this one's work, with one start more
     opt = search(
-        objective, seed=seed, seconds=seconds, restarts=restarts, generations=generations, goal=GOAL, workers=workers,
-        scheduler=scheduler, checkpoint=checkpoint,
+        objective, seed=seed, seconds=_engine_seconds(seconds, polish), restarts=restarts, generations=generations,
+        goal=GOAL, workers=workers, scheduler=scheduler, checkpoint=checkpoint,
     )  # fmt: skip
     fit = fit_from(starts=[opt.x])  # the engine's best, polished with the Freudenstein starts
     return FunctionSynthesis(fit, _mechanism(fit, units), opt)
+
+
+#: the engine's share of ``seconds`` at least (when the polish alone would take more)
+ENGINE_SHARE = 0.25
+
+
+def _engine_seconds(seconds: float, polish: float) -> float:
+    """The engine's time: ``seconds`` less the two polishes (the one done, and the last, about as long).
+
+    >>> _engine_seconds(10.0, 0.5), _engine_seconds(1.0, 0.5)
+    (9.0, 0.25)
+    """
+    return max(seconds - 2 * polish, ENGINE_SHARE * seconds)
 
 
 def _mechanism(fit: FunctionFit, units: str) -> Mechanism:
