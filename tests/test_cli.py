@@ -262,3 +262,15 @@ def test_ground_angle_is_converted_once(examples):
     res = lk.analyze(lk.load(examples / "seed000_fourbar.yaml"), {"crank": [0.0, 30.0]})
     assert np.allclose(res.angle("ground"), np.degrees(np.arctan2(1.0, 4.0)), rtol=0, atol=1e-12)
     assert np.allclose(res.angle("crank"), [0.0, 30.0], rtol=0, atol=1e-12)
+
+
+def test_ctrl_c_is_one_line_and_exit_status_130(monkeypatch, capsys):
+    """Ctrl-C anywhere in a command: one line and 128 + SIGINT, as a shell reports it (it was 1, a failure's)."""
+    import linkagekit.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_run", interrupted)
+    assert cli.main(["analyze", "x.yaml"]) == 130
+    assert capsys.readouterr().err == "linkagekit: interrupted\n"

@@ -8,6 +8,7 @@ core worth having, more time no worse, the D-path's list) are ``benchmarks/bench
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +92,13 @@ def test_pareto_list_is_non_dominated_sorted_and_its_angles_are_the_written_mech
     csv.write_text("x,y\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in TARGETS))
     args = ["synthesize", str(csv), "-o", str(tmp_path / "o.yaml"), "--units", "cm", "--pareto", "--workers", "1"]
     args += ["--restarts", "4", "--generations", "6", "--seed", "3", "--goal", "0", "--seconds", "1000"]
+    # an earlier --pareto run's designs past those of this one (removed), then a file of the user's (kept)
+    stale = [tmp_path / f"o-{k}.yaml" for k in range(2, 10)]
+    for k, path in enumerate(stale, 2):
+        lk.save(
+            replace(lk.load(ROOT / "examples" / "seed000_fourbar.yaml"), description=f"--pareto: design {k} of 9"), path
+        )
+    (tmp_path / "o-10.yaml").write_text("mine")
     assert main(args) == 0
     out = capsys.readouterr().out
     rows = [ln.split() for ln in out.split("best-transmitting (none better in both):\n")[1].splitlines()[2:]]
@@ -107,6 +115,11 @@ def test_pareto_list_is_non_dominated_sorted_and_its_angles_are_the_written_mech
         assert smallest == pytest.approx(mu[i], abs=2e-3), (i, ta, mu[i])  # printed to 6 digits; 0.1 deg samples
     assert "smallest transmission angle" in out and "deg above the bound 20 deg" in out
     assert " --pareto" in lk.load(tmp_path / "o.yaml").description  # the command that gives it again
+    n = len(rows)  # o-2 .. o-n rewritten by this run, o-(n+1) .. o-9 removed (and said so), o-10 kept
+    assert all(f"--pareto: design {k + 1} of {n}" in lk.load(r[5]).description for k, r in enumerate(rows))
+    assert [p.exists() for p in stale] == [k <= n for k in range(2, 10)]
+    assert all(f"removed {p}: a design of an earlier --pareto run" in out for p in stale[n - 1 :])
+    assert (tmp_path / "o-10.yaml").read_text() == "mine"
 
 
 def test_pareto_is_refused_for_motion_and_function(tmp_path, capsys):

@@ -1434,6 +1434,7 @@ def _interval(text: str, option: str) -> tuple[float, float]:
 def _synthesize(args: argparse.Namespace) -> int:
     """``linkagekit synthesize``."""
     import dataclasses
+    import os
     import time
 
     t0 = time.monotonic()
@@ -1467,14 +1468,18 @@ def _synthesize(args: argparse.Namespace) -> int:
             out = synthesize_path(targets, topology, **search, progress=progress, pareto=args.pareto)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; {_synthesize_resume(args)}", file=sys.stderr)
-        return 1
+        return INTERRUPTED
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
     paths = pareto_paths(args.output, len(out.pareto))
-    for design, path in zip(out.pareto or (out,), paths, strict=True):
+    for k, (design, path) in enumerate(zip(out.pareto or (out,), paths, strict=True), 1):
         described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
         described += f"\n{targets.smoothed}" if targets.smoothed else ""
+        described += f"\n{PARETO_MARK} {k} of {len(paths)}" if args.pareto else ""
         lk.save(dataclasses.replace(design.mechanism, description=described), path)
+    for path in stale_pareto(args.output, len(paths)) if args.pareto else ():
+        os.remove(path)
+        print(f"removed {path}: a design of an earlier --pareto run, not of this one")
     if args.plot:
         _plot_synthesis(out, targets, args.plot)
     if targets.smoothed:
@@ -1507,6 +1512,32 @@ def pareto_paths(output: str, n: int) -> list[str]:
 
     stem, ext = os.path.splitext(output)
     return [output] + [f"{stem}-{i}{ext}" for i in range(2, n + 1)]
+
+
+#: the line that marks a file ``--pareto`` wrote (so that a later run may remove it when it writes fewer designs)
+PARETO_MARK = "--pareto: design"
+
+
+def stale_pareto(output: str, n: int) -> list[str]:
+    """``OUT-k`` files past the ``n`` written that an earlier ``--pareto`` run wrote (their description says so),
+    up to the first that is missing or is not one: only files of the series, only linkagekit's."""
+    import itertools
+    import os
+
+    import linkagekit as lk
+
+    stem, ext = os.path.splitext(output)
+    out: list[str] = []
+    for k in itertools.count(n + 1):
+        path = f"{stem}-{k}{ext}"
+        try:
+            ours = os.path.isfile(path) and PARETO_MARK in (lk.load(path).description or "")
+        except (LinkageError, OSError):
+            ours = False
+        if not ours:
+            return out
+        out.append(path)
+    return out
 
 
 def pareto_text(out: Any, unit: str, paths: list[str]) -> str:
@@ -2258,6 +2289,11 @@ def _run(argv: list[str]) -> int:
     return code
 
 
+#: the exit status after Ctrl-C: 128 + SIGINT, as a shell reports a command the signal stopped (a script can tell an
+#: interrupted run from a failed one)
+INTERRUPTED = 130
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line on *argv* (default: ``sys.argv[1:]``) and return its exit status.
 
@@ -2281,7 +2317,7 @@ def main(argv: list[str] | None = None) -> int:
         code = exc.exit_code
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
-        code = 1
+        code = INTERRUPTED
     except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
         code = 1
         if argv is None:  # the script: no second error when Python flushes stdout at exit
