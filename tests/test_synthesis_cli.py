@@ -398,6 +398,7 @@ def test_checkpoint_of_another_problem_or_other_settings_is_refused(work, tmp_pa
     other = write_csv(tmp_path / "other.csv", seed000_curve(ANGLES + 7.0))
     code, out, err = run_main(["synthesize", str(other), "-o", str(tmp_path / "b.yaml"), *small], capsys)
     assert_one_line_error(code, err, str(ck), "another problem")
+    assert "not a readable" not in err  # said as it is, not wrapped in a second message about the file
     assert out == "" and not (tmp_path / "b.yaml").exists()
     code, _, err = run_main(
         ["synthesize", str(tmp_path / "t.csv"), "-o", str(tmp_path / "c.yaml"), *small, "--seed", "9"], capsys
@@ -792,3 +793,15 @@ def test_a_four_bar_whose_ground_pivots_coincide_is_not_feasible_without_length_
     )
     d = degenerate(sp, (pose[..., 0] + 1j * pose[..., 1]).T)
     assert abs(d[0] - (MIN_LINK - 1e-6 / spread[0])) < 1e-15 and d[1] == 0.0
+
+
+@pytest.mark.parametrize("task", ["path", "motion", "function"])
+def test_an_unknown_unit_names_the_option_for_every_task(task, tmp_path, capsys):
+    """``--units ft`` named the targets file for a path ('arc.csv: unknown length unit'), the option for the others."""
+    src = tmp_path / "t.csv"
+    src.write_text("x,y\n0,0\n1,0\n0,1\n")
+    code, out, err = run_main(
+        ["synthesize", str(src), "--task", task, "--units", "ft", "-o", str(tmp_path / "o.yaml")], capsys
+    )
+    assert_one_line_error(code, err, "--units: 'ft' is not one of mm, cm, m, in")
+    assert "t.csv" not in err and out == ""

@@ -1444,11 +1444,14 @@ def _synthesize(args: argparse.Namespace) -> int:
     from .synthesis.distribute import WorkersLost
     from .synthesis.run import synthesize_path
     from .synthesis.targets import read_targets
+    from .units import LENGTH_UNITS
 
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
     _task_options(args)
+    if args.units not in LENGTH_UNITS:  # named as the option, before any file is read or search run
+        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     if args.task == "motion":
         return _synthesize_motion(args)
     if args.task == "function":
@@ -1610,13 +1613,10 @@ def _synthesize_function(args: argparse.Namespace) -> int:
 
     from .synthesis.function import read_pairs
     from .synthesis.function_run import synthesize_function
-    from .units import LENGTH_UNITS
 
     _suffix(args.output, (".yaml", ".yml", ".json"))
     if args.plot:
         _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
-    if args.units not in LENGTH_UNITS:
-        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
     if length > MAX_GROUND_LENGTH:  # 1e13 named no option: '<dict>: joints.B[0]: ...'
         raise InputError(f"--ground-length: at most {MAX_GROUND_LENGTH:g}, got {shorten(args.ground_length)}")
@@ -1718,12 +1718,9 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
 
     from .synthesis.motion import read_poses
     from .synthesis.run import synthesize_motion
-    from .units import LENGTH_UNITS
 
     if args.topology != "fourbar":
         _motion_template(args.topology)
-    if args.units not in LENGTH_UNITS:  # before the search, not when the file is built
-        raise InputError(f"--units: {shorten(repr(args.units))} is not one of {', '.join(LENGTH_UNITS)}")
     seconds = _seconds(args)
     weight = None if args.angle_weight is None else _one_number(args.angle_weight, "--angle-weight")
     pf = read_poses(args.targets)

@@ -1248,6 +1248,8 @@ def _load(settings: Settings, problem: Objective, template: Callable[[int], Sear
             arrays = _arrays(zf, _expected(state, problem, template))
     except _Refused as e:
         raise InputError(f"{path}: not a usable linkagekit checkpoint ({e})") from None
+    except InputError:  # another problem's, other settings: said as it is (it is a ValueError too)
+        raise
     except zipfile.BadZipFile:
         raise InputError(f"{path}: not a linkagekit checkpoint (not a .npz archive)") from None
     except (OSError, EOFError, ValueError, KeyError, TypeError, zlib.error, NotImplementedError, RecursionError) as e:
