@@ -805,3 +805,13 @@ def test_an_unknown_unit_names_the_option_for_every_task(task, tmp_path, capsys)
     )
     assert_one_line_error(code, err, "--units: 'ft' is not one of mm, cm, m, in")
     assert "t.csv" not in err and out == ""
+
+
+def test_a_checkpoint_in_a_missing_directory_is_refused_before_any_work(tmp_path, capsys):
+    """It was found only when the first search saved (after the atlas's answer), with exit status 1."""
+    src = tmp_path / "t.csv"
+    src.write_text("x,y\n0,0\n1,0\n0,1\n1,1.2\n")
+    ck = tmp_path / "missing" / "ck.npz"
+    code, out, err = run_main(["synthesize", str(src), "-o", str(tmp_path / "o.yaml"), "--checkpoint", str(ck)], capsys)
+    assert_one_line_error(code, err, f"--checkpoint {ck}: no directory")
+    assert out == "" and not (tmp_path / "o.yaml").exists()

@@ -1919,6 +1919,9 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
         raise InputError("--lengths: lengths are not negative")
     if args.checkpoint and os.path.isdir(args.checkpoint):
         raise InputError(f"--checkpoint {shorten(args.checkpoint, 80)}: is a directory")
+    folder = os.path.dirname(args.checkpoint or "") or "."
+    if args.checkpoint and not os.path.isdir(folder):  # found only after the atlas's answer, exit 1
+        raise InputError(f"--checkpoint {shorten_path(args.checkpoint, 80)}: no directory {shorten_path(folder, 80)}")
     options["free"] = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
     options.update(ordered=args.ordered, scheduler=args.scheduler, checkpoint=args.checkpoint)
     options.update(shape_only=args.shape_only, partial=args.partial)
