@@ -274,3 +274,15 @@ def test_ctrl_c_is_one_line_and_exit_status_130(monkeypatch, capsys):
     monkeypatch.setattr(cli, "_run", interrupted)
     assert cli.main(["analyze", "x.yaml"]) == 130
     assert capsys.readouterr().err == "linkagekit: interrupted\n"
+
+
+def test_at_and_angles_mix_across_drivers(capsys):
+    """``--angles crank1=... --at crank2=75`` was refused ('give --at or --angles, not both'); each driver takes one
+    of them, and the answer is that of ``--angles crank2=75:75:1`` (a single value is held over the sweep)."""
+    five = str(Path(__file__).resolve().parents[1] / "examples" / "fivebar_two_drivers.yaml")
+    base = ["analyze", five, "--format", "json", "--angles", "crank1=0:40:10"]
+    code, mixed, err = run([*base, "--at", "crank2=75"], capsys)
+    assert code == 0, err
+    code, swept, err = run([*base, "--angles", "crank2=75:75:1"], capsys)
+    assert code == 0 and json.loads(mixed) == json.loads(swept)
+    assert len(json.loads(mixed)["inputs"]["crank2"]) == 5

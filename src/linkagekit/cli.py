@@ -173,16 +173,17 @@ def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[
 
 
 def _inputs(mech: Mechanism, at: list[str] | None, angles: list[str] | None) -> dict[str, np.ndarray] | None:
-    """The input values of ``--at`` or ``--angles`` by driver (None: the file's sweep)."""
+    """The input values of ``--at`` and ``--angles`` by driver (None: the file's sweep); each driver from one of
+    them (``--angles crank1=0:360:1 --at crank2=75``)."""
     import numpy as np
 
-    if at and angles:
-        raise InputError("give --at or --angles, not both")
-    if at:
-        return {k: np.array(v) for k, v in _by_driver(mech, at, "--at", _numbers).items()}
-    if angles:
-        return _by_driver(mech, angles, "--angles", _range)
-    return None
+    if not (at or angles):
+        return None
+    given = {k: np.array(v) for k, v in _by_driver(mech, at or [], "--at", _numbers).items()}
+    swept = _by_driver(mech, angles or [], "--angles", _range)
+    for name in given.keys() & swept.keys():
+        raise InputError(f"driver '{name}': give --at or --angles, not both")
+    return given | swept
 
 
 def _rates(mech: Mechanism, items: list[str] | None, option: str) -> dict[str, float] | None:
