@@ -264,18 +264,6 @@ def test_ground_angle_is_converted_once(examples):
     assert np.allclose(res.angle("crank"), [0.0, 30.0], rtol=0, atol=1e-12)
 
 
-def test_ctrl_c_is_one_line_and_exit_status_130(monkeypatch, capsys):
-    """Ctrl-C anywhere in a command: one line and 128 + SIGINT, as a shell reports it (it was 1, a failure's)."""
-    import linkagekit.cli as cli
-
-    def interrupted(args):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(cli, "_run", interrupted)
-    assert cli.main(["analyze", "x.yaml"]) == 130
-    assert capsys.readouterr().err == "linkagekit: interrupted\n"
-
-
 def test_at_and_angles_mix_across_drivers(capsys):
     """``--angles crank1=... --at crank2=75`` was refused ('give --at or --angles, not both'); each driver takes one
     of them, and the answer is that of ``--angles crank2=75:75:1`` (a single value is held over the sweep)."""

@@ -1472,7 +1472,7 @@ def _synthesize(args: argparse.Namespace) -> int:
             out = synthesize_path(targets, topology, **search, progress=progress, pareto=args.pareto)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; {_synthesize_resume(args)}", file=sys.stderr)
-        return INTERRUPTED
+        return 1
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
     paths = pareto_paths(args.output, len(out.pareto))
@@ -2290,11 +2290,6 @@ def _run(argv: list[str]) -> int:
     return code
 
 
-#: the exit status after Ctrl-C: 128 + SIGINT, as a shell reports a command the signal stopped (a script can tell an
-#: interrupted run from a failed one)
-INTERRUPTED = 130
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run the command line on *argv* (default: ``sys.argv[1:]``) and return its exit status.
 
@@ -2318,7 +2313,7 @@ def main(argv: list[str] | None = None) -> int:
         code = exc.exit_code
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
-        code = INTERRUPTED
+        code = 1  # the file format's contract: 0 success, 2 bad input, 1 anything else (not 128 + SIGINT)
     except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
         code = 1
         if argv is None:  # the script: no second error when Python flushes stdout at exit
