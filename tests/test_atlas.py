@@ -8,6 +8,7 @@ temporary directory; the fixture below sets ``LINKAGEKIT_ATLAS_SIZE``).
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -436,3 +437,20 @@ def test_a_search_builds_a_missing_atlas_on_its_own_workers(monkeypatch, tmp_pat
     targets = np.stack([np.cos(t), 0.6 * np.sin(t)], 1)
     synthesize(targets, seconds=0.5, restarts=1, generations=2, popsize=5, workers=workers, seed=1)
     assert asked == [workers] and at.path().exists()
+
+
+def test_a_deadline_bounds_the_atlas_answer(monkeypatch):
+    """200 shape-only targets of an open letter made the answer take 23 s of a 3 s budget (every evaluation places
+    the curve by its nearest points). With a deadline already past, only the nearest chunk is scored and the polish
+    stops at its start: the designs are those of the first ``COST_CHUNK`` candidates, in the order without one."""
+    atlas = at.load()
+    problem = make_problem(_curve(12), "fourbar", reach=2.0)
+    calls = []
+    cost = type(problem).cost
+    monkeypatch.setattr(type(problem), "cost", lambda self, X: calls.append(len(X)) or cost(self, X))
+    free = at.first_answer(problem, atlas, polish=1)
+    assert calls[0] == len(free.designs) - free.polished > at.COST_CHUNK  # every candidate scored at once
+    calls.clear()
+    late = at.first_answer(problem, atlas, polish=1, until=time.monotonic() - 1.0)
+    assert calls[0] == at.COST_CHUNK and len(late.designs) == at.COST_CHUNK + 1
+    assert late.polished == 1 and late.error >= free.error  # each polish returned its start

@@ -301,10 +301,16 @@ def synthesize_path(
     return finish(problem, _from_atlas(problem, settings, progress), source)
 
 
+#: the share of the time the atlas's answer may take, unless a checkpoint asks for a reproducible one (then it is
+#: bounded by its evaluations only)
+ATLAS_SHARE = 0.25
+
+
 def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progress], None] | None) -> Outcome:
     """The search started from the atlas's answer (:func:`~.atlas.first_answer`), when the atlas has the topology.
 
-    The answer is reported at once (``Progress.source == "atlas"``); one that meets the goal ends the run.
+    The answer, within :data:`ATLAS_SHARE` of the time (without a checkpoint), is reported at once
+    (``Progress.source == "atlas"``); one that meets the goal ends the run.
     ``LINKAGEKIT_ATLAS_SIZE=0`` turns the atlas off.
     """
     from . import atlas
@@ -314,7 +320,8 @@ def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progre
 
     def start() -> np.ndarray:
         t0 = time.monotonic()
-        ans = atlas.first_answer(problem, workers=None if settings.scheduler else settings.workers)
+        until = None if settings.checkpoint else t0 + ATLAS_SHARE * settings.seconds  # a checkpoint's: reproducible
+        ans = atlas.first_answer(problem, workers=None if settings.scheduler else settings.workers, until=until)
         if progress is not None and len(ans.designs):
             progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), time.monotonic() - t0, source="atlas"))
         return ans.designs
