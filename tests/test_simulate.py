@@ -392,6 +392,27 @@ def test_a_cylinder_posed_at_its_stroke_end_moves_away_from_it_and_stops_pushed_
     assert held.n == 1 and np.all(held.assembled)
 
 
+def test_one_cylinder_stops_at_its_stroke_end_itself_with_a_line_free_of_rounding():
+    """The one-driver table ended 1e-4 of the range inside each end, a toggle's margin, so the arm pushed out stopped
+    at 2.59986 m (t = 0.334068 s), 1.4e-4 m before its stroke's end, and the line said "the end of its range is
+    2.6e-12 m on" when it did start on one. A stroke's end is no singular position: the table reaches it, and the
+    integrator's event stops the motion there. Against the arm's own equation (DOP853 at 1e-12, its own event at
+    2.6 m): the stop time to 1e-6 s (the line prints 6 digits), at 2.6 m."""
+    mech = lk.Mechanism.from_dict(ARM)
+    assert reduced(mech).q_range == pytest.approx((1.2, 2.6), rel=1e-15, abs=0)
+    for force in (300.0, 400.0):
+        _, t_end = _arm_by_hand(force, np.array([0.0]))
+        line = lk.simulate(mech, np.array([0.0, 0.5]), torque=force).stopped
+        stop = re.fullmatch(r"simulate: stopped at t = (\S+) s, lift = (\S+) m: (.*)", line or "")
+        assert stop is not None and abs(float(stop[1]) - t_end) < 1e-6 and float(stop[2]) == 2.6, (line, t_end)
+        assert stop[3] == "lift reached the upper end of its stroke, 2.6 m, that the motion cannot pass"
+    held = lk.simulate(mech, np.array([0.0, 0.1]), torque=100.0).stopped
+    assert held == (
+        "simulate: stopped at t = 0 s, lift = 1.2 m: lift reached the lower end of its stroke, 1.2 m, that the motion"
+        " cannot pass"
+    )
+
+
 def _parallelogram(pose_deg: float) -> lk.Mechanism:
     """A parallelogram (mm) with masses, posed ``pose_deg`` from its flat position: its coupler only translates, so
     M = I_crank + I_rocker + (m_crank/4 + m_rocker/4 + m_coupler) l^2 = 4.2e-4 kg m^2 exactly, Q = -0.11772 cos q."""

@@ -45,7 +45,7 @@ from .branch import along_sweep
 from .checks import input_range
 from .errors import InputError
 from .forces import Kinematics, point_motion
-from .model import CylinderType, Mechanism, SliderType
+from .model import CylinderType, Driver, Mechanism, SliderType
 from .params import Params
 from .positions import solve
 from .rates import link_motion, solve_rates
@@ -328,10 +328,22 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
         if d.type.cyclic:  # the pose's angle, within a turn of the interval
             shift = 2 * math.pi * math.floor((x0 - lo * to_si) / (2 * math.pi))
         a, b = lo * to_si + shift, hi * to_si + shift
-        if a <= x0 <= b:  # just inside the ends (singular at a toggle), but never leaving the pose out
+        if a <= x0 <= b:  # just inside a toggle (singular there), on a stroke's end, never leaving the pose out
             margin = span * 1e-4
-            return np.linspace(min(a + margin, x0), max(b - margin, x0), points + 1), None
+            low, high = (_stroke_end(d, v, hi - lo) for v in (lo, hi))  # a stroke's end bounds no angle: no shift
+            a = a + margin if low is None else low * to_si
+            b = b - margin if high is None else high * to_si
+            return np.linspace(min(a, x0), max(b, x0), points + 1), None
     raise InputError(f"{mech.source}: the mechanism does not assemble at its pose's input")
+
+
+def _stroke_end(d: Driver, value: float, span: float) -> float | None:
+    """The end of driver ``d``'s stroke that an end of its range ``value`` is (file units, to 1e-9 of the range's
+    ``span``: the range's ends are found by bisection), or None: a toggle, where the model is singular."""
+    for end in d.stroke or ():
+        if abs(value - end) <= 1e-9 * span:
+            return float(end)
+    return None
 
 
 def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -644,10 +656,12 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     d = md.mech.drivers[k]
     value = q_si / (md.scale[k] * d.input_scale(md.mech))
     unit = d.input_unit(md.mech)
-    return (
-        f"simulate: stopped at t = {t:.6g} s, {d.name} = {value:.6g} {unit}: the end of its range"
-        f"{_range_end(md.mech, k, value)} (a toggle or its stroke's end) that the motion cannot pass"
-    )
+    head = f"simulate: stopped at t = {t:.6g} s, {d.name} = {value:.6g} {unit}: "
+    end = None if d.stroke is None else _stroke_end(d, value, d.stroke[1] - d.stroke[0])
+    if d.stroke is not None and end is not None:  # the table reaches the stroke's end itself: the event stops there
+        side = ("lower", "upper")[end == d.stroke[1]]
+        return head + f"{d.name} reached the {side} end of its stroke, {end:.6g} {unit}, that the motion cannot pass"
+    return head + f"the end of its range{_range_end(md.mech, k, value)} (a toggle) that the motion cannot pass"
 
 
 def _range_end(mech: Mechanism, k: int, value: float) -> str:
@@ -665,6 +679,8 @@ def _range_end(mech: Mechanism, k: int, value: float) -> str:
         turn = 2 * math.pi / d.input_scale(mech)
         gap = (gap + turn / 2) % turn - turn / 2
     i = int(np.argmin(np.abs(gap)))
+    if abs(gap[i]) <= 1e-9 * (np.ptp(ends) or 1.0):  # the end itself, to the rounding of the range's ends
+        return f", at {value + gap[i]:.6g} {d.input_unit(mech)},"
     return f" is {abs(gap[i]):.3g} {d.input_unit(mech)} on, at {value + gap[i]:.6g} {d.input_unit(mech)}"
 
 
