@@ -334,6 +334,42 @@ def test_a_motion_too_fast_for_its_time_span_is_refused_in_one_line(monkeypatch,
     assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.1:0.01", "--speed", "100"]) == 0
 
 
+#: a bar (cm) on a pivot, pulled by a spring and a damper from the frame, under gravity and a torque (review's pend)
+PENDULUM = {
+    "units": {"length": "cm", "angle": "deg"},
+    "joints": {"O": [0, 0], "P": [30, 0], "G": [0, -40]},
+    "links": {"ground": ["O", "G"], "bar": {"joints": ["O", "P"], "mass": 2, "cg": [15, 0], "inertia": 0.015}},
+    "drivers": [{"link": "bar", "pivot": "O", "toward": "P"}],
+    "gravity": [0, -9.81],
+    "springs": [{"between": ["G", "P"], "stiffness": 200, "free_length": 20}],
+    "dampers": [{"between": ["G", "P"], "damping": 3}],
+    "flywheels": [{"link": "bar", "inertia": 0.01}],
+    "loads": [{"link": "bar", "torque": 1}],
+}
+
+
+def test_a_motion_at_rest_past_the_step_budget_goes_on_with_a_stiff_method(monkeypatch):
+    """A damped pendulum settles in about 100 s; DOP853's step then stays ~0.18 s (its stability on the spring's
+    vibration), so 90000 s took more than 200000 steps and was refused as moving too fast ('the driver moves at
+    -8.67e-14 rad/s: ... lower the speed'). Past the budget, a motion whose steps hardly moved the driver goes on
+    with LSODA (stiff: long steps at rest). Here the budget is made 2000 steps over 3000 s (DOP853 alone needs
+    ~17000): the motion equals DOP853's own under the full budget to 1e-9 deg and 1e-9 rad/s."""
+    import linkagekit.dynamics as dyn
+
+    mech = lk.Mechanism.from_dict(PENDULUM)
+    times = np.linspace(0.0, 3000.0, 61)
+    ref = lk.simulate(mech, times)
+    monkeypatch.setattr(dyn, "MAX_STEPS", 2000)
+    res = lk.simulate(mech, times)
+    assert res.stopped is None and res.n == 61
+    np.testing.assert_allclose(res.inputs["bar"], ref.inputs["bar"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.speeds["bar"], ref.speeds["bar"], rtol=0, atol=1e-9)
+    assert abs(res.inputs["bar"][-1] - ref.inputs["bar"][-1]) < 1e-9 and abs(res.speeds["bar"][-1]) < 1e-12
+    # the refusal, where even that runs out: the speed is no cause there, the time span is
+    line = dyn._too_many_steps(36941.0, "-8.67e-14 rad/s", 0.0)
+    assert "shorten the time span" in line and "speed" not in line.split(":")[-1] and "vibration" in line
+
+
 #: an arm on a pivot O lifted by a cylinder from the frame's C to the arm's B, posed fully retracted (1.2 m)
 ARM = {
     "format": "linkagekit/1",

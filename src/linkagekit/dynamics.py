@@ -593,35 +593,73 @@ def _dop853(
 ) -> np.ndarray:
     """The state at every output time by the compiled DOP853 (SciPy's ``ode``): microseconds a step.
 
-    At most :data:`MAX_STEPS` steps in all (counted by the right-hand side's evaluations); ``speed``
-    formats the state's speed for the message that refuses more.
+    At most :data:`MAX_STEPS` steps (counted by the right-hand side's evaluations). A motion whose steps
+    each moved the driver less than :data:`SLOW_STEP` spent them on DOP853's stability (a stiff spring,
+    nearly at rest): it goes on from the last output time reached with LSODA, which turns to a stiff
+    method (BDF) and takes long steps there, under the same budget; ``speed`` formats the state's speed
+    for the line that refuses more.
     """
+    y = np.empty((2, len(times)))
+    y[:, 0] = y0
+    short = _ode(rhs, "dop853", times, y)
+    if short is None:
+        return y
+    i, t, state = short
+    travel = float(np.sum(np.abs(np.diff(y[0, :i]))) + abs(state[0] - y[0, i - 1]))
+    if travel / MAX_STEPS >= SLOW_STEP or _ode(rhs, "lsoda", times[i - 1 :], y[:, i - 1 :]) is not None:
+        raise InputError(_too_many_steps(t, speed(state[1]), travel / MAX_STEPS))
+    return y
+
+
+def _ode(
+    rhs: Callable[[float, Any], list[float]], method: str, times: np.ndarray, y: np.ndarray
+) -> tuple[int, float, np.ndarray] | None:
+    """``y[:, 1:]`` (2, n) filled by SciPy's ``ode`` ``method`` from ``y[:, 0]`` at ``times[0]``, in place: None, or
+    past the budget of :data:`MAX_STEPS` steps the first output index not reached, the time and state reached."""
     import warnings
 
     from scipy.integrate import ode
 
     calls = [0]
 
-    def counted(t: float, y: Any) -> list[float]:
+    def counted(t: float, state: Any) -> list[float]:
         calls[0] += 1
-        return rhs(t, y)
+        return rhs(t, state)
 
-    solver = ode(counted).set_integrator("dop853", rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
-    solver.set_initial_value(y0, times[0])
-    y = np.empty((2, len(times)))
-    y[:, 0] = y0
+    solver = ode(counted).set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
+    solver.set_initial_value(y[:, 0], times[0])
     for i in range(1, len(times)):
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said below
+            warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said by the caller
             y[:, i] = solver.integrate(times[i])
-        if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() == -2:
-            raise InputError(
-                f"simulate: more than {MAX_STEPS} integration steps by t = {solver.t:.6g} s (the driver moves at"
-                f" {speed(solver.y[1])}): shorten the time span or lower the speed"
-            )
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() in _EXCESS_WORK[method]:
+            return i, float(solver.t), np.array(solver.y, float)
         if not solver.successful():
             raise InputError(f"simulate: the integration failed at t = {solver.t:.6g} s")
-    return y
+    return None
+
+
+#: SciPy ``ode``'s return codes for "more steps are needed" (DOP853's -2; LSODA's -1, excess work)
+_EXCESS_WORK = {"dop853": (-2,), "lsoda": (-1,)}
+
+
+#: a one-driver motion whose steps each moved the driver less than this (rad, as far as the output times show) spent
+#: them on the explicit integrator's stability, not on the motion: a fast vibration (a stiff spring on a light link)
+#: bounds DOP853's step even at rest
+SLOW_STEP = 1e-3
+
+
+def _too_many_steps(t: float, speed: str, travel_per_step: float) -> str:
+    """The line that refuses a motion past :data:`MAX_STEPS` steps at time ``t`` (s): too fast for its time span, or
+    (its steps moving the driver less than :data:`SLOW_STEP` each) too long for the integrator's stable step."""
+    head = f"simulate: more than {MAX_STEPS} integration steps by t = {t:.6g} s"
+    if travel_per_step >= SLOW_STEP:
+        return f"{head} (the driver moves at {speed}): shorten the time span or lower the speed"
+    return (
+        f"{head} with the driver hardly moving (now {speed}): the explicit integrator keeps its step"
+        f" ({t / MAX_STEPS:.2g} s) under the period of the fastest vibration (a stiff spring), even at rest:"
+        " shorten the time span"
+    )
 
 
 def _with_events(
