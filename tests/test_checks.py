@@ -1080,3 +1080,30 @@ def test_a_dyad_placed_from_an_indeterminate_joint_keeps_the_sample_assembled():
     assert res.assembled.tolist() == [True, True, True] and res.singular.tolist() == [True, False, False]
     assert np.isnan(res.point("B1")[0]) and np.isnan(res.point("E")[0]) and res.point("B0")[0] == 1.0
     assert abs(res.point("E")[2] - (2.5 + 0.8660254037844386j)) < 1e-12
+
+
+@pytest.mark.parametrize("pose_deg", [0.0, 0.01, 180.0])
+def test_a_pose_at_a_change_point_is_said_to_pick_no_mode(tmp_path, capsys, pose_deg):
+    """A parallelogram (100 mm ground and coupler, 40 mm cranks) posed flat (0 deg) or folded flat (180 deg): the
+    coupler's circle about A and the rocker's about O2 touch there, so the side B lies on is rounding and the sign
+    check printed ('B +1') was no choice of the pose's, without a word. By hand: the triangle A-B-O2 has area 0 at
+    0 and 180 deg, and sin = 1.7e-4 at 0.01 deg (far above rounding: that pose picks its mode)."""
+    c, s = 40 * math.cos(math.radians(pose_deg)), 40 * math.sin(math.radians(pose_deg))
+    doc = {
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O1": [0, 0], "O2": [100, 0], "A": [c, s], "B": [100 + c, s]},
+        "links": {"ground": ["O1", "O2"], "crank": ["O1", "A"], "coupler": ["A", "B"], "rocker": ["O2", "B"]},
+        "drivers": [{"link": "crank", "pivot": "O1", "toward": "A"}],
+    }
+    path = tmp_path / "para.json"
+    path.write_text(json.dumps(doc))
+    flat = pose_deg != 0.01
+    assert main(["check", str(path), "--format", "json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["signs"]["B"]["at_change_point"] is flat
+    assert (rep["warnings"][0] == {"kind": "pose-at-change-point", "joints": ["B"]}) is flat
+    assert main(["check", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("Assembly mode of the reference pose: B"))
+    warned = lines[k + 1].startswith("Warning: the reference pose sits at a change point of B")
+    assert warned is flat and sum("change point of B" in line for line in lines) == flat  # said once

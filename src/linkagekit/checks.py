@@ -34,7 +34,7 @@ from .group import Group
 from .groupmodes import continuation_intervals, enumerate_modes
 from .model import CrankType, Mechanism
 from .params import Params, all_sign_combinations
-from .positions import solve
+from .positions import Positions, solve
 from .rates import SINGULAR_TOL, solve_rates
 from .steps import ActuatorDyad, CircleLine, CylinderDyad, CylinderLine, Dyad, SliderDrive
 
@@ -55,6 +55,11 @@ DWELL = 1e-10
 MIN_TRANSMISSION = 20.0
 #: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
 TOGGLE_ANGLE = 10.0
+#: the kind of the warning that the pose sits at a change point (check prints it under the pose's assembly mode)
+POSE_WARNING = "pose-at-change-point"
+#: a sign step whose dimensionless determinant at the pose's own coordinates is below this is flat there, to the
+#: rounding of a pose typed in decimals: the pose sits at a change point (or a toggle) and picks none of its two modes
+POSE_FLAT = 1e-9
 
 
 def _inputs(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
@@ -1576,13 +1581,15 @@ def check(mech: Mechanism) -> CheckReport:
         for i, d in enumerate(mech.drivers)
     }
     dynamics = peak_loads(mech, params) if mech.has_dynamics else None
+    flat = pose_at_change_point(params)
     return CheckReport(
         name=mech.name,
         dof=plan.dof,
         drivers=tuple(d.name for d in mech.drivers),
         plan=tuple(plan.describe(params.steps).splitlines()),
         signs={
-            j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i]} for i, j in enumerate(plan.sign_joints)
+            j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i], "at_change_point": j in flat}
+            for i, j in enumerate(plan.sign_joints)
         },
         mirror_links=plan.mirror_links,
         input_ranges=ranges,
@@ -1596,10 +1603,37 @@ def check(mech: Mechanism) -> CheckReport:
         numerical_joints=tuple(names[i] for i in plan.numerical),
         sliders=tuple(sliders),
         assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
-        warnings=tuple(_warnings(entries, dynamics)),
+        warnings=tuple(([{"kind": POSE_WARNING, "joints": flat}] if flat else []) + _warnings(entries, dynamics)),
         change_points=change_points_crossed(mech, params),
         **_first_loop(entries),
     )
+
+
+def pose_at_change_point(params: Params) -> list[str]:
+    """The joints of the sign steps whose two modes meet at the pose itself (one design).
+
+    The steps' dimensionless determinants (:func:`linkagekit.rates.solve_rates`) from the pose's own
+    coordinates (not re-solved: a flat triangle solved keeps ``sqrt`` of rounding, 1e-8) below
+    :data:`POSE_FLAT`. There the side a joint lies on is rounding: the pose picks none of the two modes, and
+    the sign written for it (+1 where the cross product is 0) is a choice, not the pose's.
+
+    >>> import linkagekit as lk
+    >>> from linkagekit.api import prepare
+    >>> pose_at_change_point(prepare(lk.load("examples/seed000_fourbar.yaml")))
+    []
+    """
+    plan = params.plan
+    q0 = params.pose_inputs[:, :1, None]
+    pos = solve(params, q0)
+    if not plan.n_signs or not pos.assembled.all():
+        return []
+    at_pose = Positions(
+        np.asarray(params.pose, complex)[:, :1, None], pos.rot, pos.margin, pos.assembled, pos.signs, pos.mirrors
+    )
+    nd = q0.shape[0]
+    rt = solve_rates(params, at_pose, np.ones((nd, 1, 1)), np.zeros((nd, 1, 1)), tol=0.0)
+    cond = np.abs(rt.condition[: plan.n_signs, 0, 0])
+    return [j for j, c in zip(plan.sign_joints, cond, strict=True) if c <= POSE_FLAT]
 
 
 def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...] | None:
@@ -1734,7 +1768,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
         *_change_point_lines(rep.get("change_points", []), fmt),
-        *(_warning_line(w, fmt) for w in rep.get("warnings") or []),
+        *(_warning_line(w, fmt) for w in rep.get("warnings") or [] if w.get("kind") != POSE_WARNING),
     ]
     return "\n".join(lines) + "\n"
 
@@ -1774,6 +1808,13 @@ def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
             "Assembly mode of the reference pose: "
             + ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items())
         )
+    flat = [w for w in rep.get("warnings") or [] if w.get("kind") == POSE_WARNING]
+    lines += [
+        f"Warning: the reference pose sits at a change point of {', '.join(w['joints'])} (its two modes meet there,"
+        " a triangle flat to rounding): the pose picks neither, the sign above is a choice; pose it off that position"
+        " to pick one"
+        for w in flat
+    ]
     if rep.get("mirror_links"):
         lines.append("Links that can be mirrored: " + ", ".join(rep["mirror_links"]))
     return lines
