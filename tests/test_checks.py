@@ -1033,6 +1033,8 @@ def test_a_rhombus_with_its_crank_over_the_ground_pivot_assembles_with_its_rocke
     assert np.isnan(res.point("D")[:2]).all() and np.isnan(res.point("P")[:2]).all()
     assert np.isnan(res.velocity("C")[:2]).all()  # the sample is singular: no rates
     assert abs(res.point("D")[3] - (1 + 1j)) < 1e-15  # a regular sample is untouched
+    m = lk.modes(mech, at=0.0).to_dict()  # both signs give the same circle: one configuration, not two
+    assert m["distinct"] == 1 and [md["assembled"] for md in m["modes"]] == [True, True]
     path = tmp_path / "rhombus.json"
     path.write_text(json.dumps(mech.to_dict()))
     assert main(["analyze", str(path), "--at", "0"]) == 0

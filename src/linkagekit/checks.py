@@ -2196,11 +2196,17 @@ def _reference_rows(
     return reference
 
 
+def _alike(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
+    """Two configurations (joint positions) within ``tol``, a joint indeterminate (NaN) in both counting as alike
+    (two circles that are one: every mode has the same circle there)."""
+    return bool(np.all((np.abs(a - b) <= tol) | (np.isnan(a) & np.isnan(b))))
+
+
 def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
     """For each row the first row with the same positions (None for the first of each), and how many are distinct.
 
     Rows are bucketed by positions rounded to 1e-6 of the size, then confirmed within the
-    bucket to ``tol`` (two configurations within tol round alike but for a 1e-3 chance at a
+    bucket to ``tol`` (:func:`_alike`) (two configurations within tol round alike but for a 1e-3 chance at a
     rounding boundary, which only splits a duplicate, never merges two modes).
     """
     z = rows.z
@@ -2212,7 +2218,7 @@ def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
         first = None
         if rows.assembled[r]:
             bucket = buckets.setdefault(keys[r].tobytes(), [])
-            first = next((f for f in bucket if np.all(np.abs(z[:, f] - z[:, r]) <= tol)), None)
+            first = next((f for f in bucket if _alike(z[:, f], z[:, r], tol)), None)
             if first is None:
                 bucket.append(r)
                 distinct += 1

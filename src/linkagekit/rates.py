@@ -111,7 +111,8 @@ def _indeterminate(plan: Any, pos: Positions) -> np.ndarray:
     if not pos.margin.size or not np.any(pos.margin == 0):
         return out
     at = pos.assembled & np.any(pos.margin == 0, axis=0)
-    written = [j for j in range(pos.z.shape[0]) if j not in set(plan.unwritten)]
+    unwritten = set(plan.unwritten)
+    written = [j for j in range(pos.z.shape[0]) if j not in unwritten]
     out[at] = ~np.all(np.isfinite(pos.z[written][:, at]), axis=0)
     return out
 
