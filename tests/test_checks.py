@@ -1010,3 +1010,102 @@ def test_a_resting_rocker_has_no_limit_positions_from_rounding(tmp_path, capsys)
     assert main(["check", str(path)]) == 0
     out = capsys.readouterr().out
     assert "Limit positions of rocker: none" in out and len(out.splitlines()) < 40
+
+
+def rhombus_at_60():
+    """Ground A-B and every side 1, posed at crank 60 deg as a parallelogram (coupler point P at C + 0.5 + 0.7i)."""
+    from helpers import fourbar_dict
+
+    C = np.exp(1j * np.radians(60.0))
+    return lk.Mechanism.from_dict(fourbar_dict(0j, 1 + 0j, C, C + 1, C + 0.5 + 0.7j))
+
+
+def test_a_rhombus_with_its_crank_over_the_ground_pivot_assembles_with_its_rocker_indeterminate(tmp_path, capsys):
+    """At crank 0 (and 360) deg the crank tip C lies on the rocker's pivot B: the circles D is found on (about C
+    and B, radius 1) are one, so the mechanism assembles with D anywhere on it (an uncertainty position).  By
+    hand: C = (1, 0) exactly, A and B where they are; D and the coupler point P indeterminate; the rates undefined.
+    It was 'not assembled' there, and check's JSON range [[1.1e-10, 359.9999999999]] against its text [0, 360]."""
+    mech = rhombus_at_60()
+    res = lk.analyze(mech, [0.0, 360.0, 1e-6, 90.0], speed=1.0)
+    assert res.assembled.all()
+    assert res.singular.tolist() == [True, True, True, False]  # 1e-6 deg: D's triangle has an angle of ~1e-8 rad
+    assert np.abs(res.point("C")[:2] - 1.0).max() < 1e-15 and np.abs(res.point("B")[:2] - 1.0).max() == 0
+    assert np.isnan(res.point("D")[:2]).all() and np.isnan(res.point("P")[:2]).all()
+    assert np.isnan(res.velocity("C")[:2]).all()  # the sample is singular: no rates
+    assert abs(res.point("D")[3] - (1 + 1j)) < 1e-15  # a regular sample is untouched
+    m = lk.modes(mech, at=0.0).to_dict()  # both signs give the same circle: one configuration, not two
+    assert m["distinct"] == 1 and [md["assembled"] for md in m["modes"]] == [True, True]
+    path = tmp_path / "rhombus.json"
+    path.write_text(json.dumps(mech.to_dict()))
+    assert main(["analyze", str(path), "--at", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "singular" in out and "not assembled" not in out
+    assert "Note: at crank = 0 deg: joint D, P is indeterminate" in out
+    # check: the whole turn, the same in its text and its JSON
+    assert main(["check", str(path), "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["input_range"] == [[0.0, 360.0]]
+    # the rocker: 0 deg as the crank leaves 0 (the parallelogram), 180 deg folded (the kite) until it comes back
+    assert doc["fourbars"][0]["swing"] == pytest.approx(180.0, abs=1e-8)  # was 179.996819 (rounding near 0)
+    assert doc["fourbars"][0]["rocker_turns_fully"] is False and doc["fourbars"][0]["limit_positions"] == []
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "Assembles for crank in [0.000000, 360.000000] deg" in out and "rocker swings 180.000000 deg" in out
+
+
+def test_a_dyad_placed_from_an_indeterminate_joint_keeps_the_sample_assembled():
+    """A second rhombus window placed from the first one's indeterminate joint: the mechanism still assembles at
+    crank 0 (every joint after it indeterminate too), and nowhere else is anything flagged that was not."""
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {
+            "A0": [0, 0],
+            "A1": [1, 0],
+            "B0": [0.5, 0.8660254037844386],
+            "B1": [1.5, 0.8660254037844386],
+            "E": [2.5, 0.8660254037844386],
+            "G": [2, 0],
+        },
+        "links": {
+            "ground": ["A0", "A1", "G"],
+            "c0": ["A0", "B0"],
+            "c1": ["A1", "B1"],
+            "k1": ["B0", "B1"],
+            "k2": ["B1", "E"],
+            "c2": ["G", "E"],
+        },
+        "drivers": [{"link": "c0", "pivot": "A0", "toward": "B0"}],
+    }
+    mech = lk.Mechanism.from_dict(doc)
+    res = lk.analyze(mech, [0.0, 30.0, 60.0])
+    assert res.assembled.tolist() == [True, True, True] and res.singular.tolist() == [True, False, False]
+    assert np.isnan(res.point("B1")[0]) and np.isnan(res.point("E")[0]) and res.point("B0")[0] == 1.0
+    assert abs(res.point("E")[2] - (2.5 + 0.8660254037844386j)) < 1e-12
+
+
+@pytest.mark.parametrize("pose_deg", [0.0, 0.01, 180.0])
+def test_a_pose_at_a_change_point_is_said_to_pick_no_mode(tmp_path, capsys, pose_deg):
+    """A parallelogram (100 mm ground and coupler, 40 mm cranks) posed flat (0 deg) or folded flat (180 deg): the
+    coupler's circle about A and the rocker's about O2 touch there, so the side B lies on is rounding and the sign
+    check printed ('B +1') was no choice of the pose's, without a word. By hand: the triangle A-B-O2 has area 0 at
+    0 and 180 deg, and sin = 1.7e-4 at 0.01 deg (far above rounding: that pose picks its mode)."""
+    c, s = 40 * math.cos(math.radians(pose_deg)), 40 * math.sin(math.radians(pose_deg))
+    doc = {
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O1": [0, 0], "O2": [100, 0], "A": [c, s], "B": [100 + c, s]},
+        "links": {"ground": ["O1", "O2"], "crank": ["O1", "A"], "coupler": ["A", "B"], "rocker": ["O2", "B"]},
+        "drivers": [{"link": "crank", "pivot": "O1", "toward": "A"}],
+    }
+    path = tmp_path / "para.json"
+    path.write_text(json.dumps(doc))
+    flat = pose_deg != 0.01
+    assert main(["check", str(path), "--format", "json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["signs"]["B"]["at_change_point"] is flat
+    assert (rep["warnings"][0] == {"kind": "pose-at-change-point", "joints": ["B"]}) is flat
+    assert main(["check", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("Assembly mode of the reference pose: B"))
+    warned = lines[k + 1].startswith("Warning: the reference pose sits at a change point of B")
+    assert warned is flat and sum("change point of B" in line for line in lines) == flat  # said once

@@ -334,6 +334,42 @@ def test_a_motion_too_fast_for_its_time_span_is_refused_in_one_line(monkeypatch,
     assert main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:0.1:0.01", "--speed", "100"]) == 0
 
 
+#: a bar (cm) on a pivot, pulled by a spring and a damper from the frame, under gravity and a torque (review's pend)
+PENDULUM = {
+    "units": {"length": "cm", "angle": "deg"},
+    "joints": {"O": [0, 0], "P": [30, 0], "G": [0, -40]},
+    "links": {"ground": ["O", "G"], "bar": {"joints": ["O", "P"], "mass": 2, "cg": [15, 0], "inertia": 0.015}},
+    "drivers": [{"link": "bar", "pivot": "O", "toward": "P"}],
+    "gravity": [0, -9.81],
+    "springs": [{"between": ["G", "P"], "stiffness": 200, "free_length": 20}],
+    "dampers": [{"between": ["G", "P"], "damping": 3}],
+    "flywheels": [{"link": "bar", "inertia": 0.01}],
+    "loads": [{"link": "bar", "torque": 1}],
+}
+
+
+def test_a_motion_at_rest_past_the_step_budget_goes_on_with_a_stiff_method(monkeypatch):
+    """A damped pendulum settles in about 100 s; DOP853's step then stays ~0.18 s (its stability on the spring's
+    vibration), so 90000 s took more than 200000 steps and was refused as moving too fast ('the driver moves at
+    -8.67e-14 rad/s: ... lower the speed'). Past the budget, a motion whose steps hardly moved the driver goes on
+    with LSODA (stiff: long steps at rest). Here the budget is made 2000 steps over 3000 s (DOP853 alone needs
+    ~17000): the motion equals DOP853's own under the full budget to 1e-9 deg and 1e-9 rad/s."""
+    import linkagekit.dynamics as dyn
+
+    mech = lk.Mechanism.from_dict(PENDULUM)
+    times = np.linspace(0.0, 3000.0, 61)
+    ref = lk.simulate(mech, times)
+    monkeypatch.setattr(dyn, "MAX_STEPS", 2000)
+    res = lk.simulate(mech, times)
+    assert res.stopped is None and res.n == 61
+    np.testing.assert_allclose(res.inputs["bar"], ref.inputs["bar"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.speeds["bar"], ref.speeds["bar"], rtol=0, atol=1e-9)
+    assert abs(res.inputs["bar"][-1] - ref.inputs["bar"][-1]) < 1e-9 and abs(res.speeds["bar"][-1]) < 1e-12
+    # the refusal, where even that runs out: the speed is no cause there, the time span is
+    line = dyn._too_many_steps(36941.0, "-8.67e-14 rad/s", 0.0)
+    assert "shorten the time span" in line and "speed" not in line.split(":")[-1] and "vibration" in line
+
+
 #: an arm on a pivot O lifted by a cylinder from the frame's C to the arm's B, posed fully retracted (1.2 m)
 ARM = {
     "format": "linkagekit/1",
@@ -390,6 +426,27 @@ def test_a_cylinder_posed_at_its_stroke_end_moves_away_from_it_and_stops_pushed_
     held = lk.simulate(mech, np.array([0.0, 0.1, 0.2]), torque=100.0)  # less than gravity's 114.89 N: pulled in
     assert held.stopped is not None and "t = 0 s" in held.stopped and "1.2 m" in held.stopped
     assert held.n == 1 and np.all(held.assembled)
+
+
+def test_one_cylinder_stops_at_its_stroke_end_itself_with_a_line_free_of_rounding():
+    """The one-driver table ended 1e-4 of the range inside each end, a toggle's margin, so the arm pushed out stopped
+    at 2.59986 m (t = 0.334068 s), 1.4e-4 m before its stroke's end, and the line said "the end of its range is
+    2.6e-12 m on" when it did start on one. A stroke's end is no singular position: the table reaches it, and the
+    integrator's event stops the motion there. Against the arm's own equation (DOP853 at 1e-12, its own event at
+    2.6 m): the stop time to 1e-6 s (the line prints 6 digits), at 2.6 m."""
+    mech = lk.Mechanism.from_dict(ARM)
+    assert reduced(mech).q_range == pytest.approx((1.2, 2.6), rel=1e-15, abs=0)
+    for force in (300.0, 400.0):
+        _, t_end = _arm_by_hand(force, np.array([0.0]))
+        line = lk.simulate(mech, np.array([0.0, 0.5]), torque=force).stopped
+        stop = re.fullmatch(r"simulate: stopped at t = (\S+) s, lift = (\S+) m: (.*)", line or "")
+        assert stop is not None and abs(float(stop[1]) - t_end) < 1e-6 and float(stop[2]) == 2.6, (line, t_end)
+        assert stop[3] == "lift reached the upper end of its stroke, 2.6 m, that the motion cannot pass"
+    held = lk.simulate(mech, np.array([0.0, 0.1]), torque=100.0).stopped
+    assert held == (
+        "simulate: stopped at t = 0 s, lift = 1.2 m: lift reached the lower end of its stroke, 1.2 m, that the motion"
+        " cannot pass"
+    )
 
 
 def _parallelogram(pose_deg: float) -> lk.Mechanism:

@@ -34,7 +34,7 @@ from .group import Group
 from .groupmodes import continuation_intervals, enumerate_modes
 from .model import CrankType, Mechanism
 from .params import Params, all_sign_combinations
-from .positions import solve
+from .positions import Positions, solve
 from .rates import SINGULAR_TOL, solve_rates
 from .steps import ActuatorDyad, CircleLine, CylinderDyad, CylinderLine, Dyad, SliderDrive
 
@@ -55,6 +55,11 @@ DWELL = 1e-10
 MIN_TRANSMISSION = 20.0
 #: check warns when a driver's peak effort is within this angle (degrees) of a toggle (a sign step's triangle flat)
 TOGGLE_ANGLE = 10.0
+#: the kind of the warning that the pose sits at a change point (check prints it under the pose's assembly mode)
+POSE_WARNING = "pose-at-change-point"
+#: a sign step whose dimensionless determinant at the pose's own coordinates is below this is flat there, to the
+#: rounding of a pose typed in decimals: the pose sits at a change point (or a toggle) and picks none of its two modes
+POSE_FLAT = 1e-9
 
 
 def _inputs(params: Params, driver: int, values: np.ndarray) -> np.ndarray:
@@ -925,11 +930,18 @@ def _limits(run: _Run, li: int, brackets: list[_Bracket], fin: _Final) -> list[_
     return limits
 
 
+#: an indeterminate sample's one-sided limits are extrapolated from inputs this far apart (radians; a length
+#: driver: this share of its span) by a cubic: error about LIMIT_STEP^4 f^(4), plus 15 eps / LIMIT_STEP of rounding
+LIMIT_STEP = 1e-3
+
+
 def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -> dict[str, Any]:
     """Whether the rocker turns fully and, if not, its swing over the range (one interval), unwrapped."""
     phi = run.q.out_angle(run.st)[li]
-    if len(run.intervals) != 1 or not np.isfinite(phi).all():
+    if len(run.intervals) != 1:
         return {}
+    if not np.isfinite(phi).all():
+        return _cut_swing(run, li, phi, limits, unit)
     u = np.unwrap(phi)
     turns = run.cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
     if turns:
@@ -941,6 +953,34 @@ def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -
         cand += [u[-1] + _wrap(fin.phi[li, c] - phi[-1]) for c in e_cols[1:2]]
     if not cand:
         cand = [float(np.min(u)), float(np.max(u))]
+    return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
+
+
+def _cut_swing(run: _Run, li: int, phi: np.ndarray, limits: list[_Limit], unit: float) -> dict[str, Any]:
+    """The swing over a full turn cut at one indeterminate sample (a rhombus's crank over its ground pivot).
+
+    There the pose's mode jumps (a rhombus: from its parallelogram to its kite), so the motion runs from one
+    side of the cut to the other without turning fully; the rocker's angle at each side is the one-sided
+    limit, a cubic extrapolation from :data:`LIMIT_STEP` on (the dense samples alone stop a grid step short).
+    """
+    bad = np.flatnonzero(~np.isfinite(phi))
+    if not run.cyclic or len(bad) != 1:
+        return {}
+    n, i = len(phi), int(bad[0])
+    order = (i + 1 + np.arange(n - 1)) % n  # the turn from just after the cut to just before it
+    u = np.unwrap(phi[order])
+    where = np.empty(n, int)
+    where[order] = np.arange(n - 1)
+    cand = [u[where[lim.sample]] + _wrap(lim.angle - phi[lim.sample]) for lim in limits if lim.sample != i]
+    cand += [float(np.min(u)), float(np.max(u))]
+    e = LIMIT_STEP * (1.0 if run.turn else run.total)
+    x = run.sw.x[i] + e * np.array([1, 2, 3, 4, -1, -2, -3, -4], float)
+    side = run.q.out_angle(run.state(x))[li].reshape(2, 4)
+    for k, end in ((0, 0), (1, -1)):
+        d = _wrap(side[k] - phi[order[end]])  # each side's angles from the cut's neighbouring sample
+        lim = 4 * d[0] - 6 * d[1] + 4 * d[2] - d[3]
+        if np.isfinite(lim):
+            cand.append(float(u[end] + lim))
     return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
 
 
@@ -1541,13 +1581,15 @@ def check(mech: Mechanism) -> CheckReport:
         for i, d in enumerate(mech.drivers)
     }
     dynamics = peak_loads(mech, params) if mech.has_dynamics else None
+    flat = pose_at_change_point(params)
     return CheckReport(
         name=mech.name,
         dof=plan.dof,
         drivers=tuple(d.name for d in mech.drivers),
         plan=tuple(plan.describe(params.steps).splitlines()),
         signs={
-            j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i]} for i, j in enumerate(plan.sign_joints)
+            j: {"sign": int(params.signs[i, 0]), "rule": plan.sign_labels[i], "at_change_point": j in flat}
+            for i, j in enumerate(plan.sign_joints)
         },
         mirror_links=plan.mirror_links,
         input_ranges=ranges,
@@ -1561,10 +1603,37 @@ def check(mech: Mechanism) -> CheckReport:
         numerical_joints=tuple(names[i] for i in plan.numerical),
         sliders=tuple(sliders),
         assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
-        warnings=tuple(_warnings(entries, dynamics)),
+        warnings=tuple(([{"kind": POSE_WARNING, "joints": flat}] if flat else []) + _warnings(entries, dynamics)),
         change_points=change_points_crossed(mech, params),
         **_first_loop(entries),
     )
+
+
+def pose_at_change_point(params: Params) -> list[str]:
+    """The joints of the sign steps whose two modes meet at the pose itself (one design).
+
+    The steps' dimensionless determinants (:func:`linkagekit.rates.solve_rates`) from the pose's own
+    coordinates (not re-solved: a flat triangle solved keeps ``sqrt`` of rounding, 1e-8) below
+    :data:`POSE_FLAT`. There the side a joint lies on is rounding: the pose picks none of the two modes, and
+    the sign written for it (+1 where the cross product is 0) is a choice, not the pose's.
+
+    >>> import linkagekit as lk
+    >>> from linkagekit.api import prepare
+    >>> pose_at_change_point(prepare(lk.load("examples/seed000_fourbar.yaml")))
+    []
+    """
+    plan = params.plan
+    q0 = params.pose_inputs[:, :1, None]
+    pos = solve(params, q0)
+    if not plan.n_signs or not pos.assembled.all():
+        return []
+    at_pose = Positions(
+        np.asarray(params.pose, complex)[:, :1, None], pos.rot, pos.margin, pos.assembled, pos.signs, pos.mirrors
+    )
+    nd = q0.shape[0]
+    rt = solve_rates(params, at_pose, np.ones((nd, 1, 1)), np.zeros((nd, 1, 1)), tol=0.0)
+    cond = np.abs(rt.condition[: plan.n_signs, 0, 0])
+    return [j for j, c in zip(plan.sign_joints, cond, strict=True) if c <= POSE_FLAT]
 
 
 def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...] | None:
@@ -1699,7 +1768,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
         *_change_point_lines(rep.get("change_points", []), fmt),
-        *(_warning_line(w, fmt) for w in rep.get("warnings") or []),
+        *(_warning_line(w, fmt) for w in rep.get("warnings") or [] if w.get("kind") != POSE_WARNING),
     ]
     return "\n".join(lines) + "\n"
 
@@ -1739,6 +1808,13 @@ def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
             "Assembly mode of the reference pose: "
             + ", ".join(f"{j} {'+1' if s['sign'] > 0 else '-1'}" for j, s in rep["signs"].items())
         )
+    flat = [w for w in rep.get("warnings") or [] if w.get("kind") == POSE_WARNING]
+    lines += [
+        f"Warning: the reference pose sits at a change point of {', '.join(w['joints'])} (its two modes meet there,"
+        " a triangle flat to rounding): the pose picks neither, the sign above is a choice; pose it off that position"
+        " to pick one"
+        for w in flat
+    ]
     if rep.get("mirror_links"):
         lines.append("Links that can be mirrored: " + ", ".join(rep["mirror_links"]))
     return lines
@@ -2120,11 +2196,17 @@ def _reference_rows(
     return reference
 
 
+def _alike(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
+    """Two configurations (joint positions) within ``tol``, a joint indeterminate (NaN) in both counting as alike
+    (two circles that are one: every mode has the same circle there)."""
+    return bool(np.all((np.abs(a - b) <= tol) | (np.isnan(a) & np.isnan(b))))
+
+
 def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
     """For each row the first row with the same positions (None for the first of each), and how many are distinct.
 
     Rows are bucketed by positions rounded to 1e-6 of the size, then confirmed within the
-    bucket to ``tol`` (two configurations within tol round alike but for a 1e-3 chance at a
+    bucket to ``tol`` (:func:`_alike`) (two configurations within tol round alike but for a 1e-3 chance at a
     rounding boundary, which only splits a duplicate, never merges two modes).
     """
     z = rows.z
@@ -2136,7 +2218,7 @@ def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
         first = None
         if rows.assembled[r]:
             bucket = buckets.setdefault(keys[r].tobytes(), [])
-            first = next((f for f in bucket if np.all(np.abs(z[:, f] - z[:, r]) <= tol)), None)
+            first = next((f for f in bucket if _alike(z[:, f], z[:, r], tol)), None)
             if first is None:
                 bucket.append(r)
                 distinct += 1

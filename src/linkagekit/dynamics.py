@@ -45,7 +45,7 @@ from .branch import along_sweep
 from .checks import input_range
 from .errors import InputError
 from .forces import Kinematics, point_motion
-from .model import CylinderType, Mechanism, SliderType
+from .model import CylinderType, Driver, Mechanism, SliderType
 from .params import Params
 from .positions import solve
 from .rates import link_motion, solve_rates
@@ -328,10 +328,22 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
         if d.type.cyclic:  # the pose's angle, within a turn of the interval
             shift = 2 * math.pi * math.floor((x0 - lo * to_si) / (2 * math.pi))
         a, b = lo * to_si + shift, hi * to_si + shift
-        if a <= x0 <= b:  # just inside the ends (singular at a toggle), but never leaving the pose out
+        if a <= x0 <= b:  # just inside a toggle (singular there), on a stroke's end, never leaving the pose out
             margin = span * 1e-4
-            return np.linspace(min(a + margin, x0), max(b - margin, x0), points + 1), None
+            low, high = (_stroke_end(d, v, hi - lo) for v in (lo, hi))  # a stroke's end bounds no angle: no shift
+            a = a + margin if low is None else low * to_si
+            b = b - margin if high is None else high * to_si
+            return np.linspace(min(a, x0), max(b, x0), points + 1), None
     raise InputError(f"{mech.source}: the mechanism does not assemble at its pose's input")
+
+
+def _stroke_end(d: Driver, value: float, span: float) -> float | None:
+    """The end of driver ``d``'s stroke that an end of its range ``value`` is (file units, to 1e-9 of the range's
+    ``span``: the range's ends are found by bisection), or None: a toggle, where the model is singular."""
+    for end in d.stroke or ():
+        if abs(value - end) <= 1e-9 * span:
+            return float(end)
+    return None
 
 
 def _rows_at(md: _Model, x: np.ndarray, signs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -581,35 +593,73 @@ def _dop853(
 ) -> np.ndarray:
     """The state at every output time by the compiled DOP853 (SciPy's ``ode``): microseconds a step.
 
-    At most :data:`MAX_STEPS` steps in all (counted by the right-hand side's evaluations); ``speed``
-    formats the state's speed for the message that refuses more.
+    At most :data:`MAX_STEPS` steps (counted by the right-hand side's evaluations). A motion whose steps
+    each moved the driver less than :data:`SLOW_STEP` spent them on DOP853's stability (a stiff spring,
+    nearly at rest): it goes on from the last output time reached with LSODA, which turns to a stiff
+    method (BDF) and takes long steps there, under the same budget; ``speed`` formats the state's speed
+    for the line that refuses more.
     """
+    y = np.empty((2, len(times)))
+    y[:, 0] = y0
+    short = _ode(rhs, "dop853", times, y)
+    if short is None:
+        return y
+    i, t, state = short
+    travel = float(np.sum(np.abs(np.diff(y[0, :i]))) + abs(state[0] - y[0, i - 1]))
+    if travel / MAX_STEPS >= SLOW_STEP or _ode(rhs, "lsoda", times[i - 1 :], y[:, i - 1 :]) is not None:
+        raise InputError(_too_many_steps(t, speed(state[1]), travel / MAX_STEPS))
+    return y
+
+
+def _ode(
+    rhs: Callable[[float, Any], list[float]], method: str, times: np.ndarray, y: np.ndarray
+) -> tuple[int, float, np.ndarray] | None:
+    """``y[:, 1:]`` (2, n) filled by SciPy's ``ode`` ``method`` from ``y[:, 0]`` at ``times[0]``, in place: None, or
+    past the budget of :data:`MAX_STEPS` steps the first output index not reached, the time and state reached."""
     import warnings
 
     from scipy.integrate import ode
 
     calls = [0]
 
-    def counted(t: float, y: Any) -> list[float]:
+    def counted(t: float, state: Any) -> list[float]:
         calls[0] += 1
-        return rhs(t, y)
+        return rhs(t, state)
 
-    solver = ode(counted).set_integrator("dop853", rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
-    solver.set_initial_value(y0, times[0])
-    y = np.empty((2, len(times)))
-    y[:, 0] = y0
+    solver = ode(counted).set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
+    solver.set_initial_value(y[:, 0], times[0])
     for i in range(1, len(times)):
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said below
+            warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said by the caller
             y[:, i] = solver.integrate(times[i])
-        if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() == -2:
-            raise InputError(
-                f"simulate: more than {MAX_STEPS} integration steps by t = {solver.t:.6g} s (the driver moves at"
-                f" {speed(solver.y[1])}): shorten the time span or lower the speed"
-            )
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() in _EXCESS_WORK[method]:
+            return i, float(solver.t), np.array(solver.y, float)
         if not solver.successful():
             raise InputError(f"simulate: the integration failed at t = {solver.t:.6g} s")
-    return y
+    return None
+
+
+#: SciPy ``ode``'s return codes for "more steps are needed" (DOP853's -2; LSODA's -1, excess work)
+_EXCESS_WORK = {"dop853": (-2,), "lsoda": (-1,)}
+
+
+#: a one-driver motion whose steps each moved the driver less than this (rad, as far as the output times show) spent
+#: them on the explicit integrator's stability, not on the motion: a fast vibration (a stiff spring on a light link)
+#: bounds DOP853's step even at rest
+SLOW_STEP = 1e-3
+
+
+def _too_many_steps(t: float, speed: str, travel_per_step: float) -> str:
+    """The line that refuses a motion past :data:`MAX_STEPS` steps at time ``t`` (s): too fast for its time span, or
+    (its steps moving the driver less than :data:`SLOW_STEP` each) too long for the integrator's stable step."""
+    head = f"simulate: more than {MAX_STEPS} integration steps by t = {t:.6g} s"
+    if travel_per_step >= SLOW_STEP:
+        return f"{head} (the driver moves at {speed}): shorten the time span or lower the speed"
+    return (
+        f"{head} with the driver hardly moving (now {speed}): the explicit integrator keeps its step"
+        f" ({t / MAX_STEPS:.2g} s) under the period of the fastest vibration (a stiff spring), even at rest:"
+        " shorten the time span"
+    )
 
 
 def _with_events(
@@ -644,10 +694,12 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     d = md.mech.drivers[k]
     value = q_si / (md.scale[k] * d.input_scale(md.mech))
     unit = d.input_unit(md.mech)
-    return (
-        f"simulate: stopped at t = {t:.6g} s, {d.name} = {value:.6g} {unit}: the end of its range"
-        f"{_range_end(md.mech, k, value)} (a toggle or its stroke's end) that the motion cannot pass"
-    )
+    head = f"simulate: stopped at t = {t:.6g} s, {d.name} = {value:.6g} {unit}: "
+    end = None if d.stroke is None else _stroke_end(d, value, d.stroke[1] - d.stroke[0])
+    if d.stroke is not None and end is not None:  # the table reaches the stroke's end itself: the event stops there
+        side = ("lower", "upper")[end == d.stroke[1]]
+        return head + f"{d.name} reached the {side} end of its stroke, {end:.6g} {unit}, that the motion cannot pass"
+    return head + f"the end of its range{_range_end(md.mech, k, value)} (a toggle) that the motion cannot pass"
 
 
 def _range_end(mech: Mechanism, k: int, value: float) -> str:
@@ -665,6 +717,8 @@ def _range_end(mech: Mechanism, k: int, value: float) -> str:
         turn = 2 * math.pi / d.input_scale(mech)
         gap = (gap + turn / 2) % turn - turn / 2
     i = int(np.argmin(np.abs(gap)))
+    if abs(gap[i]) <= 1e-9 * (np.ptp(ends) or 1.0):  # the end itself, to the rounding of the range's ends
+        return f", at {value + gap[i]:.6g} {d.input_unit(mech)},"
     return f" is {abs(gap[i]):.3g} {d.input_unit(mech)} on, at {value + gap[i]:.6g} {d.input_unit(mech)}"
 
 
