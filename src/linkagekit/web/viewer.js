@@ -221,8 +221,13 @@
     });
     this.links.forEach(function (L) {
       var ln = L.link, e = L.e;
-      e.style.visibility = ok ? "visible" : "hidden";
-      if (!ok) return;
+      // an assembled sample may hold an indeterminate joint (a rhombus's crank over its pivot): null, which
+      // arithmetic would read as 0 and draw the link to the origin; such a link is not drawn
+      var drawn = ok && (ln.kind === "block" ? [L.slider.through] : ln.joints).every(function (j) {
+        return finite(self.X[j][i]) && finite(self.Y[j][i]);
+      });
+      e.style.visibility = drawn ? "visible" : "hidden";
+      if (!drawn) return;
       if (ln.kind === "plate") {
         e.setAttribute("points", ln.joints.map(function (j) { return self.px(self.X[j][i]) + "," + self.py(self.Y[j][i]); }).join(" "));
       } else if (ln.kind === "block") {
