@@ -398,8 +398,9 @@ def in_order(t: FloatArray, closed: bool) -> FloatArray:
     order, and one step back makes the crank turn a whole turn more. Such a row's steps are
     taken as their least turns, the crank turns the way of their sum, and the angles become
     their L-infinity isotonic regression along it, ``(max_{j<=i} t_j + min_{j>=i} t_j) / 2``
-    (no angle moves by more than half the largest step back; poses met out of order share
-    one angle); a closed motion's stay within the turn from the first pose.
+    (no angle moves by more than half the largest drop ``max_{j<i} t_j - t_i``; poses met
+    out of order share one angle); a closed motion's stay within the turn from the first
+    pose (a hair short of it, so that the cycle back to the first is not read as a turn more).
 
     >>> np.degrees(in_order(np.radians([[10.0, 20, 19, 40]]), False)).round(6).tolist()
     [[10.0, 19.5, 19.5, 40.0]]
@@ -410,7 +411,7 @@ def in_order(t: FloatArray, closed: bool) -> FloatArray:
     v = way * (t[:, :1] + np.concatenate([np.zeros((len(t), 1)), np.cumsum(steps, axis=1)], axis=1))
     iso = (np.maximum.accumulate(v, axis=1) + np.minimum.accumulate(v[:, ::-1], axis=1)[:, ::-1]) / 2
     if closed:
-        iso = np.clip(iso, v[:, :1], v[:, :1] + 2 * np.pi)
+        iso = np.clip(iso, v[:, :1], v[:, :1] + 2 * np.pi * (1 - 1e-12))
         iso[:, 0] = v[:, 0]
     out: FloatArray = np.where(ordered[:, None], t, way * iso)
     return out
