@@ -155,13 +155,121 @@ def test_past_the_deadline_the_best_start_is_kept_unpolished():
 
 
 def test_no_four_bar_in_the_time_budget_says_so():
-    from linkagekit.errors import LinkageError
-    from linkagekit.synthesis.run import _best_first
+    """The message says what was searched and found nothing, never that no four-bar exists."""
+    from linkagekit.synthesis.run import _none_found
 
-    with pytest.raises(LinkageError, match=r"^motion: no four-bar found in the time budget \(5 s; more may find one\)"):
-        _best_first([], 1.0, 0.05, 0.0, late=5.0)
-    with pytest.raises(LinkageError, match=r"^motion: no four-bar meets the poses in order on one branch$"):
-        _best_first([], 1.0, 0.05, 0.0)
+    late = _none_found("motion", 0.0, 5.0, False)
+    assert isinstance(late, lk.LinkageError)
+    assert str(late).startswith("motion: no four-bar found in the time budget (5 s; more may find one)")
+    done = str(_none_found("motion", 0.0, 0.0, True))
+    assert done.startswith("motion: no four-bar found that meets the poses in order on one branch (searched: ")
+    assert "Burmester" in done and "circle-fit dyads" in done
+    assert "Burmester" not in str(_none_found("motion", 0.0, 0.0, False))
+
+
+def test_a_search_that_finds_nothing_names_the_file_and_exits_1(tmp_path, capsys, monkeypatch):
+    """Defect 2 of the synthesis review: the line named no file and claimed that no four-bar exists."""
+    import linkagekit.synthesis.run as run
+
+    monkeypatch.setattr(run, "_engine_seeds", lambda *a: np.zeros((0, motion.FB_DIM)))
+    monkeypatch.setattr(motion, "approximate", lambda *a, **k: [])  # the search finds nothing
+    src = write_poses(tmp_path / "poses.csv", traced_poses(known_fourbar(), 41.6 + np.linspace(0.0, 280.0, 7)))
+    out = tmp_path / "o.yaml"
+    assert main(["synthesize", str(src), "--task", "motion", "--min-transmission", "30", "-o", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and not out.exists()
+    assert err.startswith(ERROR_PREFIX) and "poses.csv: no four-bar found that meets the poses in order" in err
+    assert "transmission angle within [30, 150] deg (searched: " in err
+
+
+def noisy_measured(seed: int, m: int = 24, span: float = 150.0) -> tuple[np.ndarray, np.ndarray]:
+    """``m`` poses of the known crank-rocker over ``span`` degrees of its crank (the crank angles returned),
+    with the scatter of measured poses: Gaussian noise of 0.75 % of their diagonal on x and y, 1 deg on the angle.
+
+    24 poses over 150 deg are 6.5 deg apart, as the review's 40 poses over 255 deg (0.2 mm and
+    1 deg on a diagonal of 27 mm): close enough for the scatter to put a pose's fitted crank
+    angle behind the one before.
+    """
+    crank = 41.6 + np.linspace(0.0, span, m)
+    poses = traced_poses(known_fourbar(), crank)
+    rng = np.random.default_rng(seed)
+    diag = np.hypot(*np.ptp(poses[:, :2], axis=0))
+    return poses + np.c_[rng.normal(0.0, 0.0075 * diag, (m, 2)), rng.normal(0.0, 1.0, m)], crank
+
+
+def test_noisy_measured_poses_are_met_in_order_no_worse_than_by_their_generator():
+    """Measured poses scatter; the four-bar that made them still meets them in order on one branch.
+
+    The answer must too, with an error ``E`` (the documented measure, judged by ``lk.analyze``
+    of the written mechanism at its reported crank angles) no larger than the generator's at
+    the crank angles that made the poses: no tolerance. Measured: 0.0078 against 0.0185. It
+    used to be "no four-bar meets the poses in order on one branch" (review defect 2): the
+    circle fits' crank angles of close poses came a hair out of order, which counted as a
+    whole turn more, and the polish drifted out of order too.
+    """
+    poses, crank = noisy_measured(0)
+    out = lk.synthesize(poses, task="motion", seconds=30)  # about 0.5 s; the budget never ends it
+
+    def error(mech: Mechanism, inputs: np.ndarray) -> float:
+        pos, ang = errors_by_analyze(mech, poses, inputs)
+        return max(np.max(pos) / out.diagonal, motion.ANGLE_WEIGHT * np.radians(np.max(np.abs(ang))))
+
+    best = out.best
+    assert best.one_branch
+    steps = np.diff(best.inputs)  # in order: the crank never turns back, within a turn
+    assert (np.all(steps >= 0) or np.all(steps <= 0)) and abs(best.inputs[-1] - best.inputs[0]) < 360
+    a, b = best.inputs[0], best.inputs[-1]
+    assert np.all(lk.analyze(best.mechanism, {"crank": np.linspace(a, b, int(4 * abs(b - a)) + 2)}).assembled)
+    assert error(best.mechanism, best.inputs) <= error(known_fourbar(), crank)
+    pos, _ = errors_by_analyze(best.mechanism, poses, best.inputs)
+    np.testing.assert_allclose(pos, best.position_errors, atol=1e-9 * out.diagonal)
+
+
+@pytest.mark.parametrize("closed", [False, True])
+def test_in_order_makes_jittered_crank_angles_come_in_order(closed):
+    """``in_order`` on 2000 rows of crank angles, each turning one way with scatter (some steps back).
+
+    Every row comes out in order by :func:`~linkagekit.synthesis.motion.unwrap_turn` (a closed
+    one exactly one turn round, the last step back to the first included); rows already in
+    order are kept; an open row's angles move by at most half its largest drop (against the
+    way of its net turn, which scatter larger than a short span may reverse).
+    """
+    rng = np.random.default_rng(0)
+    k, m = 2000, 12
+    span = 2 * np.pi * (1 - 1 / m) if closed else rng.uniform(0.3, 5.5, (k, 1))
+    way = rng.choice([-1.0, 1.0], (k, 1))
+    t = way * np.linspace(0.0, 1.0, m) * span + rng.normal(0.0, rng.uniform(0.0, 0.2, (k, 1)), (k, m))
+    t = np.angle(np.exp(1j * (t + rng.uniform(-3, 3, (k, 1)))))  # wrapped, as the dyads' angles are
+    before = motion.unwrap_turn(t, closed)[2]
+    out = motion.in_order(t, closed)
+    assert np.all(motion.unwrap_turn(out, closed)[2]) and 0 < np.sum(~before) < k
+    assert np.array_equal(out[before], t[before])
+    moved = np.max(np.abs(np.angle(np.exp(1j * (out - t)))), axis=1)
+    if not closed:
+        u = np.unwrap(t, axis=1)
+        v = np.where(u[:, -1:] >= u[:, :1], 1.0, -1.0) * u
+        assert np.all(moved <= np.max(np.maximum.accumulate(v, axis=1) - v, axis=1) / 2 + 1e-12)
+
+
+def test_the_minimax_polish_keeps_noisy_poses_in_order():
+    """From the generator itself (in order) on noisy poses, the polish lowers ``E`` and stays in order.
+
+    Unconstrained, it ran 4.4 deg back between two poses (and the dense check then threw it away).
+    """
+    poses, crank = noisy_measured(1)
+    p = motion.motion_poses(poses[:, 0], poses[:, 1], np.radians(poses[:, 2]))
+    z = {k: (complex(*v) - p.center) / p.scale for k, v in KNOWN.items()}
+    u = (z["Q"] - z["P"]) / abs(z["Q"] - z["P"])
+    a, b = (z["A1"] - z["P"]) / u, (z["B1"] - z["P"]) / u
+    F = np.array([z["A0"].real, z["A0"].imag, a.real, a.imag, abs(z["A1"] - z["A0"]),
+                  z["B0"].real, z["B0"].imag, b.real, b.imag, abs(z["B1"] - z["B0"])])  # fmt: skip
+    t, s = np.radians(crank), motion.first_mode(p, F[None])
+    Fp, tp = motion.minimax_polish(p, F, t, float(s[0]), motion.ANGLE_WEIGHT)
+    before, after = (motion.combined(*motion.pose_errors(p, G[None], T[None], s), motion.ANGLE_WEIGHT)[0]
+                     for G, T in ((F, t), (Fp, tp)))  # fmt: skip
+    assert after < 0.6 * before  # measured 0.0128 against 0.0245
+    assert np.all(np.diff(tp) >= 0) and tp[-1] - tp[0] < 2 * np.pi
+    assert motion.sweep_check(Fp[None], tp[None], s, closed=False).assembled[0]
 
 
 # ---------------------------------------------------------------------- the objective interface

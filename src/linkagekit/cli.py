@@ -1772,6 +1772,7 @@ def _synthesize_motion(args: argparse.Namespace) -> int:
         seconds=seconds,
         full_turn=args.full_turn,
         engine=_motion_engine(args),
+        source=shorten_path(pf.source),
     )
     best = out.best
     described = f"{motion_text(out, pf.poses, args.units, None)}\ncommand: {_synthesize_command(args)}"

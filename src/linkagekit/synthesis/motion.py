@@ -30,14 +30,18 @@ Route (docs/method.md, "Motion generation")
    8-dimensional objective of both dyads) adds its best pair.
 2. **Four-bars.** Every ordered pair of distinct dyads (crank, rocker) is a four-bar whose
    assembly mode is the one its dyads have at the first pose; driven to the crank's fitted
-   angles it is scored by ``E`` (vectorized over pairs).
+   angles it is scored by ``E`` (vectorized over pairs). Fitted to measured (scattered)
+   poses, the angles of close poses may come a little out of order; they are replaced by
+   the nearest in-order angles (:func:`in_order`), at which ``E`` is then measured.
 3. **Minimax polish** of the best four-bars: SLSQP on the epigraph form ``min tau`` subject
    to ``p_i^2 <= tau^2``, ``-tau <= w (phi_i - theta_i) <= tau`` over the ten link
-   parameters and the crank angles (one common offset with timing).
+   parameters and the crank angles (one common offset with timing), the crank angles kept
+   in order within a turn.
 4. **Dense check** of one branch: the crank turns one way from the first pose's angle to the
-   last one's (a full turn for closed motions) through every pose in order, and the
-   four-bar assembles at every 1/4 degree in between (constant assembly mode, so no jump);
-   the smallest transmission angle is reported and kept above ``min_transmission``.
+   last one's (a full turn for closed motions) through every pose in order (never back;
+   two poses may share an angle), and the four-bar assembles at every 1/4 degree in between
+   (constant assembly mode, so no jump); the smallest transmission angle is reported and
+   kept above ``min_transmission``.
 
 Steps 3 and 4 respect the run's deadline (``approximate(..., deadline=)``): past it, no
 further four-bar is polished and a polish under way stops at its last iterate (kept only
@@ -377,12 +381,40 @@ def first_mode(p: MotionPoses, F: FloatArray) -> FloatArray:
 
 
 def crank_angles(p: MotionPoses, F: FloatArray) -> FloatArray:
-    """The crank's angle at every pose by its dyad (K, m), or by the first one and the inputs with timing."""
+    """The crank's angle at every pose by its dyad (K, m), in order (:func:`in_order`); with timing by the first
+    one and the inputs."""
     ga, a = F[:, 0] + 1j * F[:, 1], F[:, 2] + 1j * F[:, 3]
     t = np.angle(p.at(a[:, None]) - ga[:, None])
     if p.inputs is not None:
-        t = t[:, :1] + (p.inputs - p.inputs[0])
-    return t
+        timed: FloatArray = t[:, :1] + (p.inputs - p.inputs[0])
+        return timed
+    return in_order(t, p.closed)
+
+
+def in_order(t: FloatArray, closed: bool) -> FloatArray:
+    """Crank angles (K, m) met in order: ``t`` where they are (:func:`unwrap_turn`), else the nearest that are.
+
+    Measured poses scatter: the best crank angles of two close poses may come a little out of
+    order, and one step back makes the crank turn a whole turn more. Such a row's steps are
+    taken as their least turns, the crank turns the way of their sum, and the angles become
+    their L-infinity isotonic regression along it, ``(max_{j<=i} t_j + min_{j>=i} t_j) / 2``
+    (no angle moves by more than half the largest drop ``max_{j<i} t_j - t_i``; poses met
+    out of order share one angle); a closed motion's stay within the turn from the first
+    pose (a hair short of it, so that the cycle back to the first is not read as a turn more).
+
+    >>> np.degrees(in_order(np.radians([[10.0, 20, 19, 40]]), False)).round(6).tolist()
+    [[10.0, 19.5, 19.5, 40.0]]
+    """
+    ordered = unwrap_turn(t, closed)[2]
+    steps = np.angle(cis(np.diff(t, axis=1)))
+    way = np.where(np.sum(steps, axis=1, keepdims=True) >= 0, 1.0, -1.0)
+    v = way * (t[:, :1] + np.concatenate([np.zeros((len(t), 1)), np.cumsum(steps, axis=1)], axis=1))
+    iso = (np.maximum.accumulate(v, axis=1) + np.minimum.accumulate(v[:, ::-1], axis=1)[:, ::-1]) / 2
+    if closed:
+        iso = np.clip(iso, v[:, :1], v[:, :1] + 2 * np.pi * (1 - 1e-12))
+        iso[:, 0] = v[:, 0]
+    out: FloatArray = np.where(ordered[:, None], t, way * iso)
+    return out
 
 
 def unwrap_turn(t: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -442,12 +474,16 @@ def minimax_polish(
 
     Also constrained at the poses' crank angles and half-way between them: the four-bar
     assembles (``cos^2 alpha <= 1``) and, when asked, ``cos^2 mu <= cos^2 min_transmission``.
-    Past ``deadline`` (``time.monotonic()``) it stops at its last iterate (the start if none).
+    Without timing the crank angles stay in the order of the start ``t`` (unwrapped, in
+    order): each step the way the crank turns, the whole within a turn; a step back within
+    SLSQP's tolerance is undone (:func:`in_order`). Past ``deadline`` (``time.monotonic()``)
+    it stops at its last iterate (the start if none).
     """
     m = p.m
     timed = p.inputs is not None
     k = 1 if timed else m
     sv = np.array([s])
+    way = 1.0 if t[-1] >= t[0] else -1.0
 
     def unpack(Z: FloatArray) -> tuple[FloatArray, FloatArray]:
         T = Z[:, FB_DIM : FB_DIM + k]
@@ -463,6 +499,8 @@ def minimax_polish(
         pos, ang = pose_errors(p, Fz, T, ss, clip=True)
         _, _, cos_a, cos_mu = frames(Fz, np.concatenate([T, (T[:, 1:] + T[:, :-1]) / 2], axis=1), ss)
         parts = [tau**2 - pos**2, tau - weight * ang, tau + weight * ang, 1 - cos_a**2]
+        if not timed:  # the poses in order, within a turn
+            parts += [way * np.diff(T, axis=1), 2 * np.pi - way * (T[:, -1:] - T[:, :1])]
         if min_transmission > 0:
             parts.append(np.cos(np.radians(min_transmission)) ** 2 - cos_mu**2)
         out = np.concatenate(parts, axis=1)
@@ -478,7 +516,7 @@ def minimax_polish(
 
     z0 = np.concatenate([F, t[:k], [_start_tau(p, F, t, sv, weight)]])
     Fz, T = unpack(_slsqp_epigraph(z0, lambda z: cons(z[None])[0], jac, iterations, deadline)[None])
-    return Fz[0], T[0]
+    return Fz[0], T[0] if timed else in_order(T, p.closed)[0]  # a step back within SLSQP's tolerance undone
 
 
 def _slsqp_epigraph(

@@ -563,6 +563,7 @@ def synthesize_motion(
     seconds: float = 20.0,
     full_turn: bool = False,
     engine: Mapping[str, Any] | None = None,
+    source: str = "motion",
 ) -> MotionSynthesis:
     """Four-bars whose coupler passes through (or near) the poses, best first.
 
@@ -584,6 +585,8 @@ def synthesize_motion(
     seed, seconds, engine : int, float, mapping
         The engine's search that adds seeds: by default short (``ENGINE_SEEDS``, at most 5 s);
         ``engine`` may set its ``restarts``, ``generations``, ``workers``, ``scheduler``, ``checkpoint``.
+    source : str
+        Names the poses in the LinkageError raised when no four-bar found meets them in order on one branch.
 
     Examples
     --------
@@ -597,32 +600,54 @@ def synthesize_motion(
     >>> bool(out.best.max_position_error < 1e-9 and out.best.max_angle_error < 1e-7 and out.best.one_branch)
     True
     """
-    from . import motion as mo
-
     deadline = time.monotonic() + LIMITS["seconds"].check(seconds, "seconds")  # checked: the exact route runs no engine
     P, p, w = _motion_problem(poses, inputs, closed or full_turn, weight)  # the approximate route: as a cycle
-    found: list[MotionFourBar] = []
-    if 3 <= p.m <= 5 and not approximate and inputs is None and not closed:
-        found = _exact_motion(P, units)
-        found = [_turning_fully(f) for f in found] if full_turn else found
+    exact = 3 <= p.m <= 5 and not approximate and inputs is None and not closed
+    found = _exact_route(P, units, full_turn) if exact else []
     if not any(_admissible(f, min_transmission) for f in found):
-        seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds, engine or {})
-        found += [_motion_fourbar(p, d, units) for d in mo.approximate(p, w, min_transmission, seeds, deadline)]
-    late = seconds if time.monotonic() > deadline else 0.0
-    return MotionSynthesis(_best_first(found, p.scale, w, min_transmission, late), p.scale, w)
+        found += _approximate_route(p, w, min_transmission, units, seed, seconds, engine or {}, deadline)
+    if not any(_admissible(f, min_transmission) for f in found):
+        raise _none_found(source, min_transmission, seconds if time.monotonic() > deadline else 0.0, exact)
+    return MotionSynthesis(_best_first(found, p.scale, w, min_transmission), p.scale, w)
 
 
-def _best_first(
-    found: list[MotionFourBar], scale: float, w: float, min_transmission: float, late: float = 0.0
+def _exact_route(P: np.ndarray, units: str, full_turn: bool) -> list[MotionFourBar]:
+    """The exact four-bars (Burmester) of 3 to 5 poses ``P``, judged over a whole turn with ``full_turn``."""
+    found = _exact_motion(P, units)
+    return [_turning_fully(f) for f in found] if full_turn else found
+
+
+def _approximate_route(
+    p: Any, w: float, min_transmission: float, units: str, seed: int, seconds: float, engine: Any, deadline: float
 ) -> list[MotionFourBar]:
-    """The four-bars found, the admissible first, each group by ``E`` (:mod:`~.motion`); none admissible: an error.
+    """The approximate route's four-bars (:func:`~.motion.approximate`), the engine's best design among its seeds."""
+    from . import motion as mo
 
-    ``late``: the time budget (seconds) when it ran out before the polish was done (0: it did not).
+    seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds, engine)
+    return [_motion_fourbar(p, d, units) for d in mo.approximate(p, w, min_transmission, seeds, deadline)]
+
+
+def _none_found(source: str, min_transmission: float, late: float, exact: bool) -> LinkageError:
+    """The error of a motion synthesis that found no admissible four-bar: what was searched, not that none exists.
+
+    ``late``: the time budget (seconds) when it ran out before the polish was done (0: it did not);
+    ``exact``: the exact route (Burmester) was searched first.
+
+    >>> str(_none_found("p.csv", 0.0, 0.0, False)).split(" (searched")[0]
+    'p.csv: no four-bar found that meets the poses in order on one branch'
     """
-    if not any(_admissible(f, min_transmission) for f in found):
-        bound = f" with a transmission angle within [{min_transmission:g}, {180 - min_transmission:g}] deg"
-        what = f"no four-bar found in the time budget ({late:g} s; more may find one)" if late else "no four-bar"
-        raise LinkageError(f"motion: {what} meets the poses in order on one branch{bound * (min_transmission > 0)}")
+    bound = f" with a transmission angle within [{min_transmission:g}, {180 - min_transmission:g}] deg"
+    wanted = f"meets the poses in order on one branch{bound * (min_transmission > 0)}"
+    if late:
+        budget = f"in the time budget ({late:g} s; more may find one)"
+        return LinkageError(f"{source}: no four-bar found {budget} that {wanted}")
+    routes = "the exact four-bars (Burmester), " * exact
+    routes += "pairs of circle-fit dyads and the engine's best, the best polished to the minimax"
+    return LinkageError(f"{source}: no four-bar found that {wanted} (searched: {routes})")
+
+
+def _best_first(found: list[MotionFourBar], scale: float, w: float, min_transmission: float) -> list[MotionFourBar]:
+    """The four-bars found, the admissible first, each group by ``E`` (:mod:`~.motion`)."""
     return sorted(
         found,
         key=lambda f: (
