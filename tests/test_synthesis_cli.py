@@ -813,5 +813,5 @@ def test_a_checkpoint_in_a_missing_directory_is_refused_before_any_work(tmp_path
     src.write_text("x,y\n0,0\n1,0\n0,1\n1,1.2\n")
     ck = tmp_path / "missing" / "ck.npz"
     code, out, err = run_main(["synthesize", str(src), "-o", str(tmp_path / "o.yaml"), "--checkpoint", str(ck)], capsys)
-    assert_one_line_error(code, err, f"--checkpoint {ck}: no directory")
+    assert_one_line_error(code, err, "--checkpoint ", "ck.npz: no directory")  # a long path is shortened
     assert out == "" and not (tmp_path / "o.yaml").exists()
