@@ -288,3 +288,36 @@ def test_plot_draws_its_at_poses_on_the_sweeps_branch(tmp_path, monkeypatch):
         for j in mech.joint_names:
             np.testing.assert_allclose(drawn["poses"].xy(j), want.xy(j), rtol=0, atol=1e-9)
             np.testing.assert_allclose(want.xy(j)[0], res.xy(j)[i], rtol=0, atol=1e-9)  # the sweep's own pose there
+
+
+def test_a_cylinders_barrel_is_rigid_in_every_picture():
+    """The barrel was drawn as 0.55 of the cylinder's current length: 0.99 m retracted, 1.595 m extended (the
+    boom's stroke is 1.8..2.9 m, so the drawn barrel was shorter than the stroke). It is now 0.85 of the retracted
+    length at every sample (Matplotlib's drawing here; the page reads the same scene value), cut at the rod's end."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from linkagekit.viz.draw import Drawing
+
+    mech = lk.load(ROOT / "examples" / "excavator_boom.yaml")
+    boom = next(d for d in mech.drivers if d.name == "boom_cylinder")
+    lo, hi = boom.type.stroke
+    res = lk.analyze(mech, {"boom_cylinder": np.linspace(lo, hi, 5), "stick_cylinder": 2.9}, rates=False)
+    sc = build_scene(res)
+    assert next(ln for ln in sc.links if ln.name == "boom_cylinder").barrel == pytest.approx(0.85 * lo, rel=1e-15)
+    fig, ax = plt.subplots()
+    try:
+        drawing = Drawing(ax, sc)
+        barrels = [art for ln, art, _ in drawing.links if ln.name == "boom_cylinder" and art.get_linewidth() > 5]
+        drawn = []
+        for i in range(5):
+            drawing.update(i)
+            x, y = barrels[0].get_data()
+            drawn.append(math.hypot(x[1] - x[0], y[1] - y[0]))
+        np.testing.assert_allclose(drawn, 0.85 * lo, rtol=1e-12)  # the same at 1.8 m and at 2.9 m
+    finally:
+        plt.close(fig)
+    page_links = {ln["name"]: ln for ln in json.loads(json.dumps(sc.to_dict()))["links"]}  # what the page draws by
+    assert page_links["boom_cylinder"]["barrel"] == pytest.approx(0.85 * lo)

@@ -44,8 +44,8 @@ from .scene import Scene, broken_at_wraps, build_scene
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
 #: coupler curves
 CURVE_COLOR = "#e6007e"
-#: a cylinder: its rod (the whole length) and its barrel (the first BARREL of it)
-CYLINDER_ROD, CYLINDER_BARREL, BARREL = "#9a9a9a", "#505050", 0.55
+#: a cylinder: its rod (the whole length) and its rigid barrel (the scene link's ``barrel`` from its first end)
+CYLINDER_ROD, CYLINDER_BARREL = "#9a9a9a", "#505050"
 #: other joint paths
 PATH_COLOR = "#9a9a9a"
 BACKGROUND = "#ffffff"
@@ -345,8 +345,9 @@ class Drawing:
             elif ln.kind == "plate":
                 art.set_xy(pts)
                 art.set_visible(ok)
-            elif ln.kind == "cylinder" and art.get_linewidth() > 5:  # the barrel
-                end = pts[0] + BARREL * (pts[1] - pts[0])
+            elif ln.kind == "cylinder" and art.get_linewidth() > 5:  # the barrel: rigid, cut at the rod's end
+                length = float(np.hypot(*(pts[1] - pts[0])))
+                end = pts[0] + min(ln.barrel / length, 1.0) * (pts[1] - pts[0]) if length > 0 else pts[0]
                 art.set_data([pts[0, 0], end[0]], [pts[0, 1], end[1]])
                 art.set_visible(ok)
             else:

@@ -55,7 +55,9 @@ MARGIN = 0.08
 class SceneLink:
     """A link as drawn: ``kind`` is ``ground``, ``bar``, ``plate``, ``block`` or ``cylinder``.
 
-    A ``cylinder`` is a cylinder driver (named by the driver), drawn between its two ends.
+    A ``cylinder`` is a cylinder driver (named by the driver), drawn between its two ends: a rod
+    over the whole length and a rigid barrel of length ``barrel`` (file units) from its first end
+    (:func:`barrel_length`; cut at the current length, so it never passes the second end).
 
     ``outline`` is the order of its joints around its polygon (a plate), else its joints.
     """
@@ -64,6 +66,7 @@ class SceneLink:
     kind: str
     joints: tuple[str, ...]
     outline: tuple[str, ...]
+    barrel: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -232,7 +235,11 @@ class Scene:
             "joints": list(self.joints),
             "ground_joints": list(self.ground_joints),
             "ground_xy": {j: list(p) for j, p in self.ground_xy.items()},
-            "links": [{"name": ln.name, "kind": ln.kind, "joints": list(ln.outline)} for ln in self.links],
+            "links": [
+                {"name": ln.name, "kind": ln.kind, "joints": list(ln.outline)}
+                | ({"barrel": ln.barrel} if ln.kind == "cylinder" else {})
+                for ln in self.links
+            ],
             "sliders": [
                 {
                     "block": s.block,
@@ -298,8 +305,26 @@ def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
         out.append(SceneLink(ln.name, kind, ln.joints, outline))
     for d in mech.drivers:  # a cylinder is not a link, but it is drawn: a bar between its two ends
         if isinstance(d.type, CylinderType):
-            out.append(SceneLink(d.name, "cylinder", d.type.ends, d.type.ends))
+            a, b = d.type.ends
+            length = abs(mech.joints[b] - mech.joints[a])
+            out.append(SceneLink(d.name, "cylinder", d.type.ends, d.type.ends, barrel_length(length, d.type.stroke)))
     return tuple(out)
+
+
+#: a cylinder's barrel as drawn: this fraction of its retracted length (the stroke's shorter end), else of its
+#: length in the pose
+BARREL_OF_RETRACTED, BARREL_OF_POSE = 0.85, 0.55
+
+
+def barrel_length(pose_length: float, stroke: tuple[float, float] | None) -> float:
+    """A cylinder's barrel as drawn: rigid, :data:`BARREL_OF_RETRACTED` of the stroke's shorter end when there is a
+    stroke (never past the rod's end, however far the cylinder retracts), else :data:`BARREL_OF_POSE` of its
+    length in the pose.
+
+    >>> barrel_length(2.35, (1.8, 2.9)), barrel_length(2.0, None)
+    (1.53, 1.1)
+    """
+    return BARREL_OF_RETRACTED * min(stroke) if stroke is not None else BARREL_OF_POSE * pose_length
 
 
 def path_kinds(mech: Mechanism) -> tuple[tuple[str, ...], tuple[str, ...]]:

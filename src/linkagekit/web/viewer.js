@@ -237,8 +237,9 @@
         e.setAttribute("points", [cx - w * dx - h * nx, cy - w * dy - h * ny, cx + w * dx - h * nx, cy + w * dy - h * ny,
           cx + w * dx + h * nx, cy + w * dy + h * ny, cx - w * dx + h * nx, cy - w * dy + h * ny].join(" "));
       } else if (ln.joints.length >= 2) {
-        var a = ln.joints[0], b = ln.joints[1], f = L.barrel ? 0.55 : 1;
-        var ax = self.X[a][i], ay = self.Y[a][i];
+        var a = ln.joints[0], b = ln.joints[1], ax = self.X[a][i], ay = self.Y[a][i];
+        // a cylinder's barrel is rigid (its length in the scene), cut at the rod's end
+        var f = L.barrel ? Math.min(ln.barrel / Math.hypot(self.X[b][i] - ax, self.Y[b][i] - ay), 1) : 1;
         e.setAttribute("x1", self.px(ax)); e.setAttribute("y1", self.py(ay));
         e.setAttribute("x2", self.px(ax + f * (self.X[b][i] - ax))); e.setAttribute("y2", self.py(ay + f * (self.Y[b][i] - ay)));
       }
