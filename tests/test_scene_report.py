@@ -321,3 +321,24 @@ def test_a_cylinders_barrel_is_rigid_in_every_picture():
         plt.close(fig)
     page_links = {ln["name"]: ln for ln in json.loads(json.dumps(sc.to_dict()))["links"]}  # what the page draws by
     assert page_links["boom_cylinder"]["barrel"] == pytest.approx(0.85 * lo)
+
+
+def test_a_link_of_joints_in_line_is_a_bar_and_the_pictures_name_the_ground_pivots():
+    """seed004's input link A-C-D (lengths 2 + 3 = 5: in line) was a plate of no area, drawn as a pale ghost (a
+    plate's 0.35 alpha on an outline of no area); ``plot``'s PNG left the ground pivots unnamed, where the page
+    names them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from linkagekit.viz.draw import mechanism_figure
+
+    mech = lk.load(ROOT / "examples" / "seed004_stephenson1.yaml")
+    res = lk.analyze(mech, {"input": np.linspace(0, 360, 37)}, rates=False)
+    links = {ln.name: ln for ln in build_scene(res).links}
+    assert links["input"].kind == "bar" and links["input"].outline == ("A", "D", "C")  # its ends first
+    assert links["coupler"].kind == "plate" and links["ternary"].kind == "plate"
+    fig = mechanism_figure(res)
+    ax = fig.axes[0]
+    assert {"A", "B"} <= {t.get_text() for t in ax.texts if t.get_visible()}
+    drawn = [p for p in ax.patches if p.get_visible() and np.ptp(p.get_xy(), axis=0).max() > 0]
+    assert len([p for p in drawn if 0.3 < p.get_facecolor()[3] < 0.4]) == 2  # the coupler and the ternary

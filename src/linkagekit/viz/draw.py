@@ -167,6 +167,9 @@ class Drawing:
     size : float, optional
         The length that sizes the symbols (default the scene's): give the first drawing's
         when several scenes share an Axes, so that they are drawn alike.
+    ground_labels : bool
+        Write the ground pivots' names with the ground (``plot``'s picture; an animation's frames
+        leave them out).
     """
 
     def __init__(
@@ -178,6 +181,7 @@ class Drawing:
         animated: bool = False,
         ground: bool = True,
         size: float | None = None,
+        ground_labels: bool = False,
     ):
         self.ax, self.scene = ax, scene
         self.pin = 0.012 * (scene.size if size is None else size)
@@ -203,6 +207,9 @@ class Drawing:
         self.pins = Line2D([], [], animated=animated, **PIN)
         ax.add_line(self.pins)
         self.labels: list[tuple[int, Text]] = [(i, self._label(i, animated)) for i in self.moving] if labels else []
+        for j in scene.ground_joints if ground_labels and ground else ():  # fixed: named once, where they stay
+            x, y = scene.ground_xy[j]
+            self.static.append(ax.text(x + 0.8 * self.pin, y + 0.8 * self.pin, _t(j), fontsize=8, zorder=7))
         self.note = ax.text(
             0.5,
             0.02,
@@ -490,7 +497,7 @@ def mechanism_figure(
         bounds = (min(bounds[0], b[0]), min(bounds[1], b[1]), max(bounds[2], b[2]), max(bounds[3], b[3]))
     fig = Figure(figsize=figure_inches(size, size * _aspect(sc), dpi, pixels), dpi=dpi)
     ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
-    Drawing(ax, sc, labels=False, curves=True)  # the curves (and the ground)
+    Drawing(ax, sc, labels=False, curves=True, ground_labels=True)  # the curves, the ground and its names
     if pose_scene is None:
         shown, indices = sc, [_sample(sc, None)]
     else:

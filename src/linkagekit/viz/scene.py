@@ -288,6 +288,33 @@ def _outline(points: list[complex], names: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(names[i] for i in order)
 
 
+def _collinear(points: list[complex]) -> bool:
+    """Whether a link's joints lie on one line (to 1e-9 of its extent): it is drawn as a bar, not as a plate (a
+    polygon of no area was a pale ghost of a link in the pictures, a solid line on the page).
+
+    >>> _collinear([0j, 1 + 1j, 3 + 3j]), _collinear([0j, 1 + 0j, 1j])
+    (True, False)
+    """
+    c = sum(points) / len(points)
+    u = np.array([p - c for p in points])
+    extent = float(np.max(np.abs(u)))
+    _, sv, _ = np.linalg.svd(np.stack([u.real, u.imag]))
+    return bool(sv[-1] <= 1e-9 * max(extent, 1e-300) * math.sqrt(len(points)))
+
+
+def _along(points: list[complex], names: tuple[str, ...]) -> tuple[str, ...]:
+    """A bar's joints, its two ends first (the page draws a bar between its first two), then the others.
+
+    >>> _along([0j, 2 + 0j, 1 + 0j], ("A", "B", "C")), _along([1 + 0j, 0j, 3 + 0j], ("M", "A", "B"))
+    (('A', 'B', 'C'), ('A', 'B', 'M'))
+    """
+    if len(points) <= 2:
+        return names
+    pairs = [(j, i) for i in range(len(points)) for j in range(i)]
+    a, b = max(pairs, key=lambda p: abs(points[p[0]] - points[p[1]]))
+    return (names[a], names[b], *(n for k, n in enumerate(names) if k not in (a, b)))
+
+
 def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
     """How each link is drawn (its kind and outline), from the reference pose."""
     blocks = {s.link for s in mech.sliders}
@@ -297,11 +324,12 @@ def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
             kind = "ground"
         elif ln.name in blocks and len(ln.joints) == 1:
             kind = "block"
-        elif len(ln.joints) >= 3:
+        elif len(ln.joints) >= 3 and not _collinear([mech.joints[j] for j in ln.joints]):
             kind = "plate"
         else:
             kind = "bar"
-        outline = _outline([mech.joints[j] for j in ln.joints], ln.joints) if kind == "plate" else ln.joints
+        points = [mech.joints[j] for j in ln.joints]
+        outline = _outline(points, ln.joints) if kind == "plate" else _along(points, ln.joints)
         out.append(SceneLink(ln.name, kind, ln.joints, outline))
     for d in mech.drivers:  # a cylinder is not a link, but it is drawn: a bar between its two ends
         if isinstance(d.type, CylinderType):
