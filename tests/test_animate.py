@@ -175,6 +175,18 @@ def test_gif_has_the_frames_asked_and_they_differ(gif40):
     assert (luminance(frames[0]) < 100).mean() > 0.002  # not blank
 
 
+def test_gif_plays_at_the_frame_rate_asked(gif40):
+    """A GIF stores frame times in hundredths of a second: 24 fps (41.7 ms) was written as 40 ms, 30 fps as 30 ms
+    (33.3 fps). The times alternate so that the frames end on time: 40 frames at 24 fps play 1.667 s."""
+    path, _ = gif40
+    with Image.open(path) as im:
+        times = []
+        for k in range(im.n_frames):
+            im.seek(k)
+            times.append(im.info["duration"])
+    assert set(times) == {40, 50} and abs(sum(times) - 40 * 1000 / 24) <= 5
+
+
 @pytest.fixture(scope="module")
 def fitted(gif40) -> list[float]:
     """The pixel transform of the frames, fitted to frames 0 and 20 only (see the module docstring)."""

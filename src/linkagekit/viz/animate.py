@@ -178,6 +178,17 @@ def _indexed(rgb: np.ndarray, palette: Any, table: np.ndarray) -> Any:
     return out
 
 
+def frame_times(n: int, fps: float) -> list[int]:
+    """The ``n`` frames' times in ms, whole hundredths of a second (a GIF's unit) that add up to ``k / fps`` after
+    every frame ``k`` to the nearest hundredth: 30 fps alternates 30 and 40 ms (a single 30 ms played 33.3 fps).
+
+    >>> frame_times(6, 30.0), sum(frame_times(40, 30.0))
+    ([30, 40, 30, 30, 40, 30], 1330)
+    """
+    ends = np.round(np.arange(1, n + 1) * 100.0 / fps) * 10  # each frame's end, in whole hundredths
+    return [int(t) for t in np.diff(np.concatenate([[0.0], ends]))]
+
+
 def _write_gif(images: Frames, path: Path, fps: float, tick: Callable[[], None]) -> None:
     palette, table = _palette(images)
     gif = []
@@ -189,7 +200,7 @@ def _write_gif(images: Frames, path: Path, fps: float, tick: Callable[[], None])
         format="GIF",
         save_all=True,
         append_images=gif[1:],
-        duration=round(1000 / fps),
+        duration=frame_times(len(gif), fps),
         loop=0,
         optimize=False,
         disposal=1,
