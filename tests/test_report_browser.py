@@ -829,3 +829,26 @@ def test_a_link_with_an_indeterminate_joint_is_not_drawn(browser, tmp_path):
         assert seen["crank"] == ["visible", crank_tip]  # drawn to C = (1, 0), on the rocker's pivot
     finally:
         ctx.close()
+
+
+def test_plots_are_readable_at_a_phone_width(browser, tmp_path):
+    """At 390 px a plot drawn 640 units wide was shrunk to 55 %: its text 6-8 px tall. It is drawn in the width it is
+    shown in, so its text keeps its size (10-12 units: at least 10 px)."""
+    import linkagekit as lk
+    from linkagekit import cli
+
+    src, out = tmp_path / "sc.yaml", tmp_path / "sc.html"
+    lk.save(lk.load(Path(__file__).resolve().parents[1] / "examples" / "slider_crank.yaml"), src)
+    assert cli.main(["report", str(src), "-o", str(out)]) == 0
+    ctx = browser.new_context(viewport={"width": 390, "height": 800})
+    try:
+        page = ctx.new_page()
+        page.goto(out.as_uri(), wait_until="load")
+        sizes = page.evaluate(
+            """() => Array.from(document.querySelectorAll('svg[data-role=plot]')).map(s => [
+              s.getBoundingClientRect().width, Math.min(...Array.from(s.querySelectorAll('text'))
+                .filter(t => t.textContent).map(t => t.getBoundingClientRect().height))])"""
+        )
+        assert sizes and all(w <= 390 and h >= 10 for w, h in sizes), sizes
+    finally:
+        ctx.close()

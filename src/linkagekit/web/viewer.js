@@ -273,7 +273,10 @@
   }
 
   function Plot(scene, spec, svg) {
-    var W = 640, L = 62, R = 12, B = 34, PH = 154;
+    // drawn in the width it is shown in (640 units at most, 320 at least): on a phone a fixed 640 was shrunk to
+    // half, its text to 6-8 px
+    var shown = svg.parentNode ? svg.parentNode.clientWidth : 0;
+    var W = Math.round(Math.min(640, Math.max(320, shown || 640))), L = 62, R = 12, B = 34, PH = 154;
     // the legend: entries flow left to right under the title, wrapping to more rows
     var rows = [[]], used = 0, avail = W - L - R;
     spec.series.forEach(function (k, n) {
