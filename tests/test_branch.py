@@ -58,16 +58,14 @@ def double_parallelogram(at=50.0, spans=(3.0, 2.0)):
 
 
 def worst_parallel(res, quads, skip=None):
-    """The largest |cross| of opposite sides over the assembled samples (but ``skip``), relative to size^2.
-
-    (An assembled sample may have an indeterminate joint, NaN: a rhombus's crank over its ground pivot.)"""
+    """The largest |cross| of opposite sides over the assembled samples (but ``skip``), relative to size^2."""
     worst = 0.0
     for a, b, c, d in quads:  # A-C parallel to B-D, and C-D parallel to A-B
         za, zb, zc, zd = (z(res, n) for n in (a, b, c, d))
         size2 = abs(zb - za) ** 2 + abs(zc - za) ** 2
         ok = res.assembled if skip is None else res.assembled & ~skip
         e = np.maximum(abs(cross(zc - za, zd - zb)), abs(cross(zd - zc, zb - za))) / size2
-        worst = max(worst, float(np.nanmax(e[ok])))
+        worst = max(worst, float(np.max(e[ok])))
     return worst
 
 

@@ -805,32 +805,6 @@ def test_many_series_keep_their_legends_inside_the_plot(browser, tmp_path):
         ctx.close()
 
 
-def test_a_link_with_an_indeterminate_joint_is_not_drawn(browser, tmp_path):
-    """A rhombus at crank 0 assembles with its rocker's joint D indeterminate (null in the scene): the page drew the
-    rocker from its pivot to the origin (null read as 0). Links with such a joint are hidden; the crank is drawn."""
-    import numpy as np
-
-    import linkagekit as lk
-    from helpers import fourbar_dict
-
-    C = np.exp(1j * np.radians(60.0))
-    mech = lk.Mechanism.from_dict(fourbar_dict(0j, 1 + 0j, C, C + 1, C + 0.5 + 0.7j))
-    ctx, page, errors, _ = _page_of(browser, tmp_path, mech, ["--angles", "0:360:10"])
-    try:
-        seen = page.evaluate(
-            """() => { const s = document.querySelector('input[data-role=input]'); s.value = '0';
-            s.dispatchEvent(new Event('input', {bubbles: true}));
-            const out = {}; document.querySelectorAll('[data-link]').forEach(e => {
-              out[e.getAttribute('data-link')] = [e.style.visibility, e.getAttribute('x2')]; }); return out; }"""
-        )
-        assert not errors, errors
-        assert seen["rocker"][0] == "hidden" and seen["coupler"][0] == "hidden"
-        crank_tip = page.locator('[data-joint="C"]').get_attribute("cx")
-        assert seen["crank"] == ["visible", crank_tip]  # drawn to C = (1, 0), on the rocker's pivot
-    finally:
-        ctx.close()
-
-
 def test_plots_are_readable_at_a_phone_width(browser, tmp_path):
     """At 390 px a plot drawn 640 units wide was shrunk to 55 %: its text 6-8 px tall. It is drawn in the width it is
     shown in, so its text keeps its size (10-12 units: at least 10 px)."""

@@ -930,18 +930,11 @@ def _limits(run: _Run, li: int, brackets: list[_Bracket], fin: _Final) -> list[_
     return limits
 
 
-#: an indeterminate sample's one-sided limits are extrapolated from inputs this far apart (radians; a length
-#: driver: this share of its span) by a cubic: error about LIMIT_STEP^4 f^(4), plus 15 eps / LIMIT_STEP of rounding
-LIMIT_STEP = 1e-3
-
-
 def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -> dict[str, Any]:
     """Whether the rocker turns fully and, if not, its swing over the range (one interval), unwrapped."""
     phi = run.q.out_angle(run.st)[li]
-    if len(run.intervals) != 1:
+    if len(run.intervals) != 1 or not np.isfinite(phi).all():
         return {}
-    if not np.isfinite(phi).all():
-        return _cut_swing(run, li, phi, limits, unit)
     u = np.unwrap(phi)
     turns = run.cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
     if turns:
@@ -953,34 +946,6 @@ def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -
         cand += [u[-1] + _wrap(fin.phi[li, c] - phi[-1]) for c in e_cols[1:2]]
     if not cand:
         cand = [float(np.min(u)), float(np.max(u))]
-    return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
-
-
-def _cut_swing(run: _Run, li: int, phi: np.ndarray, limits: list[_Limit], unit: float) -> dict[str, Any]:
-    """The swing over a full turn cut at one indeterminate sample (a rhombus's crank over its ground pivot).
-
-    There the pose's mode jumps (a rhombus: from its parallelogram to its kite), so the motion runs from one
-    side of the cut to the other without turning fully; the rocker's angle at each side is the one-sided
-    limit, a cubic extrapolation from :data:`LIMIT_STEP` on (the dense samples alone stop a grid step short).
-    """
-    bad = np.flatnonzero(~np.isfinite(phi))
-    if not run.cyclic or len(bad) != 1:
-        return {}
-    n, i = len(phi), int(bad[0])
-    order = (i + 1 + np.arange(n - 1)) % n  # the turn from just after the cut to just before it
-    u = np.unwrap(phi[order])
-    where = np.empty(n, int)
-    where[order] = np.arange(n - 1)
-    cand = [u[where[lim.sample]] + _wrap(lim.angle - phi[lim.sample]) for lim in limits if lim.sample != i]
-    cand += [float(np.min(u)), float(np.max(u))]
-    e = LIMIT_STEP * (1.0 if run.turn else run.total)
-    x = run.sw.x[i] + e * np.array([1, 2, 3, 4, -1, -2, -3, -4], float)
-    side = run.q.out_angle(run.state(x))[li].reshape(2, 4)
-    for k, end in ((0, 0), (1, -1)):
-        d = _wrap(side[k] - phi[order[end]])  # each side's angles from the cut's neighbouring sample
-        lim = 4 * d[0] - 6 * d[1] + 4 * d[2] - d[3]
-        if np.isfinite(lim):
-            cand.append(float(u[end] + lim))
     return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
 
 
@@ -2196,17 +2161,11 @@ def _reference_rows(
     return reference
 
 
-def _alike(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
-    """Two configurations (joint positions) within ``tol``, a joint indeterminate (NaN) in both counting as alike
-    (two circles that are one: every mode has the same circle there)."""
-    return bool(np.all((np.abs(a - b) <= tol) | (np.isnan(a) & np.isnan(b))))
-
-
 def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
     """For each row the first row with the same positions (None for the first of each), and how many are distinct.
 
     Rows are bucketed by positions rounded to 1e-6 of the size, then confirmed within the
-    bucket to ``tol`` (:func:`_alike`) (two configurations within tol round alike but for a 1e-3 chance at a
+    bucket to ``tol`` (two configurations within tol round alike but for a 1e-3 chance at a
     rounding boundary, which only splits a duplicate, never merges two modes).
     """
     z = rows.z
@@ -2218,7 +2177,7 @@ def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
         first = None
         if rows.assembled[r]:
             bucket = buckets.setdefault(keys[r].tobytes(), [])
-            first = next((f for f in bucket if _alike(z[:, f], z[:, r], tol)), None)
+            first = next((f for f in bucket if np.all(np.abs(z[:, f] - z[:, r]) <= tol)), None)
             if first is None:
                 bucket.append(r)
                 distinct += 1

@@ -1173,43 +1173,8 @@ def _analyze(args: argparse.Namespace) -> int:
     text = analysis_tables(
         columns, res.column_units(), analysis_sections(cat, mech.name or ""), inputs=shown, width=terminal_width()
     )
-    _emit(text + "".join(f"\nNote: {note}\n" for note in indeterminate_notes(res)), args.output)
+    _emit(text, args.output)
     return 0
-
-
-#: an indeterminate-joint note names at most this many samples
-MAX_NOTE_SAMPLES = 6
-
-
-def indeterminate_notes(res: Any) -> list[str]:
-    """A line for the samples that assemble with a joint anywhere on a circle (two circles that are one).
-
-    There the mechanism is at an uncertainty position: it assembles (``assembled``), the joint and
-    those placed from it are indeterminate (NaN, null in JSON) and the sample is ``singular``.
-    """
-    import numpy as np
-
-    mech = res.mechanism
-    if res.n_designs is not None or not len(mech.drivers):
-        return []
-    pts = np.stack([np.broadcast_to(res.point(j), res.shape) for j in mech.joint_names])
-    loose = np.flatnonzero(res.assembled & ~np.all(np.isfinite(pts), axis=0))
-    if not len(loose):
-        return []
-    joints = [j for j, p in zip(mech.joint_names, pts, strict=True) if np.isnan(p[loose]).any()]
-    units = _input_units(mech)
-    at = "; ".join(
-        ", ".join(
-            f"{d.name} = {float(np.broadcast_to(res.inputs[d.name], res.shape)[i]):g} {units[d.name]}"
-            for d in mech.drivers
-        )
-        for i in loose[:MAX_NOTE_SAMPLES]
-    ) + ("; ..." if len(loose) > MAX_NOTE_SAMPLES else "")
-    return [
-        f"at {at}: joint {', '.join(joints)} is indeterminate: an uncertainty position, where the two circles a "
-        "joint is found on are one, so it may sit anywhere on that circle (the sample assembles and is singular; "
-        "--branch continuous gives its branch's limit there)"
-    ]
 
 
 def _modes(args: argparse.Namespace) -> int:

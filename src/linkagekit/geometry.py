@@ -129,22 +129,6 @@ def circle_circle(
     return out, margin
 
 
-def one_circle(
-    z1: ComplexArray, z2: ComplexArray, r1: ArrayLike, r2: ArrayLike, eps: float = ASSEMBLY_RTOL
-) -> BoolArray:
-    """Where the circles ``|z - z1| = r1`` and ``|z - z2| = r2`` are one: their centres coincide and their radii
-    are equal, to the tolerance of :func:`circle_circle` (which flags those samples: any point of the circle would
-    do).
-
-    >>> one_circle(np.array([0j, 1e-15 + 0j, 0j]), np.array([0j, 0j, 0j]), 1.0, np.array([1.0, 1.0, 1.1])).tolist()
-    [True, True, False]
-    """
-    total = r1 + r2
-    s = np.abs(np.asarray(z2) - z1)
-    same: BoolArray = (s <= eps * total) & (np.abs(r1 - r2) <= s + eps * total)
-    return same
-
-
 def _assembly_margin(
     margin: FloatArray, s: FloatArray, r1: ArrayLike, r2: ArrayLike, eps: float, total: ArrayLike
 ) -> None:

@@ -4,10 +4,7 @@ Points are complex arrays ``x + iy`` of shape ``(n_joints, designs, samples)``; 
 is a few NumPy expressions over all designs and samples (see :mod:`linkagekit.steps`).  A
 step with no real solution (two circles that do not meet, a circle that misses a line)
 gives NaN for its joint and for every joint placed from it, and a negative margin, so a
-sample that does not assemble is NaN, never a wrong number.  Two circles that are one
-(equal radii about one centre: a rhombus's crank over its ground pivot) assemble, but their
-joint is anywhere on the circle: it is NaN (indeterminate), as is every joint placed from it,
-the sample stays assembled and the rates flag it singular.
+sample that does not assemble is NaN, never a wrong number.
 
 Tolerance
 ---------
@@ -127,7 +124,7 @@ def solve(
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
-    assembled = np.all(_holds(k.margin), axis=0) if plan.n_signs else np.ones((D, n), bool)
+    assembled = np.all(k.margin >= 0, axis=0) if plan.n_signs else np.ones((D, n), bool)
     if plan.nan_flagged:  # a numerical group (or a block beyond its stroke) flags by NaN, not by a margin
         assembled &= np.all(np.isfinite(z[list(plan.nan_flagged)]), axis=0)
     if not params.valid.all():
@@ -135,17 +132,6 @@ def solve(
     if not assembled.all():  # a mechanism that does not assemble has no joint positions at all
         z[:, ~assembled] = NAN_POINT
     return Positions(z, k.rot, k.margin, assembled, sg, mr)
-
-
-def _holds(margin: np.ndarray) -> np.ndarray:
-    """Per sign step and sample, whether the step holds: its margin is >= 0, or it is NaN after a step whose two
-    circles are one (margin exactly 0 and its point indeterminate, :meth:`linkagekit.steps.Dyad.place`).
-
-    A NaN margin has NaN inputs: after a step that failed (its own margin is negative), after a NaN input
-    (no margin is 0), or after an indeterminate joint, where the mechanism still assembles.
-    """
-    holds: np.ndarray = (margin >= 0) | (np.isnan(margin) & np.any(margin == 0, axis=0))
-    return holds
 
 
 def reference_mode(mech: Mechanism, params: Params) -> Params:

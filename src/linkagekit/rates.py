@@ -90,7 +90,6 @@ def solve_rates(
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.rates(r, nums)
     singular = np.any(np.abs(r.cond) < tol, axis=0) & pos.assembled
-    singular |= _indeterminate(plan, pos)
     for gc in r.extra_cond:  # numerical groups
         singular |= (np.abs(gc) < tol) & pos.assembled
     bad = singular | ~pos.assembled
@@ -102,19 +101,6 @@ def solve_rates(
                 rates_of[link] = np.where(bad, np.nan, rates_of[link])
     cond = np.concatenate([r.cond, np.stack(r.extra_cond)]) if r.extra_cond else r.cond
     return Rates(r.v, r.a, r.om, r.al, cond, singular)
-
-
-def _indeterminate(plan: Any, pos: Positions) -> np.ndarray:
-    """(D, n) the assembled samples with a joint anywhere on a circle: a step at its limit (margin 0) whose two
-    circles are one leaves its joint NaN (:meth:`linkagekit.steps.Dyad.place`); their rates are not defined."""
-    out = np.zeros(pos.assembled.shape, bool)
-    if not pos.margin.size or not np.any(pos.margin == 0):
-        return out
-    at = pos.assembled & np.any(pos.margin == 0, axis=0)
-    unwritten = set(plan.unwritten)
-    written = [j for j in range(pos.z.shape[0]) if j not in unwritten]
-    out[at] = ~np.all(np.isfinite(pos.z[written][:, at]), axis=0)
-    return out
 
 
 #: a link's motion: rotation ``e^{i theta}`` from its shape frame, angular velocity, angular acceleration

@@ -33,7 +33,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from .geometry import _TINY, NAN_POINT, circle_circle, cis, cross, dot, link_rates, one_circle, side
+from .geometry import _TINY, NAN_POINT, circle_circle, cis, cross, dot, link_rates, side
 
 Nums = tuple[Any, ...]
 
@@ -282,13 +282,8 @@ class Dyad(Step):
         return r1, r2
 
     def place(self, k: Kin, nums: Nums) -> None:
-        z, sign, m = k.z, k.signs[self.sign], k.margin[self.sign]
-        circle_circle(z[self.k1], z[self.k2], nums[0], nums[1], sign, k.eps, z[self.joint], m)
-        bad = ~(m >= 0)
-        if bad.any():  # two circles that are one (a rhombus's crank over its ground pivot) assemble: the joint may
-            # be anywhere on the circle, so it stays NaN (indeterminate) with the step at its limit
-            z1, z2, r1, r2 = (np.broadcast_to(a, m.shape)[bad] for a in (z[self.k1], z[self.k2], *nums[:2]))
-            m[bad] = np.where(one_circle(z1, z2, r1, r2, k.eps), 0.0, m[bad])
+        z, sign = k.z, k.signs[self.sign]
+        circle_circle(z[self.k1], z[self.k2], nums[0], nums[1], sign, k.eps, z[self.joint], k.margin[self.sign])
 
     def pose_sign(self, zpose: np.ndarray, nums: Nums) -> np.ndarray:
         return side(zpose[self.k1], zpose[self.k2], zpose[self.joint])

@@ -221,8 +221,7 @@
     });
     this.links.forEach(function (L) {
       var ln = L.link, e = L.e;
-      // an assembled sample may hold an indeterminate joint (a rhombus's crank over its pivot): null, which
-      // arithmetic would read as 0 and draw the link to the origin; such a link is not drawn
+      // a link with a joint not known here (null, which arithmetic reads as 0: a link drawn to the origin) is left out
       var drawn = ok && (ln.kind === "block" ? [L.slider.through] : ln.joints).every(function (j) {
         return finite(self.X[j][i]) && finite(self.Y[j][i]);
       });
