@@ -92,13 +92,14 @@ def test_pareto_list_is_non_dominated_sorted_and_its_angles_are_the_written_mech
     csv.write_text("x,y\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in TARGETS))
     args = ["synthesize", str(csv), "-o", str(tmp_path / "o.yaml"), "--units", "cm", "--pareto", "--workers", "1"]
     args += ["--restarts", "4", "--generations", "6", "--seed", "3", "--goal", "0", "--seconds", "1000"]
-    # an earlier --pareto run's designs past those of this one (removed), then a file of the user's (kept)
+    # an earlier --pareto run's designs past those of this one (removed), then the first design of another series,
+    # -o o-10.yaml (kept: it was taken for one of these and deleted)
+    seed0 = lk.load(ROOT / "examples" / "seed000_fourbar.yaml")
     stale = [tmp_path / f"o-{k}.yaml" for k in range(2, 10)]
     for k, path in enumerate(stale, 2):
-        lk.save(
-            replace(lk.load(ROOT / "examples" / "seed000_fourbar.yaml"), description=f"--pareto: design {k} of 9"), path
-        )
-    (tmp_path / "o-10.yaml").write_text("mine")
+        lk.save(replace(seed0, description=f"--pareto: design {k} of 9 of 'o.yaml'"), path)
+    lk.save(replace(seed0, description="--pareto: design 1 of 2 of 'o-10.yaml'"), tmp_path / "o-10.yaml")
+    (tmp_path / "o-11.yaml").write_text("mine")
     assert main(args) == 0
     out = capsys.readouterr().out
     rows = [ln.split() for ln in out.split("best-transmitting (none better in both):\n")[1].splitlines()[2:]]
@@ -116,10 +117,11 @@ def test_pareto_list_is_non_dominated_sorted_and_its_angles_are_the_written_mech
     assert "smallest transmission angle" in out and "deg above the bound 20 deg" in out
     assert " --pareto" in lk.load(tmp_path / "o.yaml").description  # the command that gives it again
     n = len(rows)  # o-2 .. o-n rewritten by this run, o-(n+1) .. o-9 removed (and said so), o-10 kept
-    assert all(f"--pareto: design {k + 1} of {n}" in lk.load(r[5]).description for k, r in enumerate(rows))
+    marks = [f"--pareto: design {k + 1} of {n} of 'o.yaml'" for k in range(n)]
+    assert all(m in lk.load(r[5]).description for m, r in zip(marks, rows, strict=True))
     assert [p.exists() for p in stale] == [k <= n for k in range(2, 10)]
     assert all(f"removed {p}: a design of an earlier --pareto run" in out for p in stale[n - 1 :])
-    assert (tmp_path / "o-10.yaml").read_text() == "mine"
+    assert (tmp_path / "o-10.yaml").exists() and (tmp_path / "o-11.yaml").read_text() == "mine"
 
 
 def test_pareto_is_refused_for_motion_and_function(tmp_path, capsys):

@@ -1479,7 +1479,7 @@ def _synthesize(args: argparse.Namespace) -> int:
     for k, (design, path) in enumerate(zip(out.pareto or (out,), paths, strict=True), 1):
         described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
         described += f"\n{targets.smoothed}" if targets.smoothed else ""
-        described += f"\n{PARETO_MARK} {k} of {len(paths)}" if args.pareto else ""
+        described += f"\n{pareto_mark(args.output, k, len(paths))}" if args.pareto else ""
         lk.save(dataclasses.replace(design.mechanism, description=described), path)
     for path in stale_pareto(args.output, len(paths)) if args.pareto else ():
         os.remove(path)
@@ -1518,15 +1518,25 @@ def pareto_paths(output: str, n: int) -> list[str]:
     return [output] + [f"{stem}-{i}{ext}" for i in range(2, n + 1)]
 
 
-#: the line that marks a file ``--pareto`` wrote (so that a later run may remove it when it writes fewer designs)
-PARETO_MARK = "--pareto: design"
+def pareto_mark(output: str, k: int, n: int) -> str:
+    """The line that marks design ``k`` of ``n`` that ``--pareto`` wrote for ``-o output`` (a later run of the same
+    output may remove it when it writes fewer designs; a file of another series is never taken for one of it).
+
+    >>> pareto_mark("d/out.yaml", 2, 3)
+    "--pareto: design 2 of 3 of 'out.yaml'"
+    """
+    import os
+
+    return f"--pareto: design {k} of {n} of {os.path.basename(output)!r}"
 
 
 def stale_pareto(output: str, n: int) -> list[str]:
-    """``OUT-k`` files past the ``n`` written that an earlier ``--pareto`` run wrote (their description says so),
-    up to the first that is missing or is not one: only files of the series, only linkagekit's."""
+    """``OUT-k`` files past the ``n`` written that an earlier ``--pareto`` run of the same ``output`` wrote (their
+    description says design k of that series), up to the first that is not one: only linkagekit's own files of this
+    series (``run-3.yaml``, the first design of ``-o run-3.yaml``, is not design 3 of ``-o run.yaml``)."""
     import itertools
     import os
+    import re
 
     import linkagekit as lk
 
@@ -1534,8 +1544,9 @@ def stale_pareto(output: str, n: int) -> list[str]:
     out: list[str] = []
     for k in itertools.count(n + 1):
         path = f"{stem}-{k}{ext}"
+        mark = rf"--pareto: design {k} of \d+ of {re.escape(repr(os.path.basename(output)))}"  # as pareto_mark
         try:
-            ours = os.path.isfile(path) and PARETO_MARK in (lk.load(path).description or "")
+            ours = os.path.isfile(path) and re.search(mark, lk.load(path).description or "") is not None
         except (LinkageError, OSError):
             ours = False
         if not ours:
