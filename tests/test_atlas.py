@@ -442,7 +442,7 @@ def test_a_search_builds_a_missing_atlas_on_its_own_workers(monkeypatch, tmp_pat
 def test_a_deadline_bounds_the_atlas_answer(monkeypatch):
     """200 shape-only targets of an open letter made the answer take 23 s of a 3 s budget (every evaluation places
     the curve by its nearest points). With a deadline already past, only the nearest chunk is scored and the polish
-    stops at its start: the designs are those of the first ``COST_CHUNK`` candidates, in the order without one."""
+    but the first stops at its start: the designs are those of the first ``COST_CHUNK`` candidates."""
     atlas = at.load()
     problem = make_problem(_curve(12), "fourbar", reach=2.0)
     calls = []
@@ -451,6 +451,7 @@ def test_a_deadline_bounds_the_atlas_answer(monkeypatch):
     free = at.first_answer(problem, atlas, polish=1)
     assert calls[0] == len(free.designs) - free.polished > at.COST_CHUNK  # every candidate scored at once
     calls.clear()
-    late = at.first_answer(problem, atlas, polish=1, until=time.monotonic() - 1.0)
-    assert calls[0] == at.COST_CHUNK and len(late.designs) == at.COST_CHUNK + 1
-    assert late.polished == 1 and late.error >= free.error  # each polish returned its start
+    late = at.first_answer(problem, atlas, polish=2, until=time.monotonic() - 1.0)
+    assert calls[0] == at.COST_CHUNK and len(late.designs) == at.COST_CHUNK + 2
+    assert late.polished == 2  # the first polish runs whole, the second returns its start (cut at once)
+    assert len(np.unique(late.designs, axis=0)) == len(late.designs) - 1  # that start is among the candidates too

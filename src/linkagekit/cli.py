@@ -1475,35 +1475,41 @@ def _synthesize(args: argparse.Namespace) -> int:
         return 1
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
-    paths = pareto_paths(args.output, len(out.pareto))
-    for k, (design, path) in enumerate(zip(out.pareto or (out,), paths, strict=True), 1):
+    paths = pareto_paths(args.output, len(out.pareto)) if out.feasible else []
+    for k, (design, path) in enumerate(zip((out.pareto or (out,)) if paths else (), paths, strict=True), 1):
         described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
         described += f"\n{targets.smoothed}" if targets.smoothed else ""
         described += f"\n{pareto_mark(args.output, k, len(paths))}" if args.pareto else ""
         lk.save(dataclasses.replace(design.mechanism, description=described), path)
-    for path in stale_pareto(args.output, len(paths)) if args.pareto else ():
+    for path in stale_pareto(args.output, len(paths)) if args.pareto and out.feasible else ():
         os.remove(path)
         print(f"removed {path}: a design of an earlier --pareto run, not of this one")
-    if args.plot:
+    if args.plot and out.feasible:
         _plot_synthesis(out, targets, args.plot)
     if targets.smoothed:
         print(targets.smoothed)
-    print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, args.output))
-    if out.pareto:
+    print(synthesis_text(out, targets.xy, targets.inputs, targets.unit, _written(out.feasible, args.output)))
+    if out.pareto and paths:
         print(pareto_text(out, targets.unit, paths))
     return _met(out.feasible, args.output)
 
 
 def _met(feasible: bool, path: str) -> int:
-    """The exit status of a synthesis: 0, or 1 with one line when the best design found breaks a constraint
-    (written all the same, named INFEASIBLE, to be looked at; a script must not take it for a result)."""
+    """The exit status of a synthesis: 0, or 1 with one line when the best design found breaks a constraint (then
+    nothing is written: the file format's contract is exit 0 when a file was written; the table shows that design)."""
     if feasible:
         return 0
     print(
-        f"{PROG}: synthesize: no design found meets the constraints; {path} holds the best one, INFEASIBLE",
+        f"{PROG}: synthesize: no design found meets the constraints; {path} is not written (the best one found, "
+        "INFEASIBLE, is above)",
         file=sys.stderr,
     )
     return 1
+
+
+def _written(feasible: bool, path: str) -> str | None:
+    """Where a synthesis wrote its design, or None (an infeasible best design is not written)."""
+    return path if feasible else None
 
 
 def pareto_paths(output: str, n: int) -> list[str]:
@@ -1596,10 +1602,11 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
         out = synthesize_auto(targets, max_joints=max_joints, **search, progress=progress)
     described = f"{out.mechanism.description}\ncommand: {_synthesize_command(args)}"
     described += f"\n{targets.smoothed}" if targets.smoothed else ""
-    lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
+    if out.feasible:
+        lk.save(dataclasses.replace(out.mechanism, description=described), args.output)
     if targets.smoothed:
         print(targets.smoothed)
-    text = synthesis_text(out, targets.xy, None, targets.unit, args.output).splitlines()
+    text = synthesis_text(out, targets.xy, None, targets.unit, _written(out.feasible, args.output)).splitlines()
     a = out.mechanism.to_dict()["drivers"][0]["angles"]
     joints = len(out.mechanism.joint_names)
     tried = ", ".join(f"{t.name} {100 * t.error:.3g} %" for t in out.tried)
@@ -1657,10 +1664,11 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
     words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}", f"--seed {engine['seed']}"]
     mech = dataclasses.replace(mech, description="command: " + " ".join(words))
-    lk.save(mech, args.output)
-    if args.plot:
+    if fit.valid:
+        lk.save(mech, args.output)
+    if args.plot and fit.valid:
         _plot_function(mech, fit, args.plot)
-    print(function_text(out, args.units, args.output))
+    print(function_text(out, args.units, _written(fit.valid, args.output)))
     return _met(fit.valid, args.output)
 
 
@@ -1691,7 +1699,7 @@ def _positive(text: str, option: str) -> float:
     return value
 
 
-def function_text(out: Any, unit: str, path: str) -> str:
+def function_text(out: Any, unit: str, path: str | None) -> str:
     """The table of pairs and errors, and the summary, that ``synthesize --task function`` prints."""
     fit = out.fit
     cols = [
@@ -1718,7 +1726,7 @@ def function_text(out: Any, unit: str, path: str) -> str:
             f"engine: {o.restarts} searches, {o.evaluations} designs in {o.seconds:.1f} s "
             f"(its best, before the minimax polish: {math.degrees(out.engine.error):.6g} deg)"
         )
-    lines.append(f"wrote {path}")
+    lines.append(f"wrote {path}" if path is not None else "nothing written: the design breaks a constraint")
     return "\n".join(lines)
 
 
@@ -1991,7 +1999,7 @@ def _plot_synthesis(out: Any, targets: Any, path: str) -> None:
     draw.save_figure(fig, path, fig.axes[0])
 
 
-def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
+def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str | None) -> str:
     """The table of targets and errors, and the summary, that ``synthesize`` prints."""
     cols = [
         Column("target", [str(i + 1) for i in range(len(xy))]),
@@ -2026,7 +2034,7 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str) -> str:
         f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs evaluated in "
         f"{o.seconds:.1f} s; stopped by {why}"
     )
-    lines.append(f"wrote {path}")
+    lines.append(f"wrote {path}" if path is not None else "nothing written: the design breaks a constraint")
     return "\n".join(lines)
 
 
