@@ -599,14 +599,20 @@ def test_the_report_page_draws_each_cylinder_between_its_ends(browser, tmp_path)
     joints = page.evaluate(
         """() => { const out = {}; for (const e of document.querySelectorAll('circle[data-joint]'))
              if (!(e.getAttribute('data-joint') in out)) out[e.getAttribute('data-joint')] = [+e.getAttribute('cx'),
-             +e.getAttribute('cy')]; return out; }"""
+             +e.getAttribute('cy'), +e.getAttribute('data-x'), +e.getAttribute('data-y')]; return out; }"""
     )
     page.close()
     assert errors == []
     ends = {"boom_cylinder": ("C1", "B1"), "stick_cylinder": ("B2", "S1")}
+    strokes = {d.name: d.type.stroke for d in lk.load(EXCAVATOR).drivers}
     assert sorted(n for n, *_ in lines) == sorted([*ends, *ends])  # a rod and a barrel each
     for name, x1, y1, x2, y2 in lines:
-        a, b = (np.array(joints[j]) for j in ends[name])
+        (a, da), (b, db) = ((np.array(joints[j][:2]), np.array(joints[j][2:])) for j in ends[name])
         assert np.allclose([x1, y1], a, atol=1e-6)
-        f = np.hypot(x2 - a[0], y2 - a[1]) / np.hypot(*(b - a))  # the rod to the far end, the barrel 0.55 of it
-        assert f == pytest.approx(1.0, abs=1e-6) or f == pytest.approx(0.55, abs=1e-6)
+        along = np.array([x2, y2]) - a
+        assert abs(np.cross(along, b - a)) <= 1e-6 * np.hypot(*(b - a)) ** 2  # on the line between the ends
+        f = np.hypot(*along) / np.hypot(
+            *(b - a)
+        )  # the rod to the far end; the rigid barrel, 0.85 of the stroke's start
+        barrel = 0.85 * min(strokes[name]) / np.hypot(*(db - da))
+        assert f == pytest.approx(1.0, abs=1e-6) or f == pytest.approx(barrel, abs=1e-6)
