@@ -1151,6 +1151,51 @@ def test_save_keeps_block_style_and_a_drag_keeps_exact_numbers(tmp_path):
     assert [b for b in before if b not in after] == ["  C: [1.86, 2.48]", "    lengths:", "      A-C: 3.1"]
 
 
+@pytest.mark.parametrize("at", [0.0, 90.0])
+def test_a_mode_switch_keeps_every_given_length(tmp_path, at):
+    """Choosing another assembly mode changes no dimension: the answer's document keeps every given length
+    exactly (seed000: the coupler's C-D, C-P, D-P = 5 and the rocker's B-D = 5, though D and P move; at 90 deg
+    the crank's A-C = 2 too, though C moves), it is in the mode chosen (lk.analyze at that input gives the
+    mode's positions back, 1e-9 of the size), and Save writes the file's own lines for those lengths."""
+    path = copy_example(tmp_path)
+    original = path.read_text(encoding="utf-8").splitlines()
+    session = Session(path)
+    mech = session.mech
+    doc = mech.to_dict()
+    listed = session.solve({"doc": doc, "modes_only": True, "at": {"crank": at}})
+    other = next(m for m in listed["modes"] if not m["reference"])
+    answer = session.solve({"doc": doc, "mode": other["signs"], "mode_groups": other["groups"], "at": {"crank": at}})
+    assert answer["ok"], answer
+    m2 = lk.Mechanism.from_dict(answer["doc"])
+    moved = [j for j in mech.joint_names if m2.joints[j] != mech.joints[j]]
+    assert set(moved) >= {"D", "P"} and ("C" in moved) == (at != 0.0), moved
+    for ln in mech.links:
+        assert dict(m2.link(ln.name).lengths) == dict(ln.lengths), (ln.name, m2.link(ln.name).lengths, ln.lengths)
+    res = lk.analyze(m2, {"crank": [at]})
+    for j, (x, y) in other["joints"].items():
+        assert abs(res.point(j)[0] - complex(x, y)) < 1e-9 * mech.length_scale, (j, res.point(j)[0], (x, y))
+    session.save({"doc": answer["doc"], "base": session.base})
+    saved = path.read_text(encoding="utf-8").splitlines()
+    lines = [ln for ln in original if "lengths:" in ln]
+    assert len(lines) == 3 and all(ln in saved for ln in lines), (lines, saved)
+
+
+def test_save_after_an_undone_drag_writes_the_files_integers(tmp_path):
+    """Jansen's foot F dragged and saved (the foot's L-F: 49 and W-F go, read off the pose), then the
+    original document (Undo) saved: the file is the original again, line for line, ``L-F: 49`` and not
+    ``L-F: 49.0`` (the style of the file as opened is kept where the file saved in between lacks the number)."""
+    path = copy_example(tmp_path, "jansen_leg.yaml")
+    original = path.read_text(encoding="utf-8")
+    session = Session(path)
+    mech = session.mech
+    f = mech.joints["F"]
+    dragged = posed(mech, {"F": [f.real + 3.0, f.imag + 1.0]}, ["F"])
+    session.save({"doc": dragged.to_dict(), "base": session.base})
+    assert "L-F" not in path.read_text(encoding="utf-8")
+    session.save({"doc": mech.to_dict(), "base": session.base})
+    assert path.read_text(encoding="utf-8") == original
+
+
 def test_a_class3_drag_computes_the_exact_range_once_per_release(tmp_path, monkeypatch):
     """Dragging a joint of the class-3 triad: the coarse moves never compute the exact assembly
     range (the continuation behind the curves' breaks, 72 % of a move's cost before), and after

@@ -99,7 +99,9 @@ JS_STATE = """
     message: msg ? msg.textContent.trim() : null, busy: lk.editor.busy(), doc: lk.editor.doc(),
     scale: svg.getAttribute('data-scale'), viewBox: svg.getAttribute('viewBox'),
     undo: q('[data-action=undo]').disabled, redo: q('[data-action=redo]').disabled,
-    status: (q('[data-role=status]') || {textContent: ''}).textContent.trim()};
+    status: (q('[data-role=status]') || {textContent: ''}).textContent.trim(),
+    source: q('[data-role=source]').textContent,
+    count: parseInt((q('p.sub').textContent.match(/([0-9]+) samples/) || [0, -1])[1], 10)};
 }
 """
 
@@ -457,6 +459,9 @@ def test_drag_sets_the_reference_pose_and_save_writes_it(open_editor, name, join
     assert st1["scale"] == st0["scale"] and st1["viewBox"] == st0["viewBox"], (st0["viewBox"], st1["viewBox"])
     check_curves(ep, st1, m2, f"after dragging {joint}")
     assert not st1["undo"] and st1["redo"], "after a drag: Undo enabled, Redo disabled"
+    # the header's sample count is the sweep's (a drag of a crank pin adds the pose's input as a sample)
+    assert st1["count"] == st1["n"] == len(next(iter(ep.sweep().values()))), (st1["count"], st1["n"])
+    assert "Unsaved changes" in st1["status"], st1["status"]
     # save
     ep.click("[data-action=save]")
     backup = ep.path.with_name(ep.path.name + ".bak")
@@ -475,6 +480,8 @@ def test_drag_sets_the_reference_pose_and_save_writes_it(open_editor, name, join
     assert sorted(p.name for p in ep.path.parent.iterdir()) == sorted([ep.path.name, backup.name])
     st2 = ep.state()
     assert st2["message"] == "", f"a message after saving: {st2['message']!r}"
+    assert st2["status"].startswith("Saved"), st2["status"]
+    assert st2["source"] == text, "the page's 'Mechanism file' is not the file as saved"
     ep.assert_clean()
 
 
@@ -987,6 +994,35 @@ def test_numbers_panel_sets_a_length(open_editor):
     ep.assert_clean()
 
 
+def test_status_pane_and_fields_follow_saves_undos_and_rejected_numbers(open_editor):
+    """seed000: C-D = 5.5 says "Unsaved changes"; Save writes it and the "Mechanism file" pane shows the file
+    as saved; Undo shows C-D = 5 again and "Unsaved changes" (the disk holds 5.5).  A number the solver
+    rejects (B-D = 0.1: it does not assemble) or the page refuses (C-D = -3) keeps its message, and the
+    field reads the value in force again (5), the document unchanged."""
+    ep = open_editor("seed000")
+    st0 = ep.state()
+    assert st0["status"] == "" and st0["source"] == ep.path.read_text(encoding="utf-8")
+    set_number(ep, "coupler C-D", "5.5")
+    assert "Unsaved changes" in ep.state()["status"], ep.state()["status"]
+    ep.click("[data-action=save]")
+    assert wait_until(lambda: ep.state()["status"].startswith("Saved")), ep.state()["status"]
+    text = ep.path.read_text(encoding="utf-8")
+    assert "C-D: 5.5" in text and ep.state()["source"] == text, ep.state()["source"]
+    ep.click("[data-action=undo]")
+    ep.wait_idle("Undo")
+    st1 = ep.state()
+    field = ep.page.locator('input[data-number="coupler C-D"]')
+    assert field.input_value() == "5" and st1["doc"] == st0["doc"], field.input_value()
+    assert "Unsaved changes" in st1["status"] and ep.path.read_text(encoding="utf-8") == text, st1["status"]
+    for label, value, says in (("rocker B-D", "0.1", "does not assemble"), ("coupler C-D", "-3", "positive")):
+        set_number(ep, label, value)
+        st = ep.state()
+        assert says in st["message"], (label, value, st["message"])
+        shown = ep.page.locator(f'input[data-number="{label}"]').input_value()
+        assert shown == "5" and st["doc"] == st0["doc"], (label, value, shown)
+    ep.assert_clean()
+
+
 def test_numbers_panel_mass_and_gravity_give_forces(open_editor):
     """A mass on the coupler (its cg: the centroid of C, D, P) and gravity: the full solve has the
     driver torque, plotted, equal to lk.analyze of the document at the shown input; 0 N*m of
@@ -1040,6 +1076,8 @@ def test_driver_choice_drives_another_link(open_editor):
     ep.wait_idle("moving the rocker's range")
     st2 = ep.state()
     assert st2["current"] == before + 5 and set(st2["inputs"]) == {"rocker"}, (before, st2["current"], st2["inputs"])
+    # the rocker's pose angle is no whole degree: its sweep has one sample more, and the header says so
+    assert st2["count"] == st2["n"] == 362, (st2["count"], st2["n"])
     if all(j["x"] for j in st2["joints"]):
         check_matches_document(ep, st2, "driven by the rocker, 5 samples on")
     ep.assert_clean()

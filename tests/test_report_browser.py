@@ -678,6 +678,34 @@ def test_message_cleared_when_assembled_seed003(open_report):
     assert not shown, f"seed003 at 90 deg (assembles): a message is still shown: {shown}"
 
 
+JS_JOINTS_DRAWN = """
+() => Object.fromEntries([...document.querySelectorAll('svg[data-role=mechanism] [data-joint]')].map(e => {
+  const r = e.getBoundingClientRect();
+  return [e.getAttribute('data-joint'), {x: e.getAttribute('data-x'), u: r.left + r.width / 2, v: r.top + r.height / 2,
+    visible: getComputedStyle(e).visibility !== 'hidden'}];
+}))
+"""
+
+
+def test_ground_joints_are_drawn_where_it_does_not_assemble_seed003(open_report):
+    """The fixed pivots O1, O2 never move: at 0 deg (nothing assembles) they are drawn, at the very spot where
+    they are drawn mid-sweep (where it assembles; within 0.01 px), with empty data-x/data-y; the moving joints
+    are hidden there."""
+    rp = open_report("seed003")
+    ground = set(rp.res.mechanism.link("ground").joints)
+    assert ground == {"O1", "O2"}
+    rp.press("Home")
+    at0 = rp.page.evaluate(JS_JOINTS_DRAWN)
+    rp.click_track(0.5)
+    assert rp.res.assembled[rp.index()], rp.index()
+    mid = rp.page.evaluate(JS_JOINTS_DRAWN)
+    for j, e in at0.items():
+        assert e["x"] == "" and e["visible"] == (j in ground), (j, e)
+        assert mid[j]["visible"] and mid[j]["x"], (j, mid[j])
+        if j in ground:
+            assert math.hypot(e["u"] - mid[j]["u"], e["v"] - mid[j]["v"]) < 0.01, (j, e, mid[j])
+
+
 def test_two_sliders_move_together_fivebar(open_report):
     rp = open_report("fivebar")
     d1, d2 = rp.drivers

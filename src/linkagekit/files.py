@@ -29,7 +29,7 @@ import os
 import re
 import secrets
 import stat
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from functools import cache
 from pathlib import Path
 from typing import Any, Literal
@@ -401,7 +401,9 @@ def save(mech: Mechanism, path: str | Path) -> Path:
     return p
 
 
-def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | None = None) -> str:
+def dumps(
+    mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | None = None, earlier: Sequence[str] = ()
+) -> str:
     """The text of a mechanism file, YAML (readable: block style, points as flow lists) or JSON.
 
     Parameters
@@ -415,6 +417,11 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | No
         place in it keeps its style there (flow ``{...}``/``[...]`` or block), and a number it
         wrote as an integer stays one while its value is a whole number.  Other comments
         than the file's first lines are not kept.  Ignored for JSON, or when it does not parse.
+    earlier : sequence of str, optional
+        Older YAML texts of the same file, newest first (the editor's file as opened, then as
+        saved): where ``like`` has no mapping or list at a place, the first of them that has
+        one gives its style, and a number any of them wrote as an integer at that place stays
+        one while its value is whole (an edit undone writes the file's ``49`` back, not ``49.0``).
 
     Examples
     --------
@@ -433,10 +440,10 @@ def dumps(mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | No
     import yaml
 
     styled = _styled(data)
-    if like is not None:
-        with contextlib.suppress(LinkageError):  # a file that does not parse has no style to keep
-            node = _yaml_node(like, "the file replaced")
-            styled = _in_order_of(_like(styled, node), node)
+    nodes = [_style_node(text) for text in [like, *earlier] if text is not None]
+    styled = _like(styled, nodes)
+    if like is not None and nodes[0] is not None:  # the sections in the order of the file replaced
+        styled = _in_order_of(styled, nodes[0])
     text: str = yaml.dump(
         styled,
         Dumper=_dumper_class(),
@@ -541,22 +548,30 @@ class _BlockDict(dict[str, Any]):
     """A mapping written in YAML block style (one ``key: value`` a line)."""
 
 
-def _like(value: Any, node: Any) -> Any:
-    """``value`` styled as ``node``, the same place in the file it replaces (None: as it is).
+def _style_node(text: str) -> Any:
+    """The YAML node of a text whose styles a written file keeps (None when it does not parse: no style to keep)."""
+    with contextlib.suppress(LinkageError):
+        return _yaml_node(text, "the file replaced")
+    return None
 
-    A mapping or list takes the node's flow or block style; a whole float where the file
-    wrote an integer is written as that integer (it reads back equal).
+
+def _like(value: Any, nodes: list[Any]) -> Any:
+    """``value`` styled as ``nodes``, the same place in the texts of the file it replaces, newest first (None: absent).
+
+    A mapping or list takes the flow or block style of the first node that is one; a whole
+    float where one of the texts wrote an integer is written as that integer (it reads back equal).
     """
     import yaml
 
-    if isinstance(node, yaml.MappingNode) and isinstance(value, dict):
-        old = {k.value: v for k, v in node.value if isinstance(k, yaml.ScalarNode)}
-        return (_FlowDict if node.flow_style else _BlockDict)({k: _like(v, old.get(k)) for k, v in value.items()})
-    if isinstance(node, yaml.SequenceNode) and isinstance(value, list):
-        items = [_like(v, node.value[i] if i < len(node.value) else None) for i, v in enumerate(value)]
-        return (_FlowList if node.flow_style else _BlockList)(items)
+    if isinstance(value, dict) and (maps := [n for n in nodes if isinstance(n, yaml.MappingNode)]):
+        olds = [{k.value: v for k, v in n.value if isinstance(k, yaml.ScalarNode)} for n in maps]
+        style = _FlowDict if maps[0].flow_style else _BlockDict
+        return style({k: _like(v, [old.get(k) for old in olds]) for k, v in value.items()})
+    if isinstance(value, list) and (seqs := [n for n in nodes if isinstance(n, yaml.SequenceNode)]):
+        items = [_like(v, [n.value[i] if i < len(n.value) else None for n in seqs]) for i, v in enumerate(value)]
+        return (_FlowList if seqs[0].flow_style else _BlockList)(items)
     whole = isinstance(value, float) and value.is_integer() and abs(value) < 2.0**53
-    if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:int" and whole:
+    if whole and any(isinstance(n, yaml.ScalarNode) and n.tag == "tag:yaml.org,2002:int" for n in nodes):
         return int(value)
     return value
 

@@ -160,8 +160,8 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
         if not np.isfinite(best):
             raise MechanismFileError(
                 f"{mech.source}: the mechanism does not assemble at its reference pose's input "
-                f"(given lengths that do not close, or a degenerate pose where two joints "
-                f"a joint is found from coincide)"
+                f"(given lengths that do not close, or a degenerate pose: two joints that locate "
+                f"another joint coincide)"
             )
         tol = 1e-18 * mech.length_scale**2 + best * 1e-9
         choice = int(np.flatnonzero(err <= best + tol)[0])

@@ -21,6 +21,14 @@
   var timing = window.linkagekitTiming = [];   // drag event -> redrawn frame, ms (the benchmark reads it)
 
   function setStatus(text) { if (status) status.textContent = text; }
+  /* the document as last saved (or opened): the status says when the page shows something else */
+  var savedJSON = JSON.stringify(doc), savedNote = "", saving = false;
+  function restStatus() {
+    if (draft) return draftStatus();
+    if (JSON.stringify(doc) !== savedJSON) return "Unsaved changes (Save writes them to " + cfg.file + ").";
+    return savedNote;
+  }
+  function refreshStatus() { if (mode === null && !saving) setStatus(restStatus()); }
   function setError(text) {
     if (!lk) return;
     lk.holdMessage = !!text;
@@ -78,7 +86,7 @@
       lk.show(r.pose_index);
     }
     setError("");
-    if (!job.body.coarse) { render(r); }
+    if (!job.body.coarse) { render(r); refreshStatus(); }
     if (job.t0 !== undefined) {
       var t0 = job.t0;
       requestAnimationFrame(function () { timing.push(performance.now() - t0); });
@@ -226,7 +234,7 @@
     svg.classList.toggle("adding", mode !== null);
     finish.hidden = mode !== "link";
     setStatus(mode === "link" ? "Click joints, or empty places for new joints; then Finish link." :
-              mode === "ground" ? "Click a joint to fix it to the ground (or to free it)." : draftStatus());
+              mode === "ground" ? "Click a joint to fix it to the ground (or to free it)." : restStatus());
     drawDraft();
   }
   function draftStatus() {
@@ -234,7 +242,7 @@
   }
   function setDraft(d) {
     draft = d;
-    if (mode === null) setStatus(draftStatus());
+    refreshStatus();
     drawDraft(); buttons();
   }
   var SVGNS = "http://www.w3.org/2000/svg";
@@ -330,6 +338,7 @@
     solve({doc: d, at: atNow()}, function (ok) {
       if (ok) { setDraft(null); commit(doc); }
       else if (structural) setDraft(d);
+      else renderPanel(panelAnswer);   // a rejected number or driver: the fields show what is in force again
     });
   }
 
@@ -338,6 +347,12 @@
     var checks = q("[data-role=checks]");
     if (checks && r.checks) checks.textContent = r.checks;
     renderModes(r);
+    renderPanel(r);
+  }
+  /* the numbers and the driver of the document in force (r: its full solve's answer) */
+  var panelAnswer = null;
+  function renderPanel(r) {
+    panelAnswer = r;
     var table = q("[data-role=numbers]");
     if (table) {
       table.textContent = "";
@@ -441,10 +456,13 @@
     inp.type = "number"; inp.step = "any"; inp.value = String(Number(Number(value).toPrecision(10)));
     inp.title = String(lk.pyRepr(value));
     inp.setAttribute("data-number", label);
+    var inForce = inp.value;
     inp.addEventListener("change", function () {
       var v = parseFloat(inp.value);
       if (!isFinite(v) || (kind === "length" && v <= 0) || (kind === "mass" && v < 0)) {
-        setError(label + (kind === "signed" ? ": expected a number" : ": expected a positive number"));
+        setError(label + (kind === "signed" ? ": expected a number" : ": expected a positive number") +
+          " (" + inp.value + " not taken)");
+        inp.value = inForce;
         return;
       }
       set(v);
@@ -454,14 +472,25 @@
 
   /* ------------------------------------------------------------- saving */
   q("[data-action=save]").addEventListener("click", function () {
+    saving = true;
     setStatus("Saving...");
     whenIdle(save);   // after the solve under way: save what the page then shows
   });
   function save() {
-    post("api/save", {doc: doc, base: baseHash}).then(function (r) {
-      if (r.ok) { baseHash = r.base; setStatus("Saved " + cfg.file + " (previous version: " + cfg.file + ".bak)."); }
-      else { setStatus(""); setError(r.error || "not saved"); }
-    }, function (err) { setStatus(""); setError("Not saved: the editor's server does not answer (" + err + ")."); });
+    var sent = doc;
+    post("api/save", {doc: sent, base: baseHash}).then(function (r) {
+      saving = false;
+      if (r.ok) {
+        baseHash = r.base; savedJSON = JSON.stringify(sent);
+        savedNote = "Saved " + cfg.file + " (previous version: " + cfg.file + ".bak).";
+        var source = q("[data-role=source]");
+        if (source && typeof r.text === "string") source.textContent = r.text;   // the file as now on disk
+      } else setError(r.error || "not saved");
+      setStatus(restStatus());   // "Saving..." goes, whatever the page is doing
+    }, function (err) {
+      saving = false; setStatus(restStatus());
+      setError("Not saved: the editor's server does not answer (" + err + ").");
+    });
   }
 
   function ready() {

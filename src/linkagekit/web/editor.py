@@ -70,6 +70,8 @@ SOLVE_SECONDS = 30.0
 WATCH_INTERVAL = 0.05
 #: levels of JSON nesting a request may have (a mechanism document needs about 5)
 MAX_JSON_DEPTH = 64
+#: texts of the file a save keeps the styles of (the newest saved ones and the file as opened)
+KEPT_TEXTS = 8
 
 
 class ConflictError(LinkageError):
@@ -192,6 +194,9 @@ class Session:
         data = self.path.read_bytes()
         self.base = _hash(data)
         self.text = data.decode("utf-8-sig", errors="replace")
+        #: the file's texts as opened and as saved since, newest first (at most :data:`KEPT_TEXTS`): what an
+        #: edit undone writes back keeps the style they gave it (:meth:`_text_to_save`)
+        self.texts = [self.text]
         self.fmt: Literal["yaml", "json"] = "json" if self.path.suffix.lower() == ".json" else "yaml"
         self.backup = self.path.with_name(self.path.name + ".bak")
         self.lock = threading.Lock()
@@ -256,7 +261,8 @@ class Session:
                     listed.get("modes_note")
                     or f"the mode {wanted} does not assemble at {listed.get('modes_at')}: move the input first"
                 )
-            pose = {j: list(xy) for j, xy in match[0]["joints"].items()}
+            # a mode changes no dimension: every given length stays exactly as the document has it
+            return posed(mech, {j: list(xy) for j, xy in match[0]["joints"].items()}, [])
         return mech if pose is None else posed(mech, pose, request.get("moved"))
 
     def _coarse(self, mech: Mechanism, request: dict[str, Any]) -> tuple[Result, int]:
@@ -344,13 +350,15 @@ class Session:
             self.base = _hash(data)
             self.mech = mech
             self.text = data.decode("utf-8")
-        return {"ok": True, "base": self.base, "saved": str(self.path), "backup": str(self.backup)}
+            self.texts = [self.text, *self.texts[:-1][: KEPT_TEXTS - 2], self.texts[-1]]
+        return {"ok": True, "base": self.base, "saved": str(self.path), "backup": str(self.backup), "text": self.text}
 
     def _text_to_save(self, mech: Mechanism, old_text: str) -> str:
-        """The file's new text: :func:`~linkagekit.files.dumps` in the old file's styles, with the old file's
-        comments put back where its lines match (:func:`~linkagekit.files.merge_comments`) when that text reads
-        as the edited mechanism, else with its leading comment lines only."""
-        body = dumps(mech, self.fmt, like=old_text)
+        """The file's new text: :func:`~linkagekit.files.dumps` in the old file's styles (where it has none, in
+        those of the file as opened or saved before: an undone edit writes the file's ``49`` back, not ``49.0``),
+        with the old file's comments put back where its lines match (:func:`~linkagekit.files.merge_comments`)
+        when that text reads as the edited mechanism, else with its leading comment lines only."""
+        body = dumps(mech, self.fmt, like=old_text, earlier=self.texts)
         if self.fmt != "yaml":
             return body
         merged = merge_comments(old_text, body)

@@ -236,10 +236,11 @@ def _head(title: str, editor: bool) -> str:
 
 def _samples_text(sc: Scene) -> str:
     """How many samples, and for a simulated motion over which times."""
+    count = f'<span data-role="sample-count">{sc.n}</span> samples'  # the editor's page updates it
     if not sc.timed or sc.n == 0:
-        return f"{sc.n} samples"
+        return count
     t = sc.x
-    return f"simulated motion, t = {t[0]:.6g} to {t[-1]:.6g} {html.escape(sc.x_unit)}, {sc.n} samples"
+    return f"simulated motion, t = {t[0]:.6g} to {t[-1]:.6g} {html.escape(sc.x_unit)}, {count}"
 
 
 def _stopped_text(sc: Scene) -> str:

@@ -8,7 +8,8 @@
  * value is the sample index, [data-role=input-value], [data-role=plot] with a
  * [data-role=cursor], [data-action=play], [data-action=csv], [data-role=message]; for a
  * simulated motion (scene.x_axis.time) [data-role=time-value]: the plots run along time and
- * Play steps through the samples at the pace of their times.
+ * Play steps through the samples at the pace of their times; [data-role=sample-count]: the
+ * number of samples of the scene drawn. A ground joint is drawn at every sample.
  */
 (function () {
   "use strict";
@@ -210,13 +211,16 @@
     sc.joints.forEach(function (j) {
       var x = self.X[j][i], y = self.Y[j][i], je = self.joints[j];
       var good = finite(x) && finite(y);
+      // a ground joint never moves: drawn where the file puts it also where nothing assembles (its
+      // data-x/data-y stay empty there, as the hooks say)
+      var at = good ? [x, y] : sc.ground_xy[j];
       je.c.setAttribute("data-x", good ? pyRepr(x) : "");
       je.c.setAttribute("data-y", good ? pyRepr(y) : "");
-      je.c.style.visibility = good ? "visible" : "hidden";
-      je.t.style.visibility = good ? "visible" : "hidden";
-      if (good) {
-        je.c.setAttribute("cx", self.px(x)); je.c.setAttribute("cy", self.py(y));
-        je.t.setAttribute("x", self.px(x) + 6); je.t.setAttribute("y", self.py(y) - 6);
+      je.c.style.visibility = at ? "visible" : "hidden";
+      je.t.style.visibility = at ? "visible" : "hidden";
+      if (at) {
+        je.c.setAttribute("cx", self.px(at[0])); je.c.setAttribute("cy", self.py(at[1]));
+        je.t.setAttribute("x", self.px(at[0]) + 6); je.t.setAttribute("y", self.py(at[1]) - 6);
       }
     });
     this.links.forEach(function (L) {
@@ -394,6 +398,7 @@
     var message = document.querySelector("[data-role=message]");
     var gaps = document.querySelector("[data-role=gaps]");
     var timeValue = document.querySelector("[data-role=time-value]");
+    var count = document.querySelector("[data-role=sample-count]");
     var scene, viewer, plots, current = 0;
 
     /* draw a scene: everything is rebuilt from it (the editor calls this with each new solve) */
@@ -413,6 +418,7 @@
       var named = sliders.map(function (s) { return s.getAttribute("data-driver"); });
       if (controls && named.join("\n") !== scene.drivers.join("\n")) rebuildControls();
       sliders.forEach(function (s) { s.max = String(scene.n - 1); });
+      if (count) count.textContent = String(scene.n);   // an edit's sweep may hold one more sample (its pose's input)
       if (gaps) gaps.textContent = gapText(scene);
       api.scene = scene;
       api.viewer = viewer;
