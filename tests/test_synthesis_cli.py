@@ -656,7 +656,7 @@ def test_a_best_design_that_breaks_a_constraint_is_not_written_and_exits_1(tmp_p
     assert code == 1 and "CONSTRAINTS NOT MET" in text and "nothing written" in text and "error [" in text
     assert err.strip().splitlines()[-1] == (
         f"linkagekit: synthesize: no design found meets the constraints; {out} is not written (the best one found, "
-        "INFEASIBLE, is above)"
+        "which breaks one, is shown above)"
     )
     assert not out.exists() and not (tmp_path / "o.png").exists()
 
@@ -813,3 +813,21 @@ def test_a_checkpoint_in_a_missing_directory_is_refused_before_any_work(tmp_path
     code, out, err = run_main(["synthesize", str(src), "-o", str(tmp_path / "o.yaml"), "--checkpoint", str(ck)], capsys)
     assert_one_line_error(code, err, "--checkpoint ", "ck.npz: no directory")  # a long path is shortened
     assert out == "" and not (tmp_path / "o.yaml").exists()
+
+
+def test_a_transmission_bound_above_89_deg_is_the_bound_checked():
+    """The search's margin stopped at 89 deg and so did the bound: 89.99 was checked as 89, and a design 0.98 deg
+    below it was written with exit 0. A four-bar whose 0.05 crank barely moves its right-angled coupler and rocker
+    keeps mu within about 90 +- 0.9 deg (by hand: the crank moves C by 0.05 across a 7.07 coupler)."""
+    from linkagekit.synthesis.objective import evaluate
+    from linkagekit.synthesis.run import make_problem
+
+    t = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    joints = {"A": 0j, "B": 10 + 0j, "C": 0.05 + 0j, "D": 5 + 5j, "P": 2.5 + 2.5j}
+    for bound, feasible in ((89.0, True), (89.9, False)):
+        problem = make_problem(np.stack([2.5 + np.cos(t), 2.5 + np.sin(t)], 1), "fourbar", min_transmission=bound)
+        x = np.concatenate([[joints[j].real, joints[j].imag] for j in problem.space.free])
+        e = evaluate(
+            problem, x[None], refine=0, margin=0.0
+        )  # as the dense check, but its curve-size rule (a tiny curve)
+        assert 89 < e.transmission[0] < 89.9 and bool(e.violation[0] == 0) is feasible, (bound, e.transmission, e.violation)

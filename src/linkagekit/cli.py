@@ -1501,7 +1501,7 @@ def _met(feasible: bool, path: str) -> int:
         return 0
     print(
         f"{PROG}: synthesize: no design found meets the constraints; {path} is not written (the best one found, "
-        "INFEASIBLE, is above)",
+        "which breaks one, is shown above)",
         file=sys.stderr,
     )
     return 1

@@ -642,7 +642,8 @@ class Projected(Objective):
                 short = np.nan_to_num(np.maximum(-sol.margin, 0.0), nan=0.0)
                 v = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(len(f.sse))
             v = np.where(params.valid, v, v + 1.0)
-            cos_lim = np.cos(np.radians(self.problem.min_transmission + 0.25))
+            mt = self.problem.min_transmission  # its search margin stops at 89 deg, as the objective's
+            cos_lim = np.cos(np.radians(min(mt + 0.25, max(mt, 89.0))))
             for jn, a, b in sp.transmission:
                 zj = z[sp.joint(jn)]
                 u, w = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj

@@ -424,7 +424,8 @@ def _feasibility(
     short = np.nan_to_num(np.maximum(-margins, 0.0), nan=0.0)
     violation = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(z.shape[1])
     violation = np.where(params.valid, violation, violation + 1.0)
-    cos_lim = np.cos(np.radians(min(problem.min_transmission + margin, 89.0)))
+    # the search's margin stops at 89 deg; the bound itself never does (89.99 was checked as 89: written, exit 0)
+    cos_lim = np.cos(np.radians(min(problem.min_transmission + margin, max(problem.min_transmission, 89.0))))
     worst_cos = np.zeros(z.shape[1])
     mu_min = np.full(z.shape[1], np.nan)
     for j, a, b in sp.transmission:

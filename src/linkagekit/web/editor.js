@@ -461,7 +461,7 @@
       var v = parseFloat(inp.value);
       if (!isFinite(v) || (kind === "length" && v <= 0) || (kind === "mass" && v < 0)) {
         setError(label + (kind === "signed" ? ": expected a number" : ": expected a positive number") +
-          " (" + inp.value + " not taken)");
+          (inp.value === "" ? " (not a number: not taken)" : " (" + inp.value + " not taken)"));
         inp.value = inForce;
         return;
       }
