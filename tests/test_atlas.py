@@ -455,3 +455,6 @@ def test_a_deadline_bounds_the_atlas_answer(monkeypatch):
     assert calls[0] == at.COST_CHUNK and len(late.designs) == at.COST_CHUNK + 2
     assert late.polished == 2  # the first polish runs whole, the second returns its start (cut at once)
     assert len(np.unique(late.designs, axis=0)) == len(late.designs) - 1  # that start is among the candidates too
+    past = time.monotonic() - 1.0  # the whole budget past too: the first polish returns its start as well
+    spent = at.first_answer(problem, atlas, polish=2, until=past, first_until=past)
+    assert len(np.unique(spent.designs, axis=0)) == len(spent.designs) - 2

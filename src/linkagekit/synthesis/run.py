@@ -320,8 +320,10 @@ def _from_atlas(problem: Problem, settings: Settings, progress: Callable[[Progre
 
     def start() -> np.ndarray:
         t0 = time.monotonic()
-        until = None if settings.checkpoint else t0 + ATLAS_SHARE * settings.seconds  # a checkpoint's: reproducible
-        ans = atlas.first_answer(problem, workers=None if settings.scheduler else settings.workers, until=until)
+        clocked = not settings.checkpoint  # a checkpoint's answer is reproducible: bounded by its evaluations only
+        until, whole = (t0 + ATLAS_SHARE * settings.seconds, t0 + settings.seconds) if clocked else (None, None)
+        workers = None if settings.scheduler else settings.workers
+        ans = atlas.first_answer(problem, workers=workers, until=until, first_until=whole)
         if progress is not None and len(ans.designs):
             progress(Progress(0, 0, ans.cost, ans.error, len(ans.designs), time.monotonic() - t0, source="atlas"))
         return ans.designs
