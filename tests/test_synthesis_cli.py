@@ -830,4 +830,8 @@ def test_a_transmission_bound_above_89_deg_is_the_bound_checked():
         e = evaluate(
             problem, x[None], refine=0, margin=0.0
         )  # as the dense check, but its curve-size rule (a tiny curve)
-        assert 89 < e.transmission[0] < 89.9 and bool(e.violation[0] == 0) is feasible, (bound, e.transmission, e.violation)
+        assert 89 < e.transmission[0] < 89.9 and bool(e.violation[0] == 0) is feasible, (
+            bound,
+            e.transmission,
+            e.violation,
+        )

@@ -178,3 +178,25 @@ def test_an_objective_that_does_not_pickle_runs_here_by_default():
     assert out.error < 1e-9 and out.outcome.stopped_by == "goal"
     two = optimize.search(Nearest(), restarts=2, generations=3, workers=2)
     assert np.array_equal(two.x, out.x)
+
+
+def test_pareto_never_overwrites_a_file_of_another_series(tmp_path, capsys, monkeypatch):
+    """``-o e.yaml --pareto`` wrote its design 2 over ``e-2.yaml``, the best design of an earlier ``-o e-2.yaml``
+    (removing such files was refused, overwriting was not). It is kept, that design not written, and said so."""
+    from argparse import Namespace
+    from types import SimpleNamespace
+
+    from linkagekit.cli import _write_designs
+
+    seed0 = lk.load(ROOT / "examples" / "seed000_fourbar.yaml")
+    other = tmp_path / "e-2.yaml"
+    lk.save(replace(seed0, description="--pareto: design 1 of 2 of 'e-2.yaml'"), other)
+    before = other.read_bytes()
+    designs = [SimpleNamespace(mechanism=replace(seed0, description=f"d{k}")) for k in (1, 2, 3)]
+    out = SimpleNamespace(pareto=tuple(designs))
+    args = Namespace(output=str(tmp_path / "e.yaml"), pareto=True, targets="t.csv")
+    monkeypatch.setattr("linkagekit.cli._synthesize_command", lambda a: "linkagekit synthesize t.csv --pareto")
+    shown = _write_designs(out, SimpleNamespace(smoothed=None), args)
+    assert shown == [str(tmp_path / "e.yaml"), "(not written)", str(tmp_path / "e-3.yaml")]
+    assert other.read_bytes() == before and "kept " in capsys.readouterr().out
+    assert "--pareto: design 3 of 3 of 'e.yaml'" in lk.load(tmp_path / "e-3.yaml").description

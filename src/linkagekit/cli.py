@@ -1440,8 +1440,6 @@ def _synthesize(args: argparse.Namespace) -> int:
 
     t0 = time.monotonic()
 
-    import linkagekit as lk
-
     from .synthesis.distribute import WorkersLost
     from .synthesis.run import synthesize_path
     from .synthesis.targets import read_targets
@@ -1475,12 +1473,7 @@ def _synthesize(args: argparse.Namespace) -> int:
         return 1
     except WorkersLost as e:
         raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
-    paths = pareto_paths(args.output, len(out.pareto)) if out.feasible else []
-    for k, (design, path) in enumerate(zip((out.pareto or (out,)) if paths else (), paths, strict=True), 1):
-        described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
-        described += f"\n{targets.smoothed}" if targets.smoothed else ""
-        described += f"\n{pareto_mark(args.output, k, len(paths))}" if args.pareto else ""
-        lk.save(dataclasses.replace(design.mechanism, description=described), path)
+    paths = _write_designs(out, targets, args) if out.feasible else []
     for path in stale_pareto(args.output, len(paths)) if args.pareto and out.feasible else ():
         os.remove(path)
         print(f"removed {path}: a design of an earlier --pareto run, not of this one")
@@ -1492,6 +1485,29 @@ def _synthesize(args: argparse.Namespace) -> int:
     if out.pareto and paths:
         print(pareto_text(out, targets.unit, paths))
     return _met(out.feasible, args.output)
+
+
+def _write_designs(out: Any, targets: Any, args: argparse.Namespace) -> list[str]:
+    """Write a path synthesis's design (``--pareto``: its designs, ``OUT.yaml``, ``OUT-2.yaml``, ...); the files, as
+    the list prints them. An ``OUT-k`` that is there and is no design of an earlier ``--pareto`` run of this ``OUT``
+    (the best design of ``-o OUT-2.yaml``, say) is kept, and that design not written."""
+    import dataclasses
+
+    import linkagekit as lk
+
+    paths = pareto_paths(args.output, len(out.pareto))
+    shown = []
+    for k, (design, path) in enumerate(zip(out.pareto or (out,), paths, strict=True), 1):
+        if k > 1 and not _pareto_own(path, args.output, k):
+            print(f"kept {path}: not a design of an earlier --pareto run of {args.output} (design {k} not written)")
+            shown.append("(not written)")
+            continue
+        described = f"{design.mechanism.description}\ncommand: {_synthesize_command(args)}"
+        described += f"\n{targets.smoothed}" if targets.smoothed else ""
+        described += f"\n{pareto_mark(args.output, k, len(paths))}" if args.pareto else ""
+        lk.save(dataclasses.replace(design.mechanism, description=described), path)
+        shown.append(path)
+    return shown
 
 
 def _met(feasible: bool, path: str) -> int:
@@ -1542,23 +1558,32 @@ def stale_pareto(output: str, n: int) -> list[str]:
     series (``run-3.yaml``, the first design of ``-o run-3.yaml``, is not design 3 of ``-o run.yaml``)."""
     import itertools
     import os
-    import re
-
-    import linkagekit as lk
 
     stem, ext = os.path.splitext(output)
     out: list[str] = []
     for k in itertools.count(n + 1):
         path = f"{stem}-{k}{ext}"
-        mark = rf"--pareto: design {k} of \d+ of {re.escape(repr(os.path.basename(output)))}"  # as pareto_mark
-        try:
-            ours = os.path.isfile(path) and re.search(mark, lk.load(path).description or "") is not None
-        except (LinkageError, OSError):
-            ours = False
-        if not ours:
+        if not (os.path.isfile(path) and _pareto_own(path, output, k)):
             return out
         out.append(path)
     return out
+
+
+def _pareto_own(path: str, output: str, k: int) -> bool:
+    """Whether ``--pareto -o output`` may write (or remove) ``path`` as its design ``k``: nothing is there, or an
+    earlier run of the same output wrote its design ``k`` there (the mark says so)."""
+    import os
+    import re
+
+    import linkagekit as lk
+
+    if not os.path.lexists(path):
+        return True
+    mark = rf"--pareto: design {k} of \d+ of {re.escape(repr(os.path.basename(output)))}"  # as pareto_mark
+    try:
+        return os.path.isfile(path) and re.search(mark, lk.load(path).description or "") is not None
+    except (LinkageError, OSError):
+        return False
 
 
 def pareto_text(out: Any, unit: str, paths: list[str]) -> str:
