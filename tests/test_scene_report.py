@@ -337,6 +337,15 @@ def test_a_link_of_joints_in_line_is_a_bar_and_the_pictures_name_the_ground_pivo
     links = {ln.name: ln for ln in build_scene(res).links}
     assert links["input"].kind == "bar" and links["input"].outline == ("A", "D", "C")  # its ends first
     assert links["coupler"].kind == "plate" and links["ternary"].kind == "plate"
+    # decided by the link's rigid shape (the file's exact lengths), not the pose's digits (a review's two cases)
+    from linkagekit.viz.scene import scene_links
+
+    triangle, in_line = mech.to_dict(), mech.to_dict()
+    triangle["links"]["input"]["lengths"]["A-D"] = 4.9  # the pose in line, the lengths a triangle
+    in_line["joints"]["D"] = [2.6, 4.2]  # the pose off the line, the lengths 2 + 3 = 5 in line
+    for doc, kind in ((triangle, "plate"), (in_line, "bar")):
+        drawn = {ln.name: ln.kind for ln in scene_links(lk.Mechanism.from_dict(doc))}
+        assert drawn["input"] == kind
     fig = mechanism_figure(res)
     ax = fig.axes[0]
     assert {"A", "B"} <= {t.get_text() for t in ax.texts if t.get_visible()}

@@ -324,11 +324,11 @@ def scene_links(mech: Mechanism) -> tuple[SceneLink, ...]:
             kind = "ground"
         elif ln.name in blocks and len(ln.joints) == 1:
             kind = "block"
-        elif len(ln.joints) >= 3 and not _collinear([mech.joints[j] for j in ln.joints]):
+        elif len(ln.joints) >= 3 and not _collinear([ln.shape[j] for j in ln.joints]):
             kind = "plate"
         else:
             kind = "bar"
-        points = [mech.joints[j] for j in ln.joints]
+        points = [ln.shape[j] for j in ln.joints]  # its rigid shape: the file's exact lengths, not the pose's digits
         outline = _outline(points, ln.joints) if kind == "plate" else _along(points, ln.joints)
         out.append(SceneLink(ln.name, kind, ln.joints, outline))
     for d in mech.drivers:  # a cylinder is not a link, but it is drawn: a bar between its two ends
