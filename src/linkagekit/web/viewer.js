@@ -405,16 +405,8 @@
     function load(newScene, view) {
       scene = newScene;
       while (svgMech.firstChild) svgMech.removeChild(svgMech.firstChild);
-      while (box.firstChild) box.removeChild(box.firstChild);
       viewer = new Viewer(scene, svgMech, view);
-      plots = [];
-      scene.plots.forEach(function (spec) {
-        var fig = document.createElement("figure");
-        var svg = el("svg", {"data-role": "plot", "data-title": spec.title, width: "100%"});
-        fig.appendChild(svg);
-        box.appendChild(fig);
-        plots.push(new Plot(scene, spec, svg));
-      });
+      drawPlots();
       var named = sliders.map(function (s) { return s.getAttribute("data-driver"); });
       if (controls && named.join("\n") !== scene.drivers.join("\n")) rebuildControls();
       sliders.forEach(function (s) { s.max = String(scene.n - 1); });
@@ -423,6 +415,27 @@
       api.scene = scene;
       api.viewer = viewer;
     }
+    /* the plots, drawn in the width they are shown in (again when it changes: a phone turned, a window resized) */
+    var plotWidth = 0;
+    function drawPlots() {
+      while (box.firstChild) box.removeChild(box.firstChild);
+      plots = [];
+      scene.plots.forEach(function (spec) {
+        var fig = document.createElement("figure");
+        var svg = el("svg", {"data-role": "plot", "data-title": spec.title, width: "100%"});
+        fig.appendChild(svg);
+        box.appendChild(fig);
+        plots.push(new Plot(scene, spec, svg));
+      });
+      plotWidth = box.clientWidth;
+    }
+    var resizing = null;
+    window.addEventListener("resize", function () {
+      clearTimeout(resizing);
+      resizing = setTimeout(function () {
+        if (scene && Math.abs(box.clientWidth - plotWidth) > 0.05 * plotWidth) { drawPlots(); show(current); }
+      }, 150);
+    });
     function show(i) {
       i = Math.max(0, Math.min(scene.n - 1, i | 0));
       current = i;
