@@ -175,7 +175,7 @@ def test_a_stopped_motion_is_drawn_up_to_the_toggle_then_exit_1(tmp_path, capsys
         assert out.stat().st_size > 1000
     text = page.read_text()
     assert f'data-role="stopped">{html.escape(res.stopped)}</p>' in text
-    assert f"t = 0 to {res.time[-1]:.6g} s, {res.n} samples" in text
+    assert f't = 0 to {res.time[-1]:.6g} s, <span data-role="sample-count">{res.n}</span> samples' in text
     assert 'data-role="stopped"' not in report_html(lk.analyze(lk.load(path), {"crank": [120.0]}))
 
 
