@@ -322,7 +322,7 @@ def test_a_placement_whose_system_is_singular_to_rounding_is_solved_not_an_inter
     matrix': one design's 4 x 4 placement system (its curve's samples at one spot) was singular to rounding despite the
     ridge, and the batch's solve raised for all 64 designs. The matrix found there: its answer is the pseudo-inverse's
     (finite, M x = r to 1e-9 of |r|), the other designs' as before, and a system that overflowed is NaN."""
-    from linkagekit.synthesis.objective import _solved
+    from linkagekit.geometry import solve_each as _solved  # the placement's solve
 
     singular = [
         [417.7009033078995, 462.57859920065385, 40.29130926605185, -286.211062231303],

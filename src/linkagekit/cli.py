@@ -1528,6 +1528,11 @@ def _written(feasible: bool, path: str) -> str | None:
     return path if feasible else None
 
 
+def _wrote(path: str | None) -> str:
+    """The summary's last line: where the design was written (:func:`_written`), or that it was not."""
+    return f"wrote {path}" if path is not None else "nothing written: the design breaks a constraint"
+
+
 def pareto_paths(output: str, n: int) -> list[str]:
     """Where ``--pareto`` writes its ``n`` designs: ``OUT.yaml`` the most accurate, then ``OUT-2.yaml``, ...
 
@@ -1549,7 +1554,11 @@ def pareto_mark(output: str, k: int, n: int) -> str:
     """
     import os
 
-    return f"--pareto: design {k} of {n} of {os.path.basename(output)!r}"
+    return _PARETO_MARK.format(k=k, n=n, name=repr(os.path.basename(output)))
+
+
+#: :func:`pareto_mark`'s line, read back by :func:`_pareto_own` (any ``n``)
+_PARETO_MARK = "--pareto: design {k} of {n} of {name}"
 
 
 def stale_pareto(output: str, n: int) -> list[str]:
@@ -1579,7 +1588,8 @@ def _pareto_own(path: str, output: str, k: int) -> bool:
 
     if not os.path.lexists(path):
         return True
-    mark = rf"--pareto: design {k} of \d+ of {re.escape(repr(os.path.basename(output)))}"  # as pareto_mark
+    name = re.escape(repr(os.path.basename(output)))
+    mark = _PARETO_MARK.format(k=k, n=r"\d+", name=name)  # its literal words hold no pattern characters
     try:
         return os.path.isfile(path) and re.search(mark, lk.load(path).description or "") is not None
     except (LinkageError, OSError):
@@ -1658,9 +1668,6 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     from .synthesis.function import read_pairs
     from .synthesis.function_run import synthesize_function
 
-    _suffix(args.output, (".yaml", ".yml", ".json"))
-    if args.plot:
-        _suffix(args.plot, (".png", ".svg", ".pdf"), "--plot")
     length = 1.0 if args.ground_length is None else _positive(args.ground_length, "--ground-length")
     if length > MAX_GROUND_LENGTH:  # 1e13 named no option: '<dict>: joints.B[0]: ...'
         raise InputError(f"--ground-length: at most {MAX_GROUND_LENGTH:g}, got {shorten(args.ground_length)}")
@@ -1751,7 +1758,7 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
             f"engine: {o.restarts} searches, {o.evaluations} designs in {o.seconds:.1f} s "
             f"(its best, before the minimax polish: {math.degrees(out.engine.error):.6g} deg)"
         )
-    lines.append(f"wrote {path}" if path is not None else "nothing written: the design breaks a constraint")
+    lines.append(_wrote(path))
     return "\n".join(lines)
 
 
@@ -2059,7 +2066,7 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str | None) 
         f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs evaluated in "
         f"{o.seconds:.1f} s; stopped by {why}"
     )
-    lines.append(f"wrote {path}" if path is not None else "nothing written: the design breaks a constraint")
+    lines.append(_wrote(path))
     return "\n".join(lines)
 
 

@@ -697,8 +697,7 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     head = f"simulate: stopped at t = {t:.6g} s, {d.name} = {value:.6g} {unit}: "
     end = None if d.stroke is None else _stroke_end(d, value, d.stroke[1] - d.stroke[0])
     if d.stroke is not None and end is not None:  # the table reaches the stroke's end itself: the event stops there
-        side = ("lower", "upper")[end == d.stroke[1]]
-        return head + f"{d.name} reached the {side} end of its stroke, {end:.6g} {unit}, that the motion cannot pass"
+        return head + _stroke_end_text(md.mech, k, int(end == d.stroke[1]))
     return head + f"the end of its range{_range_end(md.mech, k, value)} (a toggle) that the motion cannot pass"
 
 
@@ -741,12 +740,16 @@ def _singular_message(md: _Model, t: float, q_si: np.ndarray) -> str:
 
 def _stroke_message(md: _Model, k: int, side: int, t: float, q_si: np.ndarray) -> str:
     """Several drivers: the line of a motion stopped by driver ``k`` at its stroke's lower (0) or upper (1) end."""
-    d = md.mech.drivers[k]
+    return f"simulate: stopped at t = {t:.6g} s ({_inputs_text(md, q_si)}): {_stroke_end_text(md.mech, k, side)}"
+
+
+def _stroke_end_text(mech: Mechanism, k: int, side: int) -> str:
+    """Driver ``k`` at its stroke's lower (0) or upper (1) end, as the stop line says it."""
+    d = mech.drivers[k]
     stroke = d.stroke
-    assert stroke is not None  # only a driver with a stroke has the event
+    assert stroke is not None  # only a driver with a stroke stops at its end
     return (
-        f"simulate: stopped at t = {t:.6g} s ({_inputs_text(md, q_si)}): {d.name} reached the"
-        f" {('lower', 'upper')[side]} end of its stroke, {stroke[side]:.6g} {d.input_unit(md.mech)},"
+        f"{d.name} reached the {('lower', 'upper')[side]} end of its stroke, {stroke[side]:.6g} {d.input_unit(mech)},"
         " that the motion cannot pass"
     )
 

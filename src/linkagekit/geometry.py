@@ -164,3 +164,24 @@ def link_rates(base: ComplexArray, vbase: ComplexArray, abase: ComplexArray) -> 
     n2 = abs2(base)
     with np.errstate(divide="ignore", invalid="ignore"):
         return cross(base, vbase) / n2, cross(base, abase) / n2
+
+
+def solve_each(A: FloatArray, b: FloatArray) -> FloatArray:
+    """``x`` with ``A x = b`` for each small system (``A`` (..., k, k), ``b`` (..., k)): NaN where a system is not
+    finite, and the minimum-norm least squares (``pinv``) for all when one is singular (LAPACK's solve then raises
+    for the whole batch; the others keep their exact answer).
+
+    >>> A = np.array([[[1.0, 1.0], [1.0, 1.0]], [[2.0, 0.0], [0.0, 4.0]], [[np.inf, 0.0], [0.0, 1.0]]])
+    >>> np.round(solve_each(A, np.array([[2.0, 2.0], [2.0, 4.0], [1.0, 1.0]])), 12).tolist()
+    [[1.0, 1.0], [1.0, 1.0], [nan, nan]]
+    """
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    bad = ~(np.all(np.isfinite(A), axis=(-2, -1)) & np.all(np.isfinite(b), axis=-1))
+    A = np.where(bad[..., None, None], np.eye(A.shape[-1]), A)
+    b = np.where(bad[..., None], 0.0, b)
+    try:
+        x = np.linalg.solve(A, b[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # exactly singular to LAPACK (rounding made a pivot 0)
+        x = (np.linalg.pinv(A) @ b[..., None])[..., 0]
+    out: FloatArray = np.where(bad[..., None], np.nan, x)
+    return out

@@ -830,8 +830,9 @@ def _costs_in_time(problem: Problem, X: np.ndarray, until: float | None) -> np.n
     if until is None:
         return np.asarray(problem.cost(X))
     parts = [np.asarray(problem.cost(X[:COST_CHUNK]))]
-    while sum(map(len, parts)) < len(X) and time.monotonic() < until:
-        k = sum(map(len, parts))
+    for k in range(COST_CHUNK, len(X), COST_CHUNK):
+        if time.monotonic() >= until:
+            break
         parts.append(np.asarray(problem.cost(X[k : k + COST_CHUNK])))
     return np.concatenate(parts)
 

@@ -36,7 +36,17 @@ import numpy as np
 from ..errors import InputError
 from .base import Objective, Score, digest
 from .distribute import Evaluator, usable, workers_lost
-from .objective import MIN_CURVE_SIZE, MIN_LINK, PENALTY, Problem, _too_small, best_index, degenerate
+from .objective import (
+    MARGIN,
+    MIN_CURVE_SIZE,
+    MIN_LINK,
+    PENALTY,
+    Problem,
+    _too_small,
+    best_index,
+    degenerate,
+    transmission_limit,
+)
 from .optimize import Outcome, Progress, Settings, check_settings, optimize
 from .run import Synthesis, _unpack, make_problem
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
@@ -642,8 +652,7 @@ class Projected(Objective):
                 short = np.nan_to_num(np.maximum(-sol.margin, 0.0), nan=0.0)
                 v = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(len(f.sse))
             v = np.where(params.valid, v, v + 1.0)
-            mt = self.problem.min_transmission  # its search margin stops at 89 deg, as the objective's
-            cos_lim = np.cos(np.radians(min(mt + 0.25, max(mt, 89.0))))
+            cos_lim = np.cos(np.radians(transmission_limit(self.problem.min_transmission, MARGIN)))
             for jn, a, b in sp.transmission:
                 zj = z[sp.joint(jn)]
                 u, w = z[sp.joint(a)] - zj, z[sp.joint(b)] - zj

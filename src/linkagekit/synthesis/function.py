@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 
 from ..checks import FourBar, grashof
 from ..errors import InputError
-from ..geometry import BoolArray, FloatArray
+from ..geometry import BoolArray, FloatArray, solve_each
 from .base import Objective, Score, digest
 from .targets import _read_text
 
@@ -77,33 +77,24 @@ def freudenstein_system(x: FloatArray, y: FloatArray) -> tuple[FloatArray, Float
 def freudenstein_exact(x: FloatArray, y: FloatArray) -> FloatArray:
     """``K`` (``(..., 3)``) of the four-bar that meets three pairs exactly (radians, ``(..., 3)``)."""
     M, r = freudenstein_system(x, y)
-    return _solve(M, r)
+    return solve_each(M, r)
 
 
 def freudenstein_lsq(x: FloatArray, y: FloatArray) -> FloatArray:
-    """``K`` (``(..., 3)``) minimising the sum of squared Freudenstein residuals, batched over ``...``."""
-    M, r = freudenstein_system(x, y)
-    Mt = np.swapaxes(M, -1, -2)
-    return _solve(Mt @ M, (Mt @ r[..., None])[..., 0])
+    """``K`` (``(..., 3)``) minimising the sum of squared Freudenstein residuals, batched over ``...``.
 
-
-def _solve(A: FloatArray, b: FloatArray) -> FloatArray:
-    """``x`` with ``A x = b`` (batched over ``...``), or the minimum-norm least squares when an ``A`` is singular.
-
-    ``A`` is singular when the outputs are the inputs, or their negatives (the ``cos psi``
-    and ``cos phi`` columns are then equal): a whole family of ``K`` fits, the parallelograms
-    among them.  Its minimum-norm member (``np.linalg.pinv``) is one more start, scored like
-    the others; the polish and the generic starts find the rest.
+    The normal matrix is singular when the outputs are the inputs, or their negatives (the ``cos psi``
+    and ``cos phi`` columns are then equal): a whole family of ``K`` fits, the parallelograms among
+    them.  Its minimum-norm member (:func:`~linkagekit.geometry.solve_each`) is one more start, scored
+    like the others; the polish and the generic starts find the rest.
 
     >>> x = np.radians([0.0, 30.0, 60.0])
     >>> np.round(freudenstein_lsq(x, x), 9).tolist()  # K1 = K2 is free: the smallest is 0
     [0.0, 0.0, 1.0]
     """
-    try:
-        out = np.linalg.solve(A, b[..., None])[..., 0]
-    except np.linalg.LinAlgError:  # only for exactly singular matrices: the others keep LAPACK's solve
-        out = (np.linalg.pinv(A) @ b[..., None])[..., 0]
-    return np.asarray(out, float)
+    M, r = freudenstein_system(x, y)
+    Mt = np.swapaxes(M, -1, -2)
+    return solve_each(Mt @ M, (Mt @ r[..., None])[..., 0])
 
 
 def lengths_from_k(K: FloatArray, d: float = 1.0) -> FloatArray:

@@ -73,7 +73,7 @@ import numpy as np
 
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError
-from ..geometry import ComplexArray, FloatArray, abs2
+from ..geometry import ComplexArray, FloatArray, abs2, solve_each
 from ..params import Params
 from ..params import compile as compile_params
 from ..positions import solve
@@ -424,8 +424,7 @@ def _feasibility(
     short = np.nan_to_num(np.maximum(-margins, 0.0), nan=0.0)
     violation = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(z.shape[1])
     violation = np.where(params.valid, violation, violation + 1.0)
-    # the search's margin stops at 89 deg; the bound itself never does (89.99 was checked as 89: written, exit 0)
-    cos_lim = np.cos(np.radians(min(problem.min_transmission + margin, max(problem.min_transmission, 89.0))))
+    cos_lim = np.cos(np.radians(transmission_limit(problem.min_transmission, margin)))
     worst_cos = np.zeros(z.shape[1])
     mu_min = np.full(z.shape[1], np.nan)
     for j, a, b in sp.transmission:
@@ -437,6 +436,16 @@ def _feasibility(
         mu = np.degrees(np.arccos(np.clip(worst, -1.0, 1.0)))
         mu_min = np.where(np.isfinite(worst), np.fmin(mu_min, mu), mu_min)
     return violation + np.maximum(worst_cos - cos_lim, 0.0), mu_min
+
+
+def transmission_limit(min_transmission: float, margin: float) -> float:
+    """The smallest transmission angle a search holds (degrees): the bound raised by its ``margin``, the raise
+    stopping at 89 deg, the bound itself never (89.99 was checked as 89, and a design below it written, exit 0).
+
+    >>> transmission_limit(20.0, 0.25), transmission_limit(88.9, 0.25), transmission_limit(89.99, 0.25)
+    (20.25, 89.0, 89.99)
+    """
+    return min(min_transmission + margin, max(min_transmission, 89.0))
 
 
 def _too_small(P: ComplexArray, pose: ComplexArray, margin: float) -> FloatArray:
@@ -526,26 +535,8 @@ def plane_fit(p: ComplexArray, nu: ComplexArray, t: ComplexArray) -> tuple[Compl
     M += (1e-15 * np.trace(M, axis1=1, axis2=2) + 1e-300)[:, None, None] * np.eye(4)  # coincident points
     # a design whose curve runs off to ~1e160 overflows its sums: no placement (its cost is infinite); neither it nor
     # a singular system is a LinAlgError for the whole batch ('Singular matrix' ended a shape-only partial search)
-    x = _solved(M, r)
+    x = solve_each(M, r)
     return x[:, 0] + 1j * x[:, 1], x[:, 2] + 1j * x[:, 3]
-
-
-def _solved(M: FloatArray, r: FloatArray) -> FloatArray:
-    """``M^-1 r`` for each design (N, k, k), (N, k): NaN where ``M`` or ``r`` is not finite (a curve that overflowed),
-    the pseudo-inverse's answer where ``M`` is singular to rounding (the solve raised for the whole batch).
-
-    >>> M = np.array([[[1.0, 1.0], [1.0, 1.0]], [[2.0, 0.0], [0.0, 4.0]], [[np.inf, 0.0], [0.0, 1.0]]])
-    >>> np.round(_solved(M, np.array([[2.0, 2.0], [2.0, 4.0], [1.0, 1.0]])), 12).tolist()
-    [[1.0, 1.0], [1.0, 1.0], [nan, nan]]
-    """
-    bad = ~(np.all(np.isfinite(M), axis=(1, 2)) & np.all(np.isfinite(r), axis=1))
-    M, r = np.where(bad[:, None, None], np.eye(M.shape[1]), M), np.where(bad[:, None], 0.0, r)
-    try:
-        x: FloatArray = np.asarray(np.linalg.solve(M, r[..., None])[..., 0], np.float64)
-    except np.linalg.LinAlgError:  # rank 2 to rounding (a curve's samples at one spot): the ridge rounds to a 0 pivot
-        x = np.asarray(np.einsum("nij,nj->ni", np.linalg.pinv(M), r), np.float64)
-    x[bad] = np.nan
-    return x
 
 
 def _tangents(P: ComplexArray, closed: bool) -> ComplexArray:
@@ -772,22 +763,25 @@ def degenerate(sp: DesignSpace, pose: np.ndarray) -> FloatArray:
     """
     spread = np.sqrt(np.mean(abs2(pose - pose.mean(axis=0)), axis=0))
     shortest = np.full(pose.shape[1], np.inf)
-    for ln in sp.template.links:
-        ids = [sp.joint(j) for j in ln.joints if j != sp.tracer]
-        for i, a in enumerate(ids):
-            for b in ids[i + 1 :]:
-                shortest = np.fmin(shortest, np.abs(pose[a] - pose[b]))
+    for a, b in _link_pairs(sp, tracer=False):
+        shortest = np.fmin(shortest, np.abs(pose[a] - pose[b]))
     return np.asarray(np.maximum(MIN_LINK - shortest / np.where(spread > 0, spread, 1.0), 0.0))
+
+
+def _link_pairs(sp: DesignSpace, tracer: bool = True) -> list[tuple[int, int]]:
+    """Every pair of joints of one link (indices of ``sp``'s joints), the ground's too; the tracer's if ``tracer``."""
+    pairs = []
+    for ln in sp.template.links:
+        ids = [sp.joint(j) for j in ln.joints if tracer or j != sp.tracer]
+        pairs += [(a, b) for i, a in enumerate(ids) for b in ids[i + 1 :]]
+    return pairs
 
 
 def _length_excess(sp: DesignSpace, pose: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Largest relative excess of a link length (between two joints of one link, the ground's pivots too: two pivots
     a nanometre apart made a 'feasible' four-bar of a rigid triangle) outside ``[lo, hi]``."""
     out = np.zeros(pose.shape[1])
-    for ln in sp.template.links:
-        ids = [sp.joint(j) for j in ln.joints]
-        for i, a in enumerate(ids):
-            for b in ids[i + 1 :]:
-                d = np.abs(pose[a] - pose[b])
-                out = np.maximum(out, np.maximum(lo - d, d - hi) / hi)
+    for a, b in _link_pairs(sp):
+        d = np.abs(pose[a] - pose[b])
+        out = np.maximum(out, np.maximum(lo - d, d - hi) / hi)
     return np.maximum(out, 0.0)
