@@ -27,6 +27,7 @@ input:crank,assembled,C.x
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import json
@@ -2380,8 +2381,25 @@ def main(argv: list[str] | None = None) -> int:
         print(prefix + one_line(str(exc), max(MAX_MESSAGE - len(prefix), 40)), file=sys.stderr)
         code = 1
     if argv is None:
-        sys.exit(code)
+        _exit(code)
     return code
+
+
+def _exit(code: int) -> None:
+    """The script's exit with ``code``: at once when a thread it started still runs (the manager thread of a worker
+    pool killed on Ctrl-C can wait for ever on a worker that is gone: the line 'interrupted' was printed, then the
+    interpreter's exit, which joins every thread, hung), else the interpreter's own."""
+    import threading
+
+    lingering = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
+    if lingering:
+        import os
+
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(OSError, ValueError):
+                stream.flush()
+        os._exit(code)
+    sys.exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover
