@@ -41,7 +41,7 @@ LAYERS = [
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},
-    {"synthesis.atlas"},
+    {"synthesis.atlas", "synthesis.autosave"},
     {"synthesis.function_run"},
     {"synthesis.run"},
     {"synthesis.auto"},

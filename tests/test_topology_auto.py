@@ -380,3 +380,70 @@ def test_auto_takes_the_four_bar_search_of_a_single_topology_as_a_candidate_too(
     assert (not out.feasible, auto.two_sided(out, arc)) == judged[0]
     res = lk.analyze(out.mechanism, {"crank": np.linspace(0.0, 360.0, 3601)})
     assert np.all(res.assembled)
+
+
+class _Killed(Exception):
+    """The run stopped."""
+
+
+def test_a_killed_auto_run_resumes_from_its_checkpoint_without_doing_again_what_it_did(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """``--topology auto --checkpoint FILE`` (it was refused: a long letter run killed lost everything). A run stopped
+    after one round of its local searches resumes: the screen and the four-bar search are not run again, the
+    searches start from their best designs so far with seeds moved on, and the clock goes on from the time used."""
+    from linkagekit.synthesis import auto, autosave
+
+    monkeypatch.setattr(autosave, "ROUND_SECONDS", 0.3)
+    monkeypatch.setattr(auto, "ROUND_SECONDS", 0.3)
+    calls: list = []
+    real, kill = auto.local_searches, True
+
+    def once(projs, seeds, starts, seconds, workers):  # type: ignore[no-untyped-def]
+        calls.append((list(seeds), [np.array(x) for x in starts], seconds))
+        if len(calls) == 2 and kill:
+            raise _Killed  # killed in the second round
+        return real(projs, seeds, starts, seconds, workers)
+
+    monkeypatch.setattr(auto, "local_searches", once)
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    T, path = np.stack([np.cos(t), 0.6 * np.sin(t)], 1), str(tmp_path / "run.npz")
+    with pytest.raises(_Killed):
+        auto.synthesize_auto(T, max_joints=5, seconds=2.0, seed=4, workers=1, checkpoint=path)
+    topologies = enumerate_topologies(5)
+    make = auto.Maker(T, "m", False, (("min_transmission", 20.0),))
+    ck = auto._checkpoint(path, make, topologies, (T, "m", False, {"min_transmission": 20.0}, 5, 4, "local"))
+    saved = ck.load()
+    assert saved.order == ["fourbar"] and saved.rounds == 1 and saved.fourbar is not None
+    assert saved.elapsed > 0.7 * 2.0 * (auto.SCREEN + auto.FOUR_BAR_SHARE)  # the screen's and the four-bar's time
+    first = saved.best[0]
+    for name in ("screen", "four_bar_engine"):  # done: not again
+        monkeypatch.setattr(auto, name, lambda *a, **k: pytest.fail("run again"))
+    calls.clear()
+    kill = False
+    out = auto.synthesize_auto(T, max_joints=5, seconds=2.0, seed=4, workers=1, checkpoint=path)
+    assert np.array_equal(calls[0][1][0], first.x)  # from the best so far
+    assert calls[0][0] == [(saved.seeds[0] + 7919) % 2**32]  # the seeds moved on by the round done
+    assert out.outcome.seconds >= 0.95 * 2.0 * (1 - auto.RESERVE)  # both runs' time: the budget, not twice it
+    done = ck.load()
+    assert done.rounds > saved.rounds and done.best[0].cost <= first.cost  # never worse than it was
+    assert done.best[0].starts >= first.starts and done.best[0].designs > first.designs
+    assert out.feasible and out.topology in ("fourbar",)
+
+
+def test_an_auto_checkpoint_of_another_run_or_altered_is_refused_in_one_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """Another run's checkpoint (other targets or options), an array of another shape, a name that is no topology of
+    the run: each refused naming the file, before any array is read."""
+    from linkagekit.synthesis.autosave import Best, Checkpoint, Saved
+
+    path = str(tmp_path / "ck.npz")
+    dims = {"fourbar": 6, "watt2": 10}.__getitem__
+    saved = Saved(1.5, [3], ["watt2"], [(0.2, np.ones(10))], None, [Best(np.full(10, 2.0), 0.1, 4, 400, 1.0)], 1)
+    Checkpoint(path, "abc", dims, 9).save(saved)
+    back = Checkpoint(path, "abc", dims, 9).load()
+    assert back is not None and back.elapsed == 1.5 and back.best[0].x.tolist() == [2.0] * 10
+    with pytest.raises(InputError, match=r"ck\.npz: this checkpoint belongs to another run"):
+        Checkpoint(path, "xyz", dims, 9).load()
+    with pytest.raises(InputError, match=r"ck\.npz: not a usable .*_x_0 .*shape \(10,\), expected .*\(12,\)"):
+        Checkpoint(path, "abc", {"fourbar": 6, "watt2": 12}.__getitem__, 9).load()
+    with pytest.raises(InputError, match=r"ck\.npz: not a usable .*'watt2' is no topology of this run"):
+        Checkpoint(path, "abc", {"fourbar": 6}.__getitem__, 9).load()
+    assert Checkpoint(str(tmp_path / "none.npz"), "abc", dims, 9).load() is None

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from .autosave import ROUND_SECONDS, Best, Checkpoint, Saved
 from .base import Objective, Score, digest
 from .distribute import Evaluator, usable, workers_lost
 from .objective import (
@@ -96,6 +97,7 @@ def synthesize_auto(
     scheduler: str | None = None,
     progress: Callable[[Progress], None] | None = None,
     method: str = "local",
+    checkpoint: str | None = None,
     **problem: Any,
 ) -> Synthesis:
     """Path generation over the built-in topologies of at most ``max_joints`` joints; the best is returned.
@@ -105,43 +107,107 @@ def synthesize_auto(
     ``method``: ``"local"`` (:func:`multistart`, the default) or ``"engine"`` (the engine's
     differential evolution and CMA-ES, with ``restarts`` ... ``scheduler``, ``progress``).
     The result's ``topology`` names the topology chosen and ``tried`` lists what was
-    searched (:class:`Tried`).
+    searched (:class:`Tried`). ``checkpoint``: a file the run's progress is saved in, and
+    resumed from when it exists (:mod:`~.autosave`; the local searches then run in rounds
+    of :data:`~.autosave.ROUND_SECONDS`, a checkpoint after each).
     """
     t0 = time.monotonic()
     check_settings(seconds=seconds, restarts=restarts, generations=generations, popsize=popsize, goal=goal)
     check_settings(workers=workers)
     workers = usable(workers)  # its shares of the time assume the workers run side by side
+    xy, units, source, partial = _arguments(targets, problem)
+    topologies = enumerate_topologies(max_joints)
+    make = Maker(xy, units, partial, tuple(problem.items()))
+    ck = _checkpoint(checkpoint, make, topologies, (xy, units, partial, problem, max_joints, seed, method))
+    saved = (ck.load() if ck else None) or Saved()
+    t0 -= saved.elapsed  # the clock goes on from the runs before
+
+    def save() -> None:
+        if ck is not None:
+            saved.elapsed = time.monotonic() - t0
+            ck.save(saved)
+
+    if saved.order is None:
+        _screened(saved, topologies, make, np.random.default_rng(seed), t0 + SCREEN * seconds, workers, method)
+        save()
+    assert saved.order is not None and saved.seeds is not None
+    projs = [make(next(t for t in topologies if t.name == name)) for name in saved.order]
+    engine = _four_bar(saved, save, targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
+    left = max(seconds * (1 - RESERVE) - (time.monotonic() - t0), 1e-3)  # the screening may have used it all
+    starts = [x for _, x in saved.screen]
+    if method == "engine":
+        each = Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler)
+        outs = [optimize(p, each, progress) for p in projs]
+    elif ck is None:
+        outs = local_searches(projs, saved.seeds, starts, left, workers)
+    else:
+        outs = saved_searches(projs, saved, left, workers, save)
+    return _chosen(saved, {t.name: t.n_joints for t in topologies}, projs, starts, outs, engine, (xy, source, t0))
+
+
+def _arguments(targets: Any, problem: dict[str, Any]) -> tuple[np.ndarray, str, str | None, bool]:
+    """The targets' points, unit and source, and whether they are ``partial``; ``problem`` (changed in place) keeps
+    the keywords of :func:`~.run.make_problem` with the transmission bound set."""
     xy, inputs, units, source = _unpack(targets, problem.pop("inputs", None), problem.pop("units", "m"))
     if inputs is not None:
         raise InputError("--topology auto: targets with input angles (timing) are not supported")
     partial = bool(problem.pop("partial", False))
     problem.pop("shape_only", None)  # the projected search always places the curve
     problem.setdefault("min_transmission", 20.0)
-    topologies = enumerate_topologies(max_joints)
-    rng = np.random.default_rng(seed)
+    return xy, units, source, partial
 
-    make = Maker(xy, units, partial, tuple(problem.items()))
-    screened = screen(topologies, make, rng, t0 + SCREEN * seconds, workers)
+
+def _screened(
+    saved: Saved,
+    topologies: Sequence[Topology],
+    make: Maker,
+    rng: np.random.Generator,
+    deadline: float,
+    workers: int,
+    method: str,
+) -> None:
+    """The screen (:func:`screen`) until ``deadline``: the topologies it chooses, their figures and designs, and
+    the local searches' seeds, into ``saved``."""
+    screened = screen(topologies, make, rng, deadline, workers)
     order = sorted(screened, key=lambda k: screened[k][0])[: searched(workers if method == "local" else 1)]
-    tried = {t.name: Tried(t.name, t.n_joints, screened[t.name][0]) for t in topologies if t.name in screened}
-    projs = [make(next(t for t in topologies if t.name == name)) for name in order]
-    engine = four_bar_engine(targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
-    left = max(seconds * (1 - RESERVE) - (time.monotonic() - t0), 1e-3)  # the screening may have used it all
-    if method == "engine":
-        each = Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler)
-        outs = [optimize(p, each, progress) for p in projs]
-    else:
-        seeds = rng.integers(0, 2**32, len(projs))
-        outs = local_searches(projs, [int(k) for k in seeds], [screened[n][1] for n in order], left, workers)
+    saved.order, saved.screen = order, [screened[n] for n in order]
+    saved.seeds = [int(k) for k in rng.integers(0, 2**32, len(order))]
+
+
+def _chosen(
+    saved: Saved,
+    joints: dict[str, int],
+    projs: Sequence[Projected],
+    starts: Sequence[np.ndarray],
+    outs: Sequence[Outcome],
+    engine: Synthesis,
+    run: tuple[np.ndarray, str | None, float],
+) -> Synthesis:
+    """The best of the topologies' searches and the four-bar's, by :func:`two_sided` (feasible first), with what
+    was tried and how the whole run went (``run``: the targets, their source and when the run started)."""
+    assert saved.order is not None
+    xy, source, t0 = run
+    tried = []
     found: list[Synthesis] = []
-    for name, proj, out in zip(order, projs, outs, strict=True):
-        x = _best_of(proj, [out.x, screened[name][1]])
+    for name, (figure, _), proj, x0, out in zip(saved.order, saved.screen, projs, starts, outs, strict=True):
+        x = _best_of(proj, [out.x, x0])
         syn = written(proj, x, replace(out, x=x), source)
-        tried[name] = replace(tried[name], error=_relative(syn))
+        tried.append(Tried(name, joints[name], figure, _relative(syn)))
         found.append(syn)
     best = min([*found, engine], key=lambda f: (not f.feasible, two_sided(f, xy)))
-    runs = (*(tried[n] for n in order), Tried(FOUR_BAR_ENGINE, 5, np.nan, _relative(engine)))
+    runs = (*tried, Tried(FOUR_BAR_ENGINE, 5, np.nan, _relative(engine)))
     return replace(best, tried=runs, outcome=_whole_run(best.outcome, [*outs, engine.outcome], t0))
+
+
+def _checkpoint(path: str | None, make: Maker, topologies: Sequence[Topology], run: tuple[Any, ...]) -> Any:
+    """The run's :class:`~.autosave.Checkpoint` at ``path`` (None: none); ``run``: what it must agree on."""
+    if path is None:
+        return None
+    xy, units, partial, problem, max_joints, seed, method = run
+    names = {t.name: t for t in topologies}
+    four = _four_bar_problem(xy, units, partial, problem)
+    key = digest(np.asarray(xy), units, partial, sorted(problem.items()), max_joints, seed, method, SEARCHED)
+    return Checkpoint(path, key, lambda name: len(make(names[name]).bounds[0]), four.dim)
 
 
 def _relative(syn: Synthesis) -> float:
@@ -206,6 +272,56 @@ def four_bar_engine(
         targets, "fourbar", units=units, shape_only=True, partial=partial, seed=seed, seconds=max(seconds, 1e-3),
         workers=workers, goal=goal, **problem,
     )  # fmt: skip
+
+
+def _four_bar(
+    saved: Saved, save: Callable[[], None], targets: Any, units: str, partial: bool, *search: Any
+) -> Synthesis:
+    """:func:`four_bar_engine`'s result (``search``: its problem, seed, seconds, workers and goal), saved; a
+    checkpoint's (``saved.fourbar``) again without the search."""
+    problem = search[0]
+    if saved.fourbar is not None:
+        return four_bar_again(targets, units, partial, problem, saved.fourbar)
+    engine = four_bar_engine(targets, units, partial, *search)
+    saved.fourbar = engine.outcome
+    save()
+    return engine
+
+
+def _four_bar_problem(xy: np.ndarray, units: str, partial: bool, problem: dict[str, Any]) -> Problem:
+    """The problem :func:`four_bar_engine` searches."""
+    return make_problem(xy, "fourbar", None, units, **problem, shape_only=True, partial=partial)
+
+
+def four_bar_again(targets: Any, units: str, partial: bool, problem: dict[str, Any], outcome: Outcome) -> Synthesis:
+    """:func:`four_bar_engine`'s result again from its outcome (a checkpoint's: the search is not run again)."""
+    from .run import finish
+
+    xy, _, _, source = _unpack(targets, None, units)
+    return finish(_four_bar_problem(xy, units, partial, problem), outcome, source)
+
+
+def saved_searches(
+    projs: Sequence[Projected], saved: Saved, seconds: float, workers: int, save: Callable[[], None]
+) -> list[Outcome]:
+    """:func:`local_searches` in rounds of :data:`~.autosave.ROUND_SECONDS` within ``seconds``, each round from the
+    best designs so far (``saved.best``, else the screen's), ``save()`` after each: each objective's outcome.
+
+    A round's seeds are the searches' own (``saved.seeds``) moved on by the rounds done, so a resumed run does not
+    draw the designs it drew before.
+    """
+    deadline = time.monotonic() + seconds
+    assert saved.seeds is not None
+    saved.best = saved.best or [None] * len(projs)
+    while any(b is None for b in saved.best) or deadline - time.monotonic() > ROUND_SECONDS / 100:
+        span = max(min(ROUND_SECONDS, deadline - time.monotonic()), 1e-3)
+        seeds = [(s + 7919 * saved.rounds) % 2**32 for s in saved.seeds]
+        x0 = [x if b is None else b.x for b, (_, x) in zip(saved.best, saved.screen, strict=True)]
+        outs = local_searches(projs, seeds, x0, span, workers)
+        saved.best = [Best.first(o) if b is None else b.merged(o) for b, o in zip(saved.best, outs, strict=True)]
+        saved.rounds += 1
+        save()
+    return [b.outcome() for b in saved.best if b is not None]
 
 
 def searched(workers: int) -> int:

@@ -1197,7 +1197,13 @@ def _save(
         names = [k for k, v in solver.items() if isinstance(v, np.ndarray)]
         header["solver"] = {**{k: v for k, v in solver.items() if k not in names}, "arrays": names}
         arrays.update({f"solver_{k}": solver[k] for k in names})
-    arrays["header"] = np.array(json.dumps(header, default=int))
+    write_archive(path, header, arrays)
+
+
+def write_archive(path: Path, header: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    """Write a checkpoint atomically: ``arrays`` and the JSON ``header`` in one ``.npz`` (a temporary file renamed
+    over ``path`` once it is whole: a run killed while writing leaves the last checkpoint as it was)."""
+    arrays = {**arrays, "header": np.array(json.dumps(header, default=int))}
     tmp = _temporary(path)
     try:
         with open(tmp, "wb") as f:
@@ -1223,12 +1229,34 @@ def _load(settings: Settings, problem: Objective, template: Callable[[int], Sear
     member and compared with what this run's search holds (``template(restart)``) before the
     array itself is read; the header's numbers are checked against the settings.
     """
+    assert settings.checkpoint is not None
+    path = Path(settings.checkpoint)
+    states: list[dict[str, Any]] = []
+
+    def expected(header: dict[str, Any]) -> dict[str, Any]:
+        _check_owner(path, header, settings, problem)
+        states.append(_state(header, settings))
+        return _expected(states[0], problem, template)
+
+    got = read_archive(path, "linkagekit-checkpoint", CHECKPOINT_VERSION, expected)
+    return None if got is None else _with_arrays(states[0], got[1])
+
+
+def read_archive(
+    path: Path, kind: str, version: int, expected: Callable[[dict[str, Any]], dict[str, Any]]
+) -> tuple[dict[str, Any], dict[str, np.ndarray]] | None:
+    """A checkpoint's JSON header and arrays, or None when the file does not exist yet.
+
+    Nothing is allocated before it is known to fit: the file must be a regular file of at most
+    ``MAX_CHECKPOINT_BYTES``, its header's format ``kind/version``; ``expected(header)`` (which
+    may refuse it: another problem's, other settings) names every array with its (smallest,
+    largest) shape, and each array's ``.npy`` header (shape and type) is read from its zip
+    member and compared with that before the array itself is read.
+    """
     import stat
     import zipfile
     import zlib
 
-    assert settings.checkpoint is not None
-    path = Path(settings.checkpoint)
     _temporary(path).unlink(missing_ok=True)  # left by a run killed while writing; the checkpoint itself is whole
     try:
         st = path.stat()
@@ -1242,10 +1270,8 @@ def _load(settings: Settings, problem: Objective, template: Callable[[int], Sear
         raise InputError(f"{path}: not a checkpoint ({st.st_size} bytes, more than any checkpoint)")
     try:
         with zipfile.ZipFile(path) as zf:
-            header = _header(zf)
-            _check_owner(path, header, settings, problem)
-            state = _state(header, settings)
-            arrays = _arrays(zf, _expected(state, problem, template))
+            header = _header(zf, kind, version)
+            return header, _arrays(zf, expected(header))
     except _Refused as e:
         raise InputError(f"{path}: not a usable linkagekit checkpoint ({e})") from None
     except InputError:  # another problem's, other settings: said as it is (it is a ValueError too)
@@ -1254,11 +1280,11 @@ def _load(settings: Settings, problem: Objective, template: Callable[[int], Sear
         raise InputError(f"{path}: not a linkagekit checkpoint (not a .npz archive)") from None
     except (OSError, EOFError, ValueError, KeyError, TypeError, zlib.error, NotImplementedError, RecursionError) as e:
         raise InputError(f"{path}: not a readable linkagekit checkpoint ({type(e).__name__}: {e})") from None
-    return _with_arrays(state, arrays)
 
 
-def _header(zf: Any) -> dict[str, Any]:
-    """The checkpoint's JSON header (its format checked), read once its size is known to be bounded."""
+def _header(zf: Any, kind: str, version: int) -> dict[str, Any]:
+    """The checkpoint's JSON header (its format ``kind/version`` checked), read once its size is known to be
+    bounded."""
     if "header.npy" not in zf.namelist():
         raise _Refused("no header")
     _, shape, dtype = _npy_header(zf, "header")
@@ -1266,12 +1292,13 @@ def _header(zf: Any) -> dict[str, Any]:
         raise _Refused(f"a header of type {dtype} and shape {shape}")
     with zf.open("header.npy") as f:
         header = json.loads(str(np.lib.format.read_array(f, allow_pickle=False)))
-    earlier = {f"linkagekit-checkpoint/{v}": v for v in range(1, CHECKPOINT_VERSION)}
+    earlier = {f"{kind}/{v}": v for v in range(1, version)}
     if isinstance(header, dict) and header.get("format") in earlier:
         v = earlier[header["format"]]
         raise _Refused(f"written by an earlier linkagekit (format {v}, another search); delete it to start anew")
-    if not isinstance(header, dict) or header.get("format") != f"linkagekit-checkpoint/{CHECKPOINT_VERSION}":
-        raise _Refused("not a linkagekit checkpoint")
+    if not isinstance(header, dict) or header.get("format") != f"{kind}/{version}":
+        fmt = header.get("format") if isinstance(header, dict) else None
+        raise _Refused(f"format {shorten(repr(fmt))}, expected {kind}/{version}" if fmt else "no format")
     return header
 
 
