@@ -77,3 +77,50 @@ def test_the_command_line_refuses_by_the_same_limits(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"--restarts: expected 1 to {over - 1}, got {over}" in err
     assert issubclass(InputError, LinkageError)
+
+
+def test_a_file_name_is_read_as_targets_in_the_units_given(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """``lk.synthesize("targets.csv")``, what the command line takes, raised a ValueError from NumPy: a file name
+    (str or path) is now read by ``read_targets`` in ``units`` (the search itself is not run here)."""
+    import pathlib
+
+    from linkagekit.synthesis import run
+
+    csv = tmp_path / "arc.csv"
+    csv.write_text("x,y\n" + "\n".join(f"{x},{y}" for x, y in ARC))
+    seen: list = []
+    monkeypatch.setattr(run, "synthesize_path", lambda targets, topology, **kw: seen.append((targets, kw)))
+    lk.synthesize(str(csv), "fourbar", units="mm")
+    lk.synthesize(pathlib.Path(csv), "fourbar")
+    (a, kw_a), (b, kw_b) = seen
+    assert a.unit == "mm" and kw_a["units"] == "mm" and b.unit == "m" and a.source == str(csv)
+    assert np.array_equal(a.xy, ARC) and np.array_equal(b.xy, ARC)
+
+
+@pytest.mark.parametrize(
+    "call, words",
+    [
+        (lambda: lk.synthesize({"x": [0, 1]}, "fourbar"), "targets: expected an array of numbers, got dict"),
+        (lambda: lk.synthesize(ARC, 4), "topology: expected a name"),
+        (lambda: lk.synthesize(ARC, "fourbar", units="km"), "units: expected one of 'mm', 'cm', 'm', 'in', got 'km'"),
+        (lambda: lk.synthesize("poses.csv", task="motion"), "read it first"),
+    ],
+)
+def test_targets_topology_and_units_that_are_no_such_thing_are_one_line(call, words) -> None:  # type: ignore[no-untyped-def]
+    """They were a TypeError, an AttributeError ('int' object has no attribute 'joint_names') and 'fourbar:
+    units.length: ...' (naming no argument)."""
+    with pytest.raises(InputError, match=words.replace("(", r"\(").replace(")", r"\)")):
+        call()
+
+
+def test_a_unit_that_contradicts_the_targets_own_is_refused(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """Targets read in metres (the default) and ``units="mm"`` given to synthesize: the design was written in metres
+    without a word."""
+    csv = tmp_path / "arc.csv"
+    csv.write_text("x,y\n" + "\n".join(f"{x},{y}" for x, y in ARC))
+    T = lk.read_targets(csv)
+    with pytest.raises(InputError, match=r"units='mm': the targets were read in 'm'"):
+        lk.synthesize(T, "fourbar", units="mm", **TINY)
+    from linkagekit.synthesis.run import _targets_given
+
+    assert _targets_given(T, "path", {"units": "m"}) is T and _targets_given(T, "path", {}) is T

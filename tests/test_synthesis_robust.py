@@ -441,3 +441,20 @@ def test_a_search_asked_for_workers_in_a_pool_worker_runs_there_with_a_warning(m
     for line in got:
         assert line.startswith("ok feasible=True"), line
         assert "workers=2: this is a daemonic worker process" in line, line
+
+
+def test_the_progress_shows_the_atlas_answer_until_a_search_beats_it() -> None:
+    """The atlas's answer (1.03 %) was followed by "search 1 ... best max error 23 %": the searches' own best, read
+    as if the run had lost the better design (which it returns). The best shown is the better of the two."""
+    from linkagekit import cli
+    from linkagekit.synthesis.optimize import Progress
+
+    shown = cli._Search(10.0)
+    atlas = Progress(0, 0, 1e-4, 0.0103, 100, 0.5, source="atlas")
+    shown.atlas = atlas
+    assert shown.best(Progress(0, 3, 1e-2, float("nan"), 900, 1.0)) == (
+        "max error 1.03 % of the targets' diagonal (the atlas's)"
+    )
+    assert shown.best(Progress(0, 9, 1e-2, 0.23, 900, 1.0)).endswith("(the atlas's)")
+    assert shown.best(Progress(1, 9, 1e-5, 0.004, 900, 2.0)) == "max error 0.4 % of the targets' diagonal"
+    assert shown.best(atlas) == "max error 1.03 % of the targets' diagonal"

@@ -16,6 +16,7 @@ A four-bar whose coupler point passes through five points of a known coupler cur
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -25,6 +26,7 @@ import numpy as np
 
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError, LinkageError
+from ..units import LENGTH_UNITS
 from .base import Objective
 from .distribute import usable
 from .function_run import FunctionSynthesis, synthesize_function
@@ -215,6 +217,11 @@ def synthesize(
     """
     if objective is not None:
         return search(objective, **options)
+    from ..model import Mechanism
+
+    if not isinstance(topology, (str, Mechanism)):
+        raise InputError(f"topology: expected a name such as 'fourbar' or a Mechanism, got {type(topology).__name__}")
+    targets = _targets_given(targets, task, options)
     if task == "path":
         return synthesize_path(targets, topology, **options)
     if task == "motion":
@@ -226,6 +233,31 @@ def synthesize(
     if task == "function":
         return _function_task(targets, **options)
     raise InputError(f"task: expected 'path', 'motion' or 'function', got {task!r}")
+
+
+def _targets_given(targets: Any, task: str, options: dict[str, Any]) -> Any:
+    """The targets as the task takes them: a file name (str or path) read by :func:`~.targets.read_targets` (path
+    generation, in ``options``' ``units``); a :class:`~.targets.Targets` whose unit another ``units=`` contradicts,
+    or anything that is not numbers, refused in one line (they were a ValueError, a TypeError or ignored)."""
+    from .targets import read_targets
+
+    if isinstance(targets, (str, os.PathLike)):
+        if task != "path":
+            reader = "synthesis.motion.read_poses" if task == "motion" else "synthesis.function.read_pairs"
+            raise InputError(f"targets: a file name; read it first (linkagekit.{reader}) and pass its numbers")
+        return read_targets(targets, units=options.get("units", "m"))
+    if hasattr(targets, "xy") and hasattr(targets, "unit"):
+        if options.get("units", targets.unit) != targets.unit:
+            raise InputError(
+                f"units={options['units']!r}: the targets were read in {targets.unit!r} "
+                "(give the unit to read_targets, which keeps it)"
+            )
+        return targets
+    try:
+        np.asarray(targets, complex)
+    except (TypeError, ValueError):
+        raise InputError(f"targets: expected an array of numbers, got {type(targets).__name__}") from None
+    return targets
 
 
 def _function_task(
@@ -340,7 +372,9 @@ def _units(units: str, old: dict[str, Any]) -> str:
         import warnings
 
         warnings.warn("synthesize(unit=...) is now units=... (as in read_targets)", DeprecationWarning, stacklevel=3)
-        return str(old["unit"])
+        units = str(old["unit"])
+    if not isinstance(units, str) or units not in LENGTH_UNITS:  # it was "fourbar: units.length: ..."
+        raise InputError(f"units: expected one of {', '.join(map(repr, LENGTH_UNITS))}, got {units!r}")
     return units
 
 
