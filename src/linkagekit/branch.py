@@ -253,12 +253,13 @@ def _meetings(btw: _Between, probe: float) -> tuple[np.ndarray, np.ndarray]:
     gap deeper than that, or a near miss, is no meeting).  At a meeting the sign flips when,
     ``probe`` before and after it, the flipped sign continues the motion smoothly and the kept
     one does not (the test of :func:`_defect`, now at the meeting itself, so
-    that it does not depend on where the samples fall).
+    that it does not depend on where the samples fall; ``probe`` may reach past the samples:
+    the other steps keep their signs there, the step's own is given).
     """
     best, low = _golden(btw.margin, btw.ta, btw.tb)
     where = _vertex(btw.margin, best, low, 1e-3 * (btw.tb - btw.ta))
-    h = np.minimum(probe, 0.5 * np.minimum(where - btw.ta, btw.tb - where))
-    one = np.ones_like(where)
+    h = np.full_like(where, probe)  # not cut to the samples: a sample 1e-4 deg from the meeting left h = 9e-7 rad,
+    one = np.ones_like(where)  # where the rates have lost the digits that tell the two ways apart (the answer changed)
     before = [btw.state(where - h, sigma * one) for sigma in (1.0, -1.0)]
     after = [btw.state(where + h, sigma * one) for sigma in (1.0, -1.0)]
     smooth = np.ones(len(where), bool)
