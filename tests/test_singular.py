@@ -114,3 +114,24 @@ def test_a_sample_that_does_not_assemble_is_null_everywhere_in_json(capsys):
         assert all(values[0] is None and values[1] is not None for values in joint.values())
     for link in out["links"].values():
         assert all(values[0] is None for values in link.values())
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_near_a_change_point_rates_are_right_or_flagged(method):
+    """The parallelogram at 5 rad/s: its rocker's angular acceleration is exactly 0 on the parallelogram branch (the
+    default's up to 180 deg). A review found -0.0017, -4.81 and -435.7 rad/s^2 at 179.99, 179.999 and 179.9999 deg,
+    none flagged: rounding in the positions grows as 1.5 eps / c^3 in the accelerations (c the dyad's condition, 1.7e-5
+    at 179.999 deg). A sample is flagged where c < 1e-4; every other sample's rates hold: the coupler's omega and the
+    rocker's alpha to 1e-3 of omega^2 = 25."""
+    mech = lk.load("examples/seed003_ex22.yaml")
+    off = 10.0 ** -np.arange(1.0, 7.5, 0.25)
+    res = lk.analyze(mech, {"crank": 180.0 - off}, method=method)
+    d = res.to_dict()["links"]
+    alpha = np.array(d["rocker"]["alpha"], float)
+    omega = np.array(d["coupler"]["omega"], float)
+    ok = ~res.singular
+    assert ok.sum() >= 4 and res.singular.sum() >= 10  # both kinds present
+    assert np.all(np.abs(alpha[ok]) < 1e-3 * 25) and np.all(np.abs(omega[ok]) < 1e-6)
+    assert np.all(np.isnan(alpha[~ok])) and np.all(res.assembled)
+    cont = lk.analyze(mech, {"crank": 180.0 - off}, branch="continuous")  # the branch's limits, at every sample
+    assert np.all(np.abs(np.asarray(cont.to_dict()["links"]["rocker"]["alpha"], float)) < 1e-3 * 25)

@@ -38,7 +38,7 @@ from .options import BranchMode
 from .params import Body, LoadParams, Params, as_poses, compile
 from .plan import Plan, make_plan
 from .positions import Positions, reference_mode, solve
-from .rates import Rates, link_motion, solve_rates
+from .rates import REPORTED_TOL, Rates, link_motion, solve_rates
 from .result import Result, frozen
 
 ArrayLike = Any
@@ -425,7 +425,7 @@ def _solve_chunk(
     pos = solve(p, q, sg, cut(req.mirrors), out=out.z[:, sl], continuous=continuous)
     rt = None
     if out.v is not None and out.a is not None:
-        rt = solve_rates(p, pos, req.w_in, req.a_in, out=(out.v[:, sl], out.a[:, sl]))
+        rt = solve_rates(p, pos, req.w_in, req.a_in, tol=REPORTED_TOL, out=(out.v[:, sl], out.a[:, sl]))
     if br is not None:
         pos, rt = limits(p, q, (req.w_in, req.a_in), cut(req.mirrors), br, angular, pos, rt)
     return pos, rt

@@ -29,8 +29,14 @@ from .steps import Rate
 
 #: |sin| of a step's angle below which its rates are undefined (see the module docstring)
 SINGULAR_TOL = 1e-6
+#: ... and below which :func:`linkagekit.analyze` reports none: rounding in the positions near a singular position
+#: grows in the rates as about ``eps / c^2`` (velocities) and ``1.5 eps / c^3`` (accelerations, forces), ``c`` the
+#: step's condition; a parallelogram 1e-3 deg from its flat position (``c = 1.7e-5``) had its rocker's angular
+#: acceleration -4.8 rad/s^2 where it is 0, unflagged. Above this, accelerations hold to about 3e-4 of their scale,
+#: velocities to 2e-8 (measured, docs/method.md)
+REPORTED_TOL = 1e-4
 
-__all__ = ["SINGULAR_TOL", "LinkMotion", "Rates", "link_motion", "solve_rates"]
+__all__ = ["REPORTED_TOL", "SINGULAR_TOL", "LinkMotion", "Rates", "link_motion", "solve_rates"]
 
 
 @dataclass(frozen=True)

@@ -44,12 +44,14 @@ import numpy as np
 from .errors import MethodNotApplicableError
 from .geometry import NAN_POINT, cross
 from .model import CrankType
+from .rates import REPORTED_TOL
 
 if TYPE_CHECKING:
     from .model import Link, Mechanism
 
-#: where a loop's sine ``sin(theta_a - theta_b)`` is below this, its rates are undefined
-SINGULAR_TOL = 1e-6
+#: where a loop's sine ``sin(theta_a - theta_b)`` is below this, its rates are not reported (the natural-coordinate
+#: solver's threshold, :data:`linkagekit.rates.REPORTED_TOL`: rounding grows there as it does in that solver)
+SINGULAR_TOL = REPORTED_TOL
 #: relative tolerance of the triangle-inequality assembly test
 ASSEMBLY_RTOL = 1e-12
 
