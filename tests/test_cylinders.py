@@ -610,7 +610,8 @@ def test_the_report_page_draws_each_cylinder_between_its_ends(browser, tmp_path)
         (a, da), (b, db) = ((np.array(joints[j][:2]), np.array(joints[j][2:])) for j in ends[name])
         assert np.allclose([x1, y1], a, atol=1e-6)
         along = np.array([x2, y2]) - a
-        assert abs(np.cross(along, b - a)) <= 1e-6 * np.hypot(*(b - a)) ** 2  # on the line between the ends
+        e = b - a
+        assert abs(along[0] * e[1] - along[1] * e[0]) <= 1e-6 * np.hypot(*e) ** 2  # on the line between the ends
         f = np.hypot(*along) / np.hypot(
             *(b - a)
         )  # the rod to the far end; the rigid barrel, 0.85 of the stroke's start
