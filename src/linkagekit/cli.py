@@ -39,7 +39,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
-from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten, shorten_path
+from .errors import MAX_MESSAGE, InputError, LinkageError, MethodNotApplicableError, one_line, shorten, shorten_path
 from .options import BranchMode
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
@@ -1153,15 +1153,18 @@ def _analyze(args: argparse.Namespace) -> int:
             f"{args.file}: the file's sweep has {mech.drivers[0].sweep.count()} samples, more than the "
             f"command line takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
         )
-    res = lk.analyze(
-        mech,
-        inputs,
-        speed=_rates(mech, args.speed, "--speed"),
-        acceleration=_rates(mech, args.acceleration, "--acceleration"),
-        method=args.method,
-        static=args.static,
-        branch=branch,
-    )
+    try:
+        res = lk.analyze(
+            mech,
+            inputs,
+            speed=_rates(mech, args.speed, "--speed"),
+            acceleration=_rates(mech, args.acceleration, "--acceleration"),
+            method=args.method,
+            static=args.static,
+            branch=branch,
+        )
+    except MethodNotApplicableError as exc:  # the method's own words name the mechanism, not the file or option
+        raise MethodNotApplicableError(f"{args.file}: --method {args.method}: {exc}") from exc
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
         return 0
