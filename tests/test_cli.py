@@ -287,3 +287,16 @@ def test_the_script_exits_though_a_thread_it_started_still_waits():
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30)  # it hung
     assert done.returncode == 2 and "no-such-file.yaml" in done.stderr
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_a_method_that_does_not_apply_names_the_file_and_the_option(capsys):
+    """The vector-loop method's refusal named the mechanism only ("Jansen's Strandbeest leg: the vector-loop method
+    handles ..."): the command line says which file and which option, in one line, exit 2."""
+    leg = str(EXAMPLES / "jansen_leg.yaml")
+    code, out, err = run(["analyze", leg, "--method", "vector-loop"], capsys)
+    assert code == 2 and out == ""
+    assert err.startswith(f"linkagekit: error: {leg}: --method vector-loop: Jansen's Strandbeest leg: the vector-loop")
+    assert err.count("\n") == 1
