@@ -562,7 +562,9 @@ def _animate_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
     _output_option(p, "the animation: .gif or .mp4")
     _sweep_option(p)
-    p.add_argument("--frames", metavar="N", help="this many frames, evenly over the sweep (or over --time)")
+    p.add_argument(
+        "--frames", metavar="N", help="this many frames (36 to 1000), evenly over the sweep (or over --time)"
+    )
     p.add_argument("--fps", metavar="F", default="24", help="frames per second (default: %(default)s)")
     _motion_options(p)
 
@@ -733,10 +735,10 @@ def _frames(text: str) -> int:
         n = int(text)
     except ValueError:
         raise InputError(f"--frames: expected a whole number, got {shorten(repr(text))}") from None
-    from .viz.animate import MAX_FRAMES
+    from .viz.animate import MAX_FRAMES, MIN_FRAMES
 
-    if not 2 <= n <= MAX_FRAMES:
-        raise InputError(f"--frames: expected 2 to {MAX_FRAMES} frames, got {n}")
+    if not MIN_FRAMES <= n <= MAX_FRAMES:  # an animation has at least 36 frames (the contract's `animate`)
+        raise InputError(f"--frames: expected {MIN_FRAMES} to {MAX_FRAMES} frames, got {n}")
     return n
 
 
