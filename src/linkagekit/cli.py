@@ -133,9 +133,9 @@ def _range(text: str, what: str) -> np.ndarray:
 
     >>> _range("0:360:90", "--angles").tolist()
     [0.0, 90.0, 180.0, 270.0, 360.0]
+    >>> _range("0:0.3:0.1", "--time").tolist()
+    [0.0, 0.1, 0.2, 0.3]
     """
-    import numpy as np
-
     parts = text.split(":")
     if len(parts) != 3:
         raise InputError(f"{what}: expected START:STOP:STEP, got {shorten(repr(text))}")
@@ -150,7 +150,9 @@ def _range(text: str, what: str) -> np.ndarray:
             f"{what}: {many} samples, more than the command line takes ({MAX_SAMPLES}); "
             "use a coarser STEP, or the Python API (lk.analyze_chunks) for more"
         )
-    return start + step * np.arange(n)
+    from .model import stepped
+
+    return stepped(start, stop, step, n)
 
 
 def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[str, str], Any]) -> dict[str, Any]:
