@@ -35,7 +35,7 @@ import math
 import re
 import shutil
 import sys
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
@@ -2371,7 +2371,14 @@ def main(argv: list[str] | None = None) -> int:
             # matplotlib's note that a font lacks a glyph of a name (the picture shows a box)
             warnings.simplefilter("ignore", RuntimeWarning)
             warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
-            code = _run(args)
+            with _checked_stdout():
+                code = _run(args)
+                sys.stdout.flush()  # an output that cannot be written fails here, not silently at the exit
+    except _OutputFailed as exc:  # `> /dev/full`, a full disk: say so, not 'internal error'
+        print(f"{PROG}: cannot write the output: {exc}", file=sys.stderr)
+        code = 1
+        if argv is None:
+            _silence_stdout()
     except LinkageError as exc:
         prefix = f"{PROG}: error: "
         print(prefix + (one_line(str(exc), MAX_MESSAGE - len(prefix)) or type(exc).__name__), file=sys.stderr)
@@ -2382,12 +2389,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
         code = 1
         if argv is None:  # the script: no second error when Python flushes stdout at exit
-            try:
-                import os
-
-                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-            except (OSError, ValueError, AttributeError):
-                pass
+            _silence_stdout()
     except Exception as exc:  # noqa: BLE001 - the promise is: never a traceback
         prefix = f"{PROG}: internal error: {type(exc).__name__}: "
         print(prefix + one_line(str(exc), max(MAX_MESSAGE - len(prefix), 40)), file=sys.stderr)
@@ -2395,6 +2397,61 @@ def main(argv: list[str] | None = None) -> int:
     if argv is None:
         _exit(code)
     return code
+
+
+class _OutputFailed(Exception):
+    """Standard output could not take what a command wrote (its ``str`` is the system's reason)."""
+
+
+class _CheckedStdout:
+    """``sys.stdout`` while a command runs: a write or flush that fails (a full disk, ``> /dev/full``) raises
+    :class:`_OutputFailed`, so that the failure is told from any other ``OSError``; everything else is the stream's.
+    A reader gone (``BrokenPipeError``) stays what it is."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return int(self._stream.write(text))
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _OutputFailed(exc.strerror or exc) from exc
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _OutputFailed(exc.strerror or exc) from exc
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+@contextlib.contextmanager
+def _checked_stdout() -> Iterator[None]:
+    """Run the block with :class:`_CheckedStdout` as ``sys.stdout``, restored after."""
+    stream = sys.stdout
+    sys.stdout = _CheckedStdout(stream)  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        if isinstance(sys.stdout, _CheckedStdout):
+            sys.stdout = stream
+
+
+def _silence_stdout() -> None:
+    """Point the script's standard output at the null device, so that Python's own flush at exit, which would fail
+    the same way, says nothing more (what was not written is lost either way)."""
+    try:
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _exit(code: int) -> None:
