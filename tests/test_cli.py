@@ -312,3 +312,11 @@ def test_an_output_that_cannot_be_written_is_one_clear_line(args):
         done = subprocess.run([sys.executable, "-c", script], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
     assert done.returncode == 1
     assert done.stderr == "linkagekit: cannot write the output: No space left on device\n"
+
+
+def test_atlas_without_an_action_names_the_choices(capsys):
+    """``linkagekit atlas`` said 'the following arguments are required: action' while the usage shows
+    ``{build,info}``: the message names the choices."""
+    code, out, err = run(["atlas"], capsys)
+    assert code == 2 and out == ""
+    assert "{build,info}" in err and ": action" not in err and err.count("\n") == 1

@@ -2205,8 +2205,12 @@ class _progress:
 
 
 def _atlas_arguments(p: argparse.ArgumentParser) -> None:
+    actions = ("build", "info")
     p.add_argument(
-        "action", choices=("build", "info"), help="build the atlas now (unless cached), or say what is cached"
+        "action",
+        choices=actions,
+        metavar="{" + ",".join(actions) + "}",  # named so in argparse's 'required' message too, as in the usage
+        help="build the atlas now (unless cached), or say what is cached",
     )
     p.add_argument("--workers", type=int, metavar="N", help="processes that build it (default: every core)")
 
