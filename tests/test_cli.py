@@ -309,7 +309,9 @@ def test_an_output_that_cannot_be_written_is_one_clear_line(args):
     exited 0, argparse swallowing the error): one line saying the output cannot be written, and why; exit 1."""
     script = f"import sys; sys.argv = ['linkagekit', *{args!r}]; from linkagekit.cli import main; main()"
     with open("/dev/full", "w") as full:
-        done = subprocess.run([sys.executable, "-c", script], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
+        done = subprocess.run(
+            [sys.executable, "-c", script], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60
+        )
     assert done.returncode == 1
     assert done.stderr == "linkagekit: cannot write the output: No space left on device\n"
 
