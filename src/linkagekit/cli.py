@@ -2439,7 +2439,7 @@ class _CheckedStdout:
 def _checked_stdout() -> Iterator[None]:
     """Run the block with :class:`_CheckedStdout` as ``sys.stdout``, restored after."""
     stream = sys.stdout
-    sys.stdout = _CheckedStdout(stream)  # type: ignore[assignment]
+    sys.stdout = _CheckedStdout(stream)
     try:
         yield
     finally:

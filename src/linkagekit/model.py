@@ -200,6 +200,10 @@ class Sweep:
         """
         return stepped(self.start, self.stop, self.step, self.count())
 
+    def to_dict(self) -> dict[str, float]:
+        """``{start, stop, step}`` as the file writes it."""
+        return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}
+
 
 def stepped(start: float, stop: float, step: float, count: int) -> np.ndarray:
     """``start + k step`` for ``k < count``, the last value exactly ``stop`` when it is within rounding of it.
@@ -216,10 +220,6 @@ def stepped(start: float, stop: float, step: float, count: int) -> np.ndarray:
     if count > 1 and abs(values[-1] - stop) <= 1e-9 * abs(step):
         values[-1] = stop
     return values
-
-    def to_dict(self) -> dict[str, float]:
-        """``{start, stop, step}`` as the file writes it."""
-        return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}
 
 
 # ---------------------------------------------------------------------- driver types
