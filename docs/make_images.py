@@ -26,6 +26,8 @@ COMMANDS = [
         "examples/targets/d_path.csv",
         "--units",
         "mm",
+        "--seconds",
+        "20",  # as docs/commands.md shows it
         "-o",
         "/tmp/d_path_fourbar.yaml",
         "--plot",

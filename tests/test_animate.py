@@ -328,6 +328,8 @@ def test_mp4_without_ffmpeg_says_how_to_get_it(tmp_path, capsys, monkeypatch):
     [
         (["-o", "{d}/a.avi"], ".gif"),
         (["-o", "{d}/a.gif", "--frames", "1"], "--frames"),
+        # an animation has at least 36 frames (the contract's `animate`): --frames took 2 to 35 as well
+        (["-o", "{d}/a.gif", "--frames", "35"], "--frames: expected 36 to 1000 frames, got 35"),
         (["-o", "{d}/a.gif", "--fps", "0"], "--fps"),
         (["-o", "{d}/nodir/a.gif", "--angles", "0:360:10"], "a.gif"),
     ],

@@ -287,3 +287,38 @@ def test_the_script_exits_though_a_thread_it_started_still_waits():
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30)  # it hung
     assert done.returncode == 2 and "no-such-file.yaml" in done.stderr
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_a_method_that_does_not_apply_names_the_file_and_the_option(capsys):
+    """The vector-loop method's refusal named the mechanism only ("Jansen's Strandbeest leg: the vector-loop method
+    handles ..."): the command line says which file and which option, in one line, exit 2."""
+    leg = str(EXAMPLES / "jansen_leg.yaml")
+    code, out, err = run(["analyze", leg, "--method", "vector-loop"], capsys)
+    assert code == 2 and out == ""
+    assert err.startswith(f"linkagekit: error: {leg}: --method vector-loop: Jansen's Strandbeest leg: the vector-loop")
+    assert err.count("\n") == 1
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full on this machine")
+@pytest.mark.parametrize("args", [["analyze", str(EXAMPLES / "seed000_fourbar.yaml")], ["--version"]])
+def test_an_output_that_cannot_be_written_is_one_clear_line(args):
+    """``linkagekit analyze FILE > /dev/full`` printed 'internal error: OSError: [Errno 28] ...' (and ``--version``
+    exited 0, argparse swallowing the error): one line saying the output cannot be written, and why; exit 1."""
+    script = f"import sys; sys.argv = ['linkagekit', *{args!r}]; from linkagekit.cli import main; main()"
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [sys.executable, "-c", script], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60
+        )
+    assert done.returncode == 1
+    assert done.stderr == "linkagekit: cannot write the output: No space left on device\n"
+
+
+def test_atlas_without_an_action_names_the_choices(capsys):
+    """``linkagekit atlas`` said 'the following arguments are required: action' while the usage shows
+    ``{build,info}``: the message names the choices."""
+    code, out, err = run(["atlas"], capsys)
+    assert code == 2 and out == ""
+    assert "{build,info}" in err and ": action" not in err and err.count("\n") == 1

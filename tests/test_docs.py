@@ -2,8 +2,9 @@
 
 * every ```yaml block of docs/mechanism-files.md is a whole mechanism file: `lk.load` reads it, or,
   when its first line is `# refused: MESSAGE`, refuses it with MESSAGE (a LinkageError, one line);
-* no user-facing file (README, docs/, examples/, the package's source: help, messages, docstrings)
-  names a path outside the repository (`../shared`, the authors' machines' absolute paths), every
+* no user-facing file (README, benchmarks/README, docs/, examples/, the package's source: help, messages,
+  docstrings) names a path outside the repository (`../shared`, the authors' machines' absolute paths) or
+  the authors' tracker ("issue 26", "the shared benchmark directory"), every
   relative Markdown link resolves to a file of the repository, and every backticked repository
   path (`docs/...`, `examples/...`) exists.
 """
@@ -59,7 +60,7 @@ def test_every_yaml_example_loads_or_is_refused_as_documented(tmp_path, index):
 
 
 def user_facing_files() -> list[Path]:
-    files = [ROOT / "README.md"]
+    files = [ROOT / "README.md", ROOT / "benchmarks" / "README.md"]
     files += sorted(p for p in (ROOT / "docs").rglob("*") if p.is_file() and p.suffix in (".md", ".py"))
     files += sorted(p for p in (ROOT / "examples").rglob("*") if p.is_file())
     files += sorted(p for p in (ROOT / "src").rglob("*") if p.suffix in (".py", ".js", ".html", ".css"))
@@ -67,7 +68,10 @@ def user_facing_files() -> list[Path]:
 
 
 #: what points outside a clone: the workspace this was written in, and absolute home/work paths
-OUTSIDE = re.compile(r"\.\./shared|\bshared/(seeds|spec|design)\b|mechanism-format\.md|/work/|/home/|/root/")
+OUTSIDE = re.compile(
+    r"\.\./shared|\bshared/(seeds|spec|design)\b|mechanism-format\.md|/work/|/home/|/root/"
+    r"|\bissues? \d+|\bissue-\d+|shared benchmark"  # the tracker and workspace this was written in
+)
 
 
 def test_nothing_a_user_reads_points_outside_the_repository():
@@ -83,6 +87,8 @@ def test_the_checker_finds_a_pointer_outside():
     assert OUTSIDE.search("The contract is `../shared/spec/mechanism-format.md`.")
     assert OUTSIDE.search("# (shared/seeds/000_b5466792cd19a3fb.txt)")
     assert not OUTSIDE.search("a joint shared by two links; see docs/method.md")
+    assert OUTSIDE.search("Then issue 29's goals: the triad positions")
+    assert OUTSIDE.search("read from the shared benchmark directory, not copied here")
 
 
 LINK = re.compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")

@@ -244,3 +244,20 @@ def test_a_crank_that_does_not_turn_fully_is_refused():
     data["drivers"] = [{"link": "beam", "pivot": "B", "toward": "D", "angles": {"start": 110, "stop": 150, "step": 1}}]
     with pytest.raises(InputError, match="does not turn fully"):
         lk.size_flywheel(lk.Mechanism.from_dict(data), 0.02, motor=MOTOR)
+
+
+@pytest.mark.parametrize(
+    ("args", "kwargs", "words"),
+    [
+        ((0.02,), {}, "give the torque law: torque= or motor="),
+        (("x",), {"torque": 1.0}, "cs (--flywheel CS): expected a number"),
+        ((2.5,), {"motor": MOTOR}, "cs (--flywheel CS): the coefficient of speed fluctuation must be in (0, 2)"),
+    ],
+)
+def test_python_errors_name_the_argument_not_only_the_option(args, kwargs, words):
+    """``lk.size_flywheel`` serves Python and ``simulate --flywheel``: its errors began with '--flywheel:', an option a
+    Python caller never gave; they name the argument (``cs``, ``torque=``/``motor=``) and the option beside it."""
+    with pytest.raises(InputError) as info:
+        lk.size_flywheel(lk.load(EXAMPLE), *args, **kwargs)
+    message = str(info.value)
+    assert words in message and not message.startswith("--")

@@ -685,7 +685,7 @@ def _fuzz_picture(fuzzdir: Path, case, command: int) -> None:
     name = ("report", "plot", "animate")[command]
     out = fuzzdir / ("out.html", "out.png", "out.gif")[command]
     out.unlink(missing_ok=True)
-    argv = [name, str(path), "-o", str(out)] + (["--frames", "3"] if name == "animate" else [])
+    argv = [name, str(path), "-o", str(out)] + (["--frames", "36"] if name == "animate" else [])
     _picture_failures.n += 1
     o = run_cli(argv)
     bad = contract_violation(o, "none")

@@ -465,3 +465,24 @@ def test_a_file_without_a_name_is_saved_without_one(tmp_path):
     assert "name:" not in out.read_text(encoding="utf-8") and load(out).name == ""
     named = load("examples/seed000_fourbar.yaml")
     assert named.to_dict()["name"] == named.name != ""
+
+
+@pytest.mark.parametrize(
+    ("start", "stop", "step", "last"),
+    [(0, 0.3, 0.1, 0.3), (0, -0.3, -0.1, -0.3), (0.1, 0.7, 0.2, 0.7), (0, 0.35, 0.1, 0.1 * 3)],
+)
+def test_a_sweep_that_lands_on_stop_ends_exactly_at_stop(start, stop, step, last):
+    """``{start: 0, stop: 0.3, step: 0.1}`` ended at 0.30000000000000004 (0 + 3 * 0.1), in the file's sweep and in
+    ``--angles``/``--time``; the last value is ``stop`` itself when the steps land on it within rounding, and a sweep
+    whose steps do not reach ``stop`` (0.35) keeps its last step's value."""
+    import linkagekit as lk
+    from linkagekit.cli import _range
+
+    d = fourbar_dict()
+    d["drivers"][0]["angles"] = {"start": start, "stop": stop, "step": step}
+    values = Mechanism.from_dict(d).drivers[0].sweep.values()
+    assert len(values) == 4 and values[-1] == last  # exactly
+    assert np.allclose(values, start + step * np.arange(4), rtol=0, atol=1e-15)
+    assert _range(f"{start}:{stop}:{step}", "--angles").tolist() == values.tolist()
+    res = lk.analyze(Mechanism.from_dict(d), rates=False)
+    assert res.inputs["crank"][-1] == last

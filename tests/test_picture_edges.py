@@ -95,7 +95,7 @@ def test_names_are_drawn_as_written(tmp_path, name, capsys):
         ["plot", str(path), "-o", str(tmp_path / "a.png")],
         ["plot", str(path), "--modes", "--at", "30", "-o", str(tmp_path / "b.png")],
         ["plot", str(path), "-q", "angles", "-o", str(tmp_path / "c.png")],
-        ["animate", str(path), "--frames", "3", "-o", str(tmp_path / "d.gif")],
+        ["animate", str(path), "--frames", "36", "-o", str(tmp_path / "d.gif")],
     ):
         assert main(argv) == 0, argv
         assert capsys.readouterr().err == ""  # no glyph warnings on stderr either
@@ -126,7 +126,7 @@ def test_gif_keeps_every_colour_and_a_white_background(tmp_path):
 
 
 def test_gif_fps_above_50_is_refused_mp4_not(tmp_path, capsys):
-    argv = ["animate", str(EX / "seed000_fourbar.yaml"), "--frames", "3", "--fps", "60"]
+    argv = ["animate", str(EX / "seed000_fourbar.yaml"), "--frames", "36", "--fps", "60"]
     assert main([*argv, "-o", str(tmp_path / "a.gif")]) == 2
     assert "50" in capsys.readouterr().err
     assert main([*argv, "-o", str(tmp_path / "a.mp4")]) == 0
@@ -145,7 +145,7 @@ def test_an_ffmpeg_that_cannot_run_is_named(tmp_path, monkeypatch, capsys):
     fake.write_text("not a program")
     fake.chmod(0o755)
     monkeypatch.setattr("linkagekit.viz.animate.find_ffmpeg", lambda: str(fake))
-    assert main(["animate", str(EX / "seed000_fourbar.yaml"), "--frames", "3", "-o", str(tmp_path / "a.mp4")]) == 1
+    assert main(["animate", str(EX / "seed000_fourbar.yaml"), "--frames", "36", "-o", str(tmp_path / "a.mp4")]) == 1
     err = capsys.readouterr().err
     assert "cannot run ffmpeg" in err and err.count("\n") == 1
     assert not (tmp_path / "a.mp4").exists()

@@ -124,3 +124,14 @@ def test_a_unit_that_contradicts_the_targets_own_is_refused(tmp_path) -> None:  
     from linkagekit.synthesis.run import _targets_given
 
     assert _targets_given(T, "path", {"units": "m"}) is T and _targets_given(T, "path", {}) is T
+
+
+@pytest.mark.parametrize("topology", ["hexbar", "no/such/template.yaml"])
+def test_an_unknown_topology_in_python_names_the_argument(topology):
+    """``lk.synthesize(T, "hexbar")`` (or a template's file name) said '--topology: unknown topology ...': a Python
+    caller gave the argument ``topology``, and a template is passed as a Mechanism, which the message says."""
+    with pytest.raises(InputError) as info:
+        lk.synthesize(ARC, topology, seconds=1, **TINY)
+    message = str(info.value)
+    assert message.startswith(f"topology: unknown topology '{topology}'"), message
+    assert "fourbar" in message and "lk.load(FILE)" in message and "\n" not in message

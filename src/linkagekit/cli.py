@@ -35,11 +35,11 @@ import math
 import re
 import shutil
 import sys
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, NamedTuple, NoReturn
 
 from .catalogue import Group
-from .errors import MAX_MESSAGE, InputError, LinkageError, one_line, shorten, shorten_path
+from .errors import MAX_MESSAGE, InputError, LinkageError, MethodNotApplicableError, one_line, shorten, shorten_path
 from .options import BranchMode
 
 if TYPE_CHECKING:  # pragma: no cover - for the type checker only: nothing heavy at start-up
@@ -133,9 +133,9 @@ def _range(text: str, what: str) -> np.ndarray:
 
     >>> _range("0:360:90", "--angles").tolist()
     [0.0, 90.0, 180.0, 270.0, 360.0]
+    >>> _range("0:0.3:0.1", "--time").tolist()
+    [0.0, 0.1, 0.2, 0.3]
     """
-    import numpy as np
-
     parts = text.split(":")
     if len(parts) != 3:
         raise InputError(f"{what}: expected START:STOP:STEP, got {shorten(repr(text))}")
@@ -150,7 +150,9 @@ def _range(text: str, what: str) -> np.ndarray:
             f"{what}: {many} samples, more than the command line takes ({MAX_SAMPLES}); "
             "use a coarser STEP, or the Python API (lk.analyze_chunks) for more"
         )
-    return start + step * np.arange(n)
+    from .model import stepped
+
+    return stepped(start, stop, step, n)
 
 
 def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[str, str], Any]) -> dict[str, Any]:
@@ -562,7 +564,9 @@ def _animate_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
     _output_option(p, "the animation: .gif or .mp4")
     _sweep_option(p)
-    p.add_argument("--frames", metavar="N", help="this many frames, evenly over the sweep (or over --time)")
+    p.add_argument(
+        "--frames", metavar="N", help="this many frames (36 to 1000), evenly over the sweep (or over --time)"
+    )
     p.add_argument("--fps", metavar="F", default="24", help="frames per second (default: %(default)s)")
     _motion_options(p)
 
@@ -733,10 +737,10 @@ def _frames(text: str) -> int:
         n = int(text)
     except ValueError:
         raise InputError(f"--frames: expected a whole number, got {shorten(repr(text))}") from None
-    from .viz.animate import MAX_FRAMES
+    from .viz.animate import MAX_FRAMES, MIN_FRAMES
 
-    if not 2 <= n <= MAX_FRAMES:
-        raise InputError(f"--frames: expected 2 to {MAX_FRAMES} frames, got {n}")
+    if not MIN_FRAMES <= n <= MAX_FRAMES:  # an animation has at least 36 frames (the contract's `animate`)
+        raise InputError(f"--frames: expected {MIN_FRAMES} to {MAX_FRAMES} frames, got {n}")
     return n
 
 
@@ -1153,15 +1157,18 @@ def _analyze(args: argparse.Namespace) -> int:
             f"{args.file}: the file's sweep has {mech.drivers[0].sweep.count()} samples, more than the "
             f"command line takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
         )
-    res = lk.analyze(
-        mech,
-        inputs,
-        speed=_rates(mech, args.speed, "--speed"),
-        acceleration=_rates(mech, args.acceleration, "--acceleration"),
-        method=args.method,
-        static=args.static,
-        branch=branch,
-    )
+    try:
+        res = lk.analyze(
+            mech,
+            inputs,
+            speed=_rates(mech, args.speed, "--speed"),
+            acceleration=_rates(mech, args.acceleration, "--acceleration"),
+            method=args.method,
+            static=args.static,
+            branch=branch,
+        )
+    except MethodNotApplicableError as exc:  # the method's own words name the mechanism, not the file or option
+        raise MethodNotApplicableError(f"{args.file}: --method {args.method}: {exc}") from exc
     if args.format == "json":
         _emit(json.dumps(res.to_dict(), allow_nan=False) + "\n", args.output)
         return 0
@@ -2198,8 +2205,12 @@ class _progress:
 
 
 def _atlas_arguments(p: argparse.ArgumentParser) -> None:
+    actions = ("build", "info")
     p.add_argument(
-        "action", choices=("build", "info"), help="build the atlas now (unless cached), or say what is cached"
+        "action",
+        choices=actions,
+        metavar="{" + ",".join(actions) + "}",  # named so in argparse's 'required' message too, as in the usage
+        help="build the atlas now (unless cached), or say what is cached",
     )
     p.add_argument("--workers", type=int, metavar="N", help="processes that build it (default: every core)")
 
@@ -2364,7 +2375,14 @@ def main(argv: list[str] | None = None) -> int:
             # matplotlib's note that a font lacks a glyph of a name (the picture shows a box)
             warnings.simplefilter("ignore", RuntimeWarning)
             warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
-            code = _run(args)
+            with _checked_stdout():
+                code = _run(args)
+                sys.stdout.flush()  # an output that cannot be written fails here, not silently at the exit
+    except _OutputFailed as exc:  # `> /dev/full`, a full disk: say so, not 'internal error'
+        print(f"{PROG}: cannot write the output: {exc}", file=sys.stderr)
+        code = 1
+        if argv is None:
+            _silence_stdout()
     except LinkageError as exc:
         prefix = f"{PROG}: error: "
         print(prefix + (one_line(str(exc), MAX_MESSAGE - len(prefix)) or type(exc).__name__), file=sys.stderr)
@@ -2375,12 +2393,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
         code = 1
         if argv is None:  # the script: no second error when Python flushes stdout at exit
-            try:
-                import os
-
-                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-            except (OSError, ValueError, AttributeError):
-                pass
+            _silence_stdout()
     except Exception as exc:  # noqa: BLE001 - the promise is: never a traceback
         prefix = f"{PROG}: internal error: {type(exc).__name__}: "
         print(prefix + one_line(str(exc), max(MAX_MESSAGE - len(prefix), 40)), file=sys.stderr)
@@ -2388,6 +2401,61 @@ def main(argv: list[str] | None = None) -> int:
     if argv is None:
         _exit(code)
     return code
+
+
+class _OutputFailed(Exception):
+    """Standard output could not take what a command wrote (its ``str`` is the system's reason)."""
+
+
+class _CheckedStdout:
+    """``sys.stdout`` while a command runs: a write or flush that fails (a full disk, ``> /dev/full``) raises
+    :class:`_OutputFailed`, so that the failure is told from any other ``OSError``; everything else is the stream's.
+    A reader gone (``BrokenPipeError``) stays what it is."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return int(self._stream.write(text))
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _OutputFailed(exc.strerror or exc) from exc
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _OutputFailed(exc.strerror or exc) from exc
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+@contextlib.contextmanager
+def _checked_stdout() -> Iterator[None]:
+    """Run the block with :class:`_CheckedStdout` as ``sys.stdout``, restored after."""
+    stream = sys.stdout
+    sys.stdout = _CheckedStdout(stream)
+    try:
+        yield
+    finally:
+        if isinstance(sys.stdout, _CheckedStdout):
+            sys.stdout = stream
+
+
+def _silence_stdout() -> None:
+    """Point the script's standard output at the null device, so that Python's own flush at exit, which would fail
+    the same way, says nothing more (what was not written is lost either way)."""
+    try:
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _exit(code: int) -> None:

@@ -188,7 +188,10 @@ class _Problem:
 
     def __init__(self, red: Reduced, drive: Drive, extra: float, q0: float, sign: float) -> None:
         if red.period is None:
-            raise InputError("--flywheel: the driver does not turn fully (no periodic motion to size a flywheel for)")
+            raise InputError(
+                "flywheel sizing (--flywheel): the driver does not turn fully "
+                "(no periodic motion to size a flywheel for)"
+            )
         self.red, self.drive, self.extra = red, drive, float(extra)
         self.q0, self.sign, self.period = float(q0), float(sign), float(red.period)
 
@@ -467,7 +470,7 @@ def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float 
     from scipy.optimize import brentq
 
     if not 0.0 < cs < 2.0:
-        raise InputError(f"--flywheel: the coefficient of speed fluctuation must be in (0, 2), got {cs}")
+        raise InputError(f"cs (--flywheel CS): the coefficient of speed fluctuation must be in (0, 2), got {cs}")
     search = _Search(red, drive)
     cs_without = search.cs(0.0)
     if cs_without <= cs:
@@ -566,13 +569,16 @@ def size_flywheel(
     if len(mech.drivers) != 1 or not isinstance(mech.drivers[0].type, CrankType):
         kinds = ", ".join(f"'{d.name}' ({d.kind})" for d in mech.drivers) or "none"
         raise InputError(
-            f"--flywheel: {mech.source}: needs exactly one crank driver (the flywheel's link); drivers: {kinds}"
+            f"flywheel sizing (--flywheel): {mech.source}: needs exactly one crank driver (the flywheel's link); "
+            f"drivers: {kinds}"
         )
     if torque is None and motor is None:
-        raise InputError("--flywheel: give the torque law: --torque T or --motor T0,W0")
+        raise InputError(
+            "flywheel sizing (--flywheel): give the torque law: torque= or motor= (--torque T or --motor T0,W0)"
+        )
     try:
         target = float(cs)
     except (TypeError, ValueError):
-        raise InputError(f"--flywheel: expected a number, got {cs!r}") from None
+        raise InputError(f"cs (--flywheel CS): expected a number, got {cs!r}") from None
     (law,) = torque_laws(mech, torque, motor)
     return size_flywheel_reduced(reduced(mech), law, target)

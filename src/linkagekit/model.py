@@ -193,12 +193,33 @@ class Sweep:
         return max(math.floor((self.stop - self.start) / self.step * (1 + 1e-12) + 1e-9) + 1, 1)
 
     def values(self) -> np.ndarray:
-        """The sweep's input values (file units)."""
-        return self.start + self.step * np.arange(self.count())
+        """The sweep's input values (file units); the last is ``stop`` itself when a step lands on it.
+
+        >>> Sweep(0, 0.3, 0.1).values().tolist()
+        [0.0, 0.1, 0.2, 0.3]
+        """
+        return stepped(self.start, self.stop, self.step, self.count())
 
     def to_dict(self) -> dict[str, float]:
         """``{start, stop, step}`` as the file writes it."""
         return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}
+
+
+def stepped(start: float, stop: float, step: float, count: int) -> np.ndarray:
+    """``start + k step`` for ``k < count``, the last value exactly ``stop`` when it is within rounding of it.
+
+    ``0 + 3 * 0.1`` is 0.30000000000000004: a sweep written to stop at 0.3 ends at 0.3 (within 1e-9 of a
+    step, the tolerance by which :meth:`Sweep.count` counts ``stop`` as landed on).
+
+    >>> stepped(0, 0.3, 0.1, 4).tolist()
+    [0.0, 0.1, 0.2, 0.3]
+    >>> stepped(0, 0.35, 0.1, 4).tolist()[-1]
+    0.30000000000000004
+    """
+    values = start + step * np.arange(count, dtype=float)
+    if count > 1 and abs(values[-1] - stop) <= 1e-9 * abs(step):
+        values[-1] = stop
+    return values
 
 
 # ---------------------------------------------------------------------- driver types

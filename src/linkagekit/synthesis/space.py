@@ -274,7 +274,10 @@ def _template(topology: str) -> dict[str, Any]:
     if topology in _TEMPLATES:
         return _TEMPLATES[topology]
     if not is_builtin(topology):
-        raise InputError(f"--topology: unknown topology '{topology}' (built in: {', '.join(TOPOLOGIES)}, or a file)")
+        raise InputError(  # the command line names its files itself: this is the Python argument's message
+            f"topology: unknown topology '{topology}' (built in: {', '.join(TOPOLOGIES)}, or a name that "
+            "topology='auto' reports, such as 'sixbar-1'; a template file is given as a Mechanism: lk.load(FILE))"
+        )
     from .topologies import by_name
 
     t = by_name(topology)
