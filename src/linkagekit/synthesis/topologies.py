@@ -329,7 +329,7 @@ def by_name(name: str) -> Topology:
     for t in _all(ENUMERATED_JOINTS):
         if t.name == name:
             return t
-    raise InputError(f"--topology: no topology named '{name}'")
+    raise InputError(f"topology: no topology named '{name}'")
 
 
 # ------------------------------------------------------------------------------------- pose
