@@ -273,8 +273,8 @@ class Reduced:
         return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
 
     def mass(self, q: ArrayLike) -> np.ndarray:
-        """``M(q)``."""
-        return self._rows(q)[..., 0]
+        """``M(q)``, never negative (a sum of squares: the interpolant's rounding next to a zero of ``M`` is cut)."""
+        return np.maximum(self._rows(q)[..., 0], 0.0)
 
     def dmass(self, q: ArrayLike) -> np.ndarray:
         """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points)."""
@@ -453,10 +453,14 @@ def _verified(
 ) -> np.ndarray:
     """Which cells the interpolant holds to :data:`TABLE_TOL`: checked against the model at every cell's middle.
 
-    ``M`` relative to itself, ``Q_s`` and ``C`` relative to their largest magnitude over the
-    table. A cell fails near a toggle (``M`` grows without bound) or where the model is not
-    smooth; a bridged cell (near a change point, where the direct values are the inaccurate
-    ones) and a middle on a singular position (no direct value) pass.
+    ``M`` relative to the larger of itself and its median over the table (its typical size),
+    ``Q_s`` and ``C`` relative to their largest magnitude over the table. A cell fails near a
+    toggle (``M`` grows without bound) or where the model is not smooth; a bridged cell (near
+    a change point, where the direct values are the inaccurate ones) and a middle on a singular
+    position (no direct value) pass. Where ``M`` falls to zero (nothing with inertia moves: a
+    rocker at its limit position, the crank and coupler massless) the cells hold to the median:
+    relative to ``M`` itself no interpolant would, and the motion passes there
+    (:func:`_integrate_reduced`).
     """
     mid = 0.5 * (x[:-1] + x[1:])
     q = (mid / md.scale[0])[None]
@@ -464,8 +468,9 @@ def _verified(
     h = x[1] - x[0]
     interp = 0.5 * (Y[:-1] + Y[1:]) + h * (dY[:-1] - dY[1:]) / 8.0  # the cubic Hermite at t = 1/2
     with np.errstate(invalid="ignore"):
-        scale = np.maximum(np.abs(direct), np.nanmax(np.abs(Y), axis=0, initial=0.0) * [0.0, 1.0, 1.0])
-        err = np.abs(interp - direct) <= TABLE_TOL * scale + 1e-300
+        typical = np.nanmedian(np.abs(Y[:, 0])) if np.isfinite(Y[:, 0]).any() else 0.0
+        floor = np.nanmax(np.abs(Y), axis=0, initial=0.0) * [0.0, 1.0, 1.0] + [typical, 0.0, 0.0]
+        err = np.abs(interp - direct) <= TABLE_TOL * np.maximum(np.abs(direct), floor) + 1e-300
     rows = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
     ok: np.ndarray = (np.all(err | ~np.isfinite(direct), axis=1) | bridged[:-1] | bridged[1:]) & rows[:-1] & rows[1:]
     return ok

@@ -75,6 +75,10 @@ BALANCE_SAMPLES = 256
 STALL_FRACTION = 1e-6
 
 
+#: the least reduced inertia the energy equation divides by (kg*m^2): where nothing with inertia moves, ``M = 0``
+_NO_MASS = 1e-300
+
+
 class StallError(LinkageError):
     """No periodic motion: under the torque law the machine stops, or never settles.
 
@@ -193,7 +197,9 @@ class _Problem:
         self.q0, self.sign, self.period = float(q0), float(sign), float(red.period)
 
     def mass(self, q: Array) -> Array:
-        return np.asarray(self.red.mass(q), dtype=float) + self.extra
+        """``M(q)`` with the flywheel; never 0 (``M`` of a massless crank and coupler vanishes where the output stops:
+        without a flywheel the speed there is then only very large, and the motor's curve takes the energy)."""
+        return np.maximum(np.asarray(self.red.mass(q), dtype=float) + self.extra, _NO_MASS)
 
     def speed(self, q: Array, e: Array) -> Array:
         """``w`` from the energy: ``sign * sqrt(2 E / M)`` (``E`` clipped at 0)."""
@@ -202,7 +208,7 @@ class _Problem:
     def rhs(self, u: float, y: Array) -> Array:
         """``d(E, ln dE/dE0)/du`` at ``q = q0 + sign * u``: the energy equation and its variational equation."""
         q = self.q0 + self.sign * u
-        m = float(self.red.mass(np.array([q]))[0]) + self.extra
+        m = float(self.mass(np.array([q]))[0])
         speed = math.sqrt(2.0 * max(float(y[0]), 0.0) / m)
         h = 1e-6 * max(speed, 1e-3)
         ws = self.sign * np.array([speed, speed + h, speed - h])
