@@ -66,6 +66,9 @@ BRIDGE = 200
 DEGREE = 11
 #: the table's cubic Hermite interpolant must meet the model at every cell's middle to this (relative)
 TABLE_TOL = 1e-8
+#: the reduced inertia ``M`` vanishes where its interpolant falls below this share of its median over the table (nothing
+#: with inertia moves there: a rocker at its limit position, the crank and coupler massless)
+NO_INERTIA = 1e-9
 #: several drivers: the motion stops where the steps' smallest dimensionless determinant falls below this
 STOP_CONDITION = 1e-3
 #: the most output times one simulation gives
@@ -76,7 +79,7 @@ MAX_STEPS = 200_000
 #: right-hand-side evaluations of one DOP853 step
 _EVALS_PER_STEP = 12
 
-__all__ = ["ATOL", "POINTS", "RTOL", "Reduced", "TorqueLaw", "reduced", "simulate"]
+__all__ = ["ATOL", "NO_INERTIA", "POINTS", "RTOL", "Reduced", "TorqueLaw", "inertia_zeros", "reduced", "simulate"]
 
 ArrayLike = Any
 
@@ -274,7 +277,7 @@ class Reduced:
 
     def mass(self, q: ArrayLike) -> np.ndarray:
         """``M(q)``, never negative (a sum of squares: the interpolant's rounding next to a zero of ``M`` is cut)."""
-        return np.maximum(self._rows(q)[..., 0], 0.0)
+        return np.maximum(self._rows(q)[..., 0], 0.0)  # type: ignore[no-any-return]
 
     def dmass(self, q: ArrayLike) -> np.ndarray:
         """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points)."""
@@ -573,6 +576,9 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
             # already past the stop: the singular event can never fall through zero (pushed in, it ran on for ever)
             raise _singular_pose(md.mech) from off
         return _integrate_direct(md, times, (law,), np.array([w0], float))
+    zeros = inertia_zeros(red)
+    if len(zeros):
+        return _integrate_passing(md, red, times, law, w0, zeros)
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
     if red.period is None:
@@ -584,6 +590,161 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     qdd = red.accel(q, w, law(w))
     signs = red.signs(md.params, q) if md.params.plan.n_signs else None
     return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def inertia_zeros(red: Reduced) -> np.ndarray:
+    """Where the table's ``M`` vanishes (SI inputs): below :data:`NO_INERTIA` of its median, by the interpolant.
+
+    ``M`` is a sum of squares of velocity coefficients, so a zero is a double one (every moving
+    mass stops there); the grid points miss it by up to a step, so each cell next to a small local
+    minimum of the grid's values is searched on 64 points of its cubic.
+    """
+    M = red._Y[:, 0]
+    typical = float(np.median(M))
+    k = np.flatnonzero((M[1:-1] <= M[:-2]) & (M[1:-1] <= M[2:]) & (M[1:-1] < 1e-4 * typical)) + 1
+    if not len(k):
+        return np.zeros(0)
+    u = np.linspace(-1.0, 1.0, 129)
+    q = red.q_range[0] + (k[:, None] + u[None, :]) * red._h
+    m = red._rows(q)[..., 0]
+    rows = np.arange(len(k))
+    i = np.clip(np.argmin(m, axis=1), 1, len(u) - 2)
+    a, b, c = m[rows, i - 1], m[rows, i], m[rows, i + 1]
+    curv = a - 2 * b + c
+    with np.errstate(divide="ignore", invalid="ignore"):  # M is a parabola next to its zero: its vertex
+        shift = np.where(curv > 0, 0.5 * (a - c) / curv, 0.0)
+    where = q[rows, i] + shift * (q[rows, 1] - q[rows, 0])
+    low = np.min(m, axis=1) < NO_INERTIA * typical
+    return np.asarray(where[low], float)
+
+
+def _integrate_passing(
+    md: _Model, red: Reduced, times: np.ndarray, law: TorqueLaw, w0: float, zeros: np.ndarray
+) -> _Run:
+    """One driver whose ``M`` vanishes at ``zeros``: the motion in the time ``s``, ``dt = sqrt(M) ds`` (method.md).
+
+    With ``u = sqrt(M) w`` (``u^2 / 2`` the kinetic energy) the reduced equation is
+    ``dq/ds = u``, ``du/ds = Q_s + T0 - (C + T0 / W0) w``, ``dt/ds = sqrt(M)``: regular where ``M`` is
+    0 if no force there acts on the speed (the crank passes in no time, the energy carrying
+    through). A motor curve or a damper acting there would have to hold the speed itself where
+    nothing carries inertia: refused in one line.
+    """
+    _refuse_speed_forces(md, red, law, zeros)
+    if red.period is None and not red.q_range[0] <= red.q0 <= red.q_range[1]:
+        raise _singular_pose(md.mech)
+    r0 = math.sqrt(max(float(red.mass(red.q0)), 0.0))
+    sol, stop = _passing_solution(md, red, law, [red.q0, r0 * w0, float(times[0])], float(times[-1]))
+    t = times[times <= (stop[0] if stop else times[-1])]
+    q, u = _passing_states(red, sol, t)
+    r = np.sqrt(red.mass(q))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(r > 0, u / r, np.copysign(np.inf, u))
+    w[0] = w0
+    stopped = None if stop is None else _toggle_message(md, 0, *stop)
+    qdd = red.accel(q, w, law(w))
+    signs = red.signs(md.params, q) if md.params.plan.n_signs else None
+    return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def _refuse_speed_forces(md: _Model, red: Reduced, law: TorqueLaw, zeros: np.ndarray) -> None:
+    """The line that refuses a motor curve or a damper acting on the speed where ``M`` vanishes (at ``zeros``)."""
+    c = red._rows(zeros)[..., 2]
+    c_max = float(np.max(np.abs(red._Y[:, 2]), initial=0.0))
+    motor = law.W0 is not None and law.T0 != 0.0
+    damped = c > 1e-6 * c_max
+    if not motor and not damped.any():
+        return
+    d = md.mech.drivers[0]
+    where = float((zeros[damped] if damped.any() and not motor else zeros)[0])
+    at = f"{where / (md.scale[0] * d.input_scale(md.mech)):.6g} {d.input_unit(md.mech)}"
+    what = "the motor curve acts" if motor else "a damper acts"
+    raise InputError(
+        f"simulate: {md.mech.source}: nothing with inertia moves with {d.name} at {d.name} = {at} (the inertia it"
+        f" sees is 0 there) and {what} on its speed: the model gives no motion through it; give the driver's link or"
+        " the coupler an inertia, or use a constant torque"
+    )
+
+
+def _passing_solution(
+    md: _Model, red: Reduced, law: TorqueLaw, y0: list[float], t_end: float
+) -> tuple[Any, tuple[float, float] | None]:
+    """``(q, u, t)`` over ``s`` by DOP853 (dense), until ``t_end``: the solution, and (time, q) of a stop at the table's
+    end (a toggle: a table that is not periodic), or None."""
+    from scipy.integrate import solve_ivp
+
+    lo, hi = red.q_range
+    rhs = _rhs_passing(red, law)
+
+    def done(_s: float, y: Any) -> float:
+        return t_end - float(y[2])
+
+    def below(_s: float, y: Any) -> float:
+        return float(y[0]) - lo
+
+    def above(_s: float, y: Any) -> float:
+        return hi - float(y[0])
+
+    events: list[Any] = [done] if red.period is not None else [done, below, above]
+    for e in events:
+        e.terminal, e.direction = True, -1.0
+    floor = math.sqrt(NO_INERTIA * float(np.median(red._Y[:, 0])))
+    span = (0.0, (t_end - y0[2]) / floor)  # dt/ds = sqrt(M) is below that floor only next to a zero, passed at once
+    sol = solve_ivp(rhs, span, y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events, dense_output=True)
+    if sol.status < 0:
+        raise InputError(f"simulate: the integration failed: {sol.message}")
+    if sol.status == 0 or len(sol.t_events[0]):
+        if sol.status == 0:
+            raise InputError(_too_many_steps(float(sol.y[2, -1]), _speed_text(md, 0.0), 0.0))
+        return sol, None
+    k = 1 if len(sol.t_events[1]) else 2
+    return sol, (float(sol.y_events[k][0][2]), float(sol.y_events[k][0][0]))
+
+
+def _rhs_passing(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
+    """``d(q, u, t)/ds`` of :func:`_integrate_passing` on the table, in plain floats (at most :data:`MAX_STEPS`)."""
+    cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
+    period, T0 = red.period, law.T0
+    calls = [0]
+
+    def rhs(_s: float, y: Any) -> list[float]:
+        calls[0] += 1
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS:
+            raise InputError(_too_many_steps(float(y[2]), "?", 1.0))
+        q, u = float(y[0]), float(y[1])
+        if period is not None:
+            q = x0 + (q - x0) % period
+        s = (q - x0) / h
+        i = min(max(int(s), 0), n)
+        t = s - i
+        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[12 * i : 12 * i + 12]
+        r = math.sqrt(max(((m3 * t + m2) * t + m1) * t + m0, 0.0))
+        Qs = ((q3 * t + q2) * t + q1) * t + q0
+        C = ((c3 * t + c2) * t + c1) * t + c0
+        return [u, Qs + T0 - (C * u / r if C else 0.0), r]
+
+    return rhs
+
+
+def _passing_states(red: Reduced, sol: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``q`` and ``u`` at the output ``times``: ``t(s)`` inverted on the dense solution, by Newton's steps
+    (``dt/ds = sqrt(M)``) kept inside each time's integration step, bisection where one would leave it."""
+    ts, ss = sol.y[2], sol.t
+    j = np.clip(np.searchsorted(ts, times, side="right") - 1, 0, len(ss) - 2)
+    a, b = ss[j], ss[j + 1]
+    gap = ts[j + 1] - ts[j]
+    s = a + (b - a) * np.clip((times - ts[j]) / np.where(gap > 0, gap, 1.0), 0.0, 1.0)
+    for _ in range(100):
+        y = sol.sol(s)
+        f = y[2] - times
+        if np.all(np.abs(f) <= 4 * np.finfo(float).eps * np.maximum(np.abs(times), 1.0)):
+            break
+        a, b = np.where(f < 0, s, a), np.where(f < 0, b, s)
+        slope = np.sqrt(red.mass(y[0]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = s - f / slope
+        s = np.where((newton > a) & (newton < b), newton, 0.5 * (a + b))
+    y = sol.sol(s)
+    return y[0], y[1]
 
 
 def _speed_text(md: _Model, w_si: float) -> str:

@@ -43,6 +43,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from . import dynamics
 from .dynamics import reduced, torque_laws
 from .errors import InputError, LinkageError
 from .model import CrankType, Mechanism
@@ -501,10 +502,13 @@ class _Search:
         self.red, self.drive = red, drive
         self.found: dict[float, SteadyState] = {}
         self.stalled: set[float] = set()
+        self.vanishes = isinstance(red, dynamics.Reduced) and len(dynamics.inertia_zeros(red)) > 0
 
     def cs(self, inertia: float) -> float:
-        """``Cs`` with ``inertia`` on the crank; 2 where the machine stalls within a turn."""
-        if inertia in self.stalled:
+        """``Cs`` with ``inertia`` on the crank; 2 where the machine stalls within a turn, or where nothing with inertia
+        turns with the crank at some input and no flywheel is added (its speed there is unbounded, or under a motor
+        curve the energy falls to 0: the limit of ``Cs`` as ``w_max / w_min`` grows without bound)."""
+        if inertia in self.stalled or (inertia == 0.0 and self.vanishes):
             return 2.0
         if inertia not in self.found:
             near = min(self.found, key=lambda i: abs(i - inertia)) if self.found else None
