@@ -16,8 +16,10 @@ checks written here:
 
 import numpy as np
 import pytest
+import yaml
 
 import linkagekit as lk
+from linkagekit import dynamics
 from linkagekit.cli import main
 
 ROCKER = {"mass": 2.0, "cg": [2.41, 2.93], "inertia": 0.5}
@@ -162,8 +164,6 @@ def test_a_constant_torque_turns_the_crank_through_the_limit_positions(doc, torq
 
 def test_the_cli_runs_through_and_a_motor_curve_there_is_one_line(tmp_path, capsys):
     path = tmp_path / "cr.yaml"
-    import yaml
-
     path.write_text(yaml.safe_dump(CRANK_ROCKER))
     assert (
         main(
@@ -186,3 +186,11 @@ def test_the_cli_runs_through_and_a_motor_curve_there_is_one_line(tmp_path, caps
     assert main(["simulate", str(path), "--time", "0:2:0.5", "--motor", "50,20"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "crank = 58.7783 deg" in err[0] and "toggle" not in err[0] and "inertia" in err[0]
+
+
+def test_a_stop_on_a_crank_that_turns_fully_is_no_toggle():
+    """Were the table cut where the crank turns fully, the line would not put a toggle at 0 deg (`check` has none)."""
+    mech = lk.Mechanism.from_dict(CRANK_ROCKER)
+    line = dynamics._toggle_message(dynamics._model(mech), 0, 1.69666, np.radians(58.7633))
+    assert line.startswith("simulate: stopped at t = 1.69666 s, crank = 58.7633 deg: ")
+    assert "(no toggle)" in line and "end of its range" not in line

@@ -598,6 +598,22 @@ def inertia_zeros(red: Reduced) -> np.ndarray:
     ``M`` is a sum of squares of velocity coefficients, so a zero is a double one (every moving
     mass stops there); the grid points miss it by up to a step, so each cell next to a small local
     minimum of the grid's values is searched on 64 points of its cubic.
+
+    Parameters
+    ----------
+    red : Reduced
+        A one-driver table (:func:`reduced`).
+
+    Returns
+    -------
+    ndarray
+        The inputs (SI) of the zeros, at the vertex of the parabola through the samples around each.
+
+    Examples
+    --------
+    >>> import linkagekit as lk
+    >>> inertia_zeros(reduced(lk.load("examples/slider_crank.yaml"))).size  # crank and rod have mass: M > 0
+    0
     """
     M = red._Y[:, 0]
     typical = float(np.median(M))
@@ -626,8 +642,10 @@ def _integrate_passing(
     With ``u = sqrt(M) w`` (``u^2 / 2`` the kinetic energy) the reduced equation is
     ``dq/ds = u``, ``du/ds = Q_s + T0 - (C + T0 / W0) w``, ``dt/ds = sqrt(M)``: regular where ``M`` is
     0 if no force there acts on the speed (the crank passes in no time, the energy carrying
-    through). A motor curve or a damper acting there would have to hold the speed itself where
-    nothing carries inertia: refused in one line.
+    through). A motor curve or a damper acting there is refused in one line: the crank's speed
+    spikes as it passes, and what the speed-dependent force takes of the energy there depends on
+    the crank's own inertia (a crank of 1e-8 and one of 1e-10 kg*m^2 on the review's rocker-only
+    crank-rocker under a motor curve were 1.6 deg apart after 2 s, converging as its 0.4th power).
     """
     _refuse_speed_forces(md, red, law, zeros)
     if red.period is None and not red.q_range[0] <= red.q0 <= red.q_range[1]:
@@ -659,9 +677,9 @@ def _refuse_speed_forces(md: _Model, red: Reduced, law: TorqueLaw, zeros: np.nda
     at = f"{where / (md.scale[0] * d.input_scale(md.mech)):.6g} {d.input_unit(md.mech)}"
     what = "the motor curve acts" if motor else "a damper acts"
     raise InputError(
-        f"simulate: {md.mech.source}: nothing with inertia moves with {d.name} at {d.name} = {at} (the inertia it"
-        f" sees is 0 there) and {what} on its speed: the model gives no motion through it; give the driver's link or"
-        " the coupler an inertia, or use a constant torque"
+        f"simulate: {md.mech.source}: at {d.name} = {at} nothing with inertia moves with {d.name} and {what} on its"
+        f" speed: the motion there depends on the inertia left out; give {d.link} or the coupler an inertia, or"
+        " apply a constant torque"
     )
 
 
@@ -673,7 +691,7 @@ def _passing_solution(
     from scipy.integrate import solve_ivp
 
     lo, hi = red.q_range
-    rhs = _rhs_passing(red, law)
+    rhs = _rhs_passing(red, law, partial(_speed_text, md))
 
     def done(_s: float, y: Any) -> float:
         return t_end - float(y[2])
@@ -693,14 +711,18 @@ def _passing_solution(
     if sol.status < 0:
         raise InputError(f"simulate: the integration failed: {sol.message}")
     if sol.status == 0 or len(sol.t_events[0]):
-        if sol.status == 0:
-            raise InputError(_too_many_steps(float(sol.y[2, -1]), _speed_text(md, 0.0), 0.0))
+        if sol.status == 0:  # s ran out with t short of the end: stuck where dt/ds = sqrt(M) is 0 (at rest there)
+            at = _inputs_text(md, sol.y[:1, -1])
+            raise InputError(
+                f"simulate: by t = {sol.y[2, -1]:.6g} s the motion has come to rest where nothing with inertia moves"
+                f" ({at}): the model does not say how it goes on"
+            )
         return sol, None
     k = 1 if len(sol.t_events[1]) else 2
     return sol, (float(sol.y_events[k][0][2]), float(sol.y_events[k][0][0]))
 
 
-def _rhs_passing(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
+def _rhs_passing(red: Reduced, law: TorqueLaw, speed: Callable[[float], str]) -> Callable[[float, Any], list[float]]:
     """``d(q, u, t)/ds`` of :func:`_integrate_passing` on the table, in plain floats (at most :data:`MAX_STEPS`)."""
     cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
     period, T0 = red.period, law.T0
@@ -708,9 +730,9 @@ def _rhs_passing(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[fl
 
     def rhs(_s: float, y: Any) -> list[float]:
         calls[0] += 1
-        if calls[0] > _EVALS_PER_STEP * MAX_STEPS:
-            raise InputError(_too_many_steps(float(y[2]), "?", 1.0))
         q, u = float(y[0]), float(y[1])
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS:
+            raise InputError(_too_many_steps(float(y[2]), speed(u / math.sqrt(max(float(red.mass(q)), 1e-300))), 1.0))
         if period is not None:
             q = x0 + (q - x0) % period
         s = (q - x0) / h
@@ -864,7 +886,16 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     end = None if d.stroke is None else _stroke_end(d, value, d.stroke[1] - d.stroke[0])
     if d.stroke is not None and end is not None:  # the table reaches the stroke's end itself: the event stops there
         return head + _stroke_end_text(md.mech, k, int(end == d.stroke[1]))
+    if _turns_fully(md.mech, k):  # a range's 0 and 360 deg are no ends: never a toggle where `check` finds none
+        return head + f"the model does not hold to its tolerance there, though {d.name} turns fully (no toggle)"
     return head + f"the end of its range{_range_end(md.mech, k, value)} (a toggle) that the motion cannot pass"
+
+
+def _turns_fully(mech: Mechanism, k: int) -> bool:
+    """Whether driver ``k`` (a crank) assembles over a whole turn (``check``: no dead point, no range's end)."""
+    d = mech.drivers[k]
+    turn = 2 * math.pi / d.input_scale(mech)
+    return d.type.cyclic and any(hi - lo >= turn * (1 - 1e-12) for lo, hi in input_range(mech, k))
 
 
 def _range_end(mech: Mechanism, k: int, value: float) -> str:
