@@ -16,7 +16,9 @@ their exact derivatives (from the acceleration coefficients), so cubic Hermite i
 is ``O(h^4)`` and the right-hand side costs microseconds.  Several drivers evaluate ``M``,
 ``h`` and ``Q`` directly at every step.  :func:`simulate` integrates with SciPy's DOP853
 (:data:`RTOL`, :data:`ATOL`) and analyses the motion at the requested times in one vectorised
-call (so every catalogue column comes with it).
+call (so every catalogue column comes with it).  Where the table's ``M`` vanishes (the crank
+and coupler massless, the output at a limit position: :func:`inertia_zeros`) one driver's
+motion is integrated in the time ``s``, ``dt = sqrt(M) ds``, regular there.
 
 Examples
 --------

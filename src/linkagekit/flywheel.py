@@ -198,8 +198,8 @@ class _Problem:
         self.q0, self.sign, self.period = float(q0), float(sign), float(red.period)
 
     def mass(self, q: Array) -> Array:
-        """``M(q)`` with the flywheel; never 0 (``M`` of a massless crank and coupler vanishes where the output stops:
-        without a flywheel the speed there is then only very large, and the motor's curve takes the energy)."""
+        """``M(q)`` with the flywheel, never 0 (the energy equation divides by it; ``M`` of a massless crank and coupler
+        vanishes where the output stops, and the sizing's trial flywheels start above 0)."""
         return np.maximum(np.asarray(self.red.mass(q), dtype=float) + self.extra, _NO_MASS)
 
     def speed(self, q: Array, e: Array) -> Array:
@@ -445,8 +445,15 @@ def steady_state(
     ------
     StallError
         When no periodic motion exists (the machine stops, or never settles).
+    InputError
+        Without ``extra_inertia``, when ``M`` vanishes somewhere (:func:`~linkagekit.dynamics.inertia_zeros`).
     """
     q0 = float(getattr(red, "q0", getattr(red, "q_range", (0.0,))[0]))
+    if extra_inertia == 0.0 and isinstance(red, dynamics.Reduced) and len(zeros := dynamics.inertia_zeros(red)):
+        raise InputError(
+            f"no steady state without a flywheel: nothing with inertia moves with the driver at {zeros[0]:.6g} rad"
+            " (its speed is unbounded there, or depends on the inertia left out); add a flywheel or an inertia"
+        )
     sign = 1.0 if float(np.asarray(drive(np.zeros(1)))[0]) >= 0.0 else -1.0
     p = _Problem(red, drive, extra_inertia, q0, sign)
     z = (
@@ -506,8 +513,7 @@ class _Search:
 
     def cs(self, inertia: float) -> float:
         """``Cs`` with ``inertia`` on the crank; 2 where the machine stalls within a turn, or where nothing with inertia
-        turns with the crank at some input and no flywheel is added (its speed there is unbounded, or under a motor
-        curve the energy falls to 0: the limit of ``Cs`` as ``w_max / w_min`` grows without bound)."""
+        turns with the crank at some input and no flywheel is added (:func:`steady_state` refuses that model)."""
         if inertia in self.stalled or (inertia == 0.0 and self.vanishes):
             return 2.0
         if inertia not in self.found:
