@@ -16,7 +16,9 @@ their exact derivatives (from the acceleration coefficients), so cubic Hermite i
 is ``O(h^4)`` and the right-hand side costs microseconds.  Several drivers evaluate ``M``,
 ``h`` and ``Q`` directly at every step.  :func:`simulate` integrates with SciPy's DOP853
 (:data:`RTOL`, :data:`ATOL`) and analyses the motion at the requested times in one vectorised
-call (so every catalogue column comes with it).
+call (so every catalogue column comes with it).  Where the table's ``M`` vanishes (the crank
+and coupler massless, the output at a limit position: :func:`inertia_zeros`) one driver's
+motion is integrated in the time ``s``, ``dt = sqrt(M) ds``, regular there.
 
 Examples
 --------
@@ -66,6 +68,9 @@ BRIDGE = 200
 DEGREE = 11
 #: the table's cubic Hermite interpolant must meet the model at every cell's middle to this (relative)
 TABLE_TOL = 1e-8
+#: the reduced inertia ``M`` vanishes where its interpolant falls below this share of its median over the table (nothing
+#: with inertia moves there: a rocker at its limit position, the crank and coupler massless)
+NO_INERTIA = 1e-9
 #: several drivers: the motion stops where the steps' smallest dimensionless determinant falls below this
 STOP_CONDITION = 1e-3
 #: the most output times one simulation gives
@@ -76,7 +81,7 @@ MAX_STEPS = 200_000
 #: right-hand-side evaluations of one DOP853 step
 _EVALS_PER_STEP = 12
 
-__all__ = ["ATOL", "POINTS", "RTOL", "Reduced", "TorqueLaw", "reduced", "simulate"]
+__all__ = ["ATOL", "NO_INERTIA", "POINTS", "RTOL", "Reduced", "TorqueLaw", "inertia_zeros", "reduced", "simulate"]
 
 ArrayLike = Any
 
@@ -273,8 +278,8 @@ class Reduced:
         return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
 
     def mass(self, q: ArrayLike) -> np.ndarray:
-        """``M(q)``."""
-        return self._rows(q)[..., 0]
+        """``M(q)``, never negative (a sum of squares: the interpolant's rounding next to a zero of ``M`` is cut)."""
+        return np.maximum(self._rows(q)[..., 0], 0.0)  # type: ignore[no-any-return]
 
     def dmass(self, q: ArrayLike) -> np.ndarray:
         """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points)."""
@@ -453,10 +458,14 @@ def _verified(
 ) -> np.ndarray:
     """Which cells the interpolant holds to :data:`TABLE_TOL`: checked against the model at every cell's middle.
 
-    ``M`` relative to itself, ``Q_s`` and ``C`` relative to their largest magnitude over the
-    table. A cell fails near a toggle (``M`` grows without bound) or where the model is not
-    smooth; a bridged cell (near a change point, where the direct values are the inaccurate
-    ones) and a middle on a singular position (no direct value) pass.
+    ``M`` relative to the larger of itself and its median over the table (its typical size),
+    ``Q_s`` and ``C`` relative to their largest magnitude over the table. A cell fails near a
+    toggle (``M`` grows without bound) or where the model is not smooth; a bridged cell (near
+    a change point, where the direct values are the inaccurate ones) and a middle on a singular
+    position (no direct value) pass. Where ``M`` falls to zero (nothing with inertia moves: a
+    rocker at its limit position, the crank and coupler massless) the cells hold to the median:
+    relative to ``M`` itself no interpolant would, and the motion passes there
+    (:func:`_integrate_reduced`).
     """
     mid = 0.5 * (x[:-1] + x[1:])
     q = (mid / md.scale[0])[None]
@@ -464,8 +473,9 @@ def _verified(
     h = x[1] - x[0]
     interp = 0.5 * (Y[:-1] + Y[1:]) + h * (dY[:-1] - dY[1:]) / 8.0  # the cubic Hermite at t = 1/2
     with np.errstate(invalid="ignore"):
-        scale = np.maximum(np.abs(direct), np.nanmax(np.abs(Y), axis=0, initial=0.0) * [0.0, 1.0, 1.0])
-        err = np.abs(interp - direct) <= TABLE_TOL * scale + 1e-300
+        typical = np.nanmedian(np.abs(Y[:, 0])) if np.isfinite(Y[:, 0]).any() else 0.0
+        floor = np.nanmax(np.abs(Y), axis=0, initial=0.0) * [0.0, 1.0, 1.0] + [typical, 0.0, 0.0]
+        err = np.abs(interp - direct) <= TABLE_TOL * np.maximum(np.abs(direct), floor) + 1e-300
     rows = np.all(np.isfinite(Y) & np.isfinite(dY), axis=1) & (Y[:, 0] > 0)
     ok: np.ndarray = (np.all(err | ~np.isfinite(direct), axis=1) | bridged[:-1] | bridged[1:]) & rows[:-1] & rows[1:]
     return ok
@@ -568,6 +578,9 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
             # already past the stop: the singular event can never fall through zero (pushed in, it ran on for ever)
             raise _singular_pose(md.mech) from off
         return _integrate_direct(md, times, (law,), np.array([w0], float))
+    zeros = inertia_zeros(red)
+    if len(zeros):
+        return _integrate_passing(md, red, times, law, w0, zeros)
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
     if red.period is None:
@@ -579,6 +592,183 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     qdd = red.accel(q, w, law(w))
     signs = red.signs(md.params, q) if md.params.plan.n_signs else None
     return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def inertia_zeros(red: Reduced) -> np.ndarray:
+    """Where the table's ``M`` vanishes (SI inputs): below :data:`NO_INERTIA` of its median, by the interpolant.
+
+    ``M`` is a sum of squares of velocity coefficients, so a zero is a double one (every moving
+    mass stops there); the grid points miss it by up to a step, so each cell next to a small local
+    minimum of the grid's values is searched on 64 points of its cubic.
+
+    Parameters
+    ----------
+    red : Reduced
+        A one-driver table (:func:`reduced`).
+
+    Returns
+    -------
+    ndarray
+        The inputs (SI) of the zeros, at the vertex of the parabola through the samples around each.
+
+    Examples
+    --------
+    >>> import linkagekit as lk
+    >>> inertia_zeros(reduced(lk.load("examples/slider_crank.yaml"))).size  # crank and rod have mass: M > 0
+    0
+    """
+    M = red._Y[:, 0]
+    typical = float(np.median(M))
+    k = np.flatnonzero((M[1:-1] <= M[:-2]) & (M[1:-1] <= M[2:]) & (M[1:-1] < 1e-4 * typical)) + 1
+    if not len(k):
+        return np.zeros(0)
+    u = np.linspace(-1.0, 1.0, 129)
+    q = red.q_range[0] + (k[:, None] + u[None, :]) * red._h
+    m = red._rows(q)[..., 0]
+    rows = np.arange(len(k))
+    i = np.clip(np.argmin(m, axis=1), 1, len(u) - 2)
+    a, b, c = m[rows, i - 1], m[rows, i], m[rows, i + 1]
+    curv = a - 2 * b + c
+    with np.errstate(divide="ignore", invalid="ignore"):  # M is a parabola next to its zero: its vertex
+        shift = np.where(curv > 0, 0.5 * (a - c) / curv, 0.0)
+    where = q[rows, i] + shift * (q[rows, 1] - q[rows, 0])
+    low = np.min(m, axis=1) < NO_INERTIA * typical
+    return np.asarray(where[low], float)
+
+
+def _integrate_passing(
+    md: _Model, red: Reduced, times: np.ndarray, law: TorqueLaw, w0: float, zeros: np.ndarray
+) -> _Run:
+    """One driver whose ``M`` vanishes at ``zeros``: the motion in the time ``s``, ``dt = sqrt(M) ds`` (method.md).
+
+    With ``u = sqrt(M) w`` (``u^2 / 2`` the kinetic energy) the reduced equation is
+    ``dq/ds = u``, ``du/ds = Q_s + T0 - (C + T0 / W0) w``, ``dt/ds = sqrt(M)``: regular where ``M`` is
+    0 if no force there acts on the speed (the crank passes in no time, the energy carrying
+    through). A motor curve or a damper acting there is refused in one line: the crank's speed
+    spikes as it passes, and what the speed-dependent force takes of the energy there depends on
+    the crank's own inertia (a crank of 1e-8 and one of 1e-10 kg*m^2 on the review's rocker-only
+    crank-rocker under a motor curve were 1.6 deg apart after 2 s, converging as its 0.4th power).
+    """
+    _refuse_speed_forces(md, red, law, zeros)
+    if red.period is None and not red.q_range[0] <= red.q0 <= red.q_range[1]:
+        raise _singular_pose(md.mech)
+    r0 = math.sqrt(max(float(red.mass(red.q0)), 0.0))
+    sol, stop = _passing_solution(md, red, law, [red.q0, r0 * w0, float(times[0])], float(times[-1]))
+    t = times[times <= (stop[0] if stop else times[-1])]
+    q, u = _passing_states(red, sol, t)
+    r = np.sqrt(red.mass(q))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(r > 0, u / r, np.copysign(np.inf, u))
+    w[0] = w0
+    stopped = None if stop is None else _toggle_message(md, 0, *stop)
+    qdd = red.accel(q, w, law(w))
+    signs = red.signs(md.params, q) if md.params.plan.n_signs else None
+    return _Run(t, q[None], w[None], np.atleast_1d(qdd)[None], signs, stopped)
+
+
+def _refuse_speed_forces(md: _Model, red: Reduced, law: TorqueLaw, zeros: np.ndarray) -> None:
+    """The line that refuses a motor curve or a damper acting on the speed where ``M`` vanishes (at ``zeros``)."""
+    c = red._rows(zeros)[..., 2]
+    c_max = float(np.max(np.abs(red._Y[:, 2]), initial=0.0))
+    motor = law.W0 is not None and law.T0 != 0.0
+    damped = c > 1e-6 * c_max
+    if not motor and not damped.any():
+        return
+    d = md.mech.drivers[0]
+    where = float((zeros[damped] if damped.any() and not motor else zeros)[0])
+    at = f"{where / (md.scale[0] * d.input_scale(md.mech)):.6g} {d.input_unit(md.mech)}"
+    what = "the motor curve acts" if motor else "a damper acts"
+    raise InputError(
+        f"simulate: {md.mech.source}: at {d.name} = {at} nothing with inertia moves with {d.name} and {what} on its"
+        f" speed: the motion there depends on the inertia left out; give {d.link} or the coupler an inertia, or"
+        " apply a constant torque"
+    )
+
+
+def _passing_solution(
+    md: _Model, red: Reduced, law: TorqueLaw, y0: list[float], t_end: float
+) -> tuple[Any, tuple[float, float] | None]:
+    """``(q, u, t)`` over ``s`` by DOP853 (dense), until ``t_end``: the solution, and (time, q) of a stop at the table's
+    end (a toggle: a table that is not periodic), or None."""
+    from scipy.integrate import solve_ivp
+
+    lo, hi = red.q_range
+    rhs = _rhs_passing(red, law, partial(_speed_text, md))
+
+    def done(_s: float, y: Any) -> float:
+        return t_end - float(y[2])
+
+    def below(_s: float, y: Any) -> float:
+        return float(y[0]) - lo
+
+    def above(_s: float, y: Any) -> float:
+        return hi - float(y[0])
+
+    events: list[Any] = [done] if red.period is not None else [done, below, above]
+    for e in events:
+        e.terminal, e.direction = True, -1.0
+    floor = math.sqrt(NO_INERTIA * float(np.median(red._Y[:, 0])))
+    span = (0.0, (t_end - y0[2]) / floor)  # dt/ds = sqrt(M) is below that floor only next to a zero, passed at once
+    sol = solve_ivp(rhs, span, y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events, dense_output=True)
+    if sol.status < 0:
+        raise InputError(f"simulate: the integration failed: {sol.message}")
+    if sol.status == 0 or len(sol.t_events[0]):
+        if sol.status == 0:  # s ran out with t short of the end: stuck where dt/ds = sqrt(M) is 0 (at rest there)
+            at = _inputs_text(md, sol.y[:1, -1])
+            raise InputError(
+                f"simulate: by t = {sol.y[2, -1]:.6g} s the motion has come to rest where nothing with inertia moves"
+                f" ({at}): the model does not say how it goes on"
+            )
+        return sol, None
+    k = 1 if len(sol.t_events[1]) else 2
+    return sol, (float(sol.y_events[k][0][2]), float(sol.y_events[k][0][0]))
+
+
+def _rhs_passing(red: Reduced, law: TorqueLaw, speed: Callable[[float], str]) -> Callable[[float, Any], list[float]]:
+    """``d(q, u, t)/ds`` of :func:`_integrate_passing` on the table, in plain floats (at most :data:`MAX_STEPS`)."""
+    cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
+    period, T0 = red.period, law.T0
+    calls = [0]
+
+    def rhs(_s: float, y: Any) -> list[float]:
+        calls[0] += 1
+        q, u = float(y[0]), float(y[1])
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS:
+            raise InputError(_too_many_steps(float(y[2]), speed(u / math.sqrt(max(float(red.mass(q)), 1e-300))), 1.0))
+        if period is not None:
+            q = x0 + (q - x0) % period
+        s = (q - x0) / h
+        i = min(max(int(s), 0), n)
+        t = s - i
+        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[12 * i : 12 * i + 12]
+        r = math.sqrt(max(((m3 * t + m2) * t + m1) * t + m0, 0.0))
+        Qs = ((q3 * t + q2) * t + q1) * t + q0
+        C = ((c3 * t + c2) * t + c1) * t + c0
+        return [u, Qs + T0 - (C * u / r if C else 0.0), r]
+
+    return rhs
+
+
+def _passing_states(red: Reduced, sol: Any, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``q`` and ``u`` at the output ``times``: ``t(s)`` inverted on the dense solution, by Newton's steps
+    (``dt/ds = sqrt(M)``) kept inside each time's integration step, bisection where one would leave it."""
+    ts, ss = sol.y[2], sol.t
+    j = np.clip(np.searchsorted(ts, times, side="right") - 1, 0, len(ss) - 2)
+    a, b = ss[j], ss[j + 1]
+    gap = ts[j + 1] - ts[j]
+    s = a + (b - a) * np.clip((times - ts[j]) / np.where(gap > 0, gap, 1.0), 0.0, 1.0)
+    for _ in range(100):
+        y = sol.sol(s)
+        f = y[2] - times
+        if np.all(np.abs(f) <= 4 * np.finfo(float).eps * np.maximum(np.abs(times), 1.0)):
+            break
+        a, b = np.where(f < 0, s, a), np.where(f < 0, b, s)
+        slope = np.sqrt(red.mass(y[0]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = s - f / slope
+        s = np.where((newton > a) & (newton < b), newton, 0.5 * (a + b))
+    y = sol.sol(s)
+    return y[0], y[1]
 
 
 def _speed_text(md: _Model, w_si: float) -> str:
@@ -698,7 +888,16 @@ def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
     end = None if d.stroke is None else _stroke_end(d, value, d.stroke[1] - d.stroke[0])
     if d.stroke is not None and end is not None:  # the table reaches the stroke's end itself: the event stops there
         return head + _stroke_end_text(md.mech, k, int(end == d.stroke[1]))
+    if _turns_fully(md.mech, k):  # a range's 0 and 360 deg are no ends: never a toggle where `check` finds none
+        return head + f"the model does not hold to its tolerance there, though {d.name} turns fully (no toggle)"
     return head + f"the end of its range{_range_end(md.mech, k, value)} (a toggle) that the motion cannot pass"
+
+
+def _turns_fully(mech: Mechanism, k: int) -> bool:
+    """Whether driver ``k`` (a crank) assembles over a whole turn (``check``: no dead point, no range's end)."""
+    d = mech.drivers[k]
+    turn = 2 * math.pi / d.input_scale(mech)
+    return d.type.cyclic and any(hi - lo >= turn * (1 - 1e-12) for lo, hi in input_range(mech, k))
 
 
 def _range_end(mech: Mechanism, k: int, value: float) -> str:

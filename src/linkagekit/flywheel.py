@@ -43,6 +43,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from . import dynamics
 from .dynamics import reduced, torque_laws
 from .errors import InputError, LinkageError
 from .model import CrankType, Mechanism
@@ -73,6 +74,10 @@ BALANCE_SAMPLES = 256
 #: the energy below which (relative to the period's start) the machine counts as stopped: its speed
 #: fell to 1e-3 of the start's (the energy equation in q is singular at w = 0)
 STALL_FRACTION = 1e-6
+
+
+#: the least reduced inertia the energy equation divides by (kg*m^2): where nothing with inertia moves, ``M = 0``
+_NO_MASS = 1e-300
 
 
 class StallError(LinkageError):
@@ -196,7 +201,9 @@ class _Problem:
         self.q0, self.sign, self.period = float(q0), float(sign), float(red.period)
 
     def mass(self, q: Array) -> Array:
-        return np.asarray(self.red.mass(q), dtype=float) + self.extra
+        """``M(q)`` with the flywheel, never 0 (the energy equation divides by it; ``M`` of a massless crank and coupler
+        vanishes where the output stops, and the sizing's trial flywheels start above 0)."""
+        return np.maximum(np.asarray(self.red.mass(q), dtype=float) + self.extra, _NO_MASS)
 
     def speed(self, q: Array, e: Array) -> Array:
         """``w`` from the energy: ``sign * sqrt(2 E / M)`` (``E`` clipped at 0)."""
@@ -205,7 +212,7 @@ class _Problem:
     def rhs(self, u: float, y: Array) -> Array:
         """``d(E, ln dE/dE0)/du`` at ``q = q0 + sign * u``: the energy equation and its variational equation."""
         q = self.q0 + self.sign * u
-        m = float(self.red.mass(np.array([q]))[0]) + self.extra
+        m = float(self.mass(np.array([q]))[0])
         speed = math.sqrt(2.0 * max(float(y[0]), 0.0) / m)
         h = 1e-6 * max(speed, 1e-3)
         ws = self.sign * np.array([speed, speed + h, speed - h])
@@ -441,8 +448,15 @@ def steady_state(
     ------
     StallError
         When no periodic motion exists (the machine stops, or never settles).
+    InputError
+        Without ``extra_inertia``, when ``M`` vanishes somewhere (:func:`~linkagekit.dynamics.inertia_zeros`).
     """
     q0 = float(getattr(red, "q0", getattr(red, "q_range", (0.0,))[0]))
+    if extra_inertia == 0.0 and isinstance(red, dynamics.Reduced) and len(zeros := dynamics.inertia_zeros(red)):
+        raise InputError(
+            f"no steady state without a flywheel: nothing with inertia moves with the driver at {zeros[0]:.6g} rad"
+            " (its speed is unbounded there, or depends on the inertia left out); add a flywheel or an inertia"
+        )
     sign = 1.0 if float(np.asarray(drive(np.zeros(1)))[0]) >= 0.0 else -1.0
     p = _Problem(red, drive, extra_inertia, q0, sign)
     z = (
@@ -498,10 +512,12 @@ class _Search:
         self.red, self.drive = red, drive
         self.found: dict[float, SteadyState] = {}
         self.stalled: set[float] = set()
+        self.vanishes = isinstance(red, dynamics.Reduced) and len(dynamics.inertia_zeros(red)) > 0
 
     def cs(self, inertia: float) -> float:
-        """``Cs`` with ``inertia`` on the crank; 2 where the machine stalls within a turn."""
-        if inertia in self.stalled:
+        """``Cs`` with ``inertia`` on the crank; 2 where the machine stalls within a turn, or where nothing with inertia
+        turns with the crank at some input and no flywheel is added (:func:`steady_state` refuses that model)."""
+        if inertia in self.stalled or (inertia == 0.0 and self.vanishes):
             return 2.0
         if inertia not in self.found:
             near = min(self.found, key=lambda i: abs(i - inertia)) if self.found else None
