@@ -528,3 +528,31 @@ def test_a_parallelogram_posed_next_to_its_flat_position_off_the_table_is_refuse
     moving away from the flat position at 0.057 deg (the conditioning rising through the threshold)."""
     with pytest.raises(lk.InputError, match="a singular pose"):
         lk.simulate(_parallelogram(0.01), np.array([0.0, 0.25]), speed=5.0)
+
+
+def test_a_pose_at_its_stroke_end_to_rounding_stops_at_once_when_pushed_in():
+    """A review's arm, posed at its stroke's lower end as decimals give it (1.8000000000000003 m): pushed in, the line
+    said "stopped at t = 7.65431e-09 s" (the integrator's event found the end a step later) where the docs say at once.
+    On an end to rounding, driven out of the table: stopped at t = 0."""
+    arm = {
+        "format": "linkagekit/1",
+        "joints": {"O": [0, 0], "C": [2, 0], "B": [0.44, 0.897997772825746]},
+        "links": {"ground": ["O", "C"], "arm": {"joints": ["O", "B"], "mass": 20, "cg": [0.22, 0.449], "inertia": 1.7}},
+        "drivers": [{"cylinder": ["C", "B"], "name": "lift", "stroke": [1.8, 2.6]}],
+        "gravity": [0, -9.81],
+    }
+    mech = lk.Mechanism.from_dict(arm)
+    res = lk.simulate(mech, np.array([0.0, 0.1]), torque=0.0)
+    assert res.stopped is not None and res.stopped.startswith(
+        "simulate: stopped at t = 0 s, lift = 1.8 m: lift reached"
+    )
+    assert res.n == 1
+    assert lk.simulate(mech, np.array([0.0, 0.05]), torque=2000.0).stopped is None  # pushed out: it moves
+
+
+def test_a_motor_whose_torque_grows_with_speed_is_refused_in_one_line():
+    """``--motor 6500,-6.5``: T0 (1 - w/W0) grows with the speed; the run went on to the step limit (a review)."""
+    mech = lk.load("examples/motor_fourbar.yaml")
+    with pytest.raises(lk.errors.InputError, match=r"motor\[crank\]: T0 = 6500 and W0 = -6.5 have opposite signs"):
+        lk.simulate(mech, np.array([0.0, 0.1]), motor=(6500.0, -6.5))
+    assert lk.simulate(mech, np.array([0.0, 0.1]), motor=(-6500.0, -6.5)).stopped is None  # the other way round

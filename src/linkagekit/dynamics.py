@@ -859,6 +859,9 @@ def _with_events(
     from scipy.integrate import solve_ivp
 
     lo, hi = red.q_range
+    pushed = _pushed_out(rhs, times[0], y0, lo, hi)
+    if pushed is not None:  # on an end and driven out of the table: stopped at the start (the event found t ~ 1e-9)
+        return times[:1], np.array([[y0[0]], [y0[1]]], float), (float(times[0]), pushed)
 
     def below(_t: float, y: Any) -> float:
         return float(y[0]) - lo
@@ -877,6 +880,21 @@ def _with_events(
         k = 0 if len(sol.t_events[0]) else 1
         return sol.t, sol.y, (float(sol.t_events[k][0]), float(sol.y_events[k][0][0]))
     return sol.t, sol.y, None
+
+
+def _pushed_out(
+    rhs: Callable[[float, Any], list[float]], t0: float, y0: list[float], lo: float, hi: float
+) -> float | None:
+    """The end of the table ``[lo, hi]`` a start ``y0 = (q, w)`` lies on (to rounding) while its speed, or at rest its
+    acceleration, drives it out; else None."""
+    q, w = float(y0[0]), float(y0[1])
+    tol = 1e-12 * max(hi - lo, abs(lo), abs(hi))
+    out = w if w != 0 else rhs(t0, [q, w])[1]
+    if abs(q - lo) <= tol and out < 0:
+        return lo
+    if abs(q - hi) <= tol and out > 0:
+        return hi
+    return None
 
 
 def _toggle_message(md: _Model, k: int, t: float, q_si: float) -> str:
@@ -1143,6 +1161,11 @@ def _laws(md: _Model, torque: Any, motor: Any) -> tuple[TorqueLaw, ...]:
             T0, W0 = _number(t0, f"motor[{d.name}] T0"), _number(w0, f"motor[{d.name}] W0")
             if W0 == 0:
                 raise InputError(f"motor[{d.name}]: the no-load speed W0 must not be zero")
+            if T0 * W0 < 0:  # T0 (1 - w / W0) would grow with the speed: a motor that feeds itself runs away
+                raise InputError(
+                    f"motor[{d.name}]: T0 = {T0:g} and W0 = {W0:g} have opposite signs (the torque would grow with "
+                    "the speed); a motor turning the other way has both negative"
+                )
             out.append(TorqueLaw(T0, W0 * md.scale[k]))
         else:
             out.append(TorqueLaw(_number(tq.get(d.name, 0.0), f"torque[{d.name}]")))
