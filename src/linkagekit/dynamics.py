@@ -539,20 +539,27 @@ class _Run:
     stopped: str | None
 
 
+def _cell_at(
+    cells: list[float], q: float, x0: float, h: float, n: int, period: float | None
+) -> tuple[float, list[float]]:
+    """The table's cell at input ``q`` (reduced to the period from ``x0``): where in it (0..1), and its 12 cubic
+    coefficients of ``M``, ``Q_s``, ``C`` by power (:func:`_cells`)."""
+    if period is not None:
+        q = x0 + (q - x0) % period
+    s = (q - x0) / h
+    i = min(max(int(s), 0), n)
+    return s - i, cells[12 * i : 12 * i + 12]
+
+
 def _rhs_reduced(red: Reduced, law: TorqueLaw) -> Callable[[float, Any], list[float]]:
     """The state derivative ``(w, q'')`` of the tabulated model, in plain floats (microseconds a call)."""
     cells, x0, h, n = _cells(red), red.q_range[0], red._h, len(red._Y) - 2
-    q_ref, period = x0, red.period
+    period = red.period
     T0, W0 = law.T0, law.W0
 
     def rhs(_t: float, y: Any) -> list[float]:
         q, w = float(y[0]), float(y[1])
-        if period is not None:
-            q = q_ref + (q - q_ref) % period
-        s = (q - x0) / h
-        i = min(max(int(s), 0), n)
-        t = s - i
-        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[12 * i : 12 * i + 12]
+        t, (m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3) = _cell_at(cells, q, x0, h, n, period)
         M = ((m3 * t + m2) * t + m1) * t + m0
         dM = ((3 * m3 * t + 2 * m2) * t + m1) / h
         Qs = ((q3 * t + q2) * t + q1) * t + q0
@@ -735,12 +742,7 @@ def _rhs_passing(red: Reduced, law: TorqueLaw, speed: Callable[[float], str]) ->
         q, u = float(y[0]), float(y[1])
         if calls[0] > _EVALS_PER_STEP * MAX_STEPS:
             raise InputError(_too_many_steps(float(y[2]), speed(u / math.sqrt(max(float(red.mass(q)), 1e-300))), 1.0))
-        if period is not None:
-            q = x0 + (q - x0) % period
-        s = (q - x0) / h
-        i = min(max(int(s), 0), n)
-        t = s - i
-        m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3 = cells[12 * i : 12 * i + 12]
+        t, (m0, q0, c0, m1, q1, c1, m2, q2, c2, m3, q3, c3) = _cell_at(cells, q, x0, h, n, period)
         r = math.sqrt(max(((m3 * t + m2) * t + m1) * t + m0, 0.0))
         Qs = ((q3 * t + q2) * t + q1) * t + q0
         C = ((c3 * t + c2) * t + c1) * t + c0
