@@ -632,7 +632,12 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
         "best-transmitting (-o OUT.yaml: the most accurate; OUT-2.yaml, ...: the others in that order)",
     )
     p.add_argument("--scheduler", metavar="ADDRESS", help="evaluate on a running Dask cluster (tcp://host:port)")
-    p.add_argument("--checkpoint", metavar="FILE", help="save the search after every generation; resume from it")
+    p.add_argument(
+        "--checkpoint",
+        metavar="FILE",
+        help="save the search as it goes (every generation; with --topology auto every phase and 10 s); "
+        "the same command resumes from it",
+    )
     p.add_argument("--units", metavar="UNIT", default="m", help="length unit of the targets: mm, cm, m, in (default m)")
     p.add_argument("--points", metavar="N", help="points sampled along an SVG path (default 40)")
     p.add_argument("--no-smooth", action="store_true", help="take hand-drawn targets (over 40 points) as they are")
