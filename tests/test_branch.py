@@ -6,6 +6,7 @@ against central finite differences of its own positions, across the change point
 """
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -458,3 +459,34 @@ def test_an_input_near_a_change_point_does_not_change_the_others_answers(name, m
         keep = [asked.index(181.0), asked.index(539.0)]
         for j in mech.joint_names:
             assert np.max(np.abs(res.xy(j)[keep] - alone.xy(j))) < 1e-9 * 4.0, (extra, j)
+
+
+def test_forces_at_a_change_point_taken_as_the_branch_limit_are_null_not_an_internal_error():
+    """The shipped IFToMM double four-bar (masses, gravity) with ``--branch continuous`` over its own sweep (which
+    holds 360 deg, a flat position): 'internal error: LinAlgError: Singular matrix' (a review). The reactions of a flat
+    position are not determined (they grow without bound either side of it: 1404 N at 359 deg, -1406 N at 361): null
+    there, the neighbours' as before."""
+    mech = lk.load("examples/iftomm_a02_double_fourbar.yaml")
+    res = lk.analyze(mech, {"crank0": [359.0, 360.0, 361.0]}, branch="continuous")
+    d = res.to_dict()
+    torque = d["driver_torque"]["crank0"]
+    assert torque[1] is None and all(np.isfinite([torque[0], torque[2]]))
+    assert abs(torque[0] - torque[2]) < 1e-6 * abs(torque[0])  # the gravity torque of a symmetric pose
+    assert all(r["fx"][1] is None and r["fx"][0] is not None for r in d["reactions"])
+    assert main(["analyze", "examples/iftomm_a02_double_fourbar.yaml", "--branch", "continuous", "--format", "csv",
+                 "-o", os.devnull]) == 0  # fmt: skip
+
+
+@pytest.mark.parametrize("at", [180.0, 180.001, 180.0 - 1e-6, 360.0])
+def test_a_lone_sample_on_a_change_point_has_every_rate_as_among_others(at):
+    """A review: ``--at 180.001 --branch continuous`` gave the crank's omega and alpha null, ``--at 180.001,181`` gave
+    5.0 and 0: a driver link's own speed (one value for every sample) was not taken as its limit. Every link's
+    omega and alpha, alone or beside other samples, are the same (the crank's 5.0 and 0, the ground's 0)."""
+    mech = lk.load("examples/seed003_ex22.yaml")
+    alone = lk.analyze(mech, {"crank": [at]}, branch="continuous")
+    among = lk.analyze(mech, {"crank": [at - 7.0, at, 181.5]}, branch="continuous")
+    for name in ("crank", "coupler", "rocker", "ground"):
+        for got, want in ((alone.link_omega[name][0], among.link_omega[name][1]),
+                          (alone.link_alpha[name][0], among.link_alpha[name][1])):  # fmt: skip
+            assert np.isfinite(got) and abs(got - want) <= 1e-9 * 25, (name, got, want)
+    assert alone.link_omega["crank"][0] == 5.0 and alone.link_alpha["crank"][0] == 0.0

@@ -468,11 +468,18 @@ def _one_sided_gap(f: np.ndarray) -> np.ndarray:
 
 
 def _patched(value: Any, side: Any, take: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> Any:
-    """``value`` (a scalar or an array over (D, n)) with its limit from ``side`` (over (D, 4K)) where ``take``."""
-    if np.ndim(side) == 0 or np.shape(side)[-1] != 4 * len(cols):
+    """``value`` (a scalar or an array over (D, n)) with its limit from ``side`` (over (D, 4K)) where ``take``.
+
+    A ``side`` that is one value for every sample (the ground's 0, a driver link's own speed, over (D or 1, 1)) is its
+    own limit: left as the value was, a driver's omega was null at a lone sample on a change point and 5.0 when another
+    sample was asked beside it (a review)."""
+    if side is None:  # the sides do not have it
         return value
-    full = np.array(np.broadcast_to(value, shape))
-    lim = np.broadcast_to(_limit(np.asarray(side)), (shape[0], len(cols)))
+    side = np.asarray(side)
+    if side.ndim and side.shape[-1] not in (1, 4 * len(cols)):
+        return value
+    full = np.array(np.broadcast_to(value, shape), dtype=np.result_type(value, side))
+    lim = np.broadcast_to(side if side.ndim == 0 or side.shape[-1] == 1 else _limit(side), (shape[0], len(cols)))
     d, k = np.nonzero(take)
     full[d, cols[k]] = lim[d, k]
     return full
@@ -589,15 +596,15 @@ def _take_limits(
     pos.z[:, d, cols[k]] = _limit(ps.z)[:, d, k]
     assembled = pos.assembled.copy()
     assembled[d, cols[k]] = True
-    rot = {name: _patched(v, ps.rot.get(name, v), take, cols, shape) for name, v in pos.rot.items()}
+    rot = {name: _patched(v, ps.rot.get(name), take, cols, shape) for name, v in pos.rot.items()}
     new_pos = replace(pos, assembled=assembled, rot=rot)
     if rt is None:
         return new_pos, None
     side = solve_rates(params, ps, _columns(rates[0], cols), _columns(rates[1], cols))
     rt.v[:, d, cols[k]] = _limit(side.v)[:, d, k]
     rt.a[:, d, cols[k]] = _limit(side.a)[:, d, k]
-    omega = {name: _patched(v, side.omega.get(name, v), take, cols, shape) for name, v in rt.omega.items()}
-    alpha = {name: _patched(v, side.alpha.get(name, v), take, cols, shape) for name, v in rt.alpha.items()}
+    omega = {name: _patched(v, side.omega.get(name), take, cols, shape) for name, v in rt.omega.items()}
+    alpha = {name: _patched(v, side.alpha.get(name), take, cols, shape) for name, v in rt.alpha.items()}
     limit = np.zeros(shape, bool)
     limit[d, cols[k]] = True
     return new_pos, replace(rt, omega=omega, alpha=alpha, limit=limit)

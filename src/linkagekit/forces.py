@@ -564,13 +564,27 @@ def solve_stacked(
         for r, c, coef in entries:
             Ak[:, r, c] += coef[start:stop] if isinstance(coef, np.ndarray) else coef
         Ak[~good[start:stop]] = eye
-        xk = np.linalg.solve(Ak, bk[..., None])[..., 0]
+        xk = _solve_or_nan(Ak, bk, eye)
         x[start:stop] = xk
         err = np.max(np.abs(np.matmul(Ak, xk[..., None])[..., 0] - bk), axis=1)
         residual[start:stop] = err / np.maximum(np.max(np.abs(bk), axis=1) + size * np.max(np.abs(xk), axis=1), 1e-300)
     x[~good] = np.nan
     residual[~good] = np.nan
     return x, residual
+
+
+def _solve_or_nan(A: np.ndarray, b: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """``A x = b`` per matrix; NaN rows where ``A`` is exactly singular (LAPACK meets a zero pivot: the reactions of a
+    flat position are not determined, as at the change point of a double parallelogram that ``--branch continuous``
+    gives its kinematic limit; the whole batch raised ``LinAlgError``, an internal error)."""
+    try:
+        return np.asarray(np.linalg.solve(A, b[..., None])[..., 0])
+    except np.linalg.LinAlgError:
+        singular = ~(np.abs(np.linalg.det(A)) > 0)
+        A = np.where(singular[:, None, None], eye, A)
+        x = np.linalg.solve(A, b[..., None])[..., 0]
+        x[singular] = np.nan
+        return np.asarray(x)
 
 
 def solve_forces(mech: Mechanism, km: Kinematics) -> Forces:
