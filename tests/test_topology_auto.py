@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -447,3 +449,39 @@ def test_an_auto_checkpoint_of_another_run_or_altered_is_refused_in_one_line(tmp
     with pytest.raises(InputError, match=r"ck\.npz: not a usable .*'watt2' is no topology of this run"):
         Checkpoint(path, "abc", {"fourbar": 6}.__getitem__, 9).load()
     assert Checkpoint(str(tmp_path / "none.npz"), "abc", dims, 9).load() is None
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, 1e300])
+def test_an_auto_checkpoint_holding_a_number_no_design_has_is_refused(tmp_path, bad) -> None:  # type: ignore[no-untyped-def]
+    """A review: NaN in a saved design reached the targets' check ('poses: every coordinate must be a finite number',
+    naming neither file), 1e300 the writer (exit 1). Refused at reading, naming the checkpoint."""
+    from linkagekit.synthesis.autosave import Best, Checkpoint, Saved
+
+    path = str(tmp_path / "ck.npz")
+    dims = {"watt2": 3}.__getitem__
+    Checkpoint(path, "k", dims, 2).save(
+        Saved(1.0, [3], ["watt2"], [(0.2, np.ones(3))], None, [Best(np.array([0.0, bad, 1.0]), 0.1, 1, 9, 1.0)], 1)
+    )
+    with pytest.raises(InputError, match=r"ck\.npz: not a usable linkagekit checkpoint \(array best_x_0 holds"):
+        Checkpoint(path, "k", dims, 2).load()
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="no /proc here")
+@pytest.mark.parametrize("topology", ["auto", "fourbar"])
+def test_a_checkpoint_that_cannot_be_written_is_refused_before_the_search(tmp_path, capsys, topology) -> None:  # type: ignore[no-untyped-def]
+    """``--checkpoint /proc/ck.npz``: the first save failed after the screen (exit 1, 1.6 s in; a review)."""
+    csv = tmp_path / "t.csv"
+    csv.write_text("x,y\n0,0\n1,0\n1,1\n0,1\n")
+    args = [
+        "synthesize",
+        str(csv),
+        "--topology",
+        topology,
+        "--checkpoint",
+        "/proc/ck.npz",
+        "-o",
+        str(tmp_path / "o.yaml"),
+    ]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--checkpoint /proc/ck.npz: cannot be written" in err

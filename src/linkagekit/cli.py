@@ -1988,10 +1988,31 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
     folder = os.path.dirname(args.checkpoint or "") or "."
     if args.checkpoint and not os.path.isdir(folder):  # found only after the atlas's answer, exit 1
         raise InputError(f"--checkpoint {shorten_path(args.checkpoint, 80)}: no directory {shorten_path(folder, 80)}")
+    if args.checkpoint:
+        _writable(args.checkpoint)
     options["free"] = [j.strip() for j in args.free.split(",") if j.strip()] if args.free else None
     options.update(ordered=args.ordered, scheduler=args.scheduler, checkpoint=args.checkpoint)
     options.update(shape_only=args.shape_only, partial=args.partial)
     return options
+
+
+def _writable(checkpoint: str) -> None:
+    """Refuse a checkpoint that cannot be written where it is to be (``/proc/ck.npz``, a read-only folder) before the
+    search: it failed at the first save, after the screen (exit 1). Its temporary file is made and removed."""
+    from pathlib import Path
+
+    from .synthesis.optimize import _temporary
+
+    tmp = _temporary(Path(checkpoint))
+    try:
+        with open(tmp, "xb"):
+            pass
+        tmp.unlink()
+    except FileExistsError:  # a run killed while writing left it: the run removes it
+        return
+    except OSError as e:
+        reason = e.strerror or e
+        raise InputError(f"--checkpoint {shorten_path(checkpoint, 80)}: cannot be written ({reason})") from None
 
 
 def _pivots(text: str) -> tuple[tuple[float, float], tuple[float, float]]:

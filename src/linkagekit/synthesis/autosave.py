@@ -150,7 +150,10 @@ class Checkpoint:
         read = read_archive(Path(self.path), KIND, VERSION, expected)
         if read is None:
             return None
-        return _with_arrays(got[0], read[1])
+        try:
+            return _with_arrays(got[0], read[1])
+        except InputError as e:
+            raise InputError(f"{self.path}: {e}") from None
 
     def _parsed(self, h: dict[str, Any]) -> Saved:
         """The header's numbers and names, each checked (the arrays come later)."""
@@ -191,7 +194,14 @@ class Checkpoint:
         return out
 
 
+#: the largest magnitude of a saved design's number (a mechanism file holds none above 1e12)
+MOST = 1e12
+
+
 def _with_arrays(s: Saved, arrays: dict[str, np.ndarray]) -> Saved:
+    for name, a in arrays.items():  # a hand-edited or damaged file: NaN reached the targets' check, 1e300 the writer
+        if not np.all(np.isfinite(a)) or np.max(np.abs(a), initial=0.0) > MOST:
+            raise InputError(f"not a usable linkagekit checkpoint (array {name} holds a number that is no design's)")
     s.screen = [(f, np.asarray(arrays[f"screen_x_{i}"], float)) for i, (f, _) in enumerate(s.screen)]
     for i, b in enumerate(s.best):
         if b is not None:
