@@ -486,3 +486,15 @@ def test_a_sweep_that_lands_on_stop_ends_exactly_at_stop(start, stop, step, last
     assert _range(f"{start}:{stop}:{step}", "--angles").tolist() == values.tolist()
     res = lk.analyze(Mechanism.from_dict(d), rates=False)
     assert res.inputs["crank"][-1] == last
+
+
+@pytest.mark.parametrize(("start", "stop", "step", "n"), [(10000.7, 10000.8, 0.001, 101), (-1e6, -1e6 + 0.3, 0.1, 4)])
+def test_a_sweep_far_from_zero_keeps_its_stop(start, stop, step, n):
+    """``Sweep(10000.7, 10000.8, 0.001)`` gave 100 values ending at 10000.799 (a review): the difference of the two
+    ends is 0.1 only to 1.5e-12 at that size, 99.999999998 steps, and 1e-9 of a step did not cover it."""
+    from linkagekit.cli import _range
+    from linkagekit.model import Sweep
+
+    values = Sweep(start, stop, step).values()
+    assert len(values) == n and values[-1] == stop
+    assert _range(f"{start!r}:{stop!r}:{step!r}", "--angles").tolist() == values.tolist()

@@ -142,16 +142,16 @@ def _range(text: str, what: str) -> np.ndarray:
     start, stop, step = (_one_number(p, what) for p in parts)
     if step == 0 or (stop - start) * step < 0:
         raise InputError(f"{what}: STEP must be non-zero and go from START toward STOP, got {shorten(repr(text))}")
+    from .model import stepped, steps_count
+
     steps = (stop - start) / step  # may overflow to inf: counted only when not far above the limit
-    n = math.floor(steps * (1 + 1e-12) + 1e-9) + 1 if steps <= 10 * MAX_SAMPLES else None
+    n = steps_count(start, stop, step) if steps <= 10 * MAX_SAMPLES else None
     if n is None or n > MAX_SAMPLES:
         many = f"over {10 * MAX_SAMPLES}" if n is None else str(n)
         raise InputError(
             f"{what}: {many} samples, more than the command line takes ({MAX_SAMPLES}); "
             "use a coarser STEP, or the Python API (lk.analyze_chunks) for more"
         )
-    from .model import stepped
-
     return stepped(start, stop, step, n)
 
 

@@ -190,7 +190,7 @@ class Sweep:
 
     def count(self) -> int:
         """How many values :meth:`values` has."""
-        return max(math.floor((self.stop - self.start) / self.step * (1 + 1e-12) + 1e-9) + 1, 1)
+        return steps_count(self.start, self.stop, self.step)
 
     def values(self) -> np.ndarray:
         """The sweep's input values (file units); the last is ``stop`` itself when a step lands on it.
@@ -205,6 +205,22 @@ class Sweep:
         return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}
 
 
+def _landing(start: float, stop: float, step: float) -> float:
+    """How near ``stop`` a step must land to count as landing on it: 1e-9 of a step, and the rounding of numbers of
+    the size of ``start`` and ``stop`` (``10000.8 - 10000.7`` is 0.1 only to 1.5e-12: 99.999999998 steps of 0.001,
+    and the sweep lost its ``stop``)."""
+    return 1e-9 * abs(step) + 8 * float(np.finfo(float).eps) * max(abs(start), abs(stop))
+
+
+def steps_count(start: float, stop: float, step: float) -> int:
+    """How many values ``start, start + step, ...`` up to ``stop`` (``stop`` itself where a step lands on it).
+
+    >>> steps_count(10000.7, 10000.8, 0.001), steps_count(0, 0.35, 0.1)
+    (101, 4)
+    """
+    return max(math.floor((stop - start) / step * (1 + 1e-12) + _landing(start, stop, step) / abs(step)) + 1, 1)
+
+
 def stepped(start: float, stop: float, step: float, count: int) -> np.ndarray:
     """``start + k step`` for ``k < count``, the last value exactly ``stop`` when it is within rounding of it.
 
@@ -217,7 +233,7 @@ def stepped(start: float, stop: float, step: float, count: int) -> np.ndarray:
     0.30000000000000004
     """
     values = start + step * np.arange(count, dtype=float)
-    if count > 1 and abs(values[-1] - stop) <= 1e-9 * abs(step):
+    if count > 1 and abs(values[-1] - stop) <= _landing(start, stop, step):
         values[-1] = stop
     return values
 
