@@ -135,3 +135,16 @@ def test_an_unknown_topology_in_python_names_the_argument(topology):
     message = str(info.value)
     assert message.startswith(f"topology: unknown topology '{topology}'"), message
     assert "fourbar" in message and "lk.load(FILE)" in message and "\n" not in message
+
+
+def test_the_former_unit_keyword_is_checked_as_units_is(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """A review: ``unit="cm"`` (the deprecated name) skipped the contradiction check and read a file in metres."""
+    from linkagekit.synthesis.run import _targets_given
+
+    csv = tmp_path / "arc.csv"
+    csv.write_text("x,y\n" + "\n".join(f"{x},{y}" for x, y in ARC))
+    assert _targets_given(str(csv), "path", {"unit": "cm"}).unit == "cm"
+    with pytest.raises(InputError, match=r"unit='cm': the targets were read in 'm'"):
+        _targets_given(lk.read_targets(csv), "path", {"unit": "cm"})
+    with pytest.raises(InputError, match=r"'auto' is a search of its own: linkagekit.synthesis.auto.synthesize_auto"):
+        lk.synthesize(ARC, "auto")

@@ -241,15 +241,16 @@ def _targets_given(targets: Any, task: str, options: dict[str, Any]) -> Any:
     or anything that is not numbers, refused in one line (they were a ValueError, a TypeError or ignored)."""
     from .targets import read_targets
 
+    key = "units" if "units" in options or "unit" not in options else "unit"  # unit=: its former name
     if isinstance(targets, (str, os.PathLike)):
         if task != "path":
             reader = "synthesis.motion.read_poses" if task == "motion" else "synthesis.function.read_pairs"
             raise InputError(f"targets: a file name; read it first (linkagekit.{reader}) and pass its numbers")
-        return read_targets(targets, units=options.get("units", "m"))
+        return read_targets(targets, units=options.get(key, "m"))
     if hasattr(targets, "xy") and hasattr(targets, "unit"):
-        if options.get("units", targets.unit) != targets.unit:
+        if options.get(key, targets.unit) != targets.unit:
             raise InputError(
-                f"units={options['units']!r}: the targets were read in {targets.unit!r} "
+                f"{key}={options[key]!r}: the targets were read in {targets.unit!r} "
                 "(give the unit to read_targets, which keeps it)"
             )
         return targets

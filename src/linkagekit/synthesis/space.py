@@ -273,10 +273,13 @@ def _template(topology: str) -> dict[str, Any]:
     """Joints in a unit pose, links and transmission angles of a built-in topology (hand-drawn or enumerated)."""
     if topology in _TEMPLATES:
         return _TEMPLATES[topology]
+    if topology == "auto":
+        raise InputError("topology: 'auto' is a search of its own: linkagekit.synthesis.auto.synthesize_auto(targets)")
     if not is_builtin(topology):
         raise InputError(  # the command line names its files itself: this is the Python argument's message
             f"topology: unknown topology '{topology}' (built in: {', '.join(TOPOLOGIES)}, or a name that "
-            "topology='auto' reports, such as 'sixbar-1'; a template file is given as a Mechanism: lk.load(FILE))"
+            "--topology auto (synthesis.auto.synthesize_auto) reports, such as 'sixbar-1'; a template file is given "
+            "as a Mechanism: lk.load(FILE))"
         )
     from .topologies import by_name
 
