@@ -485,3 +485,36 @@ def test_a_checkpoint_that_cannot_be_written_is_refused_before_the_search(tmp_pa
     assert main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--checkpoint /proc/ck.npz: cannot be written" in err
+
+
+def test_ctrl_c_saves_the_time_used_so_a_resumed_run_keeps_to_its_budget(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A review: runs killed and resumed took 24-26 s of a 20 s budget: the time since the last checkpoint was not
+    counted. On Ctrl-C the time used is saved (the work of the round under way is lost, not its time)."""
+    import time as clock
+
+    from linkagekit.synthesis import auto, autosave
+
+    monkeypatch.setattr(autosave, "ROUND_SECONDS", 0.3)
+    monkeypatch.setattr(auto, "ROUND_SECONDS", 0.3)
+    real, calls = auto.local_searches, []
+
+    def interrupted(projs, seeds, starts, seconds, workers):  # type: ignore[no-untyped-def]
+        calls.append(seconds)
+        if len(calls) == 2:
+            clock.sleep(0.5)  # half a second into the second round
+            raise KeyboardInterrupt
+        return real(projs, seeds, starts, seconds, workers)
+
+    monkeypatch.setattr(auto, "local_searches", interrupted)
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    T, path = np.stack([np.cos(t), 0.6 * np.sin(t)], 1), str(tmp_path / "run.npz")
+    t0 = clock.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        auto.synthesize_auto(T, max_joints=5, seconds=2.0, seed=4, workers=1, checkpoint=path)
+    took = clock.monotonic() - t0
+    make = auto.Maker(T, "m", False, (("min_transmission", 20.0),))
+    ck = auto._checkpoint(
+        path, make, enumerate_topologies(5), (T, "m", False, {"min_transmission": 20.0}, 5, 4, "local")
+    )
+    saved = ck.load()
+    assert saved.rounds == 1 and took - 0.05 <= saved.elapsed <= took  # the interrupted round's time counted

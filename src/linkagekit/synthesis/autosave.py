@@ -5,10 +5,11 @@ search of its own, and the local searches of the topologies the screen chose. Th
 (a ``.npz`` file: NumPy arrays and one JSON header, read with ``allow_pickle=False`` and every
 array's size known before it is read, as the engine's checkpoints are: :func:`~.optimize.read_archive`)
 is written atomically after the screen, after the four-bar search, and after every round of
-the local searches (:data:`ROUND_SECONDS` each). The same command given the same file skips
-what is done, starts the local searches from their best designs so far, and keeps the clock:
-the run ends when the time used by all of its runs together reaches ``--seconds``. A run killed
-during the screen or the four-bar search does that phase again.
+the local searches (:data:`ROUND_SECONDS` each), and with the time used on Ctrl-C. The same
+command given the same file skips what is done, starts the local searches from their best
+designs so far, and keeps the clock: the run ends when the time its runs have recorded
+reaches ``--seconds``. A run killed outright loses the work and the time since its last
+checkpoint (a screen or a four-bar search under way is done again).
 
 Examples
 --------
