@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import pickle
+import types
 from pathlib import Path
 
 import numpy as np
@@ -141,7 +142,8 @@ def test_minimax_polish_stops_at_its_deadline(monkeypatch):
     assert np.array_equal(F0, F) and np.array_equal(t0, t)
     two = motion.minimax_polish(p, F, t, s, w, iterations=2)
     ticks = iter(range(1000))
-    monkeypatch.setattr(motion.time, "monotonic", lambda: float(next(ticks)))
+    clock = types.SimpleNamespace(monotonic=lambda: float(next(ticks)))  # this module's clock only: a thread left
+    monkeypatch.setattr(motion, "time", clock)  # by another test, reading the process's clock, took a tick (xdist)
     stopped = motion.minimax_polish(p, F, t, s, w, deadline=1.5)
     assert next(ticks) == 3  # read before steps 1 and 2, and once more, past the deadline
     assert np.array_equal(stopped[0], two[0]) and np.array_equal(stopped[1], two[1])
