@@ -60,7 +60,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import InputError
-from ..geometry import ComplexArray, FloatArray, cis
+from ..geometry import ComplexArray, FloatArray, cis, fourbar_sweep
 from .base import Objective, Score, digest
 
 if TYPE_CHECKING:
@@ -78,8 +78,6 @@ LM_STEPS = 60
 POLISHED, HOPELESS = 6, 20.0
 #: a four-bar this near (E) needs no polish
 EXACT = 1e-10
-#: crank steps per degree of the dense check
-CHECK_STEPS_PER_DEG = 4
 #: two poses nearer than this (diagonals and radians) are one pose
 SAME_POSE = 1e-9
 #: joint names of the written four-bar
@@ -435,23 +433,35 @@ def unwrap_turn(t: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray, Fl
 
 @dataclass(frozen=True)
 class Sweep:
-    """The dense one-branch check of K four-bars: does each assemble at every step of its sweep; its worst angle."""
+    """The one-branch check of K four-bars: does each assemble all along its sweep; its smallest transmission angle."""
 
     assembled: np.ndarray
     min_transmission: FloatArray
 
 
 def sweep_check(F: FloatArray, t: FloatArray, s: FloatArray, closed: bool) -> Sweep:
-    """Every 1/4 degree from the first pose's crank angle to the last's (a whole turn when closed)."""
+    """From the first pose's crank angle to the last's (a whole turn when closed), exactly: no sampling.
+
+    The crank's sweep, met in order (:func:`unwrap_turn`), judged by :func:`~linkagekit.geometry.fourbar_sweep`:
+    assembled all along iff the crank tip's least and greatest distance from the rocker's pivot over it are within
+    the coupler-rocker triangle's limits, and the smallest transmission angle at one of them. In one assembly mode
+    ``s`` there is no jump. Samples every 1/4 degree stepped over a gap of 0.06 degrees between two poses, and a
+    four-bar that does not assemble there was written.
+
+    >>> F = np.array([[0.0, 0, 0, 0, 1, 3, 0, 1, 0, 2.5]])  # crank 1, ground 3, coupler 1, rocker 2.5
+    >>> sw = sweep_check(F, np.radians([[0.0, 60, 110]]), np.array([1.0]), False)  # d^2 = 10 - 6 cos t <= 3.5^2
+    >>> bool(sw.assembled[0]), round(float(sw.min_transmission[0]), 6)
+    (True, 16.173181)
+    >>> bool(sweep_check(F, np.radians([[0.0, 60, 115]]), np.array([1.0]), False).assembled[0])  # past 112.02 deg
+    False
+    """
     _, un, ordered = unwrap_turn(t, closed)
-    stop = un[:, :1] + np.where(un[:, -1:] >= un[:, :1], 1, -1) * 2 * np.pi if closed else un[:, -1:]
-    span = float(np.max(np.abs(stop - un[:, :1]), initial=0.0))
-    n = max(2, int(np.degrees(span) * CHECK_STEPS_PER_DEG) + 2)
-    grid = un[:, :1] + (stop - un[:, :1]) * np.linspace(0.0, 1.0, n)[None]
-    _, _, cos_a, cos_mu = frames(F, np.concatenate([grid, un], axis=1), s)
-    ok = ordered & np.all(np.abs(cos_a) <= 1.0, axis=1)
-    mu = np.degrees(np.arccos(np.clip(np.abs(cos_mu), 0.0, 1.0)))
-    return Sweep(ok, np.where(ok, np.min(mu, axis=1), np.nan))
+    t0 = un[:, 0]
+    t1 = t0 + np.where(un[:, -1] >= t0, 1, -1) * 2 * np.pi if closed else un[:, -1]
+    ga, a, gb, b = (F[:, k] + 1j * F[:, k + 1] for k in (0, 2, 5, 7))
+    ok, mu = fourbar_sweep(ga, F[:, 4], gb, np.abs(b - a), F[:, 9], t0, t1)  # a radius < 0 from the polish: |r|
+    ok = np.logical_and(ok, ordered)
+    return Sweep(ok, np.where(ok, mu, np.nan))
 
 
 def combined(pos: FloatArray, ang: FloatArray, weight: float) -> FloatArray:
@@ -675,7 +685,7 @@ def judge(p: MotionPoses, F: FloatArray, t: FloatArray, s: FloatArray, o: Motion
     pos, ang = pose_errors(p, F, t, s)
     e = combined(pos, ang, o.weight)
     sw = sweep_check(F, t, s, p.closed)
-    bad = ~sw.assembled | (np.nan_to_num(sw.min_transmission, nan=0.0) < o.min_transmission)
+    bad = ~sw.assembled | ~np.isfinite(e) | (np.nan_to_num(sw.min_transmission, nan=0.0) < o.min_transmission)
     return Score(e * e, e, bad.astype(float))
 
 
@@ -806,7 +816,7 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
     ga, a, ra, gb, b, rb = v[0] + 1j * v[1], v[2] + 1j * v[3], v[4], v[5] + 1j * v[6], v[7] + 1j * v[8], v[9]
     F = np.array([[ga.real, ga.imag, a.real, a.imag, ra, gb.real, gb.imag, b.real, b.imag, rb]])
     t0 = d.inputs[:1][None]
-    org, u, _, _ = frames(F, t0, np.array([d.mode]))
+    org, u, _, _ = frames(F, t0, np.array([d.mode]), clip=True)  # flat to rounding in the poses' units: as analyze
     O0, u0 = complex(org[0, 0]), complex(u[0, 0])
     z = [ga, ga + ra * cis(float(t0[0, 0])), O0 + u0 * b, gb, O0, O0 + u0 * 0.1 * p.scale]
     start = float(np.degrees(d.inputs[0]))
