@@ -185,3 +185,58 @@ def solve_each(A: FloatArray, b: FloatArray) -> FloatArray:
         x = (np.linalg.pinv(A) @ b[..., None])[..., 0]
     out: FloatArray = np.where(bad[..., None], np.nan, x)
     return out
+
+
+def crank_reach(
+    ga: ArrayLike, ra: ArrayLike, g: ArrayLike, t0: ArrayLike, t1: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """The least and the greatest ``|A(t) - g|^2`` of a crank tip ``A(t) = ga + ra cis(t)`` for ``t`` between
+    ``t0`` and ``t1`` (either way round; elementwise).
+
+    With ``c = ga - g = |c| cis(phi)``: ``|A(t) - g|^2 = |c|^2 + ra^2 + 2 ra |c| cos(t - phi)``, a sinusoid in
+    ``t``; over the interval its extremes are at the ends or at ``t = phi`` (the greatest) and ``t = phi + pi``
+    (the least) plus whole turns, where one falls inside. Exact: no sampling of ``t``.
+
+    >>> lo, hi = crank_reach(0j, 1.0, 3 + 0j, 0.0, np.pi / 2)  # from (1, 0) to (0, 1): distances 2 and sqrt(10)
+    >>> float(lo), float(np.round(hi, 12))
+    (4.0, 10.0)
+    >>> lo, hi = crank_reach(0j, 1.0, 3 + 0j, -1.0, 4.0)  # through t = pi: the far end of the crank
+    >>> float(lo), float(np.round(hi, 12))
+    (4.0, 16.0)
+    """
+    c = np.asarray(ga) - np.asarray(g)
+    ra = np.asarray(ra, float)
+    lo_t, hi_t = np.minimum(t0, t1), np.maximum(t0, t1)
+    mean, amp, phi = abs2(c) + ra * ra, 2 * ra * np.abs(c), np.angle(c)  # amp < 0 for a negative ra
+    ends = mean + amp * np.cos(np.stack([lo_t, hi_t]) - phi)
+    top, bottom = np.stack([mean + amp, mean - amp]), np.stack([phi, phi + np.pi])  # the sinusoid's extremes
+    inside = np.mod(bottom - lo_t, 2 * np.pi) <= hi_t - lo_t  # at a t + 2 pi k within [lo_t, hi_t]
+    least = np.minimum(np.min(ends, axis=0), np.min(np.where(inside, top, np.inf), axis=0))
+    greatest = np.maximum(np.max(ends, axis=0), np.max(np.where(inside, top, -np.inf), axis=0))
+    return least, greatest
+
+
+def fourbar_sweep(
+    ga: ArrayLike, ra: ArrayLike, gb: ArrayLike, coupler: ArrayLike, rocker: ArrayLike, t0: ArrayLike, t1: ArrayLike
+) -> tuple[BoolArray, FloatArray]:
+    """Does a four-bar assemble at every crank angle between ``t0`` and ``t1``, and its smallest transmission angle
+    there (degrees, folded to [0, 90]; NaN where it does not assemble), exactly (elementwise, no sampling).
+
+    Crank pivot ``ga``, crank ``ra`` (its tip ``A(t) = ga + ra cis(t)``), rocker pivot ``gb``, coupler ``l`` and
+    rocker ``r_b``: it assembles at ``t`` iff ``d(t) = |A(t) - gb|`` lies in ``[|l - r_b|, l + r_b]`` (within
+    :data:`ASSEMBLY_RTOL`, as :func:`circle_circle`), so all along the sweep iff the least and the greatest
+    ``d^2`` (:func:`crank_reach`) do. ``cos mu = (l^2 + r_b^2 - d^2) / (2 l r_b)`` is monotone in ``d^2``: the
+    smallest folded angle is at one of those extremes.
+
+    >>> ok, mu = fourbar_sweep(0j, 1.0, 3 + 0j, 1.0, 2.5, 0.0, np.radians([110.0, 115.0]))  # d^2 = 10 - 6 cos t
+    >>> ok.tolist(), np.round(mu, 6).tolist()  # past 112.02 deg, d > l + r_b = 3.5
+    ([True, False], [16.173181, nan])
+    """
+    ell, rb = np.abs(np.asarray(coupler, float)), np.abs(np.asarray(rocker, float))
+    least, greatest = crank_reach(ga, ra, gb, t0, t1)
+    near = np.maximum(np.abs(ell - rb) - ASSEMBLY_RTOL * (ell + rb), 0.0)
+    ok = (least >= near**2) & (greatest <= ((ell + rb) * (1 + ASSEMBLY_RTOL)) ** 2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos_mu = (ell**2 + rb**2 - np.stack([least, greatest])) / (2 * ell * rb)
+        mu = np.degrees(np.arccos(np.clip(np.max(np.abs(cos_mu), axis=0), 0.0, 1.0)))
+    return np.asarray(ok), np.where(ok, mu, np.nan)

@@ -47,7 +47,7 @@ from numpy.polynomial import polynomial as npoly
 from ..api import analyze, prepare
 from ..checks import FourBar, grashof
 from ..errors import InputError, MethodNotApplicableError
-from ..geometry import ArrayLike, BoolArray, ComplexArray, FloatArray, IntArray, cis, cross
+from ..geometry import ArrayLike, BoolArray, ComplexArray, FloatArray, IntArray, cis, cross, fourbar_sweep
 from ..model import Mechanism
 from .motion import JOINTS as motion_joints
 from .motion import guided_fourbar
@@ -62,8 +62,6 @@ FAR = 1e2
 MISFIT = 1e-10
 #: joint names of the written four-bar, in the order of :meth:`BurmesterFourBar.pose_array`
 JOINTS = motion_joints  # the written four-bar's joints (motion.JOINTS)
-#: crank steps per degree when a sweep is checked densely
-CHECK_STEPS_PER_DEG = 4
 
 
 # ---------------------------------------------------------------------- poses
@@ -619,7 +617,7 @@ class BurmesterFourBar:
     in_order : bool
         Whether it meets the poses in order on one branch: the poses' crank angles follow each
         other in ``direction`` within one turn, every pose is in the first pose's assembly mode,
-        and it assembles at every crank angle in between (checked every 1/4 degree).
+        and it assembles at every crank angle in between (exactly: :func:`~linkagekit.geometry.fourbar_sweep`).
     grashof, grashof_detail : str
         Its Grashof type (:func:`linkagekit.checks.grashof`).
     position_errors, angle_errors : ndarray, shape (n,)
@@ -698,11 +696,12 @@ def _turn(phi: FloatArray) -> tuple[int, FloatArray]:
 
 
 def four_bar(poses: Poses | Sequence[ArrayLike], crank: Dyad, rocker: Dyad) -> BurmesterFourBar:
-    """The four-bar of two dyads, checked at the poses and along its sweep by :func:`linkagekit.analyze`.
+    """The four-bar of two dyads, checked at the poses by :func:`linkagekit.analyze` and along its sweep exactly.
 
     The crank angles and assembly modes at the poses are the solver's (:func:`linkagekit.api.prepare`
     of the four-bar placed at every pose); the residuals are the four-bar analysed at those
-    angles in those modes; the order check sweeps the crank from the first pose to the last.
+    angles in those modes; the order check sweeps the crank from the first pose to the last
+    (:func:`~linkagekit.geometry.fourbar_sweep`: no sampling that a narrow gap could slip through).
     """
     p = _as_poses(poses)
     z = _joints(p, crank, rocker)
@@ -714,9 +713,9 @@ def four_bar(poses: Poses | Sequence[ArrayLike], crank: Dyad, rocker: Dyad) -> B
     pos_err = np.abs(res.point("P") - p.d)
     ang_err = np.abs(np.angle(pq / p.rot))
     span = abs(inputs[-1] - inputs[0])
-    sweep = inputs[0] + direction * np.linspace(0, span, max(2, int(np.degrees(span) * CHECK_STEPS_PER_DEG) + 2))
-    dense = analyze(mech, {"crank": np.degrees(sweep)}, rates=False, dynamics=False)
-    in_order = bool(span < 2 * np.pi and np.all(prm.signs == prm.signs[:, :1]) and np.all(dense.assembled))
+    A0, A1, B1, B0 = z[0, :4]  # the lengths the file reads off its first pose
+    whole, _ = fourbar_sweep(A0, abs(A1 - A0), B0, abs(B1 - A1), abs(B1 - B0), inputs[0], inputs[-1])
+    in_order = bool(span < 2 * np.pi and np.all(prm.signs == prm.signs[:, :1]) and whole)
     lengths = _lengths(crank, rocker)
     kind, detail = grashof(
         FourBar(0, 1, 2, 3, lengths["ground"], lengths["crank"], lengths["coupler"], lengths["rocker"])

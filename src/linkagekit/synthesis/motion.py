@@ -39,9 +39,12 @@ Route (docs/method.md, "Motion generation")
    in order within a turn.
 4. **Dense check** of one branch: the crank turns one way from the first pose's angle to the
    last one's (a full turn for closed motions) through every pose in order (never back;
-   two poses may share an angle), and the four-bar assembles at every 1/4 degree in between
-   (constant assembly mode, so no jump); the smallest transmission angle is reported and
-   kept above ``min_transmission``.
+   two poses may share an angle), and the four-bar assembles all along (constant assembly
+   mode, so no jump), checked exactly (:func:`~linkagekit.geometry.fourbar_sweep`: the crank
+   tip's distance from the rocker's pivot is a sinusoid in the crank angle); the smallest
+   transmission angle is reported and kept above ``min_transmission``.
+5. **Other weights.** At a weight other than :data:`ANGLE_WEIGHT`, steps 2-4 run at every
+   weight of :func:`weight_ladder`, each trying the four-bars found before at their own angles.
 
 Steps 3 and 4 respect the run's deadline (``approximate(..., deadline=)``): past it, no
 further four-bar is polished and a polish under way stops at its last iterate (kept only
@@ -60,7 +63,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import InputError
-from ..geometry import ComplexArray, FloatArray, cis
+from ..geometry import ComplexArray, FloatArray, cis, fourbar_sweep
 from .base import Objective, Score, digest
 
 if TYPE_CHECKING:
@@ -78,8 +81,6 @@ LM_STEPS = 60
 POLISHED, HOPELESS = 6, 20.0
 #: a four-bar this near (E) needs no polish
 EXACT = 1e-10
-#: crank steps per degree of the dense check
-CHECK_STEPS_PER_DEG = 4
 #: two poses nearer than this (diagonals and radians) are one pose
 SAME_POSE = 1e-9
 #: joint names of the written four-bar
@@ -435,23 +436,35 @@ def unwrap_turn(t: FloatArray, closed: bool) -> tuple[FloatArray, FloatArray, Fl
 
 @dataclass(frozen=True)
 class Sweep:
-    """The dense one-branch check of K four-bars: does each assemble at every step of its sweep; its worst angle."""
+    """The one-branch check of K four-bars: does each assemble all along its sweep; its smallest transmission angle."""
 
     assembled: np.ndarray
     min_transmission: FloatArray
 
 
 def sweep_check(F: FloatArray, t: FloatArray, s: FloatArray, closed: bool) -> Sweep:
-    """Every 1/4 degree from the first pose's crank angle to the last's (a whole turn when closed)."""
+    """From the first pose's crank angle to the last's (a whole turn when closed), exactly: no sampling.
+
+    The crank's sweep, met in order (:func:`unwrap_turn`), judged by :func:`~linkagekit.geometry.fourbar_sweep`:
+    assembled all along iff the crank tip's least and greatest distance from the rocker's pivot over it are within
+    the coupler-rocker triangle's limits, and the smallest transmission angle at one of them. In one assembly mode
+    ``s`` there is no jump. Samples every 1/4 degree stepped over a gap of 0.06 degrees between two poses, and a
+    four-bar that does not assemble there was written.
+
+    >>> F = np.array([[0.0, 0, 0, 0, 1, 3, 0, 1, 0, 2.5]])  # crank 1, ground 3, coupler 1, rocker 2.5
+    >>> sw = sweep_check(F, np.radians([[0.0, 60, 110]]), np.array([1.0]), False)  # d^2 = 10 - 6 cos t <= 3.5^2
+    >>> bool(sw.assembled[0]), round(float(sw.min_transmission[0]), 6)
+    (True, 16.173181)
+    >>> bool(sweep_check(F, np.radians([[0.0, 60, 115]]), np.array([1.0]), False).assembled[0])  # past 112.02 deg
+    False
+    """
     _, un, ordered = unwrap_turn(t, closed)
-    stop = un[:, :1] + np.where(un[:, -1:] >= un[:, :1], 1, -1) * 2 * np.pi if closed else un[:, -1:]
-    span = float(np.max(np.abs(stop - un[:, :1]), initial=0.0))
-    n = max(2, int(np.degrees(span) * CHECK_STEPS_PER_DEG) + 2)
-    grid = un[:, :1] + (stop - un[:, :1]) * np.linspace(0.0, 1.0, n)[None]
-    _, _, cos_a, cos_mu = frames(F, np.concatenate([grid, un], axis=1), s)
-    ok = ordered & np.all(np.abs(cos_a) <= 1.0, axis=1)
-    mu = np.degrees(np.arccos(np.clip(np.abs(cos_mu), 0.0, 1.0)))
-    return Sweep(ok, np.where(ok, np.min(mu, axis=1), np.nan))
+    t0 = un[:, 0]
+    t1 = t0 + np.where(un[:, -1] >= t0, 1, -1) * 2 * np.pi if closed else un[:, -1]
+    ga, a, gb, b = (F[:, k] + 1j * F[:, k + 1] for k in (0, 2, 5, 7))
+    ok, mu = fourbar_sweep(ga, F[:, 4], gb, np.abs(b - a), F[:, 9], t0, t1)  # a radius < 0 from the polish: |r|
+    ok = np.logical_and(ok, ordered)
+    return Sweep(ok, np.where(ok, mu, np.nan))
 
 
 def combined(pos: FloatArray, ang: FloatArray, weight: float) -> FloatArray:
@@ -675,7 +688,7 @@ def judge(p: MotionPoses, F: FloatArray, t: FloatArray, s: FloatArray, o: Motion
     pos, ang = pose_errors(p, F, t, s)
     e = combined(pos, ang, o.weight)
     sw = sweep_check(F, t, s, p.closed)
-    bad = ~sw.assembled | (np.nan_to_num(sw.min_transmission, nan=0.0) < o.min_transmission)
+    bad = ~sw.assembled | ~np.isfinite(e) | (np.nan_to_num(sw.min_transmission, nan=0.0) < o.min_transmission)
     return Score(e * e, e, bad.astype(float))
 
 
@@ -723,6 +736,32 @@ def design(p: MotionPoses, F: FloatArray, t: FloatArray, s: float) -> MotionDesi
     return MotionDesign(v, un[0], s, pos[0] * p.scale, ang[0], bool(sw.assembled[0]), float(sw.min_transmission[0]))
 
 
+#: the approximate route at a weight other than :data:`ANGLE_WEIGHT` also runs at the weights this many times
+#: apart from it on the way to the weight asked (and one beyond), each passing its best four-bars on
+#: (:func:`weight_ladder`): the minimax polish ends at a local optimum, and on Hsieh's 9 poses the answer at
+#: ``--angle-weight 5`` (E = 0.0597) was nine times worse than the weight-2 answer judged at weight 5 (0.0068)
+WEIGHT_STEP = 4.0
+#: four-bars polished at each weight of the ladder before the last (every four-bar found is a candidate after it)
+CARRIED = 2
+
+
+def weight_ladder(weight: float) -> list[float]:
+    """The weights the approximate route runs at, the asked ``weight`` last: ``ANGLE_WEIGHT * WEIGHT_STEP^k`` from
+    :data:`ANGLE_WEIGHT` (``k = 0``) the way to ``weight``, up to the first one beyond it. Every weight's ladder
+    runs over the same weights, so that two weights' answers come from the same four-bars found on the way.
+
+    >>> [round(w, 4) for w in weight_ladder(5.0)], [round(w, 4) for w in weight_ladder(2.0)]
+    ([0.05, 0.2, 0.8, 3.2, 12.8, 5.0], [0.05, 0.2, 0.8, 3.2, 2.0])
+    >>> weight_ladder(ANGLE_WEIGHT), [round(w, 4) for w in weight_ladder(0.01)]
+    ([0.05], [0.05, 0.0125, 0.0031, 0.01])
+    """
+    if weight == ANGLE_WEIGHT:
+        return [weight]
+    way = 1 if weight > ANGLE_WEIGHT else -1
+    beyond = math.floor(way * math.log(weight / ANGLE_WEIGHT) / math.log(WEIGHT_STEP) + 1e-9) + 1
+    return [ANGLE_WEIGHT * WEIGHT_STEP ** (way * k) for k in range(beyond + 1)] + [weight]
+
+
 def approximate(
     p: MotionPoses,
     weight: float = ANGLE_WEIGHT,
@@ -733,35 +772,66 @@ def approximate(
     """Four-bars for the poses by the route of the module's description, best first (one branch each).
 
     ``seeds``: four-bar vectors (k, 10), normalised (e.g. the engine's best), tried as well.
-    ``deadline`` (``time.monotonic()``): past it, a polish under way stops at its last iterate
-    and no more four-bars are polished once one is found (until then, the starts are judged
-    as they are).
+    At a weight other than :data:`ANGLE_WEIGHT` the route runs at every weight of :func:`weight_ladder`, each
+    trying the four-bars found at the weights before at their own crank angles: the answer is never worse, at
+    ``weight``, than one found on the way. ``deadline`` (``time.monotonic()``): shared evenly by the weights left;
+    past it, a polish under way stops at its last iterate and no more four-bars are polished once one is found
+    (until then, the starts are judged as they are).
     """
-    o = MotionObjective(p, weight, min_transmission)
+    F = _circle_fit_fourbars(p)
+    if seeds is not None:
+        F = np.concatenate([F, seeds])
+    t, s = crank_angles(p, F), first_mode(p, F)
+    pool: list[tuple[float, FloatArray, FloatArray, float]] = []  # the four-bars found on the way
+    ladder = weight_ladder(weight)
+    for k, w in enumerate(ladder):
+        left = deadline - time.monotonic()
+        share = deadline if not math.isfinite(left) else time.monotonic() + max(left, 0.0) / (len(ladder) - k)
+        Fc = np.concatenate([F, *(f[1][None] for f in pool)])
+        tc = np.concatenate([t, *(f[2][None] for f in pool)])
+        sc = np.concatenate([s, [f[3] for f in pool]])
+        full = k in (0, len(ladder) - 1)  # the default weight's route, and the asked one's
+        found = _route(p, MotionObjective(p, w, min_transmission), Fc, tc, sc, share, POLISHED if full else CARRIED)
+        pool += [f for f in found if np.isfinite(f[0])]
+    return [design(p, Fk, tk, sk) for _, Fk, tk, sk in found]
+
+
+def _circle_fit_fourbars(p: MotionPoses) -> FloatArray:
+    """Every ordered pair of distinct dyads of the circle fits (:func:`search_dyads`) as four-bar vectors (K, 10)."""
     crank = search_dyads(p, timed=p.inputs is not None)
     rocker = search_dyads(p) if p.inputs is not None else crank
     both = Dyads(*(np.concatenate([getattr(crank, f), getattr(rocker, f)]) for f in ("c", "g", "r", "rms")))
     nc = len(crank.c)
     i, j = np.meshgrid(np.arange(nc), np.arange(nc, len(both.c)), indexing="ij")
     keep = (i.ravel() != j.ravel() - nc) | (p.inputs is not None)
-    F = fourbar_vector(both, i.ravel()[keep], j.ravel()[keep])
-    if seeds is not None:
-        F = np.concatenate([F, seeds])
-    t, s = crank_angles(p, F), first_mode(p, F)
+    return fourbar_vector(both, i.ravel()[keep], j.ravel()[keep])
+
+
+def _route(
+    p: MotionPoses,
+    o: MotionObjective,
+    F: FloatArray,
+    t: FloatArray,
+    s: FloatArray,
+    deadline: float,
+    polished: int = POLISHED,
+) -> list[tuple[float, FloatArray, FloatArray, float]]:
+    """``[(E, F, t, s)]`` best first at ``o``'s weight: the candidates ``F`` at crank angles ``t``, modes ``s``,
+    judged, the best ``polished`` polished (steps 2-4 of the route)."""
     score = judge(p, F, t, s, o)
     pos, ang = pose_errors(p, F, t, s, clip=True)
-    start = combined(pos, ang, weight)
+    start = combined(pos, ang, o.weight)
     order = np.lexsort((start, score.violation > 0))  # in order on one branch first
     found: list[tuple[float, FloatArray, FloatArray, float]] = []
-    for k in order[: 2 * POLISHED]:
+    for k in order[: 2 * polished]:
         best = min((f[0] for f in found), default=np.inf)
-        if best <= EXACT or len(found) >= POLISHED or (found and time.monotonic() > deadline):
+        if best <= EXACT or len(found) >= polished or (found and time.monotonic() > deadline):
             break
         if start[k] <= HOPELESS * best:  # one far worse than a polished one is seldom worth its time
             valid = score.error[k] if score.violation[k] == 0 else None
             found += _polished(p, o, F[k], t[k], float(s[k]), valid, deadline)
     found.sort(key=lambda f: f[0])
-    return [design(p, Fk, tk, sk) for _, Fk, tk, sk in found]
+    return found
 
 
 def _polished(
@@ -806,7 +876,7 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
     ga, a, ra, gb, b, rb = v[0] + 1j * v[1], v[2] + 1j * v[3], v[4], v[5] + 1j * v[6], v[7] + 1j * v[8], v[9]
     F = np.array([[ga.real, ga.imag, a.real, a.imag, ra, gb.real, gb.imag, b.real, b.imag, rb]])
     t0 = d.inputs[:1][None]
-    org, u, _, _ = frames(F, t0, np.array([d.mode]))
+    org, u, _, _ = frames(F, t0, np.array([d.mode]), clip=True)  # flat to rounding in the poses' units: as analyze
     O0, u0 = complex(org[0, 0]), complex(u[0, 0])
     z = [ga, ga + ra * cis(float(t0[0, 0])), O0 + u0 * b, gb, O0, O0 + u0 * 0.1 * p.scale]
     start = float(np.degrees(d.inputs[0]))

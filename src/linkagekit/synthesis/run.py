@@ -760,25 +760,23 @@ def _motion_fourbar(p: Any, d: Any, units: str) -> MotionFourBar:
     )
 
 
-def _smallest_transmission(mech: Mechanism, inputs: np.ndarray) -> float:
-    """The smallest angle (degrees, folded to [0, 90]) between coupler ``A1-B1`` and rocker ``B0-B1`` over the sweep."""
-    from ..api import analyze
+def _whole_sweep(mech: Mechanism, start: float, stop: float) -> tuple[bool, float]:
+    """Does a written four-bar (joints ``A0, A1, B1, B0`` of its reference pose) assemble at every crank angle from
+    ``start`` to ``stop`` (degrees), and its smallest transmission angle there (degrees, folded to [0, 90]; NaN
+    where not): exactly, by :func:`~linkagekit.geometry.fourbar_sweep` (samples every 1/4 degree step over a gap)."""
+    from ..geometry import fourbar_sweep
 
-    sweep = np.linspace(inputs[0], inputs[-1], max(2, int(4 * abs(inputs[-1] - inputs[0])) + 2))
-    res = analyze(mech, {"crank": sweep}, rates=False, dynamics=False)
-    b = res.point("B1")
-    u, v = res.point("A1") - b, res.point("B0") - b
-    mu = np.degrees(np.arccos(np.clip(np.abs((np.conj(u) * v).real) / (np.abs(u) * np.abs(v)), 0.0, 1.0)))
-    return float(np.nanmin(mu))
+    A0, A1, B1, B0 = (mech.joints[j] for j in ("A0", "A1", "B1", "B0"))
+    ok, mu = fourbar_sweep(A0, abs(A1 - A0), B0, abs(B1 - A1), abs(B1 - B0), np.radians(start), np.radians(stop))
+    return bool(ok), float(mu)
 
 
 def _turning_fully(f: MotionFourBar) -> MotionFourBar:
     """An exact four-bar judged over a whole turn of its crank from the first pose (the pose's mode throughout).
 
-    Its driver then sweeps that turn; ``one_branch`` says whether it assembles all the way
-    (by :func:`linkagekit.analyze`, every 1/4 degree).
+    Its driver then sweeps that turn; ``one_branch`` says whether it assembles all the way (exactly:
+    :func:`_whole_sweep`).
     """
-    from ..api import analyze
     from ..model import Mechanism
 
     if not f.one_branch:
@@ -788,9 +786,7 @@ def _turning_fully(f: MotionFourBar) -> MotionFourBar:
     data = f.mechanism.to_dict()
     data["drivers"][0]["angles"] = {"start": start, "stop": start + way * 360.0, "step": way}
     mech = Mechanism.from_dict(data, "<Burmester four-bar>")
-    res = analyze(mech, {"crank": start + way * np.linspace(0.0, 360.0, 1441)}, rates=False, dynamics=False)
-    turns = bool(np.all(res.assembled))
-    smallest = _smallest_transmission(mech, np.array([start, start + way * 360.0])) if turns else np.nan
+    turns, smallest = _whole_sweep(mech, start, start + way * 360.0)
     return replace(f, mechanism=mech, one_branch=turns, min_transmission=smallest)
 
 
@@ -813,7 +809,7 @@ def _exact_motion(P: np.ndarray, units: str) -> list[MotionFourBar]:
                 np.degrees(np.asarray(fb.inputs, float)),
                 bool(fb.in_order),
                 str(fb.grashof),
-                _smallest_transmission(fb.mechanism(units, name), np.degrees(fb.inputs)) if fb.in_order else np.nan,
+                _whole_sweep(fb.mechanism(units, name), *np.degrees(fb.inputs[[0, -1]]))[1] if fb.in_order else np.nan,
                 "exact",
             )
         )
