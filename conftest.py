@@ -6,7 +6,12 @@ synthesis too, and a conftest applies only below its own directory.
 
 import os
 
-import pytest
+# One BLAS thread per process: the run's parallelism is xdist's workers (and the synthesis tests' own worker
+# processes). OpenBLAS's default, a thread per core in every process, spun idle threads against the other workers:
+# the motion weights test took 10 s of CPU for 6 s of wall time, 6 s with one thread. Read when NumPy loads.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # (the xdist workers start after it is set: they inherit it)
+
+import pytest  # noqa: E402
 
 #: entries of the four-bar atlas (synthesis/atlas.py) in the tests: none (it is off), unless a test sets a
 #: small size itself (tests/test_atlas.py: 2048, one chunk built in a fraction of a second). Off, the other
