@@ -814,3 +814,16 @@ def test_inputs_a_hair_inside_a_fold_end_are_assembled_and_a_hair_outside_not(mo
     assert ok[:6].all() and not ok[6:].any()
     for i, u in enumerate(inside):  # next to a fold the joints move as the root of the distance: 1e-7 of the size
         assert np.max(np.abs(pts[:, i] - ref.at(u))) <= 1e-7 * ref.size, u
+
+
+def test_samples_about_a_fold_end_where_only_some_last_steps_return_do_not_raise():
+    """A review of the last step next to a fold: ten samples from 0.6 deg past to 0.3 deg inside the range's end of
+    the triad above raised ValueError (the last step's way back kept some columns, and the start's knowns were still
+    those of all): every sample inside assembles, none more than 1e-6 deg past, as the code before the last step."""
+    base = random_triad(29)
+    poses = base.pose_array()[None] + np.random.default_rng(1029).normal(0, 0.5, (20, len(base.joint_names), 2))
+    mech = base.with_pose(poses[11])
+    lo = -44.34732450999293  # input_range's lower end (test above: within 0.01 deg of an independent continuation)
+    u = np.linspace(lo - 0.6, lo + 0.3, 10)
+    res = lk.analyze(mech, {"crank": u}, rates=False)
+    assert res.assembled[u > lo + 1e-6].all() and not res.assembled[u < lo - 1e-6].any()

@@ -1460,6 +1460,7 @@ class Group(Step):
         back = (1 - t[a[ok]]) * K0[:, a[ok]] + t[a[ok]] * K1[:, a[ok]]
         ok[ok] = self._returns(Un[:, ok], back, Uc[:, a[ok]], w, designs[a[ok]], FOLD_ITER)
         if ok.any():
+            back = (1 - t[a[ok]]) * K0[:, a[ok]] + t[a[ok]] * K1[:, a[ok]]  # of the columns the way back kept
             ar = w.arrays.take(designs[a[ok]])
             toward = self._sv_ratio(Un[:, ok], K1[:, a[ok]], ar) <= self._sv_ratio(Uc[:, a[ok]], back, ar)
             ok[ok] = toward
