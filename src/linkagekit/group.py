@@ -1455,15 +1455,13 @@ class Group(Step):
         a = np.flatnonzero(~alive & (t > 0) & (t < 1.0) & (left <= HOP_MOVE * w.size[designs]))
         if not len(a):
             return
+        Ks = (1 - t[a]) * K0[:, a] + t[a] * K1[:, a]  # the knowns where each column stopped
         Un, conv, sg = self._newton(Uc[:, a], K1[:, a], w.arrays.take(designs[a]), FOLD_ITER)
         ok = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * w.size[designs[a]], w, designs[a])
-        back = (1 - t[a[ok]]) * K0[:, a[ok]] + t[a[ok]] * K1[:, a[ok]]
-        ok[ok] = self._returns(Un[:, ok], back, Uc[:, a[ok]], w, designs[a[ok]], FOLD_ITER)
+        ok[ok] = self._returns(Un[:, ok], Ks[:, ok], Uc[:, a[ok]], w, designs[a[ok]], FOLD_ITER)
         if ok.any():
-            back = (1 - t[a[ok]]) * K0[:, a[ok]] + t[a[ok]] * K1[:, a[ok]]  # of the columns the way back kept
             ar = w.arrays.take(designs[a[ok]])
-            toward = self._sv_ratio(Un[:, ok], K1[:, a[ok]], ar) <= self._sv_ratio(Uc[:, a[ok]], back, ar)
-            ok[ok] = toward
+            ok[ok] = self._sv_ratio(Un[:, ok], K1[:, a[ok]], ar) <= self._sv_ratio(Uc[:, a[ok]], Ks[:, ok], ar)
         Uc[:, a[ok]] = Un[:, ok]
         t[a[ok]], alive[a[ok]] = 1.0, True
 
