@@ -827,3 +827,37 @@ def test_samples_about_a_fold_end_where_only_some_last_steps_return_do_not_raise
     u = np.linspace(lo - 0.6, lo + 0.3, 10)
     res = lk.analyze(mech, {"crank": u}, rates=False)
     assert res.assembled[u > lo + 1e-6].all() and not res.assembled[u < lo - 1e-6].any()
+
+
+def test_a_range_that_nearly_spans_a_turn_is_assembled_to_both_its_ends():
+    """A perturbed random triad (``random_triad(17)``, pose -46.07 deg) whose branch turns from 37.99 deg up to
+    -321.78 deg down (``input_range``): the directions between its ends past 37.99 (38.22..40.8 deg, the last
+    2.6 deg of the range going down) lie in the cell where the up leg stopped, and were tried only there: not
+    assembled, alone or in a sweep (a review's scipy continuation reached them). Now they are tried a turn the
+    other way: assembled alone and among others alike, at that continuation's joints to 1e-9 of the size, and the
+    0.23 deg between the two ends is not."""
+    from linkagekit.checks import input_range
+
+    base = random_triad(17)
+    pose = base.pose_array() + np.random.default_rng(1017).normal(0, 0.5, (4, 7, 2))[1]
+    mech = base.with_pose(pose - pose[base.joint_names.index("O")])  # O at the origin, as the reference has it
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo + 321.7767) < 1e-3 and abs(hi - 37.9948) < 1e-3
+    u = np.array([-318.5, -319.2, -320.0, -321.0, -321.7, 39.0, 40.5, 38.0, 38.1, 38.2, 30.0])
+    inside = (u <= hi) | (u >= lo) & (u <= -300.0) | (u >= lo + 360 + 1e-6)
+    assert inside.tolist() == [True] * 7 + [False] * 3 + [True]
+    sweep = lk.analyze(mech, {"crank": u}, rates=False)
+    assert sweep.assembled.tolist() == inside.tolist()
+    size = scale_of(mech)
+    pts = np.array([sweep.point(j) for j in ("J1", "J2", "J3")])  # (3, n)
+    for i, v in enumerate(u):
+        alone = lk.analyze(mech, {"crank": [v]}, rates=False)
+        assert bool(alone.assembled[0]) == inside[i], v
+        if inside[i]:
+            got = np.array([alone.point(j)[0] for j in ("J1", "J2", "J3")])
+            assert np.max(np.abs(got - pts[:, i])) < 1e-9 * size, v
+    # the branch going down from the pose (39 and 40.5 deg are -321 and -319.5 deg that way)
+    down = np.array([-318.5, -319.2, -320.0, -321.0, -321.7, 39.0 - 360, 40.5 - 360, 30.0])
+    ref = reference_continuation(mech, down)
+    assert np.all(np.isfinite(ref))
+    assert np.max(np.abs(ref - pts[:, [0, 1, 2, 3, 4, 5, 6, 10]])) < 1e-9 * size

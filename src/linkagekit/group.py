@@ -101,7 +101,8 @@ is given back at its input (the grid's origin starts at the pose, exact). A samp
 depends only on its input and the grid: not on the order of the inputs, nor on which others
 are asked. **A crank's input is a direction**: an angle input u is placed on the grid at its
 representative in half a turn either side of the pose's input, or, where a class-3 leg
-stopped before it, at the one a turn the other way (:func:`grid_places`); so u and u + 360 k
+stopped before it, at the one a turn the other way (:func:`grid_places`; also where the nearest one
+lies past its leg's last solved column and does not assemble there); so u and u + 360 k
 answer alike. A group that comes back in another configuration after a turn keeps, for each
 direction, the configuration reached by turning less than half a turn from the pose.
 
@@ -1013,8 +1014,9 @@ class Group(Step):
             c, s = np.nonzero(ok)
             self._from_state(start[:, c], zk0[:, c], start[:, c], c, s, w)
         else:
-            places = self._walk_grid(g, k, start, w)
+            places, second, legs = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
+            self._other_turn(g, legs, second, start, w)
         if self.input_drivers:
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
@@ -1026,15 +1028,20 @@ class Group(Step):
                     k.rot[gl.name] = (z[gl.joints[1]] - z[gl.joints[0]]) / bases[gl.name]
 
     # ------------------------------------------------------------------ the walk over the grid
-    def _walk_grid(self, g: WalkGrid, k: Kin, start: np.ndarray, w: _Walk) -> np.ndarray:
-        """Walk the grid from the pose as far as the samples need; each sample's place on it, (D, n_given).
+    def _walk_grid(
+        self, g: WalkGrid, k: Kin, start: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, tuple[_Leg, _Leg]]:
+        """Walk the grid from the pose as far as the samples need: each sample's place on it, a second place to
+        try where the first fails (both (D, n_given), NaN where there is none), and the legs.
 
         The two legs (up and down from the pose's input) step together, one Newton batch per
         grid step for every design. A class-3 leg stops where a step fails; a dyad-like leg
         goes on (restarting after a gap). A sample's place (in grid steps from the pose's
         input) is, for an angle, the representative of its direction nearest the pose's input
         when a leg reaches it, else the other one (a turn the other way) when the other leg
-        does (a second walk, as far as those need); NaN where neither is reached.
+        does (a second walk, as far as those need); NaN where neither is reached. A nearest
+        representative past the last column its leg solved (the range may end in that cell)
+        has the other representative as its second place (:meth:`_other_turn`).
         """
         D = start.shape[1]
         u = np.broadcast_to(k.q[g.driver, :, : g.n_given], (D, g.n_given))
@@ -1045,12 +1052,34 @@ class Group(Step):
         legs = (_Leg.new(origin, w, g, c0, 1), _Leg.new(origin, w, g, c0, -1))
         self._walk_legs(legs, near, w, g)
         covered = legs[0].covers(near, c0) | legs[1].covers(near, c0)
-        if g.cyclic and not self.dyad_like and not covered.all():
-            alt = np.where(covered, np.nan, other)
-            self._walk_legs(legs, alt, w, g)
-            use = ~covered & (legs[0].covers(alt, c0) | legs[1].covers(alt, c0))
-            return np.where(covered, near, np.where(use, alt, np.nan))
-        return np.where(covered, near, np.nan)
+        if not g.cyclic or self.dyad_like:
+            return np.where(covered, near, np.nan), np.full_like(near, np.nan), legs
+        edge = legs[0].past_solved(near, c0) | legs[1].past_solved(near, c0)
+        second = np.where(edge, other, np.nan)
+        if covered.all():
+            return near, second, legs
+        alt = np.where(covered, np.nan, other)
+        self._walk_legs(legs, alt, w, g)
+        use = ~covered & (legs[0].covers(alt, c0) | legs[1].covers(alt, c0))
+        return np.where(covered, near, np.where(use, alt, np.nan)), second, legs
+
+    def _other_turn(
+        self, g: WalkGrid, legs: tuple[_Leg, _Leg], second: np.ndarray, start: np.ndarray, w: _Walk
+    ) -> None:
+        """Samples not assembled at their nearest representative, where it lay past its leg's last solved column,
+        tried at the representative a turn the other way (``second``), the legs walked as far as those need.
+
+        A class-3 range that nearly spans a turn ends inside a cell both ways: a direction past one
+        end, in the cell where that leg stopped (or would have), may lie on the branch a turn the
+        other way, before its other end."""
+        retry = np.isfinite(second) & w.ok[:, : g.n_given] & ~np.all(np.isfinite(w.out[:, :, : g.n_given]), axis=0)
+        if not retry.any():
+            return
+        alt = np.where(retry, second, np.nan)
+        self._walk_legs(legs, alt, w, g)
+        c0 = int(np.searchsorted(g.index, 0))
+        reached = legs[0].covers(alt, c0) | legs[1].covers(alt, c0)
+        self._solve_samples(g, np.where(reached, alt, np.nan), start, w)
 
     def _origin(self, start: np.ndarray, col: int, w: _Walk) -> np.ndarray:
         """The grid's origin (the pose's input, column ``col``) solved from the group's start, written to ``out``.
@@ -1864,6 +1893,14 @@ class _Leg:
         self.fresh[x] = acc
         if not dyad_like:  # a class-3 group does not guess after a gap: the leg ends here
             self.alive[x[~acc]] = False
+
+    def past_solved(self, places: np.ndarray, c0: int) -> np.ndarray:
+        """Which ``places`` (D, n) this leg covers past its last solved column: in the cell where its step failed,
+        or in the one past its last column (not walked)."""
+        last = (self.pos - c0 - np.where(self.alive, 0, self.sign))[:, None]
+        with np.errstate(invalid="ignore"):
+            beyond = places > last if self.sign > 0 else places < last
+        return self.covers(places, c0) & beyond
 
     def covers(self, places: np.ndarray, c0: int) -> np.ndarray:
         """Which ``places`` (D, n), in grid steps from the pose's input, lie on this leg's side up to where it got.
