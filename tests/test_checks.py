@@ -206,6 +206,37 @@ def test_change_points_of_the_parallelogram(examples):
     assert [d["detail"].split("(")[-1] for d in dead] == ["folded)", "stretched)"]  # |A O2| = 500 = 1000 - 500, 1500
 
 
+@pytest.mark.parametrize("gamma", [0.0, 37.0, -121.5])
+def test_a_rhombus_lists_where_its_joint_is_undetermined(gamma):
+    """A rhombus (four equal sides) with its ground at ``gamma`` deg: at crank ``gamma`` the crank's tip lies on the
+    rocker's pivot, both of B1's circles coincide and B1 can be anywhere on them (by hand: the tip ``e^(i theta)``
+    meets the pivot ``e^(i gamma)`` at ``theta = gamma``). ``check`` ran its range over the whole turn from a hair past
+    that input to a hair before it and listed only the stretched change point at ``gamma + 180``; ``analyze`` flags
+    ``gamma`` itself. Now ``gamma`` is a change point too (folded, B1 undetermined), to 1e-6 deg."""
+    pivot, tip = np.exp(1j * math.radians(gamma)), np.exp(1j * math.radians(gamma + 90.0))
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {"A0": [0, 0], "A1": [pivot.real, pivot.imag], "B0": [tip.real, tip.imag]}
+        | {"B1": [(pivot + tip).real, (pivot + tip).imag]},
+        "links": {"ground": ["A0", "A1"], "crank": ["A0", "B0"], "coupler": ["B0", "B1"], "rocker": ["A1", "B1"]},
+        "drivers": [{"link": "crank", "pivot": "A0", "toward": "B0"}],
+    }
+    mech = lk.Mechanism.from_dict(doc)
+    rep = lk.check(mech).to_dict()
+    ((lo, hi),) = rep["input_range"]
+    assert hi - lo == pytest.approx(360.0, abs=1e-6) and (hi - gamma + 180.0) % 360.0 == pytest.approx(180.0, abs=1e-6)
+    dead = rep["dead_points"]["crank"]
+    assert [d["kind"] for d in dead] == ["change point", "change point"]
+    at = sorted(dead, key=lambda d: (d["input"] - gamma + 90.0) % 360.0)
+    assert (at[0]["input"] - gamma + 180.0) % 360.0 - 180.0 == pytest.approx(0.0, abs=1e-6)
+    assert (at[1]["input"] - gamma) % 360.0 == pytest.approx(180.0, abs=1e-6)
+    assert at[0]["joint"] == "B1" and at[0]["detail"].endswith("B1 undetermined at this input (analyze flags it)")
+    assert "(folded)" in at[0]["detail"] and "(stretched)" in at[1]["detail"]
+    res = lk.analyze(mech, {"crank": [gamma, gamma - 1e-6, gamma + 1e-6]}, rates=False)
+    assert res.assembled.tolist() == [False, True, True]
+
+
 def test_full_turn_has_no_dead_point(examples):
     rep = lk.check(lk.load(examples / "seed000_fourbar.yaml")).to_dict()
     assert rep["dead_points"] == {"crank": []}

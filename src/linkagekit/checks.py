@@ -853,6 +853,33 @@ def _group_stroke_end(run: _Run, v: float) -> dict[str, Any] | None:
     return None
 
 
+def _undetermined(run: _Run) -> float | None:
+    """The one input of a whole turn where the mechanism does not assemble (None where there is none): a change point
+    where a dyad's two circles coincide (a rhombus's crank on its rocker's pivot), so the pose's signs leave its joint
+    undetermined; the range runs from a hair past it to a hair before it (:func:`_assembly_intervals`)."""
+    if not run.cyclic or not run.turn:
+        return None
+    (s, e), turn = run.intervals[0], run.total
+    mid = 0.5 * (e + s + turn)
+    if e - s >= turn or bool(_assembled(run.params, run.driver, np.array([mid]))[0]):
+        return None
+    return mid
+
+
+def _undetermined_dead_point(run: _Run, fin: _Final, m: int, x: float) -> tuple[float, dict[str, Any]]:
+    """The dead point of :func:`_undetermined` at ``x``, its links from the range's end a hair before it (column
+    ``m`` of the ends in ``fin``)."""
+    col = fin.ends + m
+    info: dict[str, Any] = {"input": run.file_value(x), "kind": "change point"}
+    q = run.q
+    if len(q.k1) and (q.k1 >= 0).any():  # the dyad whose two known joints meet there
+        apart = np.abs(fin.state.z[q.k1, col] - fin.state.z[q.k2, col])
+        k = int(np.nanargmin(np.where(q.k1 >= 0, apart, np.inf)))
+        info.update(_step_links(run.params, k, fin.state, col))
+        info["detail"] += f"; {info['joint']} undetermined at this input (analyze flags it)"
+    return x, info
+
+
 def _change_dead_points(
     run: _Run, changes: list[tuple[int, _Bracket]], fin: _Final, ends: list[float]
 ) -> list[tuple[float, dict[str, Any]]]:
@@ -1007,8 +1034,12 @@ def _driver_checks(
     _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
     ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
-    fin = _finish(run, roots + mins, ends)
-    dead = _end_dead_points(run, fin, ends) + _change_dead_points(run, changes, fin, ends)
+    hole = _undetermined(run)
+    near_hole = [] if hole is None else list(intervals[0])  # a hair either side of it
+    fin = _finish(run, roots + mins, ends + near_hole[1:])
+    dead = _end_dead_points(run, fin, ends) + _change_dead_points(run, changes, fin, ends + near_hole)
+    if hole is not None:
+        dead.append(_undetermined_dead_point(run, fin, len(ends), hole))
     dead.sort(key=lambda t: t[1]["input"])
     facts = {
         index: _loop_facts(run, mech, li, lp, limits[li], extremes[li], fin) for li, (index, lp) in enumerate(loops)
