@@ -272,14 +272,19 @@ def _path(path: Any, what: str) -> Path:
 
 
 def read_regular_file(p: Path, limit: int, what: str, fail: Callable[[str], LinkageError]) -> bytes:
-    """At most ``limit + 1`` bytes of the regular file ``p``, or ``fail(message)`` raised.
+    """At most ``limit + 1`` bytes of the regular file ``p``, or ``fail(message)`` raised (:func:`read_regular`)."""
+    return read_regular(p, limit, what, fail)[0]
+
+
+def read_regular(p: Path, limit: int, what: str, fail: Callable[[str], LinkageError]) -> tuple[bytes, os.stat_result]:
+    """At most ``limit + 1`` bytes of the regular file ``p`` and its status, or ``fail(message)`` raised.
 
     The file is opened without blocking (a FIFO does not wait for a writer) and checked to be
     a regular file before anything is read: a directory, a device (``/dev/zero``), a FIFO or a
     socket is refused by name. At most ``limit + 1`` bytes are read, so the caller can tell a
     file over its limit (even one that grows while it is read) without holding more.
 
-    >>> read_regular_file(Path("/dev/zero"), 10, "mechanism file", InputError)
+    >>> read_regular(Path("/dev/zero"), 10, "mechanism file", InputError)
     Traceback (most recent call last):
     ...
     linkagekit.errors.InputError: not a regular file (a character device): not a mechanism file
@@ -294,7 +299,8 @@ def read_regular_file(p: Path, limit: int, what: str, fail: Callable[[str], Link
         raise fail(f"cannot read: {exc.strerror or exc}") from None
     except ValueError as exc:  # e.g. a path the system cannot represent
         raise fail(f"not a usable path: {exc}") from None
-    mode = os.fstat(fd).st_mode
+    st = os.fstat(fd)
+    mode = st.st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)
         if stat.S_ISDIR(mode):
@@ -304,7 +310,7 @@ def read_regular_file(p: Path, limit: int, what: str, fail: Callable[[str], Link
         with contextlib.suppress(OSError, AttributeError):
             os.set_blocking(fd, True)
         try:
-            return f.read(limit + 1)
+            return f.read(limit + 1), st
         except OSError as exc:
             raise fail(f"cannot read: {exc.strerror or exc}") from None
 
@@ -346,17 +352,28 @@ def load(path: str | Path) -> Mechanism:
         With a message naming the file and the offending key.
     """
     p = _path(path, "load")
+    return from_bytes(read_mechanism_file(p)[0], p)
+
+
+def read_mechanism_file(p: Path) -> tuple[bytes, os.stat_result]:
+    """The bytes of the mechanism file ``p`` (at most :data:`MAX_FILE_BYTES`) and its status, as :func:`load` reads
+    them (a regular file only, never waiting on a FIFO), or :class:`MechanismFileError` naming ``p``."""
 
     def fail(message: str) -> MechanismFileError:
         return MechanismFileError(f"{p}: {message}")
 
-    data = read_regular_file(p, MAX_FILE_BYTES, "mechanism file", fail)
+    data, st = read_regular(p, MAX_FILE_BYTES, "mechanism file", fail)
     if len(data) > MAX_FILE_BYTES:
         raise fail(f"more than {MAX_FILE_BYTES} bytes ({_mib(MAX_FILE_BYTES)}), more than a mechanism file may have")
+    return data, st
+
+
+def from_bytes(data: bytes, p: Path) -> Mechanism:
+    """The mechanism of the bytes ``data`` of the file ``p`` (its suffix gives the format), as :func:`load` reads it."""
     try:
         text = data.decode("utf-8-sig")  # a byte-order mark is dropped, in JSON as in YAML
     except UnicodeDecodeError as exc:
-        raise fail(f"not UTF-8 text (byte {exc.start})") from None
+        raise MechanismFileError(f"{p}: not UTF-8 text (byte {exc.start})") from None
     parsed = _json_data(text, str(p)) if p.suffix.lower() == ".json" else yaml_data(text, str(p))
     return Mechanism.from_dict(parsed, source=str(p))
 
@@ -661,14 +678,6 @@ def _dumper_class() -> type[Any]:
     return _Dumper
 
 
-def _write_atomic(p: Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``p`` through a temporary file in the same directory and :func:`os.replace`."""
-    with atomic_output(p, MechanismFileError) as tmp, open(tmp, "wb") as f:
-        f.write(text.encode("utf-8"))
-        f.flush()
-        os.fsync(f.fileno())
-
-
 #: random bytes in the name of a temporary file of :func:`atomic_output` (twice as many hex digits)
 _TMP_BYTES = 6
 
@@ -706,35 +715,118 @@ def stray_temporaries(path: str | Path) -> list[Path]:
     return found
 
 
-@contextlib.contextmanager
-def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iterator[Path]:
-    """A temporary path beside ``p`` to write; on success it replaces ``p`` in one step.
+def _write_atomic(p: Path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``p`` in one step (:func:`write_atomic`)."""
+    write_atomic(p, text.encode("utf-8"), error=MechanismFileError)
 
-    The old file stays whole until the new one is complete; the new file keeps the old
-    one's permissions (or the umask's).  A symbolic link is followed: the file it points
-    to is replaced (the temporary file is written beside it) and the link stays a link.
-    On failure the temporary file is removed; an ``OSError`` becomes ``error`` naming
-    ``p``.  A temporary file left by a killed process is named as :func:`stray_temporaries`
-    finds it.
+
+def write_atomic(
+    p: str | Path,
+    data: bytes,
+    follow: bool = True,
+    error: type[LinkageError] = InputError,
+    like: os.stat_result | None = None,
+) -> Path:
+    """Write ``data`` to ``p`` in one step: a temporary file beside it, written, synced, then :func:`os.replace`.
+
+    The temporary file is created exclusively, never through a link, and written through the
+    descriptor that created it (never reopened by name); it takes the mode and, as far as the
+    system allows, the owner and group of ``like`` (default: the file it replaces; a new file
+    gets the umask's permissions).  Just before the rename its name must still be that
+    descriptor's file, else nothing is replaced.  With ``follow`` a symbolic link ``p`` is
+    followed (the file it points to is replaced and the link stays); without it the link
+    itself is replaced by the new regular file, and nothing is ever written through it.
+
+    Returns the path replaced; an ``OSError`` becomes ``error`` naming ``p``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     d = pathlib.Path(tmp)
+    ...     _ = (d / "victim").write_text("keep")
+    ...     (d / "m.bak").symlink_to(d / "victim")
+    ...     _ = write_atomic(d / "m.bak", b"new", follow=False)
+    ...     (d / "m.bak").is_symlink(), (d / "victim").read_text(), (d / "m.bak").read_text()
+    (False, 'keep', 'new')
     """
-    p = Path(p)
-    p = Path(os.path.realpath(p)) if p.is_symlink() else p
-    tmp = p.with_name(f".{p.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
-    done = False
+    with _temporary(Path(p), follow, error, like) as (fd, _), open(fd, "wb", closefd=False) as f:
+        f.write(data)
+    return _target(Path(p), follow)
+
+
+def _target(p: Path, follow: bool) -> Path:
+    """The path a write to ``p`` replaces: the file a symbolic link points to when ``follow``."""
+    return Path(os.path.realpath(p)) if follow and p.is_symlink() else p
+
+
+def _old_stat(target: Path) -> os.stat_result | None:
+    """The file ``target`` replaces (not followed: a link's own mode is no file's), or None when there is none."""
     try:
-        try:
-            mode = stat.S_IMODE(os.stat(p).st_mode)
-        except FileNotFoundError:
-            mode = None
-        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))  # the umask applies, as for open()
-        yield tmp
-        if mode is not None:
-            os.chmod(tmp, mode)  # keep the permissions of the file it replaces
-        os.replace(tmp, p)
+        st = os.lstat(target)
+    except FileNotFoundError:
+        return None
+    return st if stat.S_ISREG(st.st_mode) else None
+
+
+@contextlib.contextmanager
+def _temporary(
+    p: Path, follow: bool, error: type[LinkageError], like: os.stat_result | None
+) -> Iterator[tuple[int, Path]]:
+    """A fresh temporary file beside ``p``'s target (its descriptor and name); on success it replaces the target.
+
+    Created with ``O_CREAT | O_EXCL | O_NOFOLLOW`` (mode 0600, or the umask's for a file with no
+    model to copy), given the model's owner (best effort) and mode through the descriptor,
+    synced, and renamed over the target once its name is checked to be still the same file.
+    """
+    target = _target(p, follow)
+    tmp = target.with_name(f".{target.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
+    flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    fd, done = -1, False
+    try:
+        model = like if like is not None else _old_stat(target)
+        fd = os.open(tmp, flags, 0o600 if model is not None else 0o666)  # no model: the umask applies, as for open()
+        yield fd, tmp
+        if model is not None:
+            _take_owner_and_mode(fd, model)
+        os.fsync(fd)
+        if not os.path.samestat(os.lstat(tmp), os.fstat(fd)):
+            raise error(f"{target}: not written: its temporary file {tmp.name} was replaced by another program")
+        os.replace(tmp, target)
         done = True
     except OSError as exc:
-        raise error(f"{p}: cannot write: {exc.strerror or exc}") from None
+        raise error(f"{target}: cannot write: {exc.strerror or exc}") from None
     finally:
+        if fd >= 0:
+            os.close(fd)
         if not done:
             with contextlib.suppress(OSError):
                 tmp.unlink()
+
+
+def _take_owner_and_mode(fd: int, model: os.stat_result) -> None:
+    """Give the file of ``fd`` the owner and group of ``model`` (as far as allowed), then its permissions."""
+    mine = os.fstat(fd)
+    if hasattr(os, "fchown") and (mine.st_uid, mine.st_gid) != (model.st_uid, model.st_gid):
+        try:
+            os.fchown(fd, model.st_uid, model.st_gid)  # only root may give a file another owner
+        except PermissionError:
+            with contextlib.suppress(PermissionError):
+                os.fchown(fd, -1, model.st_gid)  # a user may give their file a group of theirs
+    os.fchmod(fd, stat.S_IMODE(model.st_mode))  # after the owner: a chown may clear the set-id bits
+
+
+@contextlib.contextmanager
+def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iterator[Path]:
+    """A temporary path beside ``p`` for a writer that takes a file name; on success it replaces ``p`` in one step.
+
+    As :func:`write_atomic` (which writes bytes through the descriptor it creates, and should be
+    preferred): the old file stays whole until the new one is complete, the new file keeps the old
+    one's permissions and (as far as allowed) owner, a symbolic link is followed (the file it points
+    to is replaced, the link stays), and the temporary file, created exclusively and never through
+    a link, must still be the same file when it is renamed.  On failure it is removed; an
+    ``OSError`` becomes ``error`` naming ``p``.  A temporary file left by a killed process is
+    named as :func:`stray_temporaries` finds it.
+    """
+    with _temporary(Path(p), True, error, None) as (_, tmp):
+        yield tmp

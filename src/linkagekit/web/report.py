@@ -26,7 +26,7 @@ import numpy as np
 from .. import __version__
 from ..catalogue import input_units
 from ..errors import InputError
-from ..files import atomic_output
+from ..files import write_atomic
 from ..model import Mechanism
 from ..result import Result
 from ..viz.scene import Scene, build_scene
@@ -278,6 +278,5 @@ def write_report(
     if path.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"{path}: the report must end in .html")
     text = report_html(res, source=source, checks_text=checks_text, title=title)
-    with atomic_output(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+    write_atomic(path, text.encode("utf-8"))
     return path
