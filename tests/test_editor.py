@@ -850,16 +850,18 @@ def test_a_client_that_goes_away_is_not_reported(server, capfd):
 
 
 def test_an_unexpected_error_is_one_line(server, capfd, monkeypatch):
-    """An exception the handler does not expect: one short line on stderr, no traceback; the
-    server keeps serving."""
+    """An exception the handler does not expect: a 500 whose JSON error is one line, one short line
+    on stderr, no traceback anywhere; the server keeps serving."""
 
     def broken(token: str) -> str:
         raise RuntimeError("the page broke\nwith a second line")
 
     monkeypatch.setattr(server.session, "page", broken)
     c = Client(server)
-    with pytest.raises((http.client.HTTPException, ConnectionError)):
-        c.page()
+    status, headers, body = c.page()
+    got = json_error(status, headers, body, "a page that broke")
+    assert status == 500 and "RuntimeError: the page broke with a second line" in got["error"], got
+    assert "\n" not in got["error"] and "Traceback" not in got["error"]
     _wait_for_requests()
     monkeypatch.undo()
     c.still_serving()
@@ -1365,3 +1367,300 @@ def test_a_drag_drops_the_given_length_of_a_joint_whose_name_has_a_dash():
     moved = posed(mech, {"C-1": [3, 0]}, ["C-1"])
     assert dict(moved.link("crank").lengths) == {}
     assert abs(moved.link("crank").length("A", "C-1") - 3.0) < 1e-12
+
+
+# ============================================================================== review 8: the editor attacked
+def _victim(tmp_path: Path) -> Path:
+    victim = tmp_path / "elsewhere" / "precious.txt"
+    victim.parent.mkdir(exist_ok=True)
+    victim.write_text("precious user data\n")
+    return victim
+
+
+def test_save_replaces_a_planted_backup_link_and_never_writes_through_it(tmp_path):
+    """FILE.bak planted as a link (to a file, or dangling): the save replaces the link itself by a regular file
+    holding the old bytes; the file it pointed to stays as it was, and a dangling one is not created."""
+    victim = _victim(tmp_path)
+    for k, target in enumerate((victim, victim.with_name("created_by_editor.sh"))):
+        path = copy_example(tmp_path, sub=f"shared{k}")
+        original = path.read_bytes()
+        backup = path.with_name(path.name + ".bak")
+        backup.symlink_to(target)
+        s = Session(path)
+        assert s.save({"doc": s.mech.to_dict() | {"name": "saved"}, "base": s.base})["ok"] is True
+        assert not backup.is_symlink() and backup.read_bytes() == original
+        assert lk.load(path).name == "saved"
+    assert victim.read_text() == "precious user data\n"
+    assert sorted(p.name for p in victim.parent.iterdir()) == ["precious.txt"]
+
+
+@pytest.fixture
+def swap_temporaries(tmp_path, monkeypatch):
+    """Every temporary file (``.NAME.<hex>.tmp``) is swapped for a link to a victim as soon as it is created, as
+    another user who can write the directory would: returns the victim."""
+    from linkagekit import files
+
+    victim = _victim(tmp_path)
+    real_open = os.open
+
+    def racing_open(path, flags, mode=0o777, *args, **kw):
+        fd = real_open(path, flags, mode, *args, **kw)
+        name = os.fsdecode(path)
+        if flags & os.O_CREAT and name.endswith(".tmp"):
+            os.rename(name, name + ".moved")
+            os.symlink(victim, name)
+        return fd
+
+    monkeypatch.setattr(files.os, "open", racing_open)
+    return victim
+
+
+def test_a_temporary_swapped_for_a_link_is_never_written_through_nor_renamed(tmp_path, swap_temporaries):
+    """The temporary file is written through the descriptor that created it, and its name is checked to be still
+    that file before the rename: a link swapped in is neither written through nor renamed over the file (the
+    editor's save, lk.save, the report's write and atomic_output all refuse in one line naming the file)."""
+    from linkagekit.files import atomic_output
+
+    victim = swap_temporaries
+    path = copy_example(tmp_path)
+    original = path.read_bytes()
+    s = Session(path)
+    with pytest.raises(LinkageError, match=r"precious|replaced by another program") as err:
+        s.save({"doc": s.mech.to_dict() | {"name": "saved"}, "base": s.base})
+    assert "\n" not in str(err.value) and SEED000 in str(err.value)
+    with pytest.raises(LinkageError, match="replaced by another program"):
+        lk.save(s.mech, path)
+    with pytest.raises(LinkageError, match="replaced by another program"), atomic_output(path) as tmp:
+        tmp.write_text("written by name", encoding="utf-8")  # as matplotlib does: through the link
+    assert not path.is_symlink() and path.read_bytes() == original
+    assert victim.read_text() in ("precious user data\n", "written by name")  # a writer by name follows the link
+    assert "format: linkagekit" not in victim.read_text()
+
+
+def test_the_temporary_is_private_and_takes_the_files_mode_and_owner(tmp_path, monkeypatch):
+    """The temporary file is created 0600 (not with the umask's 0644) before it takes the mode of the file it
+    replaces; a 0600 file saved by the editor leaves a 0600 backup (the file's mode, not the umask's)."""
+    from linkagekit import files
+
+    path = copy_example(tmp_path)
+    path.chmod(0o600)
+    created: list[int] = []
+    real_open = os.open
+
+    def watching_open(p, flags, mode=0o777, *args, **kw):
+        if flags & os.O_CREAT and os.fsdecode(p).endswith(".tmp"):
+            created.append(mode)
+        return real_open(p, flags, mode, *args, **kw)
+
+    monkeypatch.setattr(files.os, "open", watching_open)
+    old_umask = os.umask(0o022)
+    try:
+        s = Session(path)
+        assert s.save({"doc": s.mech.to_dict() | {"name": "saved"}, "base": s.base})["ok"] is True
+    finally:
+        os.umask(old_umask)
+    backup = path.with_name(path.name + ".bak")
+    assert created == [0o600, 0o600]
+    assert stat_mode(path) == 0o600 and stat_mode(backup) == 0o600
+    if os.geteuid() == 0:  # only root may give a file another owner
+        os.chown(path, 65534, 65534)
+        s = Session(path)
+        assert s.save({"doc": s.mech.to_dict() | {"name": "again"}, "base": s.base})["ok"] is True
+        assert {(p.stat().st_uid, p.stat().st_gid) for p in (path, backup)} == {(65534, 65534)}
+
+
+def stat_mode(p: Path) -> int:
+    return p.stat().st_mode & 0o7777
+
+
+def _in_thread(fn, seconds: float = 10.0):
+    """``fn()`` in a thread: its result or exception, or a failure when it has not returned in ``seconds``."""
+    out: dict[str, object] = {}
+
+    def run() -> None:
+        try:
+            out["value"] = fn()
+        except BaseException as exc:  # noqa: BLE001 - handed to the test
+            out["error"] = exc
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(seconds)
+    assert not t.is_alive(), f"still running after {seconds} s"
+    return out
+
+
+def test_save_reads_the_file_bounded_and_a_fifo_or_a_huge_file_is_refused(server, tmp_path):
+    """The file swapped (after the page was served) for a FIFO, a link to /dev/zero or a file over the limit of a
+    mechanism file: a save is answered at once, 409 in one line naming the file; nothing is written."""
+    from linkagekit.files import MAX_FILE_BYTES
+
+    c = Client(server)
+    path = server.session.path
+    original = path.read_bytes()
+    doc, base = server.session.mech.to_dict(), server.session.base
+    for what, swap, says in (
+        ("FIFO", os.mkfifo, "FIFO"),
+        ("/dev/zero", lambda p: os.symlink("/dev/zero", p), "character device"),
+        ("huge", lambda p: os.truncate(os.open(p, os.O_CREAT | os.O_WRONLY), MAX_FILE_BYTES + 10), "more than"),
+    ):
+        path.unlink()
+        swap(path)
+        got = _in_thread(lambda: c.save({"doc": doc, "base": base}))
+        status, headers, body = got["value"]
+        err = json_error(status, headers, body, what)
+        assert status == 409 and path.name in err["error"] and says in err["error"] and "not saved" in err["error"], err
+        assert not path.with_name(path.name + ".bak").exists()
+    path.unlink()
+    path.write_bytes(original)
+    c.still_serving()
+
+
+def test_the_browser_is_opened_on_a_private_page_not_on_the_token_url(tmp_path, monkeypatch):
+    """The browser's command line holds no token: it is given a file:// page (0600, in a fresh 0700 directory)
+    that sends it to the editor's URL; the page is removed when the editor stops."""
+    import webbrowser
+
+    from linkagekit.web import editor as editor_module
+
+    opened: list[str] = []
+    ready = threading.Event()
+    servers: list[EditorServer] = []
+    monkeypatch.setattr(webbrowser, "open", lambda url, *a, **kw: opened.append(url) or True)
+
+    def on_ready(srv: EditorServer) -> None:
+        servers.append(srv)
+        ready.set()
+
+    path = copy_example(tmp_path)
+    t = threading.Thread(target=editor_module.serve, args=(path,), kwargs={"ready": on_ready}, daemon=True)
+    t.start()
+    assert ready.wait(30)
+    srv = servers[0]
+    for _ in range(200):
+        if opened:
+            break
+        time.sleep(0.02)
+    assert len(opened) == 1 and opened[0].startswith("file://"), opened
+    assert srv.token not in opened[0]
+    page = Path(urllib.request.url2pathname(opened[0][len("file://") :]))
+    assert stat_mode(page) == 0o600 and stat_mode(page.parent) == 0o700
+    text = page.read_text(encoding="utf-8")
+    assert srv.url in text and 'http-equiv="refresh"' in text
+    srv.shutdown()
+    t.join(10)
+    assert not page.exists() and not page.parent.exists()
+
+
+def _page_state(body: bytes) -> dict:
+    m = re.search(rb'id="lk-editor">(.*?)</script>', body, re.S)
+    assert m, body[:300]
+    return json.loads(m.group(1))
+
+
+def test_a_page_load_takes_the_file_as_another_program_changed_it(server):
+    """After another program changed the file, a save is refused (409) and a reload of the page edits the file as
+    it is now (its mechanism, text and hash), so the next save succeeds; a file that no longer loads, or is gone,
+    makes the page say so in one line naming it."""
+    c = Client(server)
+    path = server.session.path
+    first = _page_state(c.page()[2])
+    text = path.read_text(encoding="utf-8")
+    name = lk.load(path).name
+    path.write_text(text.replace(name, "changed elsewhere"), encoding="utf-8")
+    status, _, body = c.save({"doc": first["answer"]["doc"], "base": first["base"]})
+    assert status == 409 and "reload the page" in json.loads(body)["error"]
+    status, _, body = c.page()
+    assert status == 200
+    state = _page_state(body)
+    assert state["base"] == hashlib.sha256(path.read_bytes()).hexdigest() != first["base"]
+    assert state["answer"]["doc"]["name"] == "changed elsewhere"
+    status, _, body = c.save({"doc": state["answer"]["doc"] | {"name": "saved after reload"}, "base": state["base"]})
+    assert status == 200 and json.loads(body)["ok"] is True
+    assert lk.load(path).name == "saved after reload"
+    assert "# " in path.read_text(encoding="utf-8")  # the comments of the file as changed are kept
+    for what, change, says in (
+        ("broken", lambda: path.write_text("format: linkagekit/1\njoints: [\n"), "YAML syntax error"),
+        ("deleted", path.unlink, "no such file any more"),
+    ):
+        change()
+        status, headers, body = c.page()
+        page = body.decode("utf-8")
+        assert status == 409 and headers["Content-Type"].startswith("text/html"), (what, status, page[:300])
+        message = re.search(r"<p>(.*)</p>", page).group(1)
+        assert path.name in message and says in message and "\n" not in message, (what, message)
+
+
+def test_a_file_name_that_is_not_utf8_is_shown_with_replacement_characters(tmp_path):
+    """A file named with bytes that are not UTF-8 (legal on Linux): the page and the answers show its name with
+    U+FFFD where those bytes are, and it saves."""
+    d = tmp_path / "work"
+    d.mkdir()
+    raw = os.path.join(os.fsencode(d), b"m\xff.yaml")
+    shutil.copyfile(EXAMPLES / SEED000, raw)
+    srv = _serve(Session(os.fsdecode(raw)))
+    try:
+        c = Client(srv)
+        status, _, body = c.page()
+        assert status == 200 and _page_state(body)["file"] == "m\ufffd.yaml"
+        status, _, body = c.save({"doc": srv.session.mech.to_dict(), "base": srv.session.base})
+        got = json.loads(body)
+        assert status == 200 and got["ok"] is True and got["saved"].endswith("m\ufffd.yaml"), got
+        assert os.path.exists(raw + b".bak")
+    finally:
+        _stop(srv)
+
+
+def test_a_read_only_file_is_not_saved(server):
+    """A file without its owner's write bit is not overwritten (even by root, whom permissions do not stop): 409,
+    one line, the file and its directory as they were."""
+    c = Client(server)
+    path = server.session.path
+    path.chmod(0o444)
+    before = tree(path.parent)
+    status, headers, body = c.save({"doc": server.session.mech.to_dict(), "base": server.session.base})
+    err = json_error(status, headers, body, "read-only")
+    assert status == 409 and err["error"] == f"{path.name} is read-only: not saved"
+    assert tree(path.parent) == before and stat_mode(path) == 0o444
+
+
+@pytest.mark.parametrize("method", ["OPTIONS", "PUT", "DELETE", "HEAD", "PATCH"])
+def test_other_methods_get_the_servers_json_error_with_its_headers(server, method):
+    c = Client(server)
+    status, headers, body = c.request(method, f"/{server.token}/api/save", body=None)
+    h = {k.lower(): v for k, v in headers.items()}
+    assert status == 501 and h["content-type"] == "application/json", (status, h, body[:200])
+    assert "default-src 'none'" in h["content-security-policy"] and h["x-content-type-options"] == "nosniff"
+    if method != "HEAD":
+        assert method in json_error(status, headers, body, method)["error"]
+
+
+def test_a_garbage_request_line_gets_a_json_error(server):
+    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as sock:
+        sock.sendall(b"GARBAGE\r\n\r\n")
+        data = b""
+        while chunk := sock.recv(65536):
+            data += chunk
+    head, _, body = data.partition(b"\r\n\r\n")
+    assert head.startswith(b"HTTP/1.") and b" 400 " in head.split(b"\r\n")[0], head
+    assert b"Content-Type: application/json" in head and b"X-Content-Type-Options: nosniff" in head
+    assert json.loads(body)["ok"] is False
+
+
+def test_bad_request_fields_are_named(server):
+    """A pose that is not finite names pose.JOINT; a 'base' that is not a hash is 400 naming 'base' (not a
+    conflict); a joint the document lacks, in 'pose' or 'moved', is 400 naming it."""
+    c = Client(server)
+    doc = server.session.mech.to_dict()
+    for call, req, says in (
+        ("solve", {"doc": doc, "pose": {"A": [float("inf"), 0]}}, "pose.A: expected [x, y], two finite numbers"),
+        ("solve", {"doc": doc, "pose": {"A": [10**400, 0]}}, "pose.A: expected [x, y]"),
+        ("solve", {"doc": doc, "pose": {"ZZ": [1, 2]}}, "pose: the mechanism has no joint 'ZZ'"),
+        ("solve", {"doc": doc, "pose": {"D": [1.25, 4.6]}, "moved": ["nope"]}, "moved: the mechanism has no joint"),
+        ("save", {"doc": doc, "base": None}, "'base'"),
+        ("save", {"doc": doc, "base": 5}, "'base'"),
+    ):
+        body = json.dumps(req).replace("Infinity", "1e999")
+        status, headers, data = c.request("POST", f"/{server.token}/api/{call}", body)
+        err = json_error(status, headers, data, str(req)[-60:])
+        assert status == 400 and says in err["error"], (status, err)

@@ -13,10 +13,14 @@ one page and three JSON calls under a random token, and refuses (403) a request 
 token, with a ``Host`` other than the loopback address, from another ``Origin``, or for any
 other path.  Only the opened file (and its ``.bak`` backup) is ever written: ``save``
 writes a temporary file and renames it over the old one, after copying the old one to the
-backup, and refuses when the file changed on disk since it was opened or last saved.  A
-symbolic link is followed (the file it points to is replaced, the link stays); the temporary
-files a save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed
-when the editor starts.
+backup, and refuses when the file changed on disk since it was opened or last saved, or is
+read-only; a page load takes the file as it is on disk now.  A symbolic link FILE is followed
+(the file it points to is replaced, the link stays), a link ``FILE.bak`` never is (it is
+replaced); both writes go through :func:`~linkagekit.files.write_atomic`, and every read of
+the file is bounded (:func:`~linkagekit.files.read_mechanism_file`).  The temporary files a
+save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed when
+the editor starts.  The browser is opened on a private redirect page (:func:`redirect_file`),
+never with the token on its command line.
 
 Each solve (and the page) runs under a :class:`Watch`: past its time budget it is stopped and
 answered 503 with a message; when its client has gone (a closed tab) it is stopped at once.
@@ -29,10 +33,16 @@ import ctypes
 import hashlib
 import html
 import json
+import math
+import os
+import re
 import secrets
 import select
+import shutil
 import socket
+import stat
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -45,8 +55,16 @@ from urllib.parse import urlsplit
 import numpy as np
 
 from ..catalogue import input_units
-from ..errors import InputError, LinkageError, one_line
-from ..files import atomic_output, dumps, load, merge_comments, stray_temporaries, yaml_data
+from ..errors import InputError, LinkageError, MechanismFileError, one_line, shorten
+from ..files import (
+    dumps,
+    from_bytes,
+    merge_comments,
+    read_mechanism_file,
+    stray_temporaries,
+    write_atomic,
+    yaml_data,
+)
 from ..model import Driver, Mechanism, parse_pair
 from ..result import Result
 
@@ -75,9 +93,22 @@ KEPT_TEXTS = 8
 
 
 class ConflictError(LinkageError):
-    """The file changed on disk since the editor read or last saved it."""
+    """The file changed on disk since the editor read or last saved it (or cannot be written as it is): 409."""
 
     exit_code = 1
+
+
+class RequestError(InputError):
+    """A request whose fields are not what the page sends (a joint the document lacks, a 'base' not a hash): 400."""
+
+
+def shown(text: str) -> str:
+    """``text`` with every lone surrogate (a file name's bytes that are not UTF-8) as U+FFFD, fit for HTML and JSON.
+
+    >>> shown(os.fsdecode(b"m\\xff.yaml"))
+    'm\ufffd.yaml'
+    """
+    return re.sub("[\ud800-\udfff]", "\ufffd", text)
 
 
 def sweep_with_pose(mech: Mechanism, n: int | None = None) -> tuple[dict[str, np.ndarray], int]:
@@ -135,15 +166,12 @@ def posed(mech: Mechanism, pose: Any, moved: Any = None) -> Mechanism:
     >>> new.link("crank1").lengths["A-C"], dict(new.link("link1").lengths)
     (30.0, {'C-E': 60.0})
     """
-    if not isinstance(pose, dict):
-        raise InputError("'pose' must map joint names to [x, y]")
+    _check_pose(mech, pose, moved)
     tol = SAME_PLACE * mech.length_scale
     here = {j: [z.real, z.imag] for j, z in mech.joints.items()}
     placed = mech.with_pose({j: pose.get(j, here[j]) for j in mech.joints}).joints  # checks the pose
     if moved is None:
         moved = [j for j in mech.joints if abs(placed[j] - mech.joints[j]) > tol]
-    if not isinstance(moved, list) or not all(isinstance(j, str) for j in moved):
-        raise InputError("'moved' must list joint names")
     still = {j for j in mech.joints if j not in moved and abs(placed[j] - mech.joints[j]) <= tol}
     doc = mech.with_pose({j: here[j] if j in still else [z.real, z.imag] for j, z in placed.items()}).to_dict()
     old = mech.to_dict()["links"]
@@ -157,6 +185,34 @@ def posed(mech: Mechanism, pose: Any, moved: Any = None) -> Mechanism:
         if ln.cg_pose is not None and set(ln.joints) <= still:
             entry["cg"] = old[ln.name]["cg"]
     return Mechanism.from_dict(doc, source=mech.source)
+
+
+def _check_pose(mech: Mechanism, pose: Any, moved: Any) -> None:
+    """Refuse (:class:`RequestError`) a ``pose`` or ``moved`` that is not joints of ``mech`` and finite places."""
+    if not isinstance(pose, dict):
+        raise RequestError("'pose' must map joint names to [x, y]")
+    for j, xy in pose.items():
+        if j not in mech.joints:
+            raise RequestError(f"pose: the mechanism has no joint '{shorten(j)}'")
+        if not (isinstance(xy, list) and len(xy) == 2 and all(_finite(v) for v in xy)):
+            raise RequestError(f"pose.{shorten(j)}: expected [x, y], two finite numbers, got {shorten(repr(xy))}")
+    if moved is None:
+        return
+    if not isinstance(moved, list) or not all(isinstance(j, str) for j in moved):
+        raise RequestError("'moved' must list joint names")
+    for j in moved:
+        if j not in mech.joints:
+            raise RequestError(f"moved: the mechanism has no joint '{shorten(j)}'")
+
+
+def _finite(v: Any) -> bool:
+    """True for a finite number (not a bool; an int too large for a float is not finite)."""
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
 
 
 def _hash(data: bytes) -> str:
@@ -187,21 +243,55 @@ class Session:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        self.mech = load(self.path)  # a bad file: MechanismFileError, exit 2, before anything serves
+        #: the file's name as the page and the answers show it (bytes that are not UTF-8 as U+FFFD)
+        self.name = shown(self.path.name)
+        data, _ = read_mechanism_file(self.path)  # bounded, a regular file only
+        self._take(data, from_bytes(data, self.path))  # a bad file: MechanismFileError, exit 2, before serving
         for stray in stray_temporaries(self.path):  # left by an editor killed during a save
             with contextlib.suppress(OSError):
                 stray.unlink()
-        data = self.path.read_bytes()
-        self.base = _hash(data)
-        self.text = data.decode("utf-8-sig", errors="replace")
-        #: the file's texts as opened and as saved since, newest first (at most :data:`KEPT_TEXTS`): what an
-        #: edit undone writes back keeps the style they gave it (:meth:`_text_to_save`)
-        self.texts = [self.text]
         self.fmt: Literal["yaml", "json"] = "json" if self.path.suffix.lower() == ".json" else "yaml"
         self.backup = self.path.with_name(self.path.name + ".bak")
         self.lock = threading.Lock()
         #: the coarse-grid samples each recent drag solves (see :meth:`_coarse`), oldest first
         self.windows: dict[str, tuple[int, int, int]] = {}
+
+    def _take(self, data: bytes, mech: Mechanism) -> None:
+        """Take ``data``, the file's bytes as read now, and its mechanism as the state edited from here on."""
+        self.mech = mech
+        self.base = _hash(data)
+        self.text = data.decode("utf-8-sig", errors="replace")
+        #: the file's texts as opened and as saved since, newest first (at most :data:`KEPT_TEXTS`): what an
+        #: edit undone writes back keeps the style they gave it (:meth:`_text_to_save`)
+        self.texts = [self.text]
+
+    def _read_now(self, then: str) -> tuple[bytes, os.stat_result]:
+        """The file's bytes (bounded, as :func:`~linkagekit.files.load` reads them) and status, or a
+        :class:`ConflictError` saying plainly why not, ending with ``then`` (what was not done)."""
+        try:
+            return read_mechanism_file(self.path)
+        except MechanismFileError as exc:
+            if not os.path.lexists(self.path):
+                raise ConflictError(f"{self.path}: no such file any more (deleted or moved): {then}") from None
+            raise ConflictError(f"{one_line(str(exc), 250)}: {then}") from None
+
+    def refresh(self) -> None:
+        """Take the file as it is on disk now when it changed since it was opened or saved here.
+
+        A page load calls this: after another program changed the file, reloading the page edits
+        the file as it is now.  A file that no longer loads (or is gone) raises :class:`ConflictError`
+        naming it, and the editor keeps its state.
+        """
+        then = "fix it and reload the page"
+        with self.lock:
+            data, _ = self._read_now(then)
+            if _hash(data) == self.base:
+                return
+            try:
+                mech = from_bytes(data, self.path)
+            except LinkageError as exc:
+                raise ConflictError(f"changed on disk and no longer loads: {one_line(str(exc), 250)}: {then}") from None
+            self._take(data, mech)
 
     # ---------------------------------------------------------------- solving
     def solve(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -231,7 +321,7 @@ class Session:
             res = analyze(mech, inputs, dynamics=mech.has_dynamics)
             report = check(mech)  # its assembly range also gives the curves' breaks: computed once
             out["scene"] = build_scene(res, input_range=report.input_range).to_dict()
-            out["checks"] = check_text(report.to_dict(), input_units(mech), mech.name or self.path.name)
+            out["checks"] = check_text(report.to_dict(), input_units(mech), mech.name or self.name)
             out.update(self._modes(mech, request.get("at")))
         out["lengths"] = {
             ln.name: {f"{a}-{b}": ln.length(a, b) for i, a in enumerate(ln.joints) for b in ln.joints[i + 1 :]}
@@ -319,34 +409,35 @@ class Session:
     def save(self, request: dict[str, Any]) -> dict[str, Any]:
         """Write ``doc`` to the file, if the file is still as the editor last saw it (``base``).
 
-        The old file is copied to ``FILE.bak`` first; the new text replaces the file in one
-        step.  The file's comments are kept where its lines are (:meth:`_text_to_save`).  The
-        saved file is read back and must give the same mechanism.
+        The old file is copied to ``FILE.bak`` first (a link of that name is replaced, never
+        followed; the copy takes the file's mode and owner); the new text replaces the file in one
+        step (:func:`~linkagekit.files.write_atomic`; a link FILE is followed).  A read-only file
+        (no owner write bit) is not saved.  The file's comments are kept where its lines are
+        (:meth:`_text_to_save`).  The saved file is read back and must give the same mechanism.
         """
         doc = request.get("doc")
         if not isinstance(doc, dict):
             raise InputError("the request has no mechanism document ('doc')")
+        base = request.get("base", self.base)
+        if not isinstance(base, str):
+            raise RequestError(f"'base' must be the file's hash the page was given, got {shorten(repr(base))}")
         mech = Mechanism.from_dict(doc, source=str(self.path))
         with self.lock:
-            try:
-                old = self.path.read_bytes()
-            except OSError as exc:
-                raise ConflictError(f"{self.path}: cannot read it any more ({exc.strerror or exc})") from None
-            if _hash(old) != request.get("base", self.base) or _hash(old) != self.base:
+            old, st = self._read_now("not saved")
+            if _hash(old) != base or _hash(old) != self.base:
                 raise ConflictError(
-                    f"{self.path.name} changed on disk since it was opened or saved here: not overwritten "
+                    f"{self.name} changed on disk since it was opened or saved here: not overwritten "
                     "(reload the page to edit the file as it is now)"
                 )
+            if not st.st_mode & stat.S_IWUSR:
+                raise ConflictError(f"{self.name} is read-only: not saved")
             old_text = old.decode("utf-8-sig", errors="replace")
             text = self._text_to_save(mech, old_text)
-            with atomic_output(self.backup) as tmp:
-                tmp.write_bytes(old)
-            with atomic_output(self.path) as tmp:
-                tmp.write_text(text, encoding="utf-8")
-            again = load(self.path)
-            if again != mech:  # pragma: no cover - save and load are tested to round-trip
+            write_atomic(self.backup, old, follow=False, like=st)
+            write_atomic(self.path, text.encode("utf-8"))
+            data, _ = self._read_now("saved, but it cannot be read back")
+            if from_bytes(data, self.path) != mech:  # pragma: no cover - save and load are tested to round-trip
                 raise LinkageError(f"{self.path}: the saved file does not read back as the edited mechanism")
-            data = self.path.read_bytes()
             self.base = _hash(data)
             self.mech = mech
             self.text = data.decode("utf-8")
@@ -371,17 +462,22 @@ class Session:
 
     # ---------------------------------------------------------------- the page
     def page(self, token: str) -> str:
-        """The editor page: the report of the file's sweep, with the editor's script and state."""
+        """The editor page: the report of the file's sweep, with the editor's script and state.
+
+        The file is read again first (:meth:`refresh`): when another program changed it, the page
+        edits it as it is now.
+        """
         from ..api import analyze
         from .report import report_html
 
+        self.refresh()
         inputs, index = sweep_with_pose(self.mech)
         res = analyze(self.mech, inputs)
         first = self.solve({"doc": self.mech.to_dict()})  # checks, modes, lengths: as after each edit
         state = {
             "token": token,
             "base": self.base,
-            "file": self.path.name,
+            "file": self.name,
             "format": self.fmt,
             "pose_index": index,
             "answer": {k: v for k, v in first.items() if k != "scene"},
@@ -489,7 +585,11 @@ class _Handler(BaseHTTPRequestHandler):
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base class's name
         pass  # quiet: the terminal shows the URL, not a request log
 
-    def _send(self, code: int, body: bytes, ctype: str) -> None:
+    #: set once an answer's status line is sent: an error after it cannot be answered any more
+    answered = False
+
+    def _send(self, code: int, body: bytes, ctype: str, with_body: bool = True) -> None:
+        self.answered = True
         self.send_response(code)
         if code >= 400:
             # a refused request may leave its body unread on the connection: close it, so
@@ -507,10 +607,41 @@ class _Handler(BaseHTTPRequestHandler):
             "connect-src 'self'; form-action 'none'; frame-ancestors 'none'",
         )
         self.end_headers()
-        self.wfile.write(body)
+        if with_body:
+            self.wfile.write(body)
 
-    def _json(self, code: int, doc: dict[str, Any]) -> None:
-        self._send(code, json.dumps(doc, allow_nan=False, separators=(",", ":")).encode(), "application/json")
+    def _json(self, code: int, doc: dict[str, Any], with_body: bool = True) -> None:
+        text = json.dumps(doc, allow_nan=False, separators=(",", ":"), ensure_ascii=False)
+        self._send(code, shown(text).encode("utf-8"), "application/json", with_body)
+
+    def _html(self, code: int, message: str) -> None:
+        """A short page that says ``message`` (what the browser shows where the editor would be)."""
+        body = f"<!DOCTYPE html><title>linkagekit editor</title><p>{html.escape(message)}</p>"
+        self._send(code, shown(body).encode("utf-8"), "text/html; charset=utf-8")
+
+    def send_error(self, code: int, message: str | None = None, explain: str | None = None) -> None:
+        """The standard library's error answers (an unknown method, a malformed request line or header) in the
+        editor's JSON, with its headers, instead of its HTML page."""
+        text = message or self.responses.get(code, ("error",))[0]
+        if self.request_version == "HTTP/0.9":  # a request line it could not read: answer with a status and headers
+            self.request_version = "HTTP/1.0"
+        self.close_connection = True
+        self._json(code, {"ok": False, "error": one_line(text, 200)}, with_body=self.command != "HEAD")
+
+    def _guarded(self, handle: Any) -> None:
+        """Run ``handle``; an exception it did not expect is answered 500 in one line (and one line on stderr),
+        or, once the answer has begun, only reported; a client that went away is not answered."""
+        self.answered = False  # one handler answers every request of a kept-alive connection
+        try:
+            handle()
+        except VANISHED:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a request must never go unanswered
+            if self.answered:
+                raise
+            line = f"internal error: {type(exc).__name__}: {one_line(str(exc), 150)}"
+            print(f"linkagekit edit: a request failed: {line}", file=sys.stderr, flush=True)
+            self._json(500, {"ok": False, "error": line})
 
     def _allowed(self) -> str | None:
         """The path after the token, or None after answering 403."""
@@ -535,6 +666,12 @@ class _Handler(BaseHTTPRequestHandler):
         return rest
 
     def do_GET(self) -> None:  # noqa: N802 - http.server's name
+        self._guarded(self._get)
+
+    def do_POST(self) -> None:  # noqa: N802 - http.server's name
+        self._guarded(self._post)
+
+    def _get(self) -> None:
         rest = self._allowed()
         if rest is None:
             return
@@ -547,10 +684,13 @@ class _Handler(BaseHTTPRequestHandler):
         except SolveStopped:
             self._stopped(solve, page=True)
             return
+        except ConflictError as exc:  # the file changed on disk and no longer loads, or is gone
+            self._html(409, one_line(str(exc), 300))
+            return
         except LinkageError as exc:
             self._json(500, {"ok": False, "error": one_line(str(exc), 300)})
             return
-        self._send(200, page.encode("utf-8"), "text/html; charset=utf-8")
+        self._send(200, shown(page).encode("utf-8"), "text/html; charset=utf-8")
 
     def _stopped(self, solve: _Solve, page: bool = False) -> None:
         """Answer a solve the watch stopped: nothing when its client left, else a message naming the budget.
@@ -568,8 +708,7 @@ class _Handler(BaseHTTPRequestHandler):
                 "a coarser sweep (a larger step or a shorter range), or start the editor with a larger --solve-seconds"
             )
             print(f"linkagekit: {message}", file=sys.stderr, flush=True)
-            body = f"<!DOCTYPE html><title>linkagekit editor</title><p>{html.escape(message)}</p>"
-            self._send(503, body.encode("utf-8"), "text/html; charset=utf-8")
+            self._html(503, message)
             return
         self._json(
             503,
@@ -581,7 +720,7 @@ class _Handler(BaseHTTPRequestHandler):
             },
         )
 
-    def do_POST(self) -> None:  # noqa: N802 - http.server's name
+    def _post(self) -> None:
         rest = self._allowed()
         if rest is None:
             return
@@ -621,6 +760,8 @@ class _Handler(BaseHTTPRequestHandler):
             return 200, session.solve(request) if call == "api/solve" else session.save(request)
         except ConflictError as exc:
             return 409, {"ok": False, "error": one_line(str(exc), 300), "conflict": True}
+        except RequestError as exc:
+            return 400, {"ok": False, "error": one_line(str(exc), 300)}
         except LinkageError as exc:
             # a document that does not solve: the page keeps its last good picture and shows this
             return 200, {"ok": False, "error": one_line(str(exc), 300)}
@@ -732,11 +873,36 @@ def serve(
     print(server.url, flush=True)
     if ready is not None:
         ready(server)
-    if open_browser:
-        import webbrowser
+    with contextlib.ExitStack() as stack:
+        stack.callback(server.server_close)
+        if open_browser:
+            import webbrowser
 
-        threading.Thread(target=webbrowser.open, args=(server.url,), daemon=True).start()
-    try:
+            private = stack.enter_context(redirect_file(server.url))
+            threading.Thread(target=webbrowser.open, args=(private.as_uri(),), daemon=True).start()
         server.serve_forever(poll_interval=0.2)
+
+
+@contextlib.contextmanager
+def redirect_file(url: str) -> Iterator[Path]:
+    """A private page that sends the browser to ``url``, for as long as the block runs.
+
+    The browser is opened on this file, not on the URL: a browser's command line can be read by
+    every local user (``/proc/PID/cmdline``), and the URL's token is all that guards the editor.
+    The file is readable by its owner only (0600, in a fresh 0700 directory); it and its directory
+    are removed when the block ends.
+    """
+    folder = Path(tempfile.mkdtemp(prefix="linkagekit-edit-"))
+    try:
+        page = folder / "open-editor.html"
+        fd = os.open(page, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600)
+        link = html.escape(url)
+        with open(fd, "w", encoding="utf-8") as f:
+            f.write(
+                f'<!DOCTYPE html><meta charset="utf-8"><meta http-equiv="refresh" content="0;url={link}">'
+                f"<title>linkagekit editor</title><script>window.location.replace({json.dumps(url)})</script>"
+                f'<p><a href="{link}">Open the linkagekit editor</a></p>\n'
+            )
+        yield page
     finally:
-        server.server_close()
+        shutil.rmtree(folder, ignore_errors=True)
