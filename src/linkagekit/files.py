@@ -777,7 +777,10 @@ def _temporary(
 
     Created with ``O_CREAT | O_EXCL | O_NOFOLLOW`` (mode 0600, or the umask's for a file with no
     model to copy), given the model's owner (best effort) and mode through the descriptor,
-    synced, and renamed over the target once its name is checked to be still the same file.
+    synced, and renamed over the target once its name is checked to be still the same file (and
+    checked again after the rename: another user who can write the directory may still swap it in
+    between, but then only puts a name of theirs in place, which that user could do anyway; nothing
+    is ever written through it).
     """
     target = _target(p, follow)
     tmp = target.with_name(f".{target.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
@@ -794,6 +797,8 @@ def _temporary(
             raise error(f"{target}: not written: its temporary file {tmp.name} was replaced by another program")
         os.replace(tmp, target)
         done = True
+        if not os.path.samestat(os.lstat(target), os.fstat(fd)):  # swapped between the check and the rename
+            raise error(f"{target}: another program replaced its temporary file {tmp.name} as it was renamed")
     except OSError as exc:
         raise error(f"{target}: cannot write: {exc.strerror or exc}") from None
     finally:
