@@ -201,6 +201,10 @@ HOP_MOVE = 1e-3
 MAX_HALVINGS = 10
 #: Newton iterations of the last try of a sample's sub-steps that gave up next to a fold (:meth:`Group._last_step`)
 FOLD_ITER = 40
+#: a way back that creeps home (not converged after a sub-step's iterations) must arrive, in ``FOLD_ITER`` in all,
+#: within this part of its move of where the move started (506 such ways back about folds of triads, sliders and the
+#: Pyslvs six-bar arrived within 1.6e-9; a hop across a fold onto another sheet ended 4.7 moves away, not converged)
+ARRIVED = 1e-3
 #: an accepted continuation step moves no joint more than this times the group's mean link length
 #: (larger steps are halved: over small steps Newton's root is the branch's, not another of one sign)
 STEP_LIMIT = 0.25
@@ -1506,9 +1510,11 @@ class Group(Step):
     ) -> np.ndarray:
         """Whether a move from ``U0`` (with knowns ``K``) to ``U`` is the branch's, not a hop to another root: one
         that moves no joint more than ``HOP_MOVE`` of the group's size is; for one that moves more, Newton from ``U``
-        with the knowns ``K`` must end (after ``SUBSTEP_ITER`` steps, converged or not: near a fold it converges only
+        with the knowns ``K`` must end (after ``iters`` steps, converged or not: near a fold it converges only
         linearly) within a tenth of the move of ``U0``, or converge to a root of the other determinant sign than the
-        pose's (columns of ``designs``).
+        pose's (columns of ``designs``). One that ends there without converging is followed on to ``FOLD_ITER``
+        steps in all and must then converge within ``ARRIVED`` of its move of ``U0``: a hop across a fold onto
+        another sheet near it crept within a tenth of its move in six steps, then went away.
 
         Past a fold (the end of a range, where the branch meets the one of opposite sign) a
         sub-step can converge to a root of the pose's sign on another sheet, near enough to pass
@@ -1524,7 +1530,12 @@ class Group(Step):
             d = designs[check]
             Ub, conv, sg = self._newton(U[:, check], K[:, check], w.arrays.take(d), iters)
             home = np.max(np.abs(Ub - U0[:, check]), axis=0) <= 0.1 * move[check]
-            out[check] = home | (conv & (sg == -w.ref[d]))  # on its way home near a fold it may still creep
+            creep = np.flatnonzero(home & ~conv)  # on its way home near a fold it may still creep: followed on
+            if len(creep) and iters < FOLD_ITER:
+                c = check[creep]
+                Uf, cf, _ = self._newton(Ub[:, creep], K[:, c], w.arrays.take(d[creep]), FOLD_ITER - iters)
+                home[creep] = cf & (np.max(np.abs(Uf - U0[:, c]), axis=0) <= ARRIVED * move[c])
+            out[check] = home | (conv & (sg == -w.ref[d]))
         return out
 
     def _restart(self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray) -> np.ndarray:
