@@ -82,8 +82,9 @@ the group's mean link length (a class-3 group has up to three roots of one sign;
 small step Newton's root is the branch's). A step that fails waits while the other designs
 go on; the waiting steps are then retried together in adaptive sub-steps (halved on
 failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known
-joints linearly between the grid points (a homotopy in the group's boundary: each known
-joint moves alone, so the path is well defined). A sub-step that moves a joint more than
+joints as the inputs between the two columns put them (the steps before the group re-run
+there, :meth:`Group._knowns`; along the chord between their two places where those steps
+cannot be re-run: a numerical group before this one, or signs given per sample). A sub-step that moves a joint more than
 ``HOP_MOVE`` of the size must also find its way back (:meth:`Group._returns`): past a fold,
 where the range ends, Newton could land on a root of the pose's sign on another sheet. A
 class-3 leg that still fails stops:
@@ -161,8 +162,9 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 from typing import Any
 
 import numpy as np
@@ -385,11 +387,25 @@ class _Walk:
     vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
     fill_vector: bool = False  # ... and the samples' (many samples and designs)
     grid_columns: int = 0  # the walk's grid columns (the last of ``K``'s samples)
+    q: np.ndarray | None = None  # (n_drivers, D, n) the inputs of ``K``'s columns
+    upstream: Callable[[np.ndarray], np.ndarray | None] | None = None  # the joints before the group at inputs
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
         ok: np.ndarray = (sg == self.ref[designs]) | self.any_sign
         return ok
+
+
+@dataclass(frozen=True)
+class _Path:
+    """Sub-steps' way, per column (``designs`` (B,)): from knowns ``K0`` to ``K1`` (k, B), through the inputs from
+    ``q0`` to ``q1`` (n_drivers, B) where those are given, else along the chord (:meth:`Group._knowns`)."""
+
+    K0: np.ndarray
+    K1: np.ndarray
+    designs: np.ndarray
+    q0: np.ndarray | None = None
+    q1: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -1012,6 +1028,8 @@ class Group(Step):
             D >= VECTOR_DESIGNS,
             D * n >= VECTOR_SAMPLES,
             0 if k.grid is None else len(k.grid.index),
+            np.broadcast_to(k.q, (k.q.shape[0], D, n)),
+            None if k.upstream is None else partial(k.upstream, stop=self),
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -1097,7 +1115,7 @@ class Group(Step):
         U, acc = self._plain(start, start, w.K[:, :, col], d, w)
         todo = np.flatnonzero(~acc & np.all(np.isfinite(start), axis=0) & w.ok[:, col])
         if len(todo):
-            U[:, todo] = self._halving(start[:, todo], w.K0[:, todo], w.K[:, todo, col], w, todo)
+            U[:, todo] = self._halving(start[:, todo], _Path(w.K0[:, todo], w.K[:, todo, col], todo), w)
             acc[todo] = np.all(np.isfinite(U[:, todo]), axis=0)
         U = np.where(acc & w.ok[:, col], U, NAN_POINT)
         w.out[:, :, col] = U
@@ -1130,7 +1148,8 @@ class Group(Step):
             )
             ahead: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
             if waiting:
-                U_new, acc, lost = self._substeps(U, Kc, d, s, w)
+                src = g.n_given + np.concatenate([leg.pos[x] for leg, x in zip(legs, steps, strict=True)])
+                U_new, acc, lost = self._substeps(U, Kc, d, s, w, src)
                 pend = np.zeros(len(d), bool)
             else:
                 sign = np.concatenate([np.full(len(x), leg.sign) for leg, x in zip(legs, steps, strict=True)])
@@ -1223,12 +1242,12 @@ class Group(Step):
         return U_new, acc, lost, pend, ahead
 
     def _substeps(
-        self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk
+        self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk, src: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Grid steps that failed, retried by step halving from the last good state: (U, accepted, lost);
-        for a dyad-like group, restarts where that fails too."""
+        """Grid steps from columns ``src`` to ``s`` that failed, retried by step halving from the last good state:
+        (U, accepted, lost); for a dyad-like group, restarts where that fails too."""
         K = w.K[:, d, s]
-        U_new = self._halving(U, Kc, K, w, d)
+        U_new = self._halving(U, self._path(Kc, K, d, (src, s), w), w)
         acc = np.all(np.isfinite(U_new), axis=0)
         lost = ~acc
         self._restart_lost(U, K, d, w, U_new, acc, lost & w.ok[d, s])
@@ -1278,7 +1297,7 @@ class Group(Step):
             frm = np.clip(np.where(np.all(np.isfinite(sol(near, cr)), axis=0), near, far), 0, G - 1)
             U0 = Ug[:, cr, frm]
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
-            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w)
+            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w, g.n_given + frm)
 
     def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
         """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
@@ -1308,15 +1327,24 @@ class Group(Step):
         return V
 
     def _from_state(
-        self, U0: np.ndarray, K0: np.ndarray, centre: np.ndarray, c: np.ndarray, s: np.ndarray, w: _Walk
+        self,
+        U0: np.ndarray,
+        K0: np.ndarray,
+        centre: np.ndarray,
+        c: np.ndarray,
+        s: np.ndarray,
+        w: _Walk,
+        src: np.ndarray | None = None,
     ) -> None:
-        """Samples ``s`` of designs ``c`` reached by sub-steps from ``(U0, K0)``; a dyad-like group restarts
-        about ``centre`` where they fail."""
+        """Samples ``s`` of designs ``c`` reached by sub-steps from ``(U0, K0)`` (the knowns of columns ``src``, or
+        the pose's); a dyad-like group restarts about ``centre`` where they fail."""
         K1 = w.K[:, c, s]
         U = np.full((U0.shape[0], len(c)), NAN_POINT)
         live = np.flatnonzero(np.all(np.isfinite(U0), axis=0) & w.ok[c, s])
         if len(live):
-            U[:, live] = self._halving(U0[:, live], K0[:, live], K1[:, live], w, c[live], to_fold=True)
+            cols = None if src is None else (src[live], s[live])
+            path = self._path(K0[:, live], K1[:, live], c[live], cols, w)
+            U[:, live] = self._halving(U0[:, live], path, w, to_fold=True)
         acc = np.all(np.isfinite(U), axis=0)
         self._restart_lost(centre, K1, c, w, U, acc, ~acc & w.ok[c, s])
         w.out[:, c[acc], s[acc]] = U[:, acc]
@@ -1419,22 +1447,22 @@ class Group(Step):
             sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
         return sol, conv, sg
 
-    def _halving(
-        self, U: np.ndarray, K0: np.ndarray, K1: np.ndarray, w: _Walk, designs: np.ndarray, to_fold: bool = False
-    ) -> np.ndarray:
-        """From (U, K0) to K1 by adaptive sub-steps; NaN columns where a step below 2^-MAX_HALVINGS fails.
+    def _halving(self, U: np.ndarray, path: _Path, w: _Walk, to_fold: bool = False) -> np.ndarray:
+        """From ``U`` at the start of ``path`` to its end by adaptive sub-steps; NaN columns where a step below
+        2^-MAX_HALVINGS fails.
 
-        Each column walks ``t`` from 0 to 1 (the knowns at ``(1 - t) K0 + t K1``): a step that
-        is accepted (the tests of a continuation step) doubles the next one, a step that is
-        not is halved. A step to knowns a chain rules out fails without Newton. Newton here is
-        LAPACK's, whatever the problem's size (few columns sub-step, and many rounds: array
-        operations' fixed cost would dominate). A sub-step that moves a joint far is checked on
-        the way back (:meth:`_returns`).
+        Each column walks ``t`` from 0 to 1 along its path (:meth:`_knowns`: the knowns where the
+        inputs between its two columns put them): a step that is accepted (the tests of a
+        continuation step) doubles the next one, a step that is not is halved. A step to knowns a
+        chain rules out fails without Newton. Newton here is LAPACK's, whatever the problem's size
+        (few columns sub-step, and many rounds: array operations' fixed cost would dominate). A
+        sub-step that moves a joint far is checked on the way back (:meth:`_returns`).
         """
+        designs = path.designs
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
-        Uc, t, dt = U.copy(), np.zeros(B), np.full(B, 0.5)
+        Uc, Kc, t, dt = U.copy(), path.K0.copy(), np.zeros(B), np.full(B, 0.5)
         alive = np.ones(B, bool)
         smallest = 0.5**MAX_HALVINGS
         while True:
@@ -1442,7 +1470,7 @@ class Group(Step):
             if not len(act):
                 break
             tt = np.minimum(t[act] + dt[act], 1.0)
-            K_t = (1 - tt) * K0[:, act] + tt * K1[:, act]
+            K_t = self._knowns(path, tt, act, w)
             ok = np.zeros(len(act), bool)
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
@@ -1450,27 +1478,63 @@ class Group(Step):
                 Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 back = can[ok[can]]  # the way back must lead to where the step started: no hop to another root
-                K_back = (1 - t[act[back]]) * K0[:, act[back]] + t[act[back]] * K1[:, act[back]]
-                ok[back] = self._returns(Un[:, ok[can]], K_back, Uc[:, act[back]], w, designs[act[back]])
+                ok[back] = self._returns(Un[:, ok[can]], Kc[:, act[back]], Uc[:, act[back]], w, designs[act[back]])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
             good, bad = act[ok], act[~ok]
-            t[good] = tt[ok]
+            t[good], Kc[:, good] = tt[ok], K_t[:, ok]
             dt[good] = np.minimum(2 * dt[good], 1.0)
             dt[bad] /= 2
             alive[bad[dt[bad] < smallest]] = False
         if to_fold:  # samples (the walk's own steps find the range's ends: they are not pushed)
-            self._last_step(Uc, t, alive, (K0, K1), w, designs)
+            self._last_step(Uc, Kc, t, alive, path, w)
         return np.where(alive & (t >= 1.0), Uc, NAN_POINT)
+
+    def _path(
+        self, K0: np.ndarray, K1: np.ndarray, designs: np.ndarray, cols: tuple[np.ndarray, np.ndarray] | None, w: _Walk
+    ) -> _Path:
+        """Sub-steps of ``designs`` from knowns ``K0`` to ``K1``, the knowns of columns ``cols`` (from, to) of ``w.K``
+        (None: the chord between them): through the inputs between the two columns where the steps before the group
+        can be re-run there (an angle's input the shorter way round: a sample's input is a direction)."""
+        if cols is None or w.upstream is None or w.q is None:
+            return _Path(K0, K1, designs)
+        q0, q1 = w.q[:, designs, cols[0]], w.q[:, designs, cols[1]]
+        turn = np.array([2 * np.pi if a else np.inf for a in self.angular] + [np.inf] * len(q0))[: len(q0), None]
+        with np.errstate(invalid="ignore"):
+            q1 = np.where(np.isfinite(turn), q0 + (q1 - q0 - turn * np.round((q1 - q0) / turn)), q1)
+        return _Path(K0, K1, designs, q0, q1)
+
+    def _knowns(self, path: _Path, t: np.ndarray, idx: np.ndarray, w: _Walk) -> np.ndarray:
+        """The knowns at ``t`` (N,) of columns ``idx`` of ``path``: ``K0`` at 0, ``K1`` at 1; between, where the
+        inputs ``(1 - t) q0 + t q1`` put them (the steps before the group re-run there, every design's columns side
+        by side), else on the chord."""
+        K: np.ndarray = (1 - t) * path.K0[:, idx] + t * path.K1[:, idx]
+        K[:, t >= 1.0] = path.K1[:, idx[t >= 1.0]]
+        mid = np.flatnonzero((t > 0) & (t < 1))
+        if path.q0 is None or path.q1 is None or w.upstream is None or not len(mid):
+            return K
+        i, d = idx[mid], path.designs[idx[mid]]
+        q = (1 - t[mid]) * path.q0[:, i] + t[mid] * path.q1[:, i]
+        D = w.K.shape[1]
+        order = np.argsort(d, kind="stable")
+        first = np.concatenate([[0], np.cumsum(np.bincount(d, minlength=D))[:-1]])
+        rank = np.empty(len(d), np.intp)
+        rank[order] = np.arange(len(d)) - first[d[order]]
+        q2 = np.full((len(q), D, int(rank.max()) + 1), np.nan)
+        q2[:, d, rank] = q
+        z = w.upstream(q2)
+        if z is not None:
+            K[:, mid] = self.held(z, q2)[:, d, rank]
+        return K
 
     def _last_step(
         self,
         Uc: np.ndarray,
+        Kc: np.ndarray,
         t: np.ndarray,
         alive: np.ndarray,
-        K01: tuple[np.ndarray, np.ndarray],
+        path: _Path,
         w: _Walk,
-        designs: np.ndarray,
     ) -> None:
         """Sample columns whose sub-steps gave up a hair before their end (the knowns still to move by at most
         ``HOP_MOVE`` of the group's size) tried once more, in place: Newton of ``FOLD_ITER`` iterations from where
@@ -1483,12 +1547,12 @@ class Group(Step):
         many iterations Newton and its way back accepted one on another sheet 0.05 of the size away, better
         conditioned than the fold it came from (4.8e-4 against 4.3e-6; a triad's range grew from -43.4 to -94.8
         deg), where each sample truly inside lands nearer the fold (its conditioning below its start's)."""
-        K0, K1 = K01
+        K0, K1, designs = path.K0, path.K1, path.designs
         left = (1 - t) * np.max(np.abs(K1 - K0), axis=0, initial=0.0)  # how far the knowns still move
         a = np.flatnonzero(~alive & (t > 0) & (t < 1.0) & (left <= HOP_MOVE * w.size[designs]))
         if not len(a):
             return
-        Ks = (1 - t[a]) * K0[:, a] + t[a] * K1[:, a]  # the knowns where each column stopped
+        Ks = Kc[:, a]  # the knowns where each column stopped
         Un, conv, sg = self._newton(Uc[:, a], K1[:, a], w.arrays.take(designs[a]), FOLD_ITER)
         ok = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * w.size[designs[a]], w, designs[a])
         ok[ok] = self._returns(Un[:, ok], Ks[:, ok], Uc[:, a[ok]], w, designs[a[ok]], FOLD_ITER)

@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -112,14 +113,14 @@ def solve(
     mr = np.zeros((plan.n_mirrors, 1, 1), bool) if mirrors is None else np.asarray(mirrors, bool)
     D = params.n_designs
     n = int(np.broadcast_shapes(q.shape[-1:], sg.shape[-1:] if plan.n_signs else (1,), mr.shape[-1:])[0])
-    shape = (len(plan.joint_names), D, n)
-    z = np.empty(shape, complex) if out is None else out
+    z = np.empty((len(plan.joint_names), D, n), complex) if out is None else out
     missing = plan.unwritten
     if missing:  # a joint no step writes is NaN, never uninitialised memory
         z[list(missing)] = NAN_POINT
     k = Kin(
         z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous, grid
     )
+    k.upstream = None if grid is None else _upstream_of(params, sg, mr, eps)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -208,6 +209,34 @@ def _solve_on_grid(
         out[...] = got.z
         got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
     return got
+
+
+def _upstream_of(params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float) -> Any:
+    """:func:`_upstream` with these numbers, for the numerical groups' sub-steps; None where the signs or mirrors
+    are given per sample (following a branch continuously: which ones hold between two samples is not known)."""
+    return partial(_upstream, params, signs, mirrors, eps) if signs.shape[-1] == mirrors.shape[-1] == 1 else None
+
+
+def _upstream(
+    params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float, q: np.ndarray, stop: Any
+) -> np.ndarray | None:
+    """The joints the steps before ``stop`` place at inputs ``q`` (n_drivers, D, n), every design, with the
+    given signs and mirrors (one per design); None when a numerical group comes before ``stop``.
+
+    A numerical group's sub-steps between two of its samples follow the inputs between them
+    through this: the knowns it holds move as the mechanism moves them, not along the chord
+    between their two positions (:mod:`linkagekit.group`)."""
+    plan = params.plan
+    before = plan.steps[: next(i for i, st in enumerate(plan.steps) if st is stop)]
+    if any(isinstance(st, Group) for st in before):
+        return None
+    D, n = params.n_designs, q.shape[-1]
+    z = np.full((len(plan.joint_names), D, n), NAN_POINT)
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, signs, mirrors, eps, params.pose_inputs)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for st, nums in zip(before, params.steps, strict=False):
+            st.place(k, nums)
+    return z
 
 
 def _walk_driver(params: Params, key: np.ndarray) -> tuple[int, bool]:

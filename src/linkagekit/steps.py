@@ -28,6 +28,7 @@ Notation: points are complex (:mod:`linkagekit.geometry`); ``a . b = Re(conj(a) 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -78,6 +79,9 @@ class Kin:
     q0: np.ndarray | None = None  # (n_drivers, D) driver values at the pose (numerical groups walk from it)
     continuous: bool = False  # numerical groups follow their branch through change points (linkagekit.branch)
     grid: WalkGrid | None = None  # the fixed inputs numerical groups walk (columns of q after the given samples)
+    #: the joints the steps before ``stop`` place at other inputs ``q2`` (n_drivers, D, n2): ``upstream(q2, stop)``
+    #: (n_joints, D, n2), NaN where not placed; None where that cannot be re-run (a numerical group before it)
+    upstream: Callable[..., np.ndarray | None] | None = None
 
 
 @dataclass(frozen=True)
