@@ -322,3 +322,28 @@ def test_atlas_without_an_action_names_the_choices(capsys):
     code, out, err = run(["atlas"], capsys)
     assert code == 2 and out == ""
     assert "{build,info}" in err and ": action" not in err and err.count("\n") == 1
+
+
+def test_check_of_a_sweep_with_more_samples_than_it_evaluates(tmp_path, capsys, monkeypatch):
+    # a review: a 600-byte file whose own sweep had 3.6e7 samples took GBs in check (the change points followed
+    # the branch through every sample) and died with "internal error: MemoryError"; over the command line's cap
+    # (100000 samples) check says the change points and the peak loads were not computed and reports the rest
+    import linkagekit.checks as checks
+
+    text = Path("examples/motor_fourbar.yaml").read_text().replace("step: 2}", "step: 0.001}")
+    path = write(tmp_path, text, "fine.yaml")
+
+    def refuse(*args, **kwargs):  # the sweep must not be evaluated at all
+        raise AssertionError("the file's sweep was evaluated")
+
+    monkeypatch.setattr(checks, "along_sweep", refuse)
+    monkeypatch.setattr(checks, "analyze", refuse)
+    code, out, err = run(["check", path], capsys)
+    assert (code, err) == (0, "")
+    why = "the file's sweep has 360001 samples, more than check evaluates (100000)"
+    assert f"Change points: not followed ({why})" in out
+    assert f"not computed: {why}" in out and "Transmission angle: min 61.4398" in out
+    code, out, _ = run(["check", path, "--format", "json"], capsys)
+    rep = json.loads(out)
+    assert code == 0 and rep["change_points"] is None and rep["change_points_skipped"] == why
+    assert rep["dynamics"]["skipped"] == why and rep["input_range"] == [[0.0, 360.0]]
