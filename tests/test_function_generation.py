@@ -161,6 +161,11 @@ def check_plot(png: Path, pairs: np.ndarray) -> None:
         ("input,output\n1,2\n5,4\n3,6\n", "increase (or decrease)"),
         ("x,y\n1,2\n3,4\n5,6\n", "input,output"),
         ("input,output\n0,0\n10,0\n20,0\n30,0\n", "constant output needs no mechanism"),
+        # a review: 10000 pairs ran 12 to 24 s of --seconds 3 (the starts and their polish read no clock)
+        (
+            "input,output\n" + "".join(f"{60 + 0.05 * i:.2f},{90 + 0.01 * i:.2f}\n" for i in range(1001)),
+            "1001 pairs; function generation takes at most 1000",
+        ),
     ],
 )
 def test_bad_pairs_get_one_line_and_exit_2(rows, says, tmp_path, capsys):

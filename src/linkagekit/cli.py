@@ -1470,6 +1470,7 @@ def _synthesize(args: argparse.Namespace) -> int:
         return _synthesize_function(args)
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"), smooth=not args.no_smooth)
+    _unsmoothed_count(args, len(targets), targets.timed)
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
     if args.topology == "auto":
         return _synthesize_auto(args, targets, search, t0)
@@ -1872,6 +1873,18 @@ def _synthesize_resume(args: argparse.Namespace) -> str:
     if args.checkpoint:
         return f"the search is saved in {shorten(args.checkpoint, 80)}: the same command resumes it"
     return "nothing was saved (with --checkpoint FILE the same command resumes a run)"
+
+
+def _unsmoothed_count(args: argparse.Namespace, count: int, timed: bool) -> None:
+    """Refuse more untimed targets than ``--no-smooth`` takes as they are (the search's clock is read only after
+    the atlas has placed, refitted and checked its answers on every one of them)."""
+    from .synthesis.targets import MAX_UNSMOOTHED
+
+    if args.no_smooth and not timed and count > MAX_UNSMOOTHED:
+        raise InputError(
+            f"{shorten_path(args.targets, 80)}: {count} points; --no-smooth takes at most {MAX_UNSMOOTHED} as they "
+            "are (every evaluation costs in proportion): leave it out to smooth them, or give fewer points"
+        )
 
 
 def _synthesize_source(path: str) -> str:

@@ -230,6 +230,11 @@ def transmission_range(abc: FloatArray, d: float, x: FloatArray) -> tuple[float,
 
 
 # ---------------------------------------------------------------------- the pairs
+#: the most pairs function generation takes: the Freudenstein starts and their minimax polish (SLSQP with two
+#: constraints per pair) run before the search's clock is read (10000 pairs ran 12 to 24 s of a 3 s budget)
+MAX_PAIRS = 1000
+
+
 def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") -> tuple[FloatArray, FloatArray]:
     """The pairs as radians, checked: at least 3, finite, within [-360, 360] deg, inputs strictly monotone.
 
@@ -247,6 +252,11 @@ def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") ->
         raise InputError(f"{source}: {len(x)} inputs but {len(y)} outputs")
     if len(x) < 3:
         raise InputError(f"{source}: function generation needs at least 3 pairs, got {len(x)}")
+    if len(x) > MAX_PAIRS:
+        raise InputError(
+            f"{source}: {len(x)} pairs; function generation takes at most {MAX_PAIRS} (every polish step costs "
+            "in proportion, before the clock is read): give every k-th pair"
+        )
     for name, v in (("input", x), ("output", y)):
         bad = np.flatnonzero(~np.isfinite(v) | (np.abs(v) > 360.0))
         if len(bad):
