@@ -347,3 +347,22 @@ def test_check_of_a_sweep_with_more_samples_than_it_evaluates(tmp_path, capsys, 
     rep = json.loads(out)
     assert code == 0 and rep["change_points"] is None and rep["change_points_skipped"] == why
     assert rep["dynamics"]["skipped"] == why and rep["input_range"] == [[0.0, 360.0]]
+
+
+@pytest.mark.parametrize(
+    "command", [["analyze"], ["check"], ["modes", "--at", "30"], ["simulate", "--time", "0:1:0.5"]]
+)
+def test_an_output_naming_the_input_file_is_refused(tmp_path, capsys, monkeypatch, command):
+    # a review: `analyze victim.yaml -o victim.yaml` replaced the mechanism file with the command's output (exit 0)
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, GOOD, "victim.yaml")
+    (tmp_path / "link.yaml").symlink_to(tmp_path / "victim.yaml")
+    for out in ("victim.yaml", "./victim.yaml", str(tmp_path / "victim.yaml"), "link.yaml"):
+        code, stdout, err = run([command[0], "victim.yaml", *command[1:], "-o", out], capsys)
+        assert (code, stdout) == (
+            2,
+            "",
+        ) and err == f"linkagekit: error: -o {out}: is the input file victim.yaml; give another\n"
+    assert (tmp_path / "victim.yaml").read_text() == GOOD
+    if command[0] != "simulate":  # GOOD has no masses to simulate
+        assert run([command[0], "victim.yaml", *command[1:], "-o", "out.txt"], capsys)[0] == 0

@@ -2394,8 +2394,25 @@ def _run(argv: list[str]) -> int:
     if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
         *others, last = (c.name for c in _COMMANDS)
         raise InputError(f"give a command: {', '.join(others)} or {last} (see '{PROG} --help')")
+    _output_not_input(args)
     code: int = args.run(args)
     return code
+
+
+def _output_not_input(args: argparse.Namespace) -> None:
+    """Refuse ``-o`` naming the command's input file (the same file by any name): the output replaced it."""
+    import os
+
+    out = getattr(args, "output", None)
+    for source in (getattr(args, "file", None), getattr(args, "targets", None)):
+        if not out or not isinstance(source, str) or not source:
+            continue
+        try:
+            same = os.path.samefile(source, out) if os.path.exists(out) else False
+        except OSError:  # unreadable: compare the names
+            same = False
+        if same or os.path.realpath(source) == os.path.realpath(out):
+            raise InputError(f"-o {shorten_path(out, 80)}: is the input file {shorten_path(source, 80)}; give another")
 
 
 def main(argv: list[str] | None = None) -> int:
