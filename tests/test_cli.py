@@ -58,6 +58,11 @@ BAD_FILES = {
         "cannot form a triangle",
     ),
     "not a mapping": ("- just\n- a list\n", "mapping"),
+    # a review: one pair given twice (in either order) was taken, the last one silently winning
+    "a length given twice": (
+        GOOD.replace("coupler: [C, D, P]", "coupler: {joints: [C, D, P], lengths: {C-D: 5, D-C: 6}}"),
+        "links.coupler.lengths.D-C: the length of D-C is given twice (as 'C-D' too)",
+    ),
 }
 
 
