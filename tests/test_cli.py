@@ -385,3 +385,15 @@ def test_a_long_name_is_cut_in_the_pictures_title(tmp_path, capsys, monkeypatch,
     assert (code, err) == (0, "")
     (title,) = titles
     assert 80 <= len(title) < 130 and "ab ab" in title and "…" in title
+
+
+def test_pivots_and_lengths_take_a_leading_minus_as_a_value(tmp_path, capsys):
+    # a review: `--pivots -1:1,-1:1` gave "argument --pivots: expected one argument" (as --angles -90:90:1 once did)
+    from linkagekit.cli import _attach_negative_values, build_parser
+
+    argv = ["synthesize", "t.csv", "-o", "o.yaml", "--pivots", "-1:1,-1:1", "--lengths", "-1:5"]
+    args = build_parser().parse_args(_attach_negative_values(argv))
+    assert (args.pivots, args.lengths) == ("-1:1,-1:1", "-1:5")
+    src = write(tmp_path, "x,y\n0,0\n1,0\n1,1\n0,1\n0.5,1.5\n", "t.csv")
+    code, _, err = run(["synthesize", src, "--lengths", "-1:5", "-o", str(tmp_path / "o.yaml")], capsys)
+    assert (code, err) == (2, "linkagekit: error: --lengths: lengths are not negative\n")

@@ -65,7 +65,18 @@ NAN = "—"
 SEP = "  "
 """Between two table columns."""
 
-_RATE_OPTIONS = ("--angles", "--at", "--speed", "--acceleration", "--time", "--torque", "--motor")
+#: options whose value may start with a minus sign (`--at -30`, `--pivots -1:1,-1:1`): attached with `=` before parsing
+_RATE_OPTIONS = (
+    "--angles",
+    "--at",
+    "--speed",
+    "--acceleration",
+    "--time",
+    "--torque",
+    "--motor",
+    "--pivots",
+    "--lengths",
+)
 _NEGATIVE_VALUE = re.compile(r"-\.?\d")
 
 
