@@ -397,3 +397,18 @@ def test_pivots_and_lengths_take_a_leading_minus_as_a_value(tmp_path, capsys):
     src = write(tmp_path, "x,y\n0,0\n1,0\n1,1\n0,1\n0.5,1.5\n", "t.csv")
     code, _, err = run(["synthesize", src, "--lengths", "-1:5", "-o", str(tmp_path / "o.yaml")], capsys)
     assert (code, err) == (2, "linkagekit: error: --lengths: lengths are not negative\n")
+
+
+@pytest.mark.parametrize("command", [["synthesize", "t.csv"], ["plot", "m.yaml"], ["synthesize", "t.csv", "--plot"]])
+def test_an_output_that_is_a_directory_is_refused_before_any_work(tmp_path, capsys, monkeypatch, command):
+    # a review: `synthesize ... -o DIR.yaml` ran the whole search (60 s by default) before "cannot write"
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, "x,y\n0,0\n1,0\n1,1\n0,1\n0.5,1.5\n", "t.csv")
+    write(tmp_path, GOOD)
+    (tmp_path / "d.yaml").mkdir()
+    (tmp_path / "d.png").mkdir()
+    out = "d.png" if command[0] == "plot" or command[-1] == "--plot" else "d.yaml"
+    argv = [*command, out, "-o", "o.yaml"] if command[-1] == "--plot" else [*command, "-o", out]
+    option = "--plot" if command[-1] == "--plot" else "-o"
+    code, _, err = run(argv, capsys)
+    assert (code, err) == (2, f"linkagekit: error: {option} {out}: cannot write there: it is a directory\n")

@@ -1249,6 +1249,8 @@ def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
     ext = os.path.splitext(path)[1].lower()
     if ext not in allowed:
         raise InputError(f"{option} {shorten_path(path, 80)}: expected a file ending in {', '.join(allowed)}")
+    if os.path.isdir(path):  # `-o out.yaml/`: refused only after a whole search, its result lost
+        raise InputError(f"{option} {shorten_path(path, 80)}: cannot write there: it is a directory")
     folder = os.path.dirname(path) or "."
     if not os.path.isdir(folder):
         raise InputError(
