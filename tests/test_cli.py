@@ -412,3 +412,11 @@ def test_an_output_that_is_a_directory_is_refused_before_any_work(tmp_path, caps
     option = "--plot" if command[-1] == "--plot" else "-o"
     code, _, err = run(argv, capsys)
     assert (code, err) == (2, f"linkagekit: error: {option} {out}: cannot write there: it is a directory\n")
+
+
+@pytest.mark.parametrize(("command", "out"), [("plot", "p.png"), ("report", "r.html"), ("animate", "a.gif")])
+def test_a_sweep_too_long_for_a_picture_names_the_file(tmp_path, capsys, command, out):
+    # a review: "the file's sweep has 3600001 samples, ..." named no file (analyze's message did)
+    path = write(tmp_path, GOOD.replace("step: 10}", "step: 0.001}"), "fine.yaml")
+    code, _, err = run([command, path, "-o", str(tmp_path / out)], capsys)
+    assert code == 2 and err.startswith(f"linkagekit: error: {path}: the file's sweep has 360001 samples, more than")

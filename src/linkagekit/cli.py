@@ -439,7 +439,7 @@ def _solved(mech: Mechanism, args: argparse.Namespace) -> Result:
     """What a picture command draws: the simulated motion of ``--time``, else the sweep (``--angles`` or the file's)."""
 
     res = _motion(mech, args)
-    return _swept(mech, args, _sweep(mech, args.angles)) if res is None else res
+    return _swept(mech, args, _sweep(mech, args.angles, args.file)) if res is None else res
 
 
 def _swept(mech: Mechanism, args: argparse.Namespace, inputs: Any) -> Result:
@@ -1258,13 +1258,13 @@ def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
         )
 
 
-def _sweep(mech: Mechanism, angles: list[str] | None) -> dict[str, np.ndarray] | None:
-    """The ``--angles`` sweep of the picture commands, or the file's (refused when too long)."""
+def _sweep(mech: Mechanism, angles: list[str] | None, file: str) -> dict[str, np.ndarray] | None:
+    """The ``--angles`` sweep of the picture commands, or the file's (refused when too long, naming the ``file``)."""
     inputs = _inputs(mech, None, angles)
     if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
         raise InputError(
-            f"the file's sweep has {mech.drivers[0].sweep.count()} samples, more than the command line "
-            f"takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
+            f"{shorten_path(file, 80)}: the file's sweep has {mech.drivers[0].sweep.count()} samples, more than "
+            f"the command line takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
         )
     return inputs
 
@@ -1367,7 +1367,7 @@ def _animate(args: argparse.Namespace) -> int:
     wanted = _frames(args.frames) if args.frames is not None else None
     mech = lk.load(args.file)
     timed = _timed(args)
-    inputs = {"time": _range(args.time, "--time")} if timed else _sweep(mech, args.angles)
+    inputs = {"time": _range(args.time, "--time")} if timed else _sweep(mech, args.angles, args.file)
     values = inputs or {d.name: d.sweep.values() for d in mech.drivers}
     n = max(len(v) for v in values.values())
     frames = wanted or (n if n >= MIN_FRAMES else MIN_FRAMES)
