@@ -420,3 +420,15 @@ def test_a_sweep_too_long_for_a_picture_names_the_file(tmp_path, capsys, command
     path = write(tmp_path, GOOD.replace("step: 10}", "step: 0.001}"), "fine.yaml")
     code, _, err = run([command, path, "-o", str(tmp_path / out)], capsys)
     assert code == 2 and err.startswith(f"linkagekit: error: {path}: the file's sweep has 360001 samples, more than")
+
+
+@pytest.mark.parametrize("command", [["check"], ["analyze"], ["synthesize", "-o", "o.yaml"]])
+def test_an_empty_path_is_said_to_be_empty(tmp_path, capsys, monkeypatch, command):
+    # a review: `check ""` said ".: is a directory, not a mechanism file" (Path("") is the current directory)
+    import linkagekit as lk
+
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run([command[0], "", *command[1:]], capsys)
+    assert (code, err) == (2, "linkagekit: error: the file path is empty: give the file to read\n")
+    with pytest.raises(lk.InputError, match="^load: the file path is empty$"):
+        lk.load("")

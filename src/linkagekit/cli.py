@@ -2413,11 +2413,14 @@ def _run(argv: list[str]) -> int:
 
 
 def _output_not_input(args: argparse.Namespace) -> None:
-    """Refuse ``-o`` naming the command's input file (the same file by any name): the output replaced it."""
+    """Refuse an empty input path, and ``-o`` naming the command's input file (the same file by any name): the output
+    replaced it."""
     import os
 
     out = getattr(args, "output", None)
     for source in (getattr(args, "file", None), getattr(args, "targets", None)):
+        if source == "":  # Path("") is the current directory: ". is a directory" named no empty path
+            raise InputError("the file path is empty: give the file to read")
         if not out or not isinstance(source, str) or not source:
             continue
         try:
