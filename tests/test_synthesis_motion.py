@@ -805,3 +805,12 @@ def test_more_poses_than_the_motion_task_takes_are_one_line(tmp_path, capsys):
     why = "(the polish's constraints grow with the square of the poses): give every k-th pose"
     assert err == f"linkagekit: error: {src}: {n} poses; at most 1000 {why}"
     assert not (tmp_path / "o.yaml").exists()
+
+
+def test_dyads_of_poses_on_an_arc_do_not_stop_at_a_singular_step():
+    # found with the review's poses: 100 poses on an arc (the body turning 1.7 deg a pose) made one dyad's damped
+    # normal matrix singular to the last bit, and the whole run died with "internal error: LinAlgError"
+    t = np.arange(100) * 3 / 100
+    p = motion.motion_poses(np.round(np.cos(t), 6), np.round(np.sin(t), 6), np.radians(np.round(t * 170 / 3, 4)))
+    dy = motion.search_dyads(p)
+    assert len(dy.rms) > 0 and np.all(np.isfinite(dy.rms)) and float(np.min(dy.rms)) < 1e-3

@@ -283,6 +283,22 @@ def _dyad_residuals(p: MotionPoses, V: FloatArray, timed: bool) -> FloatArray:
     return out
 
 
+def _solve_damped(D: FloatArray, b: FloatArray) -> FloatArray:
+    """``D x = b`` for every dyad (K, 5, 5), (K, 5); a matrix singular to rounding gets a ridge of 1e-12 of its scale.
+
+    Levenberg-Marquardt's damping shrinks on every success: on a dyad whose residuals do not
+    depend on one direction (100 poses on a circular arc) ``D`` became singular to the last bit and
+    the whole search died with ``LinAlgError: Singular matrix``.
+    """
+    try:
+        x = np.linalg.solve(D, b[..., None])
+    except np.linalg.LinAlgError:
+        scale = np.trace(D, axis1=1, axis2=2)[:, None, None] / 5 + 1e-300
+        x = np.linalg.solve(D + 1e-12 * scale * np.eye(5), b[..., None])
+    out: FloatArray = np.asarray(x[..., 0], float)
+    return out
+
+
 def refine_dyads(p: MotionPoses, V: FloatArray, timed: bool = False, steps: int = LM_STEPS) -> FloatArray:
     """Levenberg-Marquardt on :func:`_dyad_residuals` for every dyad at once (central-difference Jacobian)."""
     lam = np.full(len(V), 1e-3)
@@ -295,7 +311,7 @@ def refine_dyads(p: MotionPoses, V: FloatArray, timed: bool = False, steps: int 
         JtJ = np.einsum("kmi,kmj->kij", J, J)
         g = np.einsum("kmi,km->ki", J, r0)
         D = JtJ + lam[:, None, None] * (np.eye(5) * np.diagonal(JtJ, axis1=1, axis2=2)[:, None, :] + 1e-12 * np.eye(5))
-        step = np.linalg.solve(D, -g[..., None])[..., 0]
+        step = _solve_damped(D, -g)
         Vn = V + step
         rn = _dyad_residuals(p, Vn, timed)
         fn = np.sum(rn * rn, axis=1)
