@@ -814,3 +814,24 @@ def test_dyads_of_poses_on_an_arc_do_not_stop_at_a_singular_step():
     p = motion.motion_poses(np.round(np.cos(t), 6), np.round(np.sin(t), 6), np.radians(np.round(t * 170 / 3, 4)))
     dy = motion.search_dyads(p)
     assert len(dy.rms) > 0 and np.all(np.isfinite(dy.rms)) and float(np.min(dy.rms)) < 1e-3
+
+
+def test_an_approximate_design_that_is_no_mechanism_is_skipped(monkeypatch):
+    # found with the review's poses: of 1000 poses on an arc one polished design had its ground pivots at one spot,
+    # and building it ended the run with "links.ground: joints 'A0' and 'B0' are at one spot on one link"
+    from linkagekit.synthesis import run as srun
+
+    calls = []
+
+    def no_mechanism(p, d, units):
+        calls.append(d)
+        raise lk.MechanismFileError("<motion synthesis>: links.ground: joints 'A0' and 'B0' are at one spot")
+
+    monkeypatch.setattr(srun, "_motion_fourbar", no_mechanism)
+    t = np.radians([0, 15, 30, 45, 60, 75, 90])
+    F = np.array([[0.0, 0, 0.3, 0.1, 0.4, 0.9, 0, 0.6, -0.2, 0.7]])
+    origin, u, _, _ = motion.frames(F, t[None], np.array([1.0]))
+    poses = np.stack([origin[0].real, origin[0].imag, np.degrees(np.angle(u[0]))], axis=1)
+    with pytest.raises(lk.LinkageError, match="no four-bar found that meets the poses"):
+        synthesize_motion(poses, seconds=3)
+    assert calls
