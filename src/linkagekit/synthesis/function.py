@@ -236,7 +236,7 @@ MAX_PAIRS = 1000
 
 
 def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") -> tuple[FloatArray, FloatArray]:
-    """The pairs as radians, checked: at least 3, finite, within [-360, 360] deg, inputs strictly monotone.
+    """The pairs as radians, checked: 3 to :data:`MAX_PAIRS`, finite, within [-360, 360] deg, inputs strictly monotone.
 
     The crank turns through the pairs in their order, so the inputs must increase (or decrease)
     along the list and span less than a turn; the outputs must not all be equal.

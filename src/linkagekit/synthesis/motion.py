@@ -165,7 +165,7 @@ def motion_poses(
     closed: bool = False,
     source: str = "poses",
 ) -> MotionPoses:
-    """Checked, normalised poses from coordinates and angles (radians); ``inputs`` in radians.
+    """Checked, normalised poses (3 to :data:`MAX_POSES`) from coordinates and angles (radians); ``inputs`` in radians.
 
     >>> p = motion_poses(np.array([0.0, 3, 4]), np.array([0.0, 0, 0]), np.radians([0, 10, 20]))
     >>> p.scale, round(p.center.real, 3)
