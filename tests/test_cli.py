@@ -58,6 +58,11 @@ BAD_FILES = {
         "cannot form a triangle",
     ),
     "not a mapping": ("- just\n- a list\n", "mapping"),
+    # a review: one pair given twice (in either order) was taken, the last one silently winning
+    "a length given twice": (
+        GOOD.replace("coupler: [C, D, P]", "coupler: {joints: [C, D, P], lengths: {C-D: 5, D-C: 6}}"),
+        "links.coupler.lengths.D-C: the length of D-C is given twice (as 'C-D' too)",
+    ),
 }
 
 
@@ -322,3 +327,108 @@ def test_atlas_without_an_action_names_the_choices(capsys):
     code, out, err = run(["atlas"], capsys)
     assert code == 2 and out == ""
     assert "{build,info}" in err and ": action" not in err and err.count("\n") == 1
+
+
+def test_check_of_a_sweep_with_more_samples_than_it_evaluates(tmp_path, capsys, monkeypatch):
+    # a review: a 600-byte file whose own sweep had 3.6e7 samples took GBs in check (the change points followed
+    # the branch through every sample) and died with "internal error: MemoryError"; over the command line's cap
+    # (100000 samples) check says the change points and the peak loads were not computed and reports the rest
+    import linkagekit.checks as checks
+
+    text = Path("examples/motor_fourbar.yaml").read_text().replace("step: 2}", "step: 0.001}")
+    path = write(tmp_path, text, "fine.yaml")
+
+    def refuse(*args, **kwargs):  # the sweep must not be evaluated at all
+        raise AssertionError("the file's sweep was evaluated")
+
+    monkeypatch.setattr(checks, "along_sweep", refuse)
+    monkeypatch.setattr(checks, "analyze", refuse)
+    code, out, err = run(["check", path], capsys)
+    assert (code, err) == (0, "")
+    why = "the file's sweep has 360001 samples, more than check evaluates (100000)"
+    assert f"Change points: not followed ({why})" in out
+    assert f"not computed: {why}" in out and "Transmission angle: min 61.4398" in out
+    code, out, _ = run(["check", path, "--format", "json"], capsys)
+    rep = json.loads(out)
+    assert code == 0 and rep["change_points"] is None and rep["change_points_skipped"] == why
+    assert rep["dynamics"]["skipped"] == why and rep["input_range"] == [[0.0, 360.0]]
+
+
+@pytest.mark.parametrize(
+    "command", [["analyze"], ["check"], ["modes", "--at", "30"], ["simulate", "--time", "0:1:0.5"]]
+)
+def test_an_output_naming_the_input_file_is_refused(tmp_path, capsys, monkeypatch, command):
+    # a review: `analyze victim.yaml -o victim.yaml` replaced the mechanism file with the command's output (exit 0)
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, GOOD, "victim.yaml")
+    (tmp_path / "link.yaml").symlink_to(tmp_path / "victim.yaml")
+    for out in ("victim.yaml", "./victim.yaml", str(tmp_path / "victim.yaml"), "link.yaml"):
+        code, stdout, err = run([command[0], "victim.yaml", *command[1:], "-o", out], capsys)
+        assert (code, stdout) == (
+            2,
+            "",
+        ) and err == f"linkagekit: error: -o {out}: is the input file victim.yaml; give another\n"
+    assert (tmp_path / "victim.yaml").read_text() == GOOD
+    if command[0] != "simulate":  # GOOD has no masses to simulate
+        assert run([command[0], "victim.yaml", *command[1:], "-o", "out.txt"], capsys)[0] == 0
+
+
+@pytest.mark.parametrize("extra", [[], ["--modes", "--at", "30"], ["-q", "angles"]])
+def test_a_long_name_is_cut_in_the_pictures_title(tmp_path, capsys, monkeypatch, extra):
+    # a review: `plot` of a file with a 100 kB name took 10 s (1 MB: 112 s) laying out the whole name as the title
+    from linkagekit.viz import draw
+
+    titles = []
+    monkeypatch.setattr(draw, "save_figure", lambda fig, *a, **k: titles.append(fig._suptitle.get_text()))
+    path = write(tmp_path, GOOD.replace("name: four-bar", "name: " + "ab " * 50_000))
+    code, _, err = run(["plot", path, "-o", str(tmp_path / "p.png"), *extra], capsys)
+    assert (code, err) == (0, "")
+    (title,) = titles
+    assert 80 <= len(title) < 130 and "ab ab" in title and "…" in title
+
+
+def test_pivots_and_lengths_take_a_leading_minus_as_a_value(tmp_path, capsys):
+    # a review: `--pivots -1:1,-1:1` gave "argument --pivots: expected one argument" (as --angles -90:90:1 once did)
+    from linkagekit.cli import _attach_negative_values, build_parser
+
+    argv = ["synthesize", "t.csv", "-o", "o.yaml", "--pivots", "-1:1,-1:1", "--lengths", "-1:5"]
+    args = build_parser().parse_args(_attach_negative_values(argv))
+    assert (args.pivots, args.lengths) == ("-1:1,-1:1", "-1:5")
+    src = write(tmp_path, "x,y\n0,0\n1,0\n1,1\n0,1\n0.5,1.5\n", "t.csv")
+    code, _, err = run(["synthesize", src, "--lengths", "-1:5", "-o", str(tmp_path / "o.yaml")], capsys)
+    assert (code, err) == (2, "linkagekit: error: --lengths: lengths are not negative\n")
+
+
+@pytest.mark.parametrize("command", [["synthesize", "t.csv"], ["plot", "m.yaml"], ["synthesize", "t.csv", "--plot"]])
+def test_an_output_that_is_a_directory_is_refused_before_any_work(tmp_path, capsys, monkeypatch, command):
+    # a review: `synthesize ... -o DIR.yaml` ran the whole search (60 s by default) before "cannot write"
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, "x,y\n0,0\n1,0\n1,1\n0,1\n0.5,1.5\n", "t.csv")
+    write(tmp_path, GOOD)
+    (tmp_path / "d.yaml").mkdir()
+    (tmp_path / "d.png").mkdir()
+    out = "d.png" if command[0] == "plot" or command[-1] == "--plot" else "d.yaml"
+    argv = [*command, out, "-o", "o.yaml"] if command[-1] == "--plot" else [*command, "-o", out]
+    option = "--plot" if command[-1] == "--plot" else "-o"
+    code, _, err = run(argv, capsys)
+    assert (code, err) == (2, f"linkagekit: error: {option} {out}: cannot write there: it is a directory\n")
+
+
+@pytest.mark.parametrize(("command", "out"), [("plot", "p.png"), ("report", "r.html"), ("animate", "a.gif")])
+def test_a_sweep_too_long_for_a_picture_names_the_file(tmp_path, capsys, command, out):
+    # a review: "the file's sweep has 3600001 samples, ..." named no file (analyze's message did)
+    path = write(tmp_path, GOOD.replace("step: 10}", "step: 0.001}"), "fine.yaml")
+    code, _, err = run([command, path, "-o", str(tmp_path / out)], capsys)
+    assert code == 2 and err.startswith(f"linkagekit: error: {path}: the file's sweep has 360001 samples, more than")
+
+
+@pytest.mark.parametrize("command", [["check"], ["analyze"], ["synthesize", "-o", "o.yaml"]])
+def test_an_empty_path_is_said_to_be_empty(tmp_path, capsys, monkeypatch, command):
+    # a review: `check ""` said ".: is a directory, not a mechanism file" (Path("") is the current directory)
+    import linkagekit as lk
+
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run([command[0], "", *command[1:]], capsys)
+    assert (code, err) == (2, "linkagekit: error: the file path is empty: give the file to read\n")
+    with pytest.raises(lk.InputError, match="^load: the file path is empty$"):
+        lk.load("")

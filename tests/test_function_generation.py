@@ -161,6 +161,11 @@ def check_plot(png: Path, pairs: np.ndarray) -> None:
         ("input,output\n1,2\n5,4\n3,6\n", "increase (or decrease)"),
         ("x,y\n1,2\n3,4\n5,6\n", "input,output"),
         ("input,output\n0,0\n10,0\n20,0\n30,0\n", "constant output needs no mechanism"),
+        # a review: 10000 pairs ran 12 to 24 s of --seconds 3 (the starts and their polish read no clock)
+        (
+            "input,output\n" + "".join(f"{60 + 0.05 * i:.2f},{90 + 0.01 * i:.2f}\n" for i in range(1001)),
+            "1001 pairs; function generation takes at most 1000",
+        ),
     ],
 )
 def test_bad_pairs_get_one_line_and_exit_2(rows, says, tmp_path, capsys):
@@ -235,3 +240,19 @@ def test_an_unmeetable_transmission_bound_is_said_infeasible_never_met_by_a_dege
         float(v) for v in re.search(r"crank (\S+), coupler (\S+), output (\S+), ground (\S+)", captured.out).groups()
     ]
     assert min(lengths) >= MIN_LINK_RATIO * max(lengths) and "NOT ON ONE BRANCH" in captured.out
+
+
+def test_the_pairs_readers_messages_name_the_file_as_given_and_its_line(tmp_path, capsys, monkeypatch):
+    # a review: "fn_lines.csv: row 3: ..." for a value on line 6 of sub/fn_lines.csv (rows counted without the
+    # comments, the directory dropped), unlike the path and motion readers ("t/x.csv: line 14: ...")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    out = str(tmp_path / "o.yaml")
+    for body, says in [
+        ("# comment\n# another\n\ninput,output\n60,90\n70,oops\n80,95\n", "line 6: '70,oops' is not two numbers"),
+        ("# c\ninput,output\n60,90\n\n70,80,1\n", "line 5: expected 2 values (input,output), got 3"),
+        ("# c\nin,out\n60,90\n", "expected the header 'input,output'"),
+    ]:
+        (tmp_path / "sub" / "fn.csv").write_text(body)
+        assert main(["synthesize", "sub/fn.csv", "--task", "function", "-o", out]) == 2
+        assert capsys.readouterr().err == f"linkagekit: error: sub/fn.csv: {says}\n"

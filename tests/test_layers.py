@@ -46,6 +46,7 @@ LAYERS = [
     {"synthesis.run"},
     {"synthesis.auto"},
     {"cli"},
+    {"__main__"},
 ]
 RANK = {m: i for i, layer in enumerate(LAYERS) for m in layer}
 
@@ -154,3 +155,14 @@ def test_subpackage_imports_are_resolved():
 
 def test_the_command_line_module_imports_nothing_heavy():
     assert loaded_after("import linkagekit.cli") == set()
+
+
+def test_python_m_linkagekit_runs_the_command_line():
+    # a review: `python -m linkagekit` said "No module named linkagekit.__main__"; importing the package stays light
+    import os
+
+    env = {**os.environ, "PYTHONPATH": str(SRC.parent)}
+    done = subprocess.run([sys.executable, "-m", "linkagekit", "--version"], capture_output=True, text=True, env=env)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "linkagekit 0.1.0\n", "")
+    done = subprocess.run([sys.executable, "-m", "linkagekit", "check", ""], capture_output=True, text=True, env=env)
+    assert (done.returncode, done.stderr) == (2, "linkagekit: error: the file path is empty: give the file to read\n")

@@ -498,3 +498,20 @@ def test_a_sweep_far_from_zero_keeps_its_stop(start, stop, step, n):
     values = Sweep(start, stop, step).values()
     assert len(values) == n and values[-1] == stop
     assert _range(f"{start!r}:{stop!r}:{step!r}", "--angles").tolist() == values.tolist()
+
+
+@pytest.mark.parametrize(
+    "value",
+    [[np.int64(4), 1], np.array([4, 1]), np.array([4, 1], dtype=np.int8), [np.float32(4), np.uint16(1)], [4.0, 1.0]],
+    ids=["int64", "int array", "int8 array", "float32 and uint16", "float"],
+)
+def test_from_dict_takes_numpy_numbers_of_any_width(value) -> None:
+    # a review: "joints.B[0]: expected a number, got np.int64(4)" (np.array([4, 1]) refused, [4., 1.] taken)
+    d = fourbar_dict()
+    d["joints"]["B"] = value
+    m = Mechanism.from_dict(d)
+    assert m.to_dict()["joints"]["B"] == [4.0, 1.0] and type(m.to_dict()["joints"]["B"][0]) is float
+    json.dumps(m.to_dict())
+    d["joints"]["B"] = [np.bool_(True), 1]  # a truth value is still not a number
+    with pytest.raises(MechanismFileError, match=r"joints.B\[0\]: expected a number, got np.True_"):
+        Mechanism.from_dict(d)

@@ -765,3 +765,73 @@ def test_each_angle_weights_answer_is_no_worse_than_the_others_judged_at_it():
     E = np.array([[max(pos, w * ang) for pos, ang in errs] for w in weights])  # E[judged at weight i, answer j]
     assert np.all(np.diag(E) <= 1.05 * np.min(E, axis=1)), E
     assert E[0, 0] < 0.0035 and E[2, 2] < 0.006, E  # 0.0020-0.0023 and 0.0028-0.0037 here; 0.0041 and 0.0597 before
+
+
+def test_repeated_poses_are_found_in_memory_linear_in_the_poses():
+    # a review: reading 30000 poses built every pair's gap (n x n complex, 13 GiB) and died with MemoryError;
+    # the first repeat (by the earlier pose, then the later) is the one the n x n search named
+    import tracemalloc
+
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        n = int(rng.integers(3, 40))
+        d = rng.integers(0, 3, n) + 1j * rng.integers(0, 2, n) + rng.choice([0.0, 3e-10, 2e-9], n)
+        a = np.radians(rng.integers(0, 3, n) * 120.0) + rng.choice([0.0, 4e-10, 2 * np.pi], n)
+        gap = np.abs(d[:, None] - d[None]) + np.abs(np.angle(np.exp(1j * (a[:, None] - a[None]))))
+        i, j = np.nonzero(np.triu(gap <= motion.SAME_POSE, 1))
+        assert motion.first_repeat(d, a) == ((int(i[0]), int(j[0])) if len(i) else None), trial
+    n = 6000  # every pair: 6000^2 complex = 576 MB
+    t = np.linspace(0.0, 3.0, n)
+    d = (np.cos(t) + 1j * np.sin(t)) / 3
+    tracemalloc.start()
+    try:
+        got = motion.first_repeat(d, t / 2)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert got is None and peak < 20e6
+    assert motion.first_repeat(np.r_[d, d[16]], np.r_[t, t[16]] / 2) == (16, n)
+
+
+def test_more_poses_than_the_motion_task_takes_are_one_line(tmp_path, capsys):
+    # a review: 10000 poses ran 36 s past --seconds 3 (4 GB), 30000 died with MemoryError: the polish has a
+    # crank angle per pose and constraints at each (its Jacobian grows with the square of the poses)
+    n = motion.MAX_POSES + 1
+    t = np.linspace(0.0, 3.0, n)
+    src = tmp_path / "many.csv"
+    src.write_text("x,y,angle\n" + "".join(f"{np.cos(a):.9f},{np.sin(a):.9f},{a * 50:.6f}\n" for a in t))
+    assert main(["synthesize", str(src), "--task", "motion", "-o", str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    why = "(the polish's constraints grow with the square of the poses): give every k-th pose"
+    assert err == f"linkagekit: error: {src}: {n} poses; at most 1000 {why}"
+    assert not (tmp_path / "o.yaml").exists()
+
+
+def test_dyads_of_poses_on_an_arc_do_not_stop_at_a_singular_step():
+    # found with the review's poses: 100 poses on an arc (the body turning 1.7 deg a pose) made one dyad's damped
+    # normal matrix singular to the last bit, and the whole run died with "internal error: LinAlgError"
+    t = np.arange(100) * 3 / 100
+    p = motion.motion_poses(np.round(np.cos(t), 6), np.round(np.sin(t), 6), np.radians(np.round(t * 170 / 3, 4)))
+    dy = motion.search_dyads(p)
+    assert len(dy.rms) > 0 and np.all(np.isfinite(dy.rms)) and float(np.min(dy.rms)) < 1e-3
+
+
+def test_an_approximate_design_that_is_no_mechanism_is_skipped(monkeypatch):
+    # found with the review's poses: of 1000 poses on an arc one polished design had its ground pivots at one spot,
+    # and building it ended the run with "links.ground: joints 'A0' and 'B0' are at one spot on one link"
+    from linkagekit.synthesis import run as srun
+
+    calls = []
+
+    def no_mechanism(p, d, units):
+        calls.append(d)
+        raise lk.MechanismFileError("<motion synthesis>: links.ground: joints 'A0' and 'B0' are at one spot")
+
+    monkeypatch.setattr(srun, "_motion_fourbar", no_mechanism)
+    t = np.radians([0, 15, 30, 45, 60, 75, 90])
+    F = np.array([[0.0, 0, 0.3, 0.1, 0.4, 0.9, 0, 0.6, -0.2, 0.7]])
+    origin, u, _, _ = motion.frames(F, t[None], np.array([1.0]))
+    poses = np.stack([origin[0].real, origin[0].imag, np.degrees(np.angle(u[0]))], axis=1)
+    with pytest.raises(lk.LinkageError, match="no four-bar found that meets the poses"):
+        synthesize_motion(poses, seconds=3)
+    assert calls

@@ -1226,8 +1226,19 @@ def transmission_angle(
 
 
 # ---------------------------------------------------------------------- kinetostatics
-#: the most samples of a file's sweep that ``check`` analyses for its peak loads
-MAX_DYNAMICS_SAMPLES = 100_000
+#: the most samples of a file's sweep that ``check`` evaluates (its peak loads and the change points crossed along
+#: it): the picture commands' and ``analyze``'s cap on the command line; a longer sweep is reported as not computed
+MAX_SWEEP_SAMPLES = 100_000
+#: the cap on the peak loads' sweep (:data:`MAX_SWEEP_SAMPLES`)
+MAX_DYNAMICS_SAMPLES = MAX_SWEEP_SAMPLES
+
+
+def _too_many_samples(mech: Mechanism) -> str | None:
+    """Why ``check`` does not evaluate the file's sweep (too many samples), or None."""
+    n = mech.drivers[0].sweep.count()
+    if n > MAX_SWEEP_SAMPLES:
+        return f"the file's sweep has {n} samples, more than check evaluates ({MAX_SWEEP_SAMPLES})"
+    return None
 
 
 def peak_loads(mech: Mechanism, params: Params | None = None) -> dict[str, Any]:
@@ -1245,8 +1256,9 @@ def peak_loads(mech: Mechanism, params: Params | None = None) -> dict[str, Any]:
         "speeds": {d.name: float(d.speed) for d in mech.drivers},
         "accelerations": {d.name: float(d.acceleration) for d in mech.drivers},
     }
-    if n > MAX_DYNAMICS_SAMPLES:
-        out["skipped"] = f"the file's sweep has {n} samples, more than check analyses ({MAX_DYNAMICS_SAMPLES})"
+    skipped = _too_many_samples(mech)
+    if skipped:
+        out["skipped"] = skipped
         return out
     res = analyze(mech)
     f = res.forces
@@ -1400,7 +1412,10 @@ class CheckReport:
         continuously (``analyze --branch continuous``), from the pose's input up and down:
         each ``{"joint", "driver", "input"}`` (the sign step's joint, the driver the sweep
         follows, its input there in the file's unit, to about 1e-6 degree); None when the
-        sweep is too long to follow (more than :data:`linkagekit.branch.MAX_PATH` steps).
+        sweep has more than :data:`MAX_SWEEP_SAMPLES` samples or is too long to follow (more than
+        :data:`linkagekit.branch.MAX_PATH` steps).
+    change_points_skipped : str or None
+        Why ``change_points`` is None (in :meth:`to_dict` only then).
     warnings : tuple of dict
         ``kind`` ``"transmission-angle"`` (a loop's ``min`` below ``limit``,
         :data:`MIN_TRANSMISSION`, or its ``max`` above 180 - ``limit``) or ``"toggle"`` (a
@@ -1431,6 +1446,7 @@ class CheckReport:
     assembly_gaps: dict[str, list[list[float]]] = field(default_factory=dict)
     warnings: tuple[dict[str, Any], ...] = ()
     change_points: tuple[dict[str, Any], ...] | None = ()
+    change_points_skipped: str | None = None
 
     @property
     def input_range(self) -> list[list[float]]:
@@ -1469,6 +1485,8 @@ class CheckReport:
         out["sliders"] = list(self.sliders)
         out["assembly_gaps"] = self.assembly_gaps
         out["change_points"] = None if self.change_points is None else list(self.change_points)
+        if self.change_points_skipped:
+            out["change_points_skipped"] = self.change_points_skipped
         out["warnings"] = list(self.warnings)
         finite: dict[str, Any] = _finite(out)
         return finite
@@ -1578,6 +1596,7 @@ def check(mech: Mechanism) -> CheckReport:
     }
     dynamics = peak_loads(mech, params) if mech.has_dynamics else None
     flat = pose_at_change_point(params)
+    crossed = change_points_crossed(mech, params)
     return CheckReport(
         name=mech.name,
         dof=plan.dof,
@@ -1600,7 +1619,8 @@ def check(mech: Mechanism) -> CheckReport:
         sliders=tuple(sliders),
         assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
         warnings=tuple(([{"kind": POSE_WARNING, "joints": flat}] if flat else []) + _warnings(entries, dynamics)),
-        change_points=change_points_crossed(mech, params),
+        change_points=crossed,
+        change_points_skipped=None if crossed is not None else change_points_skipped(mech),
         **_first_loop(entries),
     )
 
@@ -1635,9 +1655,12 @@ def pose_at_change_point(params: Params) -> list[str]:
 def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, Any], ...] | None:
     """The change points the continuous branch crosses along the file's sweep (see :class:`CheckReport`).
 
-    None when the sweep is too long to follow: ``check`` still reports everything else about
-    a file that ``analyze`` takes.
+    None when the sweep has more than :data:`MAX_SWEEP_SAMPLES` samples or is too long to follow
+    (:func:`change_points_skipped` says which): ``check`` still reports everything else about a file that
+    ``analyze`` takes.
     """
+    if _too_many_samples(mech):  # the path runs through every sample: memory grows with them
+        return None
     q = sweep_inputs(mech, params)
     try:
         br = along_sweep(params, q, tuple(d.type.cyclic for d in mech.drivers))
@@ -1651,6 +1674,11 @@ def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, An
         {"joint": names[int(i)], "driver": drv.name, "input": round(float(x) / scale, 9)}
         for i, x in zip(steps, where, strict=True)
     )
+
+
+def change_points_skipped(mech: Mechanism) -> str:
+    """Why :func:`change_points_crossed` gave None: the sweep's samples, or its span."""
+    return _too_many_samples(mech) or f"the sweep spans more than {MAX_PATH} steps of 1 degree"
 
 
 def _sweep_drivers(
@@ -1763,16 +1791,17 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
         *(line for k, lp in enumerate(loops) for line in _loop_lines(k, len(loops), lp, fmt)),
         *(line for sl in rep.get("sliders") or [] for line in _slider_lines_text(sl, fmt)),
         *_dynamics_lines(rep.get("dynamics"), fmt),
-        *_change_point_lines(rep.get("change_points", []), fmt),
+        *_change_point_lines(rep.get("change_points", []), fmt, rep.get("change_points_skipped")),
         *(_warning_line(w, fmt) for w in rep.get("warnings") or [] if w.get("kind") != POSE_WARNING),
     ]
     return "\n".join(lines) + "\n"
 
 
-def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text) -> list[str]:
-    """The change points the continuous branch crosses along the sweep (none: no line)."""
+def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text, skipped: str | None = None) -> list[str]:
+    """The change points the continuous branch crosses along the sweep (none: no line; None: why not followed)."""
     if cps is None:
-        return [f"Change points: not followed (the sweep spans more than {MAX_PATH} steps of 1 degree)"]
+        why = skipped or f"the sweep spans more than {MAX_PATH} steps of 1 degree"
+        return [f"Change points: not followed ({why})"]
     if not cps:
         return []
     at = ", ".join(f"{cp['joint']} at {fmt.inp(cp['driver'], cp['input'])}" for cp in cps[:MAX_TEXT_DEAD_POINTS])

@@ -65,7 +65,18 @@ NAN = "—"
 SEP = "  "
 """Between two table columns."""
 
-_RATE_OPTIONS = ("--angles", "--at", "--speed", "--acceleration", "--time", "--torque", "--motor")
+#: options whose value may start with a minus sign (`--at -30`, `--pivots -1:1,-1:1`): attached with `=` before parsing
+_RATE_OPTIONS = (
+    "--angles",
+    "--at",
+    "--speed",
+    "--acceleration",
+    "--time",
+    "--torque",
+    "--motor",
+    "--pivots",
+    "--lengths",
+)
 _NEGATIVE_VALUE = re.compile(r"-\.?\d")
 
 
@@ -428,7 +439,7 @@ def _solved(mech: Mechanism, args: argparse.Namespace) -> Result:
     """What a picture command draws: the simulated motion of ``--time``, else the sweep (``--angles`` or the file's)."""
 
     res = _motion(mech, args)
-    return _swept(mech, args, _sweep(mech, args.angles)) if res is None else res
+    return _swept(mech, args, _sweep(mech, args.angles, args.file)) if res is None else res
 
 
 def _swept(mech: Mechanism, args: argparse.Namespace, inputs: Any) -> Result:
@@ -1238,6 +1249,8 @@ def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
     ext = os.path.splitext(path)[1].lower()
     if ext not in allowed:
         raise InputError(f"{option} {shorten_path(path, 80)}: expected a file ending in {', '.join(allowed)}")
+    if os.path.isdir(path):  # `-o out.yaml/`: refused only after a whole search, its result lost
+        raise InputError(f"{option} {shorten_path(path, 80)}: cannot write there: it is a directory")
     folder = os.path.dirname(path) or "."
     if not os.path.isdir(folder):
         raise InputError(
@@ -1245,13 +1258,13 @@ def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
         )
 
 
-def _sweep(mech: Mechanism, angles: list[str] | None) -> dict[str, np.ndarray] | None:
-    """The ``--angles`` sweep of the picture commands, or the file's (refused when too long)."""
+def _sweep(mech: Mechanism, angles: list[str] | None, file: str) -> dict[str, np.ndarray] | None:
+    """The ``--angles`` sweep of the picture commands, or the file's (refused when too long, naming the ``file``)."""
     inputs = _inputs(mech, None, angles)
     if inputs is None and mech.drivers[0].sweep.count() > MAX_SAMPLES:
         raise InputError(
-            f"the file's sweep has {mech.drivers[0].sweep.count()} samples, more than the command line "
-            f"takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
+            f"{shorten_path(file, 80)}: the file's sweep has {mech.drivers[0].sweep.count()} samples, more than "
+            f"the command line takes ({MAX_SAMPLES}); give --angles with a coarser STEP"
         )
     return inputs
 
@@ -1354,7 +1367,7 @@ def _animate(args: argparse.Namespace) -> int:
     wanted = _frames(args.frames) if args.frames is not None else None
     mech = lk.load(args.file)
     timed = _timed(args)
-    inputs = {"time": _range(args.time, "--time")} if timed else _sweep(mech, args.angles)
+    inputs = {"time": _range(args.time, "--time")} if timed else _sweep(mech, args.angles, args.file)
     values = inputs or {d.name: d.sweep.values() for d in mech.drivers}
     n = max(len(v) for v in values.values())
     frames = wanted or (n if n >= MIN_FRAMES else MIN_FRAMES)
@@ -1470,6 +1483,7 @@ def _synthesize(args: argparse.Namespace) -> int:
         return _synthesize_function(args)
     search = _search_options(args)
     targets = read_targets(args.targets, units=args.units, points=search.pop("points"), smooth=not args.no_smooth)
+    _unsmoothed_count(args, len(targets), targets.timed)
     targets = dataclasses.replace(targets, source=_synthesize_source(args.targets))
     if args.topology == "auto":
         return _synthesize_auto(args, targets, search, t0)
@@ -1872,6 +1886,18 @@ def _synthesize_resume(args: argparse.Namespace) -> str:
     if args.checkpoint:
         return f"the search is saved in {shorten(args.checkpoint, 80)}: the same command resumes it"
     return "nothing was saved (with --checkpoint FILE the same command resumes a run)"
+
+
+def _unsmoothed_count(args: argparse.Namespace, count: int, timed: bool) -> None:
+    """Refuse more untimed targets than ``--no-smooth`` takes as they are (the search's clock is read only after
+    the atlas has placed, refitted and checked its answers on every one of them)."""
+    from .synthesis.targets import MAX_UNSMOOTHED
+
+    if args.no_smooth and not timed and count > MAX_UNSMOOTHED:
+        raise InputError(
+            f"{shorten_path(args.targets, 80)}: {count} points; --no-smooth takes at most {MAX_UNSMOOTHED} as they "
+            "are (every evaluation costs in proportion): leave it out to smooth them, or give fewer points"
+        )
 
 
 def _synthesize_source(path: str) -> str:
@@ -2381,8 +2407,28 @@ def _run(argv: list[str]) -> int:
     if getattr(args, "run", None) is None:  # options but no command, e.g. `linkagekit -h` is handled above
         *others, last = (c.name for c in _COMMANDS)
         raise InputError(f"give a command: {', '.join(others)} or {last} (see '{PROG} --help')")
+    _output_not_input(args)
     code: int = args.run(args)
     return code
+
+
+def _output_not_input(args: argparse.Namespace) -> None:
+    """Refuse an empty input path, and ``-o`` naming the command's input file (the same file by any name): the output
+    replaced it."""
+    import os
+
+    out = getattr(args, "output", None)
+    for source in (getattr(args, "file", None), getattr(args, "targets", None)):
+        if source == "":  # Path("") is the current directory: ". is a directory" named no empty path
+            raise InputError("the file path is empty: give the file to read")
+        if not out or not isinstance(source, str) or not source:
+            continue
+        try:
+            same = os.path.samefile(source, out) if os.path.exists(out) else False
+        except OSError:  # unreadable: compare the names
+            same = False
+        if same or os.path.realpath(source) == os.path.realpath(out):
+            raise InputError(f"-o {shorten_path(out, 80)}: is the input file {shorten_path(source, 80)}; give another")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -266,6 +266,8 @@ def _path(path: Any, what: str) -> Path:
     """A file path argument, or one clear error."""
     if not isinstance(path, str | os.PathLike):
         raise InputError(f"{what}: expected a file path, got {type(path).__name__}")
+    if not os.fsdecode(path):  # Path("") is Path("."): "check ''" answered ". is a directory"
+        raise InputError(f"{what}: the file path is empty")
     if "\x00" in os.fsdecode(path):
         raise InputError(f"{what}: a file path with a NUL byte: {shorten(repr(os.fsdecode(path)))}")
     return Path(path)

@@ -1315,10 +1315,17 @@ def _shape(lname: str, ls: LinkSpec, pose: dict[str, complex], fail: Fail, scale
     """
     js = tuple(ls.joints)
     given: dict[frozenset[str], float] = {}
+    keys: dict[frozenset[str], str] = {}
     for k, v in (ls.lengths or {}).items():
         pair = parse_pair(k, js)
         if pair is None:
             raise fail(f"links.{lname}.lengths.{k}", f"expected 'X-Y' with X and Y two joints of link '{lname}'")
+        if frozenset(pair) in keys:  # {C-D: 5, D-C: 6}: the last one silently won
+            raise fail(
+                f"links.{lname}.lengths.{k}",
+                f"the length of {pair[0]}-{pair[1]} is given twice (as {keys[frozenset(pair)]!r} too)",
+            )
+        keys[frozenset(pair)] = k
         if v <= 0:
             raise fail(f"links.{lname}.lengths.{k}", "a length must be positive")
         if v <= LENGTH_RTOL * scale:

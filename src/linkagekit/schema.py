@@ -8,6 +8,7 @@ other consistently is checked when the :class:`~linkagekit.model.Mechanism` is b
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
@@ -22,8 +23,9 @@ MAX_LINKS = 200
 
 
 def _number(value: Any) -> float:
-    # YAML gives bool for `yes`/`no` and str for quoted text: neither is a number here.
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    # YAML gives bool for `yes`/`no` and str for quoted text: neither is a number here. A real number of any
+    # type (numpy's int64, float32, ... register as numbers.Real) is one: np.int64(4) was refused as "not a number"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ValueError(f"expected a number, got {shorten(repr(value))}")
     try:
         x = float(value)
@@ -69,9 +71,9 @@ def _description(value: Any) -> str:
 
 
 def _index(value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ValueError(f"expected a whole number (an index), got {shorten(repr(value))}")
-    return value
+    return int(value)
 
 
 Number = Annotated[float, BeforeValidator(_number)]

@@ -30,9 +30,9 @@ Three pairs are met exactly:
 
 from __future__ import annotations
 
-import csv
 import itertools
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,10 +42,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..checks import FourBar, grashof
-from ..errors import InputError
+from ..errors import InputError, shorten
 from ..geometry import BoolArray, FloatArray, solve_each
 from .base import Objective, Score, digest
-from .targets import _read_text
+from .targets import _csv_cells, _read_text
 
 if TYPE_CHECKING:
     from ..model import Mechanism
@@ -230,8 +230,13 @@ def transmission_range(abc: FloatArray, d: float, x: FloatArray) -> tuple[float,
 
 
 # ---------------------------------------------------------------------- the pairs
+#: the most pairs function generation takes: the Freudenstein starts and their minimax polish (SLSQP with two
+#: constraints per pair) run before the search's clock is read (10000 pairs ran 12 to 24 s of a 3 s budget)
+MAX_PAIRS = 1000
+
+
 def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") -> tuple[FloatArray, FloatArray]:
-    """The pairs as radians, checked: at least 3, finite, within [-360, 360] deg, inputs strictly monotone.
+    """The pairs as radians, checked: 3 to :data:`MAX_PAIRS`, finite, within [-360, 360] deg, inputs strictly monotone.
 
     The crank turns through the pairs in their order, so the inputs must increase (or decrease)
     along the list and span less than a turn; the outputs must not all be equal.
@@ -247,6 +252,11 @@ def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") ->
         raise InputError(f"{source}: {len(x)} inputs but {len(y)} outputs")
     if len(x) < 3:
         raise InputError(f"{source}: function generation needs at least 3 pairs, got {len(x)}")
+    if len(x) > MAX_PAIRS:
+        raise InputError(
+            f"{source}: {len(x)} pairs; function generation takes at most {MAX_PAIRS} (every polish step costs "
+            "in proportion, before the clock is read): give every k-th pair"
+        )
     for name, v in (("input", x), ("output", y)):
         bad = np.flatnonzero(~np.isfinite(v) | (np.abs(v) > 360.0))
         if len(bad):
@@ -267,23 +277,25 @@ def check_pairs(inputs: ArrayLike, outputs: ArrayLike, source: str = "pairs") ->
 
 
 def read_pairs(path: str | Path) -> tuple[FloatArray, FloatArray]:
-    """Inputs and outputs (degrees) of a CSV file with the header ``input,output``, checked by :func:`check_pairs`."""
-    name = Path(path).name
-    rows: list[list[str]] = []
-    for line in _read_text(Path(path), name).splitlines():
-        if line.strip() and not line.strip().startswith("#"):
-            rows.append([c.strip().lower() for c in next(csv.reader([line]))])
-    if not rows or sorted(rows[0]) != ["input", "output"]:
+    """Inputs and outputs (degrees) of a CSV file with the header ``input,output``, checked by :func:`check_pairs`.
+
+    A message names the file as given and the line of the file (``sub/f.csv: line 6: ...``), as the
+    path and motion readers' do.
+    """
+    name = os.fspath(path)
+    rows = list(_csv_cells(_read_text(Path(path), name), name))
+    header = [c.lower() for c in rows[0][1]] if rows else []
+    if sorted(header) != ["input", "output"]:
         raise InputError(f"{name}: expected the header 'input,output'")
-    cols = [rows[0].index("input"), rows[0].index("output")]
+    cols = [header.index("input"), header.index("output")]
     values = []
-    for number, row in enumerate(rows[1:], start=2):
+    for number, row in rows[1:]:
+        if len(row) != 2:
+            raise InputError(f"{name}: line {number}: expected 2 values (input,output), got {len(row)}")
         try:
-            values.append([float(row[k]) for k in cols] if len(row) == 2 else [])
+            values.append([float(row[k]) for k in cols])
         except ValueError:
-            raise InputError(f"{name}: row {number}: {','.join(row)[:60]!r} is not two numbers") from None
-        if not values[-1]:
-            raise InputError(f"{name}: row {number}: expected 2 values (input,output), got {len(row)}")
+            raise InputError(f"{name}: line {number}: {shorten(','.join(row), 60)!r} is not two numbers") from None
     table = np.array(values, float).reshape(-1, 2)
     check_pairs(table[:, 0], table[:, 1], name)
     return table[:, 0], table[:, 1]

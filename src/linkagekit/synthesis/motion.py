@@ -125,6 +125,38 @@ def _check_timing(th: FloatArray, source: str) -> None:
         raise InputError(f"{source}: the inputs span {span:g} deg; the crank meets the poses within one turn")
 
 
+#: the most poses a motion task takes: without timing the minimax polish (:func:`minimax_polish`) has a crank
+#: angle per pose and constraints at each, so its Jacobian has (poses)^2 entries times a few (10000 poses ran 36 s
+#: past a 3 s budget and took 4 GB, 30000 ran out of memory)
+MAX_POSES = 1000
+
+
+def first_repeat(d: ComplexArray, angle: FloatArray) -> tuple[int, int] | None:
+    """The first pair ``i < j`` (by ``i``, then ``j``) of poses within :data:`SAME_POSE`, or None.
+
+    Two poses are the same when ``|d_i - d_j| + |angle_i - angle_j|`` (the angle's difference on
+    the turn) is at most :data:`SAME_POSE`.  Then their points ``(d, cos angle, sin angle)`` are
+    as near (the chord is shorter than the arc), so a k-d tree's pairs that near are the only
+    candidates: memory linear in the poses (every pair, n x n, took 13 GiB for 30000 poses).
+
+    >>> first_repeat(np.array([0, 1, 1, 1 + 1e-12]), np.radians([0, 10, 20, 10]))
+    (1, 3)
+    >>> first_repeat(np.array([0j, 0j]), np.array([0.0, 2 * np.pi])), first_repeat(np.array([0j, 1]), np.zeros(2))
+    ((0, 1), None)
+    """
+    from scipy.spatial import cKDTree
+
+    pts = np.column_stack([d.real, d.imag, np.cos(angle), np.sin(angle)])
+    ij = cKDTree(pts).query_pairs(2 * SAME_POSE, output_type="ndarray")  # twice: rounding of cos, sin
+    i, j = np.sort(ij, axis=1).T if len(ij) else (np.zeros(0, int), np.zeros(0, int))
+    gap = np.abs(d[i] - d[j]) + np.abs(np.angle(cis(angle[i] - angle[j])))
+    same = np.flatnonzero(gap <= SAME_POSE)
+    if not len(same):
+        return None
+    k = same[np.lexsort((j[same], i[same]))[0]]
+    return int(i[k]), int(j[k])
+
+
 def motion_poses(
     x: FloatArray,
     y: FloatArray,
@@ -133,7 +165,7 @@ def motion_poses(
     closed: bool = False,
     source: str = "poses",
 ) -> MotionPoses:
-    """Checked, normalised poses from coordinates and angles (radians); ``inputs`` in radians.
+    """Checked, normalised poses (3 to :data:`MAX_POSES`) from coordinates and angles (radians); ``inputs`` in radians.
 
     >>> p = motion_poses(np.array([0.0, 3, 4]), np.array([0.0, 0, 0]), np.radians([0, 10, 20]))
     >>> p.scale, round(p.center.real, 3)
@@ -144,6 +176,11 @@ def motion_poses(
         raise InputError(f"{source}: x, y and angle need one value per pose")
     if len(x) < 3:
         raise InputError(f"{source}: {len(x)} poses; at least 3 are needed")
+    if len(x) > MAX_POSES:
+        raise InputError(
+            f"{source}: {len(x)} poses; at most {MAX_POSES} (the polish's constraints grow with the square of "
+            "the poses): give every k-th pose"
+        )
     if not np.all(np.isfinite(np.concatenate([x, y, angle]))):
         raise InputError(f"{source}: every x, y and angle must be a finite number")
     z = x + 1j * y
@@ -153,10 +190,9 @@ def motion_poses(
         raise InputError(f"{source}: the pose points span no distance")
     center = (lo + hi) / 2
     d = (z - center) / scale
-    gap = np.abs(d[:, None] - d[None]) + np.abs(np.angle(cis(angle[:, None] - angle[None])))
-    i, j = np.nonzero(np.triu(gap <= SAME_POSE, 1))
-    if len(i):
-        raise InputError(f"{source}: pose {j[0] + 1} repeats pose {i[0] + 1}")
+    rep = first_repeat(d, angle)
+    if rep is not None:
+        raise InputError(f"{source}: pose {rep[1] + 1} repeats pose {rep[0] + 1}")
     th = None
     if inputs is not None:
         th = np.asarray(inputs, float).reshape(-1)
@@ -247,6 +283,22 @@ def _dyad_residuals(p: MotionPoses, V: FloatArray, timed: bool) -> FloatArray:
     return out
 
 
+def _solve_damped(D: FloatArray, b: FloatArray) -> FloatArray:
+    """``D x = b`` for every dyad (K, 5, 5), (K, 5); a matrix singular to rounding gets a ridge of 1e-12 of its scale.
+
+    Levenberg-Marquardt's damping shrinks on every success: on a dyad whose residuals do not
+    depend on one direction (100 poses on a circular arc) ``D`` became singular to the last bit and
+    the whole search died with ``LinAlgError: Singular matrix``.
+    """
+    try:
+        x = np.linalg.solve(D, b[..., None])
+    except np.linalg.LinAlgError:
+        scale = np.trace(D, axis1=1, axis2=2)[:, None, None] / 5 + 1e-300
+        x = np.linalg.solve(D + 1e-12 * scale * np.eye(5), b[..., None])
+    out: FloatArray = np.asarray(x[..., 0], float)
+    return out
+
+
 def refine_dyads(p: MotionPoses, V: FloatArray, timed: bool = False, steps: int = LM_STEPS) -> FloatArray:
     """Levenberg-Marquardt on :func:`_dyad_residuals` for every dyad at once (central-difference Jacobian)."""
     lam = np.full(len(V), 1e-3)
@@ -259,7 +311,7 @@ def refine_dyads(p: MotionPoses, V: FloatArray, timed: bool = False, steps: int 
         JtJ = np.einsum("kmi,kmj->kij", J, J)
         g = np.einsum("kmi,km->ki", J, r0)
         D = JtJ + lam[:, None, None] * (np.eye(5) * np.diagonal(JtJ, axis1=1, axis2=2)[:, None, :] + 1e-12 * np.eye(5))
-        step = np.linalg.solve(D, -g[..., None])[..., 0]
+        step = _solve_damped(D, -g)
         Vn = V + step
         rn = _dyad_residuals(p, Vn, timed)
         fn = np.sum(rn * rn, axis=1)
@@ -296,15 +348,33 @@ def _best_starts(p: MotionPoses, W0: ComplexArray, k: int, timed: bool, modes: t
     """
     from scipy.ndimage import minimum_filter
 
-    c = (W0 - p.d[0]) / p.u[0]
-    g, r = kasa(p.at(c.reshape(-1)[:, None]))
-    V = np.stack([c.reshape(-1).real, c.reshape(-1).imag, g.real, g.imag, r], axis=1)
-    rms = _rms(p, V, timed)
+    c = ((W0 - p.d[0]) / p.u[0]).reshape(-1)
+    V, rms = _grid_fits(p, c, timed)
     grid = np.where(np.isfinite(rms), rms, np.inf).reshape(W0.shape)
     local = (grid <= minimum_filter(grid, size=3, mode=modes)).reshape(-1) & np.isfinite(rms)
     order = np.lexsort((rms, ~local))
     best: FloatArray = V[order[:k]]
     return best
+
+
+#: the most (body point, pose) values :func:`_grid_fits` holds at once (its arrays per block: about 16 MB each)
+GRID_BLOCK = 1 << 21
+
+
+def _grid_fits(p: MotionPoses, c: ComplexArray, timed: bool) -> tuple[FloatArray, FloatArray]:
+    """Kasa's circle of each body point ``c`` (K,) over the poses: dyads (K, 5) and their RMS residuals (K,).
+
+    In blocks of body points, so that memory stays :data:`GRID_BLOCK` values whatever the poses' count
+    (the whole grid at once took 2304 x 30000 values per array, GBs in all, for 30000 poses).
+    """
+    per = max(1, GRID_BLOCK // p.m)
+    V, rms = np.empty((len(c), 5)), np.empty(len(c))
+    for start in range(0, len(c), per):  # blocks of the grid (a few for any count of poses that fits one block)
+        sl = slice(start, start + per)
+        g, r = kasa(p.at(c[sl, None]))
+        V[sl] = np.stack([c[sl].real, c[sl].imag, g.real, g.imag, r], axis=1)
+        rms[sl] = _rms(p, V[sl], timed)
+    return V, rms
 
 
 def _rms(p: MotionPoses, V: FloatArray, timed: bool) -> FloatArray:

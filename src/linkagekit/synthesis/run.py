@@ -661,7 +661,13 @@ def _approximate_route(
     from . import motion as mo
 
     seeds = _engine_seeds(mo.MotionObjective(p, w, min_transmission), seed, seconds, engine)
-    return [_motion_fourbar(p, d, units) for d in mo.approximate(p, w, min_transmission, seeds, deadline)]
+    found = []
+    for d in mo.approximate(p, w, min_transmission, seeds, deadline):
+        try:
+            found.append(_motion_fourbar(p, d, units))
+        except LinkageError:  # no mechanism (its ground pivots at one spot): 1000 poses on an arc ended the run
+            continue
+    return found
 
 
 def _none_found(source: str, min_transmission: float, late: float, exact: bool) -> LinkageError:

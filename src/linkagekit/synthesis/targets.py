@@ -473,6 +473,10 @@ SMOOTH_SAMPLES = 512
 #: a smoothed CSV drawing of more points is taken at this many, evenly by index: its 16 harmonics need far fewer,
 #: and every evaluation of a search costs in proportion (2000 points made a 10 s run take 22 s, 10^5 points 1.5 GB)
 SMOOTHED_POINTS = 400
+#: the most points of a hand-drawn CSV file that ``synthesize --no-smooth`` takes as they are: the atlas's placement,
+#: the dense checks and every evaluation cost in proportion before the clock is read (10000 points ran 25 s of a
+#: 3 s budget, 100000 over 150 s and 3 GB)
+MAX_UNSMOOTHED = 2000
 
 
 def smooth(xy: np.ndarray, closed: bool, harmonics: int = SMOOTH_HARMONICS) -> np.ndarray:

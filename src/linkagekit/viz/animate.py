@@ -92,7 +92,7 @@ class Frames:
     def __init__(self, scene: Scene, size: float = 6.0, dpi: int = 100) -> None:
         from matplotlib.figure import Figure
 
-        from .draw import Drawing, _aspect, _t
+        from .draw import Drawing, _aspect, _t, title_name
 
         self.scene = scene
         w = int(round(size * dpi / 2)) * 2
@@ -100,7 +100,7 @@ class Frames:
         fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)
         self.canvas = _agg_canvas(fig)
         self.ax = ax = fig.add_axes((0.02, 0.02, 0.96, 0.9))
-        fig.suptitle(_t(scene.name or "mechanism"), fontsize=10)
+        fig.suptitle(_t(title_name(scene.name)), fontsize=10)
         self.drawing = Drawing(ax, scene, animated=True)
         # the inputs of the frame, and a thin bar of how far through the sweep it is (so two
         # frames at one input still differ, and no GIF encoder merges them)

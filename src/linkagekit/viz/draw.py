@@ -81,6 +81,21 @@ def _t(text: str) -> str:
     return text.replace("$", r"\$")
 
 
+#: the most characters of a mechanism's name that a picture's title shows (then an ellipsis): a 100 kB name took
+#: 10 s to lay out, 1 MB 112 s
+MAX_TITLE_NAME = 80
+
+
+def title_name(name: str | None, limit: int = MAX_TITLE_NAME) -> str:
+    """A mechanism's name for a picture's title: ``mechanism`` when it has none, cut to ``limit`` characters.
+
+    >>> title_name("x" * 200, 10), title_name(""), title_name("crank")
+    ('xxxxxxxxx…', 'mechanism', 'crank')
+    """
+    text = name or "mechanism"
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 def _title(fig: Figure, text: str, size: float = 10) -> None:
     """``fig``'s title, broken into lines that fit its width (a long name was cut off on both sides at 800 px)."""
     import textwrap
@@ -519,7 +534,7 @@ def mechanism_figure(
     # one note for every input drawn that does not assemble (each drawing's own would overlap)
     missing = [inputs_at(k) for k in indices if not shown.assembled[k]]
     d.note.set_text(_t("does not assemble at " + "; ".join(missing)) if missing else "")
-    _title(fig, f"{sc.name or 'mechanism'}  ({inputs_at(i)})")
+    _title(fig, f"{title_name(sc.name)}  ({inputs_at(i)})")
     return fig
 
 
@@ -639,7 +654,7 @@ def motion_figure(
     ax.set_xlim(min(x0, z.real.min() - pad), max(x1, z.real.max() + pad))
     ax.set_ylim(min(y0, z.imag.min() - pad), max(y1, z.imag.max() + pad))
     kind = "closed" if closed else "open"
-    _title(fig, f"{len(P)} poses ({kind}): {mech.name}")
+    _title(fig, f"{len(P)} poses ({kind}): {title_name(mech.name) if mech.name else ''}")
     return fig
 
 
@@ -705,7 +720,7 @@ def modes_figure(
             signs += f" {g} " + (f"{gi['index'] + 1}/{gi['of']}" if gi["of"] > 0 else "(continued)")
         signs = signs.strip()
         ax.set_title(_t(f"{k + 1}: {signs or 'the only mode'}{' (pose)' if m.reference else ''}"), fontsize=9)
-    _title(fig, f"{mech.name or 'mechanism'}: {len(shown)} assembly mode(s) at {inp}")
+    _title(fig, f"{title_name(mech.name)}: {len(shown)} assembly mode(s) at {inp}")
     return fig
 
 
@@ -783,7 +798,7 @@ def quantities_figure(
     axes = fig.subplots(len(groups), 1, squeeze=False)[:, 0]
     for ax, names in zip(axes, groups, strict=True):
         plot_quantities(ax, sc, names)
-    _title(fig, sc.name or "mechanism")
+    _title(fig, title_name(sc.name))
     fig.tight_layout()
     return fig
 
