@@ -66,16 +66,17 @@ def test_no_smooth_is_a_path_option_and_part_of_the_repeat_command(tmp_path: Pat
     assert "--no-smooth: goes with --task path" in capsys.readouterr().err
 
 
-def test_no_smooth_refuses_more_points_than_it_takes_before_the_search(tmp_path: Path, capsys) -> None:
+def test_no_smooth_refuses_more_points_than_it_takes_before_the_search(tmp_path: Path, capsys, monkeypatch) -> None:
     # a review: 10000 hand-drawn points with --no-smooth ran 25 s of --seconds 3 (the atlas's answer is placed
     # and checked on every point before the clock is read); 2000 are taken, 2001 refused in one line
     from linkagekit.synthesis.targets import MAX_UNSMOOTHED
 
+    monkeypatch.chdir(tmp_path)  # a short path: a long one is shortened in the message
     f = _csv(tmp_path / "drawn.csv", _curve(MAX_UNSMOOTHED + 1))
     out = tmp_path / "o.yaml"
-    assert main(["synthesize", str(f), "--no-smooth", "--seconds", "1", "-o", str(out)]) == 2
+    assert main(["synthesize", "drawn.csv", "--no-smooth", "--seconds", "1", "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith(f"linkagekit: error: {f}: 2001 points; --no-smooth takes at most 2000 as they are")
+    assert err.startswith("linkagekit: error: drawn.csv: 2001 points; --no-smooth takes at most 2000 as they are")
     assert "\n" not in err and not out.exists()
     assert len(read_targets(f, smooth=False)) == 2001  # the library still reads every point
 
