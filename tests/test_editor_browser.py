@@ -771,7 +771,8 @@ def test_mode_buttons_follow_the_slider(open_editor):
 
 def test_the_modes_listed_after_play_are_those_where_it_paused(open_editor):
     """Play moved the input but the list of modes stayed the one of the input before it: the Jansen leg has 8 modes at
-    0 deg and 6 between 166 and 218 deg. Paused in there, the list is lk.modes' at the input shown."""
+    0 deg and fewer between 166 and 218 deg (6, and 4 at 189). Paused in there, the list is lk.modes' at the input
+    shown."""
     ep = open_editor("jansen")
     buttons = ep.page.locator("[data-role=modes] [data-action=mode]")
     mech = lk.load(ep.path)
@@ -791,8 +792,8 @@ def test_the_modes_listed_after_play_are_those_where_it_paused(open_editor):
     ep.wait_idle("pause")
     st = ep.state()
     assert 180.0 <= st["inputs"]["crank"] <= 205.0, st["inputs"]
-    want = expected_modes(mech, st["inputs"])
-    assert len(want) == 6 and buttons.count() == 6, (
+    want = expected_modes(mech, st["inputs"])  # 6 from 166 to 218 deg, but 4 at 189 (where a busy machine paused)
+    assert len(want) < 8 and buttons.count() == len(want), (
         f"paused at {st['inputs']}: {buttons.count()} mode buttons, lk.modes has {len(want)}"
     )
     ep.assert_clean()
