@@ -1499,9 +1499,11 @@ class Group(Step):
         if cols is None or w.upstream is None or w.q is None:
             return _Path(K0, K1, designs)
         q0, q1 = w.q[:, designs, cols[0]], w.q[:, designs, cols[1]]
-        turn = np.array([2 * np.pi if a else np.inf for a in self.angular] + [np.inf] * len(q0))[: len(q0), None]
+        angle = np.zeros(len(q0), bool)
+        angle[: len(self.angular)] = self.angular[: len(q0)]
         with np.errstate(invalid="ignore"):
-            q1 = np.where(np.isfinite(turn), q0 + (q1 - q0 - turn * np.round((q1 - q0) / turn)), q1)
+            step = q1 - q0
+            q1 = np.where(angle[:, None], q0 + step - 2 * np.pi * np.round(step / (2 * np.pi)), q1)
         return _Path(K0, K1, designs, q0, q1)
 
     def _knowns(self, path: _Path, t: np.ndarray, idx: np.ndarray, w: _Walk) -> np.ndarray:
