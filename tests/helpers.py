@@ -214,3 +214,122 @@ def assert_buildable(mech: Any, min_transmission: float = 20.0) -> None:
     for loop in rep.fourbars:
         ta = loop["transmission_angle"]
         assert min_transmission - 1e-6 <= ta["min"] and ta["max"] <= 180 - min_transmission + 1e-6, ta
+
+
+class ArclengthTriad:
+    """A class-3 triad's branch through its pose by pseudo-arclength continuation (unknowns J1, J2, J3 and the crank
+    angle u, equations the squared lengths of the six bars), its own Newton and tangents: a fold, where u turns
+    back, ends the branch; a sharp turn where the Jacobian nearly vanishes but u goes on is followed through.
+
+    ``points``: the pose (complex), joints O (crank pivot), A (crank tip), B0, C0 (ground) and J1, J2, J3; ``bars``
+    the triad's six bars ``(a, b)``. ``range``: the fold inputs below and above the pose's (degrees, continuous from
+    it, each to 1e-9 deg); :meth:`at`: J1, J2, J3 at an input between them."""
+
+    UNKNOWN = ("J1", "J2", "J3")
+
+    def __init__(self, points: dict[str, complex], bars: list[tuple[str, str]]) -> None:
+        self.p = dict(points)
+        self.bars = bars
+        self.length2 = np.array([abs(points[a] - points[b]) ** 2 for a, b in bars])
+        self.r = abs(points["A"] - points["O"])
+        u0 = float(np.angle(points["A"] - points["O"]))
+        x0 = np.array([c for j in self.UNKNOWN for c in (points[j].real, points[j].imag)] + [u0])
+        self.size = float(np.mean(np.sqrt(self.length2)))
+        self.legs = [self._leg(x0, sign) for sign in (-1, 1)]
+        self.range = tuple(float(np.degrees(leg[-1][6])) for leg in self.legs)
+
+    def _joints(self, x: np.ndarray) -> dict[str, complex]:
+        J = {j: complex(x[2 * k], x[2 * k + 1]) for k, j in enumerate(self.UNKNOWN)}
+        J["A"] = self.p["O"] + self.r * complex(np.cos(x[6]), np.sin(x[6]))
+        return {**self.p, **J}
+
+    def _F(self, x: np.ndarray) -> np.ndarray:
+        J = self._joints(x)
+        return np.array([abs(J[a] - J[b]) ** 2 for a, b in self.bars]) - self.length2
+
+    def _jac(self, x: np.ndarray) -> np.ndarray:
+        J = self._joints(x)
+        out = np.zeros((len(self.bars), 7))
+        dA = 1j * (J["A"] - self.p["O"])
+        for row, (a, b) in enumerate(self.bars):
+            d = J[a] - J[b]
+            for name, f in ((a, 2.0), (b, -2.0)):
+                if name in self.UNKNOWN:
+                    k = self.UNKNOWN.index(name)
+                    out[row, 2 * k : 2 * k + 2] += f * np.array([d.real, d.imag])
+                elif name == "A":
+                    out[row, 6] += f * (d.real * dA.real + d.imag * dA.imag)
+        return out
+
+    def _tangent(self, x: np.ndarray, prev: np.ndarray) -> np.ndarray:
+        t = np.linalg.svd(self._jac(x))[2][-1]
+        return t if t @ prev > 0 else -t
+
+    def _corrector(self, x: np.ndarray, t: np.ndarray, ds: float) -> np.ndarray | None:
+        y = x + ds * t
+        for _ in range(12):
+            g = np.concatenate([self._F(y), [t @ (y - x) - ds]])
+            step = np.linalg.solve(np.vstack([self._jac(y), t]), -g)
+            y = y + step
+            if np.max(np.abs(step)) < 1e-12 * self.size:
+                return y
+        return None
+
+    def _leg(self, x: np.ndarray, sign: int) -> list[np.ndarray]:
+        """States from the pose with u going ``sign``-wards until u turns back (then the fold, refined)."""
+        t = self._tangent(x, np.eye(7)[6] * sign)
+        ds, states = 1e-3 * self.size, [x]
+        while abs(x[6] - states[0][6]) < 2 * np.pi:
+            y = self._corrector(x, t, ds)
+            tn = None if y is None else self._tangent(y, t)
+            if tn is None or tn @ t < 0.995:  # not converged or too sharp a turn: a smaller step
+                ds /= 2
+                assert ds > 1e-12 * self.size, "the continuation stalled"
+                continue
+            if np.sign(tn[6]) != np.sign(t[6]):  # u turned: a fold between x and y
+                states.append(self._fold(x, t, y))
+                return states
+            x, t = y, tn
+            states.append(x)
+            ds = min(ds * 1.5, 2e-2 * self.size)
+        return states
+
+    def _fold(self, x: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The fold between ``x`` and ``y``: where the tangent's u component vanishes, by bisection on the arc."""
+        lo, hi = 0.0, float(t @ (y - x))
+        best = y
+        while hi - lo > 1e-13 * self.size:
+            mid = (lo + hi) / 2
+            z = self._corrector(x, t, mid)
+            assert z is not None
+            if np.sign(self._tangent(z, t)[6]) == np.sign(t[6]):
+                lo = mid
+            else:
+                hi, best = mid, z
+        return best
+
+    def at(self, u_deg: float) -> np.ndarray | None:
+        """J1, J2, J3 (complex, 3) at input ``u_deg`` on the branch (None outside its range): on the arc between the
+        two states about it, by bisection of the arclength from the first."""
+        u = np.radians(u_deg)
+        leg = self.legs[0] if u < self.legs[0][0][6] else self.legs[1]
+        us = np.array([s[6] for s in leg])  # monotone along a leg
+        if not min(us) <= u <= max(us):
+            return None
+        k = min(int(np.searchsorted(us if us[-1] > us[0] else -us, u if us[-1] > us[0] else -u)), len(leg) - 1)
+        x, y = leg[max(k - 1, 0)], leg[k]
+        t = self._tangent(x, y - x)
+        lo, hi = 0.0, float(t @ (y - x))
+        z = x
+        for _ in range(200):
+            mid = (lo + hi) / 2
+            z = self._corrector(x, t, mid)
+            assert z is not None
+            if abs(z[6] - u) < 1e-15 or hi - lo < 1e-15 * self.size:
+                break
+            lo, hi = (mid, hi) if (z[6] - u) * (y[6] - x[6]) < 0 else (lo, mid)
+        y = z.copy()
+        y[6] = u
+        for _ in range(5):  # the last rounding of u: Newton at fixed u from there
+            y[:6] += np.linalg.solve(self._jac(y)[:, :6], -self._F(y))
+        return np.array([complex(y[2 * k], y[2 * k + 1]) for k in range(3)])

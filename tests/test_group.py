@@ -30,7 +30,17 @@ from hypothesis import strategies as st
 from scipy.optimize import fsolve, root
 
 import linkagekit as lk
-from helpers import TRIAD_LINKS, fourbar_dict, points, random_points, stephenson_dict, velocities, watt2_dict, xy
+from helpers import (
+    TRIAD_LINKS,
+    ArclengthTriad,
+    fourbar_dict,
+    points,
+    random_points,
+    stephenson_dict,
+    velocities,
+    watt2_dict,
+    xy,
+)
 from linkagekit.plan import make_plan
 
 REL = 1e-10
@@ -636,11 +646,24 @@ class SixbarReference:
 
 
 @functools.cache
-def sixbar(dx: float = 0.0, dy: float = 0.0) -> tuple[lk.Mechanism, SixbarReference]:
-    """The six-bar with joint P4 moved by (dx, dy) (other lengths of L1 and L4: another limited range)."""
+def sixbar(
+    dx: float = 0.0, dy: float = 0.0, at: tuple[tuple[str, float, float], ...] = ()
+) -> tuple[lk.Mechanism, SixbarReference]:
+    """The six-bar with joint P4 moved by (dx, dy) (other lengths of L1 and L4: another limited range), and the
+    joints of ``at`` (name, x, y) placed there."""
     doc = copy.deepcopy(SIX)
     doc["joints"]["P4"] = [SIX["joints"]["P4"][0] + dx, SIX["joints"]["P4"][1] + dy]
+    doc["joints"].update({name: [x, y] for name, x, y in at})
     return lk.Mechanism.from_dict(doc), SixbarReference(doc)
+
+
+#: a variant of the six-bar (review 8): a shorter crank, P3 and P4 moved; its branch folds at 366.71 deg going up
+#: while another branch of the pose's determinant sign begins at 366.87 deg, and it comes back at 377.56 deg
+SIX_NARROW = (
+    ("P3", 21.30630214985059, 20.525903917388977),
+    ("P4", -38.82728188645594, 80.53462823163159),
+    ("P6", -87.08321526123048, -78.34185373779296),
+)
 
 
 def joints_of(res) -> tuple[np.ndarray, np.ndarray]:
@@ -700,22 +723,57 @@ def test_a_cranks_input_is_a_direction(moved):
             )
 
 
-def test_a_sample_past_a_fold_is_not_assembled_by_a_hop_to_another_root():
-    """A class-3 triad whose range ends at a fold at -43.365 deg (``input_range``; an independent fine continuation
-    with scipy finds the determinant going to zero there): inputs 0.24 and 0.94 deg past it are not assembled. Before
-    the way back was checked (``Group._returns``) they were, at a configuration of the pose's determinant sign on
-    another sheet: the sub-steps from the cell's end accepted any converged root within ``STEP_LIMIT``, a quarter of
-    the mean link (0.93), and the joints at -43.6 deg lay 0.22 from those at -43.364 deg, a hair inside the fold."""
+def test_a_gap_where_another_branch_begins_is_not_assembled():
+    """The six-bar variant ``SIX_NARROW``: its range ends at a fold 0.16 deg before another branch of the pose's
+    sign begins, well inside a grid cell of the walk. Its range by ``check`` is the reference continuation's (1e-6
+    deg), a gap of 10.85 deg; in a 0.5-degree list over six turns, and alone, every input is assembled exactly where
+    its direction lies in the range, there at the reference's joints (1e-9 of the size). Before, the walk's grid
+    step from 366 to 369 deg landed on the other branch (its way back converged home) and 22 of the list's inputs
+    in the gap were assembled on it, as were the inputs alone from 9.7 deg on."""
+    from linkagekit.checks import input_range
+
+    mech, ref = sixbar(at=SIX_NARROW)
+    ((lo, hi),) = input_range(mech)  # [-342.44, 6.71]: the reference's [17.56, 366.71] a turn down
+    assert abs(lo + 360 - ref.range[0]) <= 1e-6 and abs(hi + 360 - ref.range[1]) <= 1e-6, (lo, hi, ref.range)
+    assert 10.8 < lo + 360 - hi < 10.9
+    x = np.arange(-1080.0, 1081.0, 0.5)
+    pts, ok = joints_of(lk.analyze(mech, {"L3": x}, rates=False))
+    check_against_reference(ref, x, pts, ok)
+    gap = np.array([hi + 0.01, hi + 1, hi + 3, hi + 5.4, lo + 357, lo + 359, lo + 359.99])
+    edges = np.array([hi - 1e-4, lo + 1e-4])
+    for u in np.concatenate([gap, edges, gap - 720]):
+        check_against_reference(ref, np.array([u]), *joints_of(lk.analyze(mech, {"L3": [u]}, rates=False)))
+
+
+def test_a_triad_follows_its_branch_through_a_sharp_turn_to_its_fold():
+    """A class-3 triad whose Jacobian's determinant nearly vanishes at -43.3444 deg (5e-5 of its value elsewhere)
+    without changing sign: two complex roots pass near the branch, which turns sharply there (J1 moves 0.06 over
+    0.0004 deg) and goes on down to a fold at -94.814 deg. ``ArclengthTriad`` (an independent pseudo-arclength
+    continuation: the input falls monotonically from the pose to there) and ``modes`` (one other real mode, far
+    away, at every input) agree. ``input_range`` is the reference's to 1e-6 deg; inputs through the turn and down to
+    the fold are assembled at the reference's joints (1e-9 of the size), in a list and alone; past the fold not.
+    Before, the walk's sub-steps could not follow the turn (failed steps were halved to 2^-10 of a path, coarser than
+    the turn): inputs from -43.3453 deg down were flagged, and ``input_range`` put a fold at -43.3647 deg, as did a
+    scipy continuation in 0.01-deg steps that an earlier version of this test trusted."""
     from linkagekit.checks import input_range
 
     p = {"O": -1.0319 + 0.6634j, "A": 1.51 - 0.7844j, "B0": 3.8161 + 7.5343j, "C0": 2.7296 + 2.4825j}
     p.update({"J1": 2.1925 + 1.8222j, "J2": 3.6188 - 1.2897j, "J3": 4.2453 + 2.4778j})
     mech = triad(p)
-    ((lo, _),) = input_range(mech)
-    assert abs(lo + 43.3647) < 1e-3
-    res = lk.analyze(mech, {"crank": [-43.0, -43.6, -44.3]}, rates=False)
-    assert res.assembled[0]
-    assert not res.assembled[1:].any()
+    ref = ArclengthTriad(p, TRIAD_BARS[1:])
+    assert abs(ref.range[0] + 94.814) < 1e-3 and abs(ref.range[1] - 32.191) < 1e-3
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo - ref.range[0]) < 1e-6 and abs(hi - ref.range[1]) < 1e-6, (lo, hi, ref.range)
+    u = np.array([-43.0, -43.344, -43.3446, -43.345, -43.3647, -43.6, -44.3, -60.0, -94.81, -94.82, -100.0, 32.2])
+    listed = lk.analyze(mech, {"crank": u}, rates=False)
+    for i, ui in enumerate(u):
+        alone = lk.analyze(mech, {"crank": [ui]}, rates=False)
+        want = ref.at(ui)
+        for res, k in ((listed, i), (alone, 0)):
+            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
+            if want is not None:
+                got = np.array([complex(*res.xy(j)[k]) for j in ("J1", "J2", "J3")])
+                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
 
 
 def test_the_range_of_a_triad_whose_continuation_hopped_has_its_gap():
@@ -734,11 +792,6 @@ def test_the_range_of_a_triad_whose_continuation_hopped_has_its_gap():
     assert res.assembled[0] and not res.assembled[1:].any()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a sub-step from 0.04 deg inside the fold to 0.24 deg past it lands on a root of the pose's sign 0.2 of "
-    "the size away whose way back converges home: -45.16 deg is assembled (docs/method.md, known limitation)",
-)
 def test_no_input_past_the_end_of_a_triad_whose_continuation_hopped_is_assembled():
     """The triad above, every 0.01 deg over 1.6 deg past the end of its range at -44.347 deg: none assembled. A
     sub-step from 0.04 deg inside the fold to 0.25 deg past it moved 0.13 of the group's size onto another sheet,
@@ -746,8 +799,10 @@ def test_no_input_past_the_end_of_a_triad_whose_continuation_hopped_is_assembled
     way back accepted (near a fold it converges only linearly: the samples of
     ``test_a_sample_a_hair_inside_a_fold_end_is_assembled`` need that): -44.75 deg was assembled (review 29b).
     Followed on to 40 steps, that way back does not converge and ends 4.7 moves away (506 ways back of the branch's
-    own sub-steps about folds converged within 1.6e-9 of theirs). Still assembled: -45.16 deg, reached by a sub-step
-    whose way back does converge home."""
+    own sub-steps about folds converged within 1.6e-9 of theirs). Then still assembled: -45.16 deg, reached by a
+    sub-step whose way back does converge home. Now no sub-step goes more than half the way to where the square of
+    the Jacobian's determinant, linear through the last two states, vanishes (``Group._halving``): that sub-step is
+    not taken. (``ArclengthTriad``, a pseudo-arclength continuation, turns at -404.3473 deg: -44.3473.)"""
     base = random_triad(29)
     poses = base.pose_array()[None] + np.random.default_rng(1029).normal(0, 0.5, (20, len(base.joint_names), 2))
     mech = base.with_pose(poses[11])

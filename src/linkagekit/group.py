@@ -201,6 +201,16 @@ VECTOR_ITER = 2
 HOP_MOVE = 1e-3
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
+#: a grid step is taken whole only where the determinant of the group's Jacobian, extrapolated linearly through the
+#: leg's last two columns, stays off zero for this many steps (:func:`_zero_ahead`); else the step is taken in
+#: sub-steps, each going at most ``1 / SUB_FOLD_SHARE`` of the way to where the last two sub-steps put that zero
+GRID_FOLD_SHARE = 1.5
+SUB_FOLD_SHARE = 2.0
+#: a sub-step after a state whose determinant's trend is not known goes at most this part of its way (it gives one)
+FIRST_SUBSTEP = 1 / 16
+#: ... and the determinant's zero ahead shortens no sub-step below this part of its way (finer than a failed step's
+#: halvings: where the determinant only nearly vanishes the branch turns sharply, and small steps follow it through)
+FINEST_SUBSTEP = 0.5**30
 #: Newton iterations of the last try of a sample's sub-steps that gave up next to a fold (:meth:`Group._last_step`)
 FOLD_ITER = 40
 #: a way back that creeps home (not converged after a sub-step's iterations) must arrive, in ``FOLD_ITER`` in all,
@@ -389,10 +399,11 @@ class _Walk:
     grid_columns: int = 0  # the walk's grid columns (the last of ``K``'s samples)
     q: np.ndarray | None = None  # (n_drivers, D, n) the inputs of ``K``'s columns
     upstream: Callable[[np.ndarray], np.ndarray | None] | None = None  # the joints before the group at inputs
+    det: np.ndarray | None = None  # (D, n) the Jacobian's determinant at the grid's solved columns (NaN elsewhere)
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
-        ok: np.ndarray = (sg == self.ref[designs]) | self.any_sign
+        ok: np.ndarray = (np.sign(sg) == self.ref[designs]) | self.any_sign
         return ok
 
 
@@ -851,7 +862,8 @@ class Group(Step):
         step is not finite is NaN from the next step on: it is dropped, NaN). ``vector``: the
         linear algebra as array operations over the columns (:func:`_gauss`), else LAPACK.
         """
-        return self._newton(U, K, self._arrays(nums, U.shape[1]), iters, vector)
+        U, conv, det = self._newton(U, K, self._arrays(nums, U.shape[1]), iters, vector)
+        return U, conv, np.sign(det)
 
     def _newton(
         self,
@@ -862,7 +874,8 @@ class Group(Step):
         vector: bool = False,
         work: FloatArray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`newton` with the numbers as arrays; ``vector``: :meth:`_newton_vector` (``work``: its workspace)."""
+        """:meth:`newton` with the numbers as arrays, and the determinant itself (its value, not only its sign: the
+        walk reads how it falls, :func:`_zero_ahead`); ``vector``: :meth:`_newton_vector` (``work``: its workspace)."""
         if vector:
             return self._newton_vector(U, K, ar, iters, work)
         U = U.copy()
@@ -888,7 +901,7 @@ class Group(Step):
             J = self._jac(P, ar.J_lin, ar.R)
             det = np.linalg.det(np.where(np.isfinite(J), J, 0.0))
             conv &= np.isfinite(det) & (det != 0)
-        return U, conv, np.sign(det)
+        return U, conv, det
 
     def _newton_vector(
         self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, work: FloatArray | None = None
@@ -923,7 +936,7 @@ class Group(Step):
                 Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
             self._lapack_det_where_zero(U, K, ar, conv, det)
         conv &= np.isfinite(det) & (det != 0)
-        return U, conv, np.sign(det)
+        return U, conv, det
 
     def _lapack_det_where_zero(
         self, U: np.ndarray, K: np.ndarray, ar: _Arrays, conv: np.ndarray, det: FloatArray
@@ -1030,6 +1043,7 @@ class Group(Step):
             0 if k.grid is None else len(k.grid.index),
             np.broadcast_to(k.q, (k.q.shape[0], D, n)),
             None if k.upstream is None else partial(k.upstream, stop=self),
+            np.full((D, n), np.nan),
         )
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
@@ -1119,7 +1133,35 @@ class Group(Step):
             acc[todo] = np.all(np.isfinite(U[:, todo]), axis=0)
         U = np.where(acc & w.ok[:, col], U, NAN_POINT)
         w.out[:, :, col] = U
+        if w.det is not None:
+            w.det[:, col] = self._dets(U, w.K[:, :, col], d, w)
+            self._origin_trend(U, col, w)
         return U
+
+    def _origin_trend(self, U: np.ndarray, col: int, w: _Walk) -> None:
+        """The determinant's trend at the grid's origin ``col`` (solved ``U``), written to ``w.det`` at the columns
+        either side until the legs solve them: ``det -/+ det'`` a grid step away, ``det'`` by a central difference
+        along the tangent (``J_u V = -J_k dK``, ``dK`` the knowns' central difference over the two columns): the
+        first step of each leg has a trend to read (:meth:`_clear_of_zero`), as every later one has."""
+        assert w.det is not None
+        first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
+        if not first < col < n - 1 or not self.n_held:
+            return
+        d = np.flatnonzero(np.isfinite(w.det[:, col]))
+        K = w.K[:, d, col]
+        dK = (w.K[:, d, col + 1] - w.K[:, d, col - 1]) / 2
+        m = U.shape[0]
+        P = np.concatenate([U[:, d], K])
+        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
+        rhs = np.einsum("bij,bj->bi", J[:, :, 2 * m :], _real_pairs(dK))
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            du = _newton_step(J[:, :, : 2 * m], rhs.T)
+            V = (du[:, 0::2] + 1j * du[:, 1::2]).T
+            eps = 1e-3
+            ahead, back = (self._dets(U[:, d] + e * V, K + e * dK, d, w) for e in (eps, -eps))
+            slope = (ahead - back) / (2 * eps)
+        w.det[d, col + 1] = w.det[d, col] + slope
+        w.det[d, col - 1] = w.det[d, col] - slope
 
     def _walk_legs(self, legs: tuple[_Leg, _Leg], places: np.ndarray, w: _Walk, g: WalkGrid) -> None:
         """Step both legs, all designs at once, until each covers the ``places`` (D, n) on its side or stops.
@@ -1215,9 +1257,8 @@ class Group(Step):
         can = inside & w.ok[d[None, :], col]  # the others cannot converge
         can[1:] &= can[0]
         j, i = np.nonzero(can)
-        ahead: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         if not len(i):
-            return U_new, acc, lost, pend, ahead
+            return U_new, acc, lost, pend, []
         guess = _predict(U[:, i], before[0][:, i], before[1][:, i], j + 1.0)
         sol, conv, sg = self._newton(guess, w.K[:, d[i], col[j, i]], w.arrays.take(d[i]), vector=w.vector)
         got = np.full((k, m, N), NAN_POINT)
@@ -1226,20 +1267,65 @@ class Group(Step):
         good[j, i] = conv & w.sign_ok(sg, d[i]) & np.all(np.isfinite(sol), axis=0)
         start = np.concatenate([U[None], got[:-1]])
         good &= np.max(np.abs(got - start), axis=1) <= STEP_LIMIT * w.size[d][None, :]
+        dets = np.full((k, N), np.nan)
+        dets[j, i] = sg
+        good &= self._clear_of_zero(dets, d, s, sign, w)
         c0 = np.flatnonzero(can[0])
         a = good[0, c0]
         pend[c0] = ~a & fresh[c0]
         lost[c0] = ~a
         Un = got[0][:, c0]
+        if w.det is not None:
+            w.det[d[c0[a]], s[c0[a]]] = dets[0, c0[a]]
         self._restart_lost(U[:, c0], w.K[:, d[c0], s[c0]], d[c0], w, Un, a, ~a & ~fresh[c0])
         U_new[:, c0], acc[c0] = Un, a
+        return U_new, acc, lost, pend, self._ahead(got, cols, good, fresh, dets, d, w)
+
+    def _ahead(
+        self,
+        got: np.ndarray,
+        cols: np.ndarray,
+        good: np.ndarray,
+        fresh: np.ndarray,
+        dets: np.ndarray,
+        d: np.ndarray,
+        w: _Walk,
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """The columns after a grid step's first that its Newton batch reached (``got`` (k, m, N) at ``cols`` (k, N),
+        ``good`` where each passed the tests from the one before): ``(U, columns, accepted)`` by column, accepted
+        where every step up to it passed from a ``fresh`` leg; their determinants written to ``w.det``."""
+        ahead: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         chain = good[0] & fresh
-        for q in range(1, k):
+        for q in range(1, len(good)):
             chain = chain & good[q]
             if not chain.any():
                 break
             ahead.append((got[q], cols[q], chain.copy()))
-        return U_new, acc, lost, pend, ahead
+            if w.det is not None:
+                w.det[d[chain], cols[q][chain]] = dets[q, chain]
+        return ahead
+
+    def _clear_of_zero(self, dets: np.ndarray, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
+        """Which of a leg's grid steps (k, N) to columns ``s + q sign`` (determinants ``dets`` there) may be taken
+        whole: the determinant, extrapolated linearly through the two columns before each, stays off zero for
+        ``GRID_FOLD_SHARE`` steps (:func:`_zero_ahead`; following the branch continuously, any step may).
+
+        Newton's root at a column past a fold can lie on another sheet whose own fold is near: a Pyslvs six-bar
+        variant's branch folds at 366.71 deg and another branch begins at 366.87; the step from 366 to 369 deg landed
+        on it, and its way back converged home. The determinant told: it fell linearly to zero at 366.79 deg."""
+        out = np.ones(dets.shape, bool)
+        if w.det is None or w.any_sign:
+            return out
+        first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
+        before = []
+        for back in (2, 1):
+            col = s - back * sign
+            inside = (col >= first) & (col < n)
+            before.append(np.where(inside, w.det[d, np.clip(col, 0, n - 1)], np.nan))
+        seq = np.concatenate([np.stack(before), dets])
+        for q in range(dets.shape[0]):
+            out[q] = _zero_ahead(seq[q], seq[q + 1]) >= GRID_FOLD_SHARE
+        return out
 
     def _substeps(
         self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk, src: np.ndarray
@@ -1247,8 +1333,15 @@ class Group(Step):
         """Grid steps from columns ``src`` to ``s`` that failed, retried by step halving from the last good state:
         (U, accepted, lost); for a dyad-like group, restarts where that fails too."""
         K = w.K[:, d, s]
-        U_new = self._halving(U, self._path(Kc, K, d, (src, s), w), w)
+        before = None
+        if w.det is not None:
+            prev = 2 * src - s
+            inside = (prev >= w.K.shape[2] - w.grid_columns) & (prev < w.K.shape[2])
+            before = (np.full(len(d), -1.0), np.where(inside, w.det[d, np.clip(prev, 0, w.K.shape[2] - 1)], np.nan))
+        U_new = self._halving(U, self._path(Kc, K, d, (src, s), w), w, before=before)
         acc = np.all(np.isfinite(U_new), axis=0)
+        if w.det is not None:
+            w.det[d[acc], s[acc]] = self._dets(U_new[:, acc], K[:, acc], d[acc], w)
         lost = ~acc
         self._restart_lost(U, K, d, w, U_new, acc, lost & w.ok[d, s])
         return U_new, acc, lost
@@ -1297,7 +1390,21 @@ class Group(Step):
             frm = np.clip(np.where(np.all(np.isfinite(sol(near, cr)), axis=0), near, far), 0, G - 1)
             U0 = Ug[:, cr, frm]
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
-            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w, g.n_given + frm)
+            before = self._column_before(P[rest] - (frm - c0), cr, g.n_given + frm, w)
+            self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w, g.n_given + frm, before)
+
+    def _column_before(
+        self, dist: np.ndarray, c: np.ndarray, col: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """For sub-steps from grid columns ``col`` (designs ``c``) to samples ``dist`` grid steps away: the column on
+        the other side of each, as ``t`` along its path (``-1 / |dist|``) and its determinant (:meth:`_halving`)."""
+        if w.det is None:
+            return None
+        prev = col - np.sign(dist).astype(np.intp)
+        inside = (prev >= w.K.shape[2] - w.grid_columns) & (prev < w.K.shape[2]) & (dist != 0)
+        with np.errstate(divide="ignore"):
+            t = np.where(inside, -1 / np.abs(dist), -np.inf)
+        return t, np.where(inside, w.det[c, np.clip(prev, 0, w.K.shape[2] - 1)], np.nan)
 
     def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
         """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.
@@ -1335,16 +1442,19 @@ class Group(Step):
         s: np.ndarray,
         w: _Walk,
         src: np.ndarray | None = None,
+        before: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> None:
         """Samples ``s`` of designs ``c`` reached by sub-steps from ``(U0, K0)`` (the knowns of columns ``src``, or
-        the pose's); a dyad-like group restarts about ``centre`` where they fail."""
+        the pose's; ``before``: the column before each, :meth:`_halving`); a dyad-like group restarts about
+        ``centre`` where they fail."""
         K1 = w.K[:, c, s]
         U = np.full((U0.shape[0], len(c)), NAN_POINT)
         live = np.flatnonzero(np.all(np.isfinite(U0), axis=0) & w.ok[c, s])
         if len(live):
             cols = None if src is None else (src[live], s[live])
             path = self._path(K0[:, live], K1[:, live], c[live], cols, w)
-            U[:, live] = self._halving(U0[:, live], path, w, to_fold=True)
+            ahead = None if before is None else (before[0][live], before[1][live])
+            U[:, live] = self._halving(U0[:, live], path, w, to_fold=True, before=ahead)
         acc = np.all(np.isfinite(U), axis=0)
         self._restart_lost(centre, K1, c, w, U, acc, ~acc & w.ok[c, s])
         w.out[:, c[acc], s[acc]] = U[:, acc]
@@ -1447,7 +1557,14 @@ class Group(Step):
             sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
         return sol, conv, sg
 
-    def _halving(self, U: np.ndarray, path: _Path, w: _Walk, to_fold: bool = False) -> np.ndarray:
+    def _halving(
+        self,
+        U: np.ndarray,
+        path: _Path,
+        w: _Walk,
+        to_fold: bool = False,
+        before: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> np.ndarray:
         """From ``U`` at the start of ``path`` to its end by adaptive sub-steps; NaN columns where a step below
         2^-MAX_HALVINGS fails.
 
@@ -1456,20 +1573,24 @@ class Group(Step):
         continuation step) doubles the next one, a step that is not is halved. A step to knowns a
         chain rules out fails without Newton. Newton here is LAPACK's, whatever the problem's size
         (few columns sub-step, and many rounds: array operations' fixed cost would dominate). A
-        sub-step that moves a joint far is checked on the way back (:meth:`_returns`).
+        sub-step that moves a joint far is checked on the way back (:meth:`_returns`). ``before``: the path's ``t``
+        (negative) of the state before its start and the determinant there; with it, no sub-step goes more than
+        ``1 / SUB_FOLD_SHARE`` of the way to where the determinant, through the last two states, is zero
+        (:class:`_DetTrail`), down to the smallest step.
         """
         designs = path.designs
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
-        Uc, Kc, t, dt = U.copy(), path.K0.copy(), np.zeros(B), np.full(B, 0.5)
-        alive = np.ones(B, bool)
-        smallest = 0.5**MAX_HALVINGS
+        Uc, Kc, st = U.copy(), path.K0.copy(), _Steps.new(B)
+        if before is None:
+            before = (np.full(B, np.nan), np.full(B, np.nan))
+        trail = None if w.any_sign else _DetTrail.new(before, self._dets(U, path.K0, designs, w))
         while True:
-            act = np.flatnonzero(alive & (t < 1.0))
+            act = st.due()
             if not len(act):
                 break
-            tt = np.minimum(t[act] + dt[act], 1.0)
+            tt = st.target(act, trail)
             K_t = self._knowns(path, tt, act, w)
             ok = np.zeros(len(act), bool)
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
@@ -1481,14 +1602,13 @@ class Group(Step):
                 ok[back] = self._returns(Un[:, ok[can]], Kc[:, act[back]], Uc[:, act[back]], w, designs[act[back]])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
-            good, bad = act[ok], act[~ok]
-            t[good], Kc[:, good] = tt[ok], K_t[:, ok]
-            dt[good] = np.minimum(2 * dt[good], 1.0)
-            dt[bad] /= 2
-            alive[bad[dt[bad] < smallest]] = False
+                if trail is not None:
+                    trail.push(act[good_can], tt[good_can], sg[ok[can]])
+            Kc[:, act[ok]] = K_t[:, ok]
+            st.update(act, tt, ok)
         if to_fold:  # samples (the walk's own steps find the range's ends: they are not pushed)
-            self._last_step(Uc, Kc, t, alive, path, w)
-        return np.where(alive & (t >= 1.0), Uc, NAN_POINT)
+            self._last_step(Uc, Kc, st.t, st.alive, path, w)
+        return np.where(st.alive & (st.t >= 1.0), Uc, NAN_POINT)
 
     def _path(
         self, K0: np.ndarray, K1: np.ndarray, designs: np.ndarray, cols: tuple[np.ndarray, np.ndarray] | None, w: _Walk
@@ -1545,10 +1665,12 @@ class Group(Step):
 
         Next to a fold Newton converges only linearly (the Jacobian is nearly singular), so a sub-step of six
         iterations fails there however small: samples 1e-5 deg inside a range's end that ``check`` finds to 3e-8
-        deg were not assembled. Just past the fold there is no root of the pose's sign on the branch's sheet; with
-        many iterations Newton and its way back accepted one on another sheet 0.05 of the size away, better
-        conditioned than the fold it came from (4.8e-4 against 4.3e-6; a triad's range grew from -43.4 to -94.8
-        deg), where each sample truly inside lands nearer the fold (its conditioning below its start's)."""
+        deg were not assembled. Just past the fold there is no root of the pose's sign on the branch's sheet, and a
+        root that many iterations find elsewhere is better conditioned than the fold the sub-steps stopped at, while
+        each sample truly inside lands nearer the fold (its conditioning below its start's). (The case that first
+        showed it, a triad's range growing from -43.4 to -94.8 deg, was in fact the branch going on through a sharp
+        turn to a fold at -94.814 deg, which an arclength continuation confirms; the sub-steps now follow such turns
+        in fine steps, :class:`_Steps`.)"""
         K0, K1, designs = path.K0, path.K1, path.designs
         left = (1 - t) * np.max(np.abs(K1 - K0), axis=0, initial=0.0)  # how far the knowns still move
         a = np.flatnonzero(~alive & (t > 0) & (t < 1.0) & (left <= HOP_MOVE * w.size[designs]))
@@ -1563,6 +1685,16 @@ class Group(Step):
             ok[ok] = self._sv_ratio(Un[:, ok], K1[:, a[ok]], ar) <= self._sv_ratio(Uc[:, a[ok]], Ks[:, ok], ar)
         Uc[:, a[ok]] = Un[:, ok]
         t[a[ok]], alive[a[ok]] = 1.0, True
+
+    def _dets(self, U: np.ndarray, K: np.ndarray, designs: np.ndarray, w: _Walk) -> np.ndarray:
+        """The determinant of the Jacobian at ``U`` (m, B) with knowns ``K`` (columns of ``designs``; NaN where
+        either is not finite), as Newton's LAPACK path takes it."""
+        out = np.full(U.shape[1], np.nan)
+        i = np.flatnonzero(np.all(np.isfinite(U), axis=0) & np.all(np.isfinite(K), axis=0))
+        if len(i):
+            ar = w.arrays.take(designs[i])
+            out[i] = np.linalg.det(self._jac(np.concatenate([U[:, i], K[:, i]]) if len(K) else U[:, i], ar.J_lin, ar.R))
+        return out
 
     def _sv_ratio(self, U: np.ndarray, K: np.ndarray, ar: _Arrays) -> np.ndarray:
         """sigma_min / sigma_max of the Jacobian at ``U`` with knowns ``K`` (a few columns: by SVD)."""
@@ -1601,7 +1733,7 @@ class Group(Step):
                 c = check[creep]
                 Uf, cf, _ = self._newton(Ub[:, creep], K[:, c], w.arrays.take(d[creep]), FOLD_ITER - iters)
                 home[creep] = cf & (np.max(np.abs(Uf - U0[:, c]), axis=0) <= ARRIVED * move[c])
-            out[check] = home | (conv & (sg == -w.ref[d]))
+            out[check] = home | (conv & (np.sign(sg) == -w.ref[d]))
         return out
 
     def _restart(self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray) -> np.ndarray:
@@ -1928,6 +2060,91 @@ def _gauss(
         for k in range(n - 1, -1, -1):
             x[k] = (A[k, n] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
     return x.T, det
+
+
+def _zero_ahead(det_prev: np.ndarray, det: np.ndarray) -> np.ndarray:
+    """How many steps (each as long as the one from ``det_prev`` to ``det``) past ``det`` the determinant is zero,
+    its square taken linear through the two; inf where it does not fall toward zero (it grows, changes sign, or
+    is unknown) and where ``det_prev`` is unknown, NaN.
+
+    Next to a fold the determinant goes as the root of the input's distance to it: its square
+    puts the zero at the fold. Where it falls linearly (two branches nearly crossing) its square
+    puts the zero nearer than it is, never farther: on the safe side both ways.
+
+    >>> float(_zero_ahead(np.array(3.0), np.array(2.0))), float(_zero_ahead(np.array(2.0), np.array(3.0)))
+    (0.8, inf)
+    """
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        falls = (np.sign(det_prev) == np.sign(det)) & (np.abs(det) < np.abs(det_prev))
+        out: np.ndarray = np.where(falls, det**2 / (det_prev**2 - det**2), np.inf)
+    return np.where(np.isnan(det_prev) & np.isfinite(det), np.nan, out)
+
+
+@dataclass
+class _Steps:
+    """Sub-steps' progress along their paths, per column: ``t`` reached, the next step ``dt``, ``alive``, and the
+    step a failed one may be halved down to (``0.5**MAX_HALVINGS``; ``FINEST_SUBSTEP`` after an accepted step
+    finer than that, which only the determinant's zero ahead makes: the branch turns sharply there)."""
+
+    t: np.ndarray
+    dt: np.ndarray
+    alive: np.ndarray
+    floor: np.ndarray
+
+    @classmethod
+    def new(cls, B: int) -> _Steps:
+        return cls(np.zeros(B), np.full(B, 0.5), np.ones(B, bool), np.full(B, 0.5**MAX_HALVINGS))
+
+    def due(self) -> np.ndarray:
+        """The columns still on their way."""
+        return np.flatnonzero(self.alive & (self.t < 1.0))
+
+    def target(self, act: np.ndarray, trail: _DetTrail | None) -> np.ndarray:
+        """Where columns ``act`` step next: ``dt`` on, not past the path's end, nor (with a ``trail``) past its
+        room before the determinant's zero ahead, down to ``FINEST_SUBSTEP``."""
+        step = self.dt[act]
+        if trail is not None:
+            step = np.minimum(step, np.maximum(trail.room(act), FINEST_SUBSTEP))
+        t = self.t[act]
+        out: np.ndarray = np.where(step >= 1.0 - t, 1.0, t + step)
+        return out
+
+    def update(self, act: np.ndarray, tt: np.ndarray, ok: np.ndarray) -> None:
+        """Columns ``act`` stepped to ``tt``, accepted where ``ok``: an accepted step doubles, a failed one halves
+        (the column gives up below its floor)."""
+        step = tt - self.t[act]
+        good, bad = act[ok], act[~ok]
+        coarse = 0.5**MAX_HALVINGS
+        self.t[good] = tt[ok]
+        self.dt[good] = np.minimum(2 * step[ok], 1.0)
+        self.floor[good] = np.where(step[ok] < coarse, FINEST_SUBSTEP, coarse)
+        self.dt[bad] = step[~ok] / 2
+        self.alive[bad[self.dt[bad] < self.floor[bad]]] = False
+
+
+@dataclass
+class _DetTrail:
+    """Sub-steps' last two accepted states per column: their ``t`` along the path and the determinant there (2, B)."""
+
+    t: np.ndarray
+    det: np.ndarray
+
+    @classmethod
+    def new(cls, before: tuple[np.ndarray, np.ndarray], det0: np.ndarray) -> _DetTrail:
+        return cls(np.stack([before[0], np.zeros(len(det0))]), np.stack([before[1], det0]))
+
+    def room(self, i: np.ndarray) -> np.ndarray:
+        """How far (in ``t``) past its last state column ``i`` may go: ``1 / SUB_FOLD_SHARE`` of the way to the
+        determinant's zero (:func:`_zero_ahead`), inf where none is ahead, ``FIRST_SUBSTEP`` where the trend is not
+        known (no state before the last)."""
+        with np.errstate(invalid="ignore"):
+            out: np.ndarray = _zero_ahead(self.det[0, i], self.det[1, i]) * (self.t[1, i] - self.t[0, i])
+        return np.where(np.isnan(out), FIRST_SUBSTEP, out / SUB_FOLD_SHARE)
+
+    def push(self, i: np.ndarray, t: np.ndarray, det: np.ndarray) -> None:
+        """Columns ``i`` accepted a state at ``t`` with determinant ``det``."""
+        self.t[0, i], self.det[0, i] = self.t[1, i], self.det[1, i]
+        self.t[1, i], self.det[1, i] = t, det
 
 
 @dataclass
