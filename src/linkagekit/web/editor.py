@@ -45,7 +45,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -59,6 +59,7 @@ from ..errors import InputError, LinkageError, MechanismFileError, one_line, sho
 from ..files import (
     dumps,
     from_bytes,
+    locked,
     merge_comments,
     read_mechanism_file,
     stray_temporaries,
@@ -80,6 +81,8 @@ MAX_WINDOWS = 16
 MAX_BODY = 2 << 20
 #: seconds a request may take to arrive
 TIMEOUT = 10.0
+#: seconds a save waits for another program's lock (flock) on the file before it says so
+LOCK_SECONDS = 2.0
 #: how a client that went away shows: it reset or closed its connection, or stopped sending
 VANISHED = (ConnectionError, TimeoutError)
 #: seconds one solve (or the page) may compute before it is stopped and answered with a message
@@ -217,6 +220,23 @@ def _finite(v: Any) -> bool:
 
 def _hash(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
+
+
+_PATH_LOCKS: dict[str, threading.Lock] = {}
+_PATH_LOCKS_LOCK = threading.Lock()
+
+
+def path_lock(path: Path) -> threading.Lock:
+    """The lock of the file ``path`` names (a link followed) in this process: its saves take it in turn, also
+    those of two sessions of one file (two servers, or a ``./m.yaml`` and an ``m.yaml``)."""
+    key = os.path.realpath(path)
+    with _PATH_LOCKS_LOCK:
+        return _PATH_LOCKS.setdefault(key, threading.Lock())
+
+
+def _stamp(st: os.stat_result) -> tuple[int, int, int]:
+    """What a write to a file changes of its status: its size, its modification and its change time."""
+    return st.st_size, st.st_mtime_ns, st.st_ctime_ns
 
 
 def _leading_comments(text: str) -> str:
@@ -414,6 +434,15 @@ class Session:
         step (:func:`~linkagekit.files.write_atomic`; a link FILE is followed).  A read-only file
         (no owner write bit) is not saved.  The file's comments are kept where its lines are
         (:meth:`_text_to_save`).  The saved file is read back and must give the same mechanism.
+
+        No other writer's change is lost in between: the saves of this file in this process take turns
+        (:func:`path_lock`), each holds an advisory lock on the file (:func:`~linkagekit.files.locked`, which
+        another ``linkagekit edit`` or a program run under ``flock FILE`` honours) from its read to its
+        rename, and the last step before the rename checks that the file is still the one read, unchanged
+        (:meth:`_unchanged`).  A program that writes without the lock can still slip in between that check
+        and the rename (microseconds), or write through a descriptor it opened before the rename (into the
+        replaced file, which has no name any more): only mandatory locks, which POSIX does not have, could
+        exclude it.
         """
         doc = request.get("doc")
         if not isinstance(doc, dict):
@@ -422,7 +451,7 @@ class Session:
         if not isinstance(base, str):
             raise RequestError(f"'base' must be the file's hash the page was given, got {shorten(repr(base))}")
         mech = Mechanism.from_dict(doc, source=str(self.path))
-        with self.lock:
+        with path_lock(self.path), self.lock, locked(self.path, LOCK_SECONDS, self._locked_out):
             old, st = self._read_now("not saved")
             if _hash(old) != base or _hash(old) != self.base:
                 raise ConflictError(
@@ -434,7 +463,7 @@ class Session:
             old_text = old.decode("utf-8-sig", errors="replace")
             text = self._text_to_save(mech, old_text)
             write_atomic(self.backup, old, follow=False, like=st)
-            write_atomic(self.path, text.encode("utf-8"))
+            write_atomic(self.path, text.encode("utf-8"), before_replace=self._unchanged(old, st))
             data, _ = self._read_now("saved, but it cannot be read back")
             if from_bytes(data, self.path) != mech:  # pragma: no cover - save and load are tested to round-trip
                 raise LinkageError(f"{self.path}: the saved file does not read back as the edited mechanism")
@@ -443,6 +472,29 @@ class Session:
             self.text = data.decode("utf-8")
             self.texts = [self.text, *self.texts[:-1][: KEPT_TEXTS - 2], self.texts[-1]]
         return {"ok": True, "base": self.base, "saved": str(self.path), "backup": str(self.backup), "text": self.text}
+
+    def _locked_out(self, why: str) -> ConflictError:
+        """The answer to a save whose file another program kept locked past :data:`LOCK_SECONDS`."""
+        return ConflictError(f"{self.name} is {why}: not saved (save again when that program is done)")
+
+    def _unchanged(self, old: bytes, st: os.stat_result) -> Callable[[Path], None]:
+        """The last check of a save, just before its rename: the file (``target``) is still the one read (``st``),
+        with the same size and times and the same bytes (``old``); else :class:`ConflictError`, nothing replaced."""
+
+        def check(target: Path) -> None:
+            try:
+                now = os.lstat(target)
+                same = os.path.samestat(now, st) and _stamp(now) == _stamp(st)
+                same = same and read_mechanism_file(target)[0] == old
+            except (OSError, LinkageError):
+                same = False
+            if not same:
+                raise ConflictError(
+                    f"{self.name} changed on disk while it was being saved (another program wrote it): not "
+                    "overwritten (reload the page to edit the file as it is now)"
+                )
+
+        return check
 
     def _text_to_save(self, mech: Mechanism, old_text: str) -> str:
         """The file's new text: :func:`~linkagekit.files.dumps` in the old file's styles (where it has none, in

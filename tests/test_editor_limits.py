@@ -1,0 +1,209 @@
+"""``linkagekit edit`` under concurrent writers and hostile connections (review 8's open defects).
+
+* Lost update: two sessions of one file (two editors, two tabs) never both save over each other;
+  a write by another program in the instant before the rename (in place or by a rename) is not
+  overwritten; a program that holds an ``flock`` on the file is waited for, and its change is seen;
+  a lock held past ``LOCK_SECONDS`` is a conflict in one line, the file left alone.
+
+Timeouts are the module's constants, shortened here so that no test takes more than a few seconds.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+import linkagekit as lk
+from linkagekit.web import editor
+from linkagekit.web.editor import ConflictError, Session
+from test_editor import Client, _serve, _stop, copy_example
+
+
+@pytest.fixture
+def server(tmp_path):
+    """An in-process editor server on a copy of seed000 (as test_editor's)."""
+    srv = _serve(Session(copy_example(tmp_path)))
+    yield srv
+    _stop(srv)
+
+
+def _saves(*docs: tuple[Session, dict]) -> tuple[list[object], list[threading.Thread]]:
+    """Each (session, doc) saved in a thread of its own, started: the answers (or exceptions) as they come, in that
+    order, and the threads."""
+    out: list[object] = [None] * len(docs)
+
+    def one(i: int, s: Session, doc: dict) -> None:
+        try:
+            out[i] = s.save({"doc": doc, "base": s.base})
+        except Exception as exc:  # noqa: BLE001 - returned to the test
+            out[i] = exc
+
+    threads = [threading.Thread(target=one, args=(i, s, d), daemon=True) for i, (s, d) in enumerate(docs)]
+    for t in threads:
+        t.start()
+    return out, threads
+
+
+# ============================================================================== lost updates
+def test_two_sessions_of_one_file_never_both_save_over_each_other(tmp_path, monkeypatch):
+    """Two editors of one file (here two sessions, one named through a link) both opened it; A's save is held
+    between its check and its rename while B saves. B must wait for A and then be refused (409: the file
+    changed since B opened it): the file is A's, and B's change is not silently lost over A's, nor A's under B's."""
+    path = copy_example(tmp_path)
+    alias = tmp_path / "alias.yaml"
+    alias.symlink_to(path)
+    a, b = Session(path), Session(alias)
+    held, go = threading.Event(), threading.Event()
+    real = editor.write_atomic
+
+    def slow_write(p, data, *args, **kw):
+        if threading.current_thread().name == "A" and Path(p) == path:
+            held.set()
+            go.wait(5)
+        return real(p, data, *args, **kw)
+
+    monkeypatch.setattr(editor, "write_atomic", slow_write)
+    doc = a.mech.to_dict()
+    out: dict[str, object] = {}
+
+    def save(name: str, s: Session) -> None:
+        try:
+            out[name] = s.save({"doc": doc | {"name": name}, "base": s.base})
+        except Exception as exc:  # noqa: BLE001 - checked below
+            out[name] = exc
+
+    ta = threading.Thread(target=save, args=("A", a), name="A", daemon=True)
+    ta.start()
+    assert held.wait(5)
+    tb = threading.Thread(target=save, args=("B", b), name="B", daemon=True)
+    tb.start()
+    tb.join(0.5)
+    waited = tb.is_alive()
+    go.set()
+    ta.join(10)
+    tb.join(10)
+    assert waited, f"B's save did not wait for A's: {out.get('B')!r}"
+    assert isinstance(out["A"], dict) and out["A"]["ok"] is True, out
+    assert isinstance(out["B"], ConflictError) and "changed on disk" in str(out["B"]), out
+    assert lk.load(path).name == "A"
+    assert alias.is_symlink()
+
+
+def _outside_write(path: Path, how: str) -> None:
+    """Another program writes the file: in place (same length, same inode) or by a rename of a new file over it."""
+    text = path.read_text().replace("Four-bar", "OUTSIDE!", 1)
+    assert len(text) == len(path.read_text())
+    if how == "in place":
+        with open(path, "r+", encoding="utf-8") as f:
+            f.write(text)
+    else:
+        other = path.with_name("outside.tmp")
+        other.write_text(text)
+        os.replace(other, path)
+
+
+@pytest.mark.parametrize("how", ["in place", "by a rename"])
+def test_a_write_just_before_the_rename_is_not_overwritten(tmp_path, monkeypatch, how):
+    """Another program writes FILE after the save's hash check, as the new file is synced (the last step before
+    its rename): the save is refused (409), FILE keeps that program's text, no temporary file is left, and the
+    session still knows FILE as it opened it (a save after a reload works)."""
+    from linkagekit import files
+
+    path = copy_example(tmp_path)
+    s = Session(path)
+    real_fsync = os.fsync
+
+    def fsync_then_write(fd: int) -> None:
+        real_fsync(fd)
+        name = os.readlink(f"/proc/self/fd/{fd}")
+        if Path(name).name.startswith(f".{path.name}.") and ".bak." not in name:
+            _outside_write(path, how)
+
+    monkeypatch.setattr(files.os, "fsync", fsync_then_write)
+    base = s.base
+    with pytest.raises(ConflictError, match="changed on disk while it was being saved") as info:
+        s.save({"doc": s.mech.to_dict() | {"name": "mine"}, "base": s.base})
+    monkeypatch.undo()
+    assert "\n" not in str(info.value)
+    assert "OUTSIDE" in path.read_text() and lk.load(path).name != "mine"
+    assert sorted(p.name for p in path.parent.iterdir()) == sorted([path.name, path.name + ".bak"])
+    assert s.base == base
+    s.refresh()
+    assert s.save({"doc": s.mech.to_dict() | {"name": "mine"}, "base": s.base})["ok"] is True
+    assert lk.load(path).name == "mine"
+
+
+def test_a_save_waits_for_a_program_holding_an_flock_and_sees_its_change(tmp_path):
+    """A program holds an exclusive flock on FILE while it rewrites it in place (as ``flock FILE cmd`` would):
+    a save that starts meanwhile waits for the lock, then sees the change and is refused (409); the program's
+    text stays (it is not written into a file the save has already replaced)."""
+    path = copy_example(tmp_path)
+    s = Session(path)
+    locked, release = threading.Event(), threading.Event()
+
+    def program() -> None:
+        with open(path, "r+", encoding="utf-8") as f:
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX)
+            locked.set()
+            release.wait(5)
+            text = f.read().replace("Four-bar", "OUTSIDE!", 1)
+            f.seek(0)
+            f.write(text)
+            f.flush()
+            fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+
+    t = threading.Thread(target=program, daemon=True)
+    t.start()
+    assert locked.wait(5)
+    out, (saver,) = _saves((s, s.mech.to_dict() | {"name": "mine"}))
+    saver.join(0.3)
+    waited = saver.is_alive()
+    release.set()
+    t.join(5)
+    saver.join(5)
+    assert waited, f"the save did not wait for the lock: {out[0]!r}"
+    assert isinstance(out[0], ConflictError) and "changed on disk" in str(out[0]), out
+    assert "OUTSIDE" in path.read_text() and lk.load(path).name != "mine"
+
+
+def test_a_lock_held_past_the_wait_is_a_conflict_in_one_line(tmp_path, monkeypatch):
+    """A program that keeps its flock on FILE longer than LOCK_SECONDS (0.2 s here): the save is refused in one
+    line naming the file and the lock, soon after LOCK_SECONDS; FILE and its backup are left alone."""
+    monkeypatch.setattr(editor, "LOCK_SECONDS", 0.2)
+    path = copy_example(tmp_path)
+    original = path.read_bytes()
+    s = Session(path)
+    with open(path, "rb") as f:
+        fcntl.flock(f.fileno(), fcntl.LOCK_EX)
+        t0 = time.monotonic()
+        with pytest.raises(ConflictError) as info:
+            s.save({"doc": s.mech.to_dict() | {"name": "mine"}, "base": s.base})
+        elapsed = time.monotonic() - t0
+    msg = str(info.value)
+    assert msg.startswith(f"{path.name} is locked by another program") and "not saved" in msg and "\n" not in msg
+    assert 0.2 <= elapsed < 2.0, elapsed
+    assert path.read_bytes() == original and not path.with_name(path.name + ".bak").exists()
+    assert s.save({"doc": s.mech.to_dict() | {"name": "mine"}, "base": s.base})["ok"] is True  # released: saved
+
+
+def test_a_save_over_http_against_a_held_lock_is_409(tmp_path, monkeypatch):
+    """The same over HTTP: 409 with the one-line message and ``conflict``; the server keeps serving."""
+    monkeypatch.setattr(editor, "LOCK_SECONDS", 0.2)
+    path = copy_example(tmp_path)
+    srv = _serve(Session(path))
+    try:
+        c = Client(srv)
+        with open(path, "rb") as f:
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX)
+            status, _, body = c.save({"doc": srv.session.mech.to_dict(), "base": srv.session.base})
+        got = json.loads(body)
+        assert status == 409 and got["conflict"] is True and "locked by another program" in got["error"], got
+        c.still_serving()
+    finally:
+        _stop(srv)
