@@ -4,15 +4,22 @@
   a write by another program in the instant before the rename (in place or by a rename) is not
   overwritten; a program that holds an ``flock`` on the file is waited for, and its change is seen;
   a lock held past ``LOCK_SECONDS`` is a conflict in one line, the file left alone.
+* Stalled clients: a connection that sends part of a request and then trickles bytes (each read
+  within the socket's timeout) or sends nothing more is dropped within ``TIMEOUT`` of when its request
+  was awaited, while another client is answered at once; a request sent in pieces within the timeout,
+  and a kept-alive connection's next request, are answered.
 
 Timeouts are the module's constants, shortened here so that no test takes more than a few seconds.
 """
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
+import http.client
 import json
 import os
+import socket
 import threading
 import time
 from pathlib import Path
@@ -21,7 +28,7 @@ import pytest
 
 import linkagekit as lk
 from linkagekit.web import editor
-from linkagekit.web.editor import ConflictError, Session
+from linkagekit.web.editor import ConflictError, EditorServer, Session
 from test_editor import Client, _serve, _stop, copy_example
 
 
@@ -207,3 +214,95 @@ def test_a_save_over_http_against_a_held_lock_is_409(tmp_path, monkeypatch):
         c.still_serving()
     finally:
         _stop(srv)
+
+
+# ============================================================================== stalled clients
+def _dropped(s: socket.socket, trickle: bytes, until: float) -> float | None:
+    """Send ``trickle`` a byte every 0.1 s (each read of the server well within its timeout) until the server
+    closes the connection: the time it did, or None if it had not by ``until``."""
+    s.settimeout(0.1)
+    for i in range(10_000):
+        now = time.monotonic()
+        if now > until:
+            return None
+        try:
+            if s.recv(1) == b"":
+                return now
+        except TimeoutError:
+            pass
+        except ConnectionResetError:
+            return now
+        try:
+            s.sendall(trickle[i % len(trickle) : i % len(trickle) + 1])
+        except (BrokenPipeError, ConnectionResetError):
+            return time.monotonic()
+    return None
+
+
+def _stalled_requests(srv: EditorServer) -> dict[str, tuple[bytes, bytes]]:
+    """What a stalled client sends first, and then trickles."""
+    head = f"POST /{srv.token}/api/solve HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n"
+    body = json.dumps({"doc": srv.session.mech.to_dict()}).encode()
+    full = (head + f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n").encode()
+    return {
+        "half a request line": (f"GET /{srv.token}".encode(), b"/"),
+        "headers, trickled": (head.encode(), b"X-Slow: a\r\n"),
+        "headers, then half the body, trickled": (full + body[:100], b" "),
+    }
+
+
+@pytest.mark.parametrize("what", ["half a request line", "headers, trickled", "headers, then half the body, trickled"])
+def test_a_stalled_client_is_dropped_within_the_timeout(server, monkeypatch, what):
+    """A client sends part of a request, then a byte every 0.1 s (so that no single read of the server waits long)
+    and never finishes. The server drops it within TIMEOUT (0.5 s here) of when it awaited the request, plus
+    a margin, and answers another client meanwhile at once."""
+    monkeypatch.setattr(editor, "TIMEOUT", 0.5)
+    first, trickle = _stalled_requests(server)[what]
+    s = socket.create_connection(("127.0.0.1", server.port), timeout=5)
+    t0 = time.monotonic()
+    s.sendall(first)
+    c = Client(server)
+    w0 = time.monotonic()
+    status, _, _ = c.page()
+    assert status == 200 and time.monotonic() - w0 < 2.0
+    gone = _dropped(s, trickle, t0 + 3.0)
+    s.close()
+    assert gone is not None, f"{what}: still connected 3 s after it began (TIMEOUT 0.5 s)"
+    assert 0.4 <= gone - t0 <= 1.5, f"{what}: dropped {gone - t0:.2f} s after it began (TIMEOUT 0.5 s)"
+
+
+def test_a_client_that_sends_headers_then_nothing_is_dropped(server, monkeypatch):
+    """A POST's headers and then silence (the body never comes): dropped within TIMEOUT plus a margin."""
+    monkeypatch.setattr(editor, "TIMEOUT", 0.5)
+    first, _ = _stalled_requests(server)["headers, then half the body, trickled"]
+    s = socket.create_connection(("127.0.0.1", server.port), timeout=3)
+    t0 = time.monotonic()
+    s.sendall(first)
+    with contextlib.suppress(ConnectionResetError):
+        assert s.recv(1) == b""
+    s.close()
+    assert time.monotonic() - t0 <= 1.5
+
+
+def test_requests_within_the_timeout_are_answered(server, monkeypatch):
+    """The deadline is per request: on one kept-alive connection, three requests each sent in three pieces 0.05 s
+    apart, 0.2 s after the previous answer, are all answered, though the connection lives longer than TIMEOUT."""
+    monkeypatch.setattr(editor, "TIMEOUT", 0.5)
+    doc = json.dumps({"doc": server.session.mech.to_dict(), "coarse": True}).encode()
+    head = (
+        f"POST /{server.token}/api/solve HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\n"
+        f"Content-Type: application/json\r\nContent-Length: {len(doc)}\r\n\r\n"
+    ).encode()
+    sock = socket.create_connection(("127.0.0.1", server.port), timeout=5)
+    t0 = time.monotonic()
+    for _ in range(3):
+        time.sleep(0.2)
+        for piece in (head[:20], head[20:] + doc[:50], doc[50:]):
+            sock.sendall(piece)
+            time.sleep(0.05)
+        r = http.client.HTTPResponse(sock)
+        r.begin()
+        assert r.status == 200 and json.loads(r.read())["ok"] is True
+    assert time.monotonic() - t0 > 0.5
+    sock.close()
+    Client(server).still_serving()

@@ -32,6 +32,7 @@ import contextlib
 import ctypes
 import hashlib
 import html
+import io
 import json
 import math
 import os
@@ -79,7 +80,8 @@ PROBE_EVERY = 5
 MAX_WINDOWS = 16
 #: the largest request body the server reads
 MAX_BODY = 2 << 20
-#: seconds a request may take to arrive
+#: seconds a connection may wait for its next request to arrive whole (request line, headers and body; the idle
+#: time before it included), and an answer may take to be sent: a client that stalls or trickles is dropped
 TIMEOUT = 10.0
 #: seconds a save waits for another program's lock (flock) on the file before it says so
 LOCK_SECONDS = 2.0
@@ -627,12 +629,54 @@ class Watch:
                         _raise_in(solve.thread_id, SolveStopped)
 
 
+class _Arrival(io.RawIOBase):
+    """A connection's bytes as they arrive, every read within what is left of the request's ``deadline``.
+
+    A socket's own timeout bounds each read, not their sum: a client that sends a byte now and then
+    would hold its connection (and its thread) forever.  Past the deadline a read raises
+    :class:`TimeoutError`, and the standard library's handler drops the connection.  The socket's
+    timeout is :data:`TIMEOUT` again after each read, for the answer's writes.
+    """
+
+    def __init__(self, sock: socket.socket) -> None:
+        super().__init__()
+        self.sock = sock
+        self.deadline = math.inf
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        left = self.deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError("the request did not arrive in time")
+        self.sock.settimeout(min(left, TIMEOUT))
+        try:
+            return self.sock.recv_into(buffer)
+        finally:
+            self.sock.settimeout(TIMEOUT)
+
+
 class _Handler(BaseHTTPRequestHandler):
-    """One request: check where it comes from and what it asks, then answer it in JSON (or the page)."""
+    """One connection's requests: check where each comes from and what it asks, then answer it in JSON (or the page).
+
+    Each request must arrive whole (request line, headers, body) within :data:`TIMEOUT` of when it is
+    awaited (:class:`_Arrival`), or the connection is dropped.
+    """
 
     server: EditorServer
     protocol_version = "HTTP/1.1"
-    timeout = TIMEOUT
+
+    def setup(self) -> None:
+        super().setup()
+        self.connection.settimeout(TIMEOUT)  # read now, not at import: the tests shorten it
+        self.rfile.close()  # the standard library's reader, replaced by one with a deadline
+        self.arrival = _Arrival(self.connection)
+        self.rfile = io.BufferedReader(self.arrival)
+
+    def handle_one_request(self) -> None:
+        self.arrival.deadline = time.monotonic() + TIMEOUT
+        super().handle_one_request()
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base class's name
         pass  # quiet: the terminal shows the URL, not a request log
