@@ -8,6 +8,9 @@
   within the socket's timeout) or sends nothing more is dropped within ``TIMEOUT`` of when its request
   was awaited, while another client is answered at once; a request sent in pieces within the timeout,
   and a kept-alive connection's next request, are answered.
+* Bounded handlers: more idle connections than ``MAX_CONNECTIONS`` never run more handler threads than
+  that, and a normal request is answered once the idle ones time out; with every handler held, a
+  connection is answered 503 (JSON) after ``BUSY_SECONDS``, and served again once one is freed.
 
 Timeouts are the module's constants, shortened here so that no test takes more than a few seconds.
 """
@@ -29,7 +32,7 @@ import pytest
 import linkagekit as lk
 from linkagekit.web import editor
 from linkagekit.web.editor import ConflictError, EditorServer, Session
-from test_editor import Client, _serve, _stop, copy_example
+from test_editor import Client, _requests_in_flight, _serve, _stop, copy_example
 
 
 @pytest.fixture
@@ -306,3 +309,79 @@ def test_requests_within_the_timeout_are_answered(server, monkeypatch):
     assert time.monotonic() - t0 > 0.5
     sock.close()
     Client(server).still_serving()
+
+
+# ============================================================================== bounded handlers
+def _handlers() -> int:
+    return len(_requests_in_flight())
+
+
+def test_idle_connections_beyond_the_limit_wait_for_a_free_handler(tmp_path, monkeypatch):
+    """10 idle connections against MAX_CONNECTIONS = 4 (TIMEOUT 0.5 s): never more than 4 handler threads, and a
+    normal request that came after them is answered once they time out, four at a time (about 1.5 s); every idle
+    connection is dropped."""
+    monkeypatch.setattr(editor, "MAX_CONNECTIONS", 4)
+    monkeypatch.setattr(editor, "TIMEOUT", 0.5)
+    monkeypatch.setattr(editor, "BUSY_SECONDS", 3.0)
+    srv = _serve(Session(copy_example(tmp_path)))
+    try:
+        before = _handlers()
+        idle = [socket.create_connection(("127.0.0.1", srv.port), timeout=5) for _ in range(10)]
+        most = 0
+        answer: dict[str, object] = {}
+
+        def normal() -> None:
+            t0 = time.monotonic()
+            answer["status"] = Client(srv).page()[0]
+            answer["seconds"] = time.monotonic() - t0
+
+        t = threading.Thread(target=normal, daemon=True)
+        t.start()
+        deadline = time.monotonic() + 6
+        while t.is_alive() and time.monotonic() < deadline:
+            most = max(most, _handlers() - before)
+            t.join(0.01)
+        assert most <= 4, f"{most} handler threads for a limit of 4"
+        assert answer.get("status") == 200 and answer["seconds"] < 4.0, answer
+        for s in idle:
+            s.settimeout(3)
+            with contextlib.suppress(ConnectionResetError):
+                assert s.recv(1) == b""
+            s.close()
+    finally:
+        _stop(srv)
+
+
+def test_with_every_handler_held_a_connection_gets_503_then_is_served_once_one_is_free(tmp_path, monkeypatch):
+    """MAX_CONNECTIONS = 2 held by two idle connections (TIMEOUT 5 s): a request is answered 503 (the editor's
+    JSON, busy) after BUSY_SECONDS (0.6 s), the next one at once (no second wait); once the idle connections
+    close, a request is answered 200."""
+    monkeypatch.setattr(editor, "MAX_CONNECTIONS", 2)
+    monkeypatch.setattr(editor, "TIMEOUT", 5.0)
+    monkeypatch.setattr(editor, "BUSY_SECONDS", 0.6)
+    srv = _serve(Session(copy_example(tmp_path)))
+    try:
+        before = _handlers()
+        idle = [socket.create_connection(("127.0.0.1", srv.port), timeout=5) for _ in range(2)]
+        deadline = time.monotonic() + 5
+        while _handlers() - before < 2:
+            assert time.monotonic() < deadline, "the idle connections were not taken"
+            time.sleep(0.01)
+        c = Client(srv)
+        for k in range(2):
+            t0 = time.monotonic()
+            status, headers, body = c.page()
+            took = time.monotonic() - t0
+            got = json.loads(body)
+            assert status == 503 and got == {"ok": False, "busy": True, "error": "the editor is busy: try again"}
+            assert headers.get("Content-Type") == "application/json" and "Content-Security-Policy" in headers
+            assert (0.55 <= took < 2.5) if k == 0 else took < 0.5, (k, took)
+        for s in idle:
+            s.close()
+        deadline = time.monotonic() + 5
+        while _handlers() > before:
+            assert time.monotonic() < deadline, "the closed connections still hold their handlers"
+            time.sleep(0.01)
+        c.still_serving()
+    finally:
+        _stop(srv)

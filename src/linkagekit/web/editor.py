@@ -83,6 +83,11 @@ MAX_BODY = 2 << 20
 #: seconds a connection may wait for its next request to arrive whole (request line, headers and body; the idle
 #: time before it included), and an answer may take to be sent: a client that stalls or trickles is dropped
 TIMEOUT = 10.0
+#: connections served at once, one thread each; more wait (in the system's queue) for one to end
+MAX_CONNECTIONS = 64
+#: seconds a connection waits for a free handler before it is answered 503 (busy): as long as a stalled
+#: connection may hold one (TIMEOUT), so that only solves that long (SOLVE_SECONDS) on every handler make it busy
+BUSY_SECONDS = 10.0
 #: seconds a save waits for another program's lock (flock) on the file before it says so
 LOCK_SECONDS = 2.0
 #: how a client that went away shows: it reset or closed its connection, or stopped sending
@@ -629,6 +634,19 @@ class Watch:
                         _raise_in(solve.thread_id, SolveStopped)
 
 
+#: the headers of every answer, besides its status, type, length and connection
+_HEADERS = (
+    ("Cache-Control", "no-store"),
+    ("X-Content-Type-Options", "nosniff"),
+    ("Referrer-Policy", "no-referrer"),
+    (
+        "Content-Security-Policy",
+        "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data: blob:; "
+        "connect-src 'self'; form-action 'none'; frame-ancestors 'none'",
+    ),
+)
+
+
 class _Arrival(io.RawIOBase):
     """A connection's bytes as they arrive, every read within what is left of the request's ``deadline``.
 
@@ -694,14 +712,8 @@ class _Handler(BaseHTTPRequestHandler):
             self.close_connection = True
         self.send_header("Content-Type", ctype)
         self.send_header("Content-Length", str(len(body)))
-        self.send_header("Cache-Control", "no-store")
-        self.send_header("X-Content-Type-Options", "nosniff")
-        self.send_header("Referrer-Policy", "no-referrer")
-        self.send_header(
-            "Content-Security-Policy",
-            "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data: blob:; "
-            "connect-src 'self'; form-action 'none'; frame-ancestors 'none'",
-        )
+        for name, value in _HEADERS:
+            self.send_header(name, value)
         self.end_headers()
         if with_body:
             self.wfile.write(body)
@@ -911,6 +923,8 @@ class EditorServer(ThreadingHTTPServer):
     routes = ("", "api/solve", "api/save")
     #: set once the server stops: a request broken by the shutdown is not reported
     closing = False
+    #: set when a connection found no free handler: the next ones are answered 503 at once until one is free
+    full = False
 
     def __init__(
         self, session: Session, port: int = 0, token: str | None = None, solve_seconds: float = SOLVE_SECONDS
@@ -919,6 +933,8 @@ class EditorServer(ThreadingHTTPServer):
             raise InputError(f"--port: expected 0 to 65535, got {port!r}")
         self.session = session
         self.watch = Watch(solve_seconds)
+        #: the free connection handlers (:data:`MAX_CONNECTIONS`, read now: the tests lower it)
+        self.slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
         self.token = token or secrets.token_urlsafe(24)
         try:
             super().__init__(("127.0.0.1", port), _Handler)
@@ -927,6 +943,51 @@ class EditorServer(ThreadingHTTPServer):
         self.port = int(self.server_address[1])
         self.hosts = {f"127.0.0.1:{self.port}", f"localhost:{self.port}"}
         self.origins = {f"http://{h}" for h in self.hosts}
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """Serve the connection in a thread of its own once one of the :data:`MAX_CONNECTIONS` is free.
+
+        This runs in the accepting thread: it waits for a free handler up to :data:`BUSY_SECONDS`
+        (meanwhile the system queues the connections that come), then answers 503 (:meth:`_busy`), and,
+        until a handler is free again, answers the next connections 503 at once (a queue of them must not
+        wait :data:`BUSY_SECONDS` each).  A server that stops ends the wait.
+        """
+        deadline = time.monotonic() + (0.0 if self.full else BUSY_SECONDS)
+        while not self.slots.acquire(timeout=min(0.1, max(0.0, deadline - time.monotonic()))):
+            if self.closing or time.monotonic() >= deadline:
+                self.full = True
+                self._busy(request)
+                return
+        self.full = False
+        try:
+            super().process_request(request, client_address)
+        except BaseException:  # no thread: its handler is free again
+            self.slots.release()
+            raise
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self.slots.release()
+
+    def _busy(self, request: socket.socket) -> None:
+        """Answer 503 to a connection no handler was free for, without ever waiting on it (the accepting thread)."""
+        body = json.dumps({"ok": False, "busy": True, "error": "the editor is busy: try again"}).encode()
+        head = [
+            "HTTP/1.1 503 Service Unavailable",
+            "Content-Type: application/json",
+            f"Content-Length: {len(body)}",
+            "Connection: close",
+            "Retry-After: 1",
+            *(f"{name}: {value}" for name, value in _HEADERS),
+        ]
+        with contextlib.suppress(OSError):
+            request.setblocking(False)
+            with contextlib.suppress(BlockingIOError):
+                request.recv(1 << 16)  # what arrived of its request: closed unread, it would reset the connection
+            request.send("\r\n".join(head).encode() + b"\r\n\r\n" + body)
+        self.shutdown_request(request)
 
     def handle_error(self, request: Any, client_address: Any) -> None:
         """Report a request that failed: nothing for a client that went away, one line for anything else.
