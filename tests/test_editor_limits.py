@@ -352,6 +352,44 @@ def test_idle_connections_beyond_the_limit_wait_for_a_free_handler(tmp_path, mon
         _stop(srv)
 
 
+def test_a_crowded_server_has_idle_connections_make_room_sooner(tmp_path, monkeypatch):
+    """10 idle connections against MAX_CONNECTIONS = 4 with a long TIMEOUT (5 s): once a connection waits for a
+    handler, those that have not sent their request must send it within CROWDED_SECONDS (0.3 s here), so a
+    normal request that came after them is answered in about 3 x 0.3 s, not 3 x 5 s (the idle ones before it
+    dropped). A request under way is not cut: a solve whose request arrived, running on one handler, is answered."""
+    monkeypatch.setattr(editor, "MAX_CONNECTIONS", 4)
+    monkeypatch.setattr(editor, "TIMEOUT", 5.0)
+    monkeypatch.setattr(editor, "CROWDED_SECONDS", 0.3)
+    monkeypatch.setattr(editor, "BUSY_SECONDS", 3.0)
+    srv = _serve(Session(copy_example(tmp_path)))
+    try:
+        doc = srv.session.mech.to_dict()
+        solving = threading.Thread(target=lambda: answers.append(Client(srv).solve({"doc": doc})[0]), daemon=True)
+        answers: list[int] = []
+        solving.start()  # a full sweep with checks, taking a handler before the idle connections come
+        time.sleep(0.05)
+        idle = [socket.create_connection(("127.0.0.1", srv.port), timeout=5) for _ in range(10)]
+        t0 = time.monotonic()
+        status, _, _ = Client(srv).page()
+        took = time.monotonic() - t0
+        assert status == 200 and took < 3.0, (status, took)
+        solving.join(10)
+        assert answers == [200]
+        dropped = 0
+        for s in idle:
+            s.settimeout(0.05)
+            try:
+                dropped += s.recv(1) == b""
+            except ConnectionResetError:
+                dropped += 1
+            except TimeoutError:
+                pass
+            s.close()
+        assert dropped >= 6, f"{dropped} idle connections made room (at least 10 - 4 had to, for the request)"
+    finally:
+        _stop(srv)
+
+
 def test_with_every_handler_held_a_connection_gets_503_then_is_served_once_one_is_free(tmp_path, monkeypatch):
     """MAX_CONNECTIONS = 2 held by two idle connections (TIMEOUT 5 s): a request is answered 503 (the editor's
     JSON, busy) after BUSY_SECONDS (0.6 s), the next one at once (no second wait); once the idle connections

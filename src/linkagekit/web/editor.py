@@ -91,6 +91,11 @@ MAX_BODY = 2 << 20
 TIMEOUT = 10.0
 #: connections served at once, one thread each; more wait (in the system's queue) for one to end
 MAX_CONNECTIONS = 64
+#: seconds a request may still take to arrive once every handler is taken and a connection waits for one: idle
+#: kept-alive connections and stalled clients make room sooner than TIMEOUT
+CROWDED_SECONDS = 1.0
+#: seconds between two looks of a waiting read at its deadline (which a crowded server brings forward)
+READ_SLICE = 0.25
 #: seconds a connection waits for a free handler before it is answered 503 (busy): a little longer than a stalled
 #: connection may hold one (TIMEOUT), so that only solves that long (SOLVE_SECONDS) on every handler make it busy
 BUSY_SECONDS = 12.0
@@ -658,8 +663,9 @@ class _Arrival(io.RawIOBase):
 
     A socket's own timeout bounds each read, not their sum: a client that sends a byte now and then
     would hold its connection (and its thread) forever.  Past the deadline a read raises
-    :class:`TimeoutError`, and the standard library's handler drops the connection.  The socket's
-    timeout is :data:`TIMEOUT` again after each read, for the answer's writes.
+    :class:`TimeoutError`, and the standard library's handler drops the connection.  A read waits
+    :data:`READ_SLICE` at a time, so that a deadline brought forward (:meth:`hurry`) counts at once.
+    The socket's timeout is :data:`TIMEOUT` again after each read, for the answer's writes.
     """
 
     def __init__(self, sock: socket.socket) -> None:
@@ -670,15 +676,22 @@ class _Arrival(io.RawIOBase):
     def readable(self) -> bool:
         return True
 
+    def hurry(self, seconds: float) -> None:
+        """Have the request arrive within ``seconds`` from now, if its deadline is later (from another thread)."""
+        self.deadline = min(self.deadline, time.monotonic() + seconds)
+
     def readinto(self, buffer: Any) -> int:
-        left = self.deadline - time.monotonic()
-        if left <= 0:
-            raise TimeoutError("the request did not arrive in time")
-        self.sock.settimeout(min(left, TIMEOUT))
-        try:
-            return self.sock.recv_into(buffer)
-        finally:
-            self.sock.settimeout(TIMEOUT)
+        while True:
+            left = self.deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("the request did not arrive in time")
+            self.sock.settimeout(min(left, READ_SLICE))
+            try:
+                return self.sock.recv_into(buffer)
+            except TimeoutError:
+                continue  # look at the deadline again: it may have been brought forward
+            finally:
+                self.sock.settimeout(TIMEOUT)
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -697,6 +710,13 @@ class _Handler(BaseHTTPRequestHandler):
         self.rfile.close()  # the standard library's reader, replaced by one with a deadline
         self.arrival = _Arrival(self.connection)
         self.rfile = io.BufferedReader(self.arrival)
+        with self.server.lock:
+            self.server.arrivals.add(self.arrival)
+
+    def finish(self) -> None:
+        with self.server.lock:
+            self.server.arrivals.discard(self.arrival)
+        super().finish()
 
     def handle_one_request(self) -> None:
         self.arrival.deadline = time.monotonic() + TIMEOUT
@@ -941,6 +961,9 @@ class EditorServer(ThreadingHTTPServer):
         self.watch = Watch(solve_seconds)
         #: the free connection handlers (:data:`MAX_CONNECTIONS`, read now: the tests lower it)
         self.slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
+        #: the readers of the connections served now (:meth:`_crowded` brings their deadlines forward)
+        self.arrivals: set[_Arrival] = set()
+        self.lock = threading.Lock()
         self.token = token or secrets.token_urlsafe(24)
         try:
             super().__init__(("127.0.0.1", port), _Handler)
@@ -956,10 +979,12 @@ class EditorServer(ThreadingHTTPServer):
         This runs in the accepting thread: it waits for a free handler up to :data:`BUSY_SECONDS`
         (meanwhile the system queues the connections that come), then answers 503 (:meth:`_busy`), and,
         until a handler is free again, answers the next connections 503 at once (a queue of them must not
-        wait :data:`BUSY_SECONDS` each).  A server that stops ends the wait.
+        wait :data:`BUSY_SECONDS` each).  While it waits, the requests under way must arrive within
+        :data:`CROWDED_SECONDS` (:meth:`_crowded`).  A server that stops ends the wait.
         """
         deadline = time.monotonic() + (0.0 if self.full else BUSY_SECONDS)
         while not self.slots.acquire(timeout=min(0.1, max(0.0, deadline - time.monotonic()))):
+            self._crowded()
             if self.closing or time.monotonic() >= deadline:
                 self.full = True
                 self._busy(request)
@@ -970,6 +995,13 @@ class EditorServer(ThreadingHTTPServer):
         except BaseException:  # no thread: its handler is free again
             self.slots.release()
             raise
+
+    def _crowded(self) -> None:
+        """Every handler is taken and a connection waits: the connections that are still to send their request
+        (idle kept-alive ones, stalled clients) must send it within :data:`CROWDED_SECONDS`, or make room."""
+        with self.lock:
+            for arrival in self.arrivals:
+                arrival.hurry(CROWDED_SECONDS)
 
     def process_request_thread(self, request: Any, client_address: Any) -> None:
         try:
