@@ -9,8 +9,9 @@ The editor runs as a child process (``serve`` with a solve budget of BUDGET seco
    next editor started on FILE must remove any temporary file the kill left;
 2. 500 concurrent requests (coarse solves and the page), every one of them answered;
 3. 200 slow connections (headers sent one byte a second), while a normal request is answered;
-   the server drops them after its request timeout (TIMEOUT), MAX_CONNECTIONS at a time (the rest
-   wait in the system's queue for a handler), so all within ceil(200 / MAX_CONNECTIONS) timeouts;
+   the server drops them MAX_CONNECTIONS at a time (the rest wait in the system's queue for a
+   handler), each after its request timeout (TIMEOUT; CROWDED_SECONDS while others wait), so all
+   within ceil(200 / MAX_CONNECTIONS) timeouts;
 4. a solve that would take minutes (a 10,000-sample sweep of the class-3 triad), its client
    leaving after 1 s (a closed tab): the editor's CPU must be idle again well within BUDGET; and
    the same solve with the client waiting: answered 503 with a message after about BUDGET.
