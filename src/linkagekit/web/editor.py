@@ -16,17 +16,18 @@ writes a temporary file and renames it over the old one, after copying the old o
 backup, and refuses when the file changed on disk since it was opened or last saved, or is
 read-only; a page load takes the file as it is on disk now.  Saves of one file take turns (in
 this process, and with any program that takes an ``flock`` on it), and the file is checked once
-more just before the rename (:meth:`Session.save` says what no check can exclude).  A symbolic link FILE is followed
-(the file it points to is replaced, the link stays), a link ``FILE.bak`` never is (it is
-replaced); both writes go through :func:`~linkagekit.files.write_atomic`, and every read of
-the file is bounded (:func:`~linkagekit.files.read_mechanism_file`).  The temporary files a
-save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed when
+more just before the rename (:meth:`Session.save` says what no check can exclude).  A symbolic
+link FILE is followed (the file it points to is replaced, the link stays), a link ``FILE.bak``
+never is (it is replaced); both writes go through :func:`~linkagekit.files.write_atomic`, and
+every read of the file is bounded (:func:`~linkagekit.files.read_mechanism_file`).  The
+temporary files a save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed when
 the editor starts.  The browser is opened on a private redirect page (:func:`redirect_file`),
 never with the token on its command line.
 
 At most :data:`MAX_CONNECTIONS` connections are served at once (one thread each; more wait, then
 are answered 503), and each request must arrive whole within :data:`TIMEOUT` of when it is
-awaited: a client that stalls or trickles its request is dropped.
+awaited (sooner when others wait for a handler): a client that stalls or trickles its request
+is dropped.
 
 Each solve (and the page) runs under a :class:`Watch`: past its time budget it is stopped and
 answered 503 with a message; when its client has gone (a closed tab) it is stopped at once.
