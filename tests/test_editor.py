@@ -1309,7 +1309,7 @@ def test_slow_connections_do_not_block_the_editor(server, monkeypatch):
     here, TIMEOUT in use)."""
     from linkagekit.web import editor
 
-    monkeypatch.setattr(editor._Handler, "timeout", 0.5)
+    monkeypatch.setattr(editor, "TIMEOUT", 0.5)
     socks = [socket.create_connection(("127.0.0.1", server.port), timeout=10) for _ in range(20)]
     for s in socks:
         s.sendall(b"G")

@@ -29,6 +29,7 @@ import os
 import re
 import secrets
 import stat
+import time
 from collections.abc import Callable, Iterator, Sequence
 from functools import cache
 from pathlib import Path
@@ -728,6 +729,7 @@ def write_atomic(
     follow: bool = True,
     error: type[LinkageError] = InputError,
     like: os.stat_result | None = None,
+    before_replace: Callable[[Path], None] | None = None,
 ) -> Path:
     """Write ``data`` to ``p`` in one step: a temporary file beside it, written, synced, then :func:`os.replace`.
 
@@ -738,6 +740,10 @@ def write_atomic(
     descriptor's file, else nothing is replaced.  With ``follow`` a symbolic link ``p`` is
     followed (the file it points to is replaced and the link stays); without it the link
     itself is replaced by the new regular file, and nothing is ever written through it.
+    ``before_replace``, when given, is called with the path about to be replaced as the last
+    step before the rename (the new file complete and synced): whatever it raises stops the
+    write, the old file stays, the temporary file is removed (the editor checks there that
+    nobody changed the file since it was read).
 
     Returns the path replaced; an ``OSError`` becomes ``error`` naming ``p``.
 
@@ -752,7 +758,7 @@ def write_atomic(
     ...     (d / "m.bak").is_symlink(), (d / "victim").read_text(), (d / "m.bak").read_text()
     (False, 'keep', 'new')
     """
-    with _temporary(Path(p), follow, error, like) as (fd, _), open(fd, "wb", closefd=False) as f:
+    with _temporary(Path(p), follow, error, like, before_replace) as (fd, _), open(fd, "wb", closefd=False) as f:
         f.write(data)
     return _target(Path(p), follow)
 
@@ -773,7 +779,11 @@ def _old_stat(target: Path) -> os.stat_result | None:
 
 @contextlib.contextmanager
 def _temporary(
-    p: Path, follow: bool, error: type[LinkageError], like: os.stat_result | None
+    p: Path,
+    follow: bool,
+    error: type[LinkageError],
+    like: os.stat_result | None,
+    before_replace: Callable[[Path], None] | None = None,
 ) -> Iterator[tuple[int, Path]]:
     """A fresh temporary file beside ``p``'s target (its descriptor and name); on success it replaces the target.
 
@@ -782,7 +792,7 @@ def _temporary(
     synced, and renamed over the target once its name is checked to be still the same file (and
     checked again after the rename: another user who can write the directory may still swap it in
     between, but then only puts a name of theirs in place, which that user could do anyway; nothing
-    is ever written through it).
+    is ever written through it).  ``before_replace(target)`` runs last, just before the rename.
     """
     target = _target(p, follow)
     tmp = target.with_name(f".{target.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
@@ -797,6 +807,8 @@ def _temporary(
         os.fsync(fd)
         if not os.path.samestat(os.lstat(tmp), os.fstat(fd)):
             raise error(f"{target}: not written: its temporary file {tmp.name} was replaced by another program")
+        if before_replace is not None:
+            before_replace(target)
         os.replace(tmp, target)
         done = True
         if not os.path.samestat(os.lstat(target), os.fstat(fd)):  # swapped between the check and the rename
@@ -837,3 +849,82 @@ def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iter
     """
     with _temporary(Path(p), True, error, None) as (_, tmp):
         yield tmp
+
+
+#: seconds between two tries of :func:`locked` to take a lock another program holds
+LOCK_POLL = 0.01
+
+
+@contextlib.contextmanager
+def locked(p: str | Path, seconds: float, fail: Callable[[str], LinkageError]) -> Iterator[int | None]:
+    """Hold an advisory exclusive lock (``flock``) on the regular file ``p`` (a link followed) for the block.
+
+    Writers that take the same lock before they read the file and keep it until they have written it
+    (another ``linkagekit edit``, ``flock FILE command``) then never interleave with this one.  The lock is
+    on the file, not on its name: once taken, the descriptor must still be the file named ``p`` (a
+    writer that replaced it meanwhile, by a rename, is waited for again on the new file).  Waits at most
+    ``seconds`` for a lock another program holds, else raises ``fail(message)``.  Yields the locked
+    descriptor, or None when there is nothing to lock (no such file, not a regular file: the read that
+    follows says why) or the system has no ``flock``.  The lock binds only writers that take it: nothing
+    stops another program from writing the file without it.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     f = pathlib.Path(tmp) / "m.yaml"
+    ...     _ = f.write_text("x")
+    ...     with locked(f, 1.0, InputError) as fd, locked(f, 0.05, InputError):
+    ...         pass
+    Traceback (most recent call last):
+    ...
+    linkagekit.errors.InputError: locked by another program (it holds an flock on the file)
+    """
+    fd = _lock(Path(p), time.monotonic() + seconds, fail)
+    try:
+        yield fd
+    finally:
+        if fd is not None:
+            os.close(fd)  # releases the lock
+
+
+def _lock(p: Path, deadline: float, fail: Callable[[str], LinkageError]) -> int | None:
+    """The descriptor of the file ``p`` now names, flock-ed exclusively (:func:`locked`), or None."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        try:
+            fd = os.open(p, flags)
+        except (OSError, ValueError):
+            return None
+        try:
+            if not (stat.S_ISREG(os.fstat(fd).st_mode) and _flock(fd, deadline, fail)):
+                os.close(fd)
+                return None
+            with contextlib.suppress(OSError):
+                if os.path.samestat(os.fstat(fd), os.stat(p)):
+                    return fd
+        except BaseException:
+            os.close(fd)
+            raise
+        os.close(fd)  # replaced while it was waited for: lock the file that has the name now
+        if time.monotonic() >= deadline:
+            raise fail("locked by another program (it keeps replacing the file)")
+
+
+def _flock(fd: int, deadline: float, fail: Callable[[str], LinkageError]) -> bool:
+    """Take an exclusive flock on ``fd``, waiting until ``deadline`` (then ``fail``); False when the system has none
+    (no ``fcntl``, or a file system that refuses it)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows: no advisory locks of this kind
+        return False
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                raise fail("locked by another program (it holds an flock on the file)") from None
+            time.sleep(LOCK_POLL)
+        except OSError:  # pragma: no cover - e.g. ENOLCK on a network file system without locks
+            return False

@@ -14,13 +14,20 @@ token, with a ``Host`` other than the loopback address, from another ``Origin``,
 other path.  Only the opened file (and its ``.bak`` backup) is ever written: ``save``
 writes a temporary file and renames it over the old one, after copying the old one to the
 backup, and refuses when the file changed on disk since it was opened or last saved, or is
-read-only; a page load takes the file as it is on disk now.  A symbolic link FILE is followed
-(the file it points to is replaced, the link stays), a link ``FILE.bak`` never is (it is
-replaced); both writes go through :func:`~linkagekit.files.write_atomic`, and every read of
-the file is bounded (:func:`~linkagekit.files.read_mechanism_file`).  The temporary files a
-save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed when
+read-only; a page load takes the file as it is on disk now.  Saves of one file take turns (in
+this process, and with any program that takes an ``flock`` on it), and the file is checked once
+more just before the rename (:meth:`Session.save` says what no check can exclude).  A symbolic
+link FILE is followed (the file it points to is replaced, the link stays), a link ``FILE.bak``
+never is (it is replaced); both writes go through :func:`~linkagekit.files.write_atomic`, and
+every read of the file is bounded (:func:`~linkagekit.files.read_mechanism_file`).  The
+temporary files a save killed half-way may leave (``.FILE.<hex>.tmp``, exactly that pattern) are removed when
 the editor starts.  The browser is opened on a private redirect page (:func:`redirect_file`),
 never with the token on its command line.
+
+At most :data:`MAX_CONNECTIONS` connections are served at once (one thread each; more wait, then
+are answered 503), and each request must arrive whole within :data:`TIMEOUT` of when it is
+awaited (sooner when others wait for a handler): a client that stalls or trickles its request
+is dropped.
 
 Each solve (and the page) runs under a :class:`Watch`: past its time budget it is stopped and
 answered 503 with a message; when its client has gone (a closed tab) it is stopped at once.
@@ -32,6 +39,7 @@ import contextlib
 import ctypes
 import hashlib
 import html
+import io
 import json
 import math
 import os
@@ -45,7 +53,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -59,6 +67,7 @@ from ..errors import InputError, LinkageError, MechanismFileError, one_line, sho
 from ..files import (
     dumps,
     from_bytes,
+    locked,
     merge_comments,
     read_mechanism_file,
     stray_temporaries,
@@ -78,8 +87,21 @@ PROBE_EVERY = 5
 MAX_WINDOWS = 16
 #: the largest request body the server reads
 MAX_BODY = 2 << 20
-#: seconds a request may take to arrive
+#: seconds a connection may wait for its next request to arrive whole (request line, headers and body; the idle
+#: time before it included), and an answer may take to be sent: a client that stalls or trickles is dropped
 TIMEOUT = 10.0
+#: connections served at once, one thread each; more wait (in the system's queue) for one to end
+MAX_CONNECTIONS = 64
+#: seconds a request may still take to arrive once every handler is taken and a connection waits for one: idle
+#: kept-alive connections and stalled clients make room sooner than TIMEOUT
+CROWDED_SECONDS = 1.0
+#: seconds between two looks of a waiting read at its deadline (which a crowded server brings forward)
+READ_SLICE = 0.25
+#: seconds a connection waits for a free handler before it is answered 503 (busy): a little longer than a stalled
+#: connection may hold one (TIMEOUT), so that only solves that long (SOLVE_SECONDS) on every handler make it busy
+BUSY_SECONDS = 12.0
+#: seconds a save waits for another program's lock (flock) on the file before it says so
+LOCK_SECONDS = 2.0
 #: how a client that went away shows: it reset or closed its connection, or stopped sending
 VANISHED = (ConnectionError, TimeoutError)
 #: seconds one solve (or the page) may compute before it is stopped and answered with a message
@@ -217,6 +239,23 @@ def _finite(v: Any) -> bool:
 
 def _hash(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
+
+
+_PATH_LOCKS: dict[str, threading.Lock] = {}
+_PATH_LOCKS_LOCK = threading.Lock()
+
+
+def path_lock(path: Path) -> threading.Lock:
+    """The lock of the file ``path`` names (a link followed) in this process: its saves take it in turn, also
+    those of two sessions of one file (two servers, or a ``./m.yaml`` and an ``m.yaml``)."""
+    key = os.path.realpath(path)
+    with _PATH_LOCKS_LOCK:
+        return _PATH_LOCKS.setdefault(key, threading.Lock())
+
+
+def _stamp(st: os.stat_result) -> tuple[int, int, int]:
+    """What a write to a file changes of its status: its size, its modification and its change time."""
+    return st.st_size, st.st_mtime_ns, st.st_ctime_ns
 
 
 def _leading_comments(text: str) -> str:
@@ -414,6 +453,15 @@ class Session:
         step (:func:`~linkagekit.files.write_atomic`; a link FILE is followed).  A read-only file
         (no owner write bit) is not saved.  The file's comments are kept where its lines are
         (:meth:`_text_to_save`).  The saved file is read back and must give the same mechanism.
+
+        No other writer's change is lost in between: the saves of this file in this process take turns
+        (:func:`path_lock`), each holds an advisory lock on the file (:func:`~linkagekit.files.locked`, which
+        another ``linkagekit edit`` or a program run under ``flock FILE`` honours) from its read to its
+        rename, and the last step before the rename checks that the file is still the one read, unchanged
+        (:meth:`_unchanged`).  A program that writes without the lock can still slip in between that check
+        and the rename (microseconds), or write through a descriptor it opened before the rename (into the
+        replaced file, which has no name any more): only mandatory locks, which POSIX does not have, could
+        exclude it.
         """
         doc = request.get("doc")
         if not isinstance(doc, dict):
@@ -422,7 +470,7 @@ class Session:
         if not isinstance(base, str):
             raise RequestError(f"'base' must be the file's hash the page was given, got {shorten(repr(base))}")
         mech = Mechanism.from_dict(doc, source=str(self.path))
-        with self.lock:
+        with path_lock(self.path), self.lock, locked(self.path, LOCK_SECONDS, self._locked_out):
             old, st = self._read_now("not saved")
             if _hash(old) != base or _hash(old) != self.base:
                 raise ConflictError(
@@ -434,7 +482,7 @@ class Session:
             old_text = old.decode("utf-8-sig", errors="replace")
             text = self._text_to_save(mech, old_text)
             write_atomic(self.backup, old, follow=False, like=st)
-            write_atomic(self.path, text.encode("utf-8"))
+            write_atomic(self.path, text.encode("utf-8"), before_replace=self._unchanged(old, st))
             data, _ = self._read_now("saved, but it cannot be read back")
             if from_bytes(data, self.path) != mech:  # pragma: no cover - save and load are tested to round-trip
                 raise LinkageError(f"{self.path}: the saved file does not read back as the edited mechanism")
@@ -443,6 +491,29 @@ class Session:
             self.text = data.decode("utf-8")
             self.texts = [self.text, *self.texts[:-1][: KEPT_TEXTS - 2], self.texts[-1]]
         return {"ok": True, "base": self.base, "saved": str(self.path), "backup": str(self.backup), "text": self.text}
+
+    def _locked_out(self, why: str) -> ConflictError:
+        """The answer to a save whose file another program kept locked past :data:`LOCK_SECONDS`."""
+        return ConflictError(f"{self.name} is {why}: not saved (save again when that program is done)")
+
+    def _unchanged(self, old: bytes, st: os.stat_result) -> Callable[[Path], None]:
+        """The last check of a save, just before its rename: the file (``target``) is still the one read (``st``),
+        with the same size and times and the same bytes (``old``); else :class:`ConflictError`, nothing replaced."""
+
+        def check(target: Path) -> None:
+            try:
+                now = os.lstat(target)
+                same = os.path.samestat(now, st) and _stamp(now) == _stamp(st)
+                same = same and read_mechanism_file(target)[0] == old
+            except (OSError, LinkageError):
+                same = False
+            if not same:
+                raise ConflictError(
+                    f"{self.name} changed on disk while it was being saved (another program wrote it): not "
+                    "overwritten (reload the page to edit the file as it is now)"
+                )
+
+        return check
 
     def _text_to_save(self, mech: Mechanism, old_text: str) -> str:
         """The file's new text: :func:`~linkagekit.files.dumps` in the old file's styles (where it has none, in
@@ -575,12 +646,82 @@ class Watch:
                         _raise_in(solve.thread_id, SolveStopped)
 
 
+#: the headers of every answer, besides its status, type, length and connection
+_HEADERS = (
+    ("Cache-Control", "no-store"),
+    ("X-Content-Type-Options", "nosniff"),
+    ("Referrer-Policy", "no-referrer"),
+    (
+        "Content-Security-Policy",
+        "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data: blob:; "
+        "connect-src 'self'; form-action 'none'; frame-ancestors 'none'",
+    ),
+)
+
+
+class _Arrival(io.RawIOBase):
+    """A connection's bytes as they arrive, every read within what is left of the request's ``deadline``.
+
+    A socket's own timeout bounds each read, not their sum: a client that sends a byte now and then
+    would hold its connection (and its thread) forever.  Past the deadline a read raises
+    :class:`TimeoutError`, and the standard library's handler drops the connection.  A read waits
+    :data:`READ_SLICE` at a time, so that a deadline brought forward (:meth:`hurry`) counts at once.
+    The socket's timeout is :data:`TIMEOUT` again after each read, for the answer's writes.
+    """
+
+    def __init__(self, sock: socket.socket) -> None:
+        super().__init__()
+        self.sock = sock
+        self.deadline = math.inf
+
+    def readable(self) -> bool:
+        return True
+
+    def hurry(self, seconds: float) -> None:
+        """Have the request arrive within ``seconds`` from now, if its deadline is later (from another thread)."""
+        self.deadline = min(self.deadline, time.monotonic() + seconds)
+
+    def readinto(self, buffer: Any) -> int:
+        while True:
+            left = self.deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("the request did not arrive in time")
+            self.sock.settimeout(min(left, READ_SLICE))
+            try:
+                return self.sock.recv_into(buffer)
+            except TimeoutError:
+                continue  # look at the deadline again: it may have been brought forward
+            finally:
+                self.sock.settimeout(TIMEOUT)
+
+
 class _Handler(BaseHTTPRequestHandler):
-    """One request: check where it comes from and what it asks, then answer it in JSON (or the page)."""
+    """One connection's requests: check where each comes from and what it asks, then answer it in JSON (or the page).
+
+    Each request must arrive whole (request line, headers, body) within :data:`TIMEOUT` of when it is
+    awaited (:class:`_Arrival`), or the connection is dropped.
+    """
 
     server: EditorServer
     protocol_version = "HTTP/1.1"
-    timeout = TIMEOUT
+
+    def setup(self) -> None:
+        super().setup()
+        self.connection.settimeout(TIMEOUT)  # read now, not at import: the tests shorten it
+        self.rfile.close()  # the standard library's reader, replaced by one with a deadline
+        self.arrival = _Arrival(self.connection)
+        self.rfile = io.BufferedReader(self.arrival)
+        with self.server.lock:
+            self.server.arrivals.add(self.arrival)
+
+    def finish(self) -> None:
+        with self.server.lock:
+            self.server.arrivals.discard(self.arrival)
+        super().finish()
+
+    def handle_one_request(self) -> None:
+        self.arrival.deadline = time.monotonic() + TIMEOUT
+        super().handle_one_request()
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base class's name
         pass  # quiet: the terminal shows the URL, not a request log
@@ -598,14 +739,8 @@ class _Handler(BaseHTTPRequestHandler):
             self.close_connection = True
         self.send_header("Content-Type", ctype)
         self.send_header("Content-Length", str(len(body)))
-        self.send_header("Cache-Control", "no-store")
-        self.send_header("X-Content-Type-Options", "nosniff")
-        self.send_header("Referrer-Policy", "no-referrer")
-        self.send_header(
-            "Content-Security-Policy",
-            "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data: blob:; "
-            "connect-src 'self'; form-action 'none'; frame-ancestors 'none'",
-        )
+        for name, value in _HEADERS:
+            self.send_header(name, value)
         self.end_headers()
         if with_body:
             self.wfile.write(body)
@@ -815,6 +950,8 @@ class EditorServer(ThreadingHTTPServer):
     routes = ("", "api/solve", "api/save")
     #: set once the server stops: a request broken by the shutdown is not reported
     closing = False
+    #: set when a connection found no free handler: the next ones are answered 503 at once until one is free
+    full = False
 
     def __init__(
         self, session: Session, port: int = 0, token: str | None = None, solve_seconds: float = SOLVE_SECONDS
@@ -823,6 +960,11 @@ class EditorServer(ThreadingHTTPServer):
             raise InputError(f"--port: expected 0 to 65535, got {port!r}")
         self.session = session
         self.watch = Watch(solve_seconds)
+        #: the free connection handlers (:data:`MAX_CONNECTIONS`, read now: the tests lower it)
+        self.slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
+        #: the readers of the connections served now (:meth:`_crowded` brings their deadlines forward)
+        self.arrivals: set[_Arrival] = set()
+        self.lock = threading.Lock()
         self.token = token or secrets.token_urlsafe(24)
         try:
             super().__init__(("127.0.0.1", port), _Handler)
@@ -831,6 +973,60 @@ class EditorServer(ThreadingHTTPServer):
         self.port = int(self.server_address[1])
         self.hosts = {f"127.0.0.1:{self.port}", f"localhost:{self.port}"}
         self.origins = {f"http://{h}" for h in self.hosts}
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """Serve the connection in a thread of its own once one of the :data:`MAX_CONNECTIONS` is free.
+
+        This runs in the accepting thread: it waits for a free handler up to :data:`BUSY_SECONDS`
+        (meanwhile the system queues the connections that come), then answers 503 (:meth:`_busy`), and,
+        until a handler is free again, answers the next connections 503 at once (a queue of them must not
+        wait :data:`BUSY_SECONDS` each).  While it waits, the requests under way must arrive within
+        :data:`CROWDED_SECONDS` (:meth:`_crowded`).  A server that stops ends the wait.
+        """
+        deadline = time.monotonic() + (0.0 if self.full else BUSY_SECONDS)
+        while not self.slots.acquire(timeout=min(0.1, max(0.0, deadline - time.monotonic()))):
+            self._crowded()
+            if self.closing or time.monotonic() >= deadline:
+                self.full = True
+                self._busy(request)
+                return
+        self.full = False
+        try:
+            super().process_request(request, client_address)
+        except BaseException:  # no thread: its handler is free again
+            self.slots.release()
+            raise
+
+    def _crowded(self) -> None:
+        """Every handler is taken and a connection waits: the connections that are still to send their request
+        (idle kept-alive ones, stalled clients) must send it within :data:`CROWDED_SECONDS`, or make room."""
+        with self.lock:
+            for arrival in self.arrivals:
+                arrival.hurry(CROWDED_SECONDS)
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self.slots.release()
+
+    def _busy(self, request: socket.socket) -> None:
+        """Answer 503 to a connection no handler was free for, without ever waiting on it (the accepting thread)."""
+        body = json.dumps({"ok": False, "busy": True, "error": "the editor is busy: try again"}).encode()
+        head = [
+            "HTTP/1.1 503 Service Unavailable",
+            "Content-Type: application/json",
+            f"Content-Length: {len(body)}",
+            "Connection: close",
+            "Retry-After: 1",
+            *(f"{name}: {value}" for name, value in _HEADERS),
+        ]
+        with contextlib.suppress(OSError):
+            request.setblocking(False)
+            with contextlib.suppress(BlockingIOError):
+                request.recv(1 << 16)  # what arrived of its request: closed unread, it would reset the connection
+            request.send("\r\n".join(head).encode() + b"\r\n\r\n" + body)
+        self.shutdown_request(request)
 
     def handle_error(self, request: Any, client_address: Any) -> None:
         """Report a request that failed: nothing for a client that went away, one line for anything else.
