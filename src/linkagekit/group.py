@@ -1720,6 +1720,9 @@ class Group(Step):
         return _condition(C.transpose(2, 1, 0))
 
     # ------------------------------------------------------------------ description
+    def link_names(self) -> tuple[str, ...]:
+        return tuple(gl.name for gl in self.links)
+
     def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
         placed = ", ".join(names[j] for j in self.joints)
         links = ", ".join(f"'{gl.name}'" for gl in self.links)

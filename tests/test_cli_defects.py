@@ -1,0 +1,107 @@
+"""Command-line defects an attack found (session 9): each test fails on the code before its fix.
+
+Every bad input is one line on stderr naming the file, option, joint or link, exit status 2.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from linkagekit.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+FOURBAR = """\
+format: linkagekit/1
+name: four-bar
+joints:
+  A: [0, 0]
+  B: [4, 1]
+  C: [2, 0]
+  D: [0.8206, 4.8589]
+  E: [3, 7]
+links:
+  ground: [A, B]
+  crank: [A, C]
+  coupler: {joints: [C, D], lengths: {C-D: COUPLER}}
+  rocker: [B, D]
+  extra: {joints: [D, E], lengths: {D-E: EXTRA}}
+  out: [B, E]
+drivers:
+  - {link: crank, pivot: A, toward: C}
+"""
+
+
+def run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main(args)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def write(tmp_path: Path, text: str, name: str = "m.yaml") -> str:
+    """Write ``text`` to ``name`` in ``tmp_path``, the working directory of these tests (``here``): a short path, as
+    a long one (xdist's) is shortened in the messages."""
+    (tmp_path / name).write_text(text)
+    return name
+
+
+@pytest.fixture(autouse=True)
+def here(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+# ---------------------------------------------------------------- 2. a pose that does not assemble
+@pytest.mark.parametrize(
+    ("coupler", "extra", "named"),
+    [
+        # the coupler (20) is longer than crank + ground + rocker: D cannot be placed (step 3, after A, B and C)
+        ("20", "6", "joint D of links 'coupler', 'rocker' cannot be placed (step 3 of the plan: D = circle(C, 20) x"),
+        # D closes; the extra link (30) cannot reach E from D with 'out' from B: step 4
+        ("5", "30", "joint E of links 'extra', 'out' cannot be placed (step 4 of the plan: E = circle(D, 30) x"),
+    ],
+)
+@pytest.mark.parametrize("command", [["check"], ["analyze"], ["modes", "--at", "0"]])
+def test_a_pose_that_does_not_assemble_names_the_joint_links_and_step(tmp_path, capsys, command, coupler, extra, named):
+    """Given lengths that cannot close at the pose's input said 'the mechanism does not assemble at its reference
+    pose's input (given lengths that do not close, or a degenerate pose ...)': no joint, link or step was named."""
+    path = write(tmp_path, FOURBAR.replace("COUPLER", coupler).replace("EXTRA", extra))
+    code, out, err = run([command[0], path, *command[1:]], capsys)
+    assert (code, out) == (2, "")
+    assert err.startswith(f"linkagekit: error: {path}: does not assemble at its reference pose's input: {named}")
+    assert err.count("\n") == 1 and err.endswith(": no solution with the given lengths)\n")
+
+
+def test_a_slider_whose_rod_cannot_reach_its_line_names_the_rod(tmp_path, capsys):
+    """The circle-and-line step names its joint and its one link."""
+    text = (EXAMPLES / "slider_crank.yaml").read_text().replace("A-B: 0.0939414711402797", "A-B: 0.01")
+    path = write(tmp_path, text)
+    code, out, err = run(["check", path], capsys)
+    assert (code, out) == (2, "")
+    assert err.startswith(
+        f"linkagekit: error: {path}: does not assemble at its reference pose's input: joint B of link 'rod' cannot "
+        "be placed (step 3 of the plan: B = circle(A, 0.01) x line of slider 0: no solution"
+    )
+    assert err.count("\n") == 1
+
+
+def test_a_numerical_group_that_does_not_assemble_at_the_pose_is_refused(tmp_path, capsys):
+    """A class-3 triad whose given length cannot close was accepted: `check` said 'assembles nowhere', exit 0, and
+    `analyze` gave every sample not assembled. It is refused as a closed-form step is, naming the group's joints and
+    links."""
+    text = (EXAMPLES / "triad_six_modes.yaml").read_text()
+    path = write(tmp_path, text.replace("l1: [A, J1]", "l1: {joints: [A, J1], lengths: {A-J1: 60}}"))
+    for command in (["check", path], ["analyze", path, "--at", "0"]):
+        code, out, err = run(command, capsys)
+        assert (code, out) == (2, "")
+        assert err == (
+            f"linkagekit: error: {path}: does not assemble at its reference pose's input: joints J1, J2, J3 of links "
+            "'l1', 'l2', 'l3', 'tern' cannot be placed (step 3 of the plan: J1, J2, J3 placed numerically: no solution with the given lengths)\n"
+        )
+        assert err.count("\n") == 1
+    good = write(tmp_path, text.replace("l1: [A, J1]", "l1: {joints: [A, J1], lengths: {A-J1: 10.02}}"), "ok.yaml")
+    assert run(["check", good], capsys)[0] == 0  # a length that closes is taken, as before
