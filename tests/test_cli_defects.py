@@ -5,8 +5,11 @@ Every bad input is one line on stderr naming the file, option, joint or link, ex
 
 from __future__ import annotations
 
+import os
+import stat
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -100,8 +103,84 @@ def test_a_numerical_group_that_does_not_assemble_at_the_pose_is_refused(tmp_pat
         assert (code, out) == (2, "")
         assert err == (
             f"linkagekit: error: {path}: does not assemble at its reference pose's input: joints J1, J2, J3 of links "
-            "'l1', 'l2', 'l3', 'tern' cannot be placed (step 3 of the plan: J1, J2, J3 placed numerically: no solution with the given lengths)\n"
+            "'l1', 'l2', 'l3', 'tern' cannot be placed (step 3 of the plan: J1, J2, J3 placed numerically: "
+            "no solution with the given lengths)\n"
         )
         assert err.count("\n") == 1
     good = write(tmp_path, text.replace("l1: [A, J1]", "l1: {joints: [A, J1], lengths: {A-J1: 10.02}}"), "ok.yaml")
     assert run(["check", good], capsys)[0] == 0  # a length that closes is taken, as before
+
+
+# ---------------------------------------------------------------- 1. an output that cannot be written
+FULL = Path("/dev/full")
+needs_full = pytest.mark.skipif(not FULL.is_char_device(), reason="no /dev/full on this machine")
+
+
+def _script(args: list[str], stdout: object) -> subprocess.CompletedProcess[str]:
+    """The ``linkagekit`` script (``main()`` without arguments, as installed) with ``args`` and this stdout."""
+    script = f"import sys; sys.argv = ['linkagekit', *{args!r}]; from linkagekit.cli import main; main()"
+    return subprocess.run(
+        [sys.executable, "-c", script], stdout=stdout, stderr=subprocess.PIPE, text=True, timeout=120, check=False
+    )
+
+
+@needs_full
+@pytest.mark.parametrize("fmt", ["table", "csv", "json"])
+def test_a_full_device_fails_alike_on_standard_output_and_on_o(fmt):
+    """``analyze FILE > /dev/full`` exited 1 ('cannot write the output: ...') while ``-o /dev/full`` exited 2: both
+    are one line naming where the output went, and why, exit 2."""
+    args = ["analyze", str(EXAMPLES / "seed000_fourbar.yaml"), "--format", fmt]
+    with FULL.open("w") as full:
+        piped = _script(args, full)
+    given = _script([*args, "-o", str(FULL)], subprocess.DEVNULL)
+    assert (piped.returncode, piped.stderr) == (
+        2,
+        "linkagekit: error: standard output: cannot write: No space left on device\n",
+    )
+    assert (given.returncode, given.stderr) == (
+        2,
+        "linkagekit: error: -o /dev/full: cannot write: No space left on device\n",
+    )
+    assert FULL.is_char_device()
+
+
+def _reader(fifo: Path, limit: int | None, got: list[bytes]) -> threading.Thread:
+    """A thread that reads ``fifo`` (``limit`` bytes then closes it, or to its end) into ``got``."""
+
+    def read() -> None:
+        with fifo.open("rb") as fh:
+            got.append(fh.read(limit) if limit is not None else fh.read())
+
+    t = threading.Thread(target=read, daemon=True)
+    t.start()
+    return t
+
+
+def test_a_picture_through_a_link_to_a_pipe_is_written_into_the_pipe(here, capsys):
+    """``plot -o out.svg`` where out.svg is a link to a FIFO (or to ``/dev/full``, ``/dev/null``) replaced the
+    link's target with a regular file: as root it replaced the device ``/dev/full`` itself. A device or a pipe is
+    written in place; the FIFO stays a FIFO and its reader gets the picture."""
+    fifo = here / "fifo"
+    os.mkfifo(fifo)
+    (here / "out.svg").symlink_to(fifo)
+    got: list[bytes] = []
+    reader = _reader(fifo, None, got)
+    code, out, err = run(["plot", str(EXAMPLES / "seed000_fourbar.yaml"), "-o", "out.svg"], capsys)
+    reader.join(30)
+    assert (code, out, err) == (0, "", "")
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and (here / "out.svg").is_symlink()
+    assert got and got[0].startswith(b"<?xml") and got[0].rstrip().endswith(b"</svg>")
+
+
+def test_a_reader_gone_from_o_is_quiet_as_on_standard_output(here, capsys):
+    """``analyze -o FIFO`` whose reader left after 10 bytes said 'cannot write: Broken pipe', exit 2, where the same
+    reader on standard output (``| head``) is quiet, exit 1: both are quiet, exit 1."""
+    fifo = here / "fifo"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = _reader(fifo, 10, got)
+    args = ["analyze", str(EXAMPLES / "seed000_fourbar.yaml"), "--angles", "0:360:0.01", "--format", "csv"]
+    code, out, err = run([*args, "-o", "fifo"], capsys)
+    reader.join(30)
+    assert (code, out, err) == (1, "", "")
+    assert got == [b"input:cran"]

@@ -827,8 +827,10 @@ def _emit(text: str, out: str | None) -> None:
     try:
         with open(out, "w", encoding="utf-8") as fh:
             fh.write(text)
-    except OSError as exc:
-        raise InputError(f"-o {out}: cannot write: {exc.strerror or exc}") from None
+    except BrokenPipeError:  # `-o FIFO` whose reader has gone: quiet, as on standard output (main)
+        raise
+    except OSError as exc:  # `-o /dev/full`, a full disk: as on standard output (main)
+        raise InputError(f"-o {shorten_path(out, 80)}: cannot write: {exc.strerror or exc}") from None
 
 
 def format_csv(columns: Mapping[str, Any]) -> str:
@@ -2450,9 +2452,9 @@ def main(argv: list[str] | None = None) -> int:
             with _checked_stdout():
                 code = _run(args)
                 sys.stdout.flush()  # an output that cannot be written fails here, not silently at the exit
-    except _OutputFailed as exc:  # `> /dev/full`, a full disk: say so, not 'internal error'
-        print(f"{PROG}: cannot write the output: {exc}", file=sys.stderr)
-        code = 1
+    except _OutputFailed as exc:  # `> /dev/full`, a full disk: as `-o` says it (_emit), not 'internal error'
+        print(f"{PROG}: error: standard output: cannot write: {exc}", file=sys.stderr)
+        code = InputError.exit_code
         if argv is None:
             _silence_stdout()
     except LinkageError as exc:
