@@ -5,6 +5,7 @@ Every bad input is one line on stderr naming the file, option, joint or link, ex
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import subprocess
@@ -184,3 +185,54 @@ def test_a_reader_gone_from_o_is_quiet_as_on_standard_output(here, capsys):
     reader.join(30)
     assert (code, out, err) == (1, "", "")
     assert got == [b"input:cran"]
+
+
+# ---------------------------------------------------------------- 3. driver names holding ',' or '='
+ODD_NAMES = """\
+format: linkagekit/1
+name: five-bar with odd driver names
+units: {length: m, angle: deg}
+joints:
+  A: [0, 0]
+  E: [3, 0]
+  B: [0, 1]
+  D: [3, 1]
+  C: [1.5, 2.5]
+links:
+  ground: [A, E]
+  "arm,left": [A, B]
+  "arm=right": [E, D]
+  c1: [B, C]
+  c2: [D, C]
+drivers:
+  - {link: "arm,left", pivot: A, toward: B}
+  - {link: "arm=right", pivot: E, toward: D}
+"""
+
+
+def test_a_driver_name_with_a_comma_or_an_equals_sign_is_given_as_written(tmp_path, capsys):
+    """A driver (a link) named 'arm=right' could not be given: ``--at arm=right=90`` said "no driver named 'arm'".
+    NAME is everything before the last '=' (a value never holds one): every option takes the names as written."""
+    path = write(tmp_path, ODD_NAMES)
+    code, out, err = run(
+        ["analyze", path, "--at", "arm,left=90,100", "--at", "arm=right=90", "--speed", "arm=right=2",
+         "--speed", "arm,left = 1", "--format", "json"],
+        capsys,
+    )  # fmt: skip
+    assert (code, err) == (0, "")
+    res = json.loads(out)
+    assert res["inputs"] == {"arm,left": [90.0, 100.0], "arm=right": [90.0, 90.0]}
+    b = res["joints"]["B"]
+    assert b["x"][0] == pytest.approx(0.0, abs=1e-12) and b["y"][0] == pytest.approx(1.0, abs=1e-12)
+    assert b["vx"][0] == pytest.approx(-1.0, abs=1e-12)  # |AB| = 1 turning at 1 rad/s from 90 deg
+    assert res["joints"]["D"]["vx"][0] == pytest.approx(-2.0, abs=1e-12)  # |ED| = 1 at 2 rad/s
+    code, out, err = run(["modes", path, "--at", "arm,left=90", "--at", "arm=right=90", "--format", "json"], capsys)
+    assert (code, err) == (0, "") and json.loads(out)["input"] == {"arm,left": 90.0, "arm=right": 90.0}
+
+
+def test_an_unknown_driver_lists_the_names_quoted(tmp_path, capsys):
+    """The list of drivers in the message read 'drivers: arm,left, arm=right': each name is quoted."""
+    path = write(tmp_path, ODD_NAMES)
+    code, out, err = run(["analyze", path, "--at", "arm=90"], capsys)
+    assert (code, out) == (2, "")
+    assert err == "linkagekit: error: --at: no driver named 'arm' (drivers: 'arm,left', 'arm=right')\n"

@@ -167,18 +167,28 @@ def _range(text: str, what: str) -> np.ndarray:
 
 
 def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[str, str], Any]) -> dict[str, Any]:
-    """Split ``NAME=VALUE`` items (or a bare VALUE for a single driver) by driver."""
+    """Split ``NAME=VALUE`` items (or a bare VALUE for a single driver) by driver.
+
+    NAME is everything before the last ``=`` (a value never holds one), so a driver whose name
+    holds ``=``, ``,`` or ``:`` (a link's name is any string) is named as written in the file.
+
+    >>> class M:  # only the drivers' names are read
+    ...     drivers = [type("D", (), {"name": n}) for n in ("arm=left", "arm,right")]
+    >>> _by_driver(M, ["arm=left=0,90", "arm,right = 5"], "--at", _numbers)
+    {'arm=left': [0.0, 90.0], 'arm,right': [5.0]}
+    """
     names = [d.name for d in mech.drivers]
+    listed = ", ".join(f"'{n}'" for n in names)
     out: dict[str, Any] = {}
     for item in items:
         if "=" in item:
-            name, _, text = item.partition("=")
-            name = name.strip()
+            name, _, text = item.rpartition("=")
+            name = name if name in names else name.strip()
             if name not in names:
-                raise InputError(f"{option}: no driver named '{name}' (drivers: {', '.join(names)})")
+                raise InputError(f"{option}: no driver named '{shorten(name, 40)}' (drivers: {listed})")
         else:
             if len(names) != 1:
-                raise InputError(f"{option}: this mechanism has drivers {', '.join(names)}: write {option} NAME=...")
+                raise InputError(f"{option}: this mechanism has drivers {listed}: write {option} NAME=...")
             name, text = names[0], item
         if name in out:
             raise InputError(f"{option}: driver '{name}' given twice")
