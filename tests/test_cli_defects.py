@@ -11,6 +11,7 @@ import stat
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -236,3 +237,41 @@ def test_an_unknown_driver_lists_the_names_quoted(tmp_path, capsys):
     code, out, err = run(["analyze", path, "--at", "arm=90"], capsys)
     assert (code, out) == (2, "")
     assert err == "linkagekit: error: --at: no driver named 'arm' (drivers: 'arm,left', 'arm=right')\n"
+
+
+# ---------------------------------------------------------------- 4. plot --at has a cap
+@pytest.mark.parametrize(
+    ("values", "n"),
+    [
+        ([",".join(str(i % 360) for i in range(100_000))], 100_000),
+        (["crank1=" + ",".join(str(i % 360) for i in range(1001)), "crank2=75"], 1001),
+    ],
+)
+def test_plot_at_takes_at_most_as_many_poses_as_an_animation_has_frames(capsys, values, n):
+    """``plot --at`` with 100,000 values (the command line's cap on a list) drew every pose: minutes, and memory.
+    It takes at most MAX_POSES (1000, an animation's most frames), refused before anything is solved or drawn."""
+    from linkagekit.cli import MAX_POSES
+    from linkagekit.viz.animate import MAX_FRAMES
+
+    assert MAX_POSES == MAX_FRAMES == 1000
+    fourbar = str(EXAMPLES / "seed000_fourbar.yaml")
+    path = fourbar if len(values) == 1 else str(EXAMPLES / "fivebar_two_drivers.yaml")
+    args = [a for v in values for a in ("--at", v)]
+    start = time.perf_counter()
+    code, out, err = run(["plot", path, *args, "-o", "p.png"], capsys)
+    assert time.perf_counter() - start < 20  # refused at once (it ran for minutes)
+    assert (code, out) == (2, "")
+    assert err == (
+        f"linkagekit: error: --at: {n} values, more poses than plot draws (1000): give fewer, or --angles for the "
+        "curves of a sweep\n"
+    )
+    assert not Path("p.png").exists()
+
+
+def test_plot_at_of_a_thousand_poses_is_drawn(capsys):
+    """The cap is MAX_POSES itself: 1000 values are drawn."""
+    fourbar = str(EXAMPLES / "seed000_fourbar.yaml")
+    code, out, err = run(
+        ["plot", fourbar, "--at", ",".join(f"{0.36 * i:g}" for i in range(1000)), "-o", "p.svg"], capsys
+    )
+    assert (code, out, err) == (0, "", "") and Path("p.svg").read_text().rstrip().endswith("</svg>")

@@ -1283,7 +1283,6 @@ def _sweep(mech: Mechanism, angles: list[str] | None, file: str) -> dict[str, np
 
 def _plot(args: argparse.Namespace) -> int:
     """``linkagekit plot``."""
-    import numpy as np
 
     import linkagekit as lk
 
@@ -1313,6 +1312,7 @@ def _plot(args: argparse.Namespace) -> int:
         _check_pixels(fig)
         draw.save_figure(fig, args.output)
         return 0
+    at = _poses_at(mech, args.at) if args.at else None  # before the sweep is solved: a list too long is refused first
     res = _solved(mech, args)
     if args.quantity:
         from .viz.scene import build_scene
@@ -1324,13 +1324,31 @@ def _plot(args: argparse.Namespace) -> int:
         draw.save_figure(fig, args.output, fig.axes[0])  # a PNG maps the first plot's (x, value) to pixels
         return _stopped(res)
     poses = None
-    if args.at:
-        at = {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()}
+    if at is not None:
         poses = _swept(mech, args, at)  # on the sweep's branch: a parallelogram past flat stays one
     fig = draw.mechanism_figure(res, poses, **picture)
     _check_pixels(fig)
     draw.save_figure(fig, args.output, fig.axes[0])
     return _stopped(res)
+
+
+#: the most poses ``plot --at`` draws, as many as an animation's frames (:data:`linkagekit.viz.animate.MAX_FRAMES`):
+#: each is drawn (about 4 ms), where a sweep (``--angles``, up to :data:`MAX_SAMPLES`) is drawn as curves
+MAX_POSES = 1000
+
+
+def _poses_at(mech: Mechanism, items: list[str]) -> dict[str, np.ndarray]:
+    """The inputs of the poses ``plot --at`` draws, by driver: at most :data:`MAX_POSES` (100,000 took minutes)."""
+    import numpy as np
+
+    at = {k: np.asarray(v) for k, v in _by_driver(mech, items, "--at", _numbers).items()}
+    n = max(len(v) for v in at.values())
+    if n > MAX_POSES:
+        raise InputError(
+            f"--at: {n} values, more poses than plot draws ({MAX_POSES}): give fewer, or --angles for the curves "
+            "of a sweep"
+        )
+    return at
 
 
 def _check_pixels(fig: Any) -> None:
