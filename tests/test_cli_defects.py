@@ -5,6 +5,7 @@ Every bad input is one line on stderr naming the file, option, joint or link, ex
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import stat
@@ -275,3 +276,45 @@ def test_plot_at_of_a_thousand_poses_is_drawn(capsys):
         ["plot", fourbar, "--at", ",".join(f"{0.36 * i:g}" for i in range(1000)), "-o", "p.svg"], capsys
     )
     assert (code, out, err) == (0, "", "") and Path("p.svg").read_text().rstrip().endswith("</svg>")
+
+
+# ---------------------------------------------------------------- 5. a large numerical group's conditioning
+def test_a_large_groups_conditioning_is_the_svds_without_the_tridiagonal_form(monkeypatch):
+    """``analyze --method numerical`` on a 97-joint chain spent 7.4 of its 10 s in the Python-level tridiagonal form
+    of J^T J (about n^3 / 3 array operations for n = 194 columns), then took the SVD anyway. Above
+    COND_TRIDIAGONAL_MOST columns every matrix goes to LAPACK's SVD at once: the same numbers (to rounding)."""
+    import numpy as np
+
+    from linkagekit import group
+
+    rng = np.random.default_rng(5)
+    # well conditioned (above COND_EXACT: the old path answered from the eigenvalues) and ill conditioned
+    good = np.eye(40)[None] * 3 + 0.05 * rng.normal(size=(4, 40, 40))
+    bad = rng.normal(size=(3, 40, 40)) @ np.diag(np.geomspace(1, 1e-6, 40))
+    small = rng.normal(size=(5, 6, 6))  # a triad's 6 columns keep the tridiagonal way
+    expect = {
+        k: (lambda s: s[:, -1] / s[:, 0])(np.linalg.svd(m, compute_uv=False)) for k, m in (("g", good), ("b", bad))
+    }
+    tridiagonal = group._gram_tridiagonal
+    calls: list[int] = []
+    monkeypatch.setattr(group, "_gram_tridiagonal", lambda Js: calls.append(Js.shape[2]) or tridiagonal(Js))
+    assert group.COND_TRIDIAGONAL_MOST == 18
+    np.testing.assert_allclose(group._condition(good), expect["g"], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(group._condition(bad), expect["b"], rtol=1e-9, atol=0)
+    assert calls == []
+    s = np.linalg.svd(small, compute_uv=False)
+    np.testing.assert_allclose(group._condition(small), s[:, -1] / s[:, 0], rtol=1e-12, atol=0)
+    assert calls == [6]
+
+
+def test_dyad_like_is_counted_once_per_group():
+    """The walk asked ``Group.dyad_like`` at every restart and it recounted the links each time (0.6 s of the
+    chain's sweep): it is a cached property of the (immutable) group, the same answer."""
+    import linkagekit as lk
+    from linkagekit.group import Group
+    from linkagekit.plan import make_plan
+
+    plan = make_plan(lk.load(EXAMPLES / "triad_six_modes.yaml"), numerical=True)
+    (st,) = [s for s in plan.steps if isinstance(s, Group)]
+    assert st.dyad_like is False and "dyad_like" in vars(st)
+    assert isinstance(vars(Group)["dyad_like"], functools.cached_property)
