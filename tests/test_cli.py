@@ -311,14 +311,15 @@ def test_a_method_that_does_not_apply_names_the_file_and_the_option(capsys):
 @pytest.mark.parametrize("args", [["analyze", str(EXAMPLES / "seed000_fourbar.yaml")], ["--version"]])
 def test_an_output_that_cannot_be_written_is_one_clear_line(args):
     """``linkagekit analyze FILE > /dev/full`` printed 'internal error: OSError: [Errno 28] ...' (and ``--version``
-    exited 0, argparse swallowing the error): one line saying the output cannot be written, and why; exit 1."""
+    exited 0, argparse swallowing the error): one line saying the output cannot be written, and why; exit 2, as
+    ``-o /dev/full`` (session 9: it was exit 1 and 'cannot write the output', while ``-o`` gave 2)."""
     script = f"import sys; sys.argv = ['linkagekit', *{args!r}]; from linkagekit.cli import main; main()"
     with open("/dev/full", "w") as full:
         done = subprocess.run(
             [sys.executable, "-c", script], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60
         )
-    assert done.returncode == 1
-    assert done.stderr == "linkagekit: cannot write the output: No space left on device\n"
+    assert done.returncode == 2
+    assert done.stderr == "linkagekit: error: standard output: cannot write: No space left on device\n"
 
 
 def test_atlas_without_an_action_names_the_choices(capsys):

@@ -167,18 +167,28 @@ def _range(text: str, what: str) -> np.ndarray:
 
 
 def _by_driver(mech: Mechanism, items: list[str], option: str, parse: Callable[[str, str], Any]) -> dict[str, Any]:
-    """Split ``NAME=VALUE`` items (or a bare VALUE for a single driver) by driver."""
+    """Split ``NAME=VALUE`` items (or a bare VALUE for a single driver) by driver.
+
+    NAME is everything before the last ``=`` (a value never holds one), so a driver whose name
+    holds ``=``, ``,`` or ``:`` (a link's name is any string) is named as written in the file.
+
+    >>> class M:  # only the drivers' names are read
+    ...     drivers = [type("D", (), {"name": n}) for n in ("arm=left", "arm,right")]
+    >>> _by_driver(M, ["arm=left=0,90", "arm,right = 5"], "--at", _numbers)
+    {'arm=left': [0.0, 90.0], 'arm,right': [5.0]}
+    """
     names = [d.name for d in mech.drivers]
+    listed = ", ".join(f"'{n}'" for n in names)
     out: dict[str, Any] = {}
     for item in items:
         if "=" in item:
-            name, _, text = item.partition("=")
-            name = name.strip()
+            name, _, text = item.rpartition("=")
+            name = name if name in names else name.strip()
             if name not in names:
-                raise InputError(f"{option}: no driver named '{name}' (drivers: {', '.join(names)})")
+                raise InputError(f"{option}: no driver named '{shorten(name, 40)}' (drivers: {listed})")
         else:
             if len(names) != 1:
-                raise InputError(f"{option}: this mechanism has drivers {', '.join(names)}: write {option} NAME=...")
+                raise InputError(f"{option}: this mechanism has drivers {listed}: write {option} NAME=...")
             name, text = names[0], item
         if name in out:
             raise InputError(f"{option}: driver '{name}' given twice")
@@ -827,8 +837,10 @@ def _emit(text: str, out: str | None) -> None:
     try:
         with open(out, "w", encoding="utf-8") as fh:
             fh.write(text)
-    except OSError as exc:
-        raise InputError(f"-o {out}: cannot write: {exc.strerror or exc}") from None
+    except BrokenPipeError:  # `-o FIFO` whose reader has gone: quiet, as on standard output (main)
+        raise
+    except OSError as exc:  # `-o /dev/full`, a full disk: as on standard output (main)
+        raise InputError(f"-o {shorten_path(out, 80)}: cannot write: {exc.strerror or exc}") from None
 
 
 def format_csv(columns: Mapping[str, Any]) -> str:
@@ -1271,7 +1283,6 @@ def _sweep(mech: Mechanism, angles: list[str] | None, file: str) -> dict[str, np
 
 def _plot(args: argparse.Namespace) -> int:
     """``linkagekit plot``."""
-    import numpy as np
 
     import linkagekit as lk
 
@@ -1301,6 +1312,7 @@ def _plot(args: argparse.Namespace) -> int:
         _check_pixels(fig)
         draw.save_figure(fig, args.output)
         return 0
+    at = _poses_at(mech, args.at) if args.at else None  # before the sweep is solved: a list too long is refused first
     res = _solved(mech, args)
     if args.quantity:
         from .viz.scene import build_scene
@@ -1312,13 +1324,31 @@ def _plot(args: argparse.Namespace) -> int:
         draw.save_figure(fig, args.output, fig.axes[0])  # a PNG maps the first plot's (x, value) to pixels
         return _stopped(res)
     poses = None
-    if args.at:
-        at = {k: np.asarray(v) for k, v in _by_driver(mech, args.at, "--at", _numbers).items()}
+    if at is not None:
         poses = _swept(mech, args, at)  # on the sweep's branch: a parallelogram past flat stays one
     fig = draw.mechanism_figure(res, poses, **picture)
     _check_pixels(fig)
     draw.save_figure(fig, args.output, fig.axes[0])
     return _stopped(res)
+
+
+#: the most poses ``plot --at`` draws, as many as an animation's frames (:data:`linkagekit.viz.animate.MAX_FRAMES`):
+#: each is drawn (about 4 ms), where a sweep (``--angles``, up to :data:`MAX_SAMPLES`) is drawn as curves
+MAX_POSES = 1000
+
+
+def _poses_at(mech: Mechanism, items: list[str]) -> dict[str, np.ndarray]:
+    """The inputs of the poses ``plot --at`` draws, by driver: at most :data:`MAX_POSES` (100,000 took minutes)."""
+    import numpy as np
+
+    at = {k: np.asarray(v) for k, v in _by_driver(mech, items, "--at", _numbers).items()}
+    n = max(len(v) for v in at.values())
+    if n > MAX_POSES:
+        raise InputError(
+            f"--at: {n} values, more poses than plot draws ({MAX_POSES}): give fewer, or --angles for the curves "
+            "of a sweep"
+        )
+    return at
 
 
 def _check_pixels(fig: Any) -> None:
@@ -2450,9 +2480,9 @@ def main(argv: list[str] | None = None) -> int:
             with _checked_stdout():
                 code = _run(args)
                 sys.stdout.flush()  # an output that cannot be written fails here, not silently at the exit
-    except _OutputFailed as exc:  # `> /dev/full`, a full disk: say so, not 'internal error'
-        print(f"{PROG}: cannot write the output: {exc}", file=sys.stderr)
-        code = 1
+    except _OutputFailed as exc:  # `> /dev/full`, a full disk: as `-o` says it (_emit), not 'internal error'
+        print(f"{PROG}: error: standard output: cannot write: {exc}", file=sys.stderr)
+        code = InputError.exit_code
         if argv is None:
             _silence_stdout()
     except LinkageError as exc:

@@ -743,7 +743,9 @@ def write_atomic(
     ``before_replace``, when given, is called with the path about to be replaced as the last
     step before the rename (the new file complete and synced): whatever it raises stops the
     write, the old file stays, the temporary file is removed (the editor checks there that
-    nobody changed the file since it was read).
+    nobody changed the file since it was read).  A device or a pipe (``/dev/null``,
+    ``/dev/full``, a FIFO; reached through a followed link too) is written in place: there is
+    no file to replace, and a rename would put a regular file where the device was.
 
     Returns the path replaced; an ``OSError`` becomes ``error`` naming ``p``.
 
@@ -795,6 +797,10 @@ def _temporary(
     is ever written through it).  ``before_replace(target)`` runs last, just before the rename.
     """
     target = _target(p, follow)
+    if _is_stream(target):
+        with _in_place(target, error) as fd:
+            yield fd, target
+        return
     tmp = target.with_name(f".{target.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
     flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
     fd, done = -1, False
@@ -823,6 +829,34 @@ def _temporary(
                 tmp.unlink()
 
 
+def _is_stream(target: Path) -> bool:
+    """Is ``target`` (a link already followed, or not to be followed) a device or a pipe (``/dev/null``, ``/dev/full``,
+    a FIFO): a stream written in place, not a file to replace (a rename would put a regular file where the device
+    was)?"""
+    try:
+        mode = os.lstat(target).st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISBLK(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
+
+
+@contextlib.contextmanager
+def _in_place(target: Path, error: type[LinkageError]) -> Iterator[int]:
+    """A descriptor open for writing on the stream ``target`` (:func:`_is_stream`); an ``OSError`` (``/dev/full``:
+    no space left on the device) becomes ``error`` naming it, except ``BrokenPipeError`` (a reader gone)."""
+    fd = -1
+    try:
+        fd = os.open(target, os.O_WRONLY | getattr(os, "O_CLOEXEC", 0))
+        yield fd
+    except BrokenPipeError:  # a pipe whose reader has gone: the reader's choice, not a fault of the path
+        raise
+    except OSError as exc:
+        raise error(f"{target}: cannot write: {exc.strerror or exc}") from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
+
+
 def _take_owner_and_mode(fd: int, model: os.stat_result) -> None:
     """Give the file of ``fd`` the owner and group of ``model`` (as far as allowed), then its permissions."""
     mine = os.fstat(fd)
@@ -843,7 +877,8 @@ def atomic_output(p: str | Path, error: type[LinkageError] = InputError) -> Iter
     preferred): the old file stays whole until the new one is complete, the new file keeps the old
     one's permissions and (as far as allowed) owner, a symbolic link is followed (the file it points
     to is replaced, the link stays), and the temporary file, created exclusively and never through
-    a link, must still be the same file when it is renamed.  On failure it is removed; an
+    a link, must still be the same file when it is renamed (a device or a pipe is written in place:
+    the path yielded is its own).  On failure it is removed; an
     ``OSError`` becomes ``error`` naming ``p``.  A temporary file left by a killed process is
     named as :func:`stray_temporaries` finds it.
     """

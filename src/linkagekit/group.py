@@ -185,6 +185,10 @@ COND_EXACT = 1e-3
 #: the extreme eigenvalues of J^T J by Newton (:func:`_extreme_root`): converged at a step below this of the
 #: largest, at most COND_ITER steps (the rest by LAPACK's eigvalsh)
 COND_STEP, COND_ITER = 1e-15, 12
+#: above this many unknowns (columns of J) a group's conditioning is the SVD's at once: the tridiagonal form
+#: (:func:`_gram_tridiagonal`) costs about n^3 / 3 array operations in Python, past LAPACK's SVD from about
+#: 18 columns (10^4 samples; 361: 14), and 7.4 of 10 s of a 97-joint chain forced onto the numerical group
+COND_TRIDIAGONAL_MOST = 18
 #: samples solved at once in chunks of this many (their arrays stay in the cache)
 FILL_CHUNK = 2048
 #: from this many designs on, the walk's Newton runs as array operations over them (:func:`_gauss`), below
@@ -555,7 +559,7 @@ class Group(Step):
             out.append((rho, dhat, c, ell))
         return out
 
-    @property
+    @cached_property  # asked at every restart of the walk: 0.6 s of a 97-joint group's sweep when recounted
     def dyad_like(self) -> bool:
         """One joint of the group is on two of its links, the others ride on one: two roots, one per sign.
 
@@ -1852,6 +1856,9 @@ class Group(Step):
         return _condition(C.transpose(2, 1, 0))
 
     # ------------------------------------------------------------------ description
+    def link_names(self) -> tuple[str, ...]:
+        return tuple(gl.name for gl in self.links)
+
     def describe(self, names: tuple[str, ...], nums: Nums | None) -> str | None:
         placed = ", ".join(names[j] for j in self.joints)
         links = ", ".join(f"'{gl.name}'" for gl in self.links)
@@ -2288,7 +2295,8 @@ def _condition(Js: FloatArray) -> FloatArray:
     found by Newton on the characteristic polynomial from outside (:func:`_extreme_root`), all as array operations
     over the batch (LAPACK's ``eigvalsh`` costs about 1.5 us a matrix). Their rounding is about 1e-16 of the
     largest, as ``eigvalsh``'s: a matrix where Newton has not converged after ``COND_ITER`` steps goes to
-    ``eigvalsh``, one whose ratio is below ``COND_EXACT`` to the SVD.
+    ``eigvalsh``, one whose ratio is below ``COND_EXACT`` to the SVD; above ``COND_TRIDIAGONAL_MOST`` columns,
+    every matrix goes to the SVD.
 
     >>> import numpy as np
     >>> A = np.random.default_rng(0).normal(size=(3, 6, 6))
@@ -2299,7 +2307,7 @@ def _condition(Js: FloatArray) -> FloatArray:
     B, _, n = Js.shape
     cond = np.full(B, np.nan)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        if n >= 2:
+        if 2 <= n <= COND_TRIDIAGONAL_MOST:  # beyond, LAPACK's SVD of every matrix is the faster (and exact)
             d, e2 = _gram_tridiagonal(Js)
             e = np.sqrt(e2)
             pad = np.zeros((1, B))
@@ -2308,10 +2316,10 @@ def _condition(Js: FloatArray) -> FloatArray:
             lo, ok_lo = _extreme_root(d, e2, np.zeros(B), high)
             cond = np.sqrt(np.maximum(lo, 0.0) / hi)
             cond[~(ok_hi & ok_lo)] = np.nan
-        slow = np.flatnonzero(~np.isfinite(cond))
-        if len(slow):
-            ev = np.linalg.eigvalsh(Js[slow].transpose(0, 2, 1) @ Js[slow])
-            cond[slow] = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
+            slow = np.flatnonzero(~np.isfinite(cond))
+            if len(slow):
+                ev = np.linalg.eigvalsh(Js[slow].transpose(0, 2, 1) @ Js[slow])
+                cond[slow] = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
         low = np.flatnonzero(~(cond >= COND_EXACT))
         if len(low):
             sv = np.linalg.svd(Js[low], compute_uv=False)

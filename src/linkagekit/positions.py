@@ -32,11 +32,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import MechanismFileError
+from .errors import MechanismFileError, shorten
 from .geometry import ASSEMBLY_RTOL, NAN_POINT
 from .group import GRID_MOST, GRID_STEP, GRID_STEP_LENGTH, Group, grid_places
 from .params import Params, all_sign_combinations
-from .steps import Kin, WalkGrid
+from .steps import Kin, WalkGrid, is_sign_step
 
 if TYPE_CHECKING:
     from .model import Mechanism
@@ -144,7 +144,7 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
     the one whose joints lie nearest their pose positions wins (ties, as at a flat triangle,
     go to +1); above ``EXHAUSTIVE_SIGNS`` signs, greedily one sign at a time.
     """
-    if not mech.has_given_lengths or params.plan.n_signs == 0:
+    if not mech.has_given_lengths:
         return params
     from dataclasses import replace
 
@@ -152,6 +152,10 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
     k = plan.n_signs
     pose = params.pose[:, 0][:, None, None]
     q0 = params.pose_inputs[:, :, None]
+    if k == 0:  # a numerical group alone takes its mode from the pose: it must assemble there
+        if plan.numerical and unplaced_step(params, q0) is not None:
+            raise MechanismFileError(f"{mech.source}: {unassembled_text(params, q0)}")
+        return params
     if k <= EXHAUSTIVE_SIGNS:
         combos = all_sign_combinations(k)
         sol = solve(params, np.broadcast_to(q0, (len(mech.drivers), 1, combos.shape[1])), combos[:, None, :])
@@ -159,11 +163,7 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
         err = np.where(np.isfinite(err), err, np.inf)
         best = float(np.min(err))
         if not np.isfinite(best):
-            raise MechanismFileError(
-                f"{mech.source}: the mechanism does not assemble at its reference pose's input "
-                f"(given lengths that do not close, or a degenerate pose: two joints that locate "
-                f"another joint coincide)"
-            )
+            raise MechanismFileError(f"{mech.source}: {unassembled_text(params, q0)}")
         tol = 1e-18 * mech.length_scale**2 + best * 1e-9
         choice = int(np.flatnonzero(err <= best + tol)[0])
         return replace(params, signs=combos[:, choice : choice + 1].copy())
@@ -177,6 +177,64 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
             errs.append(float(np.nansum(d)) if np.isfinite(d).any() else np.inf)
         signs[i] = 1.0 if errs[0] <= errs[1] else -1.0
     return replace(params, signs=signs)
+
+
+def unplaced_step(params: Params, q: np.ndarray) -> int | None:
+    """The index (in ``params.plan.steps``) of the first step that cannot place its joints at the inputs ``q``
+    (n_drivers, 1, 1) in the first design's own mode, or None when every step places them.
+
+    The steps run as :func:`solve` runs them (with the grid a numerical group walks), and stop
+    at the first whose joints are not finite or whose sign step has no solution there.
+
+    Examples
+    --------
+    >>> import numpy as np, linkagekit as lk
+    >>> from linkagekit.params import compile
+    >>> p = compile(lk.load("examples/seed000_fourbar.yaml"))
+    >>> unplaced_step(p, np.radians([[[0.0]]])) is None
+    True
+    """
+    plan = params.plan
+    q = np.asarray(q, dtype=float)
+    walk = _walk_grid(params, q) if plan.numerical else None
+    qg, grid = walk if walk is not None else (q, None)
+    sg, mr = params.signs[:, :1, None], np.zeros((plan.n_mirrors, 1, 1), bool)
+    z = np.full((len(plan.joint_names), 1, qg.shape[-1]), NAN_POINT)
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, 1, qg.shape[-1])), qg, sg, mr, ASSEMBLY_RTOL)
+    k.q0, k.grid = params.pose_inputs[:, :1], grid
+    k.upstream = None if grid is None else _upstream_of(params, sg, mr, ASSEMBLY_RTOL)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for i, (st, nums) in enumerate(zip(plan.steps, params.steps, strict=True)):
+            st.place(k, nums)
+            sign = getattr(st, "sign", None) if is_sign_step(st) else None
+            if not np.isfinite(z[list(st.writes()), 0, 0]).all() or (sign is not None and k.margin[sign, 0, 0] < 0):
+                return i
+    return None
+
+
+def unassembled_text(params: Params, q: np.ndarray) -> str:
+    """One line saying that the mechanism does not assemble at the inputs ``q`` of its reference pose, naming the
+    joints, links and plan step (as ``linkagekit check`` numbers them) that first fail (:func:`unplaced_step`)."""
+    plan = params.plan
+    i = unplaced_step(params, q)
+    if i is None:
+        return (
+            "the mechanism does not assemble at its reference pose's input (given lengths that do not close, "
+            "or a degenerate pose: two joints that locate another joint coincide)"
+        )
+    st, names = plan.steps[i], plan.joint_names
+    number = sum(s.describe(names, None) is not None for s in plan.steps[: i + 1])
+    said = shorten((st.describe(names, params.steps[i]) or "").split("; ")[0].split(" (")[0], 60)  # its first clause
+    joints, links = [names[j] for j in st.writes()], [f"'{name}'" for name in st.link_names()]
+    which = " of ".join(
+        f"{what}{'s' * (len(items) > 1)} {', '.join(items)}"
+        for what, items in (("joint", joints), ("link", links))
+        if items
+    )
+    return (
+        f"does not assemble at its reference pose's input: {which or 'a step'} cannot be placed (step {number} of "
+        f"the plan: {said}: no solution with the given lengths)"
+    )
 
 
 #: paths that follow the inputs (:mod:`linkagekit.branch`) pass through inputs at most this far apart

@@ -147,6 +147,15 @@ class Step:
         joint = getattr(self, "joint", None)
         return (joint,) if joint is not None else tuple(getattr(self, "joints", ()))
 
+    def link_names(self) -> tuple[str, ...]:
+        """The links whose dimensions this step reads (its ``links``, or its one ``link``): what a message names
+        when the step cannot place its joints."""
+        links = getattr(self, "links", None)
+        if links is not None:
+            return tuple(links)
+        link = getattr(self, "link", None)
+        return (link,) if link else ()
+
 
 def _num(value: Any) -> str:
     """A design's number for a description (the first design of a batch)."""
