@@ -217,17 +217,21 @@ def assert_buildable(mech: Any, min_transmission: float = 20.0) -> None:
 
 
 class ArclengthTriad:
-    """A class-3 triad's branch through its pose by pseudo-arclength continuation (unknowns J1, J2, J3 and the crank
-    angle u, equations the squared lengths of the six bars), its own Newton and tangents: a fold, where u turns
-    back, ends the branch; a sharp turn where the Jacobian nearly vanishes but u goes on is followed through.
+    """A crank-driven linkage's branch through its pose by pseudo-arclength continuation (unknowns the joints
+    ``unknown`` and the crank angle u, equations the squared lengths of ``bars``), its own Newton and tangents: a
+    fold, where u turns back, ends the branch; a sharp turn where the Jacobian nearly vanishes but u goes on is
+    followed through. By default a class-3 triad (unknowns J1, J2, J3).
 
-    ``points``: the pose (complex), joints O (crank pivot), A (crank tip), B0, C0 (ground) and J1, J2, J3; ``bars``
-    the triad's six bars ``(a, b)``. ``range``: the fold inputs below and above the pose's (degrees, continuous from
-    it, each to 1e-9 deg); :meth:`at`: J1, J2, J3 at an input between them."""
+    ``points``: the pose (complex), joints O (crank pivot), A (crank tip), the ground joints and the unknowns;
+    ``bars`` the bars ``(a, b)`` other than the crank, as many as twice the unknowns. ``range``: the fold inputs
+    below and above the pose's (degrees, continuous from it, each to 1e-9 deg); :meth:`at`: the unknowns at an
+    input between them."""
 
-    UNKNOWN = ("J1", "J2", "J3")
-
-    def __init__(self, points: dict[str, complex], bars: list[tuple[str, str]]) -> None:
+    def __init__(
+        self, points: dict[str, complex], bars: list[tuple[str, str]], unknown: tuple[str, ...] = ("J1", "J2", "J3")
+    ) -> None:
+        self.UNKNOWN = unknown
+        self.n = 2 * len(unknown)
         self.p = dict(points)
         self.bars = bars
         self.length2 = np.array([abs(points[a] - points[b]) ** 2 for a, b in bars])
@@ -236,11 +240,11 @@ class ArclengthTriad:
         x0 = np.array([c for j in self.UNKNOWN for c in (points[j].real, points[j].imag)] + [u0])
         self.size = float(np.mean(np.sqrt(self.length2)))
         self.legs = [self._leg(x0, sign) for sign in (-1, 1)]
-        self.range = tuple(float(np.degrees(leg[-1][6])) for leg in self.legs)
+        self.range = tuple(float(np.degrees(leg[-1][self.n])) for leg in self.legs)
 
     def _joints(self, x: np.ndarray) -> dict[str, complex]:
         J = {j: complex(x[2 * k], x[2 * k + 1]) for k, j in enumerate(self.UNKNOWN)}
-        J["A"] = self.p["O"] + self.r * complex(np.cos(x[6]), np.sin(x[6]))
+        J["A"] = self.p["O"] + self.r * complex(np.cos(x[self.n]), np.sin(x[self.n]))
         return {**self.p, **J}
 
     def _F(self, x: np.ndarray) -> np.ndarray:
@@ -249,7 +253,7 @@ class ArclengthTriad:
 
     def _jac(self, x: np.ndarray) -> np.ndarray:
         J = self._joints(x)
-        out = np.zeros((len(self.bars), 7))
+        out = np.zeros((len(self.bars), self.n + 1))
         dA = 1j * (J["A"] - self.p["O"])
         for row, (a, b) in enumerate(self.bars):
             d = J[a] - J[b]
@@ -258,7 +262,7 @@ class ArclengthTriad:
                     k = self.UNKNOWN.index(name)
                     out[row, 2 * k : 2 * k + 2] += f * np.array([d.real, d.imag])
                 elif name == "A":
-                    out[row, 6] += f * (d.real * dA.real + d.imag * dA.imag)
+                    out[row, self.n] += f * (d.real * dA.real + d.imag * dA.imag)
         return out
 
     def _tangent(self, x: np.ndarray, prev: np.ndarray) -> np.ndarray:
@@ -277,16 +281,16 @@ class ArclengthTriad:
 
     def _leg(self, x: np.ndarray, sign: int) -> list[np.ndarray]:
         """States from the pose with u going ``sign``-wards until u turns back (then the fold, refined)."""
-        t = self._tangent(x, np.eye(7)[6] * sign)
+        t = self._tangent(x, np.eye(self.n + 1)[self.n] * sign)
         ds, states = 1e-3 * self.size, [x]
-        while abs(x[6] - states[0][6]) < 2 * np.pi:
+        while abs(x[self.n] - states[0][self.n]) < 2 * np.pi:
             y = self._corrector(x, t, ds)
             tn = None if y is None else self._tangent(y, t)
             if tn is None or tn @ t < 0.995:  # not converged or too sharp a turn: a smaller step
                 ds /= 2
                 assert ds > 1e-12 * self.size, "the continuation stalled"
                 continue
-            if np.sign(tn[6]) != np.sign(t[6]):  # u turned: a fold between x and y
+            if np.sign(tn[self.n]) != np.sign(t[self.n]):  # u turned: a fold between x and y
                 states.append(self._fold(x, t, y))
                 return states
             x, t = y, tn
@@ -302,18 +306,18 @@ class ArclengthTriad:
             mid = (lo + hi) / 2
             z = self._corrector(x, t, mid)
             assert z is not None
-            if np.sign(self._tangent(z, t)[6]) == np.sign(t[6]):
+            if np.sign(self._tangent(z, t)[self.n]) == np.sign(t[self.n]):
                 lo = mid
             else:
                 hi, best = mid, z
         return best
 
     def at(self, u_deg: float) -> np.ndarray | None:
-        """J1, J2, J3 (complex, 3) at input ``u_deg`` on the branch (None outside its range): on the arc between the
+        """The unknowns (complex) at input ``u_deg`` on the branch (None outside its range): on the arc between the
         two states about it, by bisection of the arclength from the first."""
         u = np.radians(u_deg)
-        leg = self.legs[0] if u < self.legs[0][0][6] else self.legs[1]
-        us = np.array([s[6] for s in leg])  # monotone along a leg
+        leg = self.legs[0] if u < self.legs[0][0][self.n] else self.legs[1]
+        us = np.array([s[self.n] for s in leg])  # monotone along a leg
         if not min(us) <= u <= max(us):
             return None
         k = min(int(np.searchsorted(us if us[-1] > us[0] else -us, u if us[-1] > us[0] else -u)), len(leg) - 1)
@@ -325,11 +329,11 @@ class ArclengthTriad:
             mid = (lo + hi) / 2
             z = self._corrector(x, t, mid)
             assert z is not None
-            if abs(z[6] - u) < 1e-15 or hi - lo < 1e-15 * self.size:
+            if abs(z[self.n] - u) < 1e-15 or hi - lo < 1e-15 * self.size:
                 break
-            lo, hi = (mid, hi) if (z[6] - u) * (y[6] - x[6]) < 0 else (lo, mid)
+            lo, hi = (mid, hi) if (z[self.n] - u) * (y[self.n] - x[self.n]) < 0 else (lo, mid)
         y = z.copy()
-        y[6] = u
+        y[self.n] = u
         for _ in range(5):  # the last rounding of u: Newton at fixed u from there
-            y[:6] += np.linalg.solve(self._jac(y)[:, :6], -self._F(y))
-        return np.array([complex(y[2 * k], y[2 * k + 1]) for k in range(3)])
+            y[: self.n] += np.linalg.solve(self._jac(y)[:, : self.n], -self._F(y))
+        return np.array([complex(y[2 * k], y[2 * k + 1]) for k in range(len(self.UNKNOWN))])

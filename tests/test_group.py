@@ -838,6 +838,88 @@ def test_the_whole_range_of_a_slider_triad_near_a_fold_is_assembled():
     assert res.assembled.all()
 
 
+def test_a_sample_extrapolated_past_a_fold_is_not_assembled():
+    """A perturbed random triad (range [-155.482, -99.145] deg by ``ArclengthTriad``, the pose at -145.9): -157.48
+    deg, 2 deg past the lower end, lies in the cell past the walk's last column (-154.92 deg, 0.56 deg before the
+    fold); started from the extrapolation of the columns before, Newton converged on another branch and the sample
+    was assembled in the list below (and alone, once the walk's steps were bounded by the determinant's zero ahead),
+    while -157 and -156 deg were not. Now a sample extrapolated past where the
+    determinant's square, linear through the last two columns, vanishes is left to the sub-steps, which stop at the
+    fold. Inputs about the end agree with the reference (flags; joints to 1e-9 of the size)."""
+    p = {"O": -0.10899343699051743 - 0.1701495325198742j, "A": -3.1495997040073225 - 2.2276040499406164j}
+    p |= {"B0": -7.871886587506435 + 1.627926286529156j, "C0": -1.214171393076433 + 9.936923426857481j}
+    p |= {"J1": -2.8270203263234874 - 1.7804701283986402j, "J2": -0.4068113340861727 - 1.6932176658814364j}
+    p |= {"J3": -1.732560357408202 - 4.012415193087582j}
+    mech = triad(p)
+    ref = ArclengthTriad(p, TRIAD_BARS[1:])
+    assert abs(ref.range[0] + 155.4816) < 1e-4 and abs(ref.range[1] + 99.145) < 1e-3
+    u = np.array([-157.48165, -157.0, -156.0, -155.5, -155.48, -155.4, -150.0, 562.51835])
+    # the list of an independent harness in which 562.51835 deg was assembled
+    u = np.concatenate([u, [-180.0, -885.0, -510.0, 225.0, -480.0, -465.0, -90.0, -795.0, 300.0, -765.0, -750.0]])
+    u = np.concatenate([u, [-375.0, 360.0, 375.0, 30.0, -675.0, -660.0, 435.0, 450.0, 825.0, 120.0, 135.0, 510.0]])
+    u = np.concatenate([u, [525.0, -155.48164, 564.52835, -515.18165, -515.49165, -875.78165, -819.14504]])
+    u = np.concatenate([u, [260.84497, 260.55497, -99.13503, -458.84503, -97.14503]])
+    listed = lk.analyze(mech, {"crank": u}, rates=False)
+    for i, ui in enumerate(u):
+        d = ref.range[0] + (ui - ref.range[0]) % 360.0
+        want = ref.at(d) if d <= ref.range[1] else None
+        for res, k in ((listed, i), (lk.analyze(mech, {"crank": [ui]}, rates=False), 0)):
+            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
+            if want is not None:
+                got = np.array([complex(*res.xy(j)[k]) for j in ("J1", "J2", "J3")])
+                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
+
+
+#: two triads in sequence (review 8): the crank O-A drives triad J1 J2 J3 (legs A-J1, B0-J2, C0-J3), whose J3 drives
+#: triad K1 K2 K3 (legs J3-K1, D0-K2, E0-K3); the first turns fully, not back to its configuration after a turn
+TWO_TRIADS = {
+    "O": 0j,
+    "A": 1.5 + 0.5j,
+    "B0": 6.183488855581185 - 1.9845590727742248j,
+    "C0": 2.444074100721867 + 4.885477160882504j,
+    "J1": 3.0984160235358154 + 4.583468868186857j,
+    "J2": -1.0706135500406222 + 2.1785207235905886j,
+    "J3": 1.221169412507832 + 0.31805170979358266j,
+    "D0": -5.921235290488499 + 5.628700117597598j,
+    "E0": 7.7662314200064575 + 4.984537937417514j,
+    "K1": -0.8893042816312955 + 2.7537963517090485j,
+    "K2": -0.9864735488810941 + 2.9630085139709625j,
+    "K3": 2.5534940868503546 + 3.9812466837314977j,
+}
+TWO_TRIADS_BARS = TRIAD_BARS[1:] + [("J3", "K1"), ("D0", "K2"), ("E0", "K3"), ("K1", "K2"), ("K2", "K3"), ("K1", "K3")]
+
+
+def test_two_triads_in_sequence_take_a_direction_the_same_way_round():
+    """``TWO_TRIADS``: the whole mechanism's branch runs from -286.006 deg to a fold 0.05 deg above the pose (18.487
+    deg), by ``ArclengthTriad`` over both triads (12 unknowns); ``input_range`` says so. A direction such as 180 deg
+    lies nearer the pose going up, where the first triad reaches it but the second does not, so both must take it
+    going down, where the first triad is in another configuration (its branch turns fully without coming back to it
+    after a turn). Before, the first group went up and the second could not go down without it: every input from
+    -176.75 deg down was flagged (review 8). Now inputs across the range, in a list and alone, are at the
+    reference's joints (1e-9 of the size), and the directions outside it are flagged."""
+    from linkagekit.checks import input_range
+
+    unknown = ("J1", "J2", "J3", "K1", "K2", "K3")
+    ref = ArclengthTriad(TWO_TRIADS, TWO_TRIADS_BARS, unknown)
+    assert abs(ref.range[0] + 286.006) < 1e-3 and abs(ref.range[1] - 18.487) < 1e-3
+    links = dict(TRIAD_LINKS, m1=["J3", "K1"], m2=["D0", "K2"], m3=["E0", "K3"], tern2=["K1", "K2", "K3"])
+    links["ground"] = ["O", "B0", "C0", "D0", "E0"]
+    doc = {"format": "linkagekit/1", "units": {"length": "mm", "angle": "deg"}, "joints": xy(TWO_TRIADS)}
+    mech = lk.Mechanism.from_dict(doc | {"links": links, "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]})
+    ((lo, hi),) = input_range(mech)
+    assert abs(lo - ref.range[0]) < 1e-6 and abs(hi - ref.range[1]) < 1e-6, (lo, hi, ref.range)
+    u = np.array([-100.0, -150.0, -180.0, -190.0, 170.0, -250.0, 90.0, -285.9, 18.4, 18.5, 30.0, 60.0, 200.0])
+    listed = lk.analyze(mech, {"crank": u}, rates=False)
+    for i, ui in enumerate(u):
+        d = ref.range[0] + (ui - ref.range[0]) % 360.0
+        want = ref.at(d) if d <= ref.range[1] else None
+        for res, k in ((listed, i), (lk.analyze(mech, {"crank": [ui]}, rates=False), 0)):
+            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
+            if want is not None:
+                got = np.array([complex(*res.xy(j)[k]) for j in unknown])
+                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
+
+
 def test_a_sample_a_hair_inside_a_fold_end_is_assembled():
     """``random_triad(27)``'s range ends at folds, -165.0500215 and 100.6491420 deg (``input_range``; an independent
     scipy continuation stops within 1e-9 deg of both). Inputs 2e-5 to 3e-5 deg inside the lower end and 4e-5 deg

@@ -1087,6 +1087,8 @@ class Group(Step):
         u = np.broadcast_to(k.q[g.driver, :, : g.n_given], (D, g.n_given))
         x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
         near, other = grid_places(u, x0, g.step, g.cyclic)
+        if k.turn is not None:  # the mechanism takes these directions a turn the other way
+            near, other = np.where(k.turn, other, near), np.where(k.turn, np.nan, other)
         c0 = int(np.searchsorted(g.index, 0))
         origin = self._origin(start, g.n_given + c0, w)
         legs = (_Leg.new(origin, w, g, c0, 1), _Leg.new(origin, w, g, c0, -1))
@@ -1381,6 +1383,9 @@ class Group(Step):
             ao, bo, co = a[other], b[other], c[other]
             Umm, Um, Uao, Ubo, Up, Upp = (sol(x, co) for x in (ao - 2, ao - 1, ao, bo, bo + 1, bo + 2))
             guess[:, other], bound[other] = _cell_guess(Umm, Um, Uao, Ubo, Up, Upp, t[other])
+            ends = (np.all(np.isfinite(Uao), axis=0), np.all(np.isfinite(Ubo), axis=0))
+            past = self._past_zero(t[other], ao + g.n_given, co, ends, w)
+            bound[other] = np.where(past, np.nan, bound[other])  # sub-steps, which the zero ahead bounds
         with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0) & np.isfinite(bound))
         done = np.zeros(len(c), bool)
         if len(with_guess):
@@ -1409,6 +1414,26 @@ class Group(Step):
         with np.errstate(divide="ignore"):
             t = np.where(inside, -1 / np.abs(dist), -np.inf)
         return t, np.where(inside, w.det[c, np.clip(prev, 0, w.K.shape[2] - 1)], np.nan)
+
+    def _past_zero(
+        self, t: np.ndarray, a: np.ndarray, c: np.ndarray, ends: tuple[np.ndarray, np.ndarray], w: _Walk
+    ) -> np.ndarray:
+        """Which samples at ``t`` in cells from columns ``a`` to ``a + 1`` (designs ``c``) with one end solved
+        (``ends``: which) lie past where the determinant's square, linear through that end and the column before it,
+        vanishes (less than 1.5 times their distance from that end: :func:`_zero_ahead`). Extrapolated into such a
+        cell, Newton can converge on another branch past a fold (a random triad 2 deg past its range's end, 0.56 deg
+        past the cell's solved end)."""
+        if w.det is None or w.any_sign:
+            return np.zeros(len(t), bool)
+        up = ends[0] & ~ends[1]  # solved below the sample: the branch goes up to it
+        last = w.K.shape[2] - 1
+        end = np.clip(np.where(up, a, a + 1), 0, last)
+        prev = np.clip(np.where(up, a - 1, a + 2), 0, last)
+        dist = np.where(up, t, 1 - t)
+        with np.errstate(invalid="ignore"):
+            zero = _zero_ahead(w.det[c, prev], w.det[c, end])
+            out: np.ndarray = (ends[0] != ends[1]) & (zero < 1.5 * dist)
+        return out
 
     def _grid_slopes(self, g: WalkGrid, w: _Walk) -> np.ndarray:
         """The group's motion per grid step at every solved grid point, (m, D, G); NaN where unknown.

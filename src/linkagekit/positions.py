@@ -26,7 +26,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
@@ -40,6 +40,7 @@ from .steps import Kin, WalkGrid, is_sign_step
 
 if TYPE_CHECKING:
     from .model import Mechanism
+    from .plan import Plan
 
 #: above this many sign steps the pose's mode (given lengths) is searched greedily, one sign at a time
 EXHAUSTIVE_SIGNS = 14
@@ -82,6 +83,7 @@ def solve(
     out: np.ndarray | None = None,
     grid: WalkGrid | None = None,
     continuous: bool = False,
+    turn: np.ndarray | None = None,
 ) -> Positions:
     """Positions of every joint for every design and input sample.
 
@@ -103,6 +105,8 @@ def solve(
         Numerical groups follow their branch through change points (a sign change of their
         Jacobian's determinant is accepted where the motion is smooth); the sign steps take
         ``signs`` as given (:mod:`linkagekit.branch` chooses them).
+    turn : ndarray of bool, shape (D, n), optional
+        Set by this function itself: directions taken a turn the other way (:func:`_other_turn`).
     """
     plan = params.plan
     q = np.asarray(q, dtype=float)
@@ -114,13 +118,10 @@ def solve(
     D = params.n_designs
     n = int(np.broadcast_shapes(q.shape[-1:], sg.shape[-1:] if plan.n_signs else (1,), mr.shape[-1:])[0])
     z = np.empty((len(plan.joint_names), D, n), complex) if out is None else out
-    missing = plan.unwritten
-    if missing:  # a joint no step writes is NaN, never uninitialised memory
-        z[list(missing)] = NAN_POINT
-    k = Kin(
-        z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous, grid
-    )
-    k.upstream = None if grid is None else _upstream_of(params, sg, mr, eps)
+    if plan.unwritten:  # a joint no step writes is NaN, never uninitialised memory
+        z[list(plan.unwritten)] = NAN_POINT
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
+    k.grid, k.upstream, k.turn = grid, None if grid is None else _upstream_of(params, sg, mr, eps), turn
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -259,14 +260,69 @@ def _solve_on_grid(
         return None
     qg, grid = walk
     n, m = q.shape[-1], qg.shape[-1]
-    full = solve(
-        params, qg, _dense_choice(signs, n, m), _dense_choice(mirrors, n, m), eps, grid=grid, continuous=continuous
-    )
+    sg, mr = _dense_choice(signs, n, m), _dense_choice(mirrors, n, m)
+    full = solve(params, qg, sg, mr, eps, grid=grid, continuous=continuous)
     got = take_samples(full, np.arange(n))
+    if grid.cyclic and not continuous and _after_a_group(params.plan):
+        got = _other_turn(params, qg, grid, sg, mr, eps, got)
     if out is not None:
         out[...] = got.z
         got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
     return got
+
+
+def _after_a_group(plan: Plan) -> bool:
+    """Whether a step comes after the plan's first numerical group (which may need it a turn the other way)."""
+    first = next((i for i, st in enumerate(plan.steps) if isinstance(st, Group)), None)
+    return first is not None and first < len(plan.steps) - 1
+
+
+def _other_turn(
+    params: Params,
+    qg: np.ndarray,
+    grid: WalkGrid,
+    signs: np.ndarray | None,
+    mirrors: np.ndarray | None,
+    eps: float,
+    got: Positions,
+) -> Positions:
+    """Samples that did not assemble with their directions taken nearest the pose's input, solved again with every
+    numerical group a turn the other way (``turn``); taken where they assemble so.
+
+    Each group goes the other way round by itself where its own branch ends first
+    (:meth:`linkagekit.group.Group._other_turn`), but a later step needs the joints of the
+    earlier ones on the same way round: the first of two triads in sequence turns fully (not
+    back to the same configuration after a turn), the second ends 0.05 deg above the pose, and a
+    direction whose nearest representative lies above the pose assembles only the other way round,
+    for both groups. The samples of a chain (a step after a numerical group) that did not assemble
+    are solved once more with all its groups that way round."""
+    n = grid.n_given
+    miss = ~got.assembled
+    cols = np.flatnonzero(miss.any(axis=0))
+    if not len(cols):
+        return got
+    keep = np.concatenate([cols, np.arange(n, qg.shape[-1])])
+
+    def sub(a: np.ndarray | None) -> np.ndarray | None:
+        return a[..., keep] if a is not None and np.ndim(a) and np.shape(a)[-1] > 1 else a
+
+    again = solve(
+        params, qg[..., keep], sub(signs), sub(mirrors), eps, grid=replace(grid, n_given=len(cols)), turn=miss[:, cols]
+    )
+    use = miss[:, cols] & again.assembled[:, : len(cols)]
+    if not use.any():
+        return got
+    z, margin, assembled = got.z.copy(), got.margin.copy(), got.assembled.copy()
+    z[:, :, cols] = np.where(use, again.z[:, :, : len(cols)], z[:, :, cols])
+    margin[:, :, cols] = np.where(use, again.margin[:, :, : len(cols)], margin[:, :, cols])
+    assembled[:, cols] |= use
+    rot = dict(got.rot)
+    for name, v in got.rot.items():
+        if np.ndim(v) and np.shape(v)[-1] == n:
+            w = np.array(v, copy=True)
+            w[..., cols] = np.where(use, again.rot[name][..., : len(cols)], w[..., cols])
+            rot[name] = w
+    return Positions(z, rot, margin, assembled, got.signs, got.mirrors)
 
 
 def _upstream_of(params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float) -> Any:

@@ -82,6 +82,9 @@ class Kin:
     #: the joints the steps before ``stop`` place at other inputs ``q2`` (n_drivers, D, n2): ``upstream(q2, stop)``
     #: (n_joints, D, n2), NaN where not placed; None where that cannot be re-run (a numerical group before it)
     upstream: Callable[..., np.ndarray | None] | None = None
+    #: (D, n given) where a numerical group takes each sample's direction a turn the other way from the nearest one
+    #: to the pose's input (:func:`linkagekit.positions.solve`'s second pass for chains of groups)
+    turn: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
