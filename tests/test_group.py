@@ -745,6 +745,20 @@ def test_a_gap_where_another_branch_begins_is_not_assembled():
         check_against_reference(ref, np.array([u]), *joints_of(lk.analyze(mech, {"L3": [u]}, rates=False)))
 
 
+def agrees_with_arclength(mech, ref: ArclengthTriad, u: np.ndarray, direction: bool = True) -> None:
+    """Inputs ``u`` (deg) in one list and each alone: assembled exactly where the reference's branch reaches them (the
+    direction taken into its range when ``direction``), there at its joints (1e-9 of the size)."""
+    listed = lk.analyze(mech, {"crank": u}, rates=False)
+    for i, ui in enumerate(u):
+        d = ref.range[0] + (ui - ref.range[0]) % 360.0 if direction else ui
+        want = ref.at(d) if d <= ref.range[1] else None
+        for res, k in ((listed, i), (lk.analyze(mech, {"crank": [ui]}, rates=False), 0)):
+            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
+            if want is not None:
+                got = np.array([complex(*res.xy(j)[k]) for j in ref.UNKNOWN])
+                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
+
+
 def test_a_triad_follows_its_branch_through_a_sharp_turn_to_its_fold():
     """A class-3 triad whose Jacobian's determinant nearly vanishes at -43.3444 deg (5e-5 of its value elsewhere)
     without changing sign: two complex roots pass near the branch, which turns sharply there (J1 moves 0.06 over
@@ -765,15 +779,7 @@ def test_a_triad_follows_its_branch_through_a_sharp_turn_to_its_fold():
     ((lo, hi),) = input_range(mech)
     assert abs(lo - ref.range[0]) < 1e-6 and abs(hi - ref.range[1]) < 1e-6, (lo, hi, ref.range)
     u = np.array([-43.0, -43.344, -43.3446, -43.345, -43.3647, -43.6, -44.3, -60.0, -94.81, -94.82, -100.0, 32.2])
-    listed = lk.analyze(mech, {"crank": u}, rates=False)
-    for i, ui in enumerate(u):
-        alone = lk.analyze(mech, {"crank": [ui]}, rates=False)
-        want = ref.at(ui)
-        for res, k in ((listed, i), (alone, 0)):
-            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
-            if want is not None:
-                got = np.array([complex(*res.xy(j)[k]) for j in ("J1", "J2", "J3")])
-                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
+    agrees_with_arclength(mech, ref, u, direction=False)
 
 
 def test_the_range_of_a_triad_whose_continuation_hopped_has_its_gap():
@@ -859,15 +865,7 @@ def test_a_sample_extrapolated_past_a_fold_is_not_assembled():
     u = np.concatenate([u, [-375.0, 360.0, 375.0, 30.0, -675.0, -660.0, 435.0, 450.0, 825.0, 120.0, 135.0, 510.0]])
     u = np.concatenate([u, [525.0, -155.48164, 564.52835, -515.18165, -515.49165, -875.78165, -819.14504]])
     u = np.concatenate([u, [260.84497, 260.55497, -99.13503, -458.84503, -97.14503]])
-    listed = lk.analyze(mech, {"crank": u}, rates=False)
-    for i, ui in enumerate(u):
-        d = ref.range[0] + (ui - ref.range[0]) % 360.0
-        want = ref.at(d) if d <= ref.range[1] else None
-        for res, k in ((listed, i), (lk.analyze(mech, {"crank": [ui]}, rates=False), 0)):
-            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
-            if want is not None:
-                got = np.array([complex(*res.xy(j)[k]) for j in ("J1", "J2", "J3")])
-                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
+    agrees_with_arclength(mech, ref, u)
 
 
 #: two triads in sequence (review 8): the crank O-A drives triad J1 J2 J3 (legs A-J1, B0-J2, C0-J3), whose J3 drives
@@ -909,15 +907,7 @@ def test_two_triads_in_sequence_take_a_direction_the_same_way_round():
     ((lo, hi),) = input_range(mech)
     assert abs(lo - ref.range[0]) < 1e-6 and abs(hi - ref.range[1]) < 1e-6, (lo, hi, ref.range)
     u = np.array([-100.0, -150.0, -180.0, -190.0, 170.0, -250.0, 90.0, -285.9, 18.4, 18.5, 30.0, 60.0, 200.0])
-    listed = lk.analyze(mech, {"crank": u}, rates=False)
-    for i, ui in enumerate(u):
-        d = ref.range[0] + (ui - ref.range[0]) % 360.0
-        want = ref.at(d) if d <= ref.range[1] else None
-        for res, k in ((listed, i), (lk.analyze(mech, {"crank": [ui]}, rates=False), 0)):
-            assert res.assembled[k] == (want is not None), (ui, res.assembled[k])
-            if want is not None:
-                got = np.array([complex(*res.xy(j)[k]) for j in unknown])
-                assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
+    agrees_with_arclength(mech, ref, u)
 
 
 def test_a_sample_a_hair_inside_a_fold_end_is_assembled():
