@@ -121,7 +121,7 @@ def solve(
     if plan.unwritten:  # a joint no step writes is NaN, never uninitialised memory
         z[list(plan.unwritten)] = NAN_POINT
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
-    k.grid, k.upstream, k.turn = grid, None if grid is None else _upstream_of(params, sg, mr, eps), turn
+    k.grid, k.upstream, k.turn = grid, _upstream_of(params, sg, mr, eps) if plan.numerical else None, turn
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -353,6 +353,34 @@ def _upstream(
     return z
 
 
+def _nearest_turn(params: Params, key: np.ndarray) -> np.ndarray:
+    """Inputs ``key`` (n_drivers, n; the pose's first) with every angle's taken at its direction's representative
+    nearest the pose's (an angle is a direction: the walk's path, and so an answer, is the same for u + 360 k)."""
+    angular = np.zeros(len(key), bool)
+    got = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
+    angular[: len(got)] = np.asarray(got, bool)[: len(key)]
+    step = key - key[:, :1]
+    near = key[:, :1] + step - 2 * np.pi * np.round(step / (2 * np.pi))
+    out: np.ndarray = np.where(angular[:, None], near, key)
+    return out
+
+
+def _one_line(off: np.ndarray) -> np.ndarray | None:
+    """The direction (n_drivers,) of the line through the pose that holds every sample's offset from it ``off``
+    (n_drivers, n; an angle's at its nearest representative), or None where they lie on no one line.
+
+    >>> _one_line(np.array([[1.0, -2.0], [0.5, -1.0]])).tolist(), _one_line(np.array([[1.0, 2.0], [0.0, 1.0]]))
+    ([-2.0, -1.0], None)
+    """
+    norms = np.linalg.norm(off, axis=0)
+    if not len(norms) or norms.max() == 0:
+        first: np.ndarray = np.eye(len(off))[0]
+        return first
+    v: np.ndarray = off[:, int(np.argmax(norms))]
+    across = off - np.outer(v, v @ off) / (v @ v)
+    return v if np.all(np.linalg.norm(across, axis=0) <= 1e-12 * norms.max()) else None
+
+
 def _walk_driver(params: Params, key: np.ndarray) -> tuple[int, bool]:
     """The driver the walk follows (the one that moves most over ``key`` (n_drivers, n), the pose's input
     first) and whether it is an angle (its input is a direction)."""
@@ -379,8 +407,11 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     The grid is fixed: the pose's input plus whole steps of the driver that moves most
     (:func:`_grid_step`), as far as the samples may need (for an angle, the representatives
     of their directions either way round, :func:`linkagekit.group.grid_places`; at most
-    ``GRID_MOST`` steps either way for a length); the other drivers are interpolated along
-    it (between the pose's values and the samples'). None without a driver or a sample.
+    ``GRID_MOST`` steps either way for a length); the other drivers move along the line
+    through the pose that holds every sample (:func:`_one_line`). None without a driver or a
+    sample, or where the samples lie on no one line: each is then reached from the pose by its
+    own straight path (:meth:`linkagekit.group.Group.place`), so that no answer depends on the
+    others asked.
     """
     n = q.shape[-1]
     if q.ndim != 3 or n == 0 or q.shape[0] == 0:
@@ -388,7 +419,10 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     D = params.n_designs
     q0 = params.pose_inputs
     qb = np.broadcast_to(q, (q.shape[0], D, n))
-    key = np.concatenate([q0[:, :1], qb[:, 0, :]], axis=1)  # the pose's input first
+    key = _nearest_turn(params, np.concatenate([q0[:, :1], qb[:, 0, :]], axis=1))  # the pose's input first
+    slope = _one_line(key[:, 1:] - key[:, :1])
+    if slope is None:  # several drivers, not on one line through the pose: each sample by its own straight path
+        return None
     d, cyclic = _walk_driver(params, key)
     step = _grid_step(params, cyclic)
     near, other = grid_places(qb[d], q0[d], step, cyclic)
@@ -397,8 +431,7 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     lo, hi = (int(np.clip(f(e), -GRID_MOST, GRID_MOST)) for f, e in zip((np.floor, np.ceil), ends, strict=True))
     index = np.arange(min(lo, 0), max(hi, 0) + 1)
     x = q0[d][:, None] + index * step[:, None]  # (D, G)
-    srt = np.argsort(key[d], kind="stable")
-    rows = [x if i == d else np.interp(x, key[d][srt], key[i][srt]) for i in range(q.shape[0])]
+    rows = [x if i == d else q0[i][:, None] + (x - q0[d][:, None]) * (slope[i] / slope[d]) for i in range(len(q))]
     qg = np.concatenate([qb, np.array(rows)], axis=2)
     return qg, WalkGrid(n, index, step, d, cyclic)
 
