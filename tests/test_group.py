@@ -928,6 +928,15 @@ FIVEBAR_TRIAD = {
 }
 
 
+def fivebar_triad_mechanism() -> lk.Mechanism:
+    doc = {"format": "linkagekit/1", "units": {"length": "mm", "angle": "deg"}, "joints": xy(FIVEBAR_TRIAD)}
+    doc["links"] = {"ground": ["A", "B", "B0", "C0"], "crank1": ["A", "C"], "crank2": ["B", "D"]}
+    doc["links"] |= {"link1": ["C", "E", "P"], "link2": ["D", "E"], "l1": ["P", "J1"], "l2": ["B0", "J2"]}
+    doc["links"] |= {"l3": ["C0", "J3"], "tern": ["J1", "J2", "J3"]}
+    doc["drivers"] = [{"link": "crank1", "pivot": "A", "toward": "C"}, {"link": "crank2", "pivot": "B", "toward": "D"}]
+    return lk.Mechanism.from_dict(doc)
+
+
 def straight_path_reference(p: dict[str, complex], target: np.ndarray) -> np.ndarray | None:
     """J1, J2, J3 of ``FIVEBAR_TRIAD`` at crank angles ``target`` (deg, the directions nearest the pose's), reached
     from the pose along the straight path of the two inputs in 0.1-deg steps: the five-bar by the law of cosines
@@ -976,12 +985,7 @@ def test_two_drivers_answer_alike_alone_and_in_any_list():
     with the other interpolated through the samples, so a pair's answer depended on the others asked (a pair
     assembled alone was flagged next to two pairs written +360 deg; 28 of 60 random pairs differed, review 8). Now
     samples on no one line through the pose are each reached by their own straight path."""
-    doc = {"format": "linkagekit/1", "units": {"length": "mm", "angle": "deg"}, "joints": xy(FIVEBAR_TRIAD)}
-    doc["links"] = {"ground": ["A", "B", "B0", "C0"], "crank1": ["A", "C"], "crank2": ["B", "D"]}
-    doc["links"] |= {"link1": ["C", "E", "P"], "link2": ["D", "E"], "l1": ["P", "J1"], "l2": ["B0", "J2"]}
-    doc["links"] |= {"l3": ["C0", "J3"], "tern": ["J1", "J2", "J3"]}
-    doc["drivers"] = [{"link": "crank1", "pivot": "A", "toward": "C"}, {"link": "crank2", "pivot": "B", "toward": "D"}]
-    mech = lk.Mechanism.from_dict(doc)
+    mech = fivebar_triad_mechanism()
     rng = np.random.default_rng(3)
     q0 = np.array([120.0, 60.0])
     near = q0[:, None] + rng.uniform(-60, 60, (2, 40))
@@ -1001,6 +1005,27 @@ def test_two_drivers_answer_alike_alone_and_in_any_list():
                 got = np.array([complex(*res.xy(j)[k]) for j in ("J1", "J2", "J3")])
                 assert np.max(np.abs(got - want)) <= 1e-9 * size, (q[:, i], np.max(np.abs(got - want)) / size)
     assert 0 < flagged < 40  # some pairs lie beyond the branch's reach, some within
+
+
+def test_two_drivers_in_a_batch_answer_as_each_design_alone():
+    """``FIVEBAR_TRIAD`` and the same mechanism posed at cranks (128, 55) deg (its joints there, as ``analyze`` gives
+    them), in one batch (``poses=``): pairs on a line through the first pose's inputs lie on none through the
+    second's. Each design's answers in the batch are its own alone (flags; joints to 1e-9 of the size): the line
+    the walk follows is each design's, or there is none."""
+    base = fivebar_triad_mechanism()
+    there = lk.analyze(base, {"crank1": [128.0], "crank2": [55.0]}, rates=False)
+    assert there.assembled[0]
+    moved = np.array([there.xy(j)[0] for j in base.joint_names])
+    t = np.linspace(-30, 30, 13)
+    q = {"crank1": 120.0 + t, "crank2": 60.0 + 0.5 * t}
+    batch = lk.analyze(base, q, poses=np.stack([base.pose_array(), moved]), rates=False)
+    assert batch.assembled.any(axis=1).all()
+    size = scale_of(base)
+    for k, mech in enumerate((base, base.with_pose(moved))):
+        alone = lk.analyze(mech, q, rates=False)
+        assert np.array_equal(batch.assembled[k], alone.assembled)
+        for j in ("J1", "J2", "J3"):
+            assert np.nanmax(np.abs(batch.point(j)[k] - alone.point(j))) <= 1e-9 * size
 
 
 def test_a_sample_a_hair_inside_a_fold_end_is_assembled():

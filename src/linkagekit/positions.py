@@ -354,31 +354,36 @@ def _upstream(
 
 
 def _nearest_turn(params: Params, key: np.ndarray) -> np.ndarray:
-    """Inputs ``key`` (n_drivers, n; the pose's first) with every angle's taken at its direction's representative
-    nearest the pose's (an angle is a direction: the walk's path, and so an answer, is the same for u + 360 k)."""
+    """Inputs ``key`` (n_drivers, ..., n; the pose's first) with every angle's taken at its direction's
+    representative nearest the pose's (an angle is a direction: the walk's path, and so an answer, is the same for
+    u + 360 k)."""
     angular = np.zeros(len(key), bool)
     got = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
     angular[: len(got)] = np.asarray(got, bool)[: len(key)]
-    step = key - key[:, :1]
-    near = key[:, :1] + step - 2 * np.pi * np.round(step / (2 * np.pi))
-    out: np.ndarray = np.where(angular[:, None], near, key)
+    step = key - key[..., :1]
+    near = key[..., :1] + step - 2 * np.pi * np.round(step / (2 * np.pi))
+    out: np.ndarray = np.where(angular.reshape((-1,) + (1,) * (key.ndim - 1)), near, key)
     return out
 
 
 def _one_line(off: np.ndarray) -> np.ndarray | None:
-    """The direction (n_drivers,) of the line through the pose that holds every sample's offset from it ``off``
-    (n_drivers, n; an angle's at its nearest representative), or None where they lie on no one line.
+    """Per design, the direction (n_drivers, D) of the line through its pose that holds every sample's offset from
+    it ``off`` (n_drivers, D, n; an angle's at its nearest representative), or None where a design's samples lie on
+    no one line. A design whose samples are all at its pose has the first driver's direction.
 
-    >>> _one_line(np.array([[1.0, -2.0], [0.5, -1.0]])).tolist(), _one_line(np.array([[1.0, 2.0], [0.0, 1.0]]))
-    ([-2.0, -1.0], None)
+    >>> _one_line(np.array([[[1.0, -2.0]], [[0.5, -1.0]]])).tolist(), _one_line(np.array([[[1.0, 2.0]], [[0.0, 1.0]]]))
+    ([[-2.0], [-1.0]], None)
     """
-    norms = np.linalg.norm(off, axis=0)
-    if not len(norms) or norms.max() == 0:
-        first: np.ndarray = np.eye(len(off))[0]
-        return first
-    v: np.ndarray = off[:, int(np.argmax(norms))]
-    across = off - np.outer(v, v @ off) / (v @ v)
-    return v if np.all(np.linalg.norm(across, axis=0) <= 1e-12 * norms.max()) else None
+    norms = np.linalg.norm(off, axis=0)  # (D, n)
+    D = off.shape[1]
+    v = off[:, np.arange(D), np.argmax(norms, axis=1)] if off.shape[2] else np.zeros(off.shape[:2])
+    vv = np.sum(v * v, axis=0)
+    v = np.where(vv > 0, v, np.eye(len(off))[:, :1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        across = off - v[:, :, None] * (np.einsum("kd,kdn->dn", v, off) / np.sum(v * v, axis=0)[:, None])
+    scale = np.max(norms, axis=1, initial=0.0)[:, None]
+    on: bool = bool(np.all(np.linalg.norm(across, axis=0) <= 1e-12 * scale))
+    return v if on else None
 
 
 def _walk_driver(params: Params, key: np.ndarray) -> tuple[int, bool]:
@@ -419,11 +424,11 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     D = params.n_designs
     q0 = params.pose_inputs
     qb = np.broadcast_to(q, (q.shape[0], D, n))
-    key = _nearest_turn(params, np.concatenate([q0[:, :1], qb[:, 0, :]], axis=1))  # the pose's input first
-    slope = _one_line(key[:, 1:] - key[:, :1])
-    if slope is None:  # several drivers, not on one line through the pose: each sample by its own straight path
+    key = _nearest_turn(params, np.concatenate([q0[:, :, None], qb], axis=2))  # each design's pose input first
+    line = _one_line(key[..., 1:] - key[..., :1])
+    d, cyclic = _walk_driver(params, key.reshape(len(key), -1))
+    if line is None or np.any(line[d] == 0):  # several drivers off one line through the pose: each sample its own path
         return None
-    d, cyclic = _walk_driver(params, key)
     step = _grid_step(params, cyclic)
     near, other = grid_places(qb[d], q0[d], step, cyclic)
     with np.errstate(invalid="ignore"):
@@ -431,7 +436,9 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     lo, hi = (int(np.clip(f(e), -GRID_MOST, GRID_MOST)) for f, e in zip((np.floor, np.ceil), ends, strict=True))
     index = np.arange(min(lo, 0), max(hi, 0) + 1)
     x = q0[d][:, None] + index * step[:, None]  # (D, G)
-    rows = [x if i == d else q0[i][:, None] + (x - q0[d][:, None]) * (slope[i] / slope[d]) for i in range(len(q))]
+    rows = [
+        x if i == d else q0[i][:, None] + (x - q0[d][:, None]) * (line[i] / line[d])[:, None] for i in range(len(q))
+    ]
     qg = np.concatenate([qb, np.array(rows)], axis=2)
     return qg, WalkGrid(n, index, step, d, cyclic)
 
