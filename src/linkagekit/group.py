@@ -1050,9 +1050,9 @@ class Group(Step):
             np.full((D, n), np.nan),
         )
         g = k.grid
-        if g is None:  # no grid: every sample from the pose by sub-steps, along its own straight path
+        if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
             c, s = np.nonzero(ok)
-            self._from_state(start[:, c], zk0[:, c], start[:, c], c, s, w, q0=np.asarray(k.q0, float))
+            self._from_state(start[:, c], zk0[:, c], start[:, c], c, s, w)
         else:
             places, second, legs = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
@@ -1472,19 +1472,16 @@ class Group(Step):
         w: _Walk,
         src: np.ndarray | None = None,
         before: tuple[np.ndarray, np.ndarray] | None = None,
-        q0: np.ndarray | None = None,
     ) -> None:
         """Samples ``s`` of designs ``c`` reached by sub-steps from ``(U0, K0)`` (the knowns of columns ``src``, or
-        the pose's; ``before``: the column before each, :meth:`_halving`; ``q0`` (n_drivers, D): the pose's inputs,
-        from which each sample's path goes straight to its inputs); a dyad-like group restarts about ``centre``
-        where they fail."""
+        the pose's; ``before``: the column before each, :meth:`_halving`); a dyad-like group restarts about
+        ``centre`` where they fail."""
         K1 = w.K[:, c, s]
         U = np.full((U0.shape[0], len(c)), NAN_POINT)
         live = np.flatnonzero(np.all(np.isfinite(U0), axis=0) & w.ok[c, s])
         if len(live):
             cols = None if src is None else (src[live], s[live])
-            start = None if q0 is None else q0[:, c[live]]
-            path = self._path(K0[:, live], K1[:, live], c[live], cols if q0 is None else (s[live], s[live]), w, start)
+            path = self._path(K0[:, live], K1[:, live], c[live], cols, w)
             ahead = None if before is None else (before[0][live], before[1][live])
             U[:, live] = self._halving(U0[:, live], path, w, to_fold=True, before=ahead)
         acc = np.all(np.isfinite(U), axis=0)
@@ -1643,21 +1640,14 @@ class Group(Step):
         return np.where(st.alive & (st.t >= 1.0), Uc, NAN_POINT)
 
     def _path(
-        self,
-        K0: np.ndarray,
-        K1: np.ndarray,
-        designs: np.ndarray,
-        cols: tuple[np.ndarray, np.ndarray] | None,
-        w: _Walk,
-        q0: np.ndarray | None = None,
+        self, K0: np.ndarray, K1: np.ndarray, designs: np.ndarray, cols: tuple[np.ndarray, np.ndarray] | None, w: _Walk
     ) -> _Path:
         """Sub-steps of ``designs`` from knowns ``K0`` to ``K1``, the knowns of columns ``cols`` (from, to) of ``w.K``
         (None: the chord between them): through the inputs between the two columns where the steps before the group
-        can be re-run there (an angle's input the shorter way round: a sample's input is a direction); ``q0``: the
-        inputs it starts from (n_drivers, B), instead of column ``cols[0]``'s."""
+        can be re-run there (an angle's input the shorter way round: a sample's input is a direction)."""
         if cols is None or w.upstream is None or w.q is None:
             return _Path(K0, K1, designs)
-        q0, q1 = w.q[:, designs, cols[0]] if q0 is None else q0, w.q[:, designs, cols[1]]
+        q0, q1 = w.q[:, designs, cols[0]], w.q[:, designs, cols[1]]
         angle = np.zeros(len(q0), bool)
         angle[: len(self.angular)] = self.angular[: len(q0)]
         with np.errstate(invalid="ignore"):

@@ -121,7 +121,7 @@ def solve(
     if plan.unwritten:  # a joint no step writes is NaN, never uninitialised memory
         z[list(plan.unwritten)] = NAN_POINT
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
-    k.grid, k.upstream, k.turn = grid, _upstream_of(params, sg, mr, eps) if plan.numerical else None, turn
+    k.grid, k.upstream, k.turn = grid, None if grid is None else _upstream_of(params, sg, mr, eps), turn
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -354,36 +354,16 @@ def _upstream(
 
 
 def _nearest_turn(params: Params, key: np.ndarray) -> np.ndarray:
-    """Inputs ``key`` (n_drivers, ..., n; the pose's first) with every angle's taken at its direction's
-    representative nearest the pose's (an angle is a direction: the walk's path, and so an answer, is the same for
-    u + 360 k)."""
+    """Inputs ``key`` (n_drivers, n; the pose's first) with every angle's taken at its direction's representative
+    nearest the pose's, as :func:`linkagekit.group.grid_places` takes it (an angle is a direction: the walk's path
+    through the samples, and so an answer, is the same for u + 360 k)."""
     angular = np.zeros(len(key), bool)
     got = next((st.angular for st in params.plan.steps if isinstance(st, Group)), ())
     angular[: len(got)] = np.asarray(got, bool)[: len(key)]
-    step = key - key[..., :1]
-    near = key[..., :1] + step - 2 * np.pi * np.round(step / (2 * np.pi))
-    out: np.ndarray = np.where(angular.reshape((-1,) + (1,) * (key.ndim - 1)), near, key)
+    step = key - key[:, :1]
+    near = key[:, :1] + step - 2 * np.pi * np.floor(step / (2 * np.pi) + 0.5)
+    out: np.ndarray = np.where(angular[:, None], near, key)
     return out
-
-
-def _one_line(off: np.ndarray) -> np.ndarray | None:
-    """Per design, the direction (n_drivers, D) of the line through its pose that holds every sample's offset from
-    it ``off`` (n_drivers, D, n; an angle's at its nearest representative), or None where a design's samples lie on
-    no one line. A design whose samples are all at its pose has the first driver's direction.
-
-    >>> _one_line(np.array([[[1.0, -2.0]], [[0.5, -1.0]]])).tolist(), _one_line(np.array([[[1.0, 2.0]], [[0.0, 1.0]]]))
-    ([[-2.0], [-1.0]], None)
-    """
-    norms = np.linalg.norm(off, axis=0)  # (D, n)
-    D = off.shape[1]
-    v = off[:, np.arange(D), np.argmax(norms, axis=1)] if off.shape[2] else np.zeros(off.shape[:2])
-    vv = np.sum(v * v, axis=0)
-    v = np.where(vv > 0, v, np.eye(len(off))[:, :1])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        across = off - v[:, :, None] * (np.einsum("kd,kdn->dn", v, off) / np.sum(v * v, axis=0)[:, None])
-    scale = np.max(norms, axis=1, initial=0.0)[:, None]
-    on: bool = bool(np.all(np.linalg.norm(across, axis=0) <= 1e-12 * scale))
-    return v if on else None
 
 
 def _walk_driver(params: Params, key: np.ndarray) -> tuple[int, bool]:
@@ -412,11 +392,9 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     The grid is fixed: the pose's input plus whole steps of the driver that moves most
     (:func:`_grid_step`), as far as the samples may need (for an angle, the representatives
     of their directions either way round, :func:`linkagekit.group.grid_places`; at most
-    ``GRID_MOST`` steps either way for a length); the other drivers move along the line
-    through the pose that holds every sample (:func:`_one_line`). None without a driver or a
-    sample, or where the samples lie on no one line: each is then reached from the pose by its
-    own straight path (:meth:`linkagekit.group.Group.place`), so that no answer depends on the
-    others asked.
+    ``GRID_MOST`` steps either way for a length); the other drivers are interpolated along
+    it (between the pose's values and the samples', every angle at its representative
+    nearest the pose's, :func:`_nearest_turn`). None without a driver or a sample.
     """
     n = q.shape[-1]
     if q.ndim != 3 or n == 0 or q.shape[0] == 0:
@@ -424,11 +402,8 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     D = params.n_designs
     q0 = params.pose_inputs
     qb = np.broadcast_to(q, (q.shape[0], D, n))
-    key = _nearest_turn(params, np.concatenate([q0[:, :, None], qb], axis=2))  # each design's pose input first
-    line = _one_line(key[..., 1:] - key[..., :1])
-    d, cyclic = _walk_driver(params, key.reshape(len(key), -1))
-    if line is None or np.any(line[d] == 0):  # several drivers off one line through the pose: each sample its own path
-        return None
+    key = _nearest_turn(params, np.concatenate([q0[:, :1], qb[:, 0, :]], axis=1))  # the pose's input first
+    d, cyclic = _walk_driver(params, key)
     step = _grid_step(params, cyclic)
     near, other = grid_places(qb[d], q0[d], step, cyclic)
     with np.errstate(invalid="ignore"):
@@ -436,9 +411,8 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     lo, hi = (int(np.clip(f(e), -GRID_MOST, GRID_MOST)) for f, e in zip((np.floor, np.ceil), ends, strict=True))
     index = np.arange(min(lo, 0), max(hi, 0) + 1)
     x = q0[d][:, None] + index * step[:, None]  # (D, G)
-    rows = [
-        x if i == d else q0[i][:, None] + (x - q0[d][:, None]) * (line[i] / line[d])[:, None] for i in range(len(q))
-    ]
+    srt = np.argsort(key[d], kind="stable")
+    rows = [x if i == d else np.interp(x, key[d][srt], key[i][srt]) for i in range(q.shape[0])]
     qg = np.concatenate([qb, np.array(rows)], axis=2)
     return qg, WalkGrid(n, index, step, d, cyclic)
 
