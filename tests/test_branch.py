@@ -310,6 +310,27 @@ def test_numerical_groups_follow_the_double_rhombus():
     assert np.nanmax(np.abs((z(default, "C2") - z(default, "C1")).imag)) > 0.5
 
 
+def test_a_change_point_forced_through_newton_is_flagged_however_its_direction_is_written():
+    """IFToMM's double rhombus (pose at 90 deg) forced through Newton, the pose's branch: at 0 deg C1 lies on A2 and
+    C2 is undetermined, so the closed form flags it. Written as 0, 360, 720 or -360 deg, in a list and alone, it
+    is flagged; 180 and 540 deg are assembled as in the closed form (to 1e-5: there C2 and C3 sit on tangent
+    circles, which Newton fixes only to about the square root of its tolerance: 5.4e-7 and 1.1e-6). The chains'
+    second pass (every group a turn the other way) once reached 360 deg from the other side and took a root Newton
+    converged to only by rounding (C2 at (0, 0)): a configuration whose Jacobian's determinant is below 1e-12 of the
+    pose's is no answer now (review 9)."""
+    mech = double_parallelogram(90.0, (1.0, 1.0))
+    u = [0.0, 360.0, 720.0, -360.0, 180.0, 540.0]
+    ref = lk.analyze(mech, {"crank1": u}, rates=False)
+    assert ref.assembled.tolist() == [False, False, False, False, True, True]
+    for res in [lk.analyze(mech, {"crank1": u}, method="numerical", rates=False)] + [
+        lk.analyze(mech, {"crank1": [x]}, method="numerical", rates=False) for x in u
+    ]:
+        k = slice(None) if len(res.assembled) == len(u) else [u.index(float(res.inputs["crank1"][0]))]
+        assert res.assembled.tolist() == np.asarray(ref.assembled)[k].tolist()
+        for j in ("C1", "C2", "C3"):
+            assert np.nanmax(np.abs(z(res, j) - z(ref, j)[k]), initial=0.0) < 1e-5
+
+
 def test_numerical_group_continuous_off_whole_degrees_and_after_a_gap():
     """Found by review (on the walk before it was rewritten): a parallelogram forced through Newton
     with the continuous branch, swept off whole degrees, took the crossed mode near 0.5 deg; a

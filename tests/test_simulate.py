@@ -300,6 +300,21 @@ def test_no_driver_or_no_inertia_is_refused():
         lk.simulate(_fourbar(), [0.0, np.nan])
 
 
+def test_several_drivers_without_inertia_are_refused_naming_them(capsys):
+    """The massless five-bar with a torque on each crank: its mass matrix is zero, and the solve raised numpy's
+    LinAlgError ("internal error", exit 1; review 9). With mass on crank1 only, crank2 still moves nothing with
+    inertia. Each is one line naming the drivers without inertia, exit 2."""
+    path = str(EXAMPLES / "fivebar_two_drivers.yaml")
+    args = ["--time", "0:0.1:0.01", "--torque", "crank1=0.5", "--torque", "crank2=0.5"]
+    assert main(["simulate", path, *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no inertia along the motion of 'crank1', 'crank2'" in err[0]
+    doc = _example("fivebar_two_drivers.yaml")
+    _bar(doc, "crank1", 0.2, "A", "C")
+    with pytest.raises(lk.InputError, match="no inertia along the motion of 'crank2': give the links it moves"):
+        lk.simulate(lk.Mechanism.from_dict(doc), [0.0, 0.1], torque={"crank1": 0.5, "crank2": 0.5})
+
+
 def test_two_drivers_spring_and_damper_agree_with_kinetostatics():
     """Several drivers with a spring and a damper: kinetostatics (forces.py, its own spring and damper code)
     of the simulated motion needs exactly the applied torques, so a wrong sign or factor of either in the

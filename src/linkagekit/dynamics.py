@@ -1005,10 +1005,23 @@ def _direct_accel(md: _Model, q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> 
         Lq, Lw = split(_stretch(m, a, b)[1])
         rhs -= c * Lq * Lw
     good = np.all(m.good.reshape(nd + 1, n), axis=0) & np.all(np.isfinite(M), axis=(1, 2))
+    _check_inertia(md, M[good])
     M[~good] = np.eye(nd)
     qdd = np.linalg.solve(M, np.nan_to_num(rhs).T[..., None])[..., 0].T
     qdd[:, ~good] = np.nan
     return qdd, np.min(m.cond.reshape(nd + 1, n), axis=0)
+
+
+def _check_inertia(md: _Model, M: np.ndarray) -> None:
+    """Several drivers: each must move something with inertia (``M`` (n, n_d, n_d) at assembled states), else its
+    acceleration is undetermined: an error naming those drivers (a massless five-bar raised LinAlgError)."""
+    if not len(M):
+        return
+    none = np.all(np.diagonal(M, axis1=1, axis2=2) <= 0, axis=0)
+    if none.any():
+        names = ", ".join(repr(d.name) for d, z in zip(md.mech.drivers, none, strict=True) if z)
+        they = "it moves" if none.sum() == 1 else "they move"
+        raise InputError(f"{md.mech.source}: no inertia along the motion of {names}: give the links {they} masses")
 
 
 def _unbounded(mech: Mechanism) -> Mechanism:

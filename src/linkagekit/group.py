@@ -203,13 +203,16 @@ VECTOR_ITER = 2
 #: from its end, back at its start's knowns, returns to its start (or to a root of the other sign): another root of
 #: the pose's sign lies farther (nearer, it would be a hair from a singular position of its own)
 HOP_MOVE = 1e-3
+#: a converged configuration whose Jacobian's determinant is at most this part of the pose's is singular (a joint
+#: undetermined, as two coincident circles leave it): not an answer (Newton converges there only by rounding)
+SINGULAR_DET = 1e-12
 #: a failed continuation step is retried in sub-steps down to 2^-MAX_HALVINGS of it
 MAX_HALVINGS = 10
 #: a grid step is taken whole only where the determinant of the group's Jacobian, extrapolated linearly through the
 #: leg's last two columns, stays off zero for this many steps (:func:`_zero_ahead`); else the step is taken in
 #: sub-steps, each going at most ``1 / SUB_FOLD_SHARE`` of the way to where the last two sub-steps put that zero
-GRID_FOLD_SHARE = 1.5
-SUB_FOLD_SHARE = 2.0
+GRID_FOLD_SHARE = 1.0
+SUB_FOLD_SHARE = 1.5
 #: a sub-step after a state whose determinant's trend is not known goes at most this part of its way (it gives one)
 FIRST_SUBSTEP = 1 / 16
 #: ... and the determinant's zero ahead shortens no sub-step below this part of its way (finer than a failed step's
@@ -404,6 +407,7 @@ class _Walk:
     q: np.ndarray | None = None  # (n_drivers, D, n) the inputs of ``K``'s columns
     upstream: Callable[[np.ndarray], np.ndarray | None] | None = None  # the joints before the group at inputs
     det: np.ndarray | None = None  # (D, n) the Jacobian's determinant at the grid's solved columns (NaN elsewhere)
+    det0: np.ndarray | None = None  # (D,) its size at the pose: a root where it is SINGULAR_DET times that is no answer
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
@@ -1049,6 +1053,7 @@ class Group(Step):
             None if k.upstream is None else partial(k.upstream, stop=self),
             np.full((D, n), np.nan),
         )
+        w.det0 = np.abs(self._dets(start, zk0, np.arange(D), w))
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
             c, s = np.nonzero(ok)
@@ -1501,8 +1506,12 @@ class Group(Step):
         """Whether Newton's ``sol`` from ``start`` (columns of ``designs``) is the branch's: converged, with the
         pose's determinant sign (a sign change is a passage through a singular position, never silent; following
         the branch continuously, :meth:`_Walk.sign_ok`, any sign), and no joint farther than ``bound`` from where
-        it started (over a small step Newton's root is the branch's, not another of one sign)."""
+        it started (over a small step Newton's root is the branch's, not another of one sign); and, keeping the pose's
+        sign, not singular (its determinant above ``SINGULAR_DET`` of the pose's: where a joint is undetermined, as
+        at a rhombus's flat position, Newton converges only by rounding, to any point of a circle)."""
         near = np.max(np.abs(sol - start), axis=0) <= bound
+        if w.det0 is not None and not w.any_sign:  # following the branch continuously, its limit there is the answer
+            near &= np.abs(sign) > SINGULAR_DET * w.det0[designs]
         return conv & w.sign_ok(sign, designs) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
 
     def _plain(
@@ -1619,6 +1628,10 @@ class Group(Step):
             act = st.due()
             if not len(act):
                 break
+            if trail is not None:  # at a fold, not at a sharp turn: the path goes no farther
+                gone = trail.folded(act)
+                st.alive[act[gone]] = False
+                act = act[~gone]
             tt = st.target(act, trail)
             K_t = self._knowns(path, tt, act, w)
             ok = np.zeros(len(act), bool)
@@ -2156,14 +2169,28 @@ class _Steps:
 
 @dataclass
 class _DetTrail:
-    """Sub-steps' last two accepted states per column: their ``t`` along the path and the determinant there (2, B)."""
+    """Sub-steps' last two accepted states per column: their ``t`` along the path and the determinant there (2, B);
+    and where the last two pairs put the determinant's zero (``zero``, (2, B), NaN where none)."""
 
     t: np.ndarray
     det: np.ndarray
+    zero: np.ndarray
 
     @classmethod
     def new(cls, before: tuple[np.ndarray, np.ndarray], det0: np.ndarray) -> _DetTrail:
-        return cls(np.stack([before[0], np.zeros(len(det0))]), np.stack([before[1], det0]))
+        B = len(det0)
+        return cls(np.stack([before[0], np.zeros(B)]), np.stack([before[1], det0]), np.full((2, B), np.nan))
+
+    def folded(self, i: np.ndarray) -> np.ndarray:
+        """Which columns ``i`` stand within ``0.5**MAX_HALVINGS`` of a fold before their path's end: the last two
+        pairs of states put the determinant's zero at the same place (to 1e-2 of the way there), as a fold does
+        (the square of the determinant linear in the input); where it only nearly vanishes, or two branches nearly
+        cross, the zero's place runs ahead as the states come nearer, and the fine sub-steps go on."""
+        z, t = self.zero[:, i], self.t[1, i]
+        with np.errstate(invalid="ignore"):
+            way = z[1] - t
+            out: np.ndarray = (way < 0.5**MAX_HALVINGS) & (z[1] < 1.0) & (np.abs(z[1] - z[0]) <= 1e-2 * way)
+        return out
 
     def room(self, i: np.ndarray) -> np.ndarray:
         """How far (in ``t``) past its last state column ``i`` may go: ``1 / SUB_FOLD_SHARE`` of the way to the
@@ -2177,6 +2204,9 @@ class _DetTrail:
         """Columns ``i`` accepted a state at ``t`` with determinant ``det``."""
         self.t[0, i], self.det[0, i] = self.t[1, i], self.det[1, i]
         self.t[1, i], self.det[1, i] = t, det
+        with np.errstate(invalid="ignore"):
+            ahead = _zero_ahead(self.det[0, i], self.det[1, i]) * (self.t[1, i] - self.t[0, i])
+        self.zero[0, i], self.zero[1, i] = self.zero[1, i], np.where(np.isfinite(ahead), t + ahead, np.nan)
 
 
 @dataclass
