@@ -224,8 +224,9 @@ class ArclengthTriad:
 
     ``points``: the pose (complex), joints O (crank pivot), A (crank tip), the ground joints and the unknowns;
     ``bars`` the bars ``(a, b)`` other than the crank, as many as twice the unknowns. ``range``: the fold inputs
-    below and above the pose's (degrees, continuous from it, each to 1e-9 deg); :meth:`at`: the unknowns at an
-    input between them."""
+    below and above the pose's (degrees, continuous from it, each to 1e-9 deg; the same with arc steps of at most
+    2e-2 and 2e-3 of the size, or an assertion fails: where two branches nearly cross, a long step can jump between
+    them); :meth:`at`: the unknowns at an input between them."""
 
     def __init__(
         self, points: dict[str, complex], bars: list[tuple[str, str]], unknown: tuple[str, ...] = ("J1", "J2", "J3")
@@ -239,8 +240,16 @@ class ArclengthTriad:
         u0 = float(np.angle(points["A"] - points["O"]))
         x0 = np.array([c for j in self.UNKNOWN for c in (points[j].real, points[j].imag)] + [u0])
         self.size = float(np.mean(np.sqrt(self.length2)))
-        self.legs = [self._leg(x0, sign) for sign in (-1, 1)]
+        coarse = [self._leg(x0, sign, 2e-2) for sign in (-1, 1)]
+        self.legs = [self._leg(x0, sign, 2e-3) for sign in (-1, 1)]
         self.range = tuple(float(np.degrees(leg[-1][self.n])) for leg in self.legs)
+        other = tuple(float(np.degrees(leg[-1][self.n])) for leg in coarse)
+        # where two branches nearly cross, too long an arc step can jump between them: both steps must agree
+        assert np.allclose(self.range, other, rtol=0, atol=1e-7), (
+            "the reference depends on its step",
+            self.range,
+            other,
+        )
 
     def _joints(self, x: np.ndarray) -> dict[str, complex]:
         J = {j: complex(x[2 * k], x[2 * k + 1]) for k, j in enumerate(self.UNKNOWN)}
@@ -279,7 +288,7 @@ class ArclengthTriad:
                 return y
         return None
 
-    def _leg(self, x: np.ndarray, sign: int) -> list[np.ndarray]:
+    def _leg(self, x: np.ndarray, sign: int, longest: float) -> list[np.ndarray]:
         """States from the pose with u going ``sign``-wards until u turns back (then the fold, refined)."""
         t = self._tangent(x, np.eye(self.n + 1)[self.n] * sign)
         ds, states = 1e-3 * self.size, [x]
@@ -295,7 +304,7 @@ class ArclengthTriad:
                 return states
             x, t = y, tn
             states.append(x)
-            ds = min(ds * 1.5, 2e-2 * self.size)
+            ds = min(ds * 1.5, longest * self.size)
         return states
 
     def _fold(self, x: np.ndarray, t: np.ndarray, y: np.ndarray) -> np.ndarray:
