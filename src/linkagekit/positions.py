@@ -147,7 +147,6 @@ def reference_mode(mech: Mechanism, params: Params) -> Params:
     """
     if not mech.has_given_lengths:
         return params
-    from dataclasses import replace
 
     plan = params.plan
     k = plan.n_signs
