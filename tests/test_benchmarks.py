@@ -52,7 +52,7 @@ def test_bench_editor(capsys):
         pytest.skip("LINKAGEKIT_NO_BROWSER=1: the editor benchmark needs Chromium")
     import bench_editor
 
-    rows = bench_editor.main(steps=10, enforce=False)  # timings on a busy machine say nothing: no goal here
+    rows = bench_editor.main(steps=10, enforce=False, repeat=3)  # timings on a busy machine say nothing: no goal here
     out = capsys.readouterr().out
     assert "of 10 answered" in out and "median" in out and "95th percentile" in out and "coarse request" in out
     assert [r["example"] for r in rows] == [case[0] for case in bench_editor.CASES]
@@ -87,9 +87,9 @@ def test_bench_synthesis(capsys):
 def test_bench_recovery(capsys):
     import bench_recovery
 
-    rows = bench_recovery.main(1, seconds=1.0, workers=1)
+    rows = bench_recovery.main(1, seconds=0.5, workers=1)
     out = capsys.readouterr().out
-    assert len(rows) == 3 and "within 0.1 % in 1 s" in out
+    assert len(rows) == 3 and "within 0.1 % in 0.5 s" in out
     assert all(r[2] >= 0 and r[3] > 0 for r in rows)
 
 

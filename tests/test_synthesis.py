@@ -36,18 +36,19 @@ def random_designs(topology: str, n: int, seed: int, min_transmission: float = 3
     re-check them with lk.check."""
     base = make_problem(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), topology, min_transmission=min_transmission)
     X = np.random.default_rng(seed).uniform(-1, 1, (20000, base.space.dim))
-    ev = evaluate(base, X, samples=720, margin=0.0)
     out = []
-    for i in np.flatnonzero(ev.violation == 0):
-        mech = base.space.mechanism(X[i])
-        res = lk.analyze(mech, {"crank": np.arange(0.0, 360.0, 2.0)})
-        P = res.xy("P")
-        lo, hi = P.min(axis=0), P.max(axis=0)
-        c, L = (lo + hi) / 2, np.hypot(*(hi - lo))
-        if all(np.all(np.abs(res.xy(j) - c) <= 0.9 * L) for j in mech.joint_names):  # at every input
-            out.append(mech)
-        if len(out) == n:
-            return out
+    for chunk in np.split(X, 10):  # in order, scored a chunk at a time: the first n found, without scoring them all
+        ev = evaluate(base, chunk, samples=720, margin=0.0)
+        for i in np.flatnonzero(ev.violation == 0):
+            mech = base.space.mechanism(chunk[i])
+            res = lk.analyze(mech, {"crank": np.arange(0.0, 360.0, 2.0)})
+            P = res.xy("P")
+            lo, hi = P.min(axis=0), P.max(axis=0)
+            c, L = (lo + hi) / 2, np.hypot(*(hi - lo))
+            if all(np.all(np.abs(res.xy(j) - c) <= 0.9 * L) for j in mech.joint_names):  # at every input
+                out.append(mech)
+            if len(out) == n:
+                return out
     raise AssertionError(f"only {len(out)} such {topology} designs")
 
 
@@ -255,9 +256,9 @@ def test_recovers_with_prescribed_timing():
 
 def test_same_seed_same_design_and_another_seed_another_search():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
-    kw = dict(units="cm", restarts=1, generations=40, goal=0.0)
-    a = synthesize(T, "fourbar", seed=4, **kw)
-    b = synthesize(T, "fourbar", seed=4, **kw)
+    kw = dict(units="cm", restarts=1, generations=15, goal=0.0)
+    a = synthesize(T, "fourbar", seed=1, **kw)  # seeds whose polish is short (seed 4's took 6 s)
+    b = synthesize(T, "fourbar", seed=1, **kw)
     c = synthesize(T, "fourbar", seed=5, **kw)
     assert np.array_equal(a.x, b.x) and not np.array_equal(a.x, c.x)
     assert a.mechanism.to_dict() == b.mechanism.to_dict()
@@ -266,9 +267,9 @@ def test_same_seed_same_design_and_another_seed_another_search():
 def test_workers_give_the_same_result():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
     pb = make_problem(T, "fourbar", units="cm")
-    s = Settings(seed=2, restarts=1, generations=25, goal=0.0)
+    s = Settings(seed=2, restarts=1, generations=10, goal=0.0)
     one = optimize(pb, s)
-    two = optimize(pb, Settings(seed=2, restarts=1, generations=25, goal=0.0, workers=2))
+    two = optimize(pb, Settings(seed=2, restarts=1, generations=10, goal=0.0, workers=2))
     assert np.array_equal(one.x, two.x) and one.cost == two.cost
 
 

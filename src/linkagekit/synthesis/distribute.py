@@ -219,6 +219,8 @@ class WorkersLost(LinkageError):
     exit_code = 1
 
 
+#: seconds to wait for a ``--scheduler`` to answer before it is said unreachable
+CONNECT_SECONDS = 10.0
 #: a generation is sent again this many times when workers die under it
 RETRIES = 3
 #: seconds a Dask cluster may go without any worker before the run stops; between looks at it
@@ -291,7 +293,7 @@ class Evaluator:
             self._quiet_dask()
             try:
                 connect: Any = Client  # distributed leaves Client.__init__ unannotated
-                self._client = connect(scheduler, timeout=10, set_as_default=False)
+                self._client = connect(scheduler, timeout=CONNECT_SECONDS, set_as_default=False)
             except (OSError, TimeoutError, ValueError) as e:
                 raise InputError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({e})") from None
             self._remote = [self._client.scatter(p, broadcast=True) for p in self.problems]
