@@ -367,6 +367,37 @@ def test_numerical_group_continuous_off_whole_degrees_and_after_a_gap():
     assert np.max(np.abs(num.point("B")[ok] - ref.point("B")[ok])) < 1e-9
 
 
+def test_numerical_group_continuous_keeps_its_branch_where_no_modes_meet():
+    """Review 8: a triad fed by a four-bar's coupler (crank-rocker; the triad's range [72.96, 91.05] deg, no change
+    point inside) left its branch under ``branch="continuous"`` at 79.5..82 deg (by 0.24 mm; its joints span 10.5
+    mm) and came back. The walk's look-ahead took a root of the other determinant sign (341, 377 at 87, 84 deg, then
+    -474 at 81 deg): a sign change is now taken only along the determinant's trend. Where no modes meet the result is
+    the default's (itself an independent continuation's to 1e-13), to 1e-10 of the span (the two differ by 2e-14:
+    following the branch, the four-bar's joints go along the sub-steps' chord)."""
+    doc = {
+            "format": "linkagekit/1",
+            "units": {"length": "mm", "angle": "deg"},
+            "joints": {"O": [0.0, 0.0], "O2": [4.0, 0.0], "A": [0.0, 1.0],
+                       "B": [3.489041676410868, 2.956166705643473], "C": [1.0109583235891315, 3.286473981475812],
+                       "B0": [9.296027354063606, -2.67709103873365], "C0": [7.255118164392492, -3.6114860306876757],
+                       "J1": [2.032968421114176, 2.8107302271602466], "J2": [0.7153310092334033, 3.3866216228656834],
+                       "J3": [2.7144505541325112, 0.29306816795673196]},
+            "links": {"ground": ["O", "O2", "B0", "C0"], "crank": ["O", "A"], "coupler": ["A", "B", "C"],
+                      "rocker": ["O2", "B"], "l1": ["C", "J1"], "l2": ["B0", "J2"], "l3": ["C0", "J3"],
+                      "tern": ["J1", "J2", "J3"]},
+            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }  # fmt: skip
+    mech = lk.Mechanism.from_dict(doc)
+    pts = np.array([complex(*p) for p in doc["joints"].values()])
+    size = np.max(np.abs(pts[:, None] - pts[None, :]))  # the largest distance between two joints
+    for deg in (np.arange(73.0, 91.0, 0.5), np.arange(91.0, 73.0, -0.5)):
+        default = lk.analyze(mech, {"crank": deg}, rates=False)
+        cont = lk.analyze(mech, {"crank": deg}, rates=False, branch="continuous")
+        assert default.assembled.all() and cont.assembled.all()
+        for j in ("J1", "J2", "J3"):
+            assert np.nanmax(np.abs(z(cont, j) - z(default, j))) / size < 1e-10
+
+
 FLAT = DEG % 180 == 0  # the change points of a parallelogram driven by its crank: 0, 180, 360, 540, 720 deg
 
 
