@@ -78,9 +78,10 @@ only say how far the legs go. A step is accepted (:meth:`Group._accept`, the one
 decides, but for the continuous branch's sign) only when Newton converges (residual below
 ``NEWTON_TOL`` relative), the Jacobian's determinant keeps the pose's sign (a sign change is a
 passage through a singular position: a change of mode, never silent; following the branch
-continuously, :func:`_sign_passes`, it keeps the sign of the state before or changes it along
-the determinant's trend) and no joint moves more than ``STEP_LIMIT`` times the group's mean
-link length (a class-3 group has up to three roots of one sign; over a small step Newton's
+continuously, :func:`_sign_passes`, it follows the determinant's trend, or keeps the sign of
+the state before where no zero of the determinant lies within the step) and no joint moves
+more than ``STEP_LIMIT`` times the group's mean link length (a class-3 group has up to three
+roots of one sign; over a small step Newton's
 root is the branch's). A step that fails waits while the other designs
 go on; the waiting steps are then retried together in adaptive sub-steps (halved on
 failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known
@@ -412,9 +413,8 @@ class _Walk:
     det0: np.ndarray | None = None  # (D,) its size at the pose: a root where it is SINGULAR_DET times that is no answer
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
-        """A continuation step keeps the pose's determinant sign (following the branch, any sign here: the sign of
-        the state it starts from, or a change along the determinant's trend, is checked where that state is known,
-        :func:`_sign_passes`)."""
+        """A continuation step keeps the pose's determinant sign (following the branch, any sign here: the steps
+        check :func:`_sign_passes` where the states before them are known)."""
         ok: np.ndarray = (np.sign(sg) == self.ref[designs]) | self.any_sign
         return ok
 
@@ -1324,8 +1324,9 @@ class Group(Step):
         """Which of a leg's grid steps (k, N) to columns ``s + q sign`` (determinants ``dets`` there) may be taken
         whole: the determinant, extrapolated linearly through the two columns before each, stays off zero for
         ``GRID_FOLD_SHARE`` steps (:func:`_zero_ahead`). Following the branch continuously, the steps go through the
-        zeros on purpose: any step may be taken whole that keeps the sign of the column before or changes it along the
-        determinant's trend through the two columns before (:func:`_sign_passes`; else in sub-steps).
+        zeros on purpose: a step is taken whole that follows the determinant's trend through the two columns before, or
+        keeps the sign of the column before where the zero ahead is not within it (:func:`_sign_passes`; else in
+        sub-steps).
 
         Newton's root at a column past a fold can lie on another sheet whose own fold is near: a Pyslvs six-bar
         variant's branch folds at 366.71 deg and another branch begins at 366.87; the step from 366 to 369 deg landed
@@ -2156,13 +2157,17 @@ def _zero_ahead(det_prev: np.ndarray, det: np.ndarray) -> np.ndarray:
 def _sign_passes(det_prev: np.ndarray, det: np.ndarray, det_new: np.ndarray, ratio: np.ndarray | float) -> np.ndarray:
     """Following the branch continuously: whether a step from a state of determinant ``det`` (``det_prev`` at the
     state before it; the step ``ratio`` times as long as the last) to one of ``det_new`` is the branch's as far as the
-    determinant tells: it keeps ``det``'s sign, or ``det_new`` continues the determinant's trend, off the line through
-    ``det_prev`` and ``det`` by at most that line's own change over the step. Where ``det`` is unknown it tells nothing.
+    determinant tells. ``det_new`` continues the determinant's trend (off the line through ``det_prev`` and ``det`` by
+    at most that line's own change over the step), or keeps ``det``'s sign where the determinant's zero ahead
+    (:func:`_zero_ahead`, as the default's whole grid steps read it) is not within the step. Where ``det`` is unknown it
+    tells nothing.
 
-    Along the branch the determinant is smooth: over a small step it follows its trend, and at a change point (a
-    simple zero) it changes sign that way; a root of another branch has a determinant of its own. A triad fed by a
-    four-bar's coupler, its determinant 341 and 377 at 87 and 84 deg, took -474 at 81 deg (0.1 of its size off the
-    branch) and 317 again at 78 deg; a parallelogram's, 1.67 and 0.84 a grid step apart, is -0.0 at its flat position.
+    Along the branch the determinant is smooth: at a change point (a simple zero) it changes sign along its trend, and
+    where its zero is near (a change point, or a fold, where the range ends) the branch's next state is on the trend,
+    not at a root of another branch. A triad fed by a four-bar's coupler, its determinant 341 and 377 at 87 and 84
+    deg, took -474 at 81 deg (0.1 of its size off the branch) and 317 again at 78 deg; another, past a fold, kept its
+    sign on another branch. A parallelogram's determinant, 1.67 and 0.84 a grid step apart, is -0.0 at its flat
+    position.
 
     >>> _sign_passes(np.array([341.0, 1.67]), np.array([377.0, 0.84]), np.array([-474.0, -0.0]), 1.0).tolist()
     [False, True]
@@ -2170,7 +2175,8 @@ def _sign_passes(det_prev: np.ndarray, det: np.ndarray, det_new: np.ndarray, rat
     with np.errstate(invalid="ignore", over="ignore"):
         trend = det + (det - det_prev) * ratio
         follows = np.abs(det_new - trend) <= np.abs(trend - det)
-        out: np.ndarray = (np.sign(det_new) == np.sign(det)) | follows | ~np.isfinite(det)
+        clear = ~(_zero_ahead(det_prev, det) < ratio)
+        out: np.ndarray = follows | ((np.sign(det_new) == np.sign(det)) & clear) | ~np.isfinite(det)
     return out
 
 
