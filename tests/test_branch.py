@@ -367,6 +367,54 @@ def test_numerical_group_continuous_off_whole_degrees_and_after_a_gap():
     assert np.max(np.abs(num.point("B")[ok] - ref.point("B")[ok])) < 1e-9
 
 
+def coupler_fed_triad(triad):
+    """A crank-rocker (crank O-A at 90 deg in the pose, coupler A-B-C, rocker O2-B) whose coupler point C holds a
+    triad: legs C-J1, B0-J2, C0-J3 on a ternary J1 J2 J3, the points of ``triad`` (review 8's attack family)."""
+    joints = {"O": [0.0, 0.0], "O2": [4.0, 0.0], "A": [0.0, 1.0], "B": [3.489041676410868, 2.956166705643473],
+              "C": [1.0109583235891315, 3.286473981475812], **triad}  # fmt: skip
+    links = {"ground": ["O", "O2", "B0", "C0"], "crank": ["O", "A"], "coupler": ["A", "B", "C"],
+             "rocker": ["O2", "B"], "l1": ["C", "J1"], "l2": ["B0", "J2"], "l3": ["C0", "J3"],
+             "tern": ["J1", "J2", "J3"]}  # fmt: skip
+    doc = {"format": "linkagekit/1", "units": {"length": "mm", "angle": "deg"}, "joints": joints, "links": links,
+           "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]}  # fmt: skip
+    pts = np.array([complex(*p) for p in joints.values()])
+    return lk.Mechanism.from_dict(doc), np.max(np.abs(pts[:, None] - pts[None, :]))  # and the joints' span
+
+
+TRIADS = {
+    # range [72.96, 91.05] deg: continuous left the branch at 79.5..82 deg by 0.24 mm (span 10.5 mm), came back
+    "inside": ({"B0": [9.296027354063606, -2.67709103873365], "C0": [7.255118164392492, -3.6114860306876757],
+                "J1": [2.032968421114176, 2.8107302271602466], "J2": [0.7153310092334033, 3.3866216228656834],
+                "J3": [2.7144505541325112, 0.29306816795673196]},
+               (np.arange(73.0, 91.0, 0.5), np.arange(91.0, 73.0, -0.5)), (72.96178714675288, 91.05172568436907)),
+    # range [-207.54, 90.60] deg: continuous went on past the fold at 90.60 deg (all 360 directions assembled)
+    "fold": ({"B0": [2.1891459952041075, 9.207419141214965], "C0": [-3.6934461964858603, 9.178391154195902],
+              "J1": [1.520460004754253, 2.3724283571570726], "J2": [0.12991547401734183, 0.4642282415266079],
+              "J3": [1.1495125790260774, 3.0171492414076573]},
+             (np.arange(0.0, 360.0, 1.0),), (-207.54221579821768, 90.60383629615204)),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", list(TRIADS))
+def test_numerical_group_continuous_keeps_its_branch_where_no_modes_meet(name):
+    """Review 8: a triad fed by a four-bar's coupler, no change point in its range, left its branch under
+    ``branch="continuous"``. Inside its range the walk's look-ahead took a root of the other determinant sign (341,
+    377 at 87, 84 deg, then -474 at 81 deg), and past a fold a root of the pose's sign on another branch: a step now
+    keeps its sign only where the determinant's zero is not within it, and changes it only along its trend. Where no
+    modes meet the result is the default's: the same flags, assembled exactly where the direction lies in the range
+    an independent continuation finds (each end to 1e-7 deg), the joints to 1e-10 of the span (the two differ by
+    2e-14: following the branch, the four-bar's joints go along the sub-steps' chord)."""
+    triad, sweeps, (lo, hi) = TRIADS[name]
+    mech, span = coupler_fed_triad(triad)
+    for deg in sweeps:
+        default = lk.analyze(mech, {"crank": deg}, rates=False)
+        cont = lk.analyze(mech, {"crank": deg}, rates=False, branch="continuous")
+        inside = (deg - lo) % 360.0 <= hi - lo
+        assert default.assembled.tolist() == cont.assembled.tolist() == inside.tolist()
+        for j in ("J1", "J2", "J3"):
+            assert np.nanmax(np.abs(z(cont, j) - z(default, j))) / span < 1e-10
+
+
 FLAT = DEG % 180 == 0  # the change points of a parallelogram driven by its crank: 0, 180, 360, 540, 720 deg
 
 

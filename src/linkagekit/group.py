@@ -75,11 +75,14 @@ each started from a quadratic predictor; the batch also solves the next ``LOOK_A
 columns of a leg, kept while each passes the step's test from the one before (one
 that fails is stepped to again from the last kept). The grid does not depend on the inputs asked; they
 only say how far the legs go. A step is accepted (:meth:`Group._accept`, the one place that
-decides) only when Newton converges (residual below ``NEWTON_TOL`` relative), the
-Jacobian's determinant keeps the pose's sign (a sign change is a passage through a singular
-position: a change of mode, never silent) and no joint moves more than ``STEP_LIMIT`` times
-the group's mean link length (a class-3 group has up to three roots of one sign; over a
-small step Newton's root is the branch's). A step that fails waits while the other designs
+decides, but for the continuous branch's sign) only when Newton converges (residual below
+``NEWTON_TOL`` relative), the Jacobian's determinant keeps the pose's sign (a sign change is a
+passage through a singular position: a change of mode, never silent; following the branch
+continuously, :func:`_sign_passes`, it follows the determinant's trend, or keeps the sign of
+the state before where no zero of the determinant lies within the step) and no joint moves
+more than ``STEP_LIMIT`` times the group's mean link length (a class-3 group has up to three
+roots of one sign; over a small step Newton's
+root is the branch's). A step that fails waits while the other designs
 go on; the waiting steps are then retried together in adaptive sub-steps (halved on
 failure, doubled on success, down to ``2^-MAX_HALVINGS`` of the step), moving the known
 joints as the inputs between the two columns put them (the steps before the group re-run
@@ -400,7 +403,7 @@ class _Walk:
     arrays: _Arrays  # the numbers per design as Newton reads them
     reach: tuple[FloatArray, FloatArray, FloatArray]  # (n_chains, D) each chain's (low, high, margin)
     K0: np.ndarray  # (k, D) the known joints the start was solved with
-    any_sign: bool = False  # continuous branch: a small smooth step may change the determinant's sign
+    any_sign: bool = False  # continuous branch: a step may change the determinant's sign along its trend
     vector: bool = False  # the walk's Newton as array operations over the designs (many designs), else LAPACK
     fill_vector: bool = False  # ... and the samples' (many samples and designs)
     grid_columns: int = 0  # the walk's grid columns (the last of ``K``'s samples)
@@ -410,7 +413,8 @@ class _Walk:
     det0: np.ndarray | None = None  # (D,) its size at the pose: a root where it is SINGULAR_DET times that is no answer
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
-        """A continuation step keeps the pose's determinant sign (or, following the branch, any sign)."""
+        """A continuation step keeps the pose's determinant sign (following the branch, any sign here: the steps
+        check :func:`_sign_passes` where the states before them are known)."""
         ok: np.ndarray = (np.sign(sg) == self.ref[designs]) | self.any_sign
         return ok
 
@@ -1319,13 +1323,16 @@ class Group(Step):
     def _clear_of_zero(self, dets: np.ndarray, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
         """Which of a leg's grid steps (k, N) to columns ``s + q sign`` (determinants ``dets`` there) may be taken
         whole: the determinant, extrapolated linearly through the two columns before each, stays off zero for
-        ``GRID_FOLD_SHARE`` steps (:func:`_zero_ahead`; following the branch continuously, any step may).
+        ``GRID_FOLD_SHARE`` steps (:func:`_zero_ahead`). Following the branch continuously, the steps go through the
+        zeros on purpose: a step is taken whole that follows the determinant's trend through the two columns before, or
+        keeps the sign of the column before where the zero ahead is not within it (:func:`_sign_passes`; else in
+        sub-steps).
 
         Newton's root at a column past a fold can lie on another sheet whose own fold is near: a Pyslvs six-bar
         variant's branch folds at 366.71 deg and another branch begins at 366.87; the step from 366 to 369 deg landed
         on it, and its way back converged home. The determinant told: it fell linearly to zero at 366.79 deg."""
         out = np.ones(dets.shape, bool)
-        if w.det is None or w.any_sign:
+        if w.det is None:
             return out
         first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
         before = []
@@ -1335,7 +1342,10 @@ class Group(Step):
             before.append(np.where(inside, w.det[d, np.clip(col, 0, n - 1)], np.nan))
         seq = np.concatenate([np.stack(before), dets])
         for q in range(dets.shape[0]):
-            out[q] = _zero_ahead(seq[q], seq[q + 1]) >= GRID_FOLD_SHARE
+            if w.any_sign:
+                out[q] = _sign_passes(seq[q], seq[q + 1], dets[q], 1.0)
+            else:
+                out[q] = _zero_ahead(seq[q], seq[q + 1]) >= GRID_FOLD_SHARE
         return out
 
     def _substeps(
@@ -1395,7 +1405,8 @@ class Group(Step):
         done = np.zeros(len(c), bool)
         if len(with_guess):
             i = with_guess
-            done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w)
+            keep = self._cell_sign(c[i], a[i], b[i], g.n_given, w)
+            done[i] = self._fill_batch(s[i], c[i], guess[:, i], bound[i], w, keep)
         rest = np.flatnonzero(~done)
         if len(rest):  # sub-steps from the cell's end nearer the pose, else its other end
             near = np.where(P[rest] >= 0, a[rest], b[rest])
@@ -1406,6 +1417,16 @@ class Group(Step):
             centre = np.where(np.isfinite(U0), U0, start[:, cr])  # a dyad-like group restarts about it
             before = self._column_before(P[rest] - (frm - c0), cr, g.n_given + frm, w)
             self._from_state(U0, w.K[:, cr, g.n_given + frm], centre, cr, s[rest], w, g.n_given + frm, before)
+
+    def _cell_sign(self, c: np.ndarray, a: np.ndarray, b: np.ndarray, first: int, w: _Walk) -> np.ndarray | None:
+        """Following the branch continuously, the determinant's sign samples in cells from grid columns ``a`` to
+        ``b`` (designs ``c``; grid column 0 is column ``first`` of ``w.det``) must have: the one both ends share
+        (0, any, where they differ: a change point between them; or where an end is unknown). Else None."""
+        if not w.any_sign or w.det is None:
+            return None
+        n = w.det.shape[1]
+        da, db = (np.where((x >= 0) & (first + x < n), w.det[c, np.clip(first + x, 0, n - 1)], np.nan) for x in (a, b))
+        return np.where(np.isfinite(da) & (np.sign(da) == np.sign(db)), np.sign(da), 0.0)
 
     def _column_before(
         self, dist: np.ndarray, c: np.ndarray, col: np.ndarray, w: _Walk
@@ -1505,7 +1526,8 @@ class Group(Step):
     ) -> np.ndarray:
         """Whether Newton's ``sol`` from ``start`` (columns of ``designs``) is the branch's: converged, with the
         pose's determinant sign (a sign change is a passage through a singular position, never silent; following
-        the branch continuously, :meth:`_Walk.sign_ok`, any sign), and no joint farther than ``bound`` from where
+        the branch continuously, any sign here: the grid steps, sub-steps and samples, which know the states before,
+        check :func:`_sign_passes`), and no joint farther than ``bound`` from where
         it started (over a small step Newton's root is the branch's, not another of one sign); and, keeping the pose's
         sign, not singular (its determinant above ``SINGULAR_DET`` of the pose's: where a joint is undetermined, as
         at a rhombus's flat position, Newton converges only by rounding, to any point of a circle)."""
@@ -1555,13 +1577,18 @@ class Group(Step):
         U_new[:, idx[found]] = U_r[:, found]
         acc[idx[found]] = True
 
-    def _fill_batch(self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk) -> np.ndarray:
-        """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not."""
+    def _fill_batch(
+        self, r: np.ndarray, c: np.ndarray, g: np.ndarray, bound: np.ndarray, w: _Walk, keep: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Samples ``r`` of designs ``c`` from guesses ``g`` at once: accepted (written to ``out``) or not (``keep``:
+        the determinant's sign each must have, 0 any, :meth:`_cell_sign`)."""
         ok = np.zeros(len(r), bool)
         i = np.flatnonzero(w.ok[c, r])  # the others cannot converge
         ri, ci, gi = r[i], c[i], g[:, i]
         sol, conv, sg = self._newton_samples(gi, w.K[:, ci, ri], ci, w)
         good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
+        if keep is not None:
+            good &= (keep[i] == 0) | (np.sign(sg) == keep[i])
         w.out[:, ci[good], ri[good]] = sol[:, good]
         ok[i] = good
         return ok
@@ -1623,16 +1650,17 @@ class Group(Step):
         Uc, Kc, st = U.copy(), path.K0.copy(), _Steps.new(B)
         if before is None:
             before = (np.full(B, np.nan), np.full(B, np.nan))
-        trail = None if w.any_sign else _DetTrail.new(before, self._dets(U, path.K0, designs, w))
+        trail = _DetTrail.new(before, self._dets(U, path.K0, designs, w))
+        bounded = None if w.any_sign else trail  # following the branch continuously, through the zeros on purpose
         while True:
             act = st.due()
             if not len(act):
                 break
-            if trail is not None:  # at a fold, not at a sharp turn: the path goes no farther
-                gone = trail.folded(act)
+            if bounded is not None:  # at a fold, not at a sharp turn: the path goes no farther
+                gone = bounded.folded(act)
                 st.alive[act[gone]] = False
                 act = act[~gone]
-            tt = st.target(act, trail)
+            tt = st.target(act, bounded)
             K_t = self._knowns(path, tt, act, w)
             ok = np.zeros(len(act), bool)
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
@@ -1640,12 +1668,13 @@ class Group(Step):
                 a = act[can]
                 Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
+                if w.any_sign:  # a sign change only across the determinant's zero (:func:`_sign_passes`)
+                    ok[can] &= trail.sign_passes(a, tt[can], sg)
                 back = can[ok[can]]  # the way back must lead to where the step started: no hop to another root
                 ok[back] = self._returns(Un[:, ok[can]], Kc[:, act[back]], Uc[:, act[back]], w, designs[act[back]])
                 good_can = can[ok[can]]
                 Uc[:, act[good_can]] = Un[:, ok[can]]
-                if trail is not None:
-                    trail.push(act[good_can], tt[good_can], sg[ok[can]])
+                trail.push(act[good_can], tt[good_can], sg[ok[can]])
             Kc[:, act[ok]] = K_t[:, ok]
             st.update(act, tt, ok)
         if to_fold:  # samples (the walk's own steps find the range's ends: they are not pushed)
@@ -2125,6 +2154,32 @@ def _zero_ahead(det_prev: np.ndarray, det: np.ndarray) -> np.ndarray:
     return np.where(np.isnan(det_prev) & np.isfinite(det), np.nan, out)
 
 
+def _sign_passes(det_prev: np.ndarray, det: np.ndarray, det_new: np.ndarray, ratio: np.ndarray | float) -> np.ndarray:
+    """Following the branch continuously: whether a step from a state of determinant ``det`` (``det_prev`` at the
+    state before it; the step ``ratio`` times as long as the last) to one of ``det_new`` is the branch's as far as the
+    determinant tells. ``det_new`` continues the determinant's trend (off the line through ``det_prev`` and ``det`` by
+    at most that line's own change over the step), or keeps ``det``'s sign where the determinant's zero ahead
+    (:func:`_zero_ahead`, as the default's whole grid steps read it) is not within the step. Where ``det`` is unknown it
+    tells nothing.
+
+    Along the branch the determinant is smooth: at a change point (a simple zero) it changes sign along its trend, and
+    where its zero is near (a change point, or a fold, where the range ends) the branch's next state is on the trend,
+    not at a root of another branch. A triad fed by a four-bar's coupler, its determinant 341 and 377 at 87 and 84
+    deg, took -474 at 81 deg (0.1 of its size off the branch) and 317 again at 78 deg; another, past a fold, kept its
+    sign on another branch. A parallelogram's determinant, 1.67 and 0.84 a grid step apart, is -0.0 at its flat
+    position.
+
+    >>> _sign_passes(np.array([341.0, 1.67]), np.array([377.0, 0.84]), np.array([-474.0, -0.0]), 1.0).tolist()
+    [False, True]
+    """
+    with np.errstate(invalid="ignore", over="ignore"):
+        trend = det + (det - det_prev) * ratio
+        follows = np.abs(det_new - trend) <= np.abs(trend - det)
+        clear = ~(_zero_ahead(det_prev, det) < ratio)
+        out: np.ndarray = follows | ((np.sign(det_new) == np.sign(det)) & clear) | ~np.isfinite(det)
+    return out
+
+
 @dataclass
 class _Steps:
     """Sub-steps' progress along their paths, per column: ``t`` reached, the next step ``dt``, ``alive``, and the
@@ -2199,6 +2254,13 @@ class _DetTrail:
         with np.errstate(invalid="ignore"):
             out: np.ndarray = _zero_ahead(self.det[0, i], self.det[1, i]) * (self.t[1, i] - self.t[0, i])
         return np.where(np.isnan(out), FIRST_SUBSTEP, out / SUB_FOLD_SHARE)
+
+    def sign_passes(self, i: np.ndarray, t: np.ndarray, det: np.ndarray) -> np.ndarray:
+        """Whether columns ``i`` may step to ``t``, where the determinant is ``det``, following the branch
+        continuously (:func:`_sign_passes`, the trend through their last two states)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = (t - self.t[1, i]) / (self.t[1, i] - self.t[0, i])
+        return _sign_passes(self.det[0, i], self.det[1, i], det, ratio)
 
     def push(self, i: np.ndarray, t: np.ndarray, det: np.ndarray) -> None:
         """Columns ``i`` accepted a state at ``t`` with determinant ``det``."""
