@@ -84,6 +84,14 @@ def test_bench_synthesis(capsys):
         assert "pylinkage" in out and "not installed" in out
 
 
+def test_bench_threads(capsys):
+    import bench_threads
+
+    ratio = bench_threads.main(6)
+    out = capsys.readouterr().out
+    assert "one BLAS thread (linkagekit)" in out and "ratio" in out and ratio > 0
+
+
 def test_bench_recovery(capsys):
     import bench_recovery
 

@@ -16,7 +16,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "linkagekit"
 
 #: lower layers first; a module may import its own layer and the layers before it
 LAYERS = [
-    {"errors", "units", "geometry", "options"},
+    {"errors", "units", "geometry", "options", "threads"},
     {"schema", "model", "files"},
     {"steps", "group", "plan", "params", "catalogue"},
     {"positions", "rates", "branch", "forces", "vectorloop", "groupmodes"},

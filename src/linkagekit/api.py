@@ -40,6 +40,7 @@ from .plan import Plan, make_plan
 from .positions import Positions, reference_mode, solve
 from .rates import REPORTED_TOL, Rates, link_motion, solve_rates
 from .result import Result, frozen
+from .threads import one_blas_thread
 
 ArrayLike = Any
 
@@ -432,6 +433,7 @@ def _solve_chunk(
 
 
 # ---------------------------------------------------------------------- analyze
+@one_blas_thread
 def analyze(
     mech: Mechanism,
     inputs: Mapping[str, ArrayLike] | ArrayLike | None = None,

@@ -37,6 +37,7 @@ from .params import Params, all_sign_combinations
 from .positions import Positions, solve
 from .rates import SINGULAR_TOL, solve_rates
 from .steps import ActuatorDyad, CircleLine, CylinderDyad, CylinderLine, Dyad, SliderDrive
+from .threads import one_blas_thread
 
 N_COARSE = 7200
 #: dead points the text of check lists per driver (the JSON has them all)
@@ -1565,6 +1566,7 @@ def _first_loop(entries: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
+@one_blas_thread
 def check(mech: Mechanism) -> CheckReport:
     """Freedom, solve plan, assembly range, dead points, four-bar loops and peak loads of a mechanism.
 
@@ -2245,6 +2247,7 @@ def _same_as(rows: _ModeRows, tol: float) -> tuple[list[int | None], int]:
     return same, distinct
 
 
+@one_blas_thread
 def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
     """Every assembly mode (and with ``mirrors`` every mirror image) at one input.
 

@@ -52,6 +52,7 @@ from .params import Params
 from .positions import solve
 from .rates import link_motion, solve_rates
 from .result import Result, frozen
+from .threads import one_blas_thread
 from .units import UnitKind
 
 #: relative and absolute tolerances of the integration (SI state: rad or m, rad/s or m/s)
@@ -1194,6 +1195,7 @@ def _start_speeds(md: _Model, speed: Any) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- simulate
+@one_blas_thread
 def simulate(
     mech: Mechanism,
     times: ArrayLike,

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..threads import one_blas_thread_with_scipy
 from .autosave import ROUND_SECONDS, Best, Checkpoint, Saved
 from .base import Objective, Score, digest
 from .distribute import Evaluator, usable, workers_lost
@@ -84,6 +85,7 @@ class Tried:
     error: float = float("nan")
 
 
+@one_blas_thread_with_scipy
 def synthesize_auto(
     targets: Any,
     *,

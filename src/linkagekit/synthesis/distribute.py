@@ -135,38 +135,17 @@ def _install(problems: tuple[Objective, ...], line: Channel | None = None) -> No
     _PROBLEMS, _CHANNEL = problems, line
 
 
-#: OpenBLAS's call that sets its threads, under the names its builds export (scipy-openblas, plain)
-_BLAS_THREADS = ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads", "openblas_set_num_threads")
-
-
 def one_blas_thread() -> None:
-    """OpenBLAS told to use one thread in this process (a worker; elsewhere nothing happens).
+    """Every BLAS library of this process (a worker's) on one thread for good (``threads.limit_for_good``).
 
     The engine's BLAS calls are small (the polish's least-squares steps), but after each one
     OpenBLAS's threads spin: measured, a one-worker run of 2.0 s burned 2.7 CPU-s, and two
     workers (each with its own spinning threads) ran two searches in 2.4 s where with one
-    BLAS thread each they took 1.9 s, as one search alone does. NumPy and SciPy each bring
-    their own OpenBLAS: both are set, found among the libraries this process has loaded
-    (``/proc/self/maps``), through ctypes.
+    BLAS thread each they took 1.9 s, as one search alone does.
     """
-    import ctypes
+    from ..threads import limit_for_good
 
-    import scipy.linalg  # noqa: F401 -- loads SciPy's own OpenBLAS (the polish's), which NumPy's does not cover
-
-    try:
-        with open("/proc/self/maps") as f:
-            libs = {line.split()[-1] for line in f if "openblas" in line.lower() and ".so" in line}
-    except OSError:  # not Linux
-        return
-    for path in sorted(libs):
-        try:
-            lib = ctypes.CDLL(path)
-        except OSError:
-            continue
-        fn = next((getattr(lib, n) for n in _BLAS_THREADS if hasattr(lib, n)), None)
-        if fn is not None:
-            fn.argtypes = [ctypes.c_int]
-            fn(1)
+    limit_for_good()
 
 
 #: Linux's prctl option: the signal a process gets when its parent dies (linux/prctl.h)

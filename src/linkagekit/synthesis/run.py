@@ -26,6 +26,7 @@ import numpy as np
 
 from ..checks import MIN_TRANSMISSION
 from ..errors import InputError, LinkageError
+from ..threads import one_blas_thread_with_scipy
 from ..units import LENGTH_UNITS
 from .base import Objective
 from .distribute import usable
@@ -182,6 +183,7 @@ def make_problem(
     return Problem(space, z, th, ordered, float(min_transmission), lengths, samples, shape_only, partial)
 
 
+@one_blas_thread_with_scipy
 def synthesize(
     targets: Any,
     topology: str | Mechanism = "fourbar",

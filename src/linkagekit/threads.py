@@ -1,0 +1,82 @@
+"""One BLAS thread while linkagekit computes.
+
+The solvers' linear algebra is many small matrices at once (a group's Jacobian per sample,
+the kinetostatic system per sample): NumPy hands LAPACK one small matrix at a time, and a
+threaded OpenBLAS then wakes and waits for its threads on every call. On a busy machine
+that wait is the whole cost: ``analyze --method numerical`` of a 101-joint dyad strip took
+128 s with OpenBLAS's default threads and 5.2 s with one, on 2 cores shared with one other
+process (docs/method.md, "One BLAS thread"). The limit is threadpoolctl's, for the duration of
+a call: the caller's own NumPy work outside it keeps its threads.
+
+>>> from threadpoolctl import threadpool_info
+>>> @one_blas_thread
+... def blas_threads():
+...     return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+>>> blas_threads()
+{1}
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, TypeVar
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+_LOCK = threading.Lock()
+_CONTROLLER: list[Any] = []  # [controller, whether SciPy's OpenBLAS was loaded when it looked]
+
+
+def _controller() -> Any:
+    """threadpoolctl's view of the BLAS libraries loaded; looked at again once SciPy has loaded its own."""
+    from threadpoolctl import ThreadpoolController
+
+    scipy_loaded = "scipy.linalg" in sys.modules
+    with _LOCK:
+        if not _CONTROLLER or (scipy_loaded and not _CONTROLLER[1]):
+            _CONTROLLER[:] = [ThreadpoolController(), scipy_loaded]
+        return _CONTROLLER[0]
+
+
+@contextmanager
+def blas_limited(with_scipy: bool = False) -> Iterator[None]:
+    """Every loaded BLAS library on one thread inside the block, as it was after; ``with_scipy``: SciPy's own
+    OpenBLAS (its least squares') loaded first, so that it is among them."""
+    if with_scipy:
+        import scipy.linalg  # noqa: F401
+    with _controller().limit(limits=1, user_api="blas"):
+        yield
+
+
+def one_blas_thread(fn: F) -> F:
+    """``fn`` run with :func:`blas_limited`."""
+
+    @functools.wraps(fn)
+    def limited(*args: Any, **kwargs: Any) -> Any:
+        with blas_limited():
+            return fn(*args, **kwargs)
+
+    return limited  # type: ignore[return-value]
+
+
+def one_blas_thread_with_scipy(fn: F) -> F:
+    """``fn`` run with :func:`blas_limited` ``(with_scipy=True)`` (a search that polishes with SciPy)."""
+
+    @functools.wraps(fn)
+    def limited(*args: Any, **kwargs: Any) -> Any:
+        with blas_limited(with_scipy=True):
+            return fn(*args, **kwargs)
+
+    return limited  # type: ignore[return-value]
+
+
+def limit_for_good() -> None:
+    """Every BLAS library loaded now on one thread for the rest of the process (a worker's or the command line's;
+    SciPy's is loaded first, so that it is among them)."""
+    import scipy.linalg  # noqa: F401 -- loads SciPy's own OpenBLAS, which NumPy's does not cover
+
+    _controller().limit(limits=1, user_api="blas")
