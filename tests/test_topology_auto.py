@@ -90,6 +90,42 @@ def test_tracer_fit_over_shifts_matches_brute_force(width: int) -> None:
         assert abs(f.c[d] - c) < 1e-8 * (1 + abs(c))
 
 
+def test_spectra_taken_once_serve_every_width_of_a_partial_fit() -> None:
+    """A partial fit tries several widths on the same samples: their spectra taken once give each width's fit of
+    fresh spectra, bit for bit, and each matches the brute force over the shifts."""
+    from linkagekit.synthesis.tracer import spectra
+
+    rng = np.random.default_rng(5)
+    Xi = rng.normal(size=(2, 32)) + 1j * rng.normal(size=(2, 32))
+    Xj = rng.normal(size=(2, 32)) + 1j * rng.normal(size=(2, 32))
+    Xi[0, 7] = np.nan
+    T = rng.normal(size=11) + 1j * rng.normal(size=11)
+    spec = spectra(Xi, Xj)
+    for width in (9, 12, 16, 24):
+        once, fresh = fit_shifts(Xi, Xj, T, width, spec=spec), fit_shifts(Xi, Xj, T, width)
+        for field in ("c", "a", "b", "sse", "shift", "direction"):
+            assert np.array_equal(getattr(once, field), getattr(fresh, field)), (width, field)
+        for d in range(2):
+            assert once.sse[d] == pytest.approx(_brute(Xi[d], Xj[d], T, width)[0], rel=1e-8)
+
+
+def test_the_normal_matrices_inverted_by_their_adjugate_agree_with_lapack() -> None:
+    """``_Inverse3`` (the adjugate, shared by both directions) against NumPy's solve on the same ridged matrices:
+    Gram matrices of random bases, well and badly conditioned (columns nearly dependent)."""
+    from linkagekit.synthesis.tracer import RIDGE, _Inverse3
+
+    rng = np.random.default_rng(2)
+    B = rng.normal(size=(200, 3, 20)) + 1j * rng.normal(size=(200, 3, 20))
+    B[100:, 2] = B[100:, 1] * (1 + 1e-5j) + 1e-6 * B[100:, 2]  # cond ~1e10
+    G = np.einsum("npk,nqk->npq", np.conj(B), B)
+    r = rng.normal(size=(200, 3)) + 1j * rng.normal(size=(200, 3))
+    u, _ = _Inverse3(G).solve(r, 0.0)
+    scale = np.einsum("nii->n", G).real[:, None, None]
+    want = np.linalg.solve(G + RIDGE * scale * np.eye(3), r[..., None])[..., 0]
+    err = np.abs(u - want).max(axis=1) / np.abs(want).max(axis=1)
+    assert err[:100].max() < 1e-12 and err[100:].max() < 1e-4  # rounding times the condition number, both ways
+
+
 def test_tracer_fit_recovers_a_placed_coupler_point() -> None:
     """A four-bar's coupler point, moved, turned and scaled, sampled from another shift: found exactly."""
     mech = lk.load("examples/seed000_fourbar.yaml")
@@ -210,6 +246,30 @@ def test_the_chamfer_parts_are_never_negative_where_samples_lie_on_targets() -> 
         worst = min(worst, float(parts.min()))
         assert d[0] == pytest.approx(10 * 1e-6 / 50, rel=1e-4)  # ten of the 50 samples 1e-3 off a target
     assert worst == 0.0
+
+
+def test_the_chamfer_pairs_are_the_nearest_ones_of_a_brute_force_in_double() -> None:
+    """The nearest pairs come from the expanded square and are measured again directly: the distances equal those of
+    a brute force to rounding (1e-12 of the squared size), on curves far from the origin, with samples off the
+    window never paired."""
+    from types import SimpleNamespace
+
+    from linkagekit.synthesis.auto import _chamfer
+
+    rng = np.random.default_rng(4)
+    N, n, m = 6, 50, 30
+    T = 500.0 + 3j + rng.normal(size=m) + 1j * rng.normal(size=m)
+    P = 500.0 + 3j + 1.3 * (rng.normal(size=(N, n)) + 1j * rng.normal(size=(N, n)))
+    window = rng.random((N, n)) < 0.7
+    one = SimpleNamespace(a=np.zeros(N, complex), b=np.ones(N, complex), c=np.zeros(N, complex), sse=np.zeros(N))
+    d, k, parts = _chamfer(one, P, P, T, window)
+    D2 = np.abs(P[:, :, None] - T[None, None, :]) ** 2
+    to_targets = np.where(window, D2.min(axis=2), 0.0) / window.sum(axis=1)[:, None]
+    nearest = np.where(window[:, :, None], D2, np.inf).min(axis=1)  # (N, m): to the window's samples
+    assert np.all(window[np.arange(N)[:, None], k])
+    size2 = np.abs(T - T.mean()).max() ** 2
+    assert np.abs(parts[:, m:] - to_targets).max() < 1e-12 * size2 / n
+    assert np.all(parts[:, :m] <= nearest / m + 1e-12 * size2 / m)  # the chords only come nearer than the samples
 
 
 #: a script whose argv[1] searches on two worker processes take ten minutes each unless stopped: those of the

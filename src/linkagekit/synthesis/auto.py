@@ -53,7 +53,7 @@ from .objective import (
 from .optimize import Outcome, Progress, Settings, check_settings, optimize
 from .run import Synthesis, _unpack, make_problem
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
-from .tracer import TracerFit, fit, fit_shifts
+from .tracer import TracerFit, fit, fit_shifts, spectra
 
 #: the fraction of the time the screen of topologies takes
 SCREEN = 0.2
@@ -711,7 +711,8 @@ class Projected(Objective):
         sol = solve(params, theta[None])
         i, j = _tracer_base(self.problem)
         widths = [int(round(w * n)) for w in PARTIAL_WIDTHS] if self.partial else [n]
-        return params, sol, [(fit_shifts(sol.z[i], sol.z[j], self.targets, w), w) for w in widths]
+        spec = spectra(sol.z[i], sol.z[j])  # one design's spectra serve every width
+        return params, sol, [(fit_shifts(sol.z[i], sol.z[j], self.targets, w, spec=spec), w) for w in widths]
 
     def score(self, X: np.ndarray) -> Score:
         X = np.atleast_2d(X)
@@ -835,25 +836,36 @@ def _chamfer(
 
     Also each target's nearest window sample (N, m), and the squared residuals (N, m + n)
     that sum to the distance: each target's squared distance to the curve (its nearest
-    sample or either chord there) over ``m``, each window sample's to the targets over the
-    window's size. The curve is ``a + b (X_i + c (X_j - X_i))``.
+    sample or either chord there) over ``m``, each window sample's to its nearest target over
+    the window's size. The curve is ``a + b (X_i + c (X_j - X_i))``. The nearest pairs come from
+    the expanded square (:func:`_nearest_pairs`); their distances are taken again directly.
     """
     P = f.a[:, None] + f.b[:, None] * (Xi + f.c[:, None] * (Xj - Xi))
     P = np.where(window & np.isfinite(P), P, 0.0)
-    c = T.mean()
-    Pc, Tc = P - c, T - c
-    d2 = np.stack([Pc.real, Pc.imag], axis=-1) @ np.stack([Tc.real, Tc.imag])  # (N, n, m): one product
-    d2 *= -2.0
-    d2 += (np.abs(Pc) ** 2)[:, :, None]
-    d2 += (np.abs(Tc) ** 2)[None, None, :]
-    d2[~window] = np.inf
-    k = np.argmin(d2, axis=1)  # (N, m)
-    # the expanded square is a little below 0 by rounding where a sample lies on a target
-    to_curve = np.minimum(np.maximum(np.min(d2, axis=1), 0.0), _to_segments(P, window, T, k)) / len(T)
-    to_targets = np.where(window, np.maximum(np.min(d2, axis=2), 0.0), 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
+    k, near = _nearest_pairs(P, T, window)
+    rows = np.arange(len(P))[:, None]
+    to_curve = np.minimum(np.abs(P[rows, k] - T[None, :]) ** 2, _to_segments(P, window, T, k)) / len(T)
+    to_targets = np.where(window, np.abs(P - T[near]) ** 2, 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
     parts = np.concatenate([to_curve, to_targets], axis=1)  # (N, m + n): squared residuals
     d = parts.sum(axis=1)
     return np.where(np.isfinite(d) & np.isfinite(f.sse), d, np.inf), k, parts
+
+
+def _nearest_pairs(P: np.ndarray, T: np.ndarray, window: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each target's nearest window sample (N, m) and each sample's nearest target (N, n).
+
+    One product of the centred points, ``|p - t|^2 = |p|^2 + |t|^2 - 2 p.t``, laid out (N, m, n) so that
+    the search over the samples runs along memory; samples off the window are never chosen. (Single
+    precision would halve the memory but pair wrongly where distances are 1e-3 of the curves' size
+    or less, near a good fit: its rounding on the squared size is 1e-7.)
+    """
+    c = T.mean()
+    Pc, Tc = P - c, T - c
+    d2 = np.stack([Tc.real, Tc.imag], axis=-1) @ np.stack([Pc.real, Pc.imag], axis=1)  # (N, m, n)
+    d2 *= -2.0
+    d2 += np.where(window, np.abs(Pc) ** 2, np.inf)[:, None, :]
+    d2 += (np.abs(Tc) ** 2)[None, :, None]
+    return np.argmin(d2, axis=2), np.argmin(d2, axis=1)
 
 
 def _to_segments(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray) -> np.ndarray:

@@ -96,37 +96,66 @@ def fit(Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, placement: bool = True) -
     return _placed(u, sse, zero, zero + 1)
 
 
+@dataclass(frozen=True)
+class Spectra:
+    """What :func:`fit_shifts` correlates with the targets' pattern, from samples ``Xi, Xj`` (N, n) alone: the
+    spectra of the normal matrices' six products and of the three basis rows, and of the missing samples. The
+    same for every width of a partial fit (:func:`spectra`)."""
+
+    products: np.ndarray  # (6, N, n): fft of conj(B_i) B_j, i <= j, in PAIRS' order
+    rows: np.ndarray  # (3, N, n): fft of conj(B_i)
+    missing: np.ndarray  # (N, n): fft of the missing samples' indicator
+
+
+#: the upper triangle of the 3 x 3 normal matrix, in the order of :attr:`Spectra.products`
+PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+
+
+def spectra(Xi: np.ndarray, Xj: np.ndarray) -> Spectra:
+    """The :class:`Spectra` of samples ``Xi, Xj`` (N, n) (NaN: the design does not assemble there)."""
+    Xi, Xj = np.asarray(Xi, complex), np.asarray(Xj, complex)
+    missing = ~(np.isfinite(Xi) & np.isfinite(Xj))
+    Xi, D = np.where(missing, 0, Xi), np.where(missing, 0, Xj - Xi)
+    B = np.stack([np.ones_like(Xi), Xi, D])
+    products = np.fft.fft(np.stack([np.conj(B[i]) * B[j] for i, j in PAIRS]), axis=-1)
+    return Spectra(products, np.fft.fft(np.conj(B), axis=-1), np.fft.fft(missing.astype(float), axis=-1))
+
+
 def fit_shifts(
-    Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, width: int | None = None, directions: tuple[int, ...] = (1, -1)
+    Xi: np.ndarray,
+    Xj: np.ndarray,
+    T: np.ndarray,
+    width: int | None = None,
+    directions: tuple[int, ...] = (1, -1),
+    spec: Spectra | None = None,
 ) -> TracerFit:
     """The best ``c``, placement and cyclic shift for targets ``T`` (m,) on samples ``Xi, Xj`` (N, n) of a turn.
 
     Target ``k`` goes to sample ``(floor(k width / m) + s) mod n`` (``width``: samples the
     targets span, default ``n``: a closed curve over the whole turn); NaN samples (the design
-    does not assemble) are never matched. See the module's description.
+    does not assemble) are never matched. ``spec``: the samples' :func:`spectra` when already
+    taken (a partial fit tries several widths). See the module's description.
     """
-    Xi, Xj, T = np.asarray(Xi, complex), np.asarray(Xj, complex), np.asarray(T, complex)
-    N, n = Xi.shape
+    T = np.asarray(T, complex)
+    N, n = np.shape(Xi)
     m = len(T)
+    sp = spectra(Xi, Xj) if spec is None else spec
     width = n if width is None else int(width)
-    missing = ~(np.isfinite(Xi) & np.isfinite(Xj))
-    Xi, D = np.where(missing, 0, Xi), np.where(missing, 0, Xj - Xi)
-    B = [np.ones_like(Xi), Xi, D]
     p = (np.arange(m) * width) // m
     spread = np.fft.fft(np.bincount(p, minlength=n).astype(complex))  # w
-    Fprod = {(i, j): np.fft.fft(np.conj(B[i]) * B[j], axis=1) for i in range(3) for j in range(i, 3)}
-    Fconj = [np.fft.fft(np.conj(b), axis=1) for b in B]
-    bad = _corr(spread, np.fft.fft(missing.astype(float), axis=1)).real > 0.5  # (N, n)
+    bad = _corr(spread, sp.missing).real > 0.5  # (N, n)
+    upper = _corr(spread, sp.products)  # (6, N, n)
     G = np.empty((N, n, 3, 3), complex)
-    for (i, j), F in Fprod.items():
-        G[:, :, i, j] = _corr(spread, F)
-        G[:, :, j, i] = np.conj(G[:, :, i, j])
+    for k, (i, j) in enumerate(PAIRS):
+        G[:, :, i, j] = upper[k]
+        G[:, :, j, i] = np.conj(upper[k])
     best: TracerFit | None = None
+    inverse = _Inverse3(G)  # the same normal matrices for both directions
     for d in directions:
         Td = T if d > 0 else T[::-1]
         t = np.fft.fft(np.bincount(p, weights=Td.real, minlength=n) + 1j * np.bincount(p, weights=Td.imag, minlength=n))
-        r = np.stack([_corr(t, F) for F in Fconj], axis=-1)  # (N, n, 3)
-        u, sse = _solve(G, r, float(np.sum(np.abs(T) ** 2)))
+        r = np.moveaxis(_corr(t, sp.rows), 0, -1)  # (N, n, 3)
+        u, sse = inverse.solve(r, float(np.sum(np.abs(T) ** 2)))
         sse = np.where(bad, np.inf, sse)
         s = np.argmin(sse, axis=1)
         rows = np.arange(N)
@@ -157,6 +186,32 @@ def _solve(G: np.ndarray, r: np.ndarray, tt: float | np.ndarray) -> tuple[np.nda
     u = np.linalg.solve(Gr, r[..., None])[..., 0]
     sse = tt - np.einsum("...p,...p->...", np.conj(r), u).real
     return u, np.maximum(_finite(sse), 0.0)
+
+
+class _Inverse3:
+    """``G + ridge`` (..., 3, 3) inverted by its adjugate once, for several right-hand sides (:func:`_solve`'s
+    ridge and residual): NumPy's batched LAPACK solve costs microseconds per 3 x 3 system, the adjugate's
+    products a fraction of one."""
+
+    def __init__(self, G: np.ndarray) -> None:
+        scale = np.einsum("...ii->...", G).real[..., None, None]
+        g = G + RIDGE * np.where(scale > 0, scale, 1.0) * np.eye(3)
+        adj = np.empty_like(g)
+        for i in range(3):
+            for j in range(3):  # adj[i, j] = cofactor of g[j, i]
+                a, b = [k for k in range(3) if k != j], [k for k in range(3) if k != i]
+                sign = -1.0 if (i + j) % 2 else 1.0
+                adj[..., i, j] = sign * (
+                    g[..., a[0], b[0]] * g[..., a[1], b[1]] - g[..., a[0], b[1]] * g[..., a[1], b[0]]
+                )
+        det = np.einsum("...k,...k->...", g[..., 0, :], adj[..., :, 0])
+        self.inv = adj / det[..., None, None]
+
+    def solve(self, r: np.ndarray, tt: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``u = G^-1 r`` and the residual ``|T|^2 - Re(r^H u)`` (clipped at 0)."""
+        u = np.einsum("...ij,...j->...i", self.inv, r)
+        sse = tt - np.einsum("...p,...p->...", np.conj(r), u).real
+        return u, np.maximum(_finite(sse), 0.0)
 
 
 def _placed(u: np.ndarray, sse: np.ndarray, shift: np.ndarray, direction: np.ndarray) -> TracerFit:
