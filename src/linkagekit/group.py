@@ -1431,7 +1431,8 @@ class Group(Step):
         branch's. A step that keeps the sign of the column before where the determinant's zero ahead is not within it
         is; one that changes the sign, or keeps it with the zero within it, must follow the determinant's trend
         (:func:`_sign_passes`; where the trend is not known, as at the first step from a grid that ends at the pose,
-        the velocity alone tells) and keep the velocity continuous (:meth:`_smooth`). After a gap (the determinant
+        the velocity alone tells) and keep the velocity continuous (:meth:`_smooth`; a first column refused for it is
+        taken once more from the tangent's predictor, :meth:`_from_tangent`). After a gap (the determinant
         of the column before unknown) a step has the pose's sign: the groups restart in the pose's mode, and a gap is
         no change point.
 
@@ -1456,7 +1457,43 @@ class Group(Step):
             ends = (steps[0][q, :, i].T, w.K[:, d[i], prev], steps[1][q, :, i].T, w.K[:, d[i], col])
             rates = (self._grid_rate(d[i], prev, w) * sign[i], self._grid_rate(d[i], col, w) * sign[i])
             out[q, i] = self._smooth(ends, rates, d[i], w)
+            first = np.flatnonzero(~out[q, i] & (q == 0))
+            if len(first):  # refused for its velocity: once more, from the tangent's predictor
+                r = i[first]
+                sub = (ends[0][:, first], ends[1][:, first], ends[2][:, first], ends[3][:, first])
+                rates = (rates[0][:, first], rates[1][:, first])
+                out[0, r] = self._from_tangent(sub, rates, (seq[0, r], seq[1, r]), d[r], w)
+                steps[1][0, :, r[out[0, r]]] = sub[2][:, out[0, r]].T
+                dets[0, r] = np.where(out[0, r], self._dets(sub[2], sub[3], d[r], w), dets[0, r])
         return out
+
+    def _from_tangent(
+        self,
+        ends: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        rates: tuple[np.ndarray, np.ndarray],
+        before: tuple[np.ndarray, np.ndarray],
+        d: np.ndarray,
+        w: _Walk,
+    ) -> np.ndarray:
+        """Grid steps ``ends`` = ``(U0, K0, U1, K1)`` (designs ``d``; ``rates`` and the determinants ``before``, at the
+        column before ``U0`` and at ``U0``, as :meth:`_branch_steps` reads them) refused for their velocity, taken again
+        by Newton from the tangent's predictor ``U0 + V0``: where the new root passes the same tests it replaces ``U1``
+        in ``ends[2]`` (in place); which did.
+
+        Near a change point the two modes' roots lie close, and Newton from the walk's quadratic predictor can take the
+        other mode: a parallelogram (ground 4, crank 1) posed at 177.37 deg stepped from 177.37 + 3 k deg onto the kite
+        0.37 deg past its flat position (determinants 1.57, 0.73, then 0.10 on the kite, -0.10 on the parallelogram);
+        refused, its sub-steps took the kite too (356 of 721 samples off the parallelogram). From the tangent's
+        predictor Newton finds the parallelogram."""
+        U0, K0, U1, K1 = ends
+        V0 = self._tangent(U0, K0, rates[0], d, w)
+        sol, conv, sg = self._newton(U0 + V0, K1, w.arrays.take(d), vector=w.vector)
+        ok = self._accept(sol, conv, sg, U0, STEP_LIMIT * w.size[d], w, d)
+        ok &= _sign_passes(before[0], before[1], sg, 1.0) | np.isnan(before[0])
+        ok &= np.isfinite(before[1]) | (np.sign(sg) == w.ref[d])
+        ok &= self._smooth((U0, K0, sol, K1), rates, d, w)
+        U1[:, ok] = sol[:, ok]
+        return ok
 
     def _substeps(
         self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk, src: np.ndarray
