@@ -559,3 +559,86 @@ def test_a_lone_sample_on_a_change_point_has_every_rate_as_among_others(at):
                           (alone.link_alpha[name][0], among.link_alpha[name][1])):  # fmt: skip
             assert np.isfinite(got) and abs(got - want) <= 1e-9 * 25, (name, got, want)
     assert alone.link_omega["crank"][0] == 5.0 and alone.link_alpha["crank"][0] == 0.0
+
+
+TWO_TRIADS = {  # review 10's two triads in sequence (random dimensions, no change point): range [-110.09, 77.57] deg
+    "format": "linkagekit/1",
+    "units": {"length": "mm", "angle": "deg"},
+    "joints": {"O": [0.0, 0.0], "A": [1.5, 0.5], "B0": [-1.3762362866295845, -0.32751758105198636],
+               "C0": [2.046329470580689, 1.0895967417820724], "J1": [2.255857700785211, -1.6497238319947232],
+               "J2": [1.5976513980143179, 2.019960185224155], "J3": [1.4460753947173322, -0.03224810101709963],
+               "D0": [7.2013528451739575, -5.5667120917423105], "E0": [5.241159563110896, 2.4286807536678623],
+               "K1": [-1.9158039920065058, -2.6576249901449067], "K2": [-0.5941629806356787, -1.3416471658678675],
+               "K3": [-0.22814304279151365, -1.6806662131695047]},
+    "links": {"ground": ["O", "B0", "C0", "D0", "E0"], "crank": ["O", "A"], "l1": ["A", "J1"], "l2": ["B0", "J2"],
+              "l3": ["C0", "J3"], "tern": ["J1", "J2", "J3"], "m1": ["J3", "K1"], "m2": ["D0", "K2"],
+              "m3": ["E0", "K3"], "tern2": ["K1", "K2", "K3"]},
+    "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+}  # fmt: skip
+
+
+def test_continuous_takes_no_root_of_another_branch_before_a_fold():
+    """Review 10 (A1): two triads in sequence, no change point in their range. 0.05 grid steps before the second
+    triad's fold the walk took a root of another branch whose determinant followed the trend (-560.4, -124.5, then
+    420.1): 62 of 360 samples off the branch by up to 0.29 of the span. A step that changes the determinant's sign
+    must now keep the velocity continuous too. Where no modes meet the result is the default's (which an independent
+    whole-mechanism continuation matched to 5e-13): the same flags, the joints to 1e-10 of the span."""
+    mech = lk.Mechanism.from_dict(TWO_TRIADS)
+    pts = np.array([complex(*p) for p in TWO_TRIADS["joints"].values()])
+    span = np.max(np.abs(pts[:, None] - pts[None, :]))
+    deg = np.arange(0.0, 360.0, 2.0)
+    default = lk.analyze(mech, {"crank": deg}, rates=False)
+    cont = lk.analyze(mech, {"crank": deg}, rates=False, branch="continuous")
+    assert cont.assembled.tolist() == default.assembled.tolist() and 0 < default.assembled.sum() < len(deg)
+    for j in mech.joint_names:
+        assert np.nanmax(np.abs(z(cont, j) - z(default, j))) / span < 1e-10
+
+
+def test_a_lone_input_crosses_the_change_point_next_to_the_pose():
+    """Review 10 (A2): a double parallelogram posed 0.5 deg past its flat position, forced through Newton. Asked one
+    input, its grid ends at the pose: the first step down has no determinant trend to follow, its sub-steps kept the
+    pose's sign onto the other mode, and each input alone left the double parallelogram (by 0.49 to 1.9) while the
+    list stayed on it. The whole step is smooth (its velocity continuous) and crosses. Alone or in a list, every
+    input is a double parallelogram (couplers parallel to the ground, to 1e-10) and the two agree to 1e-10."""
+    mech = double_parallelogram(0.5, (3.0, 2.0))
+    xs = [-438.97, 616.483, 561.209, -28.079, -65.146, 240.47]
+
+    def off(res):
+        return np.maximum(np.abs(z(res, "C2") - z(res, "C1") - 3), np.abs(z(res, "C3") - z(res, "C2") - 2))
+
+    both = lk.analyze(mech, {"crank1": xs}, method="numerical", branch="continuous", rates=False)
+    assert both.assembled.all() and np.max(off(both)) < 1e-10
+    for k, x in enumerate(xs):
+        alone = lk.analyze(mech, {"crank1": [x]}, method="numerical", branch="continuous", rates=False)
+        assert alone.assembled.all() and off(alone)[0] < 1e-10
+        for j in mech.joint_names:
+            assert abs(z(alone, j)[0] - z(both, j)[k]) < 1e-10
+
+
+@pytest.mark.parametrize("rocker", [0.95, 0.999])
+def test_after_a_gap_the_walk_resumes_in_the_poses_mode(rocker):
+    """Review 10 (B1): a four-bar (ground 4, crank 1, coupler 4, the rocker a little short of a parallelogram's), its
+    crank assembling in two ranges with no change point (for 0.95: [15.81, 159.69] and [200.31, 344.19] deg), forced
+    through Newton. Its down leg resumed past the gap with the other determinant sign (-2.32 after +2.32): 240 to
+    344 deg in the other mode, the rocker's tip off by up to 1.84. A step after a gap now has the pose's sign. The
+    closed form is the reference: the same flags, D to 1e-9, in a sweep and alone."""
+    A, B, C = 0j, 4 + 0j, np.exp(1j * np.radians(60))
+    mech = lk.Mechanism.from_dict(fourbar_dict(A, B, C, complex(by_cosines(C, B, 4.0, rocker, 1)), C + 0.5 + 0.7j))
+    for deg in (np.arange(0.0, 360.0, 3.0), np.array([300.0])):
+        ref = lk.analyze(mech, deg, rates=False)
+        num = lk.analyze(mech, deg, method="numerical", branch="continuous", rates=False)
+        assert num.assembled.tolist() == ref.assembled.tolist() and ref.assembled.any()
+        assert np.nanmax(np.abs(z(num, "D") - z(ref, "D"))) < 1e-9
+
+
+@pytest.mark.parametrize("at", [177.37, 178.0, 351.37])
+def test_a_pose_just_before_a_change_point_stays_a_parallelogram(at):
+    """Review 10 (B3): the parallelogram (ground 4, crank 1) forced through Newton, posed a few degrees before its flat
+    position. The grid step 2.63 deg from the pose landed 0.37 deg past it on the kite (determinants 1.57, 0.73,
+    then 0.10 on the kite, -0.10 on the parallelogram, both along the trend as far as the determinant tells); refused
+    now for its velocity, it is taken again from the tangent's predictor, where Newton finds the parallelogram
+    (before: 356 of 721 samples kites posed at 177.37 or 178 deg, 5 posed at 351.37). Opposite sides parallel to
+    1e-12 of the size at every sample, every sample assembled, as the acceptance asks."""
+    res = lk.analyze(parallelogram(at=at), DEG, method="numerical", branch="continuous", rates=False)
+    assert res.assembled.all()
+    assert worst_parallel(res, [("A", "B", "C", "D")]) <= 1e-12

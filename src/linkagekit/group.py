@@ -79,7 +79,9 @@ decides, but for the continuous branch's sign) only when Newton converges (resid
 ``NEWTON_TOL`` relative), the Jacobian's determinant keeps the pose's sign (a sign change is a
 passage through a singular position: a change of mode, never silent; following the branch
 continuously, :func:`_sign_passes`, it follows the determinant's trend, or keeps the sign of
-the state before where no zero of the determinant lies within the step) and no joint moves
+the state before where no zero of the determinant lies within the step; a grid step that changes
+the sign, or keeps it with the zero within it, also keeps the velocity continuous,
+:meth:`Group._branch_steps`) and no joint moves
 more than ``STEP_LIMIT`` times the group's mean link length (a class-3 group has up to three
 roots of one sign; over a small step Newton's
 root is the branch's). A step that fails waits while the other designs
@@ -230,6 +232,11 @@ ARRIVED = 1e-3
 #: an accepted continuation step moves no joint more than this times the group's mean link length
 #: (larger steps are halved: over small steps Newton's root is the branch's, not another of one sign)
 STEP_LIMIT = 0.25
+#: following the branch continuously, a grid step that changes the determinant's sign, or keeps it with the
+#: determinant's zero within it, must keep the velocity continuous: the tangent at each end (from a determinant above
+#: ``TANGENT_DET`` of the pose's) predicts the other end to within this part of the step's move (:meth:`Group._smooth`)
+VELOCITY_SHARE = 0.25
+TANGENT_DET = 1e-4
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
 #: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively)
@@ -1165,18 +1172,76 @@ class Group(Step):
         d = np.flatnonzero(np.isfinite(w.det[:, col]))
         K = w.K[:, d, col]
         dK = (w.K[:, d, col + 1] - w.K[:, d, col - 1]) / 2
-        m = U.shape[0]
-        P = np.concatenate([U[:, d], K])
-        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
-        rhs = np.einsum("bij,bj->bi", J[:, :, 2 * m :], _real_pairs(dK))
+        V = self._tangent(U[:, d], K, dK, d, w)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            du = _newton_step(J[:, :, : 2 * m], rhs.T)
-            V = (du[:, 0::2] + 1j * du[:, 1::2]).T
             eps = 1e-3
             ahead, back = (self._dets(U[:, d] + e * V, K + e * dK, d, w) for e in (eps, -eps))
             slope = (ahead - back) / (2 * eps)
         w.det[d, col + 1] = w.det[d, col] + slope
         w.det[d, col - 1] = w.det[d, col] - slope
+
+    def _tangent(self, U: np.ndarray, K: np.ndarray, dK: np.ndarray, d: np.ndarray, w: _Walk) -> np.ndarray:
+        """The group's motion ``V`` (m, B) at ``U`` with knowns ``K`` (columns of designs ``d``) as the knowns move by
+        ``dK``: ``J_u V = -J_k dK`` (NaN where singular)."""
+        m = U.shape[0]
+        J = self.jacobian(np.concatenate([U, K]), self._design_nums(w.nums, d), m + self.n_held)
+        rhs = np.einsum("bij,bj->bi", J[:, :, 2 * m :], _real_pairs(dK))
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            du = _newton_step(J[:, :, : 2 * m], rhs.T)
+        V: np.ndarray = (du[:, 0::2] + 1j * du[:, 1::2]).T
+        return V
+
+    def _smooth(
+        self,
+        ends: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        rates: tuple[np.ndarray, np.ndarray],
+        d: np.ndarray,
+        w: _Walk,
+    ) -> np.ndarray:
+        """Whether steps from ``U0`` (knowns ``K0``) to ``U1`` (``K1``), ``ends`` = ``(U0, K0, U1, K1)``, columns of
+        designs ``d``, keep the velocity continuous: the tangent at each end (:meth:`_tangent`, the knowns moving
+        there by ``rates`` over the step: their motion along their path, not their chord) predicts the other end to
+        within ``VELOCITY_SHARE`` of the step's move (the largest over the group's joints).
+
+        On the branch the defect ``|U1 - U0 - V|`` is of second order in the step. Across a kink at ``s`` of the
+        way (the other branch taken at a change point) it is at least ``|jump of V| max(s, 1 - s)``, half the jump;
+        across a hop to another root, the hop itself. A tangent is not read where its end's determinant is below
+        ``TANGENT_DET`` of the pose's: next to a change point it is lost in rounding (Newton places a parallelogram's
+        flat position to the square root of its tolerance, its determinant 6e-7 of the pose's), and there both
+        branches pass; the determinant's trend decides the step after it (:func:`_sign_passes`). (The knowns' chord
+        will not do for their motion where they move on a curve: off it by the square of the step, it is amplified
+        by the Jacobian's inverse, and a parallelogram's smooth 3-deg step 6 deg before its flat position had a
+        defect of half its move.)"""
+        U0, K0, U1, K1 = ends
+        out = np.ones(U0.shape[1], bool)
+        i = np.flatnonzero(np.all(np.isfinite(np.concatenate([U0, K0, U1, K1])), axis=0))
+        if not len(i) or not self.n_held:
+            return out
+        dU = U1[:, i] - U0[:, i]
+        worst, read = np.zeros(len(i)), np.ones(len(i), bool)
+        for U, K, dK in ((U0, K0, rates[0]), (U1, K1, rates[1])):
+            V = self._tangent(U[:, i], K[:, i], dK[:, i], d[i], w)
+            det = np.abs(self._dets(U[:, i], K[:, i], d[i], w))
+            read &= np.all(np.isfinite(V), axis=0) & (det > TANGENT_DET * (1.0 if w.det0 is None else w.det0[d[i]]))
+            worst = np.maximum(worst, np.max(np.abs(dU - V), axis=0, initial=0.0))
+        out[i] = ~read | (worst <= VELOCITY_SHARE * np.max(np.abs(dU), axis=0, initial=0.0))
+        return out
+
+    def _grid_rate(self, d: np.ndarray, col: np.ndarray, w: _Walk) -> np.ndarray:
+        """The knowns' motion per grid step (up the grid) at grid columns ``col`` of designs ``d``: by differences
+        over the grid's columns, central of fourth order where two columns lie either side (as
+        :meth:`_grid_slopes`), of second order where one does, else one-sided of second order."""
+        first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
+
+        def at(off: int) -> np.ndarray:
+            return w.K[:, d, np.clip(col + off, first, n - 1)]
+
+        lo, hi = col - first, n - 1 - col
+        c4 = (at(-2) - 8 * at(-1) + 8 * at(1) - at(2)) / 12
+        c2 = (at(1) - at(-1)) / 2
+        one = np.where(lo == 0, -3 * at(0) + 4 * at(1) - at(2), 3 * at(0) - 4 * at(-1) + at(-2)) / 2
+        out: np.ndarray = np.where((lo >= 2) & (hi >= 2), c4, np.where((lo >= 1) & (hi >= 1), c2, one))
+        return out
 
     def _walk_legs(self, legs: tuple[_Leg, _Leg], places: np.ndarray, w: _Walk, g: WalkGrid) -> None:
         """Step both legs, all designs at once, until each covers the ``places`` (D, n) on its side or stops.
@@ -1284,7 +1349,10 @@ class Group(Step):
         good &= np.max(np.abs(got - start), axis=1) <= STEP_LIMIT * w.size[d][None, :]
         dets = np.full((k, N), np.nan)
         dets[j, i] = sg
-        good &= self._clear_of_zero(dets, d, s, sign, w)
+        if w.any_sign and w.det is not None:
+            good &= self._branch_steps((start, got), dets, cols, sign, d, w)
+        else:
+            good &= self._clear_of_zero(dets, d, s, sign, w)
         c0 = np.flatnonzero(can[0])
         a = good[0, c0]
         pend[c0] = ~a & fresh[c0]
@@ -1323,10 +1391,8 @@ class Group(Step):
     def _clear_of_zero(self, dets: np.ndarray, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
         """Which of a leg's grid steps (k, N) to columns ``s + q sign`` (determinants ``dets`` there) may be taken
         whole: the determinant, extrapolated linearly through the two columns before each, stays off zero for
-        ``GRID_FOLD_SHARE`` steps (:func:`_zero_ahead`). Following the branch continuously, the steps go through the
-        zeros on purpose: a step is taken whole that follows the determinant's trend through the two columns before, or
-        keeps the sign of the column before where the zero ahead is not within it (:func:`_sign_passes`; else in
-        sub-steps).
+        ``GRID_FOLD_SHARE`` steps (:func:`_zero_ahead`). (Following the branch continuously the steps go through the
+        zeros on purpose: :meth:`_branch_steps` decides there.)
 
         Newton's root at a column past a fold can lie on another sheet whose own fold is near: a Pyslvs six-bar
         variant's branch folds at 366.71 deg and another branch begins at 366.87; the step from 366 to 369 deg landed
@@ -1334,19 +1400,100 @@ class Group(Step):
         out = np.ones(dets.shape, bool)
         if w.det is None:
             return out
+        seq = self._dets_before(dets, d, s, sign, w)
+        for q in range(dets.shape[0]):
+            out[q] = _zero_ahead(seq[q], seq[q + 1]) >= GRID_FOLD_SHARE
+        return out
+
+    def _dets_before(self, dets: np.ndarray, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
+        """The determinants (k + 2, N) of the two grid columns before a leg's steps to columns ``s + q sign``, then
+        ``dets`` (k, N), the steps' own (NaN where unknown)."""
+        assert w.det is not None
         first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
         before = []
         for back in (2, 1):
             col = s - back * sign
             inside = (col >= first) & (col < n)
             before.append(np.where(inside, w.det[d, np.clip(col, 0, n - 1)], np.nan))
-        seq = np.concatenate([np.stack(before), dets])
-        for q in range(dets.shape[0]):
-            if w.any_sign:
-                out[q] = _sign_passes(seq[q], seq[q + 1], dets[q], 1.0)
-            else:
-                out[q] = _zero_ahead(seq[q], seq[q + 1]) >= GRID_FOLD_SHARE
+        return np.concatenate([np.stack(before), dets])
+
+    def _branch_steps(
+        self,
+        steps: tuple[np.ndarray, np.ndarray],
+        dets: np.ndarray,
+        cols: np.ndarray,
+        sign: np.ndarray,
+        d: np.ndarray,
+        w: _Walk,
+    ) -> np.ndarray:
+        """Following the branch continuously: which of a leg's grid steps (k, N) to columns ``cols`` (``steps``: the
+        states each starts from and its solution, both (k, m, N); ``dets`` the solutions' determinants) are the
+        branch's. A step that keeps the sign of the column before where the determinant's zero ahead is not within it
+        is; one that changes the sign, or keeps it with the zero within it, must follow the determinant's trend
+        (:func:`_sign_passes`; where the trend is not known, as at the first step from a grid that ends at the pose,
+        the velocity alone tells) and keep the velocity continuous (:meth:`_smooth`; a first column refused for it is
+        taken once more from the tangent's predictor, :meth:`_from_tangent`). After a gap (the determinant
+        of the column before unknown) a step has the pose's sign: the groups restart in the pose's mode, and a gap is
+        no change point.
+
+        The review's cases: two triads in sequence (``mk.two_triads(24)``, no change point) took, 0.05 grid steps
+        before a fold, a root of another branch whose determinant followed the trend (-560.4, -124.5, then 420.1):
+        62 samples off by up to 0.29 of the span; its velocity defect was the hop itself. A double parallelogram
+        posed 0.5 deg past its flat position, asked one input, had no trend at its grid's first step (its grid ends
+        at the pose), and its sub-steps kept the pose's sign onto the other mode; the whole step, smooth, crosses.
+        A four-bar (rocker 0.95) resumed past its gap with the other sign, 105 samples in the other mode."""
+        assert w.det is not None
+        seq = self._dets_before(dets, d, cols[0], sign, w)
+        out = np.ones(dets.shape, bool)
+        for j in range(dets.shape[0]):
+            no_trend = np.isnan(seq[j]) & np.isfinite(seq[j + 1])  # the velocity alone tells (:func:`_needs_velocity`)
+            out[j] = _sign_passes(seq[j], seq[j + 1], dets[j], 1.0) | no_trend
+            out[j] &= np.isfinite(seq[j + 1]) | (np.sign(dets[j]) == w.ref[d])
+        q, i = np.nonzero(out & _needs_velocity(seq[:-2], seq[1:-1], dets, 1.0))
+        if len(i):
+            n = w.K.shape[2]
+            prev = np.clip(cols[q, i] - sign[i], 0, n - 1)
+            col = np.clip(cols[q, i], 0, n - 1)
+            ends = (steps[0][q, :, i].T, w.K[:, d[i], prev], steps[1][q, :, i].T, w.K[:, d[i], col])
+            rates = (self._grid_rate(d[i], prev, w) * sign[i], self._grid_rate(d[i], col, w) * sign[i])
+            out[q, i] = self._smooth(ends, rates, d[i], w)
+            first = np.flatnonzero(~out[q, i] & (q == 0))
+            if len(first):  # refused for its velocity: once more, from the tangent's predictor
+                r = i[first]
+                sub = (ends[0][:, first], ends[1][:, first], ends[2][:, first], ends[3][:, first])
+                rates = (rates[0][:, first], rates[1][:, first])
+                out[0, r] = self._from_tangent(sub, rates, (seq[0, r], seq[1, r]), d[r], w)
+                steps[1][0, :, r[out[0, r]]] = sub[2][:, out[0, r]].T
+                dets[0, r] = np.where(out[0, r], self._dets(sub[2], sub[3], d[r], w), dets[0, r])
         return out
+
+    def _from_tangent(
+        self,
+        ends: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        rates: tuple[np.ndarray, np.ndarray],
+        before: tuple[np.ndarray, np.ndarray],
+        d: np.ndarray,
+        w: _Walk,
+    ) -> np.ndarray:
+        """Grid steps ``ends`` = ``(U0, K0, U1, K1)`` (designs ``d``; ``rates`` and the determinants ``before``, at the
+        column before ``U0`` and at ``U0``, as :meth:`_branch_steps` reads them) refused for their velocity, taken again
+        by Newton from the tangent's predictor ``U0 + V0``: where the new root passes the same tests it replaces ``U1``
+        in ``ends[2]`` (in place); which did.
+
+        Near a change point the two modes' roots lie close, and Newton from the walk's quadratic predictor can take the
+        other mode: a parallelogram (ground 4, crank 1) posed at 177.37 deg stepped from 177.37 + 3 k deg onto the kite
+        0.37 deg past its flat position (determinants 1.57, 0.73, then 0.10 on the kite, -0.10 on the parallelogram);
+        refused, its sub-steps took the kite too (356 of 721 samples off the parallelogram). From the tangent's
+        predictor Newton finds the parallelogram."""
+        U0, K0, U1, K1 = ends
+        V0 = self._tangent(U0, K0, rates[0], d, w)
+        sol, conv, sg = self._newton(U0 + V0, K1, w.arrays.take(d), vector=w.vector)
+        ok = self._accept(sol, conv, sg, U0, STEP_LIMIT * w.size[d], w, d)
+        ok &= _sign_passes(before[0], before[1], sg, 1.0) | np.isnan(before[0])
+        ok &= np.isfinite(before[1]) | (np.sign(sg) == w.ref[d])
+        ok &= self._smooth((U0, K0, sol, K1), rates, d, w)
+        U1[:, ok] = sol[:, ok]
+        return ok
 
     def _substeps(
         self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk, src: np.ndarray
@@ -2177,6 +2324,25 @@ def _sign_passes(det_prev: np.ndarray, det: np.ndarray, det_new: np.ndarray, rat
         follows = np.abs(det_new - trend) <= np.abs(trend - det)
         clear = ~(_zero_ahead(det_prev, det) < ratio)
         out: np.ndarray = follows | ((np.sign(det_new) == np.sign(det)) & clear) | ~np.isfinite(det)
+    return out
+
+
+def _needs_velocity(
+    det_prev: np.ndarray, det: np.ndarray, det_new: np.ndarray, ratio: np.ndarray | float
+) -> np.ndarray:
+    """Following the branch continuously: which steps (as :func:`_sign_passes` reads them) the determinant alone does
+    not vouch for, so that the velocity must be continuous across them too (:meth:`Group._smooth`): those that
+    change ``det``'s sign, or keep it where the determinant's zero ahead lies within the step (both where ``det`` is
+    known). A fold's partner past its zero, or another sheet's root, can follow the determinant's trend: two triads in
+    sequence, determinants -560.4 and -124.5 a grid step apart near a fold, took 420.1 on another branch, 0.29 of the
+    mechanism's span away.
+
+    >>> _needs_velocity(np.array([3.0, 3.0, 3.0]), np.array([2.0, 2.0, 2.9]), np.array([-1.0, 1.0, 2.8]), 1.0).tolist()
+    [True, True, False]
+    """
+    with np.errstate(invalid="ignore"):
+        keeps = (np.sign(det_new) == np.sign(det)) & ~(_zero_ahead(det_prev, det) < ratio)
+    out: np.ndarray = ~keeps & np.isfinite(det)
     return out
 
 
