@@ -81,7 +81,7 @@ def api_classes() -> dict[str, type]:
     """The exported classes and the linkagekit classes the exported functions return, by name."""
     classes = {name: getattr(lk, name) for name in lk.__all__ if inspect.isclass(getattr(lk, name))}
     for name in lk.__all__:
-        function = getattr(lk, name)
+        function = inspect.unwrap(getattr(lk, name))  # a decorated entry's annotations name its own module's types
         if inspect.isfunction(function) and "return" in function.__annotations__:
             returned = function.__annotations__["return"]
             returned = eval(returned, function.__globals__) if isinstance(returned, str) else returned
