@@ -243,6 +243,8 @@ RESTARTS = 16
 LOOK_AHEAD = 4
 #: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ...
 GRID_STEP = np.radians(3.0)
+#: unknown grid columns before a step that make a gap in the range (fewer: a change point left unsolved)
+GAP_COLUMNS = 3
 #: ... and of a length driver's, times the group's mean link length
 GRID_STEP_LENGTH = 1 / 32
 #: a length driver's grid goes at most this many steps either way from the pose's input
@@ -1417,6 +1419,18 @@ class Group(Step):
             before.append(np.where(inside, w.det[d, np.clip(col, 0, n - 1)], np.nan))
         return np.concatenate([np.stack(before), dets])
 
+    def _after_wide_gap(self, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
+        """Whether the :data:`GAP_COLUMNS` grid columns before a leg's first step (to column ``s``) are all unknown
+        (N,): a gap in the range, not the one or two columns a change point on the grid leaves unsolved."""
+        assert w.det is not None
+        first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
+        out = np.ones(len(d), bool)
+        for back in range(1, GAP_COLUMNS + 1):
+            col = s - back * sign
+            inside = (col >= first) & (col < n)
+            out &= inside & np.isnan(w.det[d, np.clip(col, 0, n - 1)])
+        return out
+
     def _branch_steps(
         self,
         steps: tuple[np.ndarray, np.ndarray],
@@ -1444,11 +1458,13 @@ class Group(Step):
         A four-bar (rocker 0.95) resumed past its gap with the other sign, 105 samples in the other mode."""
         assert w.det is not None
         seq = self._dets_before(dets, d, cols[0], sign, w)
+        wide = self._after_wide_gap(d, cols[0], sign, w)
         out = np.ones(dets.shape, bool)
         for j in range(dets.shape[0]):
             no_trend = np.isnan(seq[j]) & np.isfinite(seq[j + 1])  # the velocity alone tells (:func:`_needs_velocity`)
             out[j] = _sign_passes(seq[j], seq[j + 1], dets[j], 1.0) | no_trend
-            out[j] &= np.isfinite(seq[j + 1]) | (np.sign(dets[j]) == w.ref[d])
+            gap = wide if j == 0 else np.isnan(seq[j]) & np.isnan(seq[j + 1]) & wide
+            out[j] &= ~gap | (np.sign(dets[j]) == w.ref[d])
         q, i = np.nonzero(out & _needs_velocity(seq[:-2], seq[1:-1], dets, 1.0))
         if len(i):
             n = w.K.shape[2]
@@ -1463,6 +1479,7 @@ class Group(Step):
                 sub = (ends[0][:, first], ends[1][:, first], ends[2][:, first], ends[3][:, first])
                 rates = (rates[0][:, first], rates[1][:, first])
                 out[0, r] = self._from_tangent(sub, rates, (seq[0, r], seq[1, r]), d[r], w)
+                out[1:, r[out[0, r]]] = False  # the columns ahead were judged from the refused root: again, later
                 steps[1][0, :, r[out[0, r]]] = sub[2][:, out[0, r]].T
                 dets[0, r] = np.where(out[0, r], self._dets(sub[2], sub[3], d[r], w), dets[0, r])
         return out
