@@ -663,3 +663,17 @@ def test_a_rhombus_forced_through_newton_stays_a_parallelogram_past_its_singular
     for x in (241.0, 300.0, 357.0, 717.0):
         alone = lk.analyze(mech, [x], method="numerical", branch="continuous", rates=False)
         assert alone.assembled.all() and worst_parallel(alone, [("A", "B", "C", "D")]) <= 1e-10
+
+
+def test_a_pose_on_a_flat_position_forced_through_newton_answers_not_an_internal_error():
+    """Review 10b (F8): a parallelogram posed on its flat position (0 deg), forced through Newton, raised numpy's
+    ValueError from an empty batch (``_real_pairs`` of no design), an internal error, in both branch modes. The walk
+    cannot leave a pose where the Jacobian is singular, so every sample is flagged, as not assembled; where it does
+    answer, the answer is the closed form's (D to 1e-9)."""
+    mech = parallelogram(4.0, 1.0, 0.0)
+    ref = lk.analyze(mech, [10.0, 200.0], rates=False)
+    for branch in ("pose", "continuous"):
+        res = lk.analyze(mech, [10.0, 200.0], method="numerical", branch=branch, rates=False)
+        ok = res.assembled
+        assert np.all(np.abs(z(res, "D")[ok] - z(ref, "D")[ok]) < 1e-9)
+        assert np.all(np.isnan(z(res, "D")[~ok]))

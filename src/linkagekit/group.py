@@ -2547,8 +2547,8 @@ def _predict(U: np.ndarray, U_prev: np.ndarray, U_prev2: np.ndarray, t: np.ndarr
 
 def _real_pairs(z: np.ndarray) -> FloatArray:
     """Complex (k, B) as real rows (B, 2k): ``[Re z_0, Im z_0, Re z_1, ...]``."""
-    out: FloatArray = np.stack([z.real, z.imag], axis=-1).transpose(1, 0, 2).reshape(z.shape[1], -1)
-    return out
+    out: FloatArray = np.stack([z.real, z.imag], axis=-1).transpose(1, 0, 2).reshape(z.shape[1], 2 * z.shape[0])
+    return out  # (the width written out: with no design, B = 0, -1 cannot be inferred)
 
 
 def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: np.ndarray) -> np.ndarray:
