@@ -53,3 +53,35 @@ def test_the_limit_does_not_change_an_answer():
     assert np.array_equal(a.assembled, b.assembled)
     for j in mech.joint_names:
         np.testing.assert_allclose(a.point(j), b.point(j), rtol=0, atol=1e-12 * 10)
+
+
+def test_overlapping_calls_in_two_threads_keep_the_limit_until_the_last_ends_then_give_the_threads_back():
+    """Review 10c: each call saved and restored the counts on its own, but they belong to the process. A enters,
+    B enters, A leaves: B ran on OpenBLAS's own threads again, and once both had left the process stayed on one
+    thread. Now the first to enter limits and the last to leave restores."""
+    import threading
+
+    seen: dict[str, dict[str, int]] = {}
+    a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+
+    def a() -> None:
+        with threads.blas_limited():
+            a_in.set()
+            b_in.wait(10)
+        a_out.set()
+
+    def b() -> None:
+        a_in.wait(10)
+        with threads.blas_limited():
+            b_in.set()
+            a_out.wait(10)
+            seen["b after a left"] = blas_threads()
+
+    # OpenBLAS's own count (one per core: 2 on the suite's machine); not threadpool_limits(2) set here first: after
+    # that OpenBLAS (0.3.31) reports the main thread's count to a limit set in another thread
+    before = blas_threads()
+    ta, tb = threading.Thread(target=a), threading.Thread(target=b)
+    ta.start(), tb.start()
+    ta.join(20), tb.join(20)
+    assert a_out.is_set() and set(seen["b after a left"].values()) == {1}
+    assert blas_threads() == before

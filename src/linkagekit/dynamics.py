@@ -52,7 +52,7 @@ from .params import Params
 from .positions import solve
 from .rates import link_motion, solve_rates
 from .result import Result, frozen
-from .threads import one_blas_thread
+from .threads import one_blas_thread_with_scipy
 from .units import UnitKind
 
 #: relative and absolute tolerances of the integration (SI state: rad or m, rad/s or m/s)
@@ -412,6 +412,7 @@ def _repeated(x: np.ndarray, Y: np.ndarray, period: float | None) -> tuple[np.nd
     return np.concatenate([x[:-1] - period, x[:-1], x + period]), np.concatenate([Y[:-1], Y[:-1], Y])
 
 
+@one_blas_thread_with_scipy
 def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> Reduced:
     """The reduced one-coordinate model of a one-driver mechanism, tabulated along its branch from the pose.
 
@@ -1195,7 +1196,7 @@ def _start_speeds(md: _Model, speed: Any) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- simulate
-@one_blas_thread
+@one_blas_thread_with_scipy
 def simulate(
     mech: Mechanism,
     times: ArrayLike,

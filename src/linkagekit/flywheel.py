@@ -47,7 +47,7 @@ from . import dynamics
 from .dynamics import reduced, torque_laws
 from .errors import InputError, LinkageError
 from .model import CrankType, Mechanism
-from .threads import one_blas_thread
+from .threads import one_blas_thread_with_scipy
 
 Array = NDArray[Any]
 
@@ -539,7 +539,7 @@ class _Search:
         return float(np.mean(self.red.mass(q0 + np.linspace(0.0, period, 256, endpoint=False))))
 
 
-@one_blas_thread
+@one_blas_thread_with_scipy
 def size_flywheel(
     mech: Mechanism,
     cs: float,

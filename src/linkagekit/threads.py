@@ -29,27 +29,44 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _LOCK = threading.Lock()
 _CONTROLLER: list[Any] = []  # [controller, whether SciPy's OpenBLAS was loaded when it looked]
+_ACTIVE: list[Any] = []  # [threadpoolctl's limiter, how many calls are inside it]
 
 
 def _controller() -> Any:
-    """threadpoolctl's view of the BLAS libraries loaded; looked at again once SciPy has loaded its own."""
+    """threadpoolctl's view of the BLAS libraries loaded; looked at again once SciPy has loaded its own (under
+    ``_LOCK``)."""
     from threadpoolctl import ThreadpoolController
 
     scipy_loaded = "scipy.linalg" in sys.modules
-    with _LOCK:
-        if not _CONTROLLER or (scipy_loaded and not _CONTROLLER[1]):
-            _CONTROLLER[:] = [ThreadpoolController(), scipy_loaded]
-        return _CONTROLLER[0]
+    if not _CONTROLLER or (scipy_loaded and not _CONTROLLER[1]):
+        _CONTROLLER[:] = [ThreadpoolController(), scipy_loaded]
+    return _CONTROLLER[0]
 
 
 @contextmanager
 def blas_limited(with_scipy: bool = False) -> Iterator[None]:
-    """Every loaded BLAS library on one thread inside the block, as it was after; ``with_scipy``: SciPy's own
-    OpenBLAS (its least squares') loaded first, so that it is among them."""
+    """Every loaded BLAS library on one thread inside the block, as it was once the last block running in any
+    thread has ended; ``with_scipy``: SciPy's own OpenBLAS (its least squares', its integrators') loaded first, so
+    that it is among them.
+
+    BLAS's thread counts belong to the process, not to a thread: the first block to enter sets the limit and the
+    last to leave puts back the counts from before the first (two overlapping calls in the editor's handler
+    threads, each saving and restoring on its own, left the second unlimited and the process on one thread).
+    """
     if with_scipy:
         import scipy.linalg  # noqa: F401
-    with _controller().limit(limits=1, user_api="blas"):
+    with _LOCK:
+        if not _ACTIVE:
+            _ACTIVE[:] = [_controller().limit(limits=1, user_api="blas"), 0]
+        _ACTIVE[1] += 1
+    try:
         yield
+    finally:
+        with _LOCK:
+            _ACTIVE[1] -= 1
+            if _ACTIVE[1] == 0:
+                _ACTIVE[0].restore_original_limits()
+                _ACTIVE.clear()
 
 
 def one_blas_thread(fn: F) -> F:
@@ -79,4 +96,5 @@ def limit_for_good() -> None:
     SciPy's is loaded first, so that it is among them)."""
     import scipy.linalg  # noqa: F401 -- loads SciPy's own OpenBLAS, which NumPy's does not cover
 
-    _controller().limit(limits=1, user_api="blas")
+    with _LOCK:
+        _controller().limit(limits=1, user_api="blas")
