@@ -3,10 +3,10 @@
 The solvers' linear algebra is many small matrices at once (a group's Jacobian per sample,
 the kinetostatic system per sample): NumPy hands LAPACK one small matrix at a time, and a
 threaded OpenBLAS then wakes and waits for its threads on every call. On a busy machine
-that wait is the whole cost: ``analyze --method numerical`` of a 101-joint dyad strip took
-128 s with OpenBLAS's default threads and 5.2 s with one, on 2 cores shared with one other
-process (docs/method.md, "One BLAS thread"). The limit is threadpoolctl's, for the duration of
-a call: the caller's own NumPy work outside it keeps its threads.
+that wait is the whole cost: ``analyze --method numerical`` of a 98-dyad strip took 128 s
+with OpenBLAS's default threads and 5.0 s with one, on 2 cores shared with one other process
+(docs/method.md, "One BLAS thread"). The limit is threadpoolctl's, for the duration of a call
+(of the last of overlapping calls): the caller's NumPy work before and after keeps its threads.
 
 >>> from threadpoolctl import threadpool_info
 >>> @one_blas_thread
@@ -69,30 +69,28 @@ def blas_limited(with_scipy: bool = False) -> Iterator[None]:
                 _ACTIVE.clear()
 
 
-def one_blas_thread(fn: F) -> F:
-    """``fn`` run with :func:`blas_limited`."""
+def _limiting(with_scipy: bool) -> Callable[[F], F]:
+    """A decorator that runs its function with :func:`blas_limited` ``(with_scipy)``."""
 
-    @functools.wraps(fn)
-    def limited(*args: Any, **kwargs: Any) -> Any:
-        with blas_limited():
-            return fn(*args, **kwargs)
+    def decorate(fn: F) -> F:
+        @functools.wraps(fn)
+        def limited(*args: Any, **kwargs: Any) -> Any:
+            with blas_limited(with_scipy):
+                return fn(*args, **kwargs)
 
-    return limited  # type: ignore[return-value]
+        return limited  # type: ignore[return-value]
+
+    return decorate
 
 
-def one_blas_thread_with_scipy(fn: F) -> F:
-    """``fn`` run with :func:`blas_limited` ``(with_scipy=True)`` (a search that polishes with SciPy)."""
-
-    @functools.wraps(fn)
-    def limited(*args: Any, **kwargs: Any) -> Any:
-        with blas_limited(with_scipy=True):
-            return fn(*args, **kwargs)
-
-    return limited  # type: ignore[return-value]
+#: ``fn`` run with :func:`blas_limited`
+one_blas_thread = _limiting(with_scipy=False)
+#: ``fn`` run with :func:`blas_limited` ``(with_scipy=True)`` (a search that polishes, or an integration, with SciPy)
+one_blas_thread_with_scipy = _limiting(with_scipy=True)
 
 
 def limit_for_good() -> None:
-    """Every BLAS library loaded now on one thread for the rest of the process (a worker's or the command line's;
+    """Every BLAS library loaded now on one thread for the rest of the process (a synthesis worker's;
     SciPy's is loaded first, so that it is among them)."""
     import scipy.linalg  # noqa: F401 -- loads SciPy's own OpenBLAS, which NumPy's does not cover
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, LinkageError
+from ..threads import limit_for_good
 from .base import Objective
 
 #: the problems a worker process evaluates (set once per process by the pool's initializer)
@@ -130,22 +131,12 @@ def _install(problems: tuple[Objective, ...], line: Channel | None = None) -> No
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _die_with_parent()
-    one_blas_thread()
+    # the engine's BLAS calls are small (the polish's least-squares steps), but after each one OpenBLAS's threads
+    # spin: a one-worker run of 2.0 s burned 2.7 CPU-s, and two workers ran two searches in 2.4 s where with one
+    # BLAS thread each they took 1.9 s, as one search alone does
+    limit_for_good()
     keep_freed_memory()
     _PROBLEMS, _CHANNEL = problems, line
-
-
-def one_blas_thread() -> None:
-    """Every BLAS library of this process (a worker's) on one thread for good (``threads.limit_for_good``).
-
-    The engine's BLAS calls are small (the polish's least-squares steps), but after each one
-    OpenBLAS's threads spin: measured, a one-worker run of 2.0 s burned 2.7 CPU-s, and two
-    workers (each with its own spinning threads) ran two searches in 2.4 s where with one
-    BLAS thread each they took 1.9 s, as one search alone does.
-    """
-    from ..threads import limit_for_good
-
-    limit_for_good()
 
 
 #: Linux's prctl option: the signal a process gets when its parent dies (linux/prctl.h)

@@ -92,7 +92,7 @@ def fit(Xi: np.ndarray, Xj: np.ndarray, T: np.ndarray, placement: bool = True) -
     B = np.stack([np.ones_like(Xi), Xi, D], axis=1)  # (N, 3, m)
     G = np.einsum("npk,nqk->npq", np.conj(B), B)
     r = np.einsum("npk,nk->np", np.conj(B), T)
-    u, sse = _solve(G, r, np.sum(np.abs(T) ** 2, axis=1))
+    u, sse = _Inverse3(G).solve(r, np.sum(np.abs(T) ** 2, axis=1))
     return _placed(u, sse, zero, zero + 1)
 
 
@@ -179,15 +179,6 @@ def _conj_fft(Ff: np.ndarray) -> np.ndarray:
     return out
 
 
-def _solve(G: np.ndarray, r: np.ndarray, tt: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``u = G^-1 r`` with a tiny ridge ``lam``, and the residual ``|B u - T|^2 = |T|^2 - Re(r^H u) - lam |u|^2``
-    (clipped at 0): ``|T|^2 - Re(r^H u)`` alone also counts the ridge's own term, 9 % of the residual on a basis of
-    condition 2.5e5 (review 10c)."""
-    lam = _ridge(G)
-    u = np.linalg.solve(G + lam[..., None, None] * np.eye(3), r[..., None])[..., 0]
-    return u, _residual(r, u, tt, lam)
-
-
 def _ridge(G: np.ndarray) -> np.ndarray:
     """The ridge added to the normal matrices ``G`` (..., 3, 3): ``RIDGE`` times the trace (1 where it is 0)."""
     scale = np.einsum("...ii->...", G).real
@@ -203,9 +194,11 @@ def _residual(r: np.ndarray, u: np.ndarray, tt: float | np.ndarray, lam: np.ndar
 
 
 class _Inverse3:
-    """``G + ridge`` (..., 3, 3) inverted by its adjugate once, for several right-hand sides (:func:`_solve`'s
-    ridge and residual): NumPy's batched LAPACK solve costs microseconds per 3 x 3 system, the adjugate's
-    products a fraction of one."""
+    """``G + lam`` (..., 3, 3), ``lam`` a tiny ridge (:func:`_ridge`), inverted by its adjugate once, for several
+    right-hand sides: NumPy's batched LAPACK solve costs microseconds per 3 x 3 system, the adjugate's products a
+    fraction of one. The residual reported is ``|B u - T|^2 = |T|^2 - Re(r^H u) - lam |u|^2`` (:func:`_residual`):
+    ``|T|^2 - Re(r^H u)`` alone also counts the ridge's own term, 9 % of the residual on a basis of condition 2.5e5
+    (review 10c)."""
 
     def __init__(self, G: np.ndarray) -> None:
         self.lam = _ridge(G)
