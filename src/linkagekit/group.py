@@ -168,7 +168,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property, partial
 from typing import Any
 
@@ -419,7 +419,8 @@ class _Walk:
     q: np.ndarray | None = None  # (n_drivers, D, n) the inputs of ``K``'s columns
     upstream: Callable[[np.ndarray], np.ndarray | None] | None = None  # the joints before the group at inputs
     det: np.ndarray | None = None  # (D, n) the Jacobian's determinant at the grid's solved columns (NaN elsewhere)
-    det0: np.ndarray | None = None  # (D,) its size at the pose: a root where it is SINGULAR_DET times that is no answer
+    det0: np.ndarray = field(default_factory=lambda: np.ones(0))  # (D,) its size at the pose (set with the walk):
+    # a root where it is SINGULAR_DET times that is no answer
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (following the branch, any sign here: the steps
@@ -1224,7 +1225,7 @@ class Group(Step):
         for U, K, dK in ((U0, K0, rates[0]), (U1, K1, rates[1])):
             V = self._tangent(U[:, i], K[:, i], dK[:, i], d[i], w)
             det = np.abs(self._dets(U[:, i], K[:, i], d[i], w))
-            read &= np.all(np.isfinite(V), axis=0) & (det > TANGENT_DET * (1.0 if w.det0 is None else w.det0[d[i]]))
+            read &= np.all(np.isfinite(V), axis=0) & (det > TANGENT_DET * w.det0[d[i]])
             worst = np.maximum(worst, np.max(np.abs(dU - V), axis=0, initial=0.0))
         out[i] = ~read | (worst <= VELOCITY_SHARE * np.max(np.abs(dU), axis=0, initial=0.0))
         return out
@@ -1450,7 +1451,7 @@ class Group(Step):
         of the column before unknown) a step has the pose's sign: the groups restart in the pose's mode, and a gap is
         no change point.
 
-        The review's cases: two triads in sequence (``mk.two_triads(24)``, no change point) took, 0.05 grid steps
+        The review's cases: two random triads in sequence (no change point) took, 0.05 grid steps
         before a fold, a root of another branch whose determinant followed the trend (-560.4, -124.5, then 420.1):
         62 samples off by up to 0.29 of the span; its velocity defect was the hop itself. A double parallelogram
         posed 0.5 deg past its flat position, asked one input, had no trend at its grid's first step (its grid ends
@@ -1506,8 +1507,7 @@ class Group(Step):
         V0 = self._tangent(U0, K0, rates[0], d, w)
         sol, conv, sg = self._newton(U0 + V0, K1, w.arrays.take(d), vector=w.vector)
         ok = self._accept(sol, conv, sg, U0, STEP_LIMIT * w.size[d], w, d)
-        ok &= _sign_passes(before[0], before[1], sg, 1.0) | np.isnan(before[0])
-        ok &= np.isfinite(before[1]) | (np.sign(sg) == w.ref[d])
+        ok &= _sign_passes(before[0], before[1], sg, 1.0) | np.isnan(before[0])  # (before[1] is known here)
         ok &= self._smooth((U0, K0, sol, K1), rates, d, w)
         U1[:, ok] = sol[:, ok]
         return ok
@@ -1644,12 +1644,7 @@ class Group(Step):
         d, j = np.nonzero(np.all(np.isfinite(Ug), axis=0) & np.all(np.isfinite(dK), axis=0))
         if not len(d) or not self.n_held:
             return V
-        P = np.concatenate([Ug[:, d, j], Kg[:, d, j]])
-        J = self.jacobian(P, self._design_nums(w.nums, d), m + self.n_held)
-        rhs = np.einsum("bij,bj->bi", J[:, :, 2 * m :], _real_pairs(dK[:, d, j]))
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            du = _newton_step(J[:, :, : 2 * m], rhs.T)
-        V[:, d, j] = (du[:, 0::2] + 1j * du[:, 1::2]).T
+        V[:, d, j] = self._tangent(Ug[:, d, j], Kg[:, d, j], dK[:, d, j], d, w)
         return V
 
     def _from_state(
@@ -1696,7 +1691,7 @@ class Group(Step):
         sign, not singular (its determinant above ``SINGULAR_DET`` of the pose's: where a joint is undetermined, as
         at a rhombus's flat position, Newton converges only by rounding, to any point of a circle)."""
         near = np.max(np.abs(sol - start), axis=0) <= bound
-        if w.det0 is not None and not w.any_sign:  # following the branch continuously, its limit there is the answer
+        if not w.any_sign:  # following the branch continuously, its limit there is the answer
             near &= np.abs(sign) > SINGULAR_DET * w.det0[designs]
         return conv & w.sign_ok(sign, designs) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
 
