@@ -2334,8 +2334,7 @@ def _sign_passes(det_prev: np.ndarray, det: np.ndarray, det_new: np.ndarray, rat
     with np.errstate(invalid="ignore", over="ignore"):
         trend = det + (det - det_prev) * ratio
         follows = np.abs(det_new - trend) <= np.abs(trend - det)
-        clear = ~(_zero_ahead(det_prev, det) < ratio)
-        out: np.ndarray = follows | ((np.sign(det_new) == np.sign(det)) & clear) | ~np.isfinite(det)
+        out: np.ndarray = follows | ~_needs_velocity(det_prev, det, det_new, ratio)
     return out
 
 
@@ -2352,7 +2351,7 @@ def _needs_velocity(
     >>> _needs_velocity(np.array([3.0, 3.0, 3.0]), np.array([2.0, 2.0, 2.9]), np.array([-1.0, 1.0, 2.8]), 1.0).tolist()
     [True, True, False]
     """
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
         keeps = (np.sign(det_new) == np.sign(det)) & ~(_zero_ahead(det_prev, det) < ratio)
     out: np.ndarray = ~keeps & np.isfinite(det)
     return out
