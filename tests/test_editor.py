@@ -674,7 +674,7 @@ def finish(proc: subprocess.Popen, timeout: float = 30) -> tuple[int, str, str]:
     except subprocess.TimeoutExpired:
         proc.kill()
         out, err = proc.communicate()
-        pytest.fail(f"`{' '.join(proc.args[3:])}` still running after {timeout} s: it served instead of exiting 2")
+        pytest.fail(f"`{' '.join(proc.args[3:])}` still running after {timeout} s (stderr {err!r})")
     return proc.returncode, out, err
 
 

@@ -418,3 +418,42 @@ def test_with_every_handler_held_a_connection_gets_503_then_is_served_once_one_i
         c.still_serving()
     finally:
         _stop(srv)
+
+
+def test_a_signal_while_a_handler_starts_stops_the_server_and_frees_its_slot(tmp_path, monkeypatch, capsys):
+    """SIGINT can land in ``Thread.start`` after the handler's thread began (CI stop 40: the handler freed its
+    slot, the accepting thread freed it again, BoundedSemaphore raised ValueError in place of the
+    KeyboardInterrupt, and ``linkagekit edit`` went on serving).  Here the thread runs to its end and then the
+    interrupt comes: it must propagate as KeyboardInterrupt, and every slot must be free exactly once."""
+    import socketserver
+
+    monkeypatch.setattr(editor, "MAX_CONNECTIONS", 3)
+    srv = EditorServer(Session(copy_example(tmp_path)), 0)
+    done = threading.Event()
+    run_thread = srv.process_request_thread
+
+    def thread_then_done(request, address):
+        try:
+            run_thread(request, address)
+        finally:
+            done.set()
+
+    start = socketserver.ThreadingMixIn.process_request
+
+    def start_then_signal(self, request, address):
+        start(self, request, address)
+        assert done.wait(10), "the handler's thread did not finish"
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(srv, "process_request_thread", thread_then_done)
+    monkeypatch.setattr(socketserver.ThreadingMixIn, "process_request", start_then_signal)
+    ours, theirs = socket.socketpair()
+    try:
+        theirs.close()  # the handler reads nothing and ends
+        with pytest.raises(KeyboardInterrupt):
+            srv.process_request(ours, ("127.0.0.1", 1))
+        assert all(srv.slots.acquire(blocking=False) for _ in range(3)), "a slot was not given back"
+        assert not srv.slots.acquire(blocking=False), "a slot was given back twice"
+    finally:
+        srv.server_close()
+    assert "Semaphore" not in capsys.readouterr().err

@@ -964,6 +964,8 @@ class EditorServer(ThreadingHTTPServer):
         self.slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
         #: the readers of the connections served now (:meth:`_crowded` brings their deadlines forward)
         self.arrivals: set[_Arrival] = set()
+        #: the connections that hold one of :attr:`slots` (:meth:`_free` gives it back once)
+        self.holding: set[Any] = set()
         self.lock = threading.Lock()
         self.token = token or secrets.token_urlsafe(24)
         try:
@@ -991,11 +993,23 @@ class EditorServer(ThreadingHTTPServer):
                 self._busy(request)
                 return
         self.full = False
+        with self.lock:
+            self.holding.add(request)
         try:
             super().process_request(request, client_address)
-        except BaseException:  # no thread: its handler is free again
-            self.slots.release()
+        except BaseException:  # no thread, or a signal while it started: its handler is free again
+            self._free(request)
             raise
+
+    def _free(self, request: Any) -> None:
+        """Give back the handler ``request`` holds, once: its thread and the accepting thread may both try (a
+        SIGINT in ``Thread.start`` comes after the thread began; a second release would raise ValueError
+        in place of the KeyboardInterrupt, and the server would go on serving)."""
+        with self.lock:
+            if request not in self.holding:
+                return
+            self.holding.remove(request)
+        self.slots.release()
 
     def _crowded(self) -> None:
         """Every handler is taken and a connection waits: the connections that are still to send their request
@@ -1008,7 +1022,7 @@ class EditorServer(ThreadingHTTPServer):
         try:
             super().process_request_thread(request, client_address)
         finally:
-            self.slots.release()
+            self._free(request)
 
     def _busy(self, request: socket.socket) -> None:
         """Answer 503 to a connection no handler was free for, without ever waiting on it (the accepting thread)."""
