@@ -1348,6 +1348,8 @@ class Group(Step):
         got[j, :, i] = sol.T
         good = np.zeros((k, N), bool)
         good[j, i] = conv & w.sign_ok(sg, d[i]) & np.all(np.isfinite(sol), axis=0)
+        if not w.any_sign:  # as :meth:`_accept`: a singular root is no answer
+            good[j, i] &= np.abs(sg) > SINGULAR_DET * w.det0[d[i]]
         start = np.concatenate([U[None], got[:-1]])
         good &= np.max(np.abs(got - start), axis=1) <= STEP_LIMIT * w.size[d][None, :]
         dets = np.full((k, N), np.nan)
@@ -1731,7 +1733,8 @@ class Group(Step):
         if not (lost.any() and self.dyad_like):  # not reachable from the last good sample: the only root of the sign
             return
         idx = np.flatnonzero(lost)
-        U_r = self._restart(U[:, idx], K[:, idx], w.ref[designs[idx]], w.nums, designs[idx])
+        floor = np.zeros(len(idx)) if w.any_sign else SINGULAR_DET * w.det0[designs[idx]]  # as :meth:`_accept`
+        U_r = self._restart(U[:, idx], K[:, idx], w.ref[designs[idx]], w.nums, designs[idx], floor)
         found = np.all(np.isfinite(U_r), axis=0)
         U_new[:, idx[found]] = U_r[:, found]
         acc[idx[found]] = True
@@ -1966,8 +1969,11 @@ class Group(Step):
             out[check] = home | (conv & (np.sign(sg) == -w.ref[d]))
         return out
 
-    def _restart(self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray) -> np.ndarray:
-        """After a gap: the solution at ``K`` with the pose's determinant sign, when it is the only one.
+    def _restart(
+        self, U: np.ndarray, K: np.ndarray, ref: np.ndarray, nums: Nums, designs: np.ndarray, floor: np.ndarray
+    ) -> np.ndarray:
+        """After a gap: the solution at ``K`` with the pose's determinant sign, when it is the only one (a root whose
+        determinant is at most ``floor`` is singular, no answer: :data:`SINGULAR_DET`).
 
         Newton from ``RESTARTS`` starts scattered about the last good configuration (a fixed
         seed: results are reproducible); the converged solutions of the pose's sign are
@@ -1988,9 +1994,10 @@ class Group(Step):
         Ub = np.concatenate([U[None], starts]).transpose(1, 0, 2).reshape(m, -1)
         Kb = np.repeat(K[:, None, :], RESTARTS + 1, axis=1).reshape(K.shape[0], -1)
         rows = np.tile(np.arange(B), RESTARTS + 1)
-        sol, conv, sg = self.newton(Ub, Kb, _take(dn, rows), iters=4 * NEWTON_ITER)
+        sol, conv, det = self._newton(Ub, Kb, self._arrays(_take(dn, rows), len(rows)), 4 * NEWTON_ITER)
         sol = sol.reshape(m, RESTARTS + 1, B)
-        good = (conv & (sg == np.tile(ref, RESTARTS + 1))).reshape(RESTARTS + 1, B)
+        good = conv & (np.sign(det) == np.tile(ref, RESTARTS + 1)) & (np.abs(det) > np.tile(floor, RESTARTS + 1))
+        good = good.reshape(RESTARTS + 1, B)
         out = np.full((m, B), NAN_POINT)
         for b in np.flatnonzero(good.any(axis=0)):  # per design: a handful of candidates to compare
             cand = sol[:, good[:, b], b]
