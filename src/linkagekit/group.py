@@ -428,6 +428,16 @@ class _Walk:
         ok: np.ndarray = (np.sign(sg) == self.ref[designs]) | self.any_sign
         return ok
 
+    def regular(self, det: np.ndarray, designs: np.ndarray) -> np.ndarray:
+        """A root keeping the pose's sign is not singular: its determinant above :data:`SINGULAR_DET` of the pose's
+        (where a joint is undetermined, as at a rhombus's flat position, Newton converges only by rounding, to any
+        point of a circle; following the branch continuously, its limit there is the answer)."""
+        return self.any_sign | (np.abs(det) > self.floor(designs))  # type: ignore[no-any-return]
+
+    def floor(self, designs: np.ndarray) -> np.ndarray:
+        """The determinant at and below which a root is singular (:meth:`regular`), per column of ``designs``."""
+        return np.zeros(len(designs)) if self.any_sign else SINGULAR_DET * self.det0[designs]
+
 
 @dataclass(frozen=True)
 class _Path:
@@ -1347,9 +1357,7 @@ class Group(Step):
         got = np.full((k, m, N), NAN_POINT)
         got[j, :, i] = sol.T
         good = np.zeros((k, N), bool)
-        good[j, i] = conv & w.sign_ok(sg, d[i]) & np.all(np.isfinite(sol), axis=0)
-        if not w.any_sign:  # as :meth:`_accept`: a singular root is no answer
-            good[j, i] &= np.abs(sg) > SINGULAR_DET * w.det0[d[i]]
+        good[j, i] = conv & w.sign_ok(sg, d[i]) & w.regular(sg, d[i]) & np.all(np.isfinite(sol), axis=0)
         start = np.concatenate([U[None], got[:-1]])
         good &= np.max(np.abs(got - start), axis=1) <= STEP_LIMIT * w.size[d][None, :]
         dets = np.full((k, N), np.nan)
@@ -1423,16 +1431,19 @@ class Group(Step):
         return np.concatenate([np.stack(before), dets])
 
     def _after_wide_gap(self, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
-        """Whether the :data:`GAP_COLUMNS` grid columns before a leg's first step (to column ``s``) are all unknown
-        (N,): a gap in the range, not the one or two columns a change point on the grid leaves unsolved."""
+        """Whether a leg's first step (to column ``s``) comes after a gap in the range (N,): the :data:`GAP_COLUMNS`
+        grid columns before it all unknown, or the unknown ones just before it including one a chain rules out
+        (no configuration there: :meth:`_possible`); not the one or two columns a change point on the grid leaves
+        unsolved (a rhombus's crank on the ground pivot: possible, but Newton does not converge there)."""
         assert w.det is not None
         first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
-        out = np.ones(len(d), bool)
+        run, ruled = np.ones(len(d), bool), np.zeros(len(d), bool)
         for back in range(1, GAP_COLUMNS + 1):
             col = s - back * sign
-            inside = (col >= first) & (col < n)
-            out &= inside & np.isnan(w.det[d, np.clip(col, 0, n - 1)])
-        return out
+            at = np.clip(col, 0, n - 1)
+            run &= (col >= first) & (col < n) & np.isnan(w.det[d, at])
+            ruled |= run & ~w.ok[d, at]
+        return run | ruled
 
     def _branch_steps(
         self,
@@ -1689,13 +1700,11 @@ class Group(Step):
         pose's determinant sign (a sign change is a passage through a singular position, never silent; following
         the branch continuously, any sign here: the grid steps, sub-steps and samples, which know the states before,
         check :func:`_sign_passes`), and no joint farther than ``bound`` from where
-        it started (over a small step Newton's root is the branch's, not another of one sign); and, keeping the pose's
-        sign, not singular (its determinant above ``SINGULAR_DET`` of the pose's: where a joint is undetermined, as
-        at a rhombus's flat position, Newton converges only by rounding, to any point of a circle)."""
+        it started (over a small step Newton's root is the branch's, not another of one sign); and not singular
+        (:meth:`_Walk.regular`)."""
         near = np.max(np.abs(sol - start), axis=0) <= bound
-        if not w.any_sign:  # following the branch continuously, its limit there is the answer
-            near &= np.abs(sign) > SINGULAR_DET * w.det0[designs]
-        return conv & w.sign_ok(sign, designs) & np.all(np.isfinite(sol), axis=0) & near  # type: ignore[no-any-return]
+        ok = conv & w.sign_ok(sign, designs) & w.regular(sign, designs) & np.all(np.isfinite(sol), axis=0) & near
+        return ok  # type: ignore[no-any-return]
 
     def _plain(
         self,
@@ -1733,8 +1742,7 @@ class Group(Step):
         if not (lost.any() and self.dyad_like):  # not reachable from the last good sample: the only root of the sign
             return
         idx = np.flatnonzero(lost)
-        floor = np.zeros(len(idx)) if w.any_sign else SINGULAR_DET * w.det0[designs[idx]]  # as :meth:`_accept`
-        U_r = self._restart(U[:, idx], K[:, idx], w.ref[designs[idx]], w.nums, designs[idx], floor)
+        U_r = self._restart(U[:, idx], K[:, idx], w.ref[designs[idx]], w.nums, designs[idx], w.floor(designs[idx]))
         found = np.all(np.isfinite(U_r), axis=0)
         U_new[:, idx[found]] = U_r[:, found]
         acc[idx[found]] = True
