@@ -131,6 +131,24 @@ def test_double_parallelogram_stays_parallel(spans):
     assert worst_parallel(lk.analyze(mech, DEG), quads) > 0.1  # the default folds the first loop
 
 
+@pytest.mark.parametrize("at", [179.0, 179.75, 179.99, 180.25, 0.01, 359.99])
+def test_posed_a_hair_from_the_flat_position_every_parallelogram_stays_one(at):
+    """Posed 0.01 to 1 deg before a flat position, the closed form's continuous branch folded a parallelogram, a
+    rhombus and a double parallelogram into kites past it (537 of 721 samples): the path starts with the pose's
+    input repeated (up to the first sample past it), and those samples took the rate 0, so the motion from them
+    looked like a jump on either mode. They take the rate of the path's first interval that moves now. Opposite
+    sides parallel to 1e-12 of the size at every sample and the velocities continuous (posed on the flat position
+    itself, which mode the drawing is in is rounding's choice: not asked)."""
+    quads = [("A1", "A2", "C1", "C2"), ("A2", "A3", "C2", "C3")]
+    for mech, sides in [(parallelogram(at=at), [("A", "B", "C", "D")]), (parallelogram(2.0, 2.0, at), None)] + [
+        (double_parallelogram(at, (3.0, 2.0)), quads)
+    ]:
+        res = lk.analyze(mech, DEG, speed=1.0, branch="continuous")
+        assert res.assembled.all()
+        assert worst_parallel(res, sides or [("A", "B", "C", "D")]) <= 1e-12
+        assert velocity_defect(res, ["C3"] if sides is quads else ["D"]) < 2e-4
+
+
 def test_crank_rocker_is_exactly_the_default():
     mech = lk.load("examples/seed000_fourbar.yaml")
     a = lk.analyze(mech, DEG, branch="continuous")

@@ -324,11 +324,7 @@ def follow(
     E = np.full(S.shape, -np.inf)
     t = np.broadcast_to(np.asarray(t, float), (D, n))
     q_all = np.broadcast_to(q, (q.shape[0], D, n))
-    dq = np.diff(q, axis=-1)
-    dt = np.diff(t, axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        slope = np.where(dt != 0, dq / np.where(dt != 0, dt, 1.0), 0.0)
-    w_in = np.concatenate([slope[..., :1], slope], axis=-1)  # dq/dt at each sample (from the interval before)
+    w_in = _path_rates(q, t)
     found: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for i in range(plan.n_signs):
         sub = _upto(params, i)
@@ -345,6 +341,27 @@ def follow(
             found.append((np.full(int(real.sum()), i), d[real], where[real]))
         S[i] = S[i, :, :1] * np.cumprod(np.where(flip, -1.0, 1.0), axis=-1)
     return Branch(S, _joined(found))
+
+
+def _path_rates(q: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """dq/dt at each sample of a path (``q`` (n_drivers, D or 1, n), ``t`` (D, n)): the slope of the interval before
+    it, or, where that interval has no length (the pose's input repeated where the path has not left it yet), of
+    the nearest one before with a length, else after (0 on a path that does not move).
+
+    A sample at the pose's input repeated took the rate 0, so from a pose 0.5 deg before a parallelogram's flat
+    position the motion to the next sample looked like a jump on either mode and the branch folded into a kite."""
+    dq = np.diff(np.broadcast_to(q, (q.shape[0], *t.shape)), axis=-1)
+    dt = np.diff(t, axis=-1)
+    moves = np.broadcast_to(np.concatenate([dt[:, :1] != 0, dt != 0], axis=-1), dq.shape[:1] + t.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(dt != 0, dq / np.where(dt != 0, dt, 1.0), 0.0)
+    slope = np.concatenate([slope[..., :1], slope], axis=-1)  # from the interval before (the first: its own)
+    n = slope.shape[-1]
+    before = np.maximum.accumulate(np.where(moves, np.arange(n), -1), axis=-1)
+    after = np.minimum.accumulate(np.where(moves, np.arange(n), n)[..., ::-1], axis=-1)[..., ::-1]
+    pick = np.where(before >= 0, before, np.minimum(after, n - 1))
+    rates: np.ndarray = np.take_along_axis(slope, pick, axis=-1)
+    return np.where((before >= 0) | (after < n), rates, 0.0)
 
 
 def _joined(found: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
