@@ -2231,6 +2231,8 @@ class _Search:
                 self.bar.console.print(line)
             else:
                 print(f"{PROG}: synthesize: {line}", file=sys.stderr, flush=True)
+                self.last = time.monotonic()  # a progress line too: the next comes ``every`` s after it (on a busy
+                # machine the atlas took past ``first`` s, and a run its answer ended said "search 1, generation 0")
         if self.bar is not None:
             self.bar.update(
                 self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
