@@ -1531,12 +1531,15 @@ class Group(Step):
         """Grid steps from columns ``src`` to ``s`` that failed, retried by step halving from the last good state:
         (U, accepted, lost); for a dyad-like group, restarts where that fails too."""
         K = w.K[:, d, s]
-        before = None
+        before, U_before = None, None
         if w.det is not None:
             prev = 2 * src - s
             inside = (prev >= w.K.shape[2] - w.grid_columns) & (prev < w.K.shape[2])
-            before = (np.full(len(d), -1.0), np.where(inside, w.det[d, np.clip(prev, 0, w.K.shape[2] - 1)], np.nan))
-        U_new = self._halving(U, self._path(Kc, K, d, (src, s), w), w, before=before)
+            at = np.clip(prev, 0, w.K.shape[2] - 1)
+            before = (np.full(len(d), -1.0), np.where(inside, w.det[d, at], np.nan))
+            if w.any_sign:  # the secant's state before: a grid step back along the tangent (:meth:`_halving`)
+                U_before = U - self._tangent(U, Kc, self._grid_rate(d, src, w) * (s - src), d, w)
+        U_new = self._halving(U, self._path(Kc, K, d, (src, s), w), w, before=before, U_before=U_before)
         acc = np.all(np.isfinite(U_new), axis=0)
         if w.det is not None:
             w.det[d[acc], s[acc]] = self._dets(U_new[:, acc], K[:, acc], d[acc], w)
@@ -1799,29 +1802,29 @@ class Group(Step):
         w: _Walk,
         to_fold: bool = False,
         before: tuple[np.ndarray, np.ndarray] | None = None,
+        U_before: np.ndarray | None = None,
     ) -> np.ndarray:
         """From ``U`` at the start of ``path`` to its end by adaptive sub-steps; NaN columns where a step below
         2^-MAX_HALVINGS fails.
 
-        Each column walks ``t`` from 0 to 1 along its path (:meth:`_knowns`: the knowns where the
-        inputs between its two columns put them): a step that is accepted (the tests of a
-        continuation step) doubles the next one, a step that is not is halved. A step to knowns a
-        chain rules out fails without Newton. Newton here is LAPACK's, whatever the problem's size
-        (few columns sub-step, and many rounds: array operations' fixed cost would dominate). A
-        sub-step that moves a joint far is checked on the way back (:meth:`_returns`). ``before``: the path's ``t``
-        (negative) of the state before its start and the determinant there; with it, no sub-step goes more than
-        ``1 / SUB_FOLD_SHARE`` of the way to where the determinant, through the last two states, is zero
-        (:class:`_DetTrail`), down to the smallest step.
-        """
+        Each column walks ``t`` from 0 to 1 along its path (:meth:`_knowns`: the knowns where the inputs between its
+        two columns put them): a step that is accepted (the tests of a continuation step) doubles the next one, a step
+        that is not is halved. A step to knowns a chain rules out fails without Newton. Newton here is LAPACK's,
+        whatever the problem's size (few columns sub-step, and many rounds: array operations' fixed cost would
+        dominate). A sub-step that moves a joint far is checked on the way back (:meth:`_returns`). ``before``: the
+        path's ``t`` (negative) of the state before its start and the determinant there; with it, no sub-step goes
+        more than ``1 / SUB_FOLD_SHARE`` of the way to where the determinant, through the last two states, is zero
+        (:class:`_DetTrail`), down to the smallest step. Following the branch continuously, Newton starts from the
+        secant through the last two states (:meth:`_substep_newton`; ``U_before``: the state at ``before``'s ``t``)."""
         designs = path.designs
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
         Uc, Kc, st = U.copy(), path.K0.copy(), _Steps.new(B)
-        if before is None:
-            before = (np.full(B, np.nan), np.full(B, np.nan))
+        before = (np.full(B, np.nan), np.full(B, np.nan)) if before is None else before
         trail = _DetTrail.new(before, self._dets(U, path.K0, designs, w))
         bounded = None if w.any_sign else trail  # following the branch continuously, through the zeros on purpose
+        secant = _Secant.new(U, before[0], U_before) if w.any_sign else None
         while True:
             act = st.due()
             if not len(act):
@@ -1836,13 +1839,14 @@ class Group(Step):
             can = np.flatnonzero(self._possible(K_t, tuple(x[:, act] for x in reach)))  # type: ignore[arg-type]
             if len(can):
                 a = act[can]
-                Un, conv, sg = self._newton(Uc[:, a], K_t[:, can], ar.take(a), SUBSTEP_ITER)
+                Un, conv, sg = self._substep_newton(Uc[:, a], K_t[:, can], ar.take(a), secant, (a, st.t[a], tt[can]))
                 ok[can] = self._accept(Un, conv, sg, Uc[:, a], STEP_LIMIT * size[a], w, designs[a])
                 if w.any_sign:  # a sign change only across the determinant's zero (:func:`_sign_passes`)
                     ok[can] &= trail.sign_passes(a, tt[can], sg)
                 back = can[ok[can]]  # the way back must lead to where the step started: no hop to another root
                 ok[back] = self._returns(Un[:, ok[can]], Kc[:, act[back]], Uc[:, act[back]], w, designs[act[back]])
                 good_can = can[ok[can]]
+                _Secant.push(secant, act[good_can], st.t[act[good_can]], Uc[:, act[good_can]])
                 Uc[:, act[good_can]] = Un[:, ok[can]]
                 trail.push(act[good_can], tt[good_can], sg[ok[can]])
             Kc[:, act[ok]] = K_t[:, ok]
@@ -1850,6 +1854,23 @@ class Group(Step):
         if to_fold:  # samples (the walk's own steps find the range's ends: they are not pushed)
             self._last_step(Uc, Kc, st.t, st.alive, path, w)
         return np.where(st.alive & (st.t >= 1.0), Uc, NAN_POINT)
+
+    def _substep_newton(
+        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, secant: _Secant | None, at: tuple[np.ndarray, ...]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A sub-step's Newton from columns ``U`` to knowns ``K``: started from ``secant``'s predictor (columns
+        ``at[0]``, from ``t = at[1]`` to ``at[2]``) where there is one, and again from ``U`` where that does not
+        converge (a predictor onto a singular point: the double rhombus's sub-steps through its change points).
+
+        Next to a change point the two modes' roots lie about as near the last state, and from it Newton took either
+        (a parallelogram posed 1 deg before its flat position, forced through Newton: 358 of 721 samples kites)."""
+        if secant is None:
+            return self._newton(U, K, ar, SUBSTEP_ITER)
+        Un, conv, sg = self._newton(secant.predict(at[0], U, at[1], at[2]), K, ar, SUBSTEP_ITER)
+        redo = np.flatnonzero(~conv)
+        if len(redo):
+            Un[:, redo], conv[redo], sg[redo] = self._newton(U[:, redo], K[:, redo], ar.take(redo), SUBSTEP_ITER)
+        return Un, conv, sg
 
     def _path(
         self, K0: np.ndarray, K1: np.ndarray, designs: np.ndarray, cols: tuple[np.ndarray, np.ndarray] | None, w: _Walk
@@ -2461,6 +2482,33 @@ class _DetTrail:
         with np.errstate(invalid="ignore"):
             ahead = _zero_ahead(self.det[0, i], self.det[1, i]) * (self.t[1, i] - self.t[0, i])
         self.zero[0, i], self.zero[1, i] = self.zero[1, i], np.where(np.isfinite(ahead), t + ahead, np.nan)
+
+
+@dataclass
+class _Secant:
+    """Sub-steps' last accepted state but one, per column (``U`` (m, B) at path parameter ``t`` (B,); NaN where
+    unknown): the secant predictor through it and the last state."""
+
+    U: np.ndarray
+    t: np.ndarray
+
+    @classmethod
+    def new(cls, U: np.ndarray, t: np.ndarray, U_before: np.ndarray | None) -> _Secant:
+        prev = np.full_like(U, NAN_POINT) if U_before is None else U_before.copy()
+        return cls(prev, np.asarray(t, float).copy())
+
+    def predict(self, i: np.ndarray, U: np.ndarray, t: np.ndarray, t_new: np.ndarray) -> np.ndarray:
+        """Columns ``i``, now at ``U`` (at ``t``), predicted at ``t_new``: on the secant, else ``U``."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            pred = U + (U - self.U[:, i]) * ((t_new - t) / (t - self.t[i]))
+        return np.where(np.all(np.isfinite(pred), axis=0), pred, U)
+
+    @staticmethod
+    def push(secant: _Secant | None, i: np.ndarray, t: np.ndarray, U: np.ndarray) -> None:
+        """Columns ``i`` leave their state ``U`` at ``t`` for a new one: it becomes the state before (no secant:
+        nothing to do)."""
+        if secant is not None:
+            secant.U[:, i], secant.t[i] = U, t
 
 
 @dataclass

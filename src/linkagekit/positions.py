@@ -326,8 +326,16 @@ def _other_turn(
 
 def _upstream_of(params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float) -> Any:
     """:func:`_upstream` with these numbers, for the numerical groups' sub-steps; None where the signs or mirrors
-    are given per sample (following a branch continuously: which ones hold between two samples is not known)."""
-    return partial(_upstream, params, signs, mirrors, eps) if signs.shape[-1] == mirrors.shape[-1] == 1 else None
+    differ between samples (following a branch continuously: which ones hold between two samples is not known).
+    Given per sample but the same at every one (or none at all: no sign step before the group), they hold between.
+
+    (With none, as for a crank before a group, the sub-steps once moved the crank's joint along the chord between
+    two grid columns: across a parallelogram's flat position the chord keeps the crank's joint off the circle where
+    the two modes cross, so its smooth continuation was the other mode.)"""
+    one = [x if x.shape[-1] == 1 else x[..., :1] if np.all(x == x[..., :1]) else None for x in (signs, mirrors)]
+    if one[0] is None or one[1] is None:
+        return None
+    return partial(_upstream, params, one[0], one[1], eps)
 
 
 def _upstream(
