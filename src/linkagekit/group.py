@@ -449,6 +449,7 @@ class _Path:
     designs: np.ndarray
     q0: np.ndarray | None = None
     q1: np.ndarray | None = None
+    rates: tuple[np.ndarray, np.ndarray] | None = None  # the knowns' motion over the path at its ends (k, B) each
 
 
 @dataclass(frozen=True)
@@ -1442,7 +1443,7 @@ class Group(Step):
             col = s - back * sign
             at = np.clip(col, 0, n - 1)
             run &= (col >= first) & (col < n) & np.isnan(w.det[d, at])
-            ruled |= run & ~w.ok[d, at]
+            ruled |= run & ~w.ok[d, at] & np.all(np.isfinite(w.K[:, d, at]), axis=0)
         return run | ruled
 
     def _branch_steps(
@@ -1878,21 +1879,30 @@ class Group(Step):
         """Sub-steps of ``designs`` from knowns ``K0`` to ``K1``, the knowns of columns ``cols`` (from, to) of ``w.K``
         (None: the chord between them): through the inputs between the two columns where the steps before the group
         can be re-run there (an angle's input the shorter way round: a sample's input is a direction)."""
+        rates = None
+        if cols is not None and w.det is not None:
+            first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
+            a, b = np.clip(cols[0], first, n - 1), np.clip(cols[1], first, n - 1)
+            if np.all(cols[0] >= first) and np.all(cols[1] >= first) and np.all(np.abs(cols[1] - cols[0]) == 1):
+                rates = (self._grid_rate(designs, a, w) * (b - a), self._grid_rate(designs, b, w) * (b - a))
         if cols is None or w.upstream is None or w.q is None:
-            return _Path(K0, K1, designs)
+            return _Path(K0, K1, designs, rates=rates)
         q0, q1 = w.q[:, designs, cols[0]], w.q[:, designs, cols[1]]
         angle = np.zeros(len(q0), bool)
         angle[: len(self.angular)] = self.angular[: len(q0)]
         with np.errstate(invalid="ignore"):
             step = q1 - q0
             q1 = np.where(angle[:, None], q0 + step - 2 * np.pi * np.round(step / (2 * np.pi)), q1)
-        return _Path(K0, K1, designs, q0, q1)
+        return _Path(K0, K1, designs, q0, q1, rates)
 
     def _knowns(self, path: _Path, t: np.ndarray, idx: np.ndarray, w: _Walk) -> np.ndarray:
         """The knowns at ``t`` (N,) of columns ``idx`` of ``path``: ``K0`` at 0, ``K1`` at 1; between, where the
         inputs ``(1 - t) q0 + t q1`` put them (the steps before the group re-run there, every design's columns side
         by side), else on the chord."""
         K: np.ndarray = (1 - t) * path.K0[:, idx] + t * path.K1[:, idx]
+        if path.rates is not None:
+            H = _hermite(path.K0[:, idx], path.rates[0][:, idx], path.K1[:, idx], path.rates[1][:, idx], t)
+            K = np.where(np.all(np.isfinite(H), axis=0), H, K)
         K[:, t >= 1.0] = path.K1[:, idx[t >= 1.0]]
         mid = np.flatnonzero((t > 0) & (t < 1))
         if path.q0 is None or path.q1 is None or w.upstream is None or not len(mid):
