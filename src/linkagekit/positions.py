@@ -325,35 +325,42 @@ def _other_turn(
 
 
 def _upstream_of(params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float) -> Any:
-    """:func:`_upstream` with these numbers, for the numerical groups' sub-steps; None where the signs or mirrors
-    differ between samples (following a branch continuously: which ones hold between two samples is not known).
-    Given per sample but the same at every one (or none at all: no sign step before the group), they hold between.
+    """:func:`_upstream` with these numbers, for the numerical groups' sub-steps."""
+    return partial(_upstream, params, signs, mirrors, eps)
 
-    (With none, as for a crank before a group, the sub-steps once moved the crank's joint along the chord between
-    two grid columns: across a parallelogram's flat position the chord keeps the crank's joint off the circle where
-    the two modes cross, so its smooth continuation was the other mode.)"""
-    one = [x if x.shape[-1] == 1 else x[..., :1] if np.all(x == x[..., :1]) else None for x in (signs, mirrors)]
-    if one[0] is None or one[1] is None:
-        return None
-    return partial(_upstream, params, one[0], one[1], eps)
+
+def _held(choices: np.ndarray, used: list[int]) -> np.ndarray | None:
+    """Per-sample ``choices`` (n, D, samples) as one column, where the rows ``used`` are the same at every sample
+    (the others do not matter); None where they differ."""
+    if choices.shape[-1] == 1:
+        return choices
+    rows = choices[used]
+    return choices[..., :1] if np.all(rows == rows[..., :1]) else None
 
 
 def _upstream(
     params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float, q: np.ndarray, stop: Any
 ) -> np.ndarray | None:
-    """The joints the steps before ``stop`` place at inputs ``q`` (n_drivers, D, n), every design, with the
-    given signs and mirrors (one per design); None when a numerical group comes before ``stop``.
+    """The joints the steps before ``stop`` place at inputs ``q`` (n_drivers, D, n), every design; None when a
+    numerical group comes before ``stop``, or when the signs or mirrors of those steps differ between samples
+    (following a branch continuously: which ones hold between two samples is not known).
 
     A numerical group's sub-steps between two of its samples follow the inputs between them
     through this: the knowns it holds move as the mechanism moves them, not along the chord
-    between their two positions (:mod:`linkagekit.group`)."""
+    between their two positions (:mod:`linkagekit.group`). (The signs once had to be one column: a group after
+    a crank, with no sign at all, had its sub-steps on the chord, where across a parallelogram's flat position
+    the two modes only come close and the smooth continuation is the other one.)"""
     plan = params.plan
     before = plan.steps[: next(i for i, st in enumerate(plan.steps) if st is stop)]
     if any(isinstance(st, Group) for st in before):
         return None
+    sg = _held(signs, [i for i in (getattr(st, "sign", None) for st in before if is_sign_step(st)) if i is not None])
+    mr = _held(mirrors, [m for m in (getattr(st, "mirror", None) for st in before) if m is not None])
+    if sg is None or mr is None:
+        return None
     D, n = params.n_designs, q.shape[-1]
     z = np.full((len(plan.joint_names), D, n), NAN_POINT)
-    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, signs, mirrors, eps, params.pose_inputs)
+    k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for st, nums in zip(before, params.steps, strict=False):
             st.place(k, nums)
