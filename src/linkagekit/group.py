@@ -428,6 +428,16 @@ class _Walk:
         ok: np.ndarray = (np.sign(sg) == self.ref[designs]) | self.any_sign
         return ok
 
+    def on_grid(self, col: np.ndarray) -> np.ndarray:
+        """Whether columns ``col`` of ``K`` (and ``det``) are grid columns (the samples' come first)."""
+        n = self.K.shape[2]
+        return (col >= n - self.grid_columns) & (col < n)  # type: ignore[no-any-return]
+
+    def grid_det(self, d: np.ndarray, col: np.ndarray) -> np.ndarray:
+        """The determinant at grid columns ``col`` of designs ``d``: NaN where unknown, or not a grid column."""
+        assert self.det is not None
+        return np.where(self.on_grid(col), self.det[d, np.clip(col, 0, self.det.shape[1] - 1)], np.nan)
+
     def regular(self, det: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A root keeping the pose's sign is not singular: its determinant above :data:`SINGULAR_DET` of the pose's
         (where a joint is undetermined, as at a rhombus's flat position, Newton converges only by rounding, to any
@@ -1422,13 +1432,7 @@ class Group(Step):
     def _dets_before(self, dets: np.ndarray, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
         """The determinants (k + 2, N) of the two grid columns before a leg's steps to columns ``s + q sign``, then
         ``dets`` (k, N), the steps' own (NaN where unknown)."""
-        assert w.det is not None
-        first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
-        before = []
-        for back in (2, 1):
-            col = s - back * sign
-            inside = (col >= first) & (col < n)
-            before.append(np.where(inside, w.det[d, np.clip(col, 0, n - 1)], np.nan))
+        before = [w.grid_det(d, s - back * sign) for back in (2, 1)]
         return np.concatenate([np.stack(before), dets])
 
     def _after_wide_gap(self, d: np.ndarray, s: np.ndarray, sign: np.ndarray, w: _Walk) -> np.ndarray:
@@ -1436,13 +1440,11 @@ class Group(Step):
         grid columns before it all unknown, or the unknown ones just before it including one a chain rules out
         (no configuration there: :meth:`_possible`); not the one or two columns a change point on the grid leaves
         unsolved (a rhombus's crank on the ground pivot: possible, but Newton does not converge there)."""
-        assert w.det is not None
-        first, n = w.K.shape[2] - w.grid_columns, w.K.shape[2]
         run, ruled = np.ones(len(d), bool), np.zeros(len(d), bool)
         for back in range(1, GAP_COLUMNS + 1):
             col = s - back * sign
-            at = np.clip(col, 0, n - 1)
-            run &= (col >= first) & (col < n) & np.isnan(w.det[d, at])
+            at = np.clip(col, 0, w.K.shape[2] - 1)
+            run &= w.on_grid(col) & np.isnan(w.grid_det(d, col))
             ruled |= run & ~w.ok[d, at] & np.all(np.isfinite(w.K[:, d, at]), axis=0)
         return run | ruled
 
@@ -1534,10 +1536,7 @@ class Group(Step):
         K = w.K[:, d, s]
         before, U_before = None, None
         if w.det is not None:
-            prev = 2 * src - s
-            inside = (prev >= w.K.shape[2] - w.grid_columns) & (prev < w.K.shape[2])
-            at = np.clip(prev, 0, w.K.shape[2] - 1)
-            before = (np.full(len(d), -1.0), np.where(inside, w.det[d, at], np.nan))
+            before = (np.full(len(d), -1.0), w.grid_det(d, 2 * src - s))
             if w.any_sign:  # the secant's state before: a grid step back along the tangent (:meth:`_halving`)
                 U_before = U - self._tangent(U, Kc, self._grid_rate(d, src, w) * (s - src), d, w)
         U_new = self._halving(U, self._path(Kc, K, d, (src, s), w), w, before=before, U_before=U_before)
@@ -1605,8 +1604,7 @@ class Group(Step):
         (0, any, where they differ: a change point between them; or where an end is unknown). Else None."""
         if not w.any_sign or w.det is None:
             return None
-        n = w.det.shape[1]
-        da, db = (np.where((x >= 0) & (first + x < n), w.det[c, np.clip(first + x, 0, n - 1)], np.nan) for x in (a, b))
+        da, db = (w.grid_det(c, first + x) for x in (a, b))
         return np.where(np.isfinite(da) & (np.sign(da) == np.sign(db)), np.sign(da), 0.0)
 
     def _column_before(
@@ -1617,10 +1615,10 @@ class Group(Step):
         if w.det is None:
             return None
         prev = col - np.sign(dist).astype(np.intp)
-        inside = (prev >= w.K.shape[2] - w.grid_columns) & (prev < w.K.shape[2]) & (dist != 0)
+        inside = w.on_grid(prev) & (dist != 0)
         with np.errstate(divide="ignore"):
             t = np.where(inside, -1 / np.abs(dist), -np.inf)
-        return t, np.where(inside, w.det[c, np.clip(prev, 0, w.K.shape[2] - 1)], np.nan)
+        return t, np.where(inside, w.grid_det(c, prev), np.nan)
 
     def _past_zero(
         self, t: np.ndarray, a: np.ndarray, c: np.ndarray, ends: tuple[np.ndarray, np.ndarray], w: _Walk

@@ -121,7 +121,7 @@ def solve(
     if plan.unwritten:  # a joint no step writes is NaN, never uninitialised memory
         z[list(plan.unwritten)] = NAN_POINT
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
-    k.grid, k.upstream, k.turn = grid, None if grid is None else _upstream_of(params, sg, mr, eps), turn
+    k.grid, k.upstream, k.turn = grid, None if grid is None else partial(_upstream, params, sg, mr, eps), turn
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -202,7 +202,7 @@ def unplaced_step(params: Params, q: np.ndarray) -> int | None:
     z = np.full((len(plan.joint_names), 1, qg.shape[-1]), NAN_POINT)
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, 1, qg.shape[-1])), qg, sg, mr, ASSEMBLY_RTOL)
     k.q0, k.grid = params.pose_inputs[:, :1], grid
-    k.upstream = None if grid is None else _upstream_of(params, sg, mr, ASSEMBLY_RTOL)
+    k.upstream = None if grid is None else partial(_upstream, params, sg, mr, ASSEMBLY_RTOL)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for i, (st, nums) in enumerate(zip(plan.steps, params.steps, strict=True)):
             st.place(k, nums)
@@ -322,11 +322,6 @@ def _other_turn(
             w[..., cols] = np.where(use, again.rot[name][..., : len(cols)], w[..., cols])
             rot[name] = w
     return Positions(z, rot, margin, assembled, got.signs, got.mirrors)
-
-
-def _upstream_of(params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float) -> Any:
-    """:func:`_upstream` with these numbers, for the numerical groups' sub-steps."""
-    return partial(_upstream, params, signs, mirrors, eps)
 
 
 def _held(choices: np.ndarray, used: list[int]) -> np.ndarray | None:
