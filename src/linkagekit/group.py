@@ -1096,7 +1096,9 @@ class Group(Step):
         else:
             places, second, legs = self._walk_grid(g, k, start, w)
             self._solve_samples(g, places, start, w)
-            self._other_turn(g, legs, second, start, w)
+            places = self._other_turn(g, legs, second, start, places, w)
+            if k.took is None:
+                k.took = np.where(np.all(np.isfinite(w.out[:, :, : g.n_given]), axis=0), places, np.nan)
         if self.input_drivers:
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
@@ -1129,12 +1131,14 @@ class Group(Step):
         near, other = grid_places(u, x0, g.step, g.cyclic)
         if k.turn is not None:  # the mechanism takes these directions a turn the other way
             near, other = np.where(k.turn, other, near), np.where(k.turn, np.nan, other)
+        if k.took is not None:  # an earlier group took each direction one way round: this one takes it the same way
+            near = k.took
         c0 = int(np.searchsorted(g.index, 0))
         origin = self._origin(start, g.n_given + c0, w)
         legs = (_Leg.new(origin, w, g, c0, 1), _Leg.new(origin, w, g, c0, -1))
         self._walk_legs(legs, near, w, g)
         covered = legs[0].covers(near, c0) | legs[1].covers(near, c0)
-        if not g.cyclic or self.dyad_like:
+        if not g.cyclic or self.dyad_like or k.took is not None:
             return np.where(covered, near, np.nan), np.full_like(near, np.nan), legs
         edge = legs[0].past_solved(near, c0) | legs[1].past_solved(near, c0)
         second = np.where(edge, other, np.nan)
@@ -1146,22 +1150,25 @@ class Group(Step):
         return np.where(covered, near, np.where(use, alt, np.nan)), second, legs
 
     def _other_turn(
-        self, g: WalkGrid, legs: tuple[_Leg, _Leg], second: np.ndarray, start: np.ndarray, w: _Walk
-    ) -> None:
+        self, g: WalkGrid, legs: tuple[_Leg, _Leg], second: np.ndarray, start: np.ndarray, places: np.ndarray, w: _Walk
+    ) -> np.ndarray:
         """Samples not assembled at their nearest representative, where it lay past its leg's last solved column,
         tried at the representative a turn the other way (``second``), the legs walked as far as those need.
 
         A class-3 range that nearly spans a turn ends inside a cell both ways: a direction past one
         end, in the cell where that leg stopped (or would have), may lie on the branch a turn the
-        other way, before its other end."""
+        other way, before its other end. Returns each sample's place as finally tried (``places``, or
+        ``second`` where that was tried)."""
         retry = np.isfinite(second) & w.ok[:, : g.n_given] & ~np.all(np.isfinite(w.out[:, :, : g.n_given]), axis=0)
         if not retry.any():
-            return
+            return places
         alt = np.where(retry, second, np.nan)
         self._walk_legs(legs, alt, w, g)
         c0 = int(np.searchsorted(g.index, 0))
         reached = legs[0].covers(alt, c0) | legs[1].covers(alt, c0)
         self._solve_samples(g, np.where(reached, alt, np.nan), start, w)
+        out: np.ndarray = np.where(reached, alt, places)
+        return out
 
     def _origin(self, start: np.ndarray, col: int, w: _Walk) -> np.ndarray:
         """The grid's origin (the pose's input, column ``col``) solved from the group's start, written to ``out``.

@@ -85,6 +85,9 @@ class Kin:
     #: (D, n given) where a numerical group takes each sample's direction a turn the other way from the nearest one
     #: to the pose's input (:func:`linkagekit.positions.solve`'s second pass for chains of groups)
     turn: np.ndarray | None = None
+    #: (D, n given) each sample's place on the grid (in grid steps from the pose's input) where the plan's first
+    #: numerical group solved it, NaN where it did not: the later groups take the same way round (set by that group)
+    took: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
