@@ -947,7 +947,13 @@ class Group(Step):
         return U, conv, det
 
     def _newton_vector(
-        self, U: np.ndarray, K: np.ndarray, ar: _Arrays, iters: int = NEWTON_ITER, work: FloatArray | None = None
+        self,
+        U: np.ndarray,
+        K: np.ndarray,
+        ar: _Arrays,
+        iters: int = NEWTON_ITER,
+        work: FloatArray | None = None,
+        reuse: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_newton` with its linear algebra as array operations over the columns (:func:`_solve_small`).
 
@@ -955,15 +961,27 @@ class Group(Step):
         determinant (at its solution) from that factorization, one still iterating its step.
         Only the first ``VECTOR_ITER`` iterations are vectorized (the few columns left cost less
         by LAPACK; a column's numbers depend only on its own iterations, not on the others).
+        ``reuse``: a column that converges after a step too small to move its determinant's sign keeps the
+        determinant factored before the step (:meth:`_kept_det`), and is not factored again.
         """
         U = U.copy()
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
         act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
+        dU, smin = np.zeros_like(U), np.zeros(U.shape[1])  # the last step, and its start's smallest singular value
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([Ua, Ka]) if len(K) else Ua
                 res = self._res(P, ara.L, ara.R)
                 passed = np.all(np.abs(res) <= ara.tol, axis=0)
+                if reuse and it and self.revolute:
+                    kept = passed & self._kept_det(dU, smin)
+                    if kept.any():
+                        conv[act[kept]], U[:, act[kept]] = True, Ua[:, kept]
+                        if kept.all():
+                            break
+                        rest = ~kept
+                        act, Ua, Ka, ara, P = act[rest], Ua[:, rest], Ka[:, rest], ara.take(rest), P[:, rest]
+                        res, passed = res[:, rest], passed[rest]
                 done = passed | (it == iters)
                 J = self._jac(P, ara.J_lin, ara.R)
                 dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER, work)
@@ -973,13 +991,37 @@ class Group(Step):
                 det[act[~done & ~go]] = 0.0
                 if not go.any():
                     break
+                if reuse:
+                    smin = _smallest_singular_bound(J[go], det[act[go]])
                 if not go.all():
                     act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
                     dx = dx[go]
-                Ua = Ua + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+                dU = (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+                Ua = Ua + dU
             self._lapack_det_where_zero(U, K, ar, conv, det)
         conv &= np.isfinite(det) & (det != 0)
         return U, conv, det
+
+    @cached_property
+    def revolute(self) -> bool:
+        """Whether every row is a distance or a linear one (no slider, cylinder or slider driver)."""
+        return not (self.sliders or self.cylinders or self.drives)
+
+    def _kept_det(self, dU: np.ndarray, smin: FloatArray) -> np.ndarray:
+        """Whether the step ``dU`` (m, B) left each column's determinant's sign, and its size to within a factor
+        (1 +/- 1/20)^(2m), as it was before the step, where ``smin`` (B,) bounds the smallest singular value of the
+        Jacobian there from below.
+
+        Only the distance rows change, by ``2 (de_b - de_a)`` on each unknown end, so the change ``E`` has
+        ``|E|_F^2 <= 8 sum |de|^2``; with ``|E|_2 <= smin / 20`` every eigenvalue of ``J^-1 (J + E)`` lies within
+        1/20 of 1, and ``det(J + E) / det(J)``, their product, is positive and in that range (a step a Newton that
+        has converged takes is 1e-6 of the size or less)."""
+        rw = self._rows
+        d = np.concatenate([dU, np.zeros((self.n_held, dU.shape[1]), dU.dtype)])
+        de = d[rw.b] - d[rw.a]
+        change = np.sqrt(8 * np.sum(de.real**2 + de.imag**2, axis=0))
+        kept: np.ndarray = change <= smin / 20
+        return kept
 
     def _lapack_det_where_zero(
         self, U: np.ndarray, K: np.ndarray, ar: _Arrays, conv: np.ndarray, det: FloatArray
@@ -1798,7 +1840,11 @@ class Group(Step):
         work = _workspace("newton", _gauss_size(self.n_eq, min(FILL_CHUNK, B))) if vector else None
         for first in range(0, B, FILL_CHUNK):
             i = slice(first, first + FILL_CHUNK)
-            sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], w.arrays.take(d[i]), iters, vector, work)
+            ar = w.arrays.take(d[i])
+            if vector:
+                sol[:, i], conv[i], sg[i] = self._newton_vector(U[:, i], K[:, i], ar, iters, work, reuse=True)
+            else:
+                sol[:, i], conv[i], sg[i] = self._newton(U[:, i], K[:, i], ar, iters)
         return sol, conv, sg
 
     def _halving(
@@ -2344,6 +2390,24 @@ def _gauss(
         for k in range(n - 1, -1, -1):
             x[k] = (A[k, n] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
     return x.T, det
+
+
+def _smallest_singular_bound(J: FloatArray, det: FloatArray) -> FloatArray:
+    """A lower bound (B,) of the smallest singular value of each ``J`` (B, n, n) of determinant ``det``: the
+    product of the other ``n - 1`` is at most ``(|J|_F^2 / (n - 1))^((n - 1) / 2)`` (their squares sum to at most
+    ``|J|_F^2``; the geometric mean is at most the arithmetic one); 0 where not finite.
+
+    >>> import numpy as np
+    >>> J = np.diag([3.0, 2.0, 0.5])[None]
+    >>> float(_smallest_singular_bound(J, np.linalg.det(J))[0]) <= 0.5
+    True
+    """
+    n = J.shape[1]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        frob = np.einsum("bij,bij->b", J, J) / (n - 1)
+        out = np.abs(det) / frob ** ((n - 1) / 2)
+    bound: FloatArray = np.where(np.isfinite(out), out, 0.0)
+    return bound
 
 
 def _zero_ahead(det_prev: np.ndarray, det: np.ndarray) -> np.ndarray:
