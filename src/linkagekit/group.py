@@ -179,6 +179,9 @@ from .steps import Kin, Nums, Rate, Source, Step, WalkGrid, _stroke_margin
 
 #: Newton stops when every residual is below this, relative (distance rows / L^2, linear rows / L)
 NEWTON_TOL = 1e-12
+#: a sample whose Jacobian's determinant is below this part of the pose's (next to a fold) takes one more Newton step
+#: once converged (:meth:`Group._polish`)
+POLISH_DET = 1e-2
 #: Newton iterations per attempt
 NEWTON_ITER = 16
 #: Newton iterations of a sub-step (it starts from a solution a small step away: a sub-step that needs
@@ -241,8 +244,11 @@ TANGENT_DET = 1e-4
 RESTARTS = 16
 #: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively)
 LOOK_AHEAD = 4
-#: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ...
-GRID_STEP = np.radians(3.0)
+#: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ... 3 deg
+#: times 998/997, so that a pose at a round angle puts no column on another round angle, where change points lie (a
+#: flat position at 0 or 180 deg): for k <= 240 steps, k x step is at least 2e-4 deg from any multiple of 0.1 deg
+#: (with 3 deg exactly, a double parallelogram posed at 3 deg had a column on the change point of both its loops)
+GRID_STEP = np.radians(3.0) * 998 / 997
 #: unknown grid columns before a step that make a gap in the range (fewer: a change point left unsolved)
 GAP_COLUMNS = 3
 #: ... and of a length driver's, times the group's mean link length
@@ -1735,6 +1741,8 @@ class Group(Step):
             U[:, live] = self._halving(U0[:, live], path, w, to_fold=True, before=ahead)
         acc = np.all(np.isfinite(U), axis=0)
         self._restart_lost(centre, K1, c, w, U, acc, ~acc & w.ok[c, s])
+        if acc.any():
+            U[:, acc] = self._polish(U[:, acc], K1[:, acc], c[acc], w)
         w.out[:, c[acc], s[acc]] = U[:, acc]
 
     def _accept(
@@ -1810,9 +1818,32 @@ class Group(Step):
         good = self._accept(sol, conv, sg, gi, bound[i], w, ci)
         if keep is not None:
             good &= (keep[i] == 0) | (np.sign(sg) == keep[i])
+        sol[:, good] = self._polish(sol[:, good], w.K[:, ci[good], ri[good]], ci[good], w, sg[good])
         w.out[:, ci[good], ri[good]] = sol[:, good]
         ok[i] = good
         return ok
+
+    def _polish(
+        self, U: np.ndarray, K: np.ndarray, d: np.ndarray, w: _Walk, det: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Converged columns ``U`` (designs ``d``, knowns ``K``; ``det``: their Jacobians' determinants, else
+        computed) with one more Newton step where the determinant is below ``POLISH_DET`` of the pose's.
+
+        Near a fold the Jacobian's smallest singular value ``s`` is small, and a residual ``r`` that passes
+        ``NEWTON_TOL`` leaves the joints up to ``r / s`` off (1e-4 deg from a six-bar's fold, 1.5e-9 of the
+        size). The step takes the residual to rounding (quadratic convergence); kept where finite."""
+        det = self._dets(U, K, d, w) if det is None else det
+        weak = np.flatnonzero(np.abs(det) < POLISH_DET * w.det0[d])
+        if not len(weak):
+            return U
+        ar = w.arrays.take(d[weak])
+        P = np.concatenate([U[:, weak], K[:, weak]]) if len(K) else U[:, weak]
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            dx = _newton_step(self._jac(P, ar.J_lin, ar.R), self._res(P, ar.L, ar.R))
+            step = U[:, weak] + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+        out = U.copy()
+        out[:, weak] = np.where(np.all(np.isfinite(step), axis=0), step, U[:, weak])
+        return out
 
     def _newton_samples(
         self, U: np.ndarray, K: np.ndarray, d: np.ndarray, w: _Walk
