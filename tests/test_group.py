@@ -784,6 +784,22 @@ def test_a_triad_follows_its_branch_through_a_sharp_turn_to_its_fold():
     agrees_with_arclength(mech, ref, u, direction=False)
 
 
+def test_following_the_branch_continuously_a_triad_goes_through_its_sharp_turn():
+    """The triad of the sharp turn above, ``branch="continuous"``: there no zero ahead bounds the sub-steps (a
+    change point is crossed on purpose), and failed ones were halved only to 2^-10 of a path, too coarse for the
+    turn: 77 of 190 inputs from -43.3446 deg down to the fold were flagged. Halved now down to 2^-30 (and stopped at
+    a fold as in the default mode), every input is assembled at the reference's joints (1e-9 of the size)."""
+    p = {"O": -1.0319 + 0.6634j, "A": 1.51 - 0.7844j, "B0": 3.8161 + 7.5343j, "C0": 2.7296 + 2.4825j}
+    p.update({"J1": 2.1925 + 1.8222j, "J2": 3.6188 - 1.2897j, "J3": 4.2453 + 2.4778j})
+    ref = ArclengthTriad(p, TRIAD_BARS[1:])
+    u = np.linspace(-94.8, 32.1, 190)
+    res = lk.analyze(triad(p), {"crank": u}, rates=False, branch="continuous")
+    assert res.assembled.all()
+    got = np.array([[complex(*xy) for xy in res.xy(j)] for j in ref.UNKNOWN])
+    want = np.array([ref.at(x) for x in u]).T
+    assert np.max(np.abs(got - want)) <= 1e-9 * ref.size
+
+
 def test_the_range_of_a_triad_whose_continuation_hopped_has_its_gap():
     """A perturbed random triad (``random_triad(29)``, pose -170.03 deg) whose branch ends at -77.04 deg going up and
     at -404.35 deg (the -44.35 direction) going down: an independent fine continuation (scipy, 0.01 deg steps) stops

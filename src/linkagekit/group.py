@@ -1898,24 +1898,25 @@ class Group(Step):
         path's ``t`` (negative) of the state before its start and the determinant there; with it, no sub-step goes
         more than ``1 / SUB_FOLD_SHARE`` of the way to where the determinant, through the last two states, is zero
         (:class:`_DetTrail`), down to the smallest step. Following the branch continuously, Newton starts from the
-        secant through the last two states (:meth:`_substep_newton`; ``U_before``: the state at ``before``'s ``t``)."""
+        secant through the last two states (:meth:`_substep_newton`; ``U_before``: the state at ``before``'s ``t``),
+        no zero ahead bounds the steps (a change point is crossed on purpose), failed ones halve to ``FINEST_SUBSTEP``
+        (:class:`_Steps`); in either mode a column stops at a fold (:meth:`_DetTrail.folded`)."""
         designs = path.designs
         size, ar = w.size[designs], w.arrays.take(designs)
         reach = tuple(x[:, designs] for x in w.reach)  # the walk's numbers, of these designs
         B = U.shape[1]
-        Uc, Kc, st = U.copy(), path.K0.copy(), _Steps.new(B)
+        Uc, Kc, st = U.copy(), path.K0.copy(), _Steps.new(B, fine=w.any_sign)
         before = (np.full(B, np.nan), np.full(B, np.nan)) if before is None else before
         trail = _DetTrail.new(before, self._dets(U, path.K0, designs, w))
-        bounded = None if w.any_sign else trail  # following the branch continuously, through the zeros on purpose
+        bounded = None if w.any_sign else trail  # following the branch continuously, steps go through zeros on purpose
         secant = _Secant.new(U, before[0], U_before) if w.any_sign else None
         while True:
             act = st.due()
             if not len(act):
                 break
-            if bounded is not None:  # at a fold, not at a sharp turn: the path goes no farther
-                gone = bounded.folded(act)
-                st.alive[act[gone]] = False
-                act = act[~gone]
+            gone = trail.folded(act)  # at a fold, not at a sharp turn or a change point: the path goes no farther
+            st.alive[act[gone]] = False
+            act = act[~gone]
             tt = st.target(act, bounded)
             K_t = self._knowns(path, tt, act, w)
             ok = np.zeros(len(act), bool)
@@ -2507,16 +2508,20 @@ def _needs_velocity(
 class _Steps:
     """Sub-steps' progress along their paths, per column: ``t`` reached, the next step ``dt``, ``alive``, and the
     step a failed one may be halved down to (``0.5**MAX_HALVINGS``; ``FINEST_SUBSTEP`` after an accepted step
-    finer than that, which only the determinant's zero ahead makes: the branch turns sharply there)."""
+    finer than that, which only the determinant's zero ahead makes: the branch turns sharply there; ``FINEST_SUBSTEP``
+    always where ``fine``: following the branch continuously, no zero ahead bounds the steps, and only halving
+    that far follows a sharp turn)."""
 
     t: np.ndarray
     dt: np.ndarray
     alive: np.ndarray
     floor: np.ndarray
+    fine: bool = False
 
     @classmethod
-    def new(cls, B: int) -> _Steps:
-        return cls(np.zeros(B), np.full(B, 0.5), np.ones(B, bool), np.full(B, 0.5**MAX_HALVINGS))
+    def new(cls, B: int, fine: bool = False) -> _Steps:
+        floor = FINEST_SUBSTEP if fine else 0.5**MAX_HALVINGS
+        return cls(np.zeros(B), np.full(B, 0.5), np.ones(B, bool), np.full(B, floor), fine)
 
     def due(self) -> np.ndarray:
         """The columns still on their way."""
@@ -2540,7 +2545,7 @@ class _Steps:
         coarse = 0.5**MAX_HALVINGS
         self.t[good] = tt[ok]
         self.dt[good] = np.minimum(2 * step[ok], 1.0)
-        self.floor[good] = np.where(step[ok] < coarse, FINEST_SUBSTEP, coarse)
+        self.floor[good] = np.where(step[ok] < coarse, FINEST_SUBSTEP, FINEST_SUBSTEP if self.fine else coarse)
         self.dt[bad] = step[~ok] / 2
         self.alive[bad[self.dt[bad] < self.floor[bad]]] = False
 
