@@ -947,6 +947,38 @@ def test_two_triads_take_a_direction_the_same_way_round_whatever_else_is_asked()
         agrees_with_arclength(mech, ref, np.array(pair))
 
 
+def _seeded_triad(seed: int) -> dict[str, complex]:
+    rng = np.random.default_rng(seed)
+    p = {"B0": complex(*rng.uniform(-10, 10, 2)), "C0": complex(*rng.uniform(-10, 10, 2))}
+    c = complex(*rng.uniform(-4, 4, 2))
+    return p | {j: c + complex(*rng.uniform(-3, 3, 2)) for j in ("J1", "J2", "J3")}
+
+
+@pytest.mark.parametrize("branch", ["pose", "continuous"])
+def test_two_triads_side_by_side_take_a_direction_the_same_way_round(branch):
+    """Two random triads on one crank tip (review 12a): J1 J2 J3 turns fully and comes back to its configuration
+    after a turn, K1 K2 K3 is limited to [-178.157, 54.048] deg (the pose at 18.435). A direction such as 190 deg
+    is on K's branch only a turn down. The first group (J) takes its nearest representative, and the later one
+    follows it (``Kin.took``), so the direction assembles only in the second pass with both a turn down, which
+    following the branch continuously did not run (NaN at every such direction; before ``Kin.took``, K went down
+    by itself). In both modes every input is at the arclength reference's joints over all six (1e-9 of the size)."""
+    f, t = _seeded_triad(59), _seeded_triad(1)
+    p = {"O": 0j, "A": 1.5 + 0.5j} | f | {"D0": t["B0"], "E0": t["C0"], "K1": t["J1"], "K2": t["J2"], "K3": t["J3"]}
+    bars = TRIAD_BARS[1:] + [("A", "K1"), ("D0", "K2"), ("E0", "K3"), ("K1", "K2"), ("K2", "K3"), ("K1", "K3")]
+    ref = ArclengthTriad(p, bars, ("J1", "J2", "J3", "K1", "K2", "K3"))
+    links = dict(TRIAD_LINKS, m1=["A", "K1"], m2=["D0", "K2"], m3=["E0", "K3"], tern2=["K1", "K2", "K3"])
+    links["ground"] = ["O", "B0", "C0", "D0", "E0"]
+    doc = {"format": "linkagekit/1", "units": {"length": "mm", "angle": "deg"}, "joints": xy(p), "links": links}
+    mech = lk.Mechanism.from_dict(doc | {"drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]})
+    u = np.array([-170.2, 190.0, 186.9, 183.0, -100.0, 30.0])
+    res = lk.analyze(mech, {"crank": u}, rates=False, branch=branch)
+    assert res.assembled.all()
+    for i, ui in enumerate(u):
+        d = ref.range[0] + (ui - ref.range[0]) % 360.0
+        got = np.array([complex(*res.xy(j)[i]) for j in ref.UNKNOWN])
+        assert np.max(np.abs(got - ref.at(d))) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - ref.at(d))))
+
+
 #: a five-bar (two cranks A-C, B-D) whose coupler point P holds a triad (legs P-J1, B0-J2, C0-J3; review 8)
 FIVEBAR_TRIAD = {
     "A": 0j,

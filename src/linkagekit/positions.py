@@ -262,8 +262,8 @@ def _solve_on_grid(
     sg, mr = _dense_choice(signs, n, m), _dense_choice(mirrors, n, m)
     full = solve(params, qg, sg, mr, eps, grid=grid, continuous=continuous)
     got = take_samples(full, np.arange(n))
-    if grid.cyclic and not continuous and _after_a_group(params.plan):
-        got = _other_turn(params, qg, grid, sg, mr, eps, got)
+    if grid.cyclic and _after_a_group(params.plan):
+        got = _other_turn(params, qg, grid, (sg, mr), eps, got, continuous)
     if out is not None:
         out[...] = got.z
         got = Positions(out, got.rot, got.margin, got.assembled, got.signs, got.mirrors)
@@ -280,10 +280,10 @@ def _other_turn(
     params: Params,
     qg: np.ndarray,
     grid: WalkGrid,
-    signs: np.ndarray | None,
-    mirrors: np.ndarray | None,
+    choices: tuple[np.ndarray | None, np.ndarray | None],
     eps: float,
     got: Positions,
+    continuous: bool = False,
 ) -> Positions:
     """Samples that did not assemble with their directions taken nearest the pose's input, solved again with every
     numerical group a turn the other way (``turn``); taken where they assemble so.
@@ -305,8 +305,10 @@ def _other_turn(
     def sub(a: np.ndarray | None) -> np.ndarray | None:
         return a[..., keep] if a is not None and np.ndim(a) and np.shape(a)[-1] > 1 else a
 
+    signs, mirrors = choices
+    grid = replace(grid, n_given=len(cols))
     again = solve(
-        params, qg[..., keep], sub(signs), sub(mirrors), eps, grid=replace(grid, n_given=len(cols)), turn=miss[:, cols]
+        params, qg[..., keep], sub(signs), sub(mirrors), eps, grid=grid, continuous=continuous, turn=miss[:, cols]
     )
     use = miss[:, cols] & again.assembled[:, : len(cols)]
     if not use.any():
