@@ -379,3 +379,56 @@ def test_offset_actuator_against_law_of_cosines_and_finite_differences():
     al_fd = (turn(u + h) - 2 * turn(u) + turn(u - h)) / h**2
     assert np.max(np.abs(res.alpha("bucket_barrel") - al_fd)) <= 1e-5
     assert np.max(np.abs(res.omega("bucket_rod") - res.omega("bucket_barrel"))) == 0.0
+
+
+def test_forced_through_newton_far_past_the_stroke_is_flagged_not_an_index_error():
+    """Review 12b: the slider form of the bucket forced through Newton and swept from -180 to 540 (the stroke is
+    -0.35..0.4; the walk's grid of a length went up to ``GRID_MOST`` steps either way, 98 s for two inputs). A leg
+    that reached the grid's last column covers the cell past it, whose far end is off the grid: the samples' start
+    indexed the grid's slopes there (IndexError, an internal error). Now the grid ends a cell past the walk driver's
+    stroke (every sample beyond it is flagged anyway; 0.1 s), a sample off the grid is NaN, and the flags and
+    positions are the closed form's (1e-12 of the size)."""
+    mech = lk.load("examples/excavator_bucket_slider.yaml")
+    u = {mech.drivers[0].name: np.linspace(-180.0, 540.0, 1441)}
+    ref = lk.analyze(mech, u, rates=False)
+    res = lk.analyze(mech, u, method="numerical", rates=False)
+    assert np.array_equal(res.assembled, ref.assembled) and ref.assembled.sum() >= 1
+    size = max(abs(complex(*p)) for p in mech.pose_array())
+    for j in mech.joint_names:
+        assert np.nanmax(np.abs(res.xy(j) - ref.xy(j))) <= 1e-12 * size
+
+
+def test_a_sample_past_the_walks_grid_is_flagged_not_an_index_error(monkeypatch):
+    """The same bucket without a stroke, its walk's grid cut to 8 steps either way (``GRID_MOST``, 4096 in use): a
+    sample in the cell past the grid's last column, whose far end is off the grid, raised IndexError (the samples'
+    start indexed the grid's slopes there). Now every sample's flag and position are the closed form's (1e-12 of
+    the size): those in the cells past either end are reached by sub-steps from the last column, and the one 20
+    steps out assembles in neither."""
+    from linkagekit import positions
+
+    monkeypatch.setattr(positions, "GRID_MOST", 8)
+    doc = lk.load("examples/excavator_bucket_slider.yaml").to_dict()
+    del doc["drivers"][0]["stroke"]
+    mech = lk.Mechanism.from_dict(doc)
+    name = mech.drivers[0].name
+    step = positions.GRID_STEP_LENGTH * np.mean(_group_lengths(mech))
+    u = np.array([0.0, 3.5 * step, 8.5 * step, 20 * step, -8.5 * step])
+    res = lk.analyze(mech, {name: u}, method="numerical", rates=False)
+    ref = lk.analyze(mech, {name: u}, rates=False)
+    on = res.assembled
+    assert np.array_equal(on, ref.assembled) and on.tolist() == [True, True, True, False, True]
+    size = max(abs(complex(*p)) for p in mech.pose_array())
+    for j in mech.joint_names:
+        assert np.max(np.abs(res.xy(j)[on] - ref.xy(j)[on])) <= 1e-12 * size
+
+
+def _group_lengths(mech: lk.Mechanism) -> list[float]:
+    """The link lengths of the bucket's numerical group forced through Newton (the grid step: 1/32 of their mean)."""
+    from linkagekit.group import Group
+    from linkagekit.params import compile  # noqa: A004
+    from linkagekit.plan import make_plan
+
+    params = compile(mech, None, make_plan(mech, True))
+    gi, st = next((i, s) for i, s in enumerate(params.plan.steps) if isinstance(s, Group))
+    lengths = st._design_nums(params.steps[gi], np.zeros(1, int))[0]
+    return [float(np.ravel(x)[0]) for x in lengths]

@@ -182,6 +182,8 @@ NEWTON_TOL = 1e-12
 #: a sample whose Jacobian's determinant is below this part of the pose's (next to a fold) takes one more Newton step
 #: once converged (:meth:`Group._polish`)
 POLISH_DET = 1e-2
+#: ... kept where it moves no joint more than this times the group's mean link length (and the residual falls)
+POLISH_MOVE = 1e-6
 #: Newton iterations per attempt
 NEWTON_ITER = 16
 #: Newton iterations of a sub-step (it starts from a solution a small step away: a sub-step that needs
@@ -1625,8 +1627,8 @@ class Group(Step):
             return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
 
         V = self._grid_slopes(g, w)
-        Ua, Ub = sol(a), sol(b)
-        guess = _hermite(Ua, V[:, c, a], Ub, V[:, c, b], t)
+        Ua, Ub = sol(a), sol(b)  # NaN off the grid (a leg that reached its last column covers the cell past it)
+        guess = _hermite(Ua, V[:, c, np.clip(a, 0, G - 1)], Ub, V[:, c, np.clip(b, 0, G - 1)], t)
         bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
         other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
         if len(other):
@@ -1831,18 +1833,27 @@ class Group(Step):
 
         Near a fold the Jacobian's smallest singular value ``s`` is small, and a residual ``r`` that passes
         ``NEWTON_TOL`` leaves the joints up to ``r / s`` off (1e-4 deg from a six-bar's fold, 1.5e-9 of the
-        size). The step takes the residual to rounding (quadratic convergence); kept where finite."""
+        size). The step takes the residual to rounding (quadratic convergence). It is kept only where it moves no
+        joint more than ``POLISH_MOVE`` of the group's size and leaves the residual no larger: at a singular root
+        (a rhombus's joint on a circle of solutions) the Jacobian is nearly singular, and the step goes anywhere."""
         det = self._dets(U, K, d, w) if det is None else det
         weak = np.flatnonzero(np.abs(det) < POLISH_DET * w.det0[d])
         if not len(weak):
             return U
         ar = w.arrays.take(d[weak])
-        P = np.concatenate([U[:, weak], K[:, weak]]) if len(K) else U[:, weak]
+        Uw = U[:, weak]
+        P = np.concatenate([Uw, K[:, weak]]) if len(K) else Uw
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            dx = _newton_step(self._jac(P, ar.J_lin, ar.R), self._res(P, ar.L, ar.R))
-            step = U[:, weak] + (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+            res = self._res(P, ar.L, ar.R)
+            dx = _newton_step(self._jac(P, ar.J_lin, ar.R), res)
+            step = (dx[:, 0::2] + 1j * dx[:, 1::2]).T
+            P[: len(Uw)] = Uw + step
+            after = np.max(np.abs(self._res(P, ar.L, ar.R)) / ar.tol, axis=0)
+            keep = (np.max(np.abs(step), axis=0) <= POLISH_MOVE * w.size[d[weak]]) & (
+                after <= np.max(np.abs(res) / ar.tol, axis=0)
+            )
         out = U.copy()
-        out[:, weak] = np.where(np.all(np.isfinite(step), axis=0), step, U[:, weak])
+        out[:, weak[keep]] = P[: len(Uw), keep]
         return out
 
     def _newton_samples(

@@ -114,6 +114,8 @@ class Params:
     bases: dict[str, tuple[np.ndarray, np.ndarray]]
     bodies: tuple[Body, ...] = ()
     loads: tuple[LoadParams, ...] = ()
+    #: each driver's stroke (min, max) in its input's units, (-inf, inf) where it has none (every design's)
+    strokes: tuple[tuple[float, float], ...] = ()
 
     @property
     def n_designs(self) -> int:
@@ -166,6 +168,7 @@ class Params:
                 LoadParams(ld.link, ld.force[sl], ld.torque[sl], None if ld.at is None else ld.at[sl])
                 for ld in self.loads
             ),
+            self.strokes,
         )
 
 
@@ -262,7 +265,8 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
     sign_rows = [st.pose_sign(zpose, n)[:, 0] for st, n in zip(plan.steps, nums, strict=True) if is_sign_step(st)]  # type: ignore[attr-defined]
     signs = np.array(sign_rows, float).reshape(plan.n_signs, src.D)
     bodies, loads = _dynamics(mech, src)
-    return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases, bodies, loads)
+    strokes = tuple(d.stroke or (-np.inf, np.inf) for d in mech.drivers)
+    return Params(plan, nums, q0, signs, valid, zpose[:, :, 0], bases, bodies, loads, strokes)
 
 
 @lru_cache(maxsize=64)

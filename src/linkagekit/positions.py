@@ -419,6 +419,10 @@ def _walk_grid(params: Params, q: np.ndarray) -> tuple[np.ndarray, WalkGrid] | N
     near, other = grid_places(qb[d], q0[d], step, cyclic)
     with np.errstate(invalid="ignore"):
         ends = np.nan_to_num(np.array([np.nanmin([near, other]), np.nanmax([near, other])]), posinf=0, neginf=0)
+    if not cyclic and d < len(params.strokes):  # past the stroke every sample is flagged: the walk stops a cell out
+        with np.errstate(invalid="ignore"):
+            bounds = (np.array(params.strokes[d])[:, None] - q0[d][None]) / step[None]  # (2, D) places
+        ends = np.clip(ends, np.min(bounds[0]) - 1, np.max(bounds[1]) + 1)
     lo, hi = (int(np.clip(f(e), -GRID_MOST, GRID_MOST)) for f, e in zip((np.floor, np.ceil), ends, strict=True))
     index = np.arange(min(lo, 0), max(hi, 0) + 1)
     x = q0[d][:, None] + index * step[:, None]  # (D, G)
