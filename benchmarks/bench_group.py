@@ -56,7 +56,7 @@ TRIAD = {
 }
 
 
-def main(n: int = 10_000) -> dict[str, float]:
+def main(n: int = 10_000, designs: int = 1000) -> dict[str, float]:
     triad = lk.Mechanism.from_dict(TRIAD)
     six = lk.load(ROOT / "examples" / "seed001_stephenson.yaml")
     rows = {}
@@ -78,7 +78,7 @@ def main(n: int = 10_000) -> dict[str, float]:
     ratio = rows["triad, Newton (3 joints)"] / rows["Stephenson six-bar, closed form"]
     print(f"ratio, triad (Newton) / six-bar (closed form), positions: {ratio:.0f}x")
     rows["ratio"] = ratio
-    rows["batch"] = batch(triad)
+    rows["batch"] = batch(triad, designs)
     rows["outside"] = outside(triad, n)
     return rows
 

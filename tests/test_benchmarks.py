@@ -63,7 +63,7 @@ def test_bench_editor(capsys):
 def test_bench_group(capsys):
     import bench_group
 
-    got = bench_group.main(200)
+    got = bench_group.main(200, designs=50)  # a smoke test: the goals' sizes are the script's
     out = capsys.readouterr().out
     assert "triad, Newton" in out and "ratio" in out
     assert got["ratio"] > 1 and all(v > 0 for v in got.values())
