@@ -8,6 +8,7 @@ the script ends with exit status 1 if any did.
 
     python benchmarks/bench_long_tests.py              # every check (about 4 CPU-minutes)
     python benchmarks/bench_long_tests.py fourbar-1 triads   # the checks whose names start so
+    python benchmarks/bench_long_tests.py marked   # the tests marked ``long`` (pytest -m long)
 """
 
 from __future__ import annotations
@@ -69,9 +70,20 @@ def _group_checks(n_linkages: int = 12, n_triads: int = 15) -> dict[str, Callabl
     }
 
 
+def _marked() -> str:
+    """The tests marked ``long`` (searches the suite leaves out to stay under five minutes), by pytest on 2 workers."""
+    import subprocess
+
+    cmd = [sys.executable, "-m", "pytest", "-q", "-n", "2", "-m", "long", "-p", "no:cacheprovider"]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    last = (proc.stdout.strip().splitlines() or [""])[-1]
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-1000:]
+    return last
+
+
 def checks() -> dict[str, Callable[[], str]]:
     """Every long check by name, in the order they run."""
-    return {**_recovery_checks(), **_group_checks()}
+    return {**_recovery_checks(), **_group_checks(), "marked": _marked}
 
 
 def cpu_seconds() -> float:

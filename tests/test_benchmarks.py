@@ -44,6 +44,7 @@ def test_bench_animate(capsys):
     assert "4 frames, GIF" in out and "ratio" in out
 
 
+@pytest.mark.long
 def test_bench_editor(capsys):
     """A few drag moves of the Jansen leg in the editor (Chromium); same browser policy as the page tests."""
     import os
@@ -106,7 +107,7 @@ def test_bench_long_tests(capsys):
     reach its goal is one FAILED line with its message and makes main return its name (the script exits 1)."""
     import bench_long_tests
 
-    names = ["fourbar-0", "fourbar-1", "fourbar-2", "watt2", "stephenson3", "forced-numerical", "triads"]
+    names = ["fourbar-0", "fourbar-1", "fourbar-2", "watt2", "stephenson3", "forced-numerical", "triads", "marked"]
     assert list(bench_long_tests.checks()) == names
     assert bench_long_tests.main(["triads"], table=bench_long_tests._group_checks(1, 1)) == []
     assert "1 random cases" in capsys.readouterr().out

@@ -230,6 +230,7 @@ def test_one_branch_check_sees_the_extremes_inside_the_range():
     assert np.sum((ends > 1e-5) & (margin < -1e-5)) >= 10
 
 
+@pytest.mark.long
 def test_an_unmeetable_transmission_bound_is_said_infeasible_never_met_by_a_degenerate_design(tmp_path, capsys):
     """Within 88 deg of transmission no four-bar follows log10 between the pairs but a crank of 5e12 ground lengths
     (it failed to write: joints beyond 1e12) or of 2e-8 (written, exit 0). No link may be shorter than

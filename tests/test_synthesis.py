@@ -243,6 +243,7 @@ def test_polish_converges_from_near_a_known_design(topology, seed, which, timed)
     assert sum(r <= 1e-5 for r in reached) >= 3, reached
 
 
+@pytest.mark.long
 def test_recovers_with_prescribed_timing():
     mech = random_designs("fourbar", 1, seed=5)[0]
     deg = np.arange(0.0, 360.0, 30.0)
@@ -254,6 +255,7 @@ def test_recovers_with_prescribed_timing():
     assert_buildable(out.mechanism)
 
 
+@pytest.mark.long
 def test_same_seed_same_design_and_another_seed_another_search():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
     kw = dict(units="cm", restarts=1, generations=15, goal=0.0)

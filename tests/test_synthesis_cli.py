@@ -327,7 +327,9 @@ RESUME = ["--units", "cm", "--restarts", "2", "--generations", str(DE_GENERATION
 RESUME += ["--goal", "0"]
 
 
-@pytest.mark.parametrize("kill_in", [0, 1], ids=["differential evolution", "CMA-ES"])
+@pytest.mark.parametrize(
+    "kill_in", [pytest.param(0, id="differential evolution"), pytest.param(1, id="CMA-ES", marks=pytest.mark.long)]
+)
 def test_killed_run_resumes_from_its_checkpoint_to_the_uninterrupted_result(
     work, tmp_path, capsys, monkeypatch, kill_in
 ):
@@ -464,6 +466,7 @@ def test_corrupt_checkpoint_is_one_line_exit_2(work, tmp_path, capsys, kind):
 
 
 # ---------------------------------------------------------------------- Dask
+@pytest.mark.long
 def test_dask_cluster_gives_the_same_file_as_local_processes(work, workers2_run, dask_cluster, capsys):
     out_path = work / "dask.yaml"
     code, out, err = run_main(

@@ -748,6 +748,7 @@ def test_a_four_bar_written_with_full_turn_assembles_over_its_whole_sweep(tmp_pa
     assert np.all(lk.analyze(mech, {"crank": at}).assembled)
 
 
+@pytest.mark.long
 def test_each_angle_weights_answer_is_no_worse_than_the_others_judged_at_it():
     """Hsieh's 9 poses at ``--angle-weight`` 1, 2 and 5 (the approximate route alone, no engine): judged by
     ``lk.analyze`` of each written four-bar at its crank angles, ``E_w = max(position error / diagonal, w * angle
