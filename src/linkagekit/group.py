@@ -976,12 +976,13 @@ class Group(Step):
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
         act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
         dU, smin = np.zeros_like(U), np.zeros(U.shape[1])  # the last step, and its start's smallest singular value
+        reuse = reuse and self.revolute  # only distance and linear rows bound the Jacobian's change by the step
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
                 P = np.concatenate([Ua, Ka]) if len(K) else Ua
                 res = self._res(P, ara.L, ara.R)
                 passed = np.all(np.abs(res) <= ara.tol, axis=0)
-                if reuse and it and self.revolute:
+                if reuse and it:
                     kept = passed & self._kept_det(dU, smin)
                     if kept.any():
                         conv[act[kept]], U[:, act[kept]] = True, Ua[:, kept]
