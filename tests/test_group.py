@@ -947,6 +947,37 @@ def test_two_triads_take_a_direction_the_same_way_round_whatever_else_is_asked()
         agrees_with_arclength(mech, ref, np.array(pair))
 
 
+def _perturbed_two_triads(seed: int) -> dict[str, complex]:
+    """``TWO_TRIADS`` with its triads' joints and the second's ground pivots moved by N(0, 0.15) (review 12a)."""
+    rng = np.random.default_rng(seed)
+    names = ("J1", "J2", "J3", "K1", "K2", "K3", "D0", "E0")
+    moved = {j: TWO_TRIADS[j] + complex(*rng.normal(0, 0.15, 2)) for j in names}
+    return TWO_TRIADS | moved
+
+
+@pytest.mark.parametrize(("seed", "lo", "hi"), [(5, -288.3595, 18.7695), (6, -290.8307, 18.4379)])
+def test_a_later_group_follows_an_earlier_groups_sharp_turn(seed, lo, hi):
+    """Two triads in sequence, perturbed (review 12a): the first turns fully, but turns sharply just above the pose
+    (18.435 deg; its joint J1 moves 1.1 over 0.5 deg). The second's knowns (J3) go out of its reach through a fold
+    (18.7695 deg for seed 5, 0.33 deg above the pose; 18.4379 for seed 6, 0.003 deg) and come back 0.2 deg on. With
+    its knowns on the cubic through two grid columns and one Newton per grid step, the second group stepped over
+    the excursion: inputs past the fold (20, 40 deg) assembled on another piece of the curve, and directions a turn
+    down (-165 deg, whose nearest representative is 195) 1.7 of the size off; for seed 6, -50 deg was flagged when
+    asked beside 60 deg, which assembled. Now a later group re-runs an earlier one at the inputs of its sub-steps,
+    and sub-steps through the cells where an earlier group did: every input, in a list and alone, is where the
+    arclength reference over all six joints puts it (1e-9 of the size), and flagged past its range."""
+    unknown = ("J1", "J2", "J3", "K1", "K2", "K3")
+    pts = _perturbed_two_triads(seed)
+    ref = ArclengthTriad(pts, TWO_TRIADS_BARS, unknown)
+    assert abs(ref.range[0] - lo) < 1e-3 and abs(ref.range[1] - hi) < 1e-3, ref.range
+    links = dict(TRIAD_LINKS, m1=["J3", "K1"], m2=["D0", "K2"], m3=["E0", "K3"], tern2=["K1", "K2", "K3"])
+    links["ground"] = ["O", "B0", "C0", "D0", "E0"]
+    doc = {"format": "linkagekit/1", "units": {"length": "mm", "angle": "deg"}, "joints": xy(pts), "links": links}
+    mech = lk.Mechanism.from_dict(doc | {"drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]})
+    u = np.array([-100.0, -150.0, -165.0, -190.0, 18.43, 18.9, 20.0, 40.0, 60.0, 100.0, -50.0, -280.0])
+    agrees_with_arclength(mech, ref, u)
+
+
 def _seeded_triad(seed: int) -> dict[str, complex]:
     rng = np.random.default_rng(seed)
     p = {"B0": complex(*rng.uniform(-10, 10, 2)), "C0": complex(*rng.uniform(-10, 10, 2))}

@@ -168,7 +168,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property, partial
 from typing import Any
 
@@ -429,6 +429,16 @@ class _Walk:
     det: np.ndarray | None = None  # (D, n) the Jacobian's determinant at the grid's solved columns (NaN elsewhere)
     det0: np.ndarray = field(default_factory=lambda: np.ones(0))  # (D,) its size at the pose (set with the walk):
     # a root where it is SINGULAR_DET times that is no answer
+    rough: np.ndarray | None = None  # (D, n) cells an earlier group's walk sub-stepped through (:attr:`Kin.rough`)
+    substepped: np.ndarray | None = None  # (D, n) ... and those this group's walk sub-stepped through
+    slopes: np.ndarray | None = None  # the grid's slopes (:meth:`Group._grid_slopes`) once the walk is finished
+
+    def rough_cells(self, d: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether the cells from columns ``a`` to ``b`` (designs ``d``; ``a == b``: no cell) are :attr:`rough`."""
+        if self.rough is None:
+            return np.zeros(np.broadcast(d, a, b).shape, bool)
+        lo = np.clip(np.minimum(a, b), 0, self.rough.shape[1] - 1)
+        return self.rough[d, lo] & (a != b)  # type: ignore[no-any-return]
 
     def sign_ok(self, sg: np.ndarray, designs: np.ndarray) -> np.ndarray:
         """A continuation step keeps the pose's determinant sign (following the branch, any sign here: the steps
@@ -455,6 +465,16 @@ class _Walk:
     def floor(self, designs: np.ndarray) -> np.ndarray:
         """The determinant at and below which a root is singular (:meth:`regular`), per column of ``designs``."""
         return np.zeros(len(designs)) if self.any_sign else SINGULAR_DET * self.det0[designs]
+
+
+@dataclass
+class Walked:
+    """A numerical group's finished walk, kept for the later groups' sub-steps (:meth:`Group.place_walked`)."""
+
+    walk: _Walk
+    grid: WalkGrid
+    start: np.ndarray  # (m, D) the group's pose solution
+    x0: np.ndarray  # (D,) the grid driver's input at the pose
 
 
 @dataclass(frozen=True)
@@ -1140,6 +1160,7 @@ class Group(Step):
             np.full((D, n), np.nan),
         )
         w.det0 = np.abs(self._dets(start, zk0, np.arange(D), w))
+        w.rough, w.substepped = k.rough, np.zeros((D, n), bool)
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
             c, s = np.nonzero(ok)
@@ -1150,6 +1171,9 @@ class Group(Step):
             places = self._other_turn(g, legs, second, start, places, w)
             if k.took is None:
                 k.took = np.where(np.all(np.isfinite(w.out[:, :, : g.n_given]), axis=0), places, np.nan)
+            x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
+            k.walks[id(self)] = Walked(w, g, start, x0)
+            k.rough = w.substepped if k.rough is None else k.rough | w.substepped
         if self.input_drivers:
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
@@ -1159,6 +1183,44 @@ class Group(Step):
             for gl in self.links:
                 if gl.name in self.keep_rotation:
                     k.rot[gl.name] = (z[gl.joints[1]] - z[gl.joints[0]]) / bases[gl.name]
+
+    def place_walked(self, k: Kin, nums: Nums, walked: Walked) -> None:
+        """The group's joints at the inputs of ``k`` (n_drivers, D, r; the steps before it placed there), from its
+        finished walk (``walked``): each input on its grid as it is, no turn taken off (the inputs of a later
+        group's sub-steps between two of its columns, :meth:`_knowns`), solved as a sample is.
+
+        The later group's knowns then move as this group moves them. Along the chord between two columns, or the
+        cubic through them, they cut across a sharp turn of this group's motion: a triad after one that turns
+        sharply left its range through a fold 0.34 deg past the pose and came back into it 0.2 deg on, and with
+        one Newton per grid step walked on to 40 deg on another branch."""
+        w0, g = walked.walk, walked.grid
+        G, r = len(g.index), k.q.shape[-1]
+        D = w0.K.shape[1]
+        K_new = self.held(k.z, k.q)
+        ok = np.all(np.isfinite(K_new), axis=0) & np.all(np.isfinite(walked.start), axis=0)[:, None]
+        ok &= self._possible(K_new, tuple(x[..., None] for x in w0.reach))  # type: ignore[arg-type]
+        if w0.slopes is None:
+            w0.slopes = self._grid_slopes(g, w0)
+
+        def cat(new: np.ndarray, old: np.ndarray) -> np.ndarray:
+            return np.concatenate([np.broadcast_to(new, (*old.shape[:-1], r)), old[..., -G:]], axis=-1)
+
+        w = replace(
+            w0,
+            K=cat(K_new, w0.K),
+            ok=cat(ok, w0.ok),
+            out=cat(np.full((), NAN_POINT), w0.out),
+            q=cat(k.q, w0.q) if w0.q is not None else None,
+            det=None if w0.det is None else cat(np.full((), np.nan), w0.det),
+            rough=None if w0.rough is None else cat(np.zeros((), bool), w0.rough),
+            substepped=None,
+        )
+        places = (np.broadcast_to(k.q[g.driver], (D, r)) - walked.x0[:, None]) / g.step[:, None]
+        self._solve_samples(replace(g, n_given=r), places, walked.start, w)
+        if self.input_drivers:
+            w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, r))] = NAN_POINT
+        for i, j in enumerate(self.joints):
+            k.z[j] = w.out[i, :, :r]
 
     # ------------------------------------------------------------------ the walk over the grid
     def _walk_grid(
@@ -1354,6 +1416,8 @@ class Group(Step):
             if waiting:
                 src = g.n_given + np.concatenate([leg.pos[x] for leg, x in zip(legs, steps, strict=True)])
                 U_new, acc, lost = self._substeps(U, Kc, d, s, w, src)
+                if w.substepped is not None:
+                    w.substepped[d, np.minimum(src, s)] = True
                 pend = np.zeros(len(d), bool)
             else:
                 sign = np.concatenate([np.full(len(x), leg.sign) for leg, x in zip(legs, steps, strict=True)])
@@ -1435,6 +1499,7 @@ class Group(Step):
             good &= self._branch_steps((start, got), dets, cols, sign, d, w)
         else:
             good &= self._clear_of_zero(dets, d, s, sign, w)
+        good &= ~w.rough_cells(d[None, :], col - sign[None, :], col)  # through an earlier group's turn: sub-steps
         c0 = np.flatnonzero(can[0])
         a = good[0, c0]
         pend[c0] = ~a & fresh[c0]
@@ -1627,7 +1692,7 @@ class Group(Step):
             inside = (col >= 0) & (col < G)
             return np.where(inside, Ug[:, cc, np.clip(col, 0, G - 1)], NAN_POINT)
 
-        V = self._grid_slopes(g, w)
+        V = self._grid_slopes(g, w) if w.slopes is None else w.slopes
         Ua, Ub = sol(a), sol(b)  # NaN off the grid (a leg that reached its last column covers the cell past it)
         guess = _hermite(Ua, V[:, c, np.clip(a, 0, G - 1)], Ub, V[:, c, np.clip(b, 0, G - 1)], t)
         bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
@@ -1639,7 +1704,8 @@ class Group(Step):
             ends = (np.all(np.isfinite(Uao), axis=0), np.all(np.isfinite(Ubo), axis=0))
             past = self._past_zero(t[other], ao + g.n_given, co, ends, w)
             bound[other] = np.where(past, np.nan, bound[other])  # sub-steps, which the zero ahead bounds
-        with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0) & np.isfinite(bound))
+        rough = w.rough_cells(c, g.n_given + a, g.n_given + b)  # sub-steps along an earlier group's turn
+        with_guess = np.flatnonzero(np.all(np.isfinite(guess), axis=0) & np.isfinite(bound) & ~rough)
         done = np.zeros(len(c), bool)
         if len(with_guess):
             i = with_guess

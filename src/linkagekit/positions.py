@@ -121,7 +121,7 @@ def solve(
     if plan.unwritten:  # a joint no step writes is NaN, never uninitialised memory
         z[list(plan.unwritten)] = NAN_POINT
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs, continuous)
-    k.grid, k.upstream, k.turn = grid, None if grid is None else partial(_upstream, params, sg, mr, eps), turn
+    k.grid, k.upstream, k.turn = grid, None if grid is None else partial(_upstream, params, sg, mr, eps, k.walks), turn
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
             st.place(k, nums)
@@ -202,7 +202,7 @@ def unplaced_step(params: Params, q: np.ndarray) -> int | None:
     z = np.full((len(plan.joint_names), 1, qg.shape[-1]), NAN_POINT)
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, 1, qg.shape[-1])), qg, sg, mr, ASSEMBLY_RTOL)
     k.q0, k.grid = params.pose_inputs[:, :1], grid
-    k.upstream = None if grid is None else partial(_upstream, params, sg, mr, ASSEMBLY_RTOL)
+    k.upstream = None if grid is None else partial(_upstream, params, sg, mr, ASSEMBLY_RTOL, k.walks)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for i, (st, nums) in enumerate(zip(plan.steps, params.steps, strict=True)):
             st.place(k, nums)
@@ -336,11 +336,18 @@ def _held(choices: np.ndarray, used: list[int]) -> np.ndarray | None:
 
 
 def _upstream(
-    params: Params, signs: np.ndarray, mirrors: np.ndarray, eps: float, q: np.ndarray, stop: Any
+    params: Params,
+    signs: np.ndarray,
+    mirrors: np.ndarray,
+    eps: float,
+    walks: dict[int, Any],
+    q: np.ndarray,
+    stop: Any,
 ) -> np.ndarray | None:
-    """The joints the steps before ``stop`` place at inputs ``q`` (n_drivers, D, n), every design; None when a
-    numerical group comes before ``stop``, or when the signs or mirrors of those steps differ between samples
-    (following a branch continuously: which ones hold between two samples is not known).
+    """The joints the steps before ``stop`` place at inputs ``q`` (n_drivers, D, n), every design; None when the
+    signs or mirrors of those steps differ between samples (following a branch continuously: which ones hold
+    between two samples is not known). A numerical group before ``stop`` is solved there from its finished walk
+    (``walks``, :meth:`linkagekit.group.Group.place_walked`): at the inputs as given, no turn added or taken off.
 
     A numerical group's sub-steps between two of its samples follow the inputs between them
     through this: the knowns it holds move as the mechanism moves them, not along the chord
@@ -349,7 +356,7 @@ def _upstream(
     the two modes only come close and the smooth continuation is the other one.)"""
     plan = params.plan
     before = plan.steps[: next(i for i, st in enumerate(plan.steps) if st is stop)]
-    if any(isinstance(st, Group) for st in before):
+    if any(isinstance(st, Group) and id(st) not in walks for st in before):
         return None
     sg = _held(signs, [i for i in (getattr(st, "sign", None) for st in before if is_sign_step(st)) if i is not None])
     mr = _held(mirrors, [m for m in (getattr(st, "mirror", None) for st in before) if m is not None])
@@ -360,7 +367,10 @@ def _upstream(
     k = Kin(z, {"ground": 1.0 + 0j}, np.zeros((plan.n_signs, D, n)), q, sg, mr, eps, params.pose_inputs)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for st, nums in zip(before, params.steps, strict=False):
-            st.place(k, nums)
+            if isinstance(st, Group):
+                st.place_walked(k, nums, walks[id(st)])
+            else:
+                st.place(k, nums)
     return z
 
 

@@ -88,6 +88,12 @@ class Kin:
     #: (D, n given) each sample's place on the grid (in grid steps from the pose's input) where the plan's first
     #: numerical group solved it, NaN where it did not: the later groups take the same way round (set by that group)
     took: np.ndarray | None = None
+    #: each numerical group's finished walk (by ``id`` of the step), which :attr:`upstream` re-runs the group from at
+    #: other inputs (:meth:`linkagekit.group.Group.place_walked`)
+    walks: dict[int, Any] = field(default_factory=dict)
+    #: (D, n) grid cells (by their column nearer the grid's start) where an earlier numerical group's walk took
+    #: sub-steps: its motion turns there, and a later group steps through them along it, never by one Newton
+    rough: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
