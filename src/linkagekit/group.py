@@ -429,8 +429,9 @@ class _Walk:
     det: np.ndarray | None = None  # (D, n) the Jacobian's determinant at the grid's solved columns (NaN elsewhere)
     det0: np.ndarray = field(default_factory=lambda: np.ones(0))  # (D,) its size at the pose (set with the walk):
     # a root where it is SINGULAR_DET times that is no answer
-    rough: np.ndarray | None = None  # (D, n) cells an earlier group's walk sub-stepped through (:attr:`Kin.rough`)
-    substepped: np.ndarray | None = None  # (D, n) ... and those this group's walk sub-stepped through
+    rough: np.ndarray | None = None  # (D, n) cells (by their column nearer the grid's start) where the groups whose
+    # motion the knowns follow (:attr:`Kin.follows`) took sub-steps: their motion turns there
+    substepped: np.ndarray | None = None  # (D, n) ... and those where this group's walk took sub-steps
     slopes: np.ndarray | None = None  # the grid's slopes (:meth:`Group._grid_slopes`) once the walk is finished
 
     def rough_cells(self, d: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -465,6 +466,12 @@ class _Walk:
     def floor(self, designs: np.ndarray) -> np.ndarray:
         """The determinant at and below which a root is singular (:meth:`regular`), per column of ``designs``."""
         return np.zeros(len(designs)) if self.any_sign else SINGULAR_DET * self.det0[designs]
+
+
+def _any_of(masks: list[np.ndarray | None]) -> np.ndarray | None:
+    """The union of the masks given (None for none)."""
+    got = [m for m in masks if m is not None]
+    return np.logical_or.reduce(got) if got else None
 
 
 @dataclass
@@ -1135,6 +1142,7 @@ class Group(Step):
         zu0 = np.broadcast_to(nums[3][:, :, 0], (m, D))
         dn = self._design_nums(nums, np.arange(D))
         zk0 = self._pose_held(zu0, np.broadcast_to(nums[4][:, :, 0], (len(self.known), D)), self._stack(dn, D)[1])
+        upstream, rough, follows = self._after(k)
         K_all = self.held(z, k.q)  # the known joints, then the cylinders' lengths (the drivers' inputs)
         start, conv0, ref_sign = self.newton(zu0.copy(), zk0.copy(), dn)  # the pose (exact unless `lengths`)
         start = np.where(conv0, start, NAN_POINT)
@@ -1156,11 +1164,11 @@ class Group(Step):
             D * n >= VECTOR_SAMPLES,
             0 if k.grid is None else len(k.grid.index),
             np.broadcast_to(k.q, (k.q.shape[0], D, n)),
-            None if k.upstream is None else partial(k.upstream, stop=self),
+            upstream,
             np.full((D, n), np.nan),
         )
         w.det0 = np.abs(self._dets(start, zk0, np.arange(D), w))
-        w.rough, w.substepped = k.rough, np.zeros((D, n), bool)
+        w.rough, w.substepped = rough, np.zeros((D, n), bool)
         g = k.grid
         if g is None:  # no grid (no driver moves): every sample from the pose, by sub-steps
             c, s = np.nonzero(ok)
@@ -1173,7 +1181,7 @@ class Group(Step):
                 k.took = np.where(np.all(np.isfinite(w.out[:, :, : g.n_given]), axis=0), places, np.nan)
             x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
             k.walks[id(self)] = Walked(w, g, start, x0)
-            k.rough = w.substepped if k.rough is None else k.rough | w.substepped
+            k.follows.update((j, follows | {id(self)}) for j in self.joints)
         if self.input_drivers:
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
@@ -1183,6 +1191,22 @@ class Group(Step):
             for gl in self.links:
                 if gl.name in self.keep_rotation:
                     k.rot[gl.name] = (z[gl.joints[1]] - z[gl.joints[0]]) / bases[gl.name]
+
+    def _after(
+        self, k: Kin
+    ) -> tuple[Callable[[np.ndarray], np.ndarray | None] | None, np.ndarray | None, frozenset[int]]:
+        """What the group reads of the numerical groups before it: the steps before re-run at other inputs (None:
+        its knowns move on their chord), the cells where the groups its knowns follow took sub-steps
+        (:attr:`_Walk.rough`, None for none), and those groups (:attr:`Kin.follows`).
+
+        The steps before are re-run where they hold no group, or where the knowns follow one. A group that holds
+        none of an earlier group's joints keeps the chord, as following the branch continuously does (signs per
+        sample: which hold between two samples is not known)."""
+        follows = frozenset().union(*(k.follows.get(j, frozenset()) for j in self.known))
+        if k.continuous and k.walks:
+            return None, None, follows
+        upstream = None if k.upstream is None or (k.walks and not follows) else partial(k.upstream, stop=self)
+        return upstream, _any_of([k.walks[i].walk.substepped for i in follows if i in k.walks]), follows
 
     def place_walked(self, k: Kin, nums: Nums, walked: Walked) -> None:
         """The group's joints at the inputs of ``k`` (n_drivers, D, r; the steps before it placed there), from its
@@ -1217,10 +1241,11 @@ class Group(Step):
         )
         places = (np.broadcast_to(k.q[g.driver], (D, r)) - walked.x0[:, None]) / g.step[:, None]
         self._solve_samples(replace(g, n_given=r), places, walked.start, w)
+        out = w.out[:, :, :r]
         if self.input_drivers:
-            w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, r))] = NAN_POINT
+            out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, r))] = NAN_POINT
         for i, j in enumerate(self.joints):
-            k.z[j] = w.out[i, :, :r]
+            k.z[j] = out[i]
 
     # ------------------------------------------------------------------ the walk over the grid
     def _walk_grid(
@@ -1416,8 +1441,6 @@ class Group(Step):
             if waiting:
                 src = g.n_given + np.concatenate([leg.pos[x] for leg, x in zip(legs, steps, strict=True)])
                 U_new, acc, lost = self._substeps(U, Kc, d, s, w, src)
-                if w.substepped is not None:
-                    w.substepped[d, np.minimum(src, s)] = True
                 pend = np.zeros(len(d), bool)
             else:
                 sign = np.concatenate([np.full(len(x), leg.sign) for leg, x in zip(legs, steps, strict=True)])
@@ -1472,8 +1495,7 @@ class Group(Step):
         simply stepped to again, as the next grid step, from the last accepted one.
         """
         N, m = len(d), U.shape[0]
-        U_new, acc, lost = np.full_like(U, NAN_POINT), np.zeros(N, bool), np.ones(N, bool)
-        pend = np.zeros(N, bool)
+        U_new, acc, lost, pend = np.full_like(U, NAN_POINT), np.zeros(N, bool), np.ones(N, bool), np.zeros(N, bool)
         first, G = w.K.shape[2] - w.grid_columns, w.K.shape[2]
         k = LOOK_AHEAD
         cols = s[None, :] + sign[None, :] * np.arange(k)[:, None]  # (k, N)
@@ -1655,7 +1677,10 @@ class Group(Step):
         self, U: np.ndarray, Kc: np.ndarray, d: np.ndarray, s: np.ndarray, w: _Walk, src: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Grid steps from columns ``src`` to ``s`` that failed, retried by step halving from the last good state:
-        (U, accepted, lost); for a dyad-like group, restarts where that fails too."""
+        (U, accepted, lost); for a dyad-like group, restarts where that fails too. The cells are marked
+        (:attr:`_Walk.substepped`)."""
+        if w.substepped is not None:
+            w.substepped[d, np.minimum(src, s)] = True
         K = w.K[:, d, s]
         before, U_before = None, None
         if w.det is not None:

@@ -124,7 +124,7 @@ def solve(
     k.grid, k.upstream, k.turn = grid, None if grid is None else partial(_upstream, params, sg, mr, eps, k.walks), turn
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # failures are NaN and margins
         for st, nums in zip(plan.steps, params.steps, strict=True):
-            st.place(k, nums)
+            _place(k, st, nums)
     # every failure shows in a step's margin (NaN downstream of it compares False too)
     assembled = np.all(k.margin >= 0, axis=0) if plan.n_signs else np.ones((D, n), bool)
     if plan.nan_flagged:  # a numerical group (or a block beyond its stroke) flags by NaN, not by a margin
@@ -134,6 +134,13 @@ def solve(
     if not assembled.all():  # a mechanism that does not assemble has no joint positions at all
         z[:, ~assembled] = NAN_POINT
     return Positions(z, k.rot, k.margin, assembled, sg, mr)
+
+
+def _place(k: Kin, st: Any, nums: Any) -> None:
+    """Step ``st`` places its joints (a closed-form step's follow every group before it, :attr:`Kin.follows`)."""
+    st.place(k, nums)
+    if not isinstance(st, Group):
+        k.placed(st)
 
 
 def reference_mode(mech: Mechanism, params: Params) -> Params:
@@ -205,7 +212,7 @@ def unplaced_step(params: Params, q: np.ndarray) -> int | None:
     k.upstream = None if grid is None else partial(_upstream, params, sg, mr, ASSEMBLY_RTOL, k.walks)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for i, (st, nums) in enumerate(zip(plan.steps, params.steps, strict=True)):
-            st.place(k, nums)
+            _place(k, st, nums)
             sign = getattr(st, "sign", None) if is_sign_step(st) else None
             if not np.isfinite(z[list(st.writes()), 0, 0]).all() or (sign is not None and k.margin[sign, 0, 0] < 0):
                 return i

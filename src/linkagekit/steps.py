@@ -91,9 +91,16 @@ class Kin:
     #: each numerical group's finished walk (by ``id`` of the step), which :attr:`upstream` re-runs the group from at
     #: other inputs (:meth:`linkagekit.group.Group.place_walked`)
     walks: dict[int, Any] = field(default_factory=dict)
-    #: (D, n) grid cells (by their column nearer the grid's start) where an earlier numerical group's walk took
-    #: sub-steps: its motion turns there, and a later group steps through them along it, never by one Newton
-    rough: np.ndarray | None = None
+    #: joint -> the numerical groups (``id`` of the step) whose motion it follows: a group's own joints follow it
+    #: and what its knowns follow; a closed-form step's joints, every group placed before it (a later group steps
+    #: through the cells where those took sub-steps, :meth:`linkagekit.group.Group.place`)
+    follows: dict[int, frozenset[int]] = field(default_factory=dict)
+
+    def placed(self, step: Any) -> None:
+        """Note that closed-form ``step`` placed its joints (:attr:`follows`)."""
+        if self.walks:
+            groups = frozenset(self.walks)
+            self.follows.update((j, groups) for j in step.writes())
 
 
 @dataclass(frozen=True)
