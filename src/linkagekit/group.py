@@ -253,6 +253,9 @@ LOOK_AHEAD = 4
 GRID_STEP = np.radians(3.0) * 998 / 997
 #: unknown grid columns before a step that make a gap in the range (fewer: a change point left unsolved)
 GAP_COLUMNS = 3
+#: the knowns' motion at the grid's origin, for a group whose knowns follow an earlier one, by a central difference
+#: over this share of a grid step either side (:meth:`Group._local_rate`)
+LOCAL_STEP = 1e-4
 #: ... and of a length driver's, times the group's mean link length
 GRID_STEP_LENGTH = 1 / 32
 #: a length driver's grid goes at most this many steps either way from the pose's input
@@ -1341,6 +1344,8 @@ class Group(Step):
         d = np.flatnonzero(np.isfinite(w.det[:, col]))
         K = w.K[:, d, col]
         dK = (w.K[:, d, col + 1] - w.K[:, d, col - 1]) / 2
+        if w.rough is not None:  # the knowns follow an earlier group, which may turn sharply inside a grid step
+            dK = self._local_rate(d, col, w, dK)
         V = self._tangent(U[:, d], K, dK, d, w)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             eps = 1e-3
@@ -1348,6 +1353,25 @@ class Group(Step):
             slope = (ahead - back) / (2 * eps)
         w.det[d, col + 1] = w.det[d, col] + slope
         w.det[d, col - 1] = w.det[d, col] - slope
+
+    def _local_rate(self, d: np.ndarray, col: int, w: _Walk, dK: np.ndarray) -> np.ndarray:
+        """The knowns' motion per grid step at column ``col`` (designs ``d``) by a central difference over
+        ``LOCAL_STEP`` of a grid step, the steps before re-run there (:attr:`_Walk.upstream`); ``dK`` where they
+        cannot be.
+
+        The central difference over the columns either side averages the motion over two grid steps: where an
+        earlier group turns sharply next to the pose, it says nothing of the motion there, nor so of the
+        determinant's trend (a triad whose fold lay 0.007 deg above its pose stepped over it)."""
+        if w.upstream is None or w.q is None:
+            return dK
+        q0, q1 = w.q[:, :, col], w.q[:, :, col + 1]
+        q2 = np.stack([q0 - LOCAL_STEP * (q1 - q0), q0 + LOCAL_STEP * (q1 - q0)], axis=-1)
+        z = w.upstream(q2)
+        if z is None:
+            return dK
+        Kh = self.held(z, q2)
+        local: np.ndarray = ((Kh[:, :, 1] - Kh[:, :, 0]) / (2 * LOCAL_STEP))[:, d]
+        return np.where(np.all(np.isfinite(local), axis=0), local, dK)
 
     def _tangent(self, U: np.ndarray, K: np.ndarray, dK: np.ndarray, d: np.ndarray, w: _Walk) -> np.ndarray:
         """The group's motion ``V`` (m, B) at ``U`` with knowns ``K`` (columns of designs ``d``) as the knowns move by
