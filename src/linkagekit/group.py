@@ -1189,11 +1189,15 @@ class Group(Step):
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
         for i, j in enumerate(self.joints):
             z[j] = w.out[i]
+        self._keep_rotations(k, nums)
+
+    def _keep_rotations(self, k: Kin, nums: Nums) -> None:
+        """The rotations of the links later steps read (:attr:`keep_rotation`), from the placed joints."""
         if self.keep_rotation:
             bases = dict(zip((gl.name for gl in self.links), nums[2], strict=True))
             for gl in self.links:
                 if gl.name in self.keep_rotation:
-                    k.rot[gl.name] = (z[gl.joints[1]] - z[gl.joints[0]]) / bases[gl.name]
+                    k.rot[gl.name] = (k.z[gl.joints[1]] - k.z[gl.joints[0]]) / bases[gl.name]
 
     def _after(
         self, k: Kin
@@ -1249,6 +1253,7 @@ class Group(Step):
             out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, r))] = NAN_POINT
         for i, j in enumerate(self.joints):
             k.z[j] = out[i]
+        self._keep_rotations(k, nums)
 
     # ------------------------------------------------------------------ the walk over the grid
     def _walk_grid(
