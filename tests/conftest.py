@@ -18,35 +18,6 @@ settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "suite"))
 
 
-#: CPU seconds of the heaviest test files (``pytest --durations=0``, the machine shared, so about twice an idle
-#: run's). They are collected first, and ``--no-loadscope-reorder`` keeps that order: ``pytest -n 2 --dist
-#: loadfile`` hands out whole files in it, so the longest start first and the two workers end about together
-#: (by default xdist starts with the files of most tests, and a long file of few tests started last).
-HEAVY_FILES = {
-    "test_group": 115,
-    "test_synthesis_cli": 108,
-    "test_editor_browser": 59,
-    "test_branch": 57,
-    "test_report_browser": 56,
-    "test_code_shape": 40,
-    "test_group_modes": 38,
-    "test_synthesis": 35,
-    "test_fuzz": 31,
-    "test_synthesis_motion": 30,
-    "test_editor": 29,
-    "test_function_generation": 23,
-    "test_atlas": 22,
-    "test_synthesis_robust": 21,
-    "test_animate": 19,
-    "test_cli_defects": 18,
-}
-
-
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The heaviest files first (:data:`HEAVY_FILES`); the others after, in their own order."""
-    items.sort(key=lambda item: -HEAVY_FILES.get(Path(str(item.path)).stem, 0))
-
-
 @pytest.fixture
 def examples() -> Path:
     return ROOT / "examples"
