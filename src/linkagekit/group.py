@@ -484,7 +484,6 @@ class Walked:
     walk: _Walk
     grid: WalkGrid
     start: np.ndarray  # (m, D) the group's pose solution
-    x0: np.ndarray  # (D,) the grid driver's input at the pose
 
 
 @dataclass(frozen=True)
@@ -1182,8 +1181,7 @@ class Group(Step):
             places = self._other_turn(g, legs, second, start, places, w)
             if k.took is None:
                 k.took = np.where(np.all(np.isfinite(w.out[:, :, : g.n_given]), axis=0), places, np.nan)
-            x0 = np.broadcast_to(np.asarray(k.q0, float)[g.driver], (D,))
-            k.walks[id(self)] = Walked(w, g, start, x0)
+            k.walks[id(self)] = Walked(w, g, start)
             k.follows.update((j, follows | {id(self)}) for j in self.joints)
         if self.input_drivers:
             w.out[:, self._beyond_stroke(k.q, nums[5], k.eps, (D, n))] = NAN_POINT
@@ -1225,6 +1223,7 @@ class Group(Step):
         sharply left its range through a fold 0.34 deg past the pose and came back into it 0.2 deg on, and with
         one Newton per grid step walked on to 40 deg on another branch."""
         w0, g = walked.walk, walked.grid
+        assert w0.q is not None  # a walk over a grid has its inputs
         G, r = len(g.index), k.q.shape[-1]
         D = w0.K.shape[1]
         K_new = self.held(k.z, k.q)
@@ -1241,12 +1240,13 @@ class Group(Step):
             K=cat(K_new, w0.K),
             ok=cat(ok, w0.ok),
             out=cat(np.full((), NAN_POINT), w0.out),
-            q=cat(k.q, w0.q) if w0.q is not None else None,
+            q=cat(k.q, w0.q),
             det=None if w0.det is None else cat(np.full((), np.nan), w0.det),
             rough=None if w0.rough is None else cat(np.zeros((), bool), w0.rough),
             substepped=None,
         )
-        places = (np.broadcast_to(k.q[g.driver], (D, r)) - walked.x0[:, None]) / g.step[:, None]
+        x0 = w0.q[g.driver, :, w0.q.shape[-1] - G + int(np.searchsorted(g.index, 0))]  # the origin: the pose's input
+        places = (np.broadcast_to(k.q[g.driver], (D, r)) - x0[:, None]) / g.step[:, None]
         self._solve_samples(replace(g, n_given=r), places, walked.start, w)
         out = w.out[:, :, :r]
         if self.input_drivers:
