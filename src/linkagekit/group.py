@@ -377,6 +377,56 @@ class _Rows:
     lin: np.ndarray  # (n_lin,) the row of its real part (the imaginary part is the next row)
 
 
+#: what a term of an entry of :class:`_Reduced` multiplies ``2 sign`` by: 1, ``conj(1 - rho_i)``, ``conj(rho_i)``
+_ONE, _ONE_MINUS_RHO, _RHO = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class _Reduced:
+    """A revolute group's Newton system with its further joints substituted (the samples' Newton, the rates).
+
+    A further joint ``k`` of a link (``z_k = z_a + rho (z_b - z_a)``, ``a``, ``b`` the link's first two joints) that
+    is unknown and on no other link's linear rows has, on its two linear rows, the identity on its own two columns.
+    Ordering the rows as the distance rows then those, and the columns as the other unknowns' then the further
+    joints', ``J = [[A, B], [C, I]]``, and ``J x = b`` is ``(A - B C) x_c = b_o - B b_l``, ``x_k = b_l - C x_c``;
+    ``det J = det(A - B C)`` (``det [[A, B], [C, I]] = det(A - B C)``; both orderings move rows and columns in pairs
+    past others, an even permutation each). This is
+    the joint substituted: a distance row's gradient ``G`` on ``k`` (complex, ``Re G dx + Im G dy``) moves to ``a``
+    as ``conj(1 - rho) G`` and to ``b`` as ``conj(rho) G``; the step of ``k`` is ``-c + (1 - rho) dz_a + rho dz_b``
+    (``c`` its linear residual); the right-hand side of a distance row gains ``Re(G conj(c))``. Each entry of ``A - B
+    C`` is ``f e`` (``f`` a constant of the design, ``e`` the row's link vector), so ``|A - B C|_F^2 = sum_r W_r
+    |e_r|^2`` and a step changes it by ``sum_r W_r |de_r|^2``, ``W_r = sum_s |f_rs|^2``. A triad's system is 4 x 4,
+    not 6 x 6. Only for groups whose every further joint is so (else None): the rows left are the distance rows.
+    """
+
+    cols: np.ndarray  # (n,) the unknown slots kept, in column order (slot cols[s] has columns 2s, 2s + 1)
+    lin: np.ndarray  # (p,) each further joint's index in the linear rows (``_Rows.k``)
+    k: np.ndarray  # (p,) its slot
+    a: np.ndarray  # (p,) its link's first joint's slot
+    b: np.ndarray  # (p,) ... second's
+    entries: tuple[tuple[int, int, tuple[tuple[int, int, float], ...]], ...]  # (row, column pair, ((kind, i, sign)))
+    ends: tuple[tuple[int, int, float], ...]  # (row, further joint i, sign of the row's gradient on it)
+
+    def factors(self, R: np.ndarray) -> list[np.ndarray]:
+        """Each entry's ``f`` (B,) complex: the sum of its terms, ``2 sign`` times 1 (``_ONE``), ``conj(1 - rho_i)``
+        (``_ONE_MINUS_RHO``) or ``conj(rho_i)`` (``_RHO``)."""
+        rho = np.conj(R[self.lin])
+        out = []
+        for _, _, terms in self.entries:
+            f = np.zeros(R.shape[1], complex)
+            for kind, i, sg in terms:
+                f = f + 2 * sg * (1.0 if kind == _ONE else 1.0 - rho[i] if kind == _ONE_MINUS_RHO else rho[i])
+            out.append(f)
+        return out
+
+    def weights(self, f: list[np.ndarray], n_rows: int, B: int) -> FloatArray:
+        """``W_r`` (n_rows, B) of the factors ``f``."""
+        W = np.zeros((n_rows, B))
+        for (r, _, _), fr in zip(self.entries, f, strict=True):
+            W[r] += np.abs(fr) ** 2
+        return W
+
+
 @dataclass(frozen=True)
 class _Chain:
     """A chain of link edges from one held joint to another through the group's joints."""
@@ -671,6 +721,106 @@ class Group(Step):
                 lin.append(row)
                 row += 2
         return _Rows(*(np.array(x, dtype=np.intp) for x in (a, b, dist, link, k, lin)))
+
+    @cached_property
+    def _reduced(self) -> _Reduced | None:
+        """The Newton system with the further joints substituted (:class:`_Reduced`), where every further joint is
+        unknown, on one link's linear rows and neither end of a link with linear rows; else None."""
+        rw, m = self._rows, len(self.joints)
+        ks = [int(k) for k in rw.k]
+        ends = {int(x) for x in (*rw.a[rw.link], *rw.b[rw.link])}
+        if not (self.revolute and ks) or any(k >= m or k in ends or ks.count(k) > 1 for k in ks):
+            return None
+        a, b = rw.a[rw.link], rw.b[rw.link]
+        cols = np.setdiff1d(np.arange(m), ks)
+        col_of, elim = {int(c): i for i, c in enumerate(cols)}, {k: i for i, k in enumerate(ks)}
+        terms: dict[tuple[int, int], list[tuple[int, int, float]]] = {}
+        on_k = []
+        for r in range(len(self.links)):
+            for slot, sg in ((int(rw.b[r]), 1.0), (int(rw.a[r]), -1.0)):
+                if slot in elim:  # its gradient moves to its link's first two joints
+                    i = elim[slot]
+                    on_k.append((r, i, sg))
+                    for end, kind in ((int(a[i]), _ONE_MINUS_RHO), (int(b[i]), _RHO)):
+                        if end < m:
+                            terms.setdefault((r, col_of[end]), []).append((kind, i, sg))
+                elif slot < m:
+                    terms.setdefault((r, col_of[slot]), []).append((_ONE, 0, sg))
+        entries = tuple((r, c, tuple(t)) for (r, c), t in sorted(terms.items()))
+        return _Reduced(cols, np.arange(len(ks)), np.array(ks), a, b, entries, tuple(on_k))
+
+    def _factor(
+        self, P: np.ndarray, ar: _Arrays, res: FloatArray, done: np.ndarray, vector: bool, work: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray, Callable[[np.ndarray], tuple[FloatArray, FloatArray | None]]]:
+        """Newton's steps ``dx`` (B, 2m) from slot positions ``P`` with residuals ``res``, the Jacobians'
+        determinants (B,) (:func:`_solve_small`; ``vector`` and a :attr:`_reduced` system: that system's), and
+        ``bound(cols)``: for columns ``cols``, a lower bound of each Jacobian's smallest singular value and the
+        weights of its change along a step (:meth:`_kept_det`; None: the whole Jacobian's)."""
+        if vector and self._reduced is not None:
+            return self._reduced_step(P, ar, res, work)
+        J = self._jac(P, ar.J_lin, ar.R)
+        dx, det = _solve_small(J, res, done, vector, work)
+        return dx, det, lambda cols: (_smallest_singular_bound(J[cols], det[cols]), None)
+
+    def _reduced_step(
+        self, P: np.ndarray, ar: _Arrays, res: FloatArray, work: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray, Callable[[np.ndarray], tuple[FloatArray, FloatArray | None]]]:
+        """:meth:`_factor` by the reduced system (:class:`_Reduced`), by :func:`_eliminate`."""
+        red = self._reduced
+        assert red is not None
+        n, B = 2 * len(red.cols), P.shape[1]
+        work = np.empty(_gauss_size(n, B)) if work is None else work
+        A = work[: n * (n + 1) * B].reshape(n, n + 1, B)
+        e, f = self._reduced_matrix(P, ar.R, -res, A)
+        W = red.weights(f, n, B)
+        frob = np.sum(W * (e.real**2 + e.imag**2), axis=0)
+        xc, det = _eliminate(A, work[n * (n + 1) * B :])
+        dx = self._reduced_expand(xc, -res, ar.R)
+        return dx, det, lambda cols: (_singular_bound(det[cols], frob[cols], n), W[:, cols])
+
+    def _reduced_matrix(
+        self, P: np.ndarray, R: np.ndarray, b: FloatArray, A: FloatArray
+    ) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The reduced system (:class:`_Reduced`) of ``J x = b`` (``b`` (n_eq, B)) at slot positions ``P`` into ``A``
+        (n, n + 1, B), augmented with its right-hand side (:meth:`_reduced_rhs`): (the links' vectors ``e``, the
+        entries' factors)."""
+        red, rw = self._reduced, self._rows
+        assert red is not None
+        n = A.shape[0]
+        A[:, :n] = 0.0
+        e = P[rw.b] - P[rw.a]
+        f = red.factors(R)
+        for (r, c, _), fr in zip(red.entries, f, strict=True):
+            g = fr * e[r]
+            A[r, 2 * c], A[r, 2 * c + 1] = g.real, g.imag
+        A[:, n] = self._reduced_rhs(e, b)
+        return e, f
+
+    def _reduced_rhs(self, e: np.ndarray, b: FloatArray) -> FloatArray:
+        """``b_o - B b_l`` (n, B) of ``b`` (n_eq, B): a distance row's ``b`` less ``Re(G conj(b_k))`` for a further
+        joint ``k`` at its end (``G = +/- 2 e`` its gradient there, ``b_k`` the joint's linear rows' ``b``)."""
+        red, rw = self._reduced, self._rows
+        assert red is not None
+        out = b[rw.dist].copy()
+        lin = b[rw.lin] + 1j * b[rw.lin + 1]
+        for r, i, sg in red.ends:
+            out[r] -= 2 * sg * (e[r] * np.conj(lin[i])).real
+        return out  # type: ignore[no-any-return]
+
+    def _reduced_expand(self, xc: FloatArray, b: FloatArray, R: np.ndarray) -> FloatArray:
+        """The whole solution (B, 2m) of ``J x = b`` from the reduced system's ``xc`` (B, n): a further joint's
+        ``x_k = b_k + (1 - rho) x_a + rho x_b`` (0 for a known end)."""
+        red, rw = self._reduced, self._rows
+        assert red is not None
+        m, B = len(self.joints), len(xc)
+        dz = np.zeros((m + 1, B), complex)  # the unknowns' steps, and a zero for a known end last
+        dz[red.cols] = (xc[:, 0::2] + 1j * xc[:, 1::2]).T
+        rho = R[red.lin]
+        ea, eb = np.where(red.a < m, red.a, m), np.where(red.b < m, red.b, m)
+        dz[red.k] = b[rw.lin] + 1j * b[rw.lin + 1] + (1 - rho) * dz[ea] + rho * dz[eb]
+        dx = np.empty((B, 2 * m))
+        dx[:, 0::2], dx[:, 1::2] = dz[:m].real.T, dz[:m].imag.T
+        return dx
 
     @cached_property
     def _srows(self) -> _SRows:
@@ -1005,6 +1155,7 @@ class Group(Step):
         conv, det = np.zeros(U.shape[1], bool), np.zeros(U.shape[1])
         act, Ua, Ka, ara = np.arange(U.shape[1]), U, K, ar  # the columns still iterating and their numbers
         dU, smin = np.zeros_like(U), np.zeros(U.shape[1])  # the last step, and its start's smallest singular value
+        weights: FloatArray | None = None  # ... and the weights of the Jacobian's change (:meth:`_kept_det`)
         reuse = reuse and self.revolute  # only distance and linear rows bound the Jacobian's change by the step
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for it in range(iters + 1):
@@ -1012,7 +1163,7 @@ class Group(Step):
                 res = self._res(P, ara.L, ara.R)
                 passed = np.all(np.abs(res) <= ara.tol, axis=0)
                 if reuse and it:
-                    kept = passed & self._kept_det(dU, smin)
+                    kept = passed & self._kept_det(dU, smin, weights)
                     if kept.any():
                         conv[act[kept]], U[:, act[kept]] = True, Ua[:, kept]
                         if kept.all():
@@ -1021,8 +1172,7 @@ class Group(Step):
                         act, Ua, Ka, ara, P = act[rest], Ua[:, rest], Ka[:, rest], ara.take(rest), P[:, rest]
                         res, passed = res[:, rest], passed[rest]
                 done = passed | (it == iters)
-                J = self._jac(P, ara.J_lin, ara.R)
-                dx, det[act] = _solve_small(J, res, done, it < VECTOR_ITER, work)
+                dx, det[act], bound = self._factor(P, ara, res, done, it < VECTOR_ITER, work)
                 conv[act[passed]] = True
                 go = ~done & np.all(np.isfinite(dx), axis=1)  # a step not finite: the column is NaN, dropped
                 U[:, act[~go]] = np.where(done, Ua, NAN_POINT)[:, ~go]
@@ -1030,7 +1180,7 @@ class Group(Step):
                 if not go.any():
                     break
                 if reuse:
-                    smin = _smallest_singular_bound(J[go], det[act[go]])
+                    smin, weights = bound(go)
                 if not go.all():
                     act, Ua, Ka, ara = act[go], Ua[:, go], Ka[:, go], ara.take(go)
                     dx = dx[go]
@@ -1045,7 +1195,7 @@ class Group(Step):
         """Whether every row is a distance or a linear one (no slider, cylinder or slider driver)."""
         return not (self.sliders or self.cylinders or self.drives)
 
-    def _kept_det(self, dU: np.ndarray, smin: FloatArray) -> np.ndarray:
+    def _kept_det(self, dU: np.ndarray, smin: FloatArray, W: FloatArray | None = None) -> np.ndarray:
         """Whether the step ``dU`` (m, B) left each column's determinant's sign, and its size to within a factor
         (1 +/- 1/20)^(2m), as it was before the step, where ``smin`` (B,) bounds the smallest singular value of the
         Jacobian there from below.
@@ -1057,7 +1207,7 @@ class Group(Step):
         rw = self._rows
         d = np.concatenate([dU, np.zeros((self.n_held, dU.shape[1]), dU.dtype)])
         de = d[rw.b] - d[rw.a]
-        change = np.sqrt(8 * np.sum(de.real**2 + de.imag**2, axis=0))
+        change = np.sqrt(np.sum((8.0 if W is None else W) * (de.real**2 + de.imag**2), axis=0))
         kept: np.ndarray = change <= smin / 20
         return kept
 
@@ -2280,11 +2430,15 @@ class Group(Step):
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
         Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe) if sing.any() else Ju_safe
-        system = _RatesSystem(Ju_solve, rhs_v)  # factored once for both solves
+        R = self._stack(dn, D * n)[1]
+        if self._reduced is not None and D * n >= VECTOR_SAMPLES:  # factored once for both solves
+            system: _RatesSystem | _ReducedRates = _ReducedRates(self, P, R, rhs_v)
+        else:
+            system = _RatesSystem(Ju_solve, rhs_v)
         vu = system.first
         vu[sing] = np.nan
         Vall = np.concatenate([(vu[:, 0::2] + 1j * vu[:, 1::2]).T, V]) if nk else (vu[:, 0::2] + 1j * vu[:, 1::2]).T
-        gamma = self._gamma(P, Vall, self._stack(dn, D * n)[1]).T
+        gamma = self._gamma(P, Vall, R).T
         rhs_a = -gamma - (np.einsum("bij,bj->bi", Jk, ak) if nk else 0.0)
         au = system.solve(rhs_a)
         au[sing] = np.nan
@@ -2502,6 +2656,39 @@ class _RatesSystem:
         return x
 
 
+class _ReducedRates:
+    """:class:`_RatesSystem` by a group's reduced system (:class:`_Reduced`; slot positions ``P`` (n_slots, B),
+    rhos ``R``), in chunks of ``FILL_CHUNK``: each factored once (:func:`_eliminate`), its factors solving the
+    second right-hand side (:func:`_gauss_again`). A singular system gives a step that is not finite, flagged by
+    the caller."""
+
+    def __init__(self, group: Group, P: np.ndarray, R: np.ndarray, rhs: FloatArray) -> None:
+        assert group._reduced is not None
+        self.group, self.P, self.R = group, P, R
+        n, B = 2 * len(group._reduced.cols), P.shape[1]
+        self.first = np.empty(rhs.shape)
+        factors = _workspace("rates", n * (n + 1) * B)  # every chunk's factors, kept for the second solve
+        scratch = _workspace("rates scratch", (n - 1) * n * FILL_CHUNK)
+        self.chunks: list[tuple[slice, FloatArray, np.ndarray, np.ndarray]] = []
+        for start in range(0, B, FILL_CHUNK):
+            rows = slice(start, min(start + FILL_CHUNK, B))
+            b = rows.stop - start
+            A = factors[n * (n + 1) * start : n * (n + 1) * rows.stop].reshape(n, n + 1, b)
+            e, _ = group._reduced_matrix(P[:, rows], R[:, rows], rhs[rows].T, A)
+            piv = np.empty((n, b), np.intp)
+            self.first[rows] = group._reduced_expand(_eliminate(A, scratch, piv)[0], rhs[rows].T, R[:, rows])
+            self.chunks.append((rows, A, piv, e))
+
+    def solve(self, rhs: FloatArray) -> FloatArray:
+        """``x`` (B, 2m) for ``rhs`` (B, 2m)."""
+        x = np.empty(rhs.shape)
+        for rows, A, piv, e in self.chunks:
+            b = rhs[rows].T
+            xc = _gauss_again(A, piv, self.group._reduced_rhs(e, b)).T
+            x[rows] = self.group._reduced_expand(xc, b, self.R[:, rows])
+        return x
+
+
 def _gauss_size(n: int, B: int) -> int:
     """The workspace :func:`_gauss` needs for ``B`` systems of ``n`` equations (floats)."""
     return (n * (n + 1) + (n - 1) * n) * B
@@ -2525,9 +2712,15 @@ def _gauss(
     B, n, _ = J.shape
     work = np.empty(_gauss_size(n, B)) if work is None else work
     A = work[: n * (n + 1) * B].reshape(n, n + 1, B)
-    scratch = work[n * (n + 1) * B :]
     A[:, :n] = J.transpose(1, 2, 0)
     A[:, n] = -res
+    return _eliminate(A, work[n * (n + 1) * B :], piv)
+
+
+def _eliminate(A: FloatArray, scratch: FloatArray, piv: np.ndarray | None = None) -> tuple[FloatArray, FloatArray]:
+    """:func:`_gauss` on its augmented matrices ``A`` (n, n + 1, B) (overwritten by the factors), ``scratch`` of
+    ``(n - 1) n B`` floats or more: (x (B, n), det (B,))."""
+    n, B = A.shape[0], A.shape[2]
     det = np.ones(B)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for k in range(n):
@@ -2566,10 +2759,14 @@ def _smallest_singular_bound(J: FloatArray, det: FloatArray) -> FloatArray:
     >>> float(_smallest_singular_bound(J, np.linalg.det(J))[0]) <= 0.5
     True
     """
-    n = J.shape[1]
+    return _singular_bound(det, np.einsum("bij,bij->b", J, J), J.shape[1])
+
+
+def _singular_bound(det: FloatArray, frob: FloatArray, n: int) -> FloatArray:
+    """:func:`_smallest_singular_bound` from the determinants and the squared Frobenius norms ``frob`` (B,) of ``n x
+    n`` matrices."""
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        frob = np.einsum("bij,bij->b", J, J) / (n - 1)
-        out = np.abs(det) / frob ** ((n - 1) / 2)
+        out = np.abs(det) / (frob / (n - 1)) ** ((n - 1) / 2)
     bound: FloatArray = np.where(np.isfinite(out), out, 0.0)
     return bound
 
