@@ -37,6 +37,27 @@ def test_gauss_equals_lapack_with_swaps_singular_and_nan():
     dx, det = group._gauss(bad, rng.normal(size=(6, 2)))
     assert det[0] == 0 and not np.all(np.isfinite(dx[0]))
     assert np.isnan(det[1]) and np.all(np.isnan(dx[1]))
+    # an exactly zero pivot before the last (a zero column; two proportional rows): 0 as LAPACK's, not NaN
+    flat = np.array([[[0.0, 1, 0], [0, 2, 1], [0, 0, 3]], [[1.0, 2, 3], [2, 4, 6], [0, 1, 1]]])
+    assert np.array_equal(group._gauss(flat, np.ones((3, 2)))[1], [0.0, 0.0])
+
+
+def test_a_design_whose_ternary_link_has_zero_length_is_flagged_among_the_others():
+    """A batch design whose ternary link's base joints coincide (a row scale ``1 / (2 L)`` infinite, its
+    conditioning's matrix NaN) raised ``LinAlgError`` in the rates; it is not assembled, and the other designs
+    answer as each alone."""
+    mech = random_triad(1)
+    names = mech.joint_names
+    poses = mech.pose_array()[None] + np.random.default_rng(3).normal(0, 0.3, (4, len(names), 2))
+    poses[2, names.index("J2")] = poses[2, names.index("J1")]
+    u = {"crank": np.arange(-180.0, 180.0, 5.0)}
+    res = lk.analyze(mech, u, poses=poses)
+    assert not res.assembled[2].any() and res.assembled[[0, 1, 3]].any()
+    for i in (0, 1, 3):
+        alone = lk.analyze(mech, u, poses=poses[i : i + 1])
+        assert np.array_equal(res.assembled[i], alone.assembled[0])
+        ok = alone.assembled[0]
+        assert np.max(np.abs(points(res)[:, i][:, ok] - points(alone)[:, 0][:, ok])) <= 1e-10 * scale_of(mech)
 
 
 def _solve_all(monkeypatch, vector: bool) -> list[lk.Result]:

@@ -1203,7 +1203,8 @@ class Group(Step):
         Only the distance rows change, by ``2 (de_b - de_a)`` on each unknown end, so the change ``E`` has
         ``|E|_F^2 <= 8 sum |de|^2``; with ``|E|_2 <= smin / 20`` every eigenvalue of ``J^-1 (J + E)`` lies within
         1/20 of 1, and ``det(J + E) / det(J)``, their product, is positive and in that range (a step a Newton that
-        has converged takes is 1e-6 of the size or less)."""
+        has converged takes is 1e-6 of the size or less). ``W`` (n_links, B): for the reduced system
+        (:class:`_Reduced`), whose change is exactly ``|E|_F^2 = sum_r W_r |de_r|^2``, instead of 8."""
         rw = self._rows
         d = np.concatenate([dU, np.zeros((self.n_held, dU.shape[1]), dU.dtype)])
         de = d[rw.b] - d[rw.a]
@@ -2721,7 +2722,7 @@ def _eliminate(A: FloatArray, scratch: FloatArray, piv: np.ndarray | None = None
     """:func:`_gauss` on its augmented matrices ``A`` (n, n + 1, B) (overwritten by the factors), ``scratch`` of
     ``(n - 1) n B`` floats or more: (x (B, n), det (B,))."""
     n, B = A.shape[0], A.shape[2]
-    det = np.ones(B)
+    det, zero = np.ones(B), np.zeros(B, bool)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for k in range(n):
             p = np.argmax(np.abs(A[k:, k]), axis=0)
@@ -2738,6 +2739,7 @@ def _eliminate(A: FloatArray, scratch: FloatArray, piv: np.ndarray | None = None
                     A[i, k:] = np.where(sw, A[k, k:], A[i, k:])
                     A[k, k:] = top
                     det = np.where(sw, -det, det)
+            zero |= (A[k, k] == 0) & np.isfinite(det)  # the rest of the elimination divides by it: NaN
             det *= A[k, k]
             if k < n - 1:  # in place: large temporaries cost page faults
                 upd = scratch[: (n - k - 1) * (n - k) * B].reshape(n - k - 1, n - k, B)
@@ -2746,7 +2748,7 @@ def _eliminate(A: FloatArray, scratch: FloatArray, piv: np.ndarray | None = None
         x = np.empty((n, B))
         for k in range(n - 1, -1, -1):
             x[k] = (A[k, n] - np.sum(A[k, k + 1 : n] * x[k + 1 :], axis=0)) / A[k, k]
-    return x.T, det
+    return x.T, np.where(zero, 0.0, det)
 
 
 def _smallest_singular_bound(J: FloatArray, det: FloatArray) -> FloatArray:
@@ -3107,6 +3109,7 @@ def _condition(Js: FloatArray) -> FloatArray:
     """
     B, _, n = Js.shape
     cond = np.full(B, np.nan)
+    finite = np.all(np.isfinite(Js), axis=(1, 2))  # else NaN, flagged singular (a zero-length link's row scale)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         if 2 <= n <= COND_TRIDIAGONAL_MOST:  # beyond, LAPACK's SVD of every matrix is the faster (and exact)
             d, e2 = _gram_tridiagonal(Js)
@@ -3117,11 +3120,11 @@ def _condition(Js: FloatArray) -> FloatArray:
             lo, ok_lo = _extreme_root(d, e2, np.zeros(B), high)
             cond = np.sqrt(np.maximum(lo, 0.0) / hi)
             cond[~(ok_hi & ok_lo)] = np.nan
-            slow = np.flatnonzero(~np.isfinite(cond))
+            slow = np.flatnonzero(~np.isfinite(cond) & finite)
             if len(slow):
                 ev = np.linalg.eigvalsh(Js[slow].transpose(0, 2, 1) @ Js[slow])
                 cond[slow] = np.sqrt(np.maximum(ev[:, 0], 0.0) / ev[:, -1])
-        low = np.flatnonzero(~(cond >= COND_EXACT))
+        low = np.flatnonzero(~(cond >= COND_EXACT) & finite)
         if len(low):
             sv = np.linalg.svd(Js[low], compute_uv=False)
             cond[low] = sv[:, -1] / sv[:, 0]
