@@ -1900,7 +1900,7 @@ class Group(Step):
         V = self._grid_slopes(g, w) if w.slopes is None else w.slopes
         Ua, Ub = sol(a), sol(b)  # NaN off the grid (a leg that reached its last column covers the cell past it)
         guess = _hermite(Ua, V[:, c, np.clip(a, 0, G - 1)], Ub, V[:, c, np.clip(b, 0, G - 1)], t)
-        bound = 0.5 * np.max(np.abs(Ub - Ua), axis=0) + 1e-9 * np.max(np.abs(Ua), axis=0)
+        bound = _cell_bounds(Ug, c, a, t)
         other = np.flatnonzero(~np.all(np.isfinite(guess), axis=0))  # without both ends and their motions
         if len(other):
             ao, bo, co = a[other], b[other], c[other]
@@ -3059,6 +3059,28 @@ def _hermite(Ua: np.ndarray, Va: np.ndarray, Ub: np.ndarray, Vb: np.ndarray, t: 
     t2, t3 = t * t, t * t * t
     out: np.ndarray = (2 * t3 - 3 * t2 + 1) * Ua + (t3 - 2 * t2 + t) * Va + (3 * t2 - 2 * t3) * Ub + (t3 - t2) * Vb
     return out
+
+
+def _cell_bounds(Ug: np.ndarray, c: np.ndarray, a: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """How far Newton may move samples at ``t`` in [0, 1) of cells from grid columns ``a`` (designs ``c``) of the
+    grid's solutions ``Ug`` (m, D, G): half the cell's largest joint move plus 1e-9 of the largest coordinate at
+    ``a`` (``t = 0``: the column itself, no move); NaN where either end is off the grid or unsolved. Each cell's
+    value once, then taken by the samples.
+
+    >>> import numpy as np
+    >>> Ug = np.array([[[0.0, 1.0, 3.0]]]) + 0j
+    >>> _cell_bounds(Ug, np.zeros(4, int), np.array([0, 1, 1, 2]), np.array([0.5, 0.5, 0.0, 0.5])).tolist()
+    [0.5, 1.000000001, 1e-09, nan]
+    """
+    D, G = Ug.shape[1:]
+    move = np.full((D, G), np.nan)
+    move[:, :-1] = np.max(np.abs(Ug[:, :, 1:] - Ug[:, :, :-1]), axis=0)
+    size = np.max(np.abs(Ug), axis=0)
+    inside = (a >= 0) & (a < G)
+    ac = np.clip(a, 0, G - 1)
+    with np.errstate(invalid="ignore"):
+        out: np.ndarray = 0.5 * np.where(t > 0, move[c, ac], 0.0) + 1e-9 * size[c, ac]
+    return np.where(inside, out, np.nan)
 
 
 def _cell_guess(
