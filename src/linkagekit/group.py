@@ -733,6 +733,8 @@ class Group(Step):
             return None
         a, b = rw.a[rw.link], rw.b[rw.link]
         cols = np.setdiff1d(np.arange(m), ks)
+        if not len(cols):  # (a further joint of two known ones: the plan places it in closed form)
+            return None
         col_of, elim = {int(c): i for i, c in enumerate(cols)}, {k: i for i, k in enumerate(ks)}
         terms: dict[tuple[int, int], list[tuple[int, int, float]]] = {}
         on_k = []
@@ -2430,12 +2432,13 @@ class Group(Step):
         rhs_v = -np.einsum("bij,bj->bi", Jk, vk) if nk else np.zeros((D * n, 2 * m))
         cond = self._condition(Ju_safe, dn)
         sing = ~ok | ~(cond > 0)
-        Ju_solve = np.where(sing[:, None, None], np.eye(2 * m), Ju_safe) if sing.any() else Ju_safe
         R = self._stack(dn, D * n)[1]
         if self._reduced is not None and D * n >= VECTOR_SAMPLES:  # factored once for both solves
             system: _RatesSystem | _ReducedRates = _ReducedRates(self, P, R, rhs_v)
-        else:
-            system = _RatesSystem(Ju_solve, rhs_v)
+        else:  # (LAPACK refuses a singular matrix: the identity in its place, its answer flagged below)
+            system = _RatesSystem(
+                np.where(sing[:, None, None], np.eye(2 * m), Ju_safe) if sing.any() else Ju_safe, rhs_v
+            )
         vu = system.first
         vu[sing] = np.nan
         Vall = np.concatenate([(vu[:, 0::2] + 1j * vu[:, 1::2]).T, V]) if nk else (vu[:, 0::2] + 1j * vu[:, 1::2]).T
@@ -2665,7 +2668,7 @@ class _ReducedRates:
 
     def __init__(self, group: Group, P: np.ndarray, R: np.ndarray, rhs: FloatArray) -> None:
         assert group._reduced is not None
-        self.group, self.P, self.R = group, P, R
+        self.group, self.R = group, R
         n, B = 2 * len(group._reduced.cols), P.shape[1]
         self.first = np.empty(rhs.shape)
         factors = _workspace("rates", n * (n + 1) * B)  # every chunk's factors, kept for the second solve
