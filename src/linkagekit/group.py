@@ -244,8 +244,10 @@ VELOCITY_SHARE = 0.25
 TANGENT_DET = 1e-4
 #: Newton starts when the walk comes back after a gap
 RESTARTS = 16
-#: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively)
+#: a grid step's Newton batch also solves this many columns of the leg in all (the next ones speculatively, along
+#: the quadratic predictor, for at most LOOK_AHEAD_ITER iterations: one past the range's end would iterate NEWTON_ITER)
 LOOK_AHEAD = 4
+LOOK_AHEAD_ITER = 8
 #: the grid the walk follows: a fixed step of an angle driver's input from the pose's input (radians) ... 3 deg
 #: times 998/997, so that a pose at a round angle puts no column on another round angle, where change points lie (a
 #: flat position at 0 or 180 deg): for k <= 240 steps, k x step is at least 2e-4 deg from any multiple of 0.1 deg
@@ -1690,7 +1692,7 @@ class Group(Step):
         if not len(i):
             return U_new, acc, lost, pend, []
         guess = _predict(U[:, i], before[0][:, i], before[1][:, i], j + 1.0)
-        sol, conv, sg = self._newton(guess, w.K[:, d[i], col[j, i]], w.arrays.take(d[i]), vector=w.vector)
+        sol, conv, sg = self._newton_ahead(guess, w.K[:, d[i], col[j, i]], w.arrays.take(d[i]), j == 0, w)
         got = np.full((k, m, N), NAN_POINT)
         got[j, :, i] = sol.T
         good = np.zeros((k, N), bool)
@@ -1714,6 +1716,20 @@ class Group(Step):
         self._restart_lost(U[:, c0], w.K[:, d[c0], s[c0]], d[c0], w, Un, a, ~a & ~fresh[c0])
         U_new[:, c0], acc[c0] = Un, a
         return U_new, acc, lost, pend, self._ahead(got, cols, good, fresh, dets, d, w)
+
+    def _newton_ahead(
+        self, guess: np.ndarray, K: np.ndarray, ar: _Arrays, step: np.ndarray, w: _Walk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A grid step's Newton batch (:meth:`_newton`): the columns ahead of the ``step`` ones, speculative, for at
+        most ``LOOK_AHEAD_ITER`` iterations (one past the range's end would take all ``NEWTON_ITER``; one that fails
+        is stepped to again), the step's own on to ``NEWTON_ITER`` (the same iterations as in one call)."""
+        sol, conv, sg = self._newton(guess, K, ar, LOOK_AHEAD_ITER, vector=w.vector)
+        rest = np.flatnonzero(~conv & step & np.all(np.isfinite(sol), axis=0))
+        if len(rest):
+            sol[:, rest], conv[rest], sg[rest] = self._newton(
+                sol[:, rest], K[:, rest], ar.take(rest), NEWTON_ITER - LOOK_AHEAD_ITER, vector=w.vector
+            )
+        return sol, conv, sg
 
     def _ahead(
         self,
