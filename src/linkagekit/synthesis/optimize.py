@@ -361,8 +361,9 @@ def search(
 
 #: degrees above the transmission bound of --pareto's searches
 RAISES = (10.0, 20.0, 30.0)
-#: seconds between two measures of the best design of the search under way (for the progress)
-MEASURE_EVERY = 1.0
+#: generations between two measures of the best design of the search under way (the progress reports it, so it is
+#: kept: a candidate of every polish after; by generations, not seconds, so that the result does not hang on the clock)
+MEASURE_EVERY = 10
 
 
 def _picklable(objective: Objective) -> bool:
@@ -406,7 +407,7 @@ class _Run:
     generation_time: float = 0.0  # seconds of the last generation
     front: list[tuple[np.ndarray, float, float]] = field(default_factory=list)  # --pareto's designs
     seen: float = np.inf  # the smallest max error measured so far, a search under way's best included
-    measured: float = MEASURE_EVERY / 2 - MEASURE_EVERY  # clock() of the last such measure (the first: at 0.5 s)
+    seen_x: np.ndarray | None = None  # ... the design measured so, kept as a candidate of every polish after
     lane: Any = None  # on a worker running a lane's restart: its line to the parent (_WorkerLane)
     initial: np.ndarray | None = None  # designs that seed the first searches, best first
     close: bool = False  # the first of them is within SEED_LIMIT: differential evolution is seeded too
@@ -428,6 +429,7 @@ class _Run:
             run.generation, run.evaluations, run.elapsed0 = state["generation"], state["evaluations"], state["elapsed"]
             run.finished = state["stopped_by"]
             run.stopped_by = run.finished or run.stopped_by
+            run.seen, run.seen_x = state["seen"], state["seen_x"]
         if run.finished is None and any(d["max_error"] <= settings.goal for d in run.done):
             run.stopped_by, run.restart = "goal", settings.restarts
         if settings.pareto and run.done:  # a checkpoint's: its searches' best designs (their other ones are gone)
@@ -547,13 +549,21 @@ class _Run:
             return False
         return True
 
-    def report(self, designs: int = 0, best: float = np.inf, search: Search | None = None) -> None:
-        """Tell the progress callback where the run is (the best design under way measured every second)."""
+    def measure_under_way(self, search: Search) -> None:
+        """Every ``MEASURE_EVERY`` generations, the best design of the search under way measured; the smallest max
+        error so far kept with its design (:attr:`seen_x`), which every polish after takes as a candidate: a design
+        the progress line reported is never lost."""
+        if self.generation % MEASURE_EVERY or not np.isfinite(search.best):
+            return
+        x = np.array(search.candidates()[0][0], float)
+        err = float(self.problem.measure(x[None])[0][0])
+        if err < self.seen:
+            self.seen, self.seen_x = err, x
+
+    def report(self, designs: int = 0, best: float = np.inf) -> None:
+        """Tell the progress callback where the run is (the designs under way included: :meth:`measure_under_way`)."""
         if self.progress is None:
             return
-        if search is not None and np.isfinite(best) and self.clock() - self.measured >= MEASURE_EVERY:
-            self.measured = self.clock()
-            self.seen = min(self.seen, float(self.problem.measure(search.candidates()[0][:1])[0][0]))
         cost, err = self.best_so_far()
         if np.isfinite(self.seen) and not err <= self.seen:  # NaN (nothing polished yet) or worse
             err = self.seen
@@ -581,7 +591,8 @@ class _Run:
             designs += search.step()
             self.generation += 1
             self.generation_time = time.monotonic() - t0
-            self.report(designs, search.best, search)
+            self.measure_under_way(search)
+            self.report(designs, search.best)
             if self.settings.checkpoint:
                 self.save(search.capture(), designs)
             if self.lane is not None and self.lane.dropped(self.restart):
@@ -611,6 +622,8 @@ class _Run:
         if fresh and time.monotonic() < self.deadline():  # a whole polish, not one cut by the clock
             self.polish_time = max(self.polish_time, self.clock() - t0)
         seeds = [] if self.initial is None or self.restart >= self.n_variants else [self.initial[0]]
+        if self.seen_x is not None and k == 0:  # a design the progress line may have reported
+            seeds.append(self.seen_x)
         cands = np.array(self.polished + picked + seeds)  # the first searches end no worse than their seed
         err, cost = self.problem.measure(cands)
         if self.settings.pareto:
@@ -660,8 +673,11 @@ class _Run:
             "elapsed": self.clock(),
             "stopped_by": self.finished,
             "polish": polish,
+            "seen": self.seen if self.seen_x is not None else None,
         }
         arrays = {f"polish_{i}": x for i, x in enumerate(self.polished or [])} if polish else {}
+        if self.seen_x is not None:
+            arrays["seen_x"] = self.seen_x
         _save(self.settings, self.problem, header, solver, self.done, arrays)
 
     def outcome(self) -> Outcome:
@@ -1333,6 +1349,7 @@ def _state(header: dict[str, Any], settings: Settings) -> dict[str, Any]:
         "stopped_by": header["stopped_by"],
         "solver": header["solver"],
         "polish": header["polish"],
+        "seen": None if header.get("seen") is None else _number(header["seen"], "seen", 0.0, np.inf, float),
     }
     if state["stopped_by"] is not None and state["stopped_by"] not in STOPS:
         raise _Refused(f"stopped_by {shorten(repr(state['stopped_by']))}")
@@ -1368,6 +1385,8 @@ def _expected(state: dict[str, Any], problem: Objective, template: Callable[[int
     out: dict[str, Any] = {f"done_x_{i}": (dim, dim) for i in range(len(state["done"]))}
     if state["polish"] is not None:
         out.update({f"polish_{i}": (dim, dim) for i in range(state["polish"]["count"])})
+    if state["seen"] is not None:
+        out["seen_x"] = (dim, dim)
     if state["solver"] is not None:
         shapes = template(state["restart"]).shapes()
         listed = state["solver"]["arrays"]
@@ -1414,6 +1433,8 @@ def _with_arrays(state: dict[str, Any], arrays: dict[str, np.ndarray]) -> dict[s
     for i, d in enumerate(state["done"]):
         d["x"] = np.asarray(arrays[f"done_x_{i}"], float)
     polish = state.pop("polish")
+    state["seen_x"] = None if state["seen"] is None else np.asarray(arrays["seen_x"], float)
+    state["seen"] = np.inf if state["seen"] is None else state["seen"]
     state["polished"] = None
     state["out_of_time"] = False
     if polish is not None:
