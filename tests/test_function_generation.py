@@ -263,3 +263,24 @@ def test_the_pairs_readers_messages_name_the_file_as_given_and_its_line(tmp_path
         (tmp_path / "sub" / "fn.csv").write_text(body)
         assert main(["synthesize", "sub/fn.csv", "--task", "function", "-o", out]) == 2
         assert capsys.readouterr().err == f"linkagekit: error: sub/fn.csv: {says}\n"
+
+
+def test_a_linkage_that_nearly_locks_is_written_with_a_warning(tmp_path, capsys):
+    """Function generation bounds no transmission angle by default: five pairs across 360 deg gave a four-bar whose
+    transmission angle stays about 0.17 deg (coupler and output 666 ground lengths), written without a word (review
+    14c D2). The summary now warns, naming the option that bounds it; with that option, no warning, and the angle
+    is within it (the independent computation: the angle between coupler and output of the written file)."""
+    pairs = [(340, 70), (345, 76), (350, 83), (355, 91), (360, 100)]
+    src = write_pairs(tmp_path / "w.csv", pairs)
+    args = ["synthesize", str(src), "--task", "function", "--seconds", "1", "--workers", "1", "--seed", "0"]
+    assert main([*args, "-o", str(tmp_path / "a.yaml")]) == 0
+    text = capsys.readouterr().out
+    assert "warning: the transmission angle goes down to 0.1" in text and "--min-transmission 20 bounds it" in text
+    assert main([*args, "--min-transmission", "20", "-o", str(tmp_path / "b.yaml")]) == 0
+    assert "warning" not in capsys.readouterr().out
+    mech = lk.load(tmp_path / "b.yaml")
+    sweep = mech.to_dict()["drivers"][0]["angles"]
+    res = lk.analyze(mech, {"crank": np.linspace(sweep["start"], sweep["stop"], 201)})
+    coupler, output = res.point("D") - res.point("C"), res.point("D") - res.point("B")  # meeting at D
+    mu = np.degrees(np.abs(np.angle(coupler / output)))
+    assert np.all(np.minimum(mu, 180 - mu)[res.assembled] >= 20 - 1e-6)

@@ -1788,6 +1788,19 @@ def _positive(text: str, option: str) -> float:
     return value
 
 
+def _low_transmission(mu: float) -> list[str]:
+    """A warning line when a designed four-bar's smallest transmission angle ``mu`` (deg) is below ``check``'s bound
+    (:data:`linkagekit.checks.MIN_TRANSMISSION`): motion and function generation bound none by default."""
+    from .checks import MIN_TRANSMISSION
+
+    if not mu < MIN_TRANSMISSION - 1e-3:  # (a design held at that bound meets it to the polish's tolerance)
+        return []
+    return [
+        f"warning: the transmission angle goes down to {mu:.4g} deg (below {MIN_TRANSMISSION:g}): there the coupler "
+        f"pushes the output mostly into its bearing; --min-transmission {MIN_TRANSMISSION:g} bounds it"
+    ]
+
+
 def function_text(out: Any, unit: str, path: str | None) -> str:
     """The table of pairs and errors, and the summary, that ``synthesize --task function`` prints."""
     fit = out.fit
@@ -1809,6 +1822,7 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
     state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
     lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
     lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
+    lines += _low_transmission(fit.transmission[0])
     if out.engine is not None:
         o = out.engine.outcome
         lines.append(
@@ -1898,6 +1912,7 @@ def motion_text(out: Any, poses: Any, unit: str, path: str | None) -> str:
     )
     branch = "met in order on one branch" if best.one_branch else "NOT met in order on one branch"
     lines.append(f"{best.grashof}; poses {branch}; smallest transmission angle {best.min_transmission:.4g} deg")
+    lines += _low_transmission(best.min_transmission)
     if len(out.fourbars) > 1:
         lines.append(f"{len(out.fourbars)} four-bars found (best first):")
         for i, f in enumerate(out.fourbars):
