@@ -284,3 +284,24 @@ def test_a_linkage_that_nearly_locks_is_written_with_a_warning(tmp_path, capsys)
     coupler, output = res.point("D") - res.point("C"), res.point("D") - res.point("B")  # meeting at D
     mu = np.degrees(np.abs(np.angle(coupler / output)))
     assert np.all(np.minimum(mu, 180 - mu)[res.assembled] >= 20 - 1e-6)
+
+
+def test_three_pairs_whose_exact_four_bar_points_the_other_way_say_so(tmp_path, capsys):
+    """Freudenstein's equation ``K1 cos psi - K2 cos phi + K3 = cos(phi - psi)`` (``K1 = d / a``, ``K2 = d / c``)
+    solved here for (30, 80), (60, 100), (90, 125): both ``a`` and ``c`` negative, so no four-bar with these angles
+    as given meets them; the docs said three pairs are always met exactly (review 14c D3). The summary says why and
+    names ``--free-offsets``, which meets them exactly (1e-9 deg, its four-bar's output angles by analyze)."""
+    pairs = np.array([(30, 80), (60, 100), (90, 125)], float)
+    phi, psi = np.radians(pairs.T)
+    K = np.linalg.solve(np.stack([np.cos(psi), -np.cos(phi), np.ones(3)], axis=1), np.cos(phi - psi))
+    assert 1 / K[0] < 0 and 1 / K[1] < 0  # a = d / K1, c = d / K2 with d = 1
+    src = write_pairs(tmp_path / "p.csv", pairs)
+    args = ["synthesize", str(src), "--task", "function", "--seconds", "1", "--workers", "1", "--seed", "0"]
+    assert main([*args, "-o", str(tmp_path / "a.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "180 deg away" in out and "--free-offsets may meet them" in out
+    assert main([*args, "--free-offsets", "-o", str(tmp_path / "b.yaml")]) == 0
+    assert "--free-offsets may meet them" not in capsys.readouterr().out
+    fit = solve(pairs[:, 0], pairs[:, 1], free_offsets=True)
+    assert fit.valid and fit.max_error <= 1e-9
+    assert np.max(np.abs(analysed_errors(lk.Mechanism.from_dict(fit.mechanism_dict()), fit))) <= 1e-9

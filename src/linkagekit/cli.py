@@ -1814,6 +1814,11 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
     side = "left" if fit.branch > 0 else "right"
     lines = [*render_table(cols), ""]
     lines.append(f"max error {fit.max_error:.6g} deg ({fit.method})")
+    if len(fit.inputs) == 3 and fit.method != "exact" and fit.offsets == (0.0, 0.0):
+        lines.append(
+            "three pairs are met exactly only by Freudenstein's four-bar, and here its crank or output would point "
+            "180 deg away from the angles given (or not assemble on one branch): --free-offsets may meet them"
+        )
     if fit.offsets != (0.0, 0.0):
         lines.append(
             f"offsets: crank angle = input + {fit.offsets[0]:.6g} deg, output angle = output + {fit.offsets[1]:.6g} deg"
