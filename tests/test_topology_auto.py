@@ -440,6 +440,9 @@ def test_auto_takes_the_four_bar_search_of_a_single_topology_as_a_candidate_too(
     assert abs(errors[auto.FOUR_BAR_ENGINE] - engine.rms_error / engine.diagonal) < 1e-12 and len(seen) >= 2
     judged = sorted((not c.feasible, auto.two_sided(c, arc)) for c in seen)
     assert (not out.feasible, auto.two_sided(out, arc)) == judged[0]
+    listed = {t.name: t.two_sided for t in out.tried}  # what the `searched:` line prints, over the diagonal
+    assert abs(listed[auto.FOUR_BAR_ENGINE] - auto.two_sided(engine, arc) / engine.diagonal) < 1e-12
+    assert abs(min(listed.values()) - judged[0][1] / out.diagonal) < 1e-12
     res = lk.analyze(out.mechanism, {"crank": np.linspace(0.0, 360.0, 3601)})
     assert np.all(res.assembled)
 

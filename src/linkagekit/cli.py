@@ -1701,9 +1701,9 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     text = synthesis_text(out, targets.xy, None, targets.unit, _written(out.feasible, args.output)).splitlines()
     a = out.mechanism.to_dict()["drivers"][0]["angles"]
     joints = len(out.mechanism.joint_names)
-    tried = ", ".join(f"{t.name} {100 * t.error:.3g} %" for t in out.tried)
+    tried = ", ".join(f"{t.name} {100 * t.error:.3g} % ({100 * t.two_sided:.3g} %)" for t in out.tried)
     text.insert(-1, f"topology {out.topology} ({joints} joints), crank {a['start']:.6g} to {a['stop']:.6g} deg")
-    text.insert(-1, f"searched: {tried} (rms error / diagonal)")
+    text.insert(-1, f"searched: {tried}: rms error / diagonal (the two-sided distance / diagonal, which chose)")
     print("\n".join(text))
     return _met(out.feasible, args.output)
 

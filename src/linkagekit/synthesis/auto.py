@@ -76,13 +76,17 @@ class Tried:
     screen : float
         The best screened design's RMS fit / the targets' diagonal (inf: none assembled).
     error : float
-        The searched design's max error / diagonal (NaN if not searched; inf: infeasible).
+        The searched design's RMS error / diagonal (NaN if not searched; inf: infeasible).
+    two_sided : float
+        What the choice between the topologies compares (:func:`two_sided`) / diagonal: the mean distance from the
+        targets to the design's curve plus the mean from its curve to the targets (NaN if not searched).
     """
 
     name: str
     joints: int
     screen: float
     error: float = float("nan")
+    two_sided: float = float("nan")
 
 
 @one_blas_thread_with_scipy
@@ -216,10 +220,10 @@ def _chosen(
     for name, (figure, _), proj, x0, out in zip(saved.order, saved.screen, projs, starts, outs, strict=True):
         x = _best_of(proj, [out.x, x0])
         syn = written(proj, x, replace(out, x=x), source)
-        tried.append(Tried(name, joints[name], figure, _relative(syn)))
+        tried.append(Tried(name, joints[name], figure, _relative(syn), two_sided(syn, xy) / syn.diagonal))
         found.append(syn)
-    best = min([*found, engine], key=lambda f: (not f.feasible, two_sided(f, xy)))
-    runs = (*tried, Tried(FOUR_BAR_ENGINE, 5, np.nan, _relative(engine)))
+    runs = (*tried, Tried(FOUR_BAR_ENGINE, 5, np.nan, _relative(engine), two_sided(engine, xy) / engine.diagonal))
+    best = min(zip(runs, [*found, engine], strict=True), key=lambda r: (not r[1].feasible, r[0].two_sided))[1]
     return replace(best, tried=runs, outcome=_whole_run(best.outcome, [*outs, engine.outcome], t0))
 
 
