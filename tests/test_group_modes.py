@@ -496,6 +496,51 @@ def test_a_triad_that_turns_fully():
     assert lk.check(mech).input_range == [[0.0, 360.0]]
 
 
+#: a triad whose mode runs 418.28 deg of crank from fold to fold (review 14b): posed 0.74 deg above one fold, and
+#: mid-way (at -160 deg)
+LONG_MODE = {
+    "O": 0j,
+    "A": 1.6629534486171318 + 0j,
+    "B0": 3.1620132974606356 - 3.8054986843670453j,
+    "C0": 2.819402328001919 + 3.0819423420610086j,
+    "J1": -2.922786444704469 + 7.267493629332787j,
+    "J2": -0.6092754601624639 + 6.008189477752106j,
+    "J3": 0.8458934362985033 + 0.561371225707588j,
+}
+LONG_MODE_MID = dict(
+    LONG_MODE,
+    A=-1.562665084375997 - 0.5687635768399464j,
+    J1=-1.6607931990804172 + 8.024015071228348j,
+    J2=0.3524924820135609 + 6.325527276722066j,
+    J3=0.6835195831263259 + 0.6974044416764765j,
+)
+
+
+def test_a_mode_longer_than_a_turn_that_does_not_close_ends_at_its_two_folds():
+    """The pose's mode of this triad goes 418.28 deg of crank from fold to fold: a turn round it comes back in
+    another configuration, and the directions of 58.28 deg are reached twice. ``check`` took a walk that got a
+    turn round as a full turn: [0, 360], no dead point, while a sweep jumped 6 to 9.6 mm between two samples 0.01
+    deg apart (review 14b). Now a walk that gets a turn round goes on unless it is back where it started: posed
+    mid-way, the range is the two folds of the independent arclength continuation (1e-6 deg), both listed as dead
+    points, and the text says which directions are reached twice; posed 0.74 deg above a fold (on the same mode),
+    the same range."""
+    from helpers import ArclengthTriad
+
+    ref = ArclengthTriad(
+        LONG_MODE_MID, [("A", "J1"), ("B0", "J2"), ("C0", "J3"), ("J1", "J2"), ("J2", "J3"), ("J1", "J3")]
+    )
+    lo, hi = ref.range
+    assert 418.2 < hi - lo < 418.4
+    rep = lk.check(triad(LONG_MODE_MID))
+    ((a, b),) = rep.input_range
+    k = round((a - lo) / 360)
+    assert abs(a - (lo + 360 * k)) < 1e-6 and abs(b - (hi + 360 * k)) < 1e-6
+    ends = sorted(d["input"] for d in rep.dead_points["crank"] if d["kind"] == "end of range")
+    assert np.allclose(ends, [a, b], rtol=0, atol=1e-6)
+    assert f"directions from {a:.6f} to {b - 360:.6f} deg are reached twice" in rep.text()
+    assert np.allclose(lk.check(triad(LONG_MODE)).input_range, [[a, b]], rtol=0, atol=1e-6)
+
+
 def test_a_group_that_cannot_be_cut_lists_the_continued_mode_with_a_note(monkeypatch, tmp_path, capsys):
     import linkagekit.groupmodes as gm
 

@@ -1035,6 +1035,8 @@ def _driver_checks(
     _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
     ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
+    if run.cyclic and intervals[0][1] - intervals[0][0] > (run.hi - run.lo) * (1 + 1e-9):  # a mode longer than a turn
+        ends = list(intervals[0])  # that does not close ends at a fold each way
     hole = _undetermined(run)
     near_hole = [] if hole is None else list(intervals[0])  # a hair either side of it
     fin = _finish(run, roots + mins, ends + near_hole[1:])
@@ -1868,9 +1870,25 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
                 "  in the pose's mode, by continuation from the pose (ends refined by bisection through the solver); "
                 "other modes: linkagekit modes"
             )
+            lines += _twice_reached(rng, unit)
         if driver in dead_points:
             lines += _dead_point_lines(driver, dead_points[driver], fmt)
     return lines
+
+
+def _twice_reached(rng: list[list[float]], unit: str) -> list[str]:
+    """For an angle's range longer than a turn (a numerical group's mode that does not close: it ends at a fold each
+    way, :func:`linkagekit.groupmodes.continuation_intervals`), which directions it reaches twice, and which of the
+    two configurations ``analyze`` answers."""
+    turn = {"deg": 360.0, "rad": 2 * math.pi}.get(unit)
+    if turn is None or len(rng) != 1 or not rng[0][1] - rng[0][0] > turn * (1 + 1e-9):
+        return []
+    a, b = rng[0]
+    return [
+        f"  longer than a turn, and it does not close: the directions from {a:.6f} to {b - turn:.6f} {unit} are "
+        f"reached twice, a turn apart, in two configurations; analyze answers each direction with the one nearest "
+        f"the pose's input, so a sweep of directions jumps from one to the other half a turn from it"
+    ]
 
 
 def _dead_point_lines(driver: str, dps: list[dict[str, Any]], fmt: _Text) -> list[str]:

@@ -113,6 +113,11 @@ CHUNK = 1 << 16
 JUMP_RTOL = 0.1
 #: an assembly range's ends are refined until the bracket is this narrow (rad; times the span for a length)
 RANGE_TOL = 1e-9
+#: a walk a turn round closes the mode where it comes back within this share of the mechanism's size of where it
+#: started (the same configuration: the solver's answers at one direction agree to about 1e-10 of it)
+CLOSES = 1e-6
+#: a mode that does not close after a turn is walked on, up to this many turns in all, to the fold where it ends
+TURNS = 2
 
 
 # ---------------------------------------------------------------------- restarting the solver
@@ -199,11 +204,10 @@ def continuation_intervals(
     z0 = start.z[:, 0, 0]
     step = (hi - lo) / n
     period = hi - lo
-    up = _walk(params, driver, z0, x0, step, x0 + period if cyclic else hi)
+    up = _leg(params, driver, z0, x0, step, period) if cyclic else _walk(params, driver, z0, x0, step, hi)
     if up is None and cyclic:
         return [[lo, hi]]
-    # going down, a turn less than where the walk up stopped is the whole circle
-    down = _walk(params, driver, z0, x0, -step, up[2] - period if cyclic and up is not None else lo)
+    down = _leg(params, driver, z0, x0, -step, period) if cyclic else _walk(params, driver, z0, x0, -step, lo)
     if down is None and cyclic:
         return [[lo, hi]]
     brackets = [w for w in (up, down) if w is not None]
@@ -221,12 +225,34 @@ def continuation_intervals(
     return [[float(s), float(e)]]
 
 
+def _leg(
+    params: Params, driver: int, z0: np.ndarray, x0: float, step: float, period: float
+) -> tuple[np.ndarray, float, float, float, float, float] | None:
+    """An angle's walk one way from the pose (:func:`_walk`): None where the mode turns fully, else the bracket of its
+    end. A turn that comes back to the pose's configuration closes the mode; one that comes back elsewhere does not
+    (a mode longer than a turn reaches some directions twice, in two configurations): the walk goes on, up to
+    ``TURNS`` turns in all, to the fold where it ends, or not (it turns fully, closing after more turns)."""
+    reached: list[np.ndarray] = []
+    end = _walk(params, driver, z0, x0, step, x0 + np.sign(step) * period, reached)
+    if end is not None or np.max(np.abs(reached[0] - z0)) <= CLOSES * _size(params):
+        return end
+    far = x0 + np.sign(step) * TURNS * period
+    return _walk(params, driver, reached[0], x0 + np.sign(step) * period, step, far)
+
+
 def _walk(
-    params: Params, driver: int, z0: np.ndarray, x0: float, step: float, limit: float
+    params: Params,
+    driver: int,
+    z0: np.ndarray,
+    x0: float,
+    step: float,
+    limit: float,
+    reached: list[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, float, float, float, float, float] | None:
     """Walk the solver from (z0, x0) in steps of ``step`` towards ``limit``.
 
-    Returns None when it gets there, else the bracket of its end: the last assembled state,
+    Returns None when it gets there (its state there appended to ``reached``), else the bracket of its end: the last
+    assembled state,
     its input, the first input that does not assemble, and the sample before the last with
     the :func:`_indicator` of both (for :func:`_refine_end`).  Solves come in chunks (each a
     sweep of the solver, sample after sample, restarted from the last state); a chunk grows
@@ -258,6 +284,8 @@ def _walk(
         if len(bad):
             return z, x_new, float(xs[good]), x_prev, g_prev, g_new
         if past.any():
+            if reached is not None:
+                reached.append(z)
             return None
         if np.isfinite(g_new) and g_new < g_prev:  # steps to where the indicator reaches 0
             left = g_new * abs(x_new - x_prev) / (g_prev - g_new) / abs(step)
