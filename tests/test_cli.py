@@ -50,6 +50,8 @@ BAD_FILES = {
     "non-numeric": (GOOD.replace("C: [2, 0]", "C: [two, 0]"), "joints.C[0]"),
     "unknown unit": (GOOD.replace("length: cm", "length: furlong"), "units.length"),
     "unknown key": (GOOD.replace("links:", "lynks: {}\nlinks:"), "lynks: unknown key"),
+    # a review: a misspelt required key was reported as the missing one ("drivers: required key is missing")
+    "misspelt key": (GOOD.replace("drivers:", "driverz:"), "driverz: unknown key (did you mean 'drivers'?)"),
     "no ground": (GOOD.replace("ground: [A, B]", "frame: [A, B]"), "no link named 'ground'"),
     "pivot not on link": (GOOD.replace("pivot: A", "pivot: B"), "drivers[0].pivot"),
     "coincident joints": (GOOD.replace("P: [5.6182, 3.4509]", "P: [2, 0]"), "at one spot"),

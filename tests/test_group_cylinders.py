@@ -234,3 +234,23 @@ def test_cylinders_in_groups_equal_the_closed_form(name):
     for d in mech.drivers:
         fa, fb = (np.array(r["driver_force"][d.name], float) for r in (a, b))
         np.testing.assert_allclose(fb, fa, rtol=1e-10, atol=1e-10 * np.nanmax(np.abs(fa)))
+
+
+def test_check_of_a_group_holding_a_cylinder_warns_nothing():
+    """``lk.check`` of a triad whose third leg is a cylinder driver leaked numpy's "invalid value encountered in
+    subtract" from the refinement of its range's ends (a bracket's secant where it has none; review 14b). The same
+    report, with every warning an error: its range within the stroke."""
+    import warnings
+
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"A0": [0, 1], "B0": [8, 0], "C0": [4, -5], "J1": [2, 6], "J2": [7, 5], "J3": [5, 2]},
+        "links": {"ground": ["A0", "B0", "C0"], "l1": ["A0", "J1"], "l2": ["B0", "J2"], "tern": ["J1", "J2", "J3"]},
+        "drivers": [{"cylinder": ["C0", "J3"], "name": "cyl", "stroke": [5.5, 8.5], "speed": 1}],
+    }
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rep = lk.check(lk.Mechanism.from_dict(doc))
+    ((a, b),) = rep.input_range
+    assert 5.5 <= a < b <= 8.5

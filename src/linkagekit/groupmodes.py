@@ -411,10 +411,10 @@ def _trials(
         est = a + g * (a - a_prev) / (g_prev - g)
         u = (est - a) / w
         spread = np.where(np.isfinite(est_prev), 2 * np.abs(est - est_prev) / np.abs(w), 0.25)
-    spread = np.maximum(spread, 0.5 * tol / np.maximum(np.abs(w), 1e-300))
-    valid = np.isfinite(u) & (u > 0) & (u < 1) & (g_prev > g) & (g > 0)
-    u1 = np.where(valid, u - spread, 0.5)
-    u2 = np.where(valid, u + spread, 0.5)
+        spread = np.maximum(spread, 0.5 * tol / np.maximum(np.abs(w), 1e-300))  # (NaN where the bracket is not)
+        valid = np.isfinite(u) & (u > 0) & (u < 1) & (g_prev > g) & (g > 0)
+        u1 = np.where(valid, u - spread, 0.5)
+        u2 = np.where(valid, u + spread, 0.5)
     u1 = np.where(u1 <= 0, 0.5 * np.where(valid, u, 1.0), u1)
     u2 = np.where(u2 >= 1, 0.5 * (1 + np.where(valid, u, 0.0)), u2)
     return u1, u2, est, valid

@@ -7,6 +7,7 @@ other consistently is checked when the :class:`~linkagekit.model.Mechanism` is b
 
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
 from typing import Annotated, Any, Literal
@@ -236,9 +237,21 @@ def parse(data: Any, source: str) -> FileSpec:
             if "LinkSpec" in err["loc"] and isinstance(_get(data, err["loc"][:2]), dict):
                 first = err
                 break
-        msg = _message(first)
+        unknown = [e for e in errors if e["type"] == "extra_forbidden"]
+        if unknown and first["type"] == "missing":  # a misspelt key explains a missing one: name it
+            first = unknown[0]
+        msg = _message(first) + _meant(first)
         where = shorten(_location(first["loc"]), 120)
         raise MechanismFileError(f"{source}: {where}: {shorten(msg, 200)}") from None
+
+
+def _meant(err: Any) -> str:
+    """For an unknown top-level key, the file format's key it is nearest to (a typo), if one is near."""
+    loc = tuple(err["loc"])
+    if err["type"] != "extra_forbidden" or len(loc) != 1:
+        return ""
+    near = difflib.get_close_matches(str(loc[0]), list(FileSpec.model_fields), n=1)
+    return f" (did you mean {near[0]!r}?)" if near else ""
 
 
 def _get(data: Any, loc: tuple[int | str, ...]) -> Any:
