@@ -569,8 +569,9 @@ def limits(
     ``e = 1e-3`` (``docs/method.md``).  It is taken only where all four solves assemble and
     are regular, and the left and right linear extrapolations agree to ``LIMIT_AGREE`` (of the
     size for positions, of the largest speed for velocities at unit input speed): the branch
-    is smooth there (a lock, a gap or a kink keep the sample as solved).  ``singular`` stays as
-    it was; ``Rates.limit`` marks the samples whose rates are such limits.  Every other sample
+    is smooth there (a lock, a gap or a kink keep the sample as solved).  Such a sample is
+    ``singular`` (one that did not assemble, as over a rhombus's ground pivot, becomes so); ``Rates.limit`` marks the
+    samples whose rates are such limits.  Every other sample
     is untouched.  ``rates`` are the drivers' speeds and accelerations (n_drivers, 1, n or 1).
     """
     w_in, a_in = rates
@@ -624,4 +625,5 @@ def _take_limits(
     alpha = {name: _patched(v, side.alpha.get(name), take, cols, shape) for name, v in rt.alpha.items()}
     limit = np.zeros(shape, bool)
     limit[d, cols[k]] = True
-    return new_pos, replace(rt, omega=omega, alpha=alpha, limit=limit)
+    singular = rt.singular | limit  # (one that did not assemble, coincident circles, is singular there too)
+    return new_pos, replace(rt, omega=omega, alpha=alpha, limit=limit, singular=singular)
