@@ -303,3 +303,34 @@ def test_slider_line_carried_by_a_moving_link():
     for a, b in (("C", "D"), ("D", "E"), ("E", "F"), ("D", "F")):
         assert np.max(np.abs(np.abs(z[a] - z[b]) - abs(p[a] - p[b]))) <= 1e-10
     assert np.max(np.abs(got[:, 0] - np.array([p["D"], p["E"], p["F"]]))) <= 1e-12
+
+
+def test_check_lists_the_limit_positions_of_a_block_a_triad_moves():
+    """A triad whose third leg is a block on a ground line: ``check`` listed no limit position (review 14b). The
+    conditioning rows of a numerical group were stacked after the sign steps' and shifted every row after them: the
+    block's velocity row read the group's conditioning, which never changes sign. Now the block's maximum is listed
+    where an independent sweep of its position along the line (analyze, 0.0005 deg apart) has it: 65.3366 deg
+    (1e-3 deg), 0.73262 from the pose's position (1e-6)."""
+    doc = {
+        "format": "linkagekit/1",
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O": [0, 0], "A": [3**0.5, 1.0], "B0": [8, 0], "J1": [2, 6], "J2": [7, 5], "J3": [5, 2]},
+        "links": {
+            "ground": ["O", "B0"],
+            "crank": ["O", "A"],
+            "l1": ["A", "J1"],
+            "l2": ["B0", "J2"],
+            "tern": ["J1", "J2", "J3"],
+            "block": ["J3"],
+        },
+        "sliders": [{"link": "block", "on": "ground", "through": "J3", "direction": [1, 0.3]}],
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+    }
+    mech = lk.Mechanism.from_dict(doc)
+    (limits,) = [s["limit_positions"] for s in lk.check(mech).to_dict()["sliders"]]
+    u = np.linspace(60.0, 70.0, 20001)
+    d = np.array([1, 0.3]) / np.hypot(1, 0.3)
+    along = lk.analyze(mech, {"crank": u}, rates=False).xy("J3") @ d - np.array([5, 2]) @ d
+    i = int(np.argmax(along))
+    assert [lp["extreme"] for lp in limits] == ["max"]
+    assert abs(limits[0]["input"] - u[i]) < 1e-3 and abs(limits[0]["position"] - along[i]) < 1e-6

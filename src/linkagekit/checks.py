@@ -316,9 +316,10 @@ def _state(params: Params, driver: int, x: np.ndarray) -> _State:
     speed[driver] = 1.0
     rt = solve_rates(params, pos, speed, np.zeros((nd, 1, 1)), tol=0.0)
     ok = pos.assembled[0]
-    cond = np.where(ok, np.abs(rt.condition[:, 0]), np.nan)
-    singular = np.any(cond < SINGULAR_TOL, axis=0) if len(cond) else np.zeros(len(ok), bool)
+    every = np.where(ok, np.abs(rt.condition[:, 0]), np.nan)  # the sign steps', then each numerical group's
+    singular = np.any(every < SINGULAR_TOL, axis=0) if len(every) else np.zeros(len(ok), bool)
     v = rt.v[:, 0]
+    cond = every[: params.plan.n_signs]  # the rows :class:`_Quantities` reads: a group's shifted the slider rows
     return _State(ok, pos.z[:, 0], np.where(singular, np.nan, v), v, cond, pos.margin[:, 0])
 
 
