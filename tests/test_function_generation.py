@@ -305,3 +305,14 @@ def test_three_pairs_whose_exact_four_bar_points_the_other_way_say_so(tmp_path, 
     fit = solve(pairs[:, 0], pairs[:, 1], free_offsets=True)
     assert fit.valid and fit.max_error <= 1e-9
     assert np.max(np.abs(analysed_errors(lk.Mechanism.from_dict(fit.mechanism_dict()), fit))) <= 1e-9
+
+
+def test_a_transmission_angle_near_180_is_warned_of_too(tmp_path, capsys):
+    """Three pairs met exactly by a four-bar whose transmission angle goes up to 171.1 deg: check warns (it leaves
+    [20, 160]); the summary's warning looked at the smallest angle only (review 14d)."""
+    src = write_pairs(tmp_path / "p.csv", [(20.5, 53.5), (46.9, 67.8), (107.4, 146.2)])
+    args = ["synthesize", str(src), "--task", "function", "--seconds", "1", "--workers", "1", "--seed", "0"]
+    assert main([*args, "-o", str(tmp_path / "a.yaml")]) == 0
+    out = capsys.readouterr().out
+    hi = float(re.search(r"transmission angle [\d.]+ to ([\d.]+) deg", out).group(1))
+    assert hi > 160 and f"warning: the transmission angle goes up to {hi:.4g} deg (outside [20, 160])" in out

@@ -1788,16 +1788,20 @@ def _positive(text: str, option: str) -> float:
     return value
 
 
-def _low_transmission(mu: float) -> list[str]:
-    """A warning line when a designed four-bar's smallest transmission angle ``mu`` (deg) is below ``check``'s bound
-    (:data:`linkagekit.checks.MIN_TRANSMISSION`): motion and function generation bound none by default."""
+def _low_transmission(lo: float, hi: float = 90.0) -> list[str]:
+    """A warning line when a designed four-bar's transmission angle (deg, from ``lo`` to ``hi``) leaves ``check``'s
+    ``[MIN, 180 - MIN]`` (:data:`linkagekit.checks.MIN_TRANSMISSION`): motion and function generation bound none by
+    default."""
     from .checks import MIN_TRANSMISSION
 
-    if not mu < MIN_TRANSMISSION - 1e-3:  # (a design held at that bound meets it to the polish's tolerance)
+    worst = min(lo, 180.0 - hi)
+    if not worst < MIN_TRANSMISSION - 1e-3:  # (a design held at that bound meets it to the polish's tolerance)
         return []
+    at = f"down to {lo:.4g}" if lo <= 180.0 - hi else f"up to {hi:.4g}"
+    bound = f"{MIN_TRANSMISSION:g}"
     return [
-        f"warning: the transmission angle goes down to {mu:.4g} deg (below {MIN_TRANSMISSION:g}): there the coupler "
-        f"pushes the output mostly into its bearing; --min-transmission {MIN_TRANSMISSION:g} bounds it"
+        f"warning: the transmission angle goes {at} deg (outside [{bound}, {180 - MIN_TRANSMISSION:g}]): there the "
+        f"coupler pushes the output mostly into its bearing; --min-transmission {bound} bounds it"
     ]
 
 
@@ -1827,7 +1831,7 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
     state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
     lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
     lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
-    lines += _low_transmission(fit.transmission[0])
+    lines += _low_transmission(*fit.transmission)
     if out.engine is not None:
         o = out.engine.outcome
         lines.append(

@@ -237,12 +237,19 @@ def parse(data: Any, source: str) -> FileSpec:
             if "LinkSpec" in err["loc"] and isinstance(_get(data, err["loc"][:2]), dict):
                 first = err
                 break
-        unknown = [e for e in errors if e["type"] == "extra_forbidden"]
-        if unknown and first["type"] == "missing":  # a misspelt key explains a missing one: name it
-            first = unknown[0]
+        if first["type"] == "missing":  # a misspelt key near the missing one explains it: name that key
+            first = next((e for e in errors if _misspelt(e, first)), first)
         msg = _message(first) + _meant(first)
         where = shorten(_location(first["loc"]), 120)
         raise MechanismFileError(f"{source}: {where}: {shorten(msg, 200)}") from None
+
+
+def _misspelt(err: Any, missing: Any) -> bool:
+    """Whether ``err`` is an unknown key beside the ``missing`` one, and near it (a typo of it)."""
+    loc, want = tuple(err["loc"]), tuple(missing["loc"])
+    if err["type"] != "extra_forbidden" or len(loc) != len(want) or loc[:-1] != want[:-1]:
+        return False
+    return bool(difflib.get_close_matches(str(loc[-1]), [str(want[-1])], n=1))
 
 
 def _meant(err: Any) -> str:

@@ -407,7 +407,7 @@ class _Run:
     generation_time: float = 0.0  # seconds of the last generation
     front: list[tuple[np.ndarray, float, float]] = field(default_factory=list)  # --pareto's designs
     seen: float = np.inf  # the smallest max error measured so far, a search under way's best included
-    seen_x: np.ndarray | None = None  # ... the design measured so, kept as a candidate of every polish after
+    kept: tuple[float, np.ndarray] | None = None  # the restart under way's best measured design (its max error, x)
     lane: Any = None  # on a worker running a lane's restart: its line to the parent (_WorkerLane)
     initial: np.ndarray | None = None  # designs that seed the first searches, best first
     close: bool = False  # the first of them is within SEED_LIMIT: differential evolution is seeded too
@@ -429,7 +429,9 @@ class _Run:
             run.generation, run.evaluations, run.elapsed0 = state["generation"], state["evaluations"], state["elapsed"]
             run.finished = state["stopped_by"]
             run.stopped_by = run.finished or run.stopped_by
-            run.seen, run.seen_x = state["seen"], state["seen_x"]
+            if state["kept"] is not None:
+                run.kept = state["kept"]
+                run.seen = state["kept"][0]
         if run.finished is None and any(d["max_error"] <= settings.goal for d in run.done):
             run.stopped_by, run.restart = "goal", settings.restarts
         if settings.pareto and run.done:  # a checkpoint's: its searches' best designs (their other ones are gone)
@@ -537,7 +539,7 @@ class _Run:
         self.evaluations += designs
         self.restart += 1
         self.generation = 0
-        self.polished = None
+        self.polished, self.kept = None, None
         if self.settings.checkpoint:
             self.save()
         self.report()
@@ -551,14 +553,15 @@ class _Run:
 
     def measure_under_way(self, search: Search) -> None:
         """Every ``MEASURE_EVERY`` generations, the best design of the search under way measured; the smallest max
-        error so far kept with its design (:attr:`seen_x`), which every polish after takes as a candidate: a design
-        the progress line reported is never lost."""
+        error of the restart under way kept with its design (:attr:`kept`), which its polish takes as a candidate: a
+        design the progress line reported is never lost, and a restart ends alike on one worker or several."""
         if self.generation % MEASURE_EVERY or not np.isfinite(search.best):
             return
         x = np.array(search.candidates()[0][0], float)
         err = float(self.problem.measure(x[None])[0][0])
-        if err < self.seen:
-            self.seen, self.seen_x = err, x
+        self.seen = min(self.seen, err)
+        if self.kept is None or err < self.kept[0]:  # the restart's own (workers or not, the same per restart)
+            self.kept = (err, x)
 
     def report(self, designs: int = 0, best: float = np.inf) -> None:
         """Tell the progress callback where the run is (the designs under way included: :meth:`measure_under_way`)."""
@@ -622,8 +625,8 @@ class _Run:
         if fresh and time.monotonic() < self.deadline():  # a whole polish, not one cut by the clock
             self.polish_time = max(self.polish_time, self.clock() - t0)
         seeds = [] if self.initial is None or self.restart >= self.n_variants else [self.initial[0]]
-        if self.seen_x is not None and k == 0:  # a design the progress line may have reported
-            seeds.append(self.seen_x)
+        if self.kept is not None:  # a design the progress line may have reported
+            seeds.append(self.kept[1])
         cands = np.array(self.polished + picked + seeds)  # the first searches end no worse than their seed
         err, cost = self.problem.measure(cands)
         if self.settings.pareto:
@@ -673,11 +676,11 @@ class _Run:
             "elapsed": self.clock(),
             "stopped_by": self.finished,
             "polish": polish,
-            "seen": self.seen if self.seen_x is not None else None,
+            "seen": None if self.kept is None else self.kept[0],
         }
         arrays = {f"polish_{i}": x for i, x in enumerate(self.polished or [])} if polish else {}
-        if self.seen_x is not None:
-            arrays["seen_x"] = self.seen_x
+        if self.kept is not None:
+            arrays["seen_x"] = self.kept[1]
         _save(self.settings, self.problem, header, solver, self.done, arrays)
 
     def outcome(self) -> Outcome:
@@ -766,6 +769,7 @@ class _Run:
             front=[],
             generation=0,
             polished=None,
+            kept=None,
             evaluations=0,
             progress=None,
         )
@@ -1433,8 +1437,7 @@ def _with_arrays(state: dict[str, Any], arrays: dict[str, np.ndarray]) -> dict[s
     for i, d in enumerate(state["done"]):
         d["x"] = np.asarray(arrays[f"done_x_{i}"], float)
     polish = state.pop("polish")
-    state["seen_x"] = None if state["seen"] is None else np.asarray(arrays["seen_x"], float)
-    state["seen"] = np.inf if state["seen"] is None else state["seen"]
+    state["kept"] = None if state["seen"] is None else (state["seen"], np.asarray(arrays["seen_x"], float))
     state["polished"] = None
     state["out_of_time"] = False
     if polish is not None:
