@@ -87,7 +87,8 @@ def input_range(mech: Mechanism, driver: int = 0, params: Params | None = None) 
 
     The other drivers stay at their reference-pose values.  An angle's intervals lie in
     [0, 360) degrees (or [0, 2 pi)), except that an interval running through 0 starts at
-    a negative value; a full turn is ``[[0, 360]]``.  Boundaries are exact to ~1e-12 rad.
+    a negative value; a full turn is ``[[0, 360]]``; a numerical group's mode longer than a
+    turn that does not close runs from fold to fold, longer than 360.  Boundaries are exact to ~1e-12 rad.
     With numerical groups it is the interval over which the pose's mode goes on, found by
     continuation, its ends to 1e-9 rad (:func:`linkagekit.groupmodes.continuation_intervals`).
     """
@@ -1036,8 +1037,8 @@ def _driver_checks(
     _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
     ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
-    if run.cyclic and intervals[0][1] - intervals[0][0] > (run.hi - run.lo) * (1 + 1e-9):  # a mode longer than a turn
-        ends = list(intervals[0])  # that does not close ends at a fold each way
+    if run.cyclic and _beyond_a_turn(intervals[0], run.hi - run.lo):  # a mode longer than a turn that does not
+        ends = list(intervals[0])  # close ends at a fold each way
     hole = _undetermined(run)
     near_hole = [] if hole is None else list(intervals[0])  # a hair either side of it
     fin = _finish(run, roots + mins, ends + near_hole[1:])
@@ -1877,12 +1878,17 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
     return lines
 
 
+def _beyond_a_turn(interval: list[float], turn: float) -> bool:
+    """Whether an angle's assembly ``interval`` is longer than a ``turn`` (a full turn is ``[0, turn]`` exactly)."""
+    return interval[1] - interval[0] > turn * (1 + 1e-9)
+
+
 def _twice_reached(rng: list[list[float]], unit: str) -> list[str]:
     """For an angle's range longer than a turn (a numerical group's mode that does not close: it ends at a fold each
     way, :func:`linkagekit.groupmodes.continuation_intervals`), which directions it reaches twice, and which of the
     two configurations ``analyze`` answers."""
     turn = {"deg": 360.0, "rad": 2 * math.pi}.get(unit)
-    if turn is None or len(rng) != 1 or not rng[0][1] - rng[0][0] > turn * (1 + 1e-9):
+    if turn is None or len(rng) != 1 or not _beyond_a_turn(rng[0], turn):
         return []
     a, b = rng[0]
     return [

@@ -1788,7 +1788,7 @@ def _positive(text: str, option: str) -> float:
     return value
 
 
-def _low_transmission(lo: float, hi: float = 90.0) -> list[str]:
+def _transmission_warning(lo: float, hi: float = 90.0) -> list[str]:
     """A warning line when a designed four-bar's transmission angle (deg, from ``lo`` to ``hi``) leaves ``check``'s
     ``[MIN, 180 - MIN]`` (:data:`linkagekit.checks.MIN_TRANSMISSION`): motion and function generation bound none by
     default."""
@@ -1831,7 +1831,7 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
     state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"
     lines.append(f"branch {fit.branch:+d} (D {side} of the line from C to B): {state}")
     lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
-    lines += _low_transmission(*fit.transmission)
+    lines += _transmission_warning(*fit.transmission)
     if out.engine is not None:
         o = out.engine.outcome
         lines.append(
@@ -1921,7 +1921,7 @@ def motion_text(out: Any, poses: Any, unit: str, path: str | None) -> str:
     )
     branch = "met in order on one branch" if best.one_branch else "NOT met in order on one branch"
     lines.append(f"{best.grashof}; poses {branch}; smallest transmission angle {best.min_transmission:.4g} deg")
-    lines += _low_transmission(best.min_transmission)
+    lines += _transmission_warning(best.min_transmission)
     if len(out.fourbars) > 1:
         lines.append(f"{len(out.fourbars)} four-bars found (best first):")
         for i, f in enumerate(out.fourbars):

@@ -402,7 +402,6 @@ class _Reduced:
     """
 
     cols: np.ndarray  # (n,) the unknown slots kept, in column order (slot cols[s] has columns 2s, 2s + 1)
-    lin: np.ndarray  # (p,) each further joint's index in the linear rows (``_Rows.k``)
     k: np.ndarray  # (p,) its slot
     a: np.ndarray  # (p,) its link's first joint's slot
     b: np.ndarray  # (p,) ... second's
@@ -412,7 +411,7 @@ class _Reduced:
     def factors(self, R: np.ndarray) -> list[np.ndarray]:
         """Each entry's ``f`` (B,) complex: the sum of its terms, ``2 sign`` times 1 (``_ONE``), ``conj(1 - rho_i)``
         (``_ONE_MINUS_RHO``) or ``conj(rho_i)`` (``_RHO``)."""
-        rho = np.conj(R[self.lin])
+        rho = np.conj(R[: len(self.k)])  # (every further joint's: their rhos are R's, in the linear rows' order)
         out = []
         for _, _, terms in self.entries:
             f = np.zeros(R.shape[1], complex)
@@ -751,7 +750,7 @@ class Group(Step):
                 elif slot < m:
                     terms.setdefault((r, col_of[slot]), []).append((_ONE, 0, sg))
         entries = tuple((r, c, tuple(t)) for (r, c), t in sorted(terms.items()))
-        return _Reduced(cols, np.arange(len(ks)), np.array(ks), a, b, entries, tuple(on_k))
+        return _Reduced(cols, np.array(ks), a, b, entries, tuple(on_k))
 
     def _factor(
         self, P: np.ndarray, ar: _Arrays, res: FloatArray, done: np.ndarray, vector: bool, work: FloatArray | None
@@ -819,7 +818,7 @@ class Group(Step):
         m, B = len(self.joints), len(xc)
         dz = np.zeros((m + 1, B), complex)  # the unknowns' steps, and a zero for a known end last
         dz[red.cols] = (xc[:, 0::2] + 1j * xc[:, 1::2]).T
-        rho = R[red.lin]
+        rho = R[: len(red.k)]
         ea, eb = np.where(red.a < m, red.a, m), np.where(red.b < m, red.b, m)
         dz[red.k] = b[rw.lin] + 1j * b[rw.lin + 1] + (1 - rho) * dz[ea] + rho * dz[eb]
         dx = np.empty((B, 2 * m))

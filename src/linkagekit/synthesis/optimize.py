@@ -676,11 +676,11 @@ class _Run:
             "elapsed": self.clock(),
             "stopped_by": self.finished,
             "polish": polish,
-            "seen": None if self.kept is None else self.kept[0],
+            "kept": None if self.kept is None else self.kept[0],
         }
         arrays = {f"polish_{i}": x for i, x in enumerate(self.polished or [])} if polish else {}
         if self.kept is not None:
-            arrays["seen_x"] = self.kept[1]
+            arrays["kept_x"] = self.kept[1]
         _save(self.settings, self.problem, header, solver, self.done, arrays)
 
     def outcome(self) -> Outcome:
@@ -1353,7 +1353,7 @@ def _state(header: dict[str, Any], settings: Settings) -> dict[str, Any]:
         "stopped_by": header["stopped_by"],
         "solver": header["solver"],
         "polish": header["polish"],
-        "seen": None if header.get("seen") is None else _number(header["seen"], "seen", 0.0, np.inf, float),
+        "kept": None if header.get("kept") is None else _number(header["kept"], "kept", 0.0, np.inf, float),
     }
     if state["stopped_by"] is not None and state["stopped_by"] not in STOPS:
         raise _Refused(f"stopped_by {shorten(repr(state['stopped_by']))}")
@@ -1389,8 +1389,8 @@ def _expected(state: dict[str, Any], problem: Objective, template: Callable[[int
     out: dict[str, Any] = {f"done_x_{i}": (dim, dim) for i in range(len(state["done"]))}
     if state["polish"] is not None:
         out.update({f"polish_{i}": (dim, dim) for i in range(state["polish"]["count"])})
-    if state["seen"] is not None:
-        out["seen_x"] = (dim, dim)
+    if state["kept"] is not None:
+        out["kept_x"] = (dim, dim)
     if state["solver"] is not None:
         shapes = template(state["restart"]).shapes()
         listed = state["solver"]["arrays"]
@@ -1437,7 +1437,7 @@ def _with_arrays(state: dict[str, Any], arrays: dict[str, np.ndarray]) -> dict[s
     for i, d in enumerate(state["done"]):
         d["x"] = np.asarray(arrays[f"done_x_{i}"], float)
     polish = state.pop("polish")
-    state["kept"] = None if state["seen"] is None else (state["seen"], np.asarray(arrays["seen_x"], float))
+    state["kept"] = None if state["kept"] is None else (state["kept"], np.asarray(arrays["kept_x"], float))
     state["polished"] = None
     state["out_of_time"] = False
     if polish is not None:
