@@ -146,9 +146,13 @@ def test_auto_writes_a_valid_mechanism_and_names_its_topology(tmp_path, capsys) 
     np.savetxt(csv, np.stack([np.cos(t), 0.6 * np.sin(t)], 1), delimiter=",", header="x,y", comments="")
     out = tmp_path / "out.yaml"
     code = main(["synthesize", str(csv), "--topology", "auto", "--max-joints", "5", "--seconds", "1.5", "-o", str(out)])
-    text = capsys.readouterr().out
+    text, err = capsys.readouterr()
     assert code == 0
     assert "topology fourbar (5 joints)" in text
+    lines = err.splitlines()  # off a terminal, plain progress lines (there were none: issue 30's "a plain line")
+    assert lines[0].startswith("linkagekit: synthesize: the four-bar from its atlas, then a screen of ")
+    assert any(line.startswith("linkagekit: synthesize: searching fourbar") for line in lines)
+    assert all(line.startswith("linkagekit: synthesize: ") and line.endswith(" of 1.5 s") for line in lines), lines
     mech = lk.load(out)
     a = mech.to_dict()["drivers"][0]["angles"]
     res = lk.analyze(mech, {"crank": np.linspace(a["start"], a["stop"], 1441)})
@@ -156,6 +160,36 @@ def test_auto_writes_a_valid_mechanism_and_names_its_topology(tmp_path, capsys) 
     P = res.xy("P")
     d = np.min(np.hypot(P[:, 0][None] - np.cos(t)[:, None], P[:, 1][None] - 0.6 * np.sin(t)[:, None]), axis=1)
     assert np.max(d) < 0.05 * np.hypot(2, 1.2)  # near every target
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_auto_reports_its_stages_and_a_line_every_tick_never_better_than_what_it_writes(monkeypatch, workers) -> None:  # type: ignore[no-untyped-def]
+    """``--topology auto`` printed no progress at all off a terminal (its local searches took no callback). It now
+    reports each stage at once and, while its searches run, a line every :data:`TICK` seconds; the best it reports
+    is the four-bar candidate's two-sided distance, which the written design never exceeds (it is chosen by it)."""
+    import time
+
+    from linkagekit.synthesis import auto
+
+    monkeypatch.setattr(auto, "TICK", 0.25)
+    got: list = []
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    T = np.stack([np.cos(t), 0.6 * np.sin(t)], 1)
+    t0 = time.monotonic()
+    out = auto.synthesize_auto(
+        T, max_joints=6, seconds=2.0, seed=3, workers=workers, progress=lambda s: got.append((time.monotonic() - t0, s))
+    )
+    assert got[0][1].what.startswith("the four-bar from its atlas") and got[0][0] < 1.0
+    searching = [(w, s) for w, s in got if s.what.startswith("searching ")]
+    assert len(searching) >= 3  # the stage, then a line every 0.25 s of about 1.3 s of searches
+    gaps = np.diff([w for w, _ in searching])
+    assert np.all(gaps < 0.25 + 1.5), gaps  # a tick comes at the latest after the next local search
+    for _, s in got:
+        assert abs(s.elapsed - (got[0][1].elapsed + _ - got[0][0])) < 0.2  # the run's own clock
+    four = next(r for r in out.tried if r.name == auto.FOUR_BAR_ENGINE)
+    reported = {s.best for _, s in got if s.best == s.best}
+    assert reported == {four.two_sided}  # its two-sided distance, as the choice measures it
+    assert auto.two_sided(out, T) / out.diagonal <= four.two_sided + 1e-15
 
 
 def test_auto_reports_how_the_whole_run_went() -> None:
@@ -462,11 +496,11 @@ def test_a_killed_auto_run_resumes_from_its_checkpoint_without_doing_again_what_
     calls: list = []
     real, kill = auto.local_searches, True
 
-    def once(projs, seeds, starts, seconds, workers):  # type: ignore[no-untyped-def]
+    def once(projs, seeds, starts, seconds, workers, tick=None):  # type: ignore[no-untyped-def]
         calls.append((list(seeds), [np.array(x) for x in starts], seconds))
         if len(calls) == 2 and kill:
             raise _Killed  # killed in the second round
-        return real(projs, seeds, starts, seconds, workers)
+        return real(projs, seeds, starts, seconds, workers, tick)
 
     monkeypatch.setattr(auto, "local_searches", once)
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
@@ -561,12 +595,12 @@ def test_ctrl_c_saves_the_time_used_so_a_resumed_run_keeps_to_its_budget(tmp_pat
     monkeypatch.setattr(auto, "ROUND_SECONDS", 0.3)
     real, calls = auto.local_searches, []
 
-    def interrupted(projs, seeds, starts, seconds, workers):  # type: ignore[no-untyped-def]
+    def interrupted(projs, seeds, starts, seconds, workers, tick=None):  # type: ignore[no-untyped-def]
         calls.append(seconds)
         if len(calls) == 2:
             clock.sleep(0.5)  # half a second into the second round
             raise KeyboardInterrupt
-        return real(projs, seeds, starts, seconds, workers)
+        return real(projs, seeds, starts, seconds, workers, tick)
 
     monkeypatch.setattr(auto, "local_searches", interrupted)
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)

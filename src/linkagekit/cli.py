@@ -2246,15 +2246,18 @@ class _Search:
     def update(self, p: Any) -> None:
         import time
 
+        if hasattr(p, "line"):  # --topology auto's stages (synthesis.auto.Stage): each line as it comes
+            self.say(p.line(self.seconds - p.seconds, self.seconds))  # its budget: what was left after the start
+            if self.bar is not None:
+                self.bar.update(self.task, completed=min(p.elapsed, self.seconds))
+            return
         if p.source == "atlas":  # the atlas's answer, before any search: said at once
             self.atlas = p
             line = (
                 f"the atlas's nearest four-bar, placed and polished: {self.best(p)} ({p.elapsed:.1f} s); searching on"
             )
-            if self.bar is not None:
-                self.bar.console.print(line)
-            else:
-                print(f"{PROG}: synthesize: {line}", file=sys.stderr, flush=True)
+            self.say(line)
+            if self.bar is None:
                 self.last = time.monotonic()  # a progress line too: the next comes ``every`` s after it (on a busy
                 # machine the atlas took past ``first`` s, and a run its answer ended said "search 1, generation 0")
         if self.bar is not None:
@@ -2270,6 +2273,13 @@ class _Search:
                 file=sys.stderr,
                 flush=True,
             )
+
+    def say(self, line: str) -> None:
+        """One line of progress: above the bar on a terminal, else on stderr."""
+        if self.bar is not None:
+            self.bar.console.print(line)
+        else:
+            print(f"{PROG}: synthesize: {line}", file=sys.stderr, flush=True)
 
     def __exit__(self, *exc: object) -> None:
         if self.bar is not None:

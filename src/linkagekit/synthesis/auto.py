@@ -1,6 +1,8 @@
 """``--topology auto``: path generation over every built-in topology within a joint limit.
 
-The budget is split in two. First a *screen* (:data:`SCREEN` of the time): for every
+The budget is split in three. First the four-bar search of a single topology with its atlas
+(:data:`FOUR_BAR_SHARE` of the time, :func:`four_bar_engine`), a candidate of its own. Then a
+*screen* (:data:`SCREEN` of the time): for every
 topology of :func:`~.topologies.enumerate_topologies` (the four-bar, Watt II and
 Stephenson III first, then the others in a seeded order, until the screen's time is up),
 random designs of its space are solved over a turn, and the tracer's best place on its
@@ -11,7 +13,9 @@ as fill whole rounds of the workers: :func:`searched`), each for an equal share 
 of the time; every design's tracer is at its best place on its link for the targets' nearest
 points (:meth:`Projected.placed`: the fit over the shifts, then :data:`ICP_ROUNDS` rounds of
 nearest points and a linear fit, each kept where it lowers the distance). The best design of
-all, by the problem's measure (feasible first), is written; its topology is named.
+all, by the two-sided distance (feasible first, :func:`two_sided`), is written; its topology
+is named. Each stage, and every :data:`TICK` seconds of the searches, is reported to
+``progress`` as a :class:`Stage`.
 
 Examples
 --------
@@ -63,6 +67,73 @@ SEARCHED = 3
 SCREEN_DESIGNS = 96
 #: the topologies screened first, by name
 FIRST = ("fourbar", "watt2", "stephenson3")
+#: seconds between two of the progress lines :func:`synthesize_auto` reports while its searches run
+TICK = 5.0
+
+
+@dataclass(frozen=True)
+class Stage:
+    """What :func:`synthesize_auto` reports to its ``progress`` (``method="local"``): a line at each stage of the run
+    and every :data:`TICK` seconds of its searches.
+
+    Attributes
+    ----------
+    elapsed : float
+        Seconds of the run so far.
+    seconds : float
+        The run's budget.
+    what : str
+        The stage, in words ("searching eightbar-16, fourbar, watt2").
+    best : float
+        The best candidate's two-sided distance / the targets' diagonal so far (how the run chooses: the design
+        written is never further); NaN before the first candidate.
+    """
+
+    elapsed: float
+    seconds: float
+    what: str
+    best: float = float("nan")
+
+    def line(self, before: float = 0.0, seconds: float | None = None) -> str:
+        """The stage as one progress line; ``before``: seconds spent before the run started (reading the targets),
+        counted in its time and its budget (``seconds``; None: the run's).
+
+        >>> Stage(12.4, 60, "searching fourbar", 0.0123).line()
+        'searching fourbar; best so far 1.23 % of the diagonal (two-sided distance); 12 of 60 s'
+        """
+        best = (
+            ""
+            if self.best != self.best
+            else f"; best so far {100 * self.best:.3g} % of the diagonal (two-sided distance)"
+        )
+        total = self.seconds + before if seconds is None else seconds
+        return f"{self.what}{best}; {self.elapsed + before:.0f} of {total:g} s"
+
+
+@dataclass
+class _Ticker:
+    """Reports :class:`Stage` lines to ``progress`` (None: nothing): at once for a new stage, and again every
+    :data:`TICK` seconds when called between the searches' steps."""
+
+    progress: Callable[[Any], None] | None
+    t0: float
+    seconds: float
+    what: str = ""
+    best: float = float("nan")
+    last: float = -np.inf
+
+    def stage(self, what: str, best: float | None = None) -> None:
+        self.what = what
+        if best is not None and not best >= self.best:  # the first candidate (NaN before it), or a better one
+            self.best = best
+        self.last = -np.inf
+        self()
+
+    def __call__(self) -> None:
+        now = time.monotonic()
+        if self.progress is not None and now - self.last >= TICK:
+            self.last = now
+            self.progress(Stage(now - self.t0, self.seconds, self.what, self.best))
 
 
 @dataclass(frozen=True)
@@ -129,22 +200,27 @@ def synthesize_auto(
     saved = (ck.load() if ck else None) or Saved()
     t0 -= saved.elapsed  # the clock goes on from the runs before
     save = _Saver(ck, saved, t0)
+    tick = _Ticker(progress if method == "local" else None, t0, seconds)
     with save.on_interrupt():
+        tick.stage(f"the four-bar from its atlas, then a screen of {len(topologies)} topologies")
+        engine = _four_bar(saved, save, targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
+        tick.stage("the four-bar found; screening", _candidate(engine, xy))
         if saved.order is None:
-            _screened(saved, topologies, make, np.random.default_rng(seed), t0 + SCREEN * seconds, workers, method)
+            deadline = t0 + (FOUR_BAR_SHARE + SCREEN) * seconds
+            _screened(saved, topologies, make, np.random.default_rng(seed), deadline, workers, method)
             save()
         assert saved.order is not None and saved.seeds is not None
         projs = [make(next(t for t in topologies if t.name == name)) for name in saved.order]
-        engine = _four_bar(saved, save, targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
         left = max(seconds * (1 - RESERVE) - (time.monotonic() - t0), 1e-3)  # the screening may have used it all
         starts = [x for _, x in saved.screen]
+        tick.stage(f"searching {', '.join(saved.order)}")
         if method == "engine":
             each = Settings(seed, left / len(projs), restarts, generations, popsize, goal, workers, scheduler)
             outs = [optimize(p, each, progress) for p in projs]
         elif ck is None:
-            outs = local_searches(projs, saved.seeds, starts, left, workers)
+            outs = local_searches(projs, saved.seeds, starts, left, workers, tick)
         else:
-            outs = saved_searches(projs, saved, left, workers, save)
+            outs = saved_searches(projs, saved, left, workers, save, tick)
     return _chosen(saved, {t.name: t.n_joints for t in topologies}, projs, starts, outs, engine, (xy, source, t0))
 
 
@@ -171,6 +247,12 @@ class _Saver:
         except KeyboardInterrupt:
             self()
             raise
+
+
+def _candidate(syn: Synthesis, xy: np.ndarray) -> float | None:
+    """A candidate's two-sided distance / diagonal, as the run chooses by (:func:`two_sided`); None when it is not
+    feasible (a feasible design is chosen before it)."""
+    return two_sided(syn, xy) / syn.diagonal if syn.feasible else None
 
 
 def _arguments(targets: Any, problem: dict[str, Any]) -> tuple[np.ndarray, str, str | None, bool]:
@@ -330,7 +412,12 @@ def four_bar_again(targets: Any, units: str, partial: bool, problem: dict[str, A
 
 
 def saved_searches(
-    projs: Sequence[Projected], saved: Saved, seconds: float, workers: int, save: Callable[[], None]
+    projs: Sequence[Projected],
+    saved: Saved,
+    seconds: float,
+    workers: int,
+    save: Callable[[], None],
+    tick: Callable[[], None] | None = None,
 ) -> list[Outcome]:
     """:func:`local_searches` in rounds of :data:`~.autosave.ROUND_SECONDS` within ``seconds``, each round from the
     best designs so far (``saved.best``, else the screen's), ``save()`` after each: each objective's outcome.
@@ -345,7 +432,7 @@ def saved_searches(
         span = max(min(ROUND_SECONDS, deadline - time.monotonic()), 1e-3)
         seeds = [(s + 7919 * saved.rounds) % 2**32 for s in saved.seeds]
         x0 = [x if b is None else b.x for b, (_, x) in zip(saved.best, saved.screen, strict=True)]
-        outs = local_searches(projs, seeds, x0, span, workers)
+        outs = local_searches(projs, seeds, x0, span, workers, tick)
         saved.best = [Best.first(o) if b is None else b.merged(o) for b, o in zip(saved.best, outs, strict=True)]
         saved.rounds += 1
         save()
@@ -382,10 +469,15 @@ def _pool(workers: int) -> Evaluator:
     return Evaluator((), workers)
 
 
-def _results(tasks: Sequence[Any]) -> list[Any]:
-    """The results of tasks on :func:`_pool`'s processes; one of them killed (say by the system, out of memory) is
-    :class:`~.distribute.WorkersLost` (one line, exit status 1), not an internal error."""
+def _results(tasks: Sequence[Any], tick: Callable[[], None] | None = None) -> list[Any]:
+    """The results of tasks on :func:`_pool`'s processes, ``tick()`` five times a :data:`TICK` while they run; one
+    killed (say by the system, out of memory) is :class:`~.distribute.WorkersLost` (one line, exit status 1), not an
+    internal error."""
+    from concurrent.futures import wait
+
     with workers_lost("a local worker process of the topology search died (killed?)"):
+        while tick is not None and wait(tasks, timeout=TICK / 5).not_done:
+            tick()
         return [t.result() for t in tasks]
 
 
@@ -409,7 +501,12 @@ RESERVE = 0.03
 
 
 def local_searches(
-    projs: Sequence[Projected], seeds: Sequence[int], starts: Sequence[np.ndarray], seconds: float, workers: int
+    projs: Sequence[Projected],
+    seeds: Sequence[int],
+    starts: Sequence[np.ndarray],
+    seconds: float,
+    workers: int,
+    tick: Callable[[], None] | None = None,
 ) -> list[Outcome]:
     """:func:`multistart` on each objective, ``workers`` at a time on local processes, within ``seconds`` in all.
 
@@ -422,12 +519,12 @@ def local_searches(
     k = len(projs)
     share = max(seconds / -(-k // max(workers, 1)), 1e-3)
     if workers <= 1:
-        return [_multistart(p, s, share, x) for p, s, x in zip(projs, seeds, starts, strict=True)]
+        return [_multistart(p, s, share, x, tick) for p, s, x in zip(projs, seeds, starts, strict=True)]
     owner, task_seeds, task_starts = _replicas(seeds, starts, workers)
     with _pool(min(workers, len(owner))) as pool:
         jobs = zip(owner, task_seeds, task_starts, strict=True)
         tasks = [pool.submit(_multistart, projs[i], s, share, x) for i, s, x in jobs]
-        done = _results(tasks)
+        done = _results(tasks, tick)
     return [_merged([o for o, i in zip(done, owner, strict=True) if i == j]) for j in range(k)]
 
 
@@ -453,9 +550,11 @@ def _merged(outs: Sequence[Outcome]) -> Outcome:
     return _summed(min(outs, key=lambda o: o.cost), outs)
 
 
-def _multistart(proj: Projected, seed: int, seconds: float, x0: np.ndarray | None) -> Outcome:
+def _multistart(
+    proj: Projected, seed: int, seconds: float, x0: np.ndarray | None, tick: Callable[[], None] | None = None
+) -> Outcome:
     """:func:`multistart` for ``seconds`` from now (a worker process's task)."""
-    return multistart(proj, np.random.default_rng(seed), time.monotonic() + seconds, x0)
+    return multistart(proj, np.random.default_rng(seed), time.monotonic() + seconds, x0, tick)
 
 
 #: random designs drawn at once by :func:`multistart`; the best few of them start a local search
@@ -464,8 +563,15 @@ BATCH, STARTS = 1024, 4
 LOCAL_NFEV = 60
 
 
-def multistart(proj: Projected, rng: np.random.Generator, deadline: float, x0: np.ndarray | None = None) -> Outcome:
-    """Local searches from the best of random designs until ``deadline``: the best design found.
+def multistart(
+    proj: Projected,
+    rng: np.random.Generator,
+    deadline: float,
+    x0: np.ndarray | None = None,
+    tick: Callable[[], None] | None = None,
+) -> Outcome:
+    """Local searches from the best of random designs until ``deadline``: the best design found (``tick()`` after
+    each local search).
 
     Each round draws :data:`BATCH` designs, scores them at once, and runs :func:`local_search`
     from the :data:`STARTS` best (the first round also from ``x0``). Bounded least squares
@@ -485,6 +591,8 @@ def multistart(proj: Projected, rng: np.random.Generator, deadline: float, x0: n
                 break
             x, c, n = local_search(proj, X[i], deadline=deadline)
             starts, designs = starts + 1, designs + n
+            if tick is not None:
+                tick()
             if c < best_cost:
                 best_x, best_cost = x, c
     assert best_x is not None
