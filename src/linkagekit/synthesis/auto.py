@@ -129,6 +129,13 @@ class _Ticker:
         self.last = -np.inf
         self()
 
+    def found(self, four_bar: Synthesis, xy: np.ndarray) -> None:
+        """The stage after the four-bar search: its two-sided distance / diagonal (:func:`two_sided`, as the run
+        chooses) is the best so far when it is feasible (a feasible design is chosen before one that is not)."""
+        self.stage(
+            "the four-bar found; screening", two_sided(four_bar, xy) / four_bar.diagonal if four_bar.feasible else None
+        )
+
     def __call__(self) -> None:
         now = time.monotonic()
         if self.progress is not None and now - self.last >= TICK:
@@ -199,12 +206,11 @@ def synthesize_auto(
     ck = _checkpoint(checkpoint, make, topologies, (xy, units, partial, problem, max_joints, seed, method))
     saved = (ck.load() if ck else None) or Saved()
     t0 -= saved.elapsed  # the clock goes on from the runs before
-    save = _Saver(ck, saved, t0)
-    tick = _Ticker(progress if method == "local" else None, t0, seconds)
+    save, tick = _Saver(ck, saved, t0), _Ticker(progress if method == "local" else None, t0, seconds)
     with save.on_interrupt():
         tick.stage(f"the four-bar from its atlas, then a screen of {len(topologies)} topologies")
         engine = _four_bar(saved, save, targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
-        tick.stage("the four-bar found; screening", _candidate(engine, xy))
+        tick.found(engine, xy)
         if saved.order is None:
             deadline = t0 + (FOUR_BAR_SHARE + SCREEN) * seconds
             _screened(saved, topologies, make, np.random.default_rng(seed), deadline, workers, method)
@@ -247,12 +253,6 @@ class _Saver:
         except KeyboardInterrupt:
             self()
             raise
-
-
-def _candidate(syn: Synthesis, xy: np.ndarray) -> float | None:
-    """A candidate's two-sided distance / diagonal, as the run chooses by (:func:`two_sided`); None when it is not
-    feasible (a feasible design is chosen before it)."""
-    return two_sided(syn, xy) / syn.diagonal if syn.feasible else None
 
 
 def _arguments(targets: Any, problem: dict[str, Any]) -> tuple[np.ndarray, str, str | None, bool]:
