@@ -316,3 +316,15 @@ def test_a_transmission_angle_near_180_is_warned_of_too(tmp_path, capsys):
     out = capsys.readouterr().out
     hi = float(re.search(r"transmission angle [\d.]+ to ([\d.]+) deg", out).group(1))
     assert hi > 160 and f"warning: the transmission angle goes up to {hi:.4g} deg (outside [20, 160])" in out
+
+
+def test_free_offsets_are_directions_so_the_written_crank_sweeps_within_a_turn():
+    """The shipped log10 pairs with ``--free-offsets``: the search's input offset came out as 347.57 deg and the file's
+    crank swept from 408.695 to 496.439 deg (review 14c). Offsets are directions, reported in (-180, 180]; the same
+    four-bar (its errors unchanged to 1e-9 deg by analyze), its sweep within a turn."""
+    pairs = np.loadtxt(ROOT / "examples" / "targets" / "log_function.csv", delimiter=",", skiprows=2)
+    fit = solve(pairs[:, 0], pairs[:, 1], free_offsets=True)
+    assert all(-180 < o <= 180 for o in fit.offsets), fit.offsets
+    a = fit.mechanism_dict()["drivers"][0]["angles"]
+    assert -180 < a["start"] <= 180 and abs(a["stop"] - a["start"] - (pairs[-1, 0] - pairs[0, 0])) < 1e-6
+    assert np.max(np.abs(analysed_errors(lk.Mechanism.from_dict(fit.mechanism_dict()), fit) - fit.errors)) <= 1e-9

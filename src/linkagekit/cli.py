@@ -1825,7 +1825,7 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
         )
     if fit.offsets != (0.0, 0.0):
         lines.append(
-            f"offsets: crank angle = input + {fit.offsets[0]:.6g} deg, output angle = output + {fit.offsets[1]:.6g} deg"
+            f"offsets: crank angle = input {fit.offsets[0]:+.6g} deg, output angle = output {fit.offsets[1]:+.6g} deg"
         )
     lines.append(f"crank {a:.6g}, coupler {b:.6g}, output {c:.6g}, ground {d:.6g} {unit}; Grashof type {fit.grashof}")
     state = "one branch from the first pair to the last" if fit.valid else "NOT ON ONE BRANCH (no valid design found)"

@@ -479,7 +479,7 @@ class FunctionFit:
         +1 when the output joint ``D`` lies left of the line from the crank joint ``C`` to
         the output pivot ``B``, -1 when right; the same at every pair.
     offsets : tuple of float
-        Degrees added to every input and to every output (0, 0 unless the offsets are free).
+        Degrees added to every input and to every output (0, 0 unless the offsets are free), in (-180, 180].
     inputs, outputs, errors : ndarray (n,)
         The pairs (degrees, as given) and the output-angle error at each (degrees).
     method : str
@@ -543,10 +543,20 @@ class FunctionFit:
         }
 
 
+def _direction(radians: float) -> float:
+    """An offset (radians) as the angle in (-180, 180] deg it is: the search's are unwrapped (a crank written to sweep
+    from 408.7 deg).
+
+    >>> round(_direction(np.radians(408.7 - 61.1)), 9), _direction(np.radians(-180.0))
+    (-12.4, 180.0)
+    """
+    return 180.0 - float((180.0 - np.degrees(radians)) % 360.0)
+
+
 def _fit(p: _Pairs, z: FloatArray, sigma: float, method: str) -> FunctionFit:
     """The :class:`FunctionFit` of design vector ``z`` on branch ``sigma``."""
     abc, off = p.unpack(z)
-    offsets = (0.0, 0.0) if off is None else (float(np.degrees(off[0])), float(np.degrees(off[1])))
+    offsets = (0.0, 0.0) if off is None else (_direction(off[0]), _direction(off[1]))
     a, b, c = (float(v) for v in abc)
     x = p.x + (0.0 if off is None else off[0])
     return FunctionFit(
