@@ -548,8 +548,8 @@ def synthesis_figure(
     """The mechanism of a synthesis with its curves, and the targets on them.
 
     ``res``: the synthesised mechanism over a crank turn; ``targets`` (m, 2); ``errors``
-    (m,) the distances the synthesis found (in the title). Each target is a numbered ring;
-    a thin segment joins it to the nearest sampled point of the tracer's curve, so a target
+    (m,) the distances the synthesis found (in the title, in the mechanism's length unit). Each target is a
+    numbered ring; a thin segment joins it to the nearest sampled point of the tracer's curve, so a target
     the curve misses shows how far off it is.
     """
     fig = mechanism_figure(res, size=size)
@@ -573,7 +573,8 @@ def synthesis_figure(
     if errors is not None:
         e = np.asarray(errors, float)
         kind = "closed" if closed else "open"
-        _title(fig, f"{len(t)} targets ({kind}): max error {np.max(e):.4g}, rms {np.sqrt(np.mean(e * e)):.4g}")
+        u = res.mechanism.length_unit
+        _title(fig, f"{len(t)} targets ({kind}): max error {np.max(e):.4g} {u}, rms {np.sqrt(np.mean(e * e)):.4g} {u}")
     return fig
 
 
