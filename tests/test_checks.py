@@ -1068,3 +1068,33 @@ def test_a_pose_at_a_change_point_is_said_to_pick_no_mode(tmp_path, capsys, pose
     k = next(i for i, line in enumerate(lines) if line.startswith("Assembly mode of the reference pose: B"))
     warned = lines[k + 1].startswith("Warning: the reference pose sits at a change point of B")
     assert warned is flat and sum("change point of B" in line for line in lines) == flat  # said once
+
+
+@pytest.mark.parametrize("span", [30.0, 78.0])
+def test_a_transmission_warning_gives_the_file_sweeps_extremes_where_it_does_not_cover_the_range(tmp_path, span):
+    """A ``synthesize --partial`` file rocks its crank through part of its range, bounded there; ``check`` warned of
+    the transmission angle over the whole range and said nothing of the sweep written (review 14c). The warning
+    now gives the extremes over the file's sweep too (against an independent dense sweep: the angle between coupler
+    and rocker from the joints, 20001 samples, to 0.01 deg) and says when they lie within the bounds."""
+    text = (EXAMPLES / "nongrashof_rocker.yaml").read_text()
+    path = tmp_path / "rocks.yaml"
+    path.write_text(text.replace("start: -78, stop: 78", f"start: {-span:g}, stop: {span:g}"))
+    mech = lk.load(path)
+    rep = lk.check(mech)
+    (w,) = [w for w in rep.warnings if w["kind"] == "transmission-angle"]
+    assert w["max"] > 179.9  # over the range: the rocker's toggles
+    res = lk.analyze(mech, {"crank": np.linspace(-span, span, 20001)}, rates=False)
+    C, D, B = res.point("C"), res.point("D"), res.point("B")
+    mu = np.degrees(np.abs(np.angle((C - D) / (B - D))))
+    sw = w["sweep"]
+    assert (sw["driver"], sw["from"], sw["to"]) == ("crank", -span, span)
+    assert abs(sw["min"] - mu.min()) < 0.01 and abs(sw["max"] - mu.max()) < 0.01
+    inside = min(mu.min(), 180 - mu.max()) >= 20
+    assert inside == (span == 30.0)
+    line = next(x for x in rep.text().splitlines() if x.startswith("Warning: the transmission angle"))
+    assert line.endswith(
+        f"over the file's sweep (crank from {-span:g} to {span:g} deg) min {sw['min']:.4f}°, max "
+        f"{sw['max']:.4f}°" + (": within the bounds there" if inside else "")
+    )
+    full = lk.check(lk.load(EXAMPLES / "seed003_ex21.yaml"))  # its sweep a turn: nothing more to say
+    assert all("sweep" not in w for w in full.warnings) and "file's sweep" not in full.text()

@@ -1624,7 +1624,10 @@ def check(mech: Mechanism) -> CheckReport:
         numerical_joints=tuple(names[i] for i in plan.numerical),
         sliders=tuple(sliders),
         assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
-        warnings=tuple(([{"kind": POSE_WARNING, "joints": flat}] if flat else []) + _warnings(entries, dynamics)),
+        warnings=tuple(
+            ([{"kind": POSE_WARNING, "joints": flat}] if flat else [])
+            + _warnings(entries, dynamics, mech, next(iter(ranges.values())))
+        ),
         change_points=crossed,
         change_points_skipped=None if crossed is not None else change_points_skipped(mech),
         **_first_loop(entries),
@@ -1725,28 +1728,71 @@ def assembly_gaps(ranges: list[list[float]], angle_to_rad: float) -> list[list[f
     return sorted(gaps)
 
 
-def _warnings(entries: list[dict[str, Any]], dynamics: Mapping[str, Any] | None) -> list[dict[str, Any]]:
-    """Transmission angles outside [MIN, 180 - MIN] (:data:`MIN_TRANSMISSION`); efforts peaking near a toggle."""
+#: samples of the file's sweep at which a transmission-angle warning gives the angle's extremes there too
+SWEEP_TRANSMISSION_SAMPLES = 3601
+
+
+def _warnings(
+    entries: list[dict[str, Any]],
+    dynamics: Mapping[str, Any] | None,
+    mech: Mechanism | None = None,
+    ranges: list[list[float]] | None = None,
+) -> list[dict[str, Any]]:
+    """Transmission angles outside [MIN, 180 - MIN] (:data:`MIN_TRANSMISSION`) over the input range, with their
+    extremes over the file's sweep where it does not cover the range (``ranges``: ``mech``'s one driver's);
+    efforts peaking near a toggle."""
     out = []
     for k, lp in enumerate(entries):
         ta = lp.get("transmission_angle") or {}
         if ta.get("min") is not None and min(ta["min"], 180.0 - ta["max"]) < MIN_TRANSMISSION:
-            out.append(
-                {
-                    "kind": "transmission-angle",
-                    "loop": k,
-                    "joints": lp["joints"],
-                    "min": ta["min"],
-                    "max": ta["max"],
-                    "limit": MIN_TRANSMISSION,
-                }
-            )
+            w = {"kind": "transmission-angle", "loop": k, "joints": lp["joints"], "min": ta["min"], "max": ta["max"]}
+            out.append(w | {"limit": MIN_TRANSMISSION} | _over_sweep(mech, lp["joints"], ranges or []))
     for key in ("peak_driver_torque", "peak_driver_force"):
         for name, pk in ((dynamics or {}).get(key) or {}).items():
             tg = pk.get("toggle")
             if tg and tg["angle"] < TOGGLE_ANGLE:
                 out.append({"kind": "toggle", "driver": name, "effort": key, "limit": TOGGLE_ANGLE} | pk)
     return out
+
+
+def _sweep_covers(mech: Mechanism, ranges: list[list[float]]) -> bool:
+    """Whether the file's sweep of its one driver covers every interval of its input range ``ranges`` (file units;
+    an angle's a turn along when it is one).
+
+    >>> import linkagekit as lk
+    >>> mech = lk.load("examples/nongrashof_rocker.yaml")  # its sweep: -78 to 78 deg
+    >>> [_sweep_covers(mech, r) for r in ([[-78.58, 78.58]], [[-10.0, 10.0]], [[282.0, 300.0]], [[0.0, 360.0]])]
+    [False, True, True, False]
+    """
+    d = mech.drivers[0]
+    a, b = sorted((d.sweep.start, d.sweep.stop))
+    turn = 2 * math.pi / d.input_scale(mech) if d.type.cyclic else math.inf
+    tol = 1e-9 * max(abs(a), abs(b), 1.0)
+    if b - a >= turn - tol:
+        return True
+    for s, e in ranges:
+        k = math.ceil((a - tol - s) / turn) if math.isfinite(turn) else 0  # the first copy of s at or after a
+        if not (e - s < turn - tol and e + k * turn <= b + tol):
+            return False
+    return True
+
+
+def _over_sweep(mech: Mechanism | None, joints: list[str], ranges: list[list[float]]) -> dict[str, Any]:
+    """``{"sweep": {"driver", "from", "to", "min", "max"}}``: the transmission angle of the loop of ``joints``
+    (crank pivot, crank tip, rocker tip, rocker pivot) over the file's sweep of its one driver, at
+    :data:`SWEEP_TRANSMISSION_SAMPLES` inputs; nothing with several drivers or where it never assembles. A file
+    whose crank rocks through part of its range (``synthesize --partial``) is bounded there, not over the range."""
+    if mech is None or len(mech.drivers) != 1 or _sweep_covers(mech, ranges):
+        return {}
+    d = mech.drivers[0]
+    q = np.linspace(d.sweep.start, d.sweep.stop, SWEEP_TRANSMISSION_SAMPLES)
+    res = analyze(mech, {d.name: q}, rates=False, dynamics=False)
+    a, b, o4 = (res.point(j) for j in joints[1:])
+    mu = np.degrees(np.abs(np.angle((o4 - b) / (a - b))))
+    if not np.isfinite(mu).any():
+        return {}
+    ends = {"driver": d.name, "from": float(q[0]), "to": float(q[-1])}
+    return {"sweep": ends | {"min": float(np.nanmin(mu)), "max": float(np.nanmax(mu))}}
 
 
 # ---------------------------------------------------------------------- text
@@ -2021,13 +2067,27 @@ def _warning_line(w: Mapping[str, Any], fmt: _Text) -> str:
         return (
             f"Warning: the transmission angle of loop {'-'.join(w['joints'])} leaves [{w['limit']:g}°, "
             f"{180 - w['limit']:g}°] (min {w['min']:.4f}°, max {w['max']:.4f}°): there the coupler pushes the "
-            "output mostly into its bearing"
+            f"output mostly into its bearing{_sweep_words(w, fmt)}"
         )
     tg = w["toggle"]
     what, unit = ("torque", "N*m") if w["effort"] == "peak_driver_torque" else ("force", "N")
     return (
         f"Warning: the driver {what} of {w['driver']} peaks at {_num(w['value'])} {unit} at {fmt.where(w['at'])}, "
         f"{tg['angle']:.4f}° (less than {w['limit']:g}°) from the toggle where {tg.get('detail', tg['joint'])}"
+    )
+
+
+def _sweep_words(w: Mapping[str, Any], fmt: _Text) -> str:
+    """The transmission angle's extremes over the file's sweep, for a warning over the whole range; said to stay
+    within the bounds there when it does."""
+    sw = w.get("sweep")
+    if not sw:
+        return ""
+    inside = min(sw["min"], 180.0 - sw["max"]) >= w["limit"]
+    return (
+        f"; over the file's sweep ({sw['driver']} from {_num(sw['from'])} to {_num(sw['to'])}"
+        f"{' ' + fmt.units[sw['driver']] if fmt.units.get(sw['driver']) else ''}) "
+        f"min {sw['min']:.4f}°, max {sw['max']:.4f}°{': within the bounds there' if inside else ''}"
     )
 
 
