@@ -29,6 +29,7 @@ Checked against computations written here, none of which shares code with linkag
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -516,6 +517,16 @@ LONG_MODE_MID = dict(
 )
 
 
+@functools.cache
+def long_mode_reference():  # type: ignore[no-untyped-def]
+    """The arclength continuation of :data:`LONG_MODE_MID`'s mode (from the pose near a fold it does not agree with
+    itself), shared by the tests."""
+    from helpers import ArclengthTriad
+
+    bars = [("A", "J1"), ("B0", "J2"), ("C0", "J3"), ("J1", "J2"), ("J2", "J3"), ("J1", "J3")]
+    return ArclengthTriad(LONG_MODE_MID, bars)
+
+
 def test_a_mode_longer_than_a_turn_that_does_not_close_ends_at_its_two_folds():
     """The pose's mode of this triad goes 418.28 deg of crank from fold to fold: a turn round it comes back in
     another configuration, and the directions of 58.28 deg are reached twice. ``check`` took a walk that got a
@@ -524,21 +535,49 @@ def test_a_mode_longer_than_a_turn_that_does_not_close_ends_at_its_two_folds():
     mid-way, the range is the two folds of the independent arclength continuation (1e-6 deg), both listed as dead
     points, and the text says which directions are reached twice; posed 0.74 deg above a fold (on the same mode),
     the same range."""
-    from helpers import ArclengthTriad
-
-    ref = ArclengthTriad(
-        LONG_MODE_MID, [("A", "J1"), ("B0", "J2"), ("C0", "J3"), ("J1", "J2"), ("J2", "J3"), ("J1", "J3")]
-    )
+    ref = long_mode_reference()
     lo, hi = ref.range
     assert 418.2 < hi - lo < 418.4
     rep = lk.check(triad(LONG_MODE_MID))
-    ((a, b),) = rep.input_range
-    k = round((a - lo) / 360)
-    assert abs(a - (lo + 360 * k)) < 1e-6 and abs(b - (hi + 360 * k)) < 1e-6
+    ((a, b),) = rep.input_range  # as walked from the pose's input (-160 deg): the frame its jumps are told in
+    assert abs(a - lo) < 1e-6 and abs(b - hi) < 1e-6
     ends = sorted(d["input"] for d in rep.dead_points["crank"] if d["kind"] == "end of range")
     assert np.allclose(ends, [a, b], rtol=0, atol=1e-6)
     assert f"directions from {a:.6f} to {b - 360:.6f} deg are reached twice" in rep.text()
-    assert np.allclose(lk.check(triad(LONG_MODE)).input_range, [[a, b]], rtol=0, atol=1e-6)
+    ((c, d),) = lk.check(triad(LONG_MODE)).input_range  # the same mode posed at 0 deg: its frame a turn up
+    assert abs(c - (a + 360)) < 1e-6 and abs(d - (b + 360)) < 1e-6
+
+
+@pytest.mark.parametrize("pose", ["mid", "fold"])
+def test_a_sweep_of_directions_over_a_mode_longer_than_a_turn_jumps_where_check_says_and_plot_breaks_there(pose):
+    """The mode of 418.28 deg: ``check`` said a sweep of directions jumps between the two configurations half a turn
+    from the pose's input, and ``plot`` drew the jump as motion (review 14d). Each sample of a sweep of
+    directions over two turns (4 deg apart) is matched to the independent arclength continuation at one of its two
+    representatives (1e-7 of the size); where the matched representative does not move with the input the answer
+    jumps. ``check`` names exactly those directions (``reached_twice``: at -160 deg posed mid-way, half a turn from
+    it; posed 0.74 deg above a fold, at that fold), and the scene breaks the curves at exactly those segments."""
+    from linkagekit.viz.scene import build_scene
+
+    ref = long_mode_reference()
+    points, shift = (LONG_MODE_MID, 0.0) if pose == "mid" else (LONG_MODE, 360.0)  # its frame: a turn up
+    mech = triad(points)
+    u = np.arange(-360.0, 360.0 + 1e-9, 4.0) + 0.1
+    res = lk.analyze(mech, {"crank": u}, rates=False)
+    assert res.assembled.all()
+    got = np.stack([res.point(j) for j in ("J1", "J2", "J3")], axis=1)
+    rep = np.full(len(u), np.nan)
+    for i, x in enumerate(u):
+        for r in x + 360.0 * np.arange(-1, 2):
+            want = ref.at(r - shift)
+            if want is not None and np.max(np.abs(got[i] - want)) < 1e-7 * ref.size:
+                rep[i] = r
+    assert np.all(np.isfinite(rep))
+    jumps = np.flatnonzero(np.abs(np.diff(rep) - np.diff(u)) > 1.0)
+    rep_check = lk.check(mech)
+    twice = rep_check.reached_twice["crank"]
+    expect = [j for j in twice["jumps"] for j in j + 360.0 * np.arange(-3, 4) if u[0] < j <= u[-1]]
+    assert sorted(u[jumps + 1]) == pytest.approx(sorted(np.ceil((np.array(expect) - 0.1) / 4.0) * 4.0 + 0.1))
+    assert list(build_scene(res, input_range=rep_check.input_range).breaks) == jumps.tolist()
 
 
 def test_a_group_that_cannot_be_cut_lists_the_continued_mode_with_a_note(monkeypatch, tmp_path, capsys):
@@ -559,3 +598,21 @@ def test_a_group_that_cannot_be_cut_lists_the_continued_mode_with_a_note(monkeyp
     assert main(["modes", str(path), "--at", "30"]) == 0
     out = capsys.readouterr().out
     assert "Note: the modes of group J1, J2, J3 are not enumerated" in out
+
+
+def test_simulate_refuses_a_mode_longer_than_a_turn_in_one_line(tmp_path, capsys):
+    """``simulate`` tabulated the mode of 418.28 deg over a turn of directions, as if it turned fully: its table jumped
+    between the two configurations of the directions reached twice, and the motion went through the jump (review
+    14d). It now refuses it in one line, exit status 2, naming the driver and the mode's length."""
+    from linkagekit.cli import main
+
+    doc = triad(LONG_MODE_MID).to_dict()
+    doc["links"]["crank"] = {"joints": ["O", "A"], "mass": 1.0, "cg": [0.8, 0.0], "inertia": 0.1}
+    mech = lk.Mechanism.from_dict(doc)
+    with pytest.raises(lk.InputError, match=r"mode of crank runs 418\.28\d deg from fold to fold, longer than a turn"):
+        lk.simulate(mech, np.linspace(0.0, 1.0, 11), torque=1.0)
+    path = tmp_path / "long.yaml"
+    lk.save(mech, path)
+    assert main(["simulate", str(path), "--time", "0:1:0.1", "--torque", "1", "-o", str(tmp_path / "m.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "does not follow such a mode" in err[0]

@@ -1412,6 +1412,10 @@ class CheckReport:
     assembly_gaps : dict of str to list of [float, float]
         For each angle driver the open intervals of the turn where it does not assemble
         (the complement of ``input_ranges``, each starting in [0, 1 turn)).
+    reached_twice : dict of str to dict
+        For an angle driver whose range is longer than a turn (a numerical group's mode that
+        does not close), the directions reached twice (``from``, ``to``) and where a sweep of
+        directions jumps between their two configurations (``jumps``, :func:`direction_jumps`).
     change_points : tuple of dict
         The change points the branch crosses along the file's sweep when it is followed
         continuously (``analyze --branch continuous``), from the pose's input up and down:
@@ -1449,6 +1453,7 @@ class CheckReport:
     numerical_joints: tuple[str, ...] = ()
     sliders: tuple[dict[str, Any], ...] = ()
     assembly_gaps: dict[str, list[list[float]]] = field(default_factory=dict)
+    reached_twice: dict[str, dict[str, Any]] = field(default_factory=dict)
     warnings: tuple[dict[str, Any], ...] = ()
     change_points: tuple[dict[str, Any], ...] | None = ()
     change_points_skipped: str | None = None
@@ -1489,6 +1494,8 @@ class CheckReport:
             out["dynamics"] = self.dynamics
         out["sliders"] = list(self.sliders)
         out["assembly_gaps"] = self.assembly_gaps
+        if self.reached_twice:
+            out["reached_twice"] = self.reached_twice
         out["change_points"] = None if self.change_points is None else list(self.change_points)
         if self.change_points_skipped:
             out["change_points_skipped"] = self.change_points_skipped
@@ -1624,14 +1631,24 @@ def check(mech: Mechanism) -> CheckReport:
         numerical_joints=tuple(names[i] for i in plan.numerical),
         sliders=tuple(sliders),
         assembly_gaps={d.name: assembly_gaps(ranges[d.name], mech.angle_to_rad) for d in mech.drivers if d.type.cyclic},
-        warnings=tuple(
-            ([{"kind": POSE_WARNING, "joints": flat}] if flat else [])
-            + _warnings(entries, dynamics, mech, next(iter(ranges.values())))
-        ),
+        reached_twice=_reached_twice(ranges, mech, pose_values),
+        warnings=_report_warnings(mech, flat, entries, dynamics, ranges),
         change_points=crossed,
         change_points_skipped=None if crossed is not None else change_points_skipped(mech),
         **_first_loop(entries),
     )
+
+
+def _report_warnings(
+    mech: Mechanism,
+    flat: list[str],
+    entries: list[dict[str, Any]],
+    dynamics: Mapping[str, Any] | None,
+    ranges: Mapping[str, list[list[float]]],
+) -> tuple[dict[str, Any], ...]:
+    """The report's warnings: a pose at a change point (its joints ``flat``), then :func:`_warnings`."""
+    first = ranges[mech.drivers[0].name] if mech.drivers else []
+    return tuple(([{"kind": POSE_WARNING, "joints": flat}] if flat else []) + _warnings(entries, dynamics, mech, first))
 
 
 def pose_at_change_point(params: Params) -> list[str]:
@@ -1918,7 +1935,7 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
                 "  in the pose's mode, by continuation from the pose (ends refined by bisection through the solver); "
                 "other modes: linkagekit modes"
             )
-            lines += _twice_reached(rng, unit)
+            lines += _twice_reached((rep.get("reached_twice") or {}).get(driver), unit)
         if driver in dead_points:
             lines += _dead_point_lines(driver, dead_points[driver], fmt)
     return lines
@@ -1929,18 +1946,51 @@ def _beyond_a_turn(interval: list[float], turn: float) -> bool:
     return interval[1] - interval[0] > turn * (1 + 1e-9)
 
 
-def _twice_reached(rng: list[list[float]], unit: str) -> list[str]:
-    """For an angle's range longer than a turn (a numerical group's mode that does not close: it ends at a fold each
-    way, :func:`linkagekit.groupmodes.continuation_intervals`), which directions it reaches twice, and which of the
-    two configurations ``analyze`` answers."""
-    turn = {"deg": 360.0, "rad": 2 * math.pi}.get(unit)
-    if turn is None or len(rng) != 1 or not _beyond_a_turn(rng[0], turn):
+def direction_jumps(interval: list[float], x0: float, turn: float) -> list[float]:
+    """Where a sweep of directions jumps between the two configurations of a mode longer than a ``turn`` that does not
+    close (``interval``: its inputs from fold to fold as walked from the pose's input ``x0``, which it holds).
+
+    ``analyze`` answers a direction ``u`` at its representative ``r`` nearest ``x0`` (``r - x0`` in
+    ``[-turn/2, turn/2)``) where the mode has it, else at the one a turn the other way. That choice
+    changes, and the answer jumps, at ``x0 + turn/2`` when both representatives there lie on the mode,
+    and at each fold within half a turn of ``x0``: past it only the other representative is on the mode.
+
+    >>> direction_jumps([-360.74, 57.54], -160.0, 360.0), direction_jumps([-0.74, 417.54], 0.0, 360.0)
+    ([20.0], [-0.74])
+    """
+    a, b = interval
+    half = turn / 2
+    out = [x0 + half] if a <= x0 - half and x0 + half <= b else []
+    out += [e for e, near in ((a, a - x0 >= -half), (b, b - x0 < half)) if near]
+    return sorted(out)
+
+
+def _reached_twice(
+    ranges: Mapping[str, list[list[float]]], mech: Mechanism, pose: Mapping[str, float]
+) -> dict[str, Any]:
+    """For each angle driver whose range is longer than a turn (a numerical group's mode that does not close: it ends
+    at a fold each way), the directions it reaches twice (``from``, ``to``) and where a sweep of directions jumps
+    between their two configurations (``jumps``, :func:`direction_jumps`), in the file's unit."""
+    out = {}
+    for d in mech.drivers:
+        turn = 2 * math.pi / d.input_scale(mech)
+        rng = ranges[d.name]
+        if d.type.cyclic and len(rng) == 1 and _beyond_a_turn(rng[0], turn):
+            a, b = rng[0]
+            out[d.name] = {"from": a, "to": b - turn, "jumps": direction_jumps(rng[0], pose[d.name], turn)}
+    return out
+
+
+def _twice_reached(twice: Mapping[str, Any] | None, unit: str) -> list[str]:
+    """The text of a driver's ``reached_twice`` (:func:`_reached_twice`): nothing without it."""
+    if not twice:
         return []
-    a, b = rng[0]
+    at = " and ".join(f"{j:.6f}" for j in twice["jumps"])
     return [
-        f"  longer than a turn, and it does not close: the directions from {a:.6f} to {b - turn:.6f} {unit} are "
-        f"reached twice, a turn apart, in two configurations; analyze answers each direction with the one nearest "
-        f"the pose's input, so a sweep of directions jumps from one to the other half a turn from it"
+        f"  longer than a turn, and it does not close: the directions from {twice['from']:.6f} to {twice['to']:.6f} "
+        f"{unit} are reached twice, a turn apart, in two configurations; analyze answers each direction with the one "
+        f"reached turning the least from the pose's input where the mode has it, so a sweep of directions jumps "
+        f"from one to the other at {at} {unit} (plot draws a break there)"
     ]
 
 

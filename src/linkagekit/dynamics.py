@@ -323,6 +323,7 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
     x0 = float(md.params.pose_inputs[0, 0]) * md.scale[0]
     to_si = d.input_scale(mech) * md.scale[0]  # SI per file unit
     ranges = input_range(mech, 0)
+    _one_configuration_a_direction(mech, ranges)
     full = d.type.cyclic and any(hi - lo >= 2 * math.pi / to_si * (1 - 1e-12) for lo, hi in ranges)
     if full:
         n = turns * points
@@ -341,6 +342,22 @@ def _grid(md: _Model, points: int, turns: int = 1) -> tuple[np.ndarray, float | 
             b = b - margin if high is None else high * to_si
             return np.linspace(min(a, x0), max(b, x0), points + 1), None
     raise InputError(f"{mech.source}: the mechanism does not assemble at its pose's input")
+
+
+def _one_configuration_a_direction(mech: Mechanism, ranges: list[list[float]]) -> None:
+    """Refuses, in one line, a crank whose mode runs longer than a turn and does not close (a numerical group's: it
+    ends at a fold each way, reaching some directions twice in two configurations). The table is solved at
+    directions, so it would jump between the two (``check`` says where), and a motion through the jump would be
+    no motion at all."""
+    d = mech.drivers[0]
+    turn = 2 * math.pi / d.input_scale(mech)
+    for lo, hi in ranges:
+        if d.type.cyclic and hi - lo > turn * (1 + 1e-9):
+            raise InputError(
+                f"{mech.source}: the pose's mode of {d.name} runs {hi - lo:.6g} {d.input_unit(mech)} from fold to "
+                "fold, longer than a turn, and does not come back to itself: simulate does not follow such a mode "
+                "(check tells which directions it reaches twice)"
+            )
 
 
 def _stroke_end(d: Driver, value: float, span: float) -> float | None:

@@ -195,7 +195,11 @@ def continuation_intervals(
     -------
     list of [start, stop]
         At most one interval (the pose's), the last assembled value at each end; ``[[lo,
-        hi]]`` when the mode goes on over a full turn (or the whole span).
+        hi]]`` when the mode goes on over a full turn (or the whole span). A mode longer
+        than a turn that does not close is given from its start to its end as walked from
+        the pose's input (read off the pose), which it holds: in that frame alone the
+        directions ``analyze`` answers with each of their two configurations are told
+        (:func:`linkagekit.checks.direction_jumps`).
     """
     x0 = float(params.pose_inputs[driver, 0])
     start = solve(params, _driver_inputs(params, driver, np.array([x0]))[:, None, :])
@@ -217,7 +221,7 @@ def continuation_intervals(
         ends = _refine_end(params, driver, tol, *(np.array([w[k] for w in brackets]) for k in range(6)))
     e = float(ends[0]) if up is not None else hi
     s = float(ends[-1]) if down is not None else lo
-    if cyclic:
+    if cyclic and e - s <= period:  # (a mode longer than a turn is given as walked: it holds the pose's input)
         k = math.floor((s - lo) / period)
         s, e = s - k * period, e - k * period
         if e > hi:  # runs through the turn's start: [start - period, stop]

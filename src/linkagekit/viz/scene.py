@@ -480,6 +480,8 @@ def _breaks(res: Result, x: np.ndarray, known: list[list[float]] | None = None) 
     tol = 1e-9 * max(float(np.max(np.abs(x))), 1.0)
     if mech.drivers[0].type.cyclic:
         period = 2 * math.pi / mech.drivers[0].input_scale(mech)
+        if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] > period * (1 + 1e-9):
+            return _jumps_between_configurations(mech, lo, hi, ranges[0], both)
         if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] >= period * (1 - 1e-12):
             return ()  # a full turn
         k = np.floor((lo[:, None] - ranges[None, :, 0] + tol) / period)
@@ -488,6 +490,25 @@ def _breaks(res: Result, x: np.ndarray, known: list[list[float]] | None = None) 
         start, end = ranges[None, :, 0], ranges[None, :, 1]
     inside = ((start - tol <= lo[:, None]) & (hi[:, None] <= end + tol)).any(axis=1)
     return tuple(int(i) for i in np.flatnonzero(both & ~inside))
+
+
+def _jumps_between_configurations(
+    mech: Mechanism, lo: np.ndarray, hi: np.ndarray, rng: np.ndarray, both: np.ndarray
+) -> tuple[int, ...]:
+    """The segments (from ``lo`` to ``hi``, both ends assembled where ``both``) of a sweep over a mode longer than a
+    turn that does not close (``rng``, as walked from the pose's input), that cross a direction where the answer goes
+    from one of the two configurations of a direction reached twice to the other (``check`` says where:
+    :func:`linkagekit.checks.direction_jumps`): a jump to draw as a break, not as motion."""
+    from ..api import prepare
+    from ..checks import direction_jumps
+
+    scale = mech.drivers[0].input_scale(mech)
+    period = 2 * math.pi / scale
+    jumps = direction_jumps([float(rng[0]), float(rng[1])], float(prepare(mech).pose_inputs[0, 0]) / scale, period)
+    out = np.zeros(len(lo), bool)
+    for c in jumps:  # (lo, hi] holds a copy of c: c itself is answered as past the jump
+        out |= c + (np.floor((lo - c) / period) + 1) * period <= hi
+    return tuple(int(i) for i in np.flatnonzero(both & out))
 
 
 def _plots(catalogue: Catalogue) -> tuple[Plot, ...]:
