@@ -212,7 +212,7 @@ def synthesize_auto(
         engine = _four_bar(saved, save, targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
         tick.found(engine, xy)
         if saved.order is None:
-            deadline = t0 + (FOUR_BAR_SHARE + SCREEN) * seconds
+            deadline = time.monotonic() + SCREEN * seconds  # its share whatever the four-bar took
             _screened(saved, topologies, make, np.random.default_rng(seed), deadline, workers, method)
             save()
         assert saved.order is not None and saved.seeds is not None
