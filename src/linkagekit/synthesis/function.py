@@ -33,7 +33,7 @@ from __future__ import annotations
 import itertools
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -410,11 +410,44 @@ def _score(p: _Pairs, z: FloatArray, sigma: float) -> float:
     return float(np.max(np.abs(p.errors(z, sigma))) + p.penalty(z))
 
 
+#: scipy's finite-difference steps: SLSQP's absolute one, and the relative one of its "2-point" differences
+SLSQP_STEP, RELATIVE_STEP = float(np.sqrt(np.finfo(float).eps)), float(np.finfo(float).eps ** 0.5)
+
+
+def forward_jacobian(f: Callable[[FloatArray], FloatArray], x: FloatArray, h: FloatArray) -> FloatArray:
+    """The forward differences of ``f`` at ``x`` with steps ``h`` (m, n), its rows at ``x`` and at each ``x + h_i e_i``
+    evaluated in one call (``f`` takes points as rows): scipy's "2-point" differences (the step taken as
+    ``(x_i + h_i) - x_i``), one call of ``f`` instead of ``n + 1``.
+
+    >>> f = lambda X: np.stack([X[..., 0] * X[..., 1], X[..., 0]], -1)
+    >>> forward_jacobian(f, np.array([2.0, 3.0]), np.full(2, 1e-6)).round(6)
+    array([[3., 2.],
+           [1., 0.]])
+    """
+    X = np.repeat(x[None], len(x) + 1, axis=0)
+    X[1:][np.diag_indices(len(x))] += h
+    F = np.asarray(f(X), float).reshape(len(x) + 1, -1)
+    out: FloatArray = ((F[1:] - F[0]) / ((x + h) - x)[:, None]).T
+    return out
+
+
+def _relative_steps(x: FloatArray) -> FloatArray:
+    """scipy's "2-point" steps at ``x`` by default: ``sqrt(eps) max(1, |x|)``, signed as ``x`` (+ at 0)."""
+    out: FloatArray = RELATIVE_STEP * np.where(x >= 0, 1.0, -1.0) * np.maximum(1.0, np.abs(x))
+    return out
+
+
 def _least_squares(p: _Pairs, z: FloatArray, sigma: float) -> FloatArray:
-    """Least squares of the output-angle errors from ``z``."""
+    """Least squares of the output-angle errors from ``z`` (the Jacobian by forward differences in one batch)."""
     from scipy.optimize import least_squares
 
-    out = least_squares(lambda v: p.errors(v, sigma), z, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=400)
+    def errors(v: FloatArray) -> FloatArray:
+        return p.errors(v, sigma)
+
+    out = least_squares(
+        errors, z, jac=lambda v: forward_jacobian(errors, v, _relative_steps(v)), xtol=1e-15, ftol=1e-15, gtol=1e-15,
+        max_nfev=400,
+    )  # fmt: skip
     x: FloatArray = out.x
     return x
 
@@ -423,15 +456,33 @@ def _minimax(p: _Pairs, z: FloatArray, sigma: float) -> FloatArray:
     """Minimise the largest absolute error from ``z``: ``min t`` s.t. ``-t <= e_i(z) <= t`` (SLSQP, epigraph form).
 
     One more constraint keeps the design assembled from the first pair to the last (its
-    :func:`assembly_margin` is not negative).
+    :func:`assembly_margin` is not negative). The constraints' Jacobians by forward differences
+    (SLSQP's own steps) in one batch each.
     """
     from scipy.optimize import minimize
 
+    last: list[Any] = [None, None]  # SLSQP asks for both bounds at each point: the errors once
+
+    def errors(V: FloatArray) -> FloatArray:
+        key = V.tobytes() + bytes(V.shape)
+        if last[0] != key:
+            last[:] = [key, p.errors(V[..., :-1], sigma)]
+        out: FloatArray = last[1]
+        return out
+
+    def above(V: FloatArray) -> FloatArray:
+        return V[..., -1:] - errors(V)
+
+    def below(V: FloatArray) -> FloatArray:
+        return V[..., -1:] + errors(V)
+
+    def margin(V: FloatArray) -> FloatArray:
+        return np.asarray(p.margin(V[..., :-1]))[..., None]
+
     t0 = float(np.max(np.abs(p.errors(z, sigma))))
     cons = [
-        {"type": "ineq", "fun": lambda v: v[-1] - p.errors(v[:-1], sigma)},
-        {"type": "ineq", "fun": lambda v: v[-1] + p.errors(v[:-1], sigma)},
-        {"type": "ineq", "fun": lambda v: np.atleast_1d(p.margin(v[:-1]))},
+        {"type": "ineq", "fun": f, "jac": lambda v, f=f: forward_jacobian(f, v, np.full(len(v), SLSQP_STEP))}
+        for f in (above, below, margin)
     ]
     res = minimize(
         lambda v: v[-1], np.r_[z, t0], method="SLSQP", constraints=cons, options={"ftol": 1e-15, "maxiter": 300}
@@ -595,6 +646,27 @@ def solve(
     ``min_transmission`` (degrees): a valid design also keeps its transmission angle within
     ``[min, 180 - min]`` from the first pair to the last (default 0: it only assembles).
     """
+    return scored(
+        inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, method=method, source=source,
+        starts=starts, min_transmission=min_transmission,
+    )[1]  # fmt: skip
+
+
+def scored(
+    inputs: ArrayLike,
+    outputs: ArrayLike,
+    *,
+    free_offsets: bool = False,
+    ground_length: float = 1.0,
+    method: str = "minimax",
+    source: str = "pairs",
+    starts: Sequence[FloatArray] = (),
+    min_transmission: float = 0.0,
+    freudenstein: bool = True,
+) -> tuple[float, FunctionFit]:
+    """:func:`solve` with the score its answer won by (its largest error, plus a penalty when it is not valid: of two
+    answers the lower wins); ``freudenstein=False``: only ``starts`` polished (the Freudenstein starts' answer kept
+    from an earlier call, which gives the same one)."""
     if method not in METHODS:
         raise InputError(f"method: {method!r} is not one of {', '.join(METHODS)}")
     if not (math.isfinite(ground_length) and ground_length > 0):
@@ -605,8 +677,8 @@ def solve(
     p = _Pairs(x, y, float(ground_length), bool(free_offsets), float(min_transmission))
     z, sigma, score = _starts(p)
     if len(x) == 3 and not free_offsets and score[0] < 1e-9:
-        return _fit(p, z[0], sigma[0], "exact")
-    todo = [(z[k], float(sigma[k])) for k in range(min(POLISH_STARTS, len(z)))]
+        return _score(p, z[0], sigma[0]), _fit(p, z[0], sigma[0], "exact")
+    todo = [(z[k], float(sigma[k])) for k in range(min(POLISH_STARTS, len(z)) if freudenstein else 0)]
     todo += [(np.asarray(v, float)[1:], 1.0 if v[0] >= 0 else -1.0) for v in starts]
     best: tuple[float, FloatArray, float, str] | None = None
     for zk, sk in todo:
@@ -615,7 +687,7 @@ def solve(
         if best is None or s < best[0]:
             best = (s, zk, sk, label)
     assert best is not None
-    return _fit(p, best[1], best[2], best[3])
+    return best[0], _fit(p, best[1], best[2], best[3])
 
 
 # ---------------------------------------------------------------------- the engine's objective

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..geometry import FloatArray
-from .function import FunctionFit, FunctionObjective, check_pairs, solve
+from .function import POLISH_STARTS, FunctionFit, FunctionObjective, check_pairs, scored
 from .optimize import Optimum, check_settings, search
 
 if TYPE_CHECKING:
@@ -86,20 +86,23 @@ def synthesize_function(
     x, y = check_pairs(inputs, outputs, source)
     check_settings(seconds=seconds, restarts=restarts, generations=generations, workers=workers)  # met at once too
     fit_from = partial(
-        solve, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
+        scored, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
         min_transmission=min_transmission,
     )  # fmt: skip
     t0 = time.monotonic()
-    first = fit_from()
+    score, first = fit_from()
     objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units, float(min_transmission))
     if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
         return FunctionSynthesis(first, _mechanism(first, units), None)
-    polish = time.monotonic() - t0  # the last polish repeats this one's work, with one start more
+    polish = time.monotonic() - t0  # the Freudenstein starts' polish; the last polishes the engine's answer alone
     opt = search(
         objective, seed=seed, seconds=_engine_seconds(seconds, polish), restarts=restarts, generations=generations,
         goal=GOAL, workers=workers, scheduler=scheduler, checkpoint=checkpoint,
     )  # fmt: skip
-    fit = fit_from(starts=[opt.x])  # the engine's best, polished with the Freudenstein starts
+    fit = first
+    if first.method != "exact":  # (three pairs met exactly but not valid: no start is polished)
+        engine_score, engine = fit_from(starts=[opt.x], freudenstein=False)  # the Freudenstein starts' is `first`
+        fit = engine if engine_score < score else first
     return FunctionSynthesis(fit, _mechanism(fit, units), opt)
 
 
@@ -108,12 +111,13 @@ ENGINE_SHARE = 0.25
 
 
 def _engine_seconds(seconds: float, polish: float) -> float:
-    """The engine's time: ``seconds`` less the two polishes (the one done, and the last, about as long).
+    """The engine's time: ``seconds`` less the polishes (the one done, ``polish``, of :data:`~.function.POLISH_STARTS`
+    starts, and the last, of one).
 
-    >>> _engine_seconds(10.0, 0.5), _engine_seconds(1.0, 0.5)
-    (9.0, 0.25)
+    >>> _engine_seconds(12.0, 1.2), _engine_seconds(1.0, 0.9)
+    (10.6, 0.25)
     """
-    return max(seconds - 2 * polish, ENGINE_SHARE * seconds)
+    return max(seconds - polish * (1 + 1 / POLISH_STARTS), ENGINE_SHARE * seconds)
 
 
 def _mechanism(fit: FunctionFit, units: str) -> Mechanism:
