@@ -2216,7 +2216,7 @@ class _Search:
             from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
             self.bar = Progress(
-                TextColumn("search {task.fields[restart]} gen {task.fields[generation]}"),
+                TextColumn("{task.fields[where]}"),
                 BarColumn(),
                 TextColumn("best error {task.fields[best]}"),
                 TimeElapsedColumn(),
@@ -2224,7 +2224,7 @@ class _Search:
                 transient=True,
             )
             self.bar.start()
-            self.task = self.bar.add_task("synthesis", total=self.seconds, restart=1, generation=0, best="-")
+            self.task = self.bar.add_task("synthesis", total=self.seconds, where="search 1 gen 0", best="-")
         else:
             import time
 
@@ -2248,8 +2248,11 @@ class _Search:
 
         if hasattr(p, "line"):  # --topology auto's stages (synthesis.auto.Stage): each line as it comes
             self.say(p.line(self.seconds - p.seconds, self.seconds))  # its budget: what was left after the start
-            if self.bar is not None:
-                self.bar.update(self.task, completed=min(p.elapsed, self.seconds))
+            if self.bar is not None:  # the bar: the stage, and the best so far as the run chooses
+                best = "-" if p.best != p.best else f"{100 * p.best:.3g} % (two-sided)"
+                where = p.what.split(";")[0].split(",")[0]
+                self.bar.update(self.task, completed=min(p.elapsed + self.seconds - p.seconds, self.seconds))
+                self.bar.update(self.task, where=where, best=best)
             return
         if p.source == "atlas":  # the atlas's answer, before any search: said at once
             self.atlas = p
@@ -2262,7 +2265,7 @@ class _Search:
                 # machine the atlas took past ``first`` s, and a run its answer ended said "search 1, generation 0")
         if self.bar is not None:
             self.bar.update(
-                self.task, completed=min(p.elapsed, self.seconds), restart=p.restart + 1, generation=p.generation
+                self.task, completed=min(p.elapsed, self.seconds), where=f"search {p.restart + 1} gen {p.generation}"
             )
             self.bar.update(self.task, best=self.best(p).removeprefix("max error "))  # its column: "best error"
         elif time.monotonic() - self.last >= self.every:
