@@ -1098,3 +1098,24 @@ def test_a_transmission_warning_gives_the_file_sweeps_extremes_where_it_does_not
     )
     full = lk.check(lk.load(EXAMPLES / "seed003_ex21.yaml"))  # its sweep a turn: nothing more to say
     assert all("sweep" not in w for w in full.warnings) and "file's sweep" not in full.text()
+
+
+def test_the_sweep_extremes_of_a_cylinder_swept_whole_are_not_added_and_a_sweep_past_the_range_warns_nothing(tmp_path):
+    """Review 15a: a cylinder driver's sweep never counted as covering its range (``0 * inf``), so its warning always
+    added the sweep's sampled extremes; and a sweep running past the range (samples that do not assemble) raised a
+    numpy RuntimeWarning from ``lk.check``."""
+    import warnings
+
+    text = (EXAMPLES / "excavator_bucket.yaml").read_text().replace("stroke: [2.15, 2.9]", "stroke: [1.7, 3.3]")
+    (tmp_path / "bucket.yaml").write_text(text.split("gravity:")[0])
+    bucket = lk.check(lk.load(tmp_path / "bucket.yaml"))
+    ws = [w for w in bucket.warnings if w["kind"] == "transmission-angle"]
+    lines = [x for x in bucket.text().splitlines() if x.startswith("Warning: the transmission angle")]
+    assert ws and all("sweep" not in w for w in ws) and lines and all("file's sweep" not in x for x in lines)
+    wide = (EXAMPLES / "nongrashof_rocker.yaml").read_text().replace("start: -78, stop: 78", "start: -100, stop: 50")
+    (tmp_path / "wide.yaml").write_text(wide)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rep = lk.check(lk.load(tmp_path / "wide.yaml"))
+    (w,) = [w for w in rep.warnings if w["kind"] == "transmission-angle"]
+    assert w["sweep"]["max"] > 170  # the sweep passes the toggle at -78.58 deg: there the angle is 180 deg

@@ -1780,6 +1780,9 @@ def _sweep_covers(mech: Mechanism, ranges: list[list[float]]) -> bool:
     >>> mech = lk.load("examples/nongrashof_rocker.yaml")  # its sweep: -78 to 78 deg
     >>> [_sweep_covers(mech, r) for r in ([[-78.58, 78.58]], [[-10.0, 10.0]], [[282.0, 300.0]], [[0.0, 360.0]])]
     [False, True, True, False]
+    >>> bucket = lk.load("examples/excavator_bucket.yaml")  # a cylinder's stroke, 2.15 to 2.9 m, swept whole
+    >>> [_sweep_covers(bucket, r) for r in ([[2.15, 2.9]], [[2.2, 2.3]], [[2.1, 2.3]], [[2.8, 2.95]])]
+    [True, True, False, False]
     """
     d = mech.drivers[0]
     a, b = sorted((d.sweep.start, d.sweep.stop))
@@ -1788,8 +1791,8 @@ def _sweep_covers(mech: Mechanism, ranges: list[list[float]]) -> bool:
     if b - a >= turn - tol:
         return True
     for s, e in ranges:
-        k = math.ceil((a - tol - s) / turn) if math.isfinite(turn) else 0  # the first copy of s at or after a
-        if not (e - s < turn - tol and e + k * turn <= b + tol):
+        shift = math.ceil((a - tol - s) / turn) * turn if math.isfinite(turn) else 0.0  # the copy of s at or after a
+        if not (e - s < turn - tol and a - tol <= s + shift and e + shift <= b + tol):
             return False
     return True
 
@@ -1805,7 +1808,8 @@ def _over_sweep(mech: Mechanism | None, joints: list[str], ranges: list[list[flo
     q = np.linspace(d.sweep.start, d.sweep.stop, SWEEP_TRANSMISSION_SAMPLES)
     res = analyze(mech, {d.name: q}, rates=False, dynamics=False)
     a, b, o4 = (res.point(j) for j in joints[1:])
-    mu = np.degrees(np.abs(np.angle((o4 - b) / (a - b))))
+    with np.errstate(invalid="ignore", divide="ignore"):  # NaN where a sample does not assemble
+        mu = np.degrees(np.abs(np.angle((o4 - b) / (a - b))))
     if not np.isfinite(mu).any():
         return {}
     ends = {"driver": d.name, "from": float(q[0]), "to": float(q[-1])}
