@@ -1119,3 +1119,18 @@ def test_the_sweep_extremes_of_a_cylinder_swept_whole_are_not_added_and_a_sweep_
         rep = lk.check(lk.load(tmp_path / "wide.yaml"))
     (w,) = [w for w in rep.warnings if w["kind"] == "transmission-angle"]
     assert w["sweep"]["max"] > 170  # the sweep passes the toggle at -78.58 deg: there the angle is 180 deg
+
+
+def test_the_sweep_extremes_are_over_the_values_the_file_sweeps(tmp_path):
+    """Review 15a: the sweep's extremes were taken from ``start`` to ``stop`` even where no step lands on ``stop``:
+    ``start: 0, stop: 78.58, step: 1`` sweeps 0 to 78, but the warning said "to 78.58" and gave the maximum at the
+    toggle past it (178.86 deg). Now from the first value to the last (an independent dense sweep: 0.01 deg)."""
+    text = (EXAMPLES / "nongrashof_rocker.yaml").read_text()
+    path = tmp_path / "short.yaml"
+    path.write_text(text.replace("start: -78, stop: 78, step: 1", "start: 0, stop: 78.58, step: 1"))
+    mech = lk.load(path)
+    (w,) = [w for w in lk.check(mech).warnings if w["kind"] == "transmission-angle"]
+    res = lk.analyze(mech, {"crank": np.linspace(0.0, 78.0, 7801)}, rates=False)
+    C, D, B = res.point("C"), res.point("D"), res.point("B")
+    mu = np.degrees(np.abs(np.angle((C - D) / (B - D))))
+    assert w["sweep"]["to"] == 78.0 and abs(w["sweep"]["max"] - mu.max()) < 0.01 and w["sweep"]["max"] < 170

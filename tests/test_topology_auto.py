@@ -518,7 +518,10 @@ def test_a_killed_auto_run_resumes_from_its_checkpoint_without_doing_again_what_
         monkeypatch.setattr(auto, name, lambda *a, **k: pytest.fail("run again"))
     calls.clear()
     kill = False
-    out = auto.synthesize_auto(T, max_joints=5, seconds=2.0, seed=4, workers=1, checkpoint=path)
+    stages: list = []
+    out = auto.synthesize_auto(T, max_joints=5, seconds=2.0, seed=4, workers=1, checkpoint=path, progress=stages.append)
+    assert stages[0].what.startswith("resumed from its checkpoint after ")  # (it said it searched the four-bar)
+    assert stages[1].what == "the four-bar found"  # and that it screened
     assert np.array_equal(calls[0][1][0], first.x)  # from the best so far
     assert calls[0][0] == [(saved.seeds[0] + 7919) % 2**32]  # the seeds moved on by the round done
     assert out.outcome.seconds >= 0.95 * 2.0 * (1 - auto.RESERVE)  # both runs' time: the budget, not twice it

@@ -1785,7 +1785,7 @@ def _sweep_covers(mech: Mechanism, ranges: list[list[float]]) -> bool:
     [True, True, False, False]
     """
     d = mech.drivers[0]
-    a, b = sorted((d.sweep.start, d.sweep.stop))
+    a, b = sorted(d.sweep.ends())
     turn = 2 * math.pi / d.input_scale(mech) if d.type.cyclic else math.inf
     tol = 1e-9 * max(abs(a), abs(b), 1.0)
     if b - a >= turn - tol:
@@ -1805,7 +1805,7 @@ def _over_sweep(mech: Mechanism | None, joints: list[str], ranges: list[list[flo
     if mech is None or len(mech.drivers) != 1 or _sweep_covers(mech, ranges):
         return {}
     d = mech.drivers[0]
-    q = np.linspace(d.sweep.start, d.sweep.stop, SWEEP_TRANSMISSION_SAMPLES)
+    q = np.linspace(*d.sweep.ends(), SWEEP_TRANSMISSION_SAMPLES)  # from its first value to its last
     res = analyze(mech, {d.name: q}, rates=False, dynamics=False)
     a, b, o4 = (res.point(j) for j in joints[1:])
     with np.errstate(invalid="ignore", divide="ignore"):  # NaN where a sample does not assemble

@@ -200,6 +200,18 @@ class Sweep:
         """
         return stepped(self.start, self.stop, self.step, self.count())
 
+    def ends(self) -> tuple[float, float]:
+        """The first and the last of :meth:`values`, without them all.
+
+        >>> Sweep(0, 78.58, 1).ends(), Sweep(0, 0.3, 0.1).ends()
+        ((0.0, 78.0), (0.0, 0.3))
+        """
+        n = self.count()
+        last = self.start + self.step * (n - 1)  # as stepped() computes it
+        if n > 1 and abs(last - self.stop) <= _landing(self.start, self.stop, self.step):
+            last = self.stop
+        return float(self.start), float(last)
+
     def to_dict(self) -> dict[str, float]:
         """``{start, stop, step}`` as the file writes it."""
         return {"start": float(self.start), "stop": float(self.stop), "step": float(self.step)}

@@ -85,8 +85,9 @@ class Stage:
     what : str
         The stage, in words ("searching eightbar-16, fourbar, watt2").
     best : float
-        The best candidate's two-sided distance / the targets' diagonal so far (how the run chooses: the design
-        written is never further); NaN before the first candidate.
+        A bound on the best candidate's two-sided distance / the targets' diagonal so far (how the run chooses:
+        the design written is never further): the four-bar candidate's (the searches report only when they end);
+        NaN before it.
     """
 
     elapsed: float
@@ -99,12 +100,12 @@ class Stage:
         counted in its time and its budget (``seconds``; None: the run's).
 
         >>> Stage(12.4, 60, "searching fourbar", 0.0123).line()
-        'searching fourbar; best so far 1.23 % of the diagonal (two-sided distance); 12 of 60 s'
+        'searching fourbar; best so far at most 1.23 % of the diagonal (two-sided distance); 12 of 60 s'
         """
         best = (
             ""
             if self.best != self.best
-            else f"; best so far {100 * self.best:.3g} % of the diagonal (two-sided distance)"
+            else f"; best so far at most {100 * self.best:.3g} % of the diagonal (two-sided distance)"
         )
         total = self.seconds + before if seconds is None else seconds
         return f"{self.what}{best}; {self.elapsed + before:.0f} of {total:g} s"
@@ -129,12 +130,19 @@ class _Ticker:
         self.last = -np.inf
         self()
 
-    def found(self, four_bar: Synthesis, xy: np.ndarray) -> None:
-        """The stage after the four-bar search: its two-sided distance / diagonal (:func:`two_sided`, as the run
-        chooses) is the best so far when it is feasible (a feasible design is chosen before one that is not)."""
-        self.stage(
-            "the four-bar found; screening", two_sided(four_bar, xy) / four_bar.diagonal if four_bar.feasible else None
-        )
+    def start(self, saved: Saved, topologies: int) -> None:
+        """The first stage: what the run does first, or, resumed from a checkpoint (``saved``), the time it had used."""
+        if saved.fourbar is None:
+            self.stage(f"the four-bar from its atlas, then a screen of {topologies} topologies")
+        else:
+            self.stage(f"resumed from its checkpoint after {saved.elapsed:.0f} s (the four-bar and the screen done)")
+
+    def found(self, four_bar: Synthesis, xy: np.ndarray, screening: bool) -> None:
+        """The stage after the four-bar search (``screening``: the screen comes next): its two-sided distance /
+        diagonal (:func:`two_sided`, as the run chooses) bounds the answer's when it is feasible (a feasible design
+        is chosen before one that is not)."""
+        best = two_sided(four_bar, xy) / four_bar.diagonal if four_bar.feasible else None
+        self.stage("the four-bar found" + ("; screening" if screening else ""), best)
 
     def __call__(self) -> None:
         now = time.monotonic()
@@ -208,9 +216,9 @@ def synthesize_auto(
     t0 -= saved.elapsed  # the clock goes on from the runs before
     save, tick = _Saver(ck, saved, t0), _Ticker(progress if method == "local" else None, t0, seconds)
     with save.on_interrupt():
-        tick.stage(f"the four-bar from its atlas, then a screen of {len(topologies)} topologies")
+        tick.start(saved, len(topologies))
         engine = _four_bar(saved, save, targets, units, partial, problem, seed, FOUR_BAR_SHARE * seconds, workers, goal)
-        tick.found(engine, xy)
+        tick.found(engine, xy, screening=saved.order is None)
         if saved.order is None:
             deadline = time.monotonic() + SCREEN * seconds  # its share whatever the four-bar took
             _screened(saved, topologies, make, np.random.default_rng(seed), deadline, workers, method)
