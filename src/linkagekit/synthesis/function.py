@@ -543,6 +543,9 @@ class FunctionFit:
         The Grashof type (:func:`linkagekit.checks.grashof`).
     transmission : tuple of float
         Smallest and largest transmission angle (degrees) from the first pair to the last.
+    score : float
+        What it was chosen by among the polished designs: the largest absolute error (degrees), plus a
+        penalty when it is not valid (of two answers, the lower is the better).
     """
 
     lengths: tuple[float, float, float, float]
@@ -555,6 +558,7 @@ class FunctionFit:
     valid: bool
     grashof: str
     transmission: tuple[float, float]
+    score: float = float("nan")
 
     @property
     def max_error(self) -> float:
@@ -621,6 +625,7 @@ def _fit(p: _Pairs, z: FloatArray, sigma: float, method: str) -> FunctionFit:
         valid=bool(p.valid(z)),
         grashof=grashof(FourBar(0, 1, 2, 3, ground=p.d, crank=a, coupler=b, rocker=c))[0],
         transmission=transmission_range(abc, p.d, x),
+        score=_score(p, z, sigma),
     )
 
 
@@ -634,6 +639,7 @@ def solve(
     source: str = "pairs",
     starts: Sequence[FloatArray] = (),
     min_transmission: float = 0.0,
+    freudenstein: bool = True,
 ) -> FunctionFit:
     """A four-bar whose output angle meets ``outputs`` at ``inputs`` (degrees, from the ground line), on one branch.
 
@@ -645,28 +651,9 @@ def solve(
     vectors of :class:`FunctionObjective` (e.g. the engine's best) polished the same way.
     ``min_transmission`` (degrees): a valid design also keeps its transmission angle within
     ``[min, 180 - min]`` from the first pair to the last (default 0: it only assembles).
+    ``freudenstein=False``: only ``starts`` are polished (an earlier call's answer from the Freudenstein
+    starts is the same: compare the two by their ``score``).
     """
-    return scored(
-        inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, method=method, source=source,
-        starts=starts, min_transmission=min_transmission,
-    )[1]  # fmt: skip
-
-
-def scored(
-    inputs: ArrayLike,
-    outputs: ArrayLike,
-    *,
-    free_offsets: bool = False,
-    ground_length: float = 1.0,
-    method: str = "minimax",
-    source: str = "pairs",
-    starts: Sequence[FloatArray] = (),
-    min_transmission: float = 0.0,
-    freudenstein: bool = True,
-) -> tuple[float, FunctionFit]:
-    """:func:`solve` with the score its answer won by (its largest error, plus a penalty when it is not valid: of two
-    answers the lower wins); ``freudenstein=False``: only ``starts`` polished (the Freudenstein starts' answer kept
-    from an earlier call, which gives the same one)."""
     if method not in METHODS:
         raise InputError(f"method: {method!r} is not one of {', '.join(METHODS)}")
     if not (math.isfinite(ground_length) and ground_length > 0):
@@ -677,7 +664,7 @@ def scored(
     p = _Pairs(x, y, float(ground_length), bool(free_offsets), float(min_transmission))
     z, sigma, score = _starts(p)
     if len(x) == 3 and not free_offsets and score[0] < 1e-9:
-        return _score(p, z[0], sigma[0]), _fit(p, z[0], sigma[0], "exact")
+        return _fit(p, z[0], sigma[0], "exact")
     todo = [(z[k], float(sigma[k])) for k in range(min(POLISH_STARTS, len(z)) if freudenstein else 0)]
     todo += [(np.asarray(v, float)[1:], 1.0 if v[0] >= 0 else -1.0) for v in starts]
     best: tuple[float, FloatArray, float, str] | None = None
@@ -687,7 +674,7 @@ def scored(
         if best is None or s < best[0]:
             best = (s, zk, sk, label)
     assert best is not None
-    return best[0], _fit(p, best[1], best[2], best[3])
+    return _fit(p, best[1], best[2], best[3])
 
 
 # ---------------------------------------------------------------------- the engine's objective

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..geometry import FloatArray
-from .function import POLISH_STARTS, FunctionFit, FunctionObjective, check_pairs, scored
+from .function import POLISH_STARTS, FunctionFit, FunctionObjective, check_pairs, solve
 from .optimize import Optimum, check_settings, search
 
 if TYPE_CHECKING:
@@ -86,11 +86,11 @@ def synthesize_function(
     x, y = check_pairs(inputs, outputs, source)
     check_settings(seconds=seconds, restarts=restarts, generations=generations, workers=workers)  # met at once too
     fit_from = partial(
-        scored, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
+        solve, inputs, outputs, free_offsets=free_offsets, ground_length=ground_length, source=source,
         min_transmission=min_transmission,
     )  # fmt: skip
     t0 = time.monotonic()
-    score, first = fit_from()
+    first = fit_from()
     objective = FunctionObjective(x, y, float(ground_length), bool(free_offsets), units, float(min_transmission))
     if first.valid and first.max_error <= EXACT:  # met exactly: no search can do better
         return FunctionSynthesis(first, _mechanism(first, units), None)
@@ -101,8 +101,8 @@ def synthesize_function(
     )  # fmt: skip
     fit = first
     if first.method != "exact":  # (three pairs met exactly but not valid: no start is polished)
-        engine_score, engine = fit_from(starts=[opt.x], freudenstein=False)  # the Freudenstein starts' is `first`
-        fit = engine if engine_score < score else first
+        engine = fit_from(starts=[opt.x], freudenstein=False)  # the Freudenstein starts' answer is `first`
+        fit = engine if engine.score < first.score else first
     return FunctionSynthesis(fit, _mechanism(fit, units), opt)
 
 
