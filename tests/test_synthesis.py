@@ -200,6 +200,7 @@ def check_sixbar_recovery(topology: str, **search) -> float:
     return float(np.max(d) / diagonal(T))
 
 
+@pytest.mark.long  # two searches of 4-5 s: the suite's five minutes (the four-bars' recovery stays in it)
 @pytest.mark.parametrize("topology", ["watt2", "stephenson3"])
 def test_recovers_known_sixbar_curves(topology):
     """Recovery of a known six-bar curve by one small search with a fixed seed (the clock is not what stops

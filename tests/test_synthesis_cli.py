@@ -274,6 +274,7 @@ def test_plot_draws_every_target_where_the_png_transform_maps_it(work, base_run)
 
 
 # ---------------------------------------------------------------------- determinism
+@pytest.mark.long  # a second search of the base run's size: the suite's five minutes
 def test_same_seed_gives_the_same_file(work, base_run, capsys):
     code, out, err = run_main(
         ["synthesize", str(work / "t.csv"), "-o", str(work / "again.yaml"), "--seed", "1", *SMALL], capsys
@@ -287,6 +288,7 @@ def test_two_local_processes_give_the_same_file_as_one(work, base_run, workers2_
     assert workers2_run.read_bytes() == (work / "base.yaml").read_bytes()
 
 
+@pytest.mark.long  # 6.6 s of searches: the suite's five minutes (auto's checkpoint tests stay in it)
 def test_checkpointed_run_gives_the_same_file_leaves_no_temp_file_and_a_finished_checkpoint_replays(
     work, base_run, tmp_path, capsys, monkeypatch
 ):
@@ -328,7 +330,11 @@ RESUME += ["--goal", "0"]
 
 
 @pytest.mark.parametrize(
-    "kill_in", [pytest.param(0, id="differential evolution"), pytest.param(1, id="CMA-ES", marks=pytest.mark.long)]
+    "kill_in",
+    [
+        pytest.param(0, id="differential evolution", marks=pytest.mark.long),  # 11 s: the suite's five minutes
+        pytest.param(1, id="CMA-ES", marks=pytest.mark.long),
+    ],
 )
 def test_killed_run_resumes_from_its_checkpoint_to_the_uninterrupted_result(
     work, tmp_path, capsys, monkeypatch, kill_in

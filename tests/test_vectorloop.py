@@ -86,6 +86,7 @@ def test_fourbars_agree_over_full_sweeps():
             done += 1
 
 
+@pytest.mark.long  # 7.5 s: the suite's five minutes (the other six-bar and four-bar agreements stay in it)
 def test_stephenson_sixbars_agree_over_full_sweeps():
     rng = np.random.default_rng(1)
     done = 0
