@@ -165,27 +165,30 @@ def test_auto_writes_a_valid_mechanism_and_names_its_topology(tmp_path, capsys) 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_auto_reports_its_stages_and_a_line_every_tick_never_better_than_what_it_writes(monkeypatch, workers) -> None:  # type: ignore[no-untyped-def]
     """``--topology auto`` printed no progress at all off a terminal (its local searches took no callback). It now
-    reports each stage at once and, while its searches run, a line every :data:`TICK` seconds; the best it reports
-    is the four-bar candidate's two-sided distance, which the written design never exceeds (it is chosen by it)."""
+    reports each stage at once (the first before the four-bar search starts) and, while its searches run, a line
+    every :data:`TICK` seconds (at the latest after each local search, or, with workers, each wait for them); the
+    best it reports is the four-bar candidate's two-sided distance, which the written design never exceeds (it is
+    chosen by it). No bound on the time between lines: on a busy machine a local search takes longer."""
     import time
 
     from linkagekit.synthesis import auto
 
-    monkeypatch.setattr(auto, "TICK", 0.25)
+    monkeypatch.setattr(auto, "TICK", 0.05)
     got: list = []
+    real = auto.four_bar_engine
+    monkeypatch.setattr(auto, "four_bar_engine", lambda *a, **k: got.append((None, len(got))) or real(*a, **k))
     t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
     T = np.stack([np.cos(t), 0.6 * np.sin(t)], 1)
     t0 = time.monotonic()
     out = auto.synthesize_auto(
         T, max_joints=6, seconds=2.0, seed=3, workers=workers, progress=lambda s: got.append((time.monotonic() - t0, s))
     )
-    assert got[0][1].what.startswith("the four-bar from its atlas") and got[0][0] < 1.0
-    searching = [(w, s) for w, s in got if s.what.startswith("searching ")]
-    assert len(searching) >= 3  # the stage, then a line every 0.25 s of about 1.3 s of searches
-    gaps = np.diff([w for w, _ in searching])
-    assert np.all(gaps < 0.25 + 1.5), gaps  # a tick comes at the latest after the next local search
-    for _, s in got:
-        assert abs(s.elapsed - (got[0][1].elapsed + _ - got[0][0])) < 0.2  # the run's own clock
+    assert got[0][1].what.startswith("the four-bar from its atlas") and got[1] == (None, 1)  # then the search
+    got = [g for g in got if g[0] is not None]
+    searching = [s for _, s in got if s.what.startswith("searching ")]
+    assert len(searching) >= 2  # the stage, then at least one tick (after the first local search, or a wait)
+    for w, s in got:
+        assert abs(s.elapsed - (got[0][1].elapsed + w - got[0][0])) < 0.5  # the run's own clock
     four = next(r for r in out.tried if r.name == auto.FOUR_BAR_ENGINE)
     reported = {s.best for _, s in got if s.best == s.best}
     assert reported == {four.two_sided}  # its two-sided distance, as the choice measures it

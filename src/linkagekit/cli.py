@@ -2250,7 +2250,7 @@ class _Search:
             self.say(p.line(self.seconds - p.seconds, self.seconds))  # its budget: what was left after the start
             if self.bar is not None:  # the bar: the stage, and the best so far as the run chooses
                 best = "-" if p.best != p.best else f"{100 * p.best:.3g} % (two-sided)"
-                where = p.what.split(";")[0].split(",")[0]
+                where = p.what if len(p.what) <= 48 else p.what[:47] + "…"
                 self.bar.update(self.task, completed=min(p.elapsed + self.seconds - p.seconds, self.seconds))
                 self.bar.update(self.task, where=where, best=best)
             return

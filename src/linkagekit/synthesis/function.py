@@ -417,13 +417,14 @@ SLSQP_STEP, RELATIVE_STEP = float(np.sqrt(np.finfo(float).eps)), float(np.finfo(
 def forward_jacobian(f: Callable[[FloatArray], FloatArray], x: FloatArray, h: FloatArray) -> FloatArray:
     """The forward differences of ``f`` at ``x`` with steps ``h`` (m, n), its rows at ``x`` and at each ``x + h_i e_i``
     evaluated in one call (``f`` takes points as rows): scipy's "2-point" differences (the step taken as
-    ``(x_i + h_i) - x_i``), one call of ``f`` instead of ``n + 1``.
+    ``(x_i + h_i) - x_i``; a relative one where ``h_i`` is lost to rounding), one call of ``f`` instead of ``n + 1``.
 
     >>> f = lambda X: np.stack([X[..., 0] * X[..., 1], X[..., 0]], -1)
     >>> forward_jacobian(f, np.array([2.0, 3.0]), np.full(2, 1e-6)).round(6)
     array([[3., 2.],
            [1., 0.]])
     """
+    h = np.where((x + h) - x == 0, _relative_steps(x), h)  # scipy's too: a step lost to rounding at a large x
     X = np.repeat(x[None], len(x) + 1, axis=0)
     X[1:][np.diag_indices(len(x))] += h
     F = np.asarray(f(X), float).reshape(len(x) + 1, -1)
