@@ -269,6 +269,7 @@ def test_plot_at_takes_at_most_as_many_poses_as_an_animation_has_frames(capsys, 
     assert not Path("p.png").exists()
 
 
+@pytest.mark.long  # 4 s: the suite's five minutes
 def test_plot_at_of_a_thousand_poses_is_drawn(capsys):
     """The cap is MAX_POSES itself: 1000 values are drawn."""
     fourbar = str(EXAMPLES / "seed000_fourbar.yaml")

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 
 import numpy as np
 import pytest
@@ -609,10 +610,9 @@ def test_simulate_refuses_a_mode_longer_than_a_turn_in_one_line(tmp_path, capsys
     doc = triad(LONG_MODE_MID).to_dict()
     doc["links"]["crank"] = {"joints": ["O", "A"], "mass": 1.0, "cg": [0.8, 0.0], "inertia": 0.1}
     mech = lk.Mechanism.from_dict(doc)
-    with pytest.raises(lk.InputError, match=r"mode of crank runs 418\.28\d deg from fold to fold, longer than a turn"):
-        lk.simulate(mech, np.linspace(0.0, 1.0, 11), torque=1.0)
     path = tmp_path / "long.yaml"
     lk.save(mech, path)
     assert main(["simulate", str(path), "--time", "0:1:0.1", "--torque", "1", "-o", str(tmp_path / "m.csv")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "does not follow such a mode" in err[0]
+    assert len(err) == 1 and re.search(r"crank runs 418\.28\d deg from fold to fold, longer than a turn", err[0])
+    assert "does not follow such a mode" in err[0]

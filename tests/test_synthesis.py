@@ -177,7 +177,9 @@ def check_fourbar_recovery(which: int, **search) -> float:
     return float(np.max(d) / diagonal(T))
 
 
-@pytest.mark.parametrize("which", [0, 1, 2])
+@pytest.mark.parametrize(
+    "which", [0, pytest.param(1, marks=pytest.mark.long), pytest.param(2, marks=pytest.mark.long)]
+)  # one search in the suite (its five minutes), all three in bench_long_tests.py
 def test_recovers_known_fourbar_curves(which):
     """Recovery of known four-bar curves by one small search with a fixed seed. (The search as shipped, and how
     long it takes, is run by benchmarks/bench_long_tests.py and benchmarks/bench_recovery.py, not here.)"""
@@ -267,6 +269,7 @@ def test_same_seed_same_design_and_another_seed_another_search():
     assert a.mechanism.to_dict() == b.mechanism.to_dict()
 
 
+@pytest.mark.long  # 3.7 s: the suite's five minutes (the command's two processes against one stay in it)
 def test_workers_give_the_same_result():
     T = lk.analyze(lk.load(SEED000), {"crank": np.arange(0.0, 360.0, 40.0)}).xy("P")
     pb = make_problem(T, "fourbar", units="cm")
