@@ -620,4 +620,6 @@ def test_ctrl_c_saves_the_time_used_so_a_resumed_run_keeps_to_its_budget(tmp_pat
         path, make, enumerate_topologies(5), (T, "m", False, {"min_transmission": 20.0}, 5, 4, "local")
     )
     saved = ck.load()
-    assert saved.rounds == 1 and took - 0.05 <= saved.elapsed <= took  # the interrupted round's time counted
+    # the interrupted round's time counted (the 0.5 s slept in it): less only by the setup before the run's clock
+    # and the checkpoint's write after it, which on a busy machine took 0.056 s
+    assert saved.rounds == 1 and took - 0.3 <= saved.elapsed <= took
