@@ -21,7 +21,7 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -386,6 +386,18 @@ def slider_lines(mech: Mechanism) -> list[SliderLine]:
     return out
 
 
+def transmission_deg(tip: np.ndarray, joint: np.ndarray, pivot: np.ndarray) -> np.ndarray:
+    """A four-bar loop's transmission angle (degrees, in [0, 180]) at the rocker's ``joint`` with the coupler: between
+    the coupler (to the crank's ``tip``) and the rocker (to its ground ``pivot``); NaN where a position is.
+
+    >>> float(transmission_deg(np.array(1j), np.array(0j), np.array(1 + 0j)))
+    90.0
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out: np.ndarray = np.degrees(np.abs(np.angle((pivot - joint) / (tip - joint))))
+    return out
+
+
 class _Quantities:
     """The scalar functions of the input the checks look at, as rows of one matrix per state.
 
@@ -471,8 +483,7 @@ class _Quantities:
         with np.errstate(invalid="ignore", divide="ignore"):
             w = (np.conj(arm) * v[self.joint]).imag / (np.abs(arm) ** 2)
             wc = (np.conj(bar) * (v[self.joint] - v[self.tip])).imag / (np.abs(bar) ** 2)
-            mu = np.degrees(np.abs(np.angle((o4 - b) / (a - b))))
-        mu = np.where(np.isfinite(b), mu, np.nan)
+        mu = np.where(np.isfinite(b), transmission_deg(a, b, o4), np.nan)
         return np.concatenate([w, mu, -mu, w - wc, st.cond, ds, *self._slider_rows(st)])
 
     def out_angle(self, st: _State) -> np.ndarray:
@@ -1037,7 +1048,7 @@ def _driver_checks(
     _refine(params, driver, run.q, roots, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
     ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
-    if run.cyclic and _beyond_a_turn(intervals[0], run.hi - run.lo):  # a mode longer than a turn that does not
+    if run.cyclic and beyond_a_turn(intervals[0], run.hi - run.lo):  # a mode longer than a turn that does not
         ends = list(intervals[0])  # close ends at a fold each way
     hole = _undetermined(run)
     near_hole = [] if hole is None else list(intervals[0])  # a hair either side of it
@@ -1807,9 +1818,7 @@ def _over_sweep(mech: Mechanism | None, joints: list[str], ranges: list[list[flo
     d = mech.drivers[0]
     q = np.linspace(*d.sweep.ends(), SWEEP_TRANSMISSION_SAMPLES)  # from its first value to its last
     res = analyze(mech, {d.name: q}, rates=False, dynamics=False)
-    a, b, o4 = (res.point(j) for j in joints[1:])
-    with np.errstate(invalid="ignore", divide="ignore"):  # NaN where a sample does not assemble
-        mu = np.degrees(np.abs(np.angle((o4 - b) / (a - b))))
+    mu = transmission_deg(*(res.point(j) for j in joints[1:]))  # NaN where a sample does not assemble
     if not np.isfinite(mu).any():
         return {}
     ends = {"driver": d.name, "from": float(q[0]), "to": float(q[-1])}
@@ -1945,7 +1954,7 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
     return lines
 
 
-def _beyond_a_turn(interval: list[float], turn: float) -> bool:
+def beyond_a_turn(interval: Sequence[float], turn: float) -> bool:
     """Whether an angle's assembly ``interval`` is longer than a ``turn`` (a full turn is ``[0, turn]`` exactly)."""
     return interval[1] - interval[0] > turn * (1 + 1e-9)
 
@@ -1979,7 +1988,7 @@ def _reached_twice(
     for d in mech.drivers:
         turn = 2 * math.pi / d.input_scale(mech)
         rng = ranges[d.name]
-        if d.type.cyclic and len(rng) == 1 and _beyond_a_turn(rng[0], turn):
+        if d.type.cyclic and len(rng) == 1 and beyond_a_turn(rng[0], turn):
             a, b = rng[0]
             out[d.name] = {"from": a, "to": b - turn, "jumps": direction_jumps(rng[0], pose[d.name], turn)}
     return out

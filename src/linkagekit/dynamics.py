@@ -44,7 +44,7 @@ import numpy as np
 
 from .api import analyze, prepare
 from .branch import along_sweep
-from .checks import input_range
+from .checks import beyond_a_turn, input_range
 from .errors import InputError
 from .forces import Kinematics, point_motion
 from .model import CylinderType, Driver, Mechanism, SliderType
@@ -352,7 +352,7 @@ def _one_configuration_a_direction(mech: Mechanism, ranges: list[list[float]]) -
     d = mech.drivers[0]
     turn = 2 * math.pi / d.input_scale(mech)
     for lo, hi in ranges:
-        if d.type.cyclic and hi - lo > turn * (1 + 1e-9):
+        if d.type.cyclic and beyond_a_turn([lo, hi], turn):
             raise InputError(
                 f"{mech.source}: the pose's mode of {d.name} runs {hi - lo:.6g} {d.input_unit(mech)} from fold to "
                 "fold, longer than a turn, and does not come back to itself: simulate does not follow such a mode "

@@ -410,8 +410,8 @@ def _score(p: _Pairs, z: FloatArray, sigma: float) -> float:
     return float(np.max(np.abs(p.errors(z, sigma))) + p.penalty(z))
 
 
-#: scipy's finite-difference steps: SLSQP's absolute one, and the relative one of its "2-point" differences
-SLSQP_STEP, RELATIVE_STEP = float(np.sqrt(np.finfo(float).eps)), float(np.finfo(float).eps ** 0.5)
+#: scipy's finite-difference step, sqrt(eps): SLSQP's absolute one, and the relative one of its "2-point" differences
+SLSQP_STEP = RELATIVE_STEP = float(np.sqrt(np.finfo(float).eps))
 
 
 def forward_jacobian(f: Callable[[FloatArray], FloatArray], x: FloatArray, h: FloatArray) -> FloatArray:
@@ -428,7 +428,8 @@ def forward_jacobian(f: Callable[[FloatArray], FloatArray], x: FloatArray, h: Fl
     X = np.repeat(x[None], len(x) + 1, axis=0)
     X[1:][np.diag_indices(len(x))] += h
     F = np.asarray(f(X), float).reshape(len(x) + 1, -1)
-    out: FloatArray = ((F[1:] - F[0]) / ((x + h) - x)[:, None]).T
+    dx = X[1:][np.diag_indices(len(x))] - x  # the steps taken
+    out: FloatArray = ((F[1:] - F[0]) / dx[:, None]).T
     return out
 
 
@@ -606,7 +607,7 @@ def _direction(radians: float) -> float:
     >>> round(_direction(np.radians(408.7 - 61.1)), 9), _direction(np.radians(-180.0))
     (-12.4, 180.0)
     """
-    return 180.0 - float((180.0 - np.degrees(radians)) % 360.0)
+    return float(-wrap_deg(-np.degrees(radians)))  # (-180, 180]: wrap_deg's [-180, 180) turned over
 
 
 def _fit(p: _Pairs, z: FloatArray, sigma: float, method: str) -> FunctionFit:

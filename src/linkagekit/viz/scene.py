@@ -470,7 +470,7 @@ def _breaks(res: Result, x: np.ndarray, known: list[list[float]] | None = None) 
     mech = res.mechanism
     if len(mech.drivers) != 1 or res.n < 2:
         return ()
-    from ..checks import input_range
+    from ..checks import beyond_a_turn, input_range
 
     ranges = np.array(input_range(mech, 0) if known is None else known, float).reshape(-1, 2)
     both = res.assembled[:-1] & res.assembled[1:]
@@ -480,7 +480,7 @@ def _breaks(res: Result, x: np.ndarray, known: list[list[float]] | None = None) 
     tol = 1e-9 * max(float(np.max(np.abs(x))), 1.0)
     if mech.drivers[0].type.cyclic:
         period = 2 * math.pi / mech.drivers[0].input_scale(mech)
-        if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] > period * (1 + 1e-9):
+        if ranges.shape[0] == 1 and beyond_a_turn(ranges[0], period):
             return _jumps_between_configurations(mech, lo, hi, ranges[0], both)
         if ranges.shape[0] == 1 and ranges[0, 1] - ranges[0, 0] >= period * (1 - 1e-12):
             return ()  # a full turn
