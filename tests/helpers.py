@@ -346,3 +346,15 @@ class ArclengthTriad:
         for _ in range(5):  # the last rounding of u: Newton at fixed u from there
             y[: self.n] += np.linalg.solve(self._jac(y)[:, : self.n], -self._F(y))
         return np.array([complex(y[2 * k], y[2 * k + 1]) for k in range(len(self.UNKNOWN))])
+
+
+def interruptible() -> None:
+    """``preexec_fn`` for a child the test will interrupt: SIGINT back to its default.
+
+    A shell without job control starts a background job (``pytest &``) with SIGINT ignored, and a
+    child inherits that, so Python installs no KeyboardInterrupt handler and the signal the test
+    sends, as a terminal's Ctrl-C would, does nothing.
+    """
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

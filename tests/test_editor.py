@@ -45,7 +45,7 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
-from helpers import leading_comments
+from helpers import interruptible, leading_comments
 from linkagekit.errors import LinkageError
 from linkagekit.web.editor import ConflictError, EditorServer, Session, posed
 
@@ -665,6 +665,7 @@ def cli(*args: str) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        preexec_fn=interruptible,
     )
 
 

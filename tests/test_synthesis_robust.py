@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
+from helpers import interruptible
 from linkagekit.cli import main
 from linkagekit.synthesis import distribute, optimize
 from linkagekit.synthesis.distribute import Evaluator, WorkersLost
@@ -137,7 +138,9 @@ def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path
     write_csv(tmp_path / "t.csv")
     cmd = [sys.executable, "-m", "linkagekit.cli", "synthesize", "t.csv", "-o", "o.yaml", "--checkpoint", "ck.npz"]
     cmd += ["--units", "cm", "--workers", "2", "--generations", "400", "--seconds", "1000", "--goal", "0"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    proc = subprocess.Popen(
+        cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True, start_new_session=True, preexec_fn=interruptible
+    )
     try:
         deadline = time.monotonic() + 120  # a hang guard only
         while not (tmp_path / "ck.npz").exists() and proc.poll() is None and time.monotonic() < deadline:

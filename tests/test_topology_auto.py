@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import linkagekit as lk
+from helpers import interruptible
 from linkagekit.cli import main
 from linkagekit.errors import InputError
 from linkagekit.params import compile as compile_params
@@ -347,7 +348,14 @@ def test_ctrl_c_during_the_searches_on_two_workers_ends_them_at_once_in_one_line
     import time
 
     cmd = [sys.executable, "-c", _SLOW_SEARCHES, str(k), quick]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=interruptible,
+    )
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "started\n"
         time.sleep(0.3)  # the other worker at its task, or waiting for one
