@@ -105,6 +105,7 @@ def test_a_design_of_the_atlas_is_its_own_nearest_neighbour():
     assert at.nearest(atlas, P[0][::-1], False, 1).rows[0] == lo + 7
 
 
+@pytest.mark.long
 def test_the_atlas_answer_seeds_path_synthesis(monkeypatch):
     atlas = at.load()
     rng = np.random.default_rng(3)

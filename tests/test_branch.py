@@ -727,6 +727,7 @@ def test_a_pose_on_a_flat_position_forced_through_newton_answers_not_an_internal
         assert np.all(np.isnan(z(res, "D")[~ok]))
 
 
+@pytest.mark.long
 def test_a_change_point_is_flagged_a_rounding_away_from_it():
     """The double rhombus forced through Newton, its crank within 3e-13 deg of the change point (written 0, 360,
     -360 or 720 deg, in lists): C1 lies within rounding of A2, so C2 is undetermined and every such

@@ -265,6 +265,7 @@ def test_the_pairs_readers_messages_name_the_file_as_given_and_its_line(tmp_path
         assert capsys.readouterr().err == f"linkagekit: error: sub/fn.csv: {says}\n"
 
 
+@pytest.mark.long
 def test_a_linkage_that_nearly_locks_is_written_with_a_warning(tmp_path, capsys):
     """Function generation bounds no transmission angle by default: five pairs across 360 deg gave a four-bar whose
     transmission angle stays about 0.17 deg (coupler and output 666 ground lengths), written without a word (review

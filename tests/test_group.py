@@ -707,7 +707,10 @@ def same_answers(pts_a: np.ndarray, ok_a: np.ndarray, pts_b: np.ndarray, ok_b: n
     assert np.max(np.abs(pts_a[:, ok_a] - pts_b[:, ok_b]), initial=0.0) <= 1e-9 * size
 
 
-@pytest.mark.parametrize("moved", [(0.0, 0.0), (3.0, 0.0), (-2.0, 4.0)])
+@pytest.mark.parametrize(
+    "moved",
+    [(0.0, 0.0), pytest.param((3.0, 0.0), marks=pytest.mark.long), pytest.param((-2.0, 4.0), marks=pytest.mark.long)],
+)
 def test_a_cranks_input_is_a_direction(moved):
     """The six-bar and two variants with other ranges: the range ``check`` reports is the reference continuation's
     (1e-6 deg); inputs u + 360 k (k = -3..3) answer alike in a shuffled list, in a 1-degree list from -1080 to
@@ -779,6 +782,7 @@ def agrees_with_arclength(mech, ref: ArclengthTriad, u: np.ndarray, direction: b
                 assert np.max(np.abs(got - want)) <= 1e-9 * ref.size, (ui, np.max(np.abs(got - want)))
 
 
+@pytest.mark.long
 def test_a_triad_follows_its_branch_through_a_sharp_turn_to_its_fold():
     """A class-3 triad whose Jacobian's determinant nearly vanishes at -43.3444 deg (5e-5 of its value elsewhere)
     without changing sign: two complex roots pass near the branch, which turns sharply there (J1 moves 0.06 over
@@ -930,6 +934,7 @@ def two_triads_mechanism() -> lk.Mechanism:
     return lk.Mechanism.from_dict(doc | {"links": links, "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}]})
 
 
+@pytest.mark.long
 def test_two_triads_in_sequence_take_a_direction_the_same_way_round():
     """``TWO_TRIADS``: the whole mechanism's branch runs from -286.006 deg to a fold 0.05 deg above the pose (18.487
     deg), by ``ArclengthTriad`` over both triads (12 unknowns); ``input_range`` says so. A direction such as 180 deg
@@ -974,7 +979,12 @@ def _perturbed_two_triads(seed: int) -> dict[str, complex]:
 
 
 @pytest.mark.parametrize(
-    ("seed", "lo", "hi"), [(5, -288.3595, 18.7695), (6, -290.8307, 18.4379), (14, -293.7743, 18.4419)]
+    ("seed", "lo", "hi"),
+    [
+        (5, -288.3595, 18.7695),
+        pytest.param(6, -290.8307, 18.4379, marks=pytest.mark.long),
+        pytest.param(14, -293.7743, 18.4419, marks=pytest.mark.long),
+    ],
 )
 def test_a_later_group_follows_an_earlier_groups_sharp_turn(seed, lo, hi):
     """Two triads in sequence, perturbed (review 12a): the first turns fully, but turns sharply just above the pose

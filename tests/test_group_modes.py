@@ -470,7 +470,9 @@ def triad_free_fourbar() -> dict:
     }
 
 
-@pytest.mark.parametrize("which", ["file", "seed 3", "seed 11"])
+@pytest.mark.parametrize(
+    "which", ["file", pytest.param("seed 3", marks=pytest.mark.long), pytest.param("seed 11", marks=pytest.mark.long)]
+)
 def test_assembly_range_of_a_triad_against_its_singular_positions(which):
     mech = triad(THE_TRIAD) if which == "file" else random_triad(np.random.default_rng(int(which.split()[1])))
     up, down = singular_ends(mech)
@@ -549,7 +551,7 @@ def test_a_mode_longer_than_a_turn_that_does_not_close_ends_at_its_two_folds():
     assert abs(c - (a + 360)) < 1e-6 and abs(d - (b + 360)) < 1e-6
 
 
-@pytest.mark.parametrize("pose", ["mid", "fold"])
+@pytest.mark.parametrize("pose", [pytest.param("mid", marks=pytest.mark.long), "fold"])
 def test_a_sweep_of_directions_over_a_mode_longer_than_a_turn_jumps_where_check_says_and_plot_breaks_there(pose):
     """The mode of 418.28 deg: ``check`` said a sweep of directions jumps between the two configurations half a turn
     from the pose's input, and ``plot`` drew the jump as motion (review 14d). Each sample of a sweep of

@@ -454,7 +454,10 @@ def test_mouse_moves_joints_exactly(open_report, name):
     rp.assert_one_transform()
 
 
-@pytest.mark.parametrize("name", ALL)
+@pytest.mark.parametrize(
+    "name",
+    [n if n in ("slider_crank", "fivebar", "excavator") else pytest.param(n, marks=pytest.mark.long) for n in ALL],
+)
 def test_plot_cursors_follow_input(open_report, name):
     """Every plot's cursor has data-index = sample and its x is affine in the input value (and moves)."""
     rp = open_report(name)

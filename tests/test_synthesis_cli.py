@@ -611,6 +611,7 @@ def test_template_file_with_free_joints_keeps_the_others(work, tmp_path, capsys)
     assert_buildable(mech)
 
 
+@pytest.mark.long  # the same search as the file version below, called from Python (4 s)
 def test_template_with_free_joints_through_the_library_keeps_the_others(work):
     """The library path the CLI's --topology FILE --free C,D,P calls (works, unlike the CLI; see above)."""
     from linkagekit.synthesis.run import synthesize

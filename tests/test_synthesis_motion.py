@@ -647,6 +647,7 @@ def shared_hsieh9() -> np.ndarray:
     return np.stack([q[:, 0], q[:, 1], np.degrees(np.arctan2(q[:, 3], q[:, 2]))], axis=1)
 
 
+@pytest.mark.long
 def test_a_polish_that_ends_a_hair_past_a_dead_point_is_done_again_with_a_margin():
     """Hsieh's 9 poses with ``--angle-weight 1``: the best start's polish ended with its first pose 1.8e-8 past the
     coupler's dead point (SLSQP's tolerance), the dense check threw it away, and a design with ``E = 0.1`` (0.087
