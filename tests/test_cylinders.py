@@ -537,6 +537,10 @@ BAD = {
     "cylinder with three ends": (EX.replace("cylinder: [C1, B1]", "cylinder: [C1, B1, T]"),
                                  "drivers[0].cylinder: expected two joint names"),
     "unknown link of a slider": (YK.replace("on: yoke", "on: yolk"), "sliders[1].on: unknown link 'yolk'"),
+    # the slider's line and its reaction are at `through`: a joint off the block gave another joint's stroke in
+    # `check` and a reaction at the crank pin with a moment the block does not carry
+    "slider through a joint off the block": (YK.replace("through: A,", "through: O,"),
+                                             "sliders[1].through: joint 'O' is not on link 'pin_block'"),
     "unknown driven link": (YK.replace("link: crank, pivot", "link: crank2, pivot"), "drivers[0].link: unknown link"),
     "stroke min > max": (EX.replace("stroke: [1.8, 2.9]", "stroke: [2.9, 1.8]"),
                          "drivers[0].stroke: [min, max] with min < max"),

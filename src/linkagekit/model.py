@@ -1013,6 +1013,10 @@ class _Builder:
                 raise self.fail(f"{key}.link", "the ground cannot be the sliding block (swap `link` and `on`)")
             if s.through not in self.joints:
                 raise self.fail(f"{key}.through", f"unknown joint '{s.through}'")
+            if s.through not in self.by_name[s.link].joints:
+                raise self.fail(
+                    f"{key}.through", f"joint '{s.through}' is not on link '{s.link}': name the block's joint on the line"
+                )
             direction = complex(*s.direction)
             if abs(direction) == 0:
                 raise self.fail(f"{key}.direction", "must not be the zero vector")
