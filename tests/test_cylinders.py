@@ -539,6 +539,10 @@ BAD = {
     "unknown link of a slider": (YK.replace("on: yoke", "on: yolk"), "sliders[1].on: unknown link 'yolk'"),
     # the slider's line and its reaction are at `through`: a joint off the block gave another joint's stroke in
     # `check` and a reaction at the crank pin with a moment the block does not carry
+    # before: "link 'crank' is already fixed by the rest of the mechanism", which it is not
+    "crank's pivot and toward swapped": (YK.replace("pivot: O, toward: A", "pivot: A, toward: O"),
+                                         "drivers[0]: link 'crank' turns about its pivot 'A', but its toward joint "
+                                         "'O' is the one fixed before it: swap them (pivot: O, toward: A)"),
     "slider through a joint off the block": (YK.replace("through: A,", "through: O,"),
                                              "sliders[1].through: joint 'O' is not on link 'pin_block'"),
     "unknown driven link": (YK.replace("link: crank, pivot", "link: crank2, pivot"), "drivers[0].link: unknown link"),

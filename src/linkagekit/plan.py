@@ -289,6 +289,11 @@ class _Planner:
     def _crank(self, di: int, t: CrankType) -> bool:
         """Driver ``di`` turns its link about its known pivot: its ``toward`` joint placed (:class:`Crank`)."""
         d = self.mech.drivers[di]
+        if t.toward in self.known and t.pivot not in self.known and d.link not in self.placed:
+            raise MechanismFileError(
+                f"{self.mech.source}: drivers[{di}]: link '{d.link}' turns about its pivot '{t.pivot}', but its "
+                f"toward joint '{t.toward}' is the one fixed before it: swap them (pivot: {t.toward}, toward: {t.pivot})"
+            )
         if d.link in self.placed or t.toward in self.known:
             raise MechanismFileError(
                 f"{self.mech.source}: drivers[{di}]: link '{d.link}' is already fixed by the rest of the "
