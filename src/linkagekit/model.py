@@ -1015,7 +1015,8 @@ class _Builder:
                 raise self.fail(f"{key}.through", f"unknown joint '{s.through}'")
             if s.through not in self.by_name[s.link].joints:
                 raise self.fail(
-                    f"{key}.through", f"joint '{s.through}' is not on link '{s.link}': name the block's joint on the line"
+                    f"{key}.through",
+                    f"joint '{s.through}' is not on link '{s.link}': name the block's joint on the line",
                 )
             direction = complex(*s.direction)
             if abs(direction) == 0:

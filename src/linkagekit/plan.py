@@ -292,7 +292,8 @@ class _Planner:
         if t.toward in self.known and t.pivot not in self.known and d.link not in self.placed:
             raise MechanismFileError(
                 f"{self.mech.source}: drivers[{di}]: link '{d.link}' turns about its pivot '{t.pivot}', but its "
-                f"toward joint '{t.toward}' is the one fixed before it: swap them (pivot: {t.toward}, toward: {t.pivot})"
+                f"toward joint '{t.toward}' is the one fixed before it: swap them "
+                f"(pivot: {t.toward}, toward: {t.pivot})"
             )
         if d.link in self.placed or t.toward in self.known:
             raise MechanismFileError(
