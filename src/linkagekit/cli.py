@@ -617,8 +617,8 @@ def _topology_arguments(p: argparse.ArgumentParser) -> None:
         "--topology",
         default="fourbar",
         metavar="NAME|FILE",
-        help="fourbar (default), watt2, stephenson3, auto (every built-in topology up to --max-joints), "
-        "or a mechanism file used as a template (see --free)",
+        help="fourbar (default), watt2, stephenson3, auto (every built-in topology up to --max-joints), a "
+        "topology that auto names (sixbar-4, eightbar-85, ...), or a mechanism file used as a template (see --free)",
     )
     p.add_argument(
         "--max-joints",
@@ -669,7 +669,10 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--lengths", metavar="MIN:MAX", help="bounds on every link length")
     p.add_argument("--reach", metavar="R", help="joints lie within R target diagonals of the targets (default 3)")
     p.add_argument(
-        "--restarts", metavar="N", default=_DEFAULT_RESTARTS, help="independent searches at most (default 1000)"
+        "--restarts",
+        metavar="N",
+        default=_DEFAULT_RESTARTS,
+        help="independent searches at most (default 1000; 32 for --task function)",
     )
     p.add_argument(
         "--generations", metavar="N", default="500", help="differential-evolution generations per search (default 500)"
@@ -2440,13 +2443,16 @@ _COMMANDS = (
     ),
     _Command(
         "synthesize",
-        "find a four-bar or six-bar whose tracer point P passes near target points",
+        "find a linkage (four-, six- or eight-bar) whose tracer point P passes near target points, a body "
+        "through poses, or an output angle as a function of the input",
         "Dimensional synthesis: read target points (CSV with the header x,y or x,y,input, or an SVG "
         "path) and write a mechanism file whose tracer point P passes near every target, its driver the link "
         "'crank'. With an input column (the crank angle at each target, degrees) the tracer must be at each "
-        "target at its own angle, up to one common offset. The crank turns fully and every transmission angle "
-        "stays within [MIN, 180 - MIN]. Differential evolution over whole generations, then a least-squares "
-        "polish; the same --seed gives the same result (unless --seconds stops the run).",
+        "target at its own angle, up to one common offset. The crank turns fully (with --partial it may rock "
+        "through part of a turn) and every transmission angle stays within [MIN, 180 - MIN]. A four-bar search "
+        "starts from the atlas's nearest four-bars; differential evolution and CMA-ES in turn over whole "
+        "generations, each search then polished by least squares; the same --seed gives the same result "
+        "(unless --seconds stops the run). --task motion and --task function are described with their options.",
         _synthesize_arguments,
         _synthesize,
     ),
