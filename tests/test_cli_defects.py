@@ -319,3 +319,12 @@ def test_dyad_like_is_counted_once_per_group():
     (st,) = [s for s in plan.steps if isinstance(s, Group)]
     assert st.dyad_like is False and "dyad_like" in vars(st)
     assert isinstance(vars(Group)["dyad_like"], functools.cached_property)
+
+
+def test_two_drivers_given_unequal_sweeps_are_named_both_and_told_how_they_combine(capsys):
+    """Before: "inputs: driver 'crank2' has 4 values but another has 5", naming the API's argument and not the
+    other driver, and not saying that the values pair up sample by sample (review 16c)."""
+    path = EXAMPLES / "fivebar_two_drivers.yaml"
+    code, out, err = run(["analyze", str(path), "--angles", "crank1=0:40:10", "--angles", "crank2=0:30:10"], capsys)
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert "driver 'crank2' is given 4 values and driver 'crank1' 5" in err and "sample by sample" in err, err

@@ -246,9 +246,13 @@ def _given_inputs(mech: Mechanism, inputs: Mapping[str, ArrayLike] | ArrayLike |
     """
     given = {k: _real(v, f"inputs[{k}]") for k, v in _per_driver(mech, inputs, "inputs").items()}
     n = max((len(v) for v in given.values()), default=0)
+    longest = next((k for k, v in given.items() if len(v) == n), "")
     for k, v in given.items():
         if len(v) not in (1, n):
-            raise InputError(f"inputs: driver '{k}' has {len(v)} values but another has {n}; give equal lengths")
+            raise InputError(
+                f"driver '{k}' is given {len(v)} values and driver '{longest}' {n}: the drivers' values go together "
+                "sample by sample (not as a grid), so give each driver as many values, or one"
+            )
     return given, n if n else mech.drivers[0].sweep.count()
 
 
