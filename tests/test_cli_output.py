@@ -127,6 +127,18 @@ def test_roundoff_prints_as_zero(capsys):
     assert "e-16" not in out and "e-17" not in out
 
 
+def test_roundoff_of_a_single_sample_prints_as_zero_next_to_its_columns_of_one_unit(capsys):
+    """With one sample a column's own largest value was its round-off: ``--at 90`` printed C.x = 1.22465e-16 and the
+    slider-crank's rod.omega -2.75909e-16 (review 16c). The threshold is now also relative to the largest value of
+    the section's columns of the same unit."""
+    code, out, _ = run(["analyze", str(EXAMPLES / "seed000_fourbar.yaml"), "--at", "90"], capsys)
+    assert code == 0 and column(out, "C.x [cm]")[1] == ["0"] and column(out, "C.y [cm]")[1] == ["2"]
+    code, out, _ = run(["analyze", str(EXAMPLES / "slider_crank.yaml"), "--at", "90"], capsys)
+    assert code == 0 and "e-1" not in out
+    assert column(out, "A.x [m]")[1] == ["0"] and column(out, "rod.omega [rad/s]")[1] == ["0"]
+    assert column(out, "B.x [m]")[1] == ["0.0795299"] and column(out, "rod.alpha [rad/s²]")[1] == ["62.8695"]
+
+
 def test_missing_values_and_states(capsys):
     code, out, _ = run(["analyze", str(EXAMPLES / "seed003_ex21.yaml"), "--at", "0,180"], capsys)
     assert code == 0

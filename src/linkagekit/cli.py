@@ -877,22 +877,43 @@ def _number(v: float, scale: float) -> str:
     return f"{v:.{DIGITS}g}"
 
 
-def format_cells(values: Any, rows: Sequence[int] | None = None) -> list[str]:
+def _largest(values: Any) -> float:
+    """The largest finite magnitude among *values* (0 when none)."""
+    import numpy as np
+
+    a = np.asarray(values, dtype=float)
+    return float(np.max(np.abs(a), initial=0.0, where=np.isfinite(a)))
+
+
+def format_cells(values: Any, rows: Sequence[int] | None = None, scale: float = 0.0) -> list[str]:
     """Table cells of one column (at *rows*, default all): 6 significant digits, round-off as 0, NaN as ``—``.
 
-    The round-off threshold is relative to the largest finite magnitude in the whole column.
+    The round-off threshold is relative to the largest finite magnitude in the whole column, or *scale* if larger
+    (the largest among the columns of one unit in a section: a joint's x at 90 deg next to its y).
 
     >>> format_cells([1e-20, 5e-9, -0.0])
     ['1e-20', '5e-09', '0']
     >>> format_cells([1.0, 1e-13, 3.0], rows=[1, 2])
     ['0', '3']
+    >>> format_cells([1.2246467991473532e-16], scale=1.0)
+    ['0']
     """
     import numpy as np
 
     a = np.asarray(values, dtype=float)
-    scale = float(np.max(np.abs(a), initial=0.0, where=np.isfinite(a)))
     picked = a if rows is None else a[np.asarray(rows, dtype=int)]
-    return [_number(v, scale) for v in picked.tolist()]
+    return [_number(v, max(scale, _largest(a))) for v in picked.tolist()]
+
+
+def _unit_scales(
+    columns: Mapping[str, Any], units: Mapping[str, str], keys: Sequence[Sequence[str]]
+) -> dict[str, float]:
+    """Per unit, the largest finite magnitude among a section's columns *keys* of that unit."""
+    scales: dict[str, float] = {}
+    for k in (k for g in keys for k in g if k in columns):
+        u = units.get(k, "")
+        scales[u] = max(scales.get(u, 0.0), _largest(columns[k]))
+    return scales
 
 
 def sample_rows(n: int, max_rows: int = MAX_ROWS) -> list[int]:
@@ -1050,7 +1071,15 @@ def analysis_tables(
     fixed.append(Column("state", _state_cells(columns, rows), left=True))
     out: list[str] = []
     for title, keys in sections:
-        groups = [[Column(_header(k, units), format_cells(columns[k], rows)) for k in g if k in columns] for g in keys]
+        scales = _unit_scales(columns, units, keys)
+        groups = [
+            [
+                Column(_header(k, units), format_cells(columns[k], rows, scales[units.get(k, "")]))
+                for k in g
+                if k in columns
+            ]
+            for g in keys
+        ]
         lines = render_tables(title, fixed, [g for g in groups if g], width)
         if lines:
             if out:
