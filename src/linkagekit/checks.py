@@ -1827,7 +1827,15 @@ def _over_sweep(mech: Mechanism | None, joints: list[str], ranges: list[list[flo
 
 # ---------------------------------------------------------------------- text
 def _num(v: Any, fmt: str = ".6g") -> str:
-    return "—" if v is None else format(float(v), fmt)
+    """``v`` formatted, ``—`` for None, a zero that rounding left negative without its sign.
+
+    >>> _num(-1e-12, ".6f"), _num(-1e-12), _num(None)
+    ('0.000000', '-1e-12', '—')
+    """
+    if v is None:
+        return "—"
+    text = format(float(v), fmt)
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text
 
 
 @dataclass(frozen=True)
@@ -1934,11 +1942,11 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
     lines = []
     gaps = rep.get("assembly_gaps") or {}
     for driver, rng in (rep.get("input_ranges") or {}).items():
-        text = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in rng) if rng else "nowhere"
+        text = ", ".join(f"[{_num(a, '.6f')}, {_num(b, '.6f')}]" for a, b in rng) if rng else "nowhere"
         unit = fmt.units.get(driver, "")
         line = f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else "")
         if gaps.get(driver) and any(a < 0 for a, _ in rng):  # a range through 0: its gap reads best
-            but = ", ".join(f"({a:.6f}, {b:.6f})" for a, b in gaps[driver])
+            but = ", ".join(f"({_num(a, '.6f')}, {_num(b, '.6f')})" for a, b in gaps[driver])
             line = f"Assembles for {driver} in all but {but}" + (f" {unit}" if unit else "") + f" ({text})"
         if held.get(driver):
             line += " (" + ", ".join(f"{fmt.inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
