@@ -124,7 +124,9 @@ def summary(stdout: str) -> dict[str, float | str]:
         "rms": float(m[5]),
     }
     m = re.search(
-        r"^(\d+) searches, (\d+) generations, (\d+) designs evaluated in [\d.]+ s; stopped by (.+)$", stdout, re.M
+        r"^(\d+) search(?:es)?, (\d+) generations?, (\d+) designs? evaluated in [\d.]+ s; stopped by (.+)$",
+        stdout,
+        re.M,
     )
     assert m, stdout
     out.update(searches=int(m[1]), generations=int(m[2]), designs=int(m[3]), stopped=m[4])

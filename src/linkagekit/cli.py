@@ -1865,9 +1865,12 @@ def function_text(out: Any, unit: str, path: str | None) -> str:
     lines.append(f"transmission angle {fit.transmission[0]:.4g} to {fit.transmission[1]:.4g} deg")
     lines += _transmission_warning(*fit.transmission)
     if out.engine is not None:
+        from .synthesis.targets import plural
+
         o = out.engine.outcome
         lines.append(
-            f"engine: {o.restarts} searches, {o.evaluations} designs in {o.seconds:.1f} s "
+            f"engine: {plural(o.restarts, 'search', 'searches')}, {plural(o.evaluations, 'design')} in "
+            f"{o.seconds:.1f} s "
             f"(its best, before the minimax polish: {math.degrees(out.engine.error):.6g} deg)"
         )
     lines.append(_wrote(path))
@@ -2207,10 +2210,12 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str | None) 
         start, stop = out.sweep
         state = f"the crank rocks from {start:.4g} to {stop:.4g} deg ({stop - start:.4g} deg) on one branch"
     lines.append(f"{state}; {transmission_line(out)}")
+    from .synthesis.targets import plural
+
     why = {"goal": "reaching the goal", "restarts": "the last search", "time": "the time limit"}[o.stopped_by]
     lines.append(
-        f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs evaluated in "
-        f"{o.seconds:.1f} s; stopped by {why}"
+        f"{plural(o.restarts, 'search', 'searches')}, {plural(o.generations, 'generation')}, "
+        f"{plural(o.evaluations, 'design')} evaluated in {o.seconds:.1f} s; stopped by {why}"
     )
     lines.append(_wrote(path))
     return "\n".join(lines)

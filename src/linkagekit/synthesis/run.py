@@ -34,7 +34,7 @@ from .function_run import FunctionSynthesis, synthesize_function
 from .objective import Problem, check
 from .optimize import LIMITS, Optimum, Outcome, Progress, Settings, default_workers, optimize, search
 from .space import TOPOLOGIES, DesignSpace, builtin_space, fixed, template_space
-from .targets import check_scale
+from .targets import check_scale, plural
 
 if TYPE_CHECKING:
     from ..model import Mechanism
@@ -484,7 +484,8 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
         lines.append(f"partial: the crank rocks from {out.sweep[0]:.6g} to {out.sweep[1]:.6g} deg")
     lines.append(transmission_line(out) + ("" if out.feasible else ", INFEASIBLE"))
     lines.append(
-        f"{o.restarts} searches, {o.generations} generations, {o.evaluations} designs; stopped by {o.stopped_by}"
+        f"{plural(o.restarts, 'search', 'searches')}, {plural(o.generations, 'generation')}, "
+        f"{plural(o.evaluations, 'design')}; stopped by {o.stopped_by}"
     )
     if m <= DESCRIBED_TARGETS:
         lines.append(

@@ -81,8 +81,13 @@ def _error(source: str, message: str) -> InputError:
     return InputError(one_line(f"{shorten(source, _NAME_LIMIT)}: {message}"))
 
 
-def _plural(n: int, word: str) -> str:
-    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+def plural(n: int, word: str, many: str = "") -> str:
+    """``n`` and ``word``, or its plural ``many`` (default: with an ``s``) unless ``n`` is 1.
+
+    >>> plural(1, "value"), plural(3, "value"), plural(1, "search", "searches"), plural(2, "search", "searches")
+    ('1 value', '3 values', '1 search', '2 searches')
+    """
+    return f"{n} {word}" if n == 1 else f"{n} {many or word + 's'}"
 
 
 @dataclass(frozen=True)
@@ -140,7 +145,7 @@ class Targets:
         if m > MAX_POINTS:
             raise _error(source, f"{m} target points; at most {MAX_POINTS} are allowed")
         if m < MIN_POINTS:
-            raise _error(source, f"{_plural(m, 'target point')}; at least {MIN_POINTS} are needed")
+            raise _error(source, f"{plural(m, 'target point')}; at least {MIN_POINTS} are needed")
         diagonal = _diagonal(xy)
         if not math.isfinite(diagonal):
             raise _error(source, "the target points spread too far: their extent is not a finite number")
@@ -334,7 +339,7 @@ def targets_from_array(
     if m < MIN_POINTS:
         raise _error(
             source,
-            f"{_plural(m, 'target point')} once the last, a repeat of the first, is dropped; "
+            f"{plural(m, 'target point')} once the last, a repeat of the first, is dropped; "
             f"at least {MIN_POINTS} are needed",
         )
     return Targets(xy=pts[:-1], inputs=None if ins is None else ins[:-1], unit=unit, closed=True, source=source)
@@ -590,7 +595,7 @@ def _csv_targets(text: str, name: str, units: str) -> Targets:
         if len(cells) != len(columns):
             raise _error(
                 name,
-                f"line {number}: {_plural(len(cells), 'value')}, expected {len(columns)} ({','.join(columns)})",
+                f"line {number}: {plural(len(cells), 'value')}, expected {len(columns)} ({','.join(columns)})",
             )
         if len(rows) == MAX_POINTS:
             raise _error(name, f"line {number}: more than {MAX_POINTS} target points")
@@ -627,7 +632,7 @@ def read_table(
                 raise _error(name, f"expected the header {expected}, got {_quote(','.join(cells))}")
             continue
         if len(cells) != len(columns):
-            raise _error(name, f"line {number}: {_plural(len(cells), 'value')}, expected {len(columns)}")
+            raise _error(name, f"line {number}: {plural(len(cells), 'value')}, expected {len(columns)}")
         if len(rows) == MAX_POINTS:
             raise _error(name, f"line {number}: more than {MAX_POINTS} {what}s")
         rows.append([_value(cell, column, number, name) for cell, column in zip(cells, columns, strict=True)])
