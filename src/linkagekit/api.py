@@ -722,7 +722,7 @@ def _vector_loop(
 
 
 def reference_signs(mech: Mechanism) -> dict[str, int]:
-    """The assembly mode of the mechanism's reference pose: joint -> +1/-1 (spec section 2's ``signs``)."""
+    """The assembly mode of the mechanism's reference pose: joint -> +1/-1 (the ``signs`` that ``modes`` lists)."""
     p = prepare(mech)
     return {j: int(p.signs[i, 0]) for i, j in enumerate(p.plan.sign_joints)}
 

@@ -262,7 +262,7 @@ def fourbar_loop(mech: Mechanism, params: Params | None = None) -> FourBar | Non
 
 
 def grashof(fb: FourBar, rtol: float = 1e-9) -> tuple[str, str]:
-    """Grashof class of a four-bar: (one of the spec's five names, a finer description).
+    """Grashof class of a four-bar: (one of five names, a finer description).
 
     ``s + l < p + q``: Grashof; the shortest link next to the ground makes a crank-rocker
     (input crank) or rocker-crank (output crank), the ground shortest a double crank, the

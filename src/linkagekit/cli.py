@@ -687,7 +687,7 @@ def _synthesize_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _task_arguments(p: argparse.ArgumentParser) -> None:
-    """``synthesize --task`` and the options of motion and function generation (spec section 6)."""
+    """``synthesize --task`` and the options of motion and function generation (docs/commands.md)."""
     p.add_argument(
         "--task",
         choices=SYNTHESIS_TASKS,
@@ -709,7 +709,7 @@ def _task_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _shape_arguments(p: argparse.ArgumentParser) -> None:
-    """``synthesize --shape-only`` and ``--partial`` (spec section 6, path generation)."""
+    """``synthesize --shape-only`` and ``--partial`` (docs/commands.md, path synthesis)."""
     p.add_argument(
         "--shape-only",
         action="store_true",
@@ -724,7 +724,7 @@ def _shape_arguments(p: argparse.ArgumentParser) -> None:
 
 #: ``--ground-length``'s largest value (a mechanism file holds no number above 1e12; targets' diagonals are at most 1e6)
 MAX_GROUND_LENGTH = 1e6
-#: the tasks of ``synthesize --task`` (spec section 6)
+#: the tasks of ``synthesize --task`` (docs/commands.md)
 SYNTHESIS_TASKS = ("path", "motion", "function")
 #: the options of one task only: given with another, they are refused, not ignored (a user who gave --pivots to a
 #: motion synthesis believed the pivots were bounded)
@@ -768,7 +768,7 @@ def _frames(text: str) -> int:
         raise InputError(f"--frames: expected a whole number, got {shorten(repr(text))}") from None
     from .viz.animate import MAX_FRAMES, MIN_FRAMES
 
-    if not MIN_FRAMES <= n <= MAX_FRAMES:  # an animation has at least 36 frames (the contract's `animate`)
+    if not MIN_FRAMES <= n <= MAX_FRAMES:  # an animation has at least 36 frames (docs/commands.md, `animate`)
         raise InputError(f"--frames: expected {MIN_FRAMES} to {MAX_FRAMES} frames, got {n}")
     return n
 
@@ -1601,7 +1601,7 @@ def _write_designs(out: Any, targets: Any, args: argparse.Namespace) -> list[str
 
 def _met(feasible: bool, path: str) -> int:
     """The exit status of a synthesis: 0, or 1 with one line when the best design found breaks a constraint (then
-    nothing is written: the file format's contract is exit 0 when a file was written; the table shows that design)."""
+    nothing is written: the command line's rule is exit 0 when a file was written; the table shows that design)."""
     if feasible:
         return 0
     print(
@@ -2570,7 +2570,7 @@ def main(argv: list[str] | None = None) -> int:
         code = exc.exit_code
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
-        code = 1  # the file format's contract: 0 success, 2 bad input, 1 anything else (not 128 + SIGINT)
+        code = 1  # the command line's exit statuses: 0 success, 2 bad input, 1 anything else (not 128 + SIGINT)
     except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
         code = 1
         if argv is None:  # the script: no second error when Python flushes stdout at exit

@@ -1222,7 +1222,7 @@ def simulate(
     motor: tuple[float, float] | Mapping[str, tuple[float, float]] | None = None,
     speed: float | Mapping[str, float] | None = None,
 ) -> Result:
-    """The motion under a torque law, from the pose at rest (or at ``speed``): spec section 7.
+    """The motion under a torque law, from the pose at rest (or at ``speed``): docs/commands.md, `simulate`.
 
     Parameters
     ----------

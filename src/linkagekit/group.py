@@ -147,7 +147,7 @@ sample (positions; 2.84 -> 2.16 us in a fresh process, where every chunk's copy 
 5.67 -> 5.20-5.26 us with rates; 10^3 designs x 360 samples 2.95-3.01 us and outside the
 range 2.4-2.5 us unchanged. Then the walk's look-ahead (``LOOK_AHEAD``), the conditioning as array
 operations (:func:`_condition`) and one factorization for both rates solves (:class:`_RatesSystem`),
-measured by CPU time (``time.process_time``, the other helpers' load made wall time useless), best of
+measured by CPU time (``time.process_time``, other jobs' load on the machine made wall time useless), best of
 5-7, alternately with the code before: positions 2.34-2.44 -> 1.94-2.02 us a sample, with rates
 5.05-5.16 -> 3.12-3.21 us, outside the range 2.71-2.76 -> 2.42-2.50 us, the batch 3.3-3.5 us
 unchanged (docs/method.md says where its time goes).

@@ -626,7 +626,7 @@ class Mechanism:
     loads : tuple of Load
         External forces and torques on links.
     springs, dampers, flywheels : tuple of Spring, Damper, Flywheel
-        Force elements (spec section 7): linear springs and dampers between two joints,
+        Force elements (docs/mechanism-files.md, springs and dampers): linear springs and dampers between two joints,
         extra rotational inertia on a link.
     source : str
         Where the mechanism came from (a file path, or ``"<dict>"``); not compared.
@@ -1091,7 +1091,7 @@ class _Builder:
             raise self.fail(key, "`pivot` and `toward` must be different joints")
         deg = self.spec.units.angle == "deg"
         sw = d.angles or SweepSpec(start=0.0, stop=360.0 if deg else 2 * math.pi, step=1.0 if deg else math.pi / 180)
-        # speed and acceleration are rad/s and rad/s^2 whatever the angle unit (spec section 1)
+        # speed and acceleration are rad/s and rad/s^2 whatever the angle unit (docs/mechanism-files.md)
         sweep = _sweep(sw, f"{key}.angles", self.fail)
         return Driver(d.link, d.link, sweep, CrankType(d.pivot, d.toward), d.speed, d.acceleration)
 

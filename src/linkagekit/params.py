@@ -12,7 +12,7 @@ Where the numbers come from
   ``lengths`` the file gives).  The reference signs are read off the pose's geometry,
   exact when every length comes from the pose (the pose is then a solution); when the
   file gives lengths, the solver layer replaces them by the mode nearest the pose
-  (:func:`linkagekit.positions.reference_mode`, spec section 1).
+  (:func:`linkagekit.positions.reference_mode`, docs/mechanism-files.md).
 * Poses ``(D, n_joints, 2)``: each design's shapes are its pose (every link's joints as
   they stand), exactly as a file without ``lengths``; its signs are read off its pose.
   Slider directions, masses and loads are the mechanism's (see :mod:`linkagekit.forces`).

@@ -333,7 +333,7 @@ class Result:
         return pd.DataFrame(cols, index=index)
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON result of the spec (section 3); NaN becomes ``None``.
+        """The JSON result of ``--format json`` (docs/commands.md); NaN becomes ``None``.
 
         Every quantity of :attr:`catalogue`'s table goes to its ``json_path``; ``quantities``
         lists the entries (name, owner, unit, group, path).  For a batch every array is a

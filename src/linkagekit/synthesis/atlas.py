@@ -73,7 +73,7 @@ SAMPLES = 96
 CLOSED_SHARE = 0.5
 #: smallest transmission angle of every entry over its sweep (degrees)
 BUILD_TRANSMISSION = 15.0
-#: an open entry's crank sweeps at least this much (radians; the spec's partial sweep)
+#: an open entry's crank sweeps at least this much (radians; a partial sweep's least, ``--partial``)
 MIN_SWEEP = np.pi / 2
 #: columns of a row: the descriptor, its squared norm, the joints A B C D P (x, y), the sweep, the
 #: smallest transmission angle, the kind (0 closed, 1 open)

@@ -516,7 +516,7 @@ def _polish(p: _Pairs, z: FloatArray, sigma: float, method: str) -> tuple[FloatA
 
 
 # ---------------------------------------------------------------------- the answer
-#: the search methods, from the textbooks' to the contract's
+#: the search methods, from the textbooks' to the command's default
 METHODS = ("freudenstein", "least-squares", "minimax")
 
 
@@ -580,7 +580,7 @@ class FunctionFit:
         }
 
     def mechanism_dict(self, unit: str = "m", samples: int = 120) -> dict[str, Any]:
-        """The mechanism file (section 1 of the contract) as a dictionary; the driver sweeps the pairs' inputs."""
+        """The mechanism file (docs/mechanism-files.md) as a dictionary; the driver sweeps the pairs' inputs."""
         start, stop = (round(float(self.inputs[k] + self.offsets[0]), 9) for k in (0, -1))
         return {
             "format": "linkagekit/1",

@@ -217,7 +217,7 @@ MAX_ANGLE = 360.0
 
 
 def read_poses(path: str) -> PoseFile:
-    """Poses from a CSV file with the header ``x,y,angle`` or ``x,y,angle,input`` (spec section 6).
+    """Poses from a CSV file with the header ``x,y,angle`` or ``x,y,angle,input`` (docs/commands.md).
 
     The motion is closed when the last pose repeats the first (the repeat is dropped). Bad
     input (fewer than 3 poses, a value not a finite number, an angle beyond 360 degrees, two
@@ -958,7 +958,7 @@ def mechanism(p: MotionPoses, d: MotionDesign, unit: str = "m", name: str = "mot
 
 def guided_fourbar(z: Sequence[complex], start: float, stop: float, unit: str, name: str, source: str) -> Mechanism:
     """The four-bar a motion synthesis writes: joints ``A0, A1, B1, B0, P, Q`` (``z``, complex), its coupler
-    carrying ``P`` and ``Q`` (spec section 6), the crank sweeping from ``start`` to ``stop`` (degrees, steps of
+    carrying ``P`` and ``Q`` (docs/commands.md), the crank sweeping from ``start`` to ``stop`` (degrees, steps of
     at most 1 degree)."""
     from ..model import Mechanism as _Mechanism
 

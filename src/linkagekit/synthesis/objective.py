@@ -94,13 +94,13 @@ CHUNK = 1 << 16
 MARGIN = 0.25
 #: central-difference step of the refinement (radians)
 H_THETA = 1e-4
-#: spec section 6: the traced curve's RMS radius is at least this fraction of the RMS distance of the
-#: joints (at the pose) from their centroid, for every written mechanism
+#: a rule of path synthesis (docs/commands.md): the traced curve's RMS radius is at least this fraction of the RMS
+#: distance of the joints (at the pose) from their centroid, for every written mechanism
 MIN_CURVE_SIZE = 0.07
 #: the shortest distance between two joints of one link (the tracer aside), as a fraction of the RMS distance of
 #: the joints from their centroid: two ground pivots 1e-6 apart made a "four-bar" of a rigid triangle
 MIN_LINK = 1e-3
-#: spec section 6: a partial sweep turns the crank through at least this angle (radians)
+#: a rule of path synthesis (docs/commands.md): a partial sweep turns the crank through at least this angle (radians)
 MIN_SPAN = np.pi / 2
 #: ``--shape-only``: the similarity's starting rotations (evenly spaced), nearest-point/fit rounds from each,
 #: and every how many samples of the curve they look at (the Newton steps after them see the curve itself);
@@ -449,7 +449,7 @@ def transmission_limit(min_transmission: float, margin: float) -> float:
 
 
 def _too_small(P: ComplexArray, pose: ComplexArray, margin: float) -> FloatArray:
-    r"""How far (N,) the curve's size breaks the spec's rule: ``max(0, MIN_CURVE_SIZE - R_curve / R_joints)``.
+    r"""How far (N,) the curve breaks the rule of its size: ``max(0, MIN_CURVE_SIZE - R_curve / R_joints)``.
 
     ``R_curve``: the RMS distance of the tracer's samples ``P`` (N, n) from their mean (the
     assembled ones); ``R_joints``: that of the joints of the ``pose`` (n_joints, N). Both move

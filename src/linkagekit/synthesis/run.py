@@ -192,7 +192,7 @@ def synthesize(
     objective: Objective | None = None,
     **options: Any,
 ) -> Synthesis | MotionSynthesis | FunctionSynthesis | Optimum:
-    """Design a mechanism: for a path, a motion or a function (spec section 6), or for any ``objective``.
+    """Design a mechanism: for a path, a motion or a function (docs/commands.md), or for any ``objective``.
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Design spaces: which joints of a template mechanism move, within which bounds.
 
-A candidate design is a reference pose (spec section 1): the template's joints, with the
+A candidate design is a reference pose (docs/mechanism-files.md): the template's joints, with the
 free ones moved to the candidate's coordinates. Its link lengths, its assembly mode and its
 driver's input at the pose all come from that pose, exactly as for a mechanism file, so a
 batch of candidates is one :func:`linkagekit.params.compile` over the design axis.

@@ -9,7 +9,7 @@ each dyad keeps one degree of freedom. Two rules keep only the topologies that a
 smaller one in disguise: the tracer's link carries no ground pivot (else ``P`` draws an arc),
 and the tracer moves with every moving joint (each dyad is an ancestor of the tracer's link).
 
-Joints are counted as the spec counts them: ground pivots and ``P`` included. The four-bar
+Joints are counted as ``--max-joints`` counts them: ground pivots and ``P`` included. The four-bar
 has 5 joints; Watt II and Stephenson III (``watt2``, ``stephenson3``, hand-drawn in
 :mod:`.space`) have 8 and are found again by the enumeration, under their own names. The
 others are named ``<links>bar-<k>``: ``sixbar-1``, ``eightbar-12``, ... numbered in the

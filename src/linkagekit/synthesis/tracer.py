@@ -197,8 +197,8 @@ class _Inverse3:
     """``G + lam`` (..., 3, 3), ``lam`` a tiny ridge (:func:`_ridge`), inverted by its adjugate once, for several
     right-hand sides: NumPy's batched LAPACK solve costs microseconds per 3 x 3 system, the adjugate's products a
     fraction of one. The residual reported is ``|B u - T|^2 = |T|^2 - Re(r^H u) - lam |u|^2`` (:func:`_residual`):
-    ``|T|^2 - Re(r^H u)`` alone also counts the ridge's own term, 9 % of the residual on a basis of condition 2.5e5
-    (review 10c)."""
+    ``|T|^2 - Re(r^H u)`` alone also counts the ridge's own term, 9 % of the residual on a basis of condition
+    2.5e5."""
 
     def __init__(self, G: np.ndarray) -> None:
         self.lam = _ridge(G)

@@ -1077,7 +1077,7 @@ class EditorServer(ThreadingHTTPServer):
 def serve(
     path: str | Path, port: int = 0, open_browser: bool = True, ready: Any = None, solve_seconds: float = SOLVE_SECONDS
 ) -> None:
-    """Serve the editor of ``path`` until interrupted; print its URL first (spec section 2)."""
+    """Serve the editor of ``path`` until interrupted; print its URL first (docs/commands.md, `edit`)."""
     session = Session(path)
     server = EditorServer(session, port, solve_seconds=solve_seconds)
     print(server.url, flush=True)

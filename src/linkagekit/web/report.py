@@ -1,4 +1,4 @@
-"""The report page: one self-contained HTML file of a solved sweep or a simulated motion (spec section 5).
+"""The report page: one self-contained HTML file of a solved sweep or a simulated motion (docs/commands.md, `report`).
 
 The page holds the scene (:mod:`linkagekit.viz.scene`) as JSON, the small SVG viewer
 (``viewer.js``, inlined), its style, the text of ``check`` and the mechanism file.  It

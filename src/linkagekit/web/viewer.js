@@ -3,7 +3,7 @@
  * It solves nothing: every position, curve and plotted value comes from the scene JSON
  * embedded in the page (built by linkagekit.viz.scene). It only maps file units to pixels
  * through one similarity transform (uniform scale, y up) and moves elements between
- * samples. Hooks (spec section 5): [data-joint] with data-x/data-y (Python repr of the
+ * samples. Hooks (the report page's, tested by tests/test_report_browser.py): [data-joint] with data-x/data-y (Python repr of the
  * float, empty when not assembled), <input type=range data-role=input data-driver> whose
  * value is the sample index, [data-role=input-value], [data-role=plot] with a
  * [data-role=cursor], [data-action=play], [data-action=csv], [data-role=message]; for a
