@@ -543,6 +543,9 @@ BAD = {
     "crank's pivot and toward swapped": (YK.replace("pivot: O, toward: A", "pivot: A, toward: O"),
                                          "drivers[0]: link 'crank' turns about its pivot 'A', but its toward joint "
                                          "'O' is the one fixed before it: swap them (pivot: O, toward: A)"),
+    # before: "the reaction 'B:rod>block' and the reaction 'B:rod>block' would both give the column ...: rename one"
+    "block pinned to its guide": (YK.replace("pin_block: [A]", "pin_block: [A, Y]"),
+                                  "sliders[1]: link 'pin_block' is pinned to 'yoke' at 'Y' and slides on it"),
     "slider through a joint off the block": (YK.replace("through: A,", "through: O,"),
                                              "sliders[1].through: joint 'O' is not on link 'pin_block'"),
     "unknown driven link": (YK.replace("link: crank, pivot", "link: crank2, pivot"), "drivers[0].link: unknown link"),

@@ -1013,6 +1013,13 @@ class _Builder:
                 raise self.fail(f"{key}.link", "the ground cannot be the sliding block (swap `link` and `on`)")
             if s.through not in self.joints:
                 raise self.fail(f"{key}.through", f"unknown joint '{s.through}'")
+            shared = [j for j in self.by_name[s.link].joints if j in self.by_name[s.on].joints]
+            if shared:
+                raise self.fail(
+                    key,
+                    f"link '{s.link}' is pinned to '{s.on}' at '{shared[0]}' and slides on it: a pin and a slider "
+                    "between the same two links hold them together (slide it on another link, or drop the slider)",
+                )
             if s.through not in self.by_name[s.link].joints:
                 raise self.fail(
                     f"{key}.through",
