@@ -52,6 +52,19 @@ BAD_FILES = {
     "unknown key": (GOOD.replace("links:", "lynks: {}\nlinks:"), "lynks: unknown key"),
     # a review: a misspelt required key was reported as the missing one ("drivers: required key is missing")
     "misspelt key": (GOOD.replace("drivers:", "driverz:"), "driverz: unknown key (did you mean 'drivers'?)"),
+    # review 16c: inside an entry a misspelt key had no hint, and a missing key hid the unknown one beside it
+    "misspelt key of a driver": (
+        GOOD.replace("angles:", "angle:"),
+        "drivers[0].angle: unknown key (did you mean 'angles'?)",
+    ),
+    "misspelt key of a link": (
+        GOOD.replace("coupler: [C, D, P]", "coupler: {joint: [C, D, P]}"),
+        "links.coupler.joint: unknown key (did you mean 'joints'?)",
+    ),
+    "a key beside a missing one": (
+        GOOD.replace("coupler: [C, D, P]", "coupler: {'true': [C, D, P]}"),
+        "links.coupler.joints: required key is missing; 'true' beside it is not a key here",
+    ),
     "no ground": (GOOD.replace("ground: [A, B]", "frame: [A, B]"), "no link named 'ground'"),
     "pivot not on link": (GOOD.replace("pivot: A", "pivot: B"), "drivers[0].pivot"),
     "coincident joints": (GOOD.replace("P: [5.6182, 3.4509]", "P: [2, 0]"), "at one spot"),

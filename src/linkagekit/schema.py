@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
+import typing
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
@@ -237,9 +238,11 @@ def parse(data: Any, source: str) -> FileSpec:
             if "LinkSpec" in err["loc"] and isinstance(_get(data, err["loc"][:2]), dict):
                 first = err
                 break
+        beside = ""
         if first["type"] == "missing":  # a misspelt key near the missing one explains it: name that key
             first = next((e for e in errors if _misspelt(e, first)), first)
-        msg = _message(first) + _meant(first)
+            beside = _beside(errors, first) if first["type"] == "missing" else ""
+        msg = _message(first) + _meant(first) + beside
         where = shorten(_location(first["loc"]), 120)
         raise MechanismFileError(f"{source}: {where}: {shorten(msg, 200)}") from None
 
@@ -252,13 +255,55 @@ def _misspelt(err: Any, missing: Any) -> bool:
     return bool(difflib.get_close_matches(str(loc[-1]), [str(want[-1])], n=1))
 
 
+def _beside(errors: list[Any], missing: Any) -> str:
+    """For a missing key, the unknown key given beside it, if any (a JSON file converted from YAML 1.1 has ``on:``
+    as ``"true"``)."""
+    want = tuple(missing["loc"])
+    for err in errors:
+        loc = tuple(err["loc"])
+        if err["type"] == "extra_forbidden" and len(loc) == len(want) and loc[:-1] == want[:-1]:
+            return f"; {str(loc[-1])!r} beside it is not a key here"
+    return ""
+
+
 def _meant(err: Any) -> str:
-    """For an unknown top-level key, the file format's key it is nearest to (a typo), if one is near."""
+    """For an unknown key, the file format's key of that place it is nearest to (a typo), if one is near."""
     loc = tuple(err["loc"])
-    if err["type"] != "extra_forbidden" or len(loc) != 1:
+    if err["type"] != "extra_forbidden":
         return ""
-    near = difflib.get_close_matches(str(loc[0]), list(FileSpec.model_fields), n=1)
+    near = difflib.get_close_matches(str(loc[-1]), _keys_at(loc[:-1]), n=1, cutoff=0.7)  # not 'true' for 'stroke'
     return f" (did you mean {near[0]!r}?)" if near else ""
+
+
+def _keys_at(loc: tuple[int | str, ...]) -> list[str]:
+    """The keys the file format has at the place ``loc`` (a pydantic location), none where it is not a mapping."""
+    annotation: Any = FileSpec
+    for part in loc:
+        if isinstance(part, int) or part in _UNION_TAGS:
+            continue
+        if typing.get_origin(annotation) is dict:  # a name of the file's (a joint's, a link's): its value's type
+            annotation = typing.get_args(annotation)[1]
+            continue
+        model = _model_in(annotation)
+        field = None if model is None else model.model_fields.get(part)
+        if field is None:
+            return []
+        annotation = field.annotation
+    model = _model_in(annotation)
+    return [] if model is None else list(model.model_fields)
+
+
+def _model_in(annotation: Any) -> type[BaseModel] | None:
+    """The model class an annotation holds (itself, or inside a list, union or Annotated), else None."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    if typing.get_origin(annotation) is dict:
+        return None
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
 
 
 def _get(data: Any, loc: tuple[int | str, ...]) -> Any:
