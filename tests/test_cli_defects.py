@@ -328,3 +328,13 @@ def test_two_drivers_given_unequal_sweeps_are_named_both_and_told_how_they_combi
     code, out, err = run(["analyze", str(path), "--angles", "crank1=0:40:10", "--angles", "crank2=0:30:10"], capsys)
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert "driver 'crank2' is given 4 values and driver 'crank1' 5" in err and "sample by sample" in err, err
+
+
+def test_a_force_plot_of_a_mechanism_without_forces_says_what_gives_forces(tmp_path, capsys):
+    """``plot -q torques`` of a massless four-bar said only "this mechanism has no driver torques" (review 16c)."""
+    out = tmp_path / "t.png"
+    code, _, err = run(["plot", str(EXAMPLES / "seed000_fourbar.yaml"), "-q", "torques", "-o", str(out)], capsys)
+    assert code == 2 and err.count("\n") == 1 and not out.exists(), err
+    assert "no driver torques (forces are computed when the file gives masses, gravity, loads" in err, err
+    code, _, err = run(["plot", str(EXAMPLES / "slider_crank.yaml"), "-q", "forces", "-o", str(out)], capsys)
+    assert code == 2 and err.strip().endswith("this mechanism has no driver forces"), err  # it has forces: a crank

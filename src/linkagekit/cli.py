@@ -1393,6 +1393,13 @@ def _check_pixels(fig: Any) -> None:
         )
 
 
+def _why_none(catalogue: Catalogue) -> str:
+    """Why a plot group of forces is empty, when no force was computed at all."""
+    if catalogue.of_group(Group.BEARING_LOADS):
+        return ""
+    return " (forces are computed when the file gives masses, gravity, loads, springs or dampers)"
+
+
 def _quantities(catalogue: Catalogue, item: str) -> list[str]:
     """The column names one ``--quantity NAME[,NAME...]`` asks for: columns, or whole plot groups."""
     names: list[str] = []
@@ -1401,7 +1408,9 @@ def _quantities(catalogue: Catalogue, item: str) -> list[str]:
             group = _QUANTITY_GROUPS[name]
             series = [q.name for q in catalogue.of_group(group)]
             if not series:
-                raise InputError(f"--quantity {name}: this mechanism has no {group.title.lower()}")
+                raise InputError(
+                    f"--quantity {name}: this mechanism has no {group.title.lower()}{_why_none(catalogue)}"
+                )
             names += series
         elif name in catalogue:
             names.append(name)
