@@ -82,6 +82,8 @@ COMMANDS = [
         "-o",
         "docs/images/plot_simulate_slider_crank.png",
     ],
+    ["plot", "examples/seed003_ex21.yaml", "-o", "docs/images/check_seed003.png"],  # the range check reports
+    ["animate", "examples/whitworth_quick_return.yaml", "--frames", "36", "-o", "docs/images/animate_whitworth.gif"],
 ]
 
 if __name__ == "__main__":

@@ -289,17 +289,19 @@ def _outline(points: list[complex], names: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def _collinear(points: list[complex]) -> bool:
-    """Whether a link's joints lie on one line (to 1e-9 of its extent): it is drawn as a bar, not as a plate (a
-    polygon of no area was a pale ghost of a link in the pictures, a solid line on the page).
+    """Whether a link's joints lie on one line (to 1e-6 of its extent, far thinner than any drawing shows): it is
+    drawn as a bar, not as a plate (a polygon of no area was a pale ghost of a link in the pictures, a solid line
+    on the page). A triangle given by lengths that add up (Whitworth's lever: 0.15 + 0.32 = 0.47) is placed off its
+    line by the square root of rounding, 6e-9 of its extent there.
 
-    >>> _collinear([0j, 1 + 1j, 3 + 3j]), _collinear([0j, 1 + 0j, 1j])
-    (True, False)
+    >>> _collinear([0j, 1 + 1j, 3 + 3j]), _collinear([0j, 1 + 0j, 1j]), _collinear([0j, 1 + 4e-9j, 2 + 0j])
+    (True, False, True)
     """
     c = sum(points) / len(points)
     u = np.array([p - c for p in points])
     extent = float(np.max(np.abs(u)))
     _, sv, _ = np.linalg.svd(np.stack([u.real, u.imag]))
-    return bool(sv[-1] <= 1e-9 * max(extent, 1e-300) * math.sqrt(len(points)))
+    return bool(sv[-1] <= 1e-6 * max(extent, 1e-300) * math.sqrt(len(points)))
 
 
 def _along(points: list[complex], names: tuple[str, ...]) -> tuple[str, ...]:
