@@ -65,6 +65,12 @@ BAD_FILES = {
         GOOD.replace("coupler: [C, D, P]", "coupler: {'true': [C, D, P]}"),
         "links.coupler.joints: required key is missing; 'true' beside it is not a key here",
     ),
+    # review 16a: a typo in the ground's joints braces crank and coupler and frees the rocker; the count of pins
+    # still says 1, and the planner said exit 1, "no triangulation order places B" (a valid mechanism it cannot solve)
+    "a part loose, another braced": (
+        GOOD.replace("ground: [A, B]", "ground: [A, D]"),
+        "joint(s) B can move with every driver held",
+    ),
     "no ground": (GOOD.replace("ground: [A, B]", "frame: [A, B]"), "no link named 'ground'"),
     "pivot not on link": (GOOD.replace("pivot: A", "pivot: B"), "drivers[0].pivot"),
     "coincident joints": (GOOD.replace("P: [5.6182, 3.4509]", "P: [2, 0]"), "at one spot"),

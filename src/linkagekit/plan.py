@@ -692,12 +692,67 @@ class _Planner:
                 case _:
                     assert_never(t)
         missing = [j for j in self.names if j not in self.known]
+        if missing and (free := free_joints(mech)):
+            raise MechanismFileError(
+                f"{mech.source}: joint(s) {', '.join(free)} can move with every driver held: the links do not fix "
+                f"them (check the links at {free[0]} and the ground's joints; counting pins missed it because "
+                f"another part is braced twice)"
+            )
         if missing:
             raise NotSolvableError(
                 f"{mech.source}: no triangulation order places {', '.join(missing)}, and no numerical group does: "
                 f"the numerical solver takes groups of links, sliders and cylinder drivers whose equations fix "
                 f"their joints"
             )
+
+
+def free_joints(mech: Mechanism) -> tuple[str, ...]:
+    """The joints of a mechanism of pins and cranks that can move at its pose with every driver held (none if it is
+    rigid so, or has sliders or cylinders, which this does not model): a part left loose, which Gruebler's count
+    misses when another part is braced twice.
+
+    The rows of the pose's constraint Jacobian: each pair of joints of a link keeps its distance, each ground joint
+    its place, each crank its direction. A null vector of it moves the joints where it is not zero.
+
+    >>> import linkagekit as lk
+    >>> doc = lk.load("examples/seed000_fourbar.yaml").to_dict()
+    >>> free_joints(lk.Mechanism.from_dict(doc))
+    ()
+    >>> doc["links"]["ground"] = ["A", "D"]  # a typo for [A, B]: the crank and coupler braced, the rocker loose
+    >>> free_joints(lk.Mechanism.from_dict(doc))
+    ('B',)
+    """
+    import numpy as np
+
+    if mech.sliders or not all(isinstance(d.type, CrankType) for d in mech.drivers):
+        return ()
+    names = list(mech.joint_names)
+    col = {j: 2 * k for k, j in enumerate(names)}
+    rows: list[np.ndarray] = []
+
+    def row(pairs: list[tuple[str, complex]]) -> None:
+        r = np.zeros(2 * len(names))
+        for j, g in pairs:
+            r[col[j] : col[j] + 2] += (g.real, g.imag)
+        rows.append(r)
+
+    for ln in mech.links:
+        for a, b in combinations(ln.joints, 2) if ln.name != "ground" else ():
+            d = mech.joints[a] - mech.joints[b]
+            row([(a, d / abs(d)), (b, -d / abs(d))])
+    for j in mech.link("ground").joints:
+        row([(j, 1)])
+        row([(j, 1j)])
+    for d in mech.drivers:
+        t = d.type
+        assert isinstance(t, CrankType)
+        e = (mech.joints[t.toward] - mech.joints[t.pivot]) * 1j
+        row([(t.toward, e / abs(e)), (t.pivot, -e / abs(e))])
+    _, sv, vt = np.linalg.svd(np.array(rows))
+    rank = int(np.sum(sv > 1e-9 * sv[0]))
+    null = vt[rank:].reshape(-1, len(names), 2)
+    moving = np.sqrt(np.sum(null**2, axis=(0, 2))) > 1e-6
+    return tuple(j for j, m in zip(names, moving, strict=True) if m)
 
 
 def _keep_rotation(st: Step, needs: set[str]) -> Step:
