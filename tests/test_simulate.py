@@ -581,3 +581,30 @@ def test_a_motor_whose_torque_grows_with_speed_is_refused_in_one_line():
     with pytest.raises(lk.errors.InputError, match=r"motor\[crank\]: T0 = 6500 and W0 = -6.5 have opposite signs"):
         lk.simulate(mech, np.array([0.0, 0.1]), motor=(6500.0, -6.5))
     assert lk.simulate(mech, np.array([0.0, 0.1]), motor=(-6500.0, -6.5)).stopped is None  # the other way round
+
+
+def test_a_stiff_motion_of_a_driver_with_ends_is_refused_within_the_step_budget(tmp_path, capsys, monkeypatch):
+    """A crank with a limited range is integrated by ``solve_ivp`` with the range's ends as events, which had no
+    budget: a damper of 1e9 on the non-Grashof rocker ran for ever (killed after 400 CPU-s; review 16a). It now
+    stops after ``MAX_STEPS`` steps, as the other integrations do (here a smaller budget, for the suite's time)."""
+    from linkagekit import dynamics
+
+    monkeypatch.setattr(dynamics, "MAX_STEPS", 2000)
+    doc = yaml.safe_load((EXAMPLES / "nongrashof_rocker.yaml").read_text())
+    doc["dampers"] = [{"between": ["A", "D"], "damping": 1e9}]
+    path = tmp_path / "stiff.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    code = main(["simulate", str(path), "--time", "0:1:0.1", "--torque", "20"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert "more than 2000 integration steps" in err and "hardly moving" in err, err
+
+
+def test_a_motor_curve_beyond_the_machines_scale_is_one_line(capsys):
+    """``--motor 1e12,1e-12`` made a trial state infinite: "internal error: OverflowError: cannot convert float
+    infinity to integer" on a limited range, and on a crank that turns fully a ValueError from the compiled
+    integrator (review 16a)."""
+    for name in ("nongrashof_rocker.yaml", "iftomm_a03_andrews.yaml"):
+        code = main(["simulate", str(EXAMPLES / name), "--time", "0:0.5:0.05", "--motor", "1e12,1e-12"])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and "no longer a finite number" in err, (name, err)

@@ -563,6 +563,8 @@ def _cell_at(
 ) -> tuple[float, list[float]]:
     """The table's cell at input ``q`` (reduced to the period from ``x0``): where in it (0..1), and its 12 cubic
     coefficients of ``M``, ``Q_s``, ``C`` by power (:func:`_cells`)."""
+    if not math.isfinite(q):  # a trial step of a torque law far beyond the machine's scale
+        raise InputError("simulate: the integration failed: the motion's state is no longer a finite number")
     if period is not None:
         q = x0 + (q - x0) % period
     s = (q - x0) / h
@@ -610,7 +612,7 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
     if red.period is None:
-        t, y, stop = _with_events(red, rhs, times, y0)
+        t, y, stop = _with_events(red, _budgeted(rhs, partial(_speed_text, md)), times, y0)
     else:
         t, y, stop = times, _dop853(rhs, times, y0, partial(_speed_text, md)), None
     stopped = None if stop is None else _toggle_message(md, 0, *stop)
@@ -831,11 +833,15 @@ def _ode(
 
     from scipy.integrate import ode
 
-    calls = [0]
+    calls, refused = [0], []
 
     def counted(t: float, state: Any) -> list[float]:
         calls[0] += 1
-        return rhs(t, state)
+        try:
+            return rhs(t, state)
+        except InputError as exc:  # raised through the compiled integrator it came back as another error
+            refused.append(exc)
+            return [math.nan] * len(state)
 
     solver = ode(counted).set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
     solver.set_initial_value(y[:, 0], times[0])
@@ -843,6 +849,8 @@ def _ode(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said by the caller
             y[:, i] = solver.integrate(times[i])
+        if refused:
+            raise refused[0]
         if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() in _EXCESS_WORK[method]:
             return i, float(solver.t), np.array(solver.y, float)
         if not solver.successful():
@@ -868,9 +876,29 @@ def _too_many_steps(t: float, speed: str, travel_per_step: float) -> str:
         return f"{head} (the driver moves at {speed}): shorten the time span or lower the speed"
     return (
         f"{head} with the driver hardly moving (now {speed}): the explicit integrator keeps its step"
-        f" ({t / MAX_STEPS:.2g} s) under the period of the fastest vibration (a stiff spring), even at rest:"
+        f" ({t / MAX_STEPS:.2g} s) under the period of the fastest vibration (a stiff spring, damper or motor curve),"
+        " even at rest:"
         " shorten the time span"
     )
+
+
+def _budgeted(
+    rhs: Callable[[float, Any], list[float]], speed: Callable[[float], str]
+) -> Callable[[float, Any], list[float]]:
+    """``rhs`` that refuses, in one line, a motion past :data:`MAX_STEPS` steps (counted by its evaluations, as
+    :func:`_ode` counts them): ``solve_ivp`` has no budget of its own, and a stiff damper ran for ever."""
+    calls, first = [0], [math.nan]
+
+    def counted(t: float, y: Any) -> list[float]:
+        calls[0] += 1
+        if calls[0] == 1:
+            first[0] = float(y[0])
+        if calls[0] > _EVALS_PER_STEP * MAX_STEPS:  # the net travel: a stiff step's trial states jump back and forth
+            travel = abs(float(y[0]) - first[0])
+            raise InputError(_too_many_steps(t, speed(float(y[1])), travel / MAX_STEPS))
+        return rhs(t, y)
+
+    return counted
 
 
 def _with_events(

@@ -738,13 +738,13 @@ def free_joints(mech: Mechanism) -> tuple[str, ...]:
 
     for ln in mech.links:
         for a, b in combinations(ln.joints, 2) if ln.name != "ground" else ():
-            d = mech.joints[a] - mech.joints[b]
-            row([(a, d / abs(d)), (b, -d / abs(d))])
+            u = mech.joints[a] - mech.joints[b]
+            row([(a, u / abs(u)), (b, -u / abs(u))])
     for j in mech.link("ground").joints:
         row([(j, 1)])
         row([(j, 1j)])
-    for d in mech.drivers:
-        t = d.type
+    for dr in mech.drivers:
+        t = dr.type
         assert isinstance(t, CrankType)
         e = (mech.joints[t.toward] - mech.joints[t.pivot]) * 1j
         row([(t.toward, e / abs(e)), (t.pivot, -e / abs(e))])
