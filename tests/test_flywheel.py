@@ -252,6 +252,8 @@ def test_a_crank_that_does_not_turn_fully_is_refused():
         ((0.02,), {}, "give the torque law: torque= or motor="),
         (("x",), {"torque": 1.0}, "cs (--flywheel CS): expected a number"),
         ((2.5,), {"motor": MOTOR}, "cs (--flywheel CS): the coefficient of speed fluctuation must be in (0, 2)"),
+        # review 16a: a ValueError (math domain error) from the log of a fluctuation that rounded to 0
+        ((1e-20,), {"motor": MOTOR}, "cs (--flywheel CS): at least 1e-09, what the steady state resolves"),
     ],
 )
 def test_python_errors_name_the_argument_not_only_the_option(args, kwargs, words):

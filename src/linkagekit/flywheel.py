@@ -472,6 +472,12 @@ def steady_state(
     return SteadyState(q, w, float(np.exp(z[0])), w_min, w_max, contraction, float(extra_inertia), col.q, z)
 
 
+#: the smallest coefficient of speed fluctuation sized for: the kinetic energy over a period is integrated to
+#: :data:`RTOL` relative (the speeds to half that), and a flywheel for 1e-15 left a fluctuation that rounded to 0 (a
+#: math domain error; review 16a)
+MIN_CS = 1e-9
+
+
 def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float = INERTIA_RTOL) -> FlywheelSize:
     """The smallest extra inertia on the crank for which the steady state's ``Cs`` is at most ``cs``.
 
@@ -486,6 +492,8 @@ def size_flywheel_reduced(red: Reduced, drive: Drive, cs: float, *, rtol: float 
 
     if not 0.0 < cs < 2.0:
         raise InputError(f"cs (--flywheel CS): the coefficient of speed fluctuation must be in (0, 2), got {cs}")
+    if cs < MIN_CS:  # a flywheel for less swings the speed below the steady state's tolerance: Cs came out 0
+        raise InputError(f"cs (--flywheel CS): at least {MIN_CS:g}, what the steady state resolves; got {cs:g}")
     search = _Search(red, drive)
     cs_without = search.cs(0.0)
     if cs_without <= cs:
