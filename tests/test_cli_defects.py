@@ -338,3 +338,21 @@ def test_a_force_plot_of_a_mechanism_without_forces_says_what_gives_forces(tmp_p
     assert "no driver torques (forces are computed when the file gives masses, gravity, loads" in err, err
     code, _, err = run(["plot", str(EXAMPLES / "slider_crank.yaml"), "-q", "forces", "-o", str(out)], capsys)
     assert code == 2 and err.strip().endswith("this mechanism has no driver forces"), err  # it has forces: a crank
+
+
+def test_a_file_name_that_is_not_utf8_makes_a_readable_page_and_file(tmp_path, capsys):
+    """A file name with a byte that is not UTF-8 (``four\\xff.yaml``): ``report`` stopped with "internal error:
+    UnicodeEncodeError", and a synthesis of ``tg\\xff.csv`` wrote its name into the mechanism's description as
+    ``\\uDCFF``, a file linkagekit then refused to read (review 16a). Both write U+FFFD for the byte."""
+    import dataclasses
+
+    import linkagekit as lk
+
+    src = tmp_path / os.fsdecode(b"four\xff.yaml")
+    src.write_bytes((EXAMPLES / "seed000_fourbar.yaml").read_bytes())
+    code, _, err = run(["report", str(src), "-o", str(tmp_path / "r.html")], capsys)
+    assert code == 0, err
+    assert "four\ufffd.yaml" in (tmp_path / "r.html").read_text(encoding="utf-8")
+    mech = dataclasses.replace(lk.load(src), description="from " + os.fsdecode(b"tg\xff.csv"))
+    lk.save(mech, tmp_path / "out.yaml")
+    assert lk.load(tmp_path / "out.yaml").description == "from tg\ufffd.csv"

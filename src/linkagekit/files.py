@@ -421,6 +421,22 @@ def save(mech: Mechanism, path: str | Path) -> Path:
     return p
 
 
+def readable(value: Any) -> Any:
+    """``value`` (text, or mappings and lists of it) with the bytes a file name could not decode (Python's lone
+    surrogates, ``\\udcff``) as U+FFFD: written as they were, they made an unreadable file or page.
+
+    >>> readable({"description": "targets tg\\udcff.csv", "n": [1, "a"]})
+    {'description': 'targets tg\ufffd.csv', 'n': [1, 'a']}
+    """
+    if isinstance(value, str):
+        return value.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
+    if isinstance(value, dict):
+        return {readable(k): readable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return type(value)(readable(v) for v in value)
+    return value
+
+
 def dumps(
     mech: Mechanism, fmt: Literal["yaml", "json"] = "yaml", like: str | None = None, earlier: Sequence[str] = ()
 ) -> str:
@@ -452,7 +468,7 @@ def dumps(
     >>> print(dumps(m, like="units:\\n  length: cm\\n  angle: deg\\n").splitlines()[2:5])
     ['units:', '  length: cm', '  angle: deg']
     """
-    data = mech.to_dict()
+    data = readable(mech.to_dict())
     if fmt == "json":
         return _json(data) + "\n"
     if fmt != "yaml":

@@ -26,7 +26,7 @@ import numpy as np
 from .. import __version__
 from ..catalogue import input_units
 from ..errors import InputError
-from ..files import write_atomic
+from ..files import readable, write_atomic
 from ..model import Mechanism
 from ..result import Result
 from ..viz.scene import Scene, build_scene
@@ -277,6 +277,6 @@ def write_report(
     path = Path(path)
     if path.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"{path}: the report must end in .html")
-    text = report_html(res, source=source, checks_text=checks_text, title=title)
+    text = readable(report_html(res, source=source, checks_text=checks_text, title=title))
     write_atomic(path, text.encode("utf-8"))
     return path
