@@ -56,6 +56,9 @@ CALLS = {
     "result design text": lambda: BATCH.design("0"),
     "reaction unknown": lambda: RES.forces.reaction("Z", "rod"),
     "mechanism unknown link": lambda: MECH.link("nope"),
+    # review 16a: ZeroDivisionError, IndexError, TypeError, and a table of 10^9 rows tried
+    **{f"reduced points {p!r}": (lambda p=p: lk.reduced(MECH, points=p)) for p in (0, -1, None, 10**9)},
+    "synthesize workers text": lambda: lk.synthesize(np.array([[0, 0], [1, 0.2], [2, 0.1]]), workers="x"),  # TypeError
 }
 
 BAD_SIGNS = [[0], [0.5], [7], [np.nan], [1, 1], "x", {"Q": 1}, {"D": 0}]

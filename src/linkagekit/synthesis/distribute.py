@@ -50,6 +50,8 @@ def usable(workers: int) -> int:
     A :class:`multiprocessing.pool.Pool`'s worker that calls ``synthesize(..., workers=2)`` got Python's
     ``AssertionError: daemonic processes are not allowed to have children`` from the first search.
     """
+    if not isinstance(workers, int | np.integer) or isinstance(workers, bool) or workers < 1:
+        raise InputError(f"workers: expected a whole number of processes, at least 1, got {workers!r}")
     if workers > 1 and daemonic():
         import warnings
 
