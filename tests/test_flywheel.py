@@ -265,3 +265,12 @@ def test_python_errors_name_the_argument_not_only_the_option(args, kwargs, words
         lk.size_flywheel(lk.load(EXAMPLE), *args, **kwargs)
     message = str(info.value)
     assert words in message and not message.startswith("--")
+
+
+def test_no_torque_on_conservative_loads_says_nothing_drives_the_crank(capsys):
+    """``--torque 0`` on the slider-crank (gravity only, which takes nothing over a turn) said "the loads take -0
+    N*m on average over a turn, more than the torque law gives at any speed (0 N*m at rest)" (review 16a)."""
+    path = EXAMPLE.parent / "slider_crank.yaml"
+    assert main(["simulate", str(path), "--flywheel", "0.02", "--torque", "0"]) == 1
+    err = capsys.readouterr().err
+    assert "nothing drives the crank on average over a turn (the loads take 0 N*m" in err and "-0" not in err, err

@@ -261,12 +261,20 @@ def _mean_balance_speed(p: _Problem) -> float:
         return float(p.sign * np.mean(np.asarray(p.red.force(q, w)) + np.asarray(p.drive(w))))
 
     zero = np.zeros_like(q)
-    load = -p.sign * float(np.mean(np.asarray(p.red.force(q, zero))))  # what the loads take at rest, on average
+    at_rest = np.asarray(p.red.force(q, zero))
+    load = -p.sign * float(np.mean(at_rest))  # what the loads take at rest, on average
+    load = 0.0 if abs(load) <= 1e-9 * float(np.max(np.abs(at_rest), initial=0.0)) else load  # rounding: conservative
     low = 1e-9
     if mean_power(low) <= 0.0:
+        given = abs(float(np.asarray(p.drive(zero[:1]))[0]))
+        if load <= 0.0:  # --torque 0 on conservative loads: "the loads take -0 N*m, more than ... 0 N*m"
+            raise NoBalanceError(
+                f"no periodic steady state: nothing drives the crank on average over a turn (the loads take "
+                f"{load:.6g} N*m, the torque law gives {given:.6g} N*m at rest)"
+            )
         raise NoBalanceError(
             f"the mechanism stalls: the loads take {load:.6g} N*m on average over a turn, more than the "
-            f"torque law gives at any speed ({abs(float(np.asarray(p.drive(zero[:1]))[0])):.6g} N*m at rest)"
+            f"torque law gives at any speed ({given:.6g} N*m at rest)"
         )
     high = 1.0
     for _ in range(80):
