@@ -395,6 +395,20 @@ def test_an_output_naming_the_input_file_is_refused(tmp_path, capsys, monkeypatc
         assert run([command[0], "victim.yaml", *command[1:], "-o", "out.txt"], capsys)[0] == 0
 
 
+def test_two_files_a_synthesis_writes_that_are_one_are_refused(tmp_path, capsys, monkeypatch):
+    """``--checkpoint`` naming the ``-o`` or ``--plot`` file: each write replaced the other (review 16a)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("x,y\n0,0\n1,0.2\n2,0.1\n3,0.4\n")
+    for extra, words in (
+        (["-o", "a.yaml", "--checkpoint", "a.yaml"], "--checkpoint a.yaml: is also -o's file"),
+        (["-o", "a.yaml", "--plot", "p.png", "--checkpoint", "./p.png"], "--checkpoint ./p.png: is also --plot's file"),
+        (["-o", "t.csv"], "-o t.csv: is the input file t.csv"),
+    ):
+        code, out, err = run(["synthesize", "t.csv", *extra, "--seconds", "1"], capsys)
+        assert (code, out) == (2, "") and words in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.csv"]
+
+
 @pytest.mark.parametrize("extra", [[], ["--modes", "--at", "30"], ["-q", "angles"]])
 def test_a_long_name_is_cut_in_the_pictures_title(tmp_path, capsys, monkeypatch, extra):
     # a review: `plot` of a file with a 100 kB name took 10 s (1 MB: 112 s) laying out the whole name as the title

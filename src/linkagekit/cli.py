@@ -2532,22 +2532,42 @@ def _run(argv: list[str]) -> int:
 
 
 def _output_not_input(args: argparse.Namespace) -> None:
-    """Refuse an empty input path, and ``-o`` naming the command's input file (the same file by any name): the output
-    replaced it."""
-    import os
-
-    out = getattr(args, "output", None)
+    """Refuse an empty input path, a file written (``-o``, ``--plot``, ``--checkpoint``) that is the command's input
+    file (the same file by any name: the output replaced it), and two written files that are one (each overwrote
+    the other)."""
+    written = _files_written(args)
     for source in (getattr(args, "file", None), getattr(args, "targets", None)):
         if source == "":  # Path("") is the current directory: ". is a directory" named no empty path
             raise InputError("the file path is empty: give the file to read")
-        if not out or not isinstance(source, str) or not source:
+        if not isinstance(source, str) or not source:
             continue
-        try:
-            same = os.path.samefile(source, out) if os.path.exists(out) else False
-        except OSError:  # unreadable: compare the names
-            same = False
-        if same or os.path.realpath(source) == os.path.realpath(out):
-            raise InputError(f"-o {shorten_path(out, 80)}: is the input file {shorten_path(source, 80)}; give another")
+        for flag, path in written:
+            if _same_file(source, path):
+                raise InputError(
+                    f"{flag} {shorten_path(path, 80)}: is the input file {shorten_path(source, 80)}; give another"
+                )
+    for i, (flag, path) in enumerate(written):
+        for earlier, other in written[:i]:
+            if _same_file(path, other):
+                raise InputError(f"{flag} {shorten_path(path, 80)}: is also {earlier}'s file; give each its own")
+
+
+def _files_written(args: argparse.Namespace) -> list[tuple[str, str]]:
+    """The files a command writes: (option, path)."""
+    flags = (("output", "-o"), ("plot", "--plot"), ("checkpoint", "--checkpoint"))
+    return [(flag, v) for key, flag in flags if isinstance(v := getattr(args, key, None), str) and v]
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether paths ``a`` and ``b`` name one file (by any name: links, hard links), or would."""
+    import os
+
+    try:
+        if os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b):
+            return True
+    except OSError:  # unreadable: compare the names
+        pass
+    return os.path.realpath(a) == os.path.realpath(b)
 
 
 def main(argv: list[str] | None = None) -> int:
