@@ -166,6 +166,7 @@ def test_modes_json(capsys, examples):
     )
     doc = json.loads(out)
     assert code == 0 and doc["format"] == "linkagekit-modes/1" and doc["input"] == {"crank": 0.0}
+    assert doc["units"] == {"length": "cm", "angle": "deg"}  # the only JSON without them (review 16a)
     assert len(doc["modes"]) == 4 and all(m["assembled"] for m in doc["modes"])
     assert {tuple(m["signs"].items()) for m in doc["modes"]} == {(("D", 1),), (("D", -1),)}
 

@@ -2267,17 +2267,21 @@ class Modes:
     notes : tuple of str
         The numerical groups whose modes could not be enumerated (only the mode continued
         from the pose is listed for them).
+    units : dict of str to str
+        The file's ``length`` unit (the joints') and ``angle`` unit (the inputs of cranks).
     """
 
     input: dict[str, float]
     modes: tuple[Mode, ...]
     distinct: int
     notes: tuple[str, ...] = ()
+    units: dict[str, str] = field(default_factory=dict)  # the file's length and angle units (the joints', inputs')
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``linkagekit modes --format json``."""
         out: dict[str, Any] = {
             "format": "linkagekit-modes/1",
+            "units": self.units,
             "input": self.input,
             "distinct": self.distinct,
             "modes": [m.to_dict() for m in self.modes],
@@ -2458,4 +2462,4 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
                 else None,
             )
         )
-    return Modes(inp, tuple(out), distinct, rows.notes)
+    return Modes(inp, tuple(out), distinct, rows.notes, {"length": mech.length_unit, "angle": mech.angle_unit})
