@@ -618,7 +618,7 @@ def _integrate_reduced(md: _Model, times: np.ndarray, law: TorqueLaw, w0: float)
     rhs = _rhs_reduced(red, law)
     y0 = [red.q0, w0]
     if red.period is None:
-        t, y, stop = _with_events(red, _budgeted(rhs, partial(_speed_text, md)), times, y0)
+        t, y, stop = _with_events_stiff_too(red, rhs, times, y0, partial(_speed_text, md))
     else:
         t, y, stop = times, _dop853(rhs, times, y0, partial(_speed_text, md)), None
     stopped = None if stop is None else _toggle_message(md, 0, *stop)
@@ -901,16 +901,43 @@ def _budgeted(
             first[0] = float(y[0])
         if calls[0] > _EVALS_PER_STEP * MAX_STEPS:  # the net travel: a stiff step's trial states jump back and forth
             travel = abs(float(y[0]) - first[0])
-            raise InputError(_too_many_steps(t, speed(float(y[1])), travel / MAX_STEPS))
+            raise _OverBudget(_too_many_steps(t, speed(float(y[1])), travel / MAX_STEPS), travel / MAX_STEPS)
         return rhs(t, y)
 
     return counted
 
 
-def _with_events(
-    red: Reduced, rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float]
+class _OverBudget(InputError):
+    """A motion past :data:`MAX_STEPS` steps (its message the line that refuses it), ``travel_per_step`` of the
+    driver each."""
+
+    def __init__(self, message: str, travel_per_step: float) -> None:
+        super().__init__(message)
+        self.travel_per_step = travel_per_step
+
+
+def _with_events_stiff_too(
+    red: Reduced,
+    rhs: Callable[[float, Any], list[float]],
+    times: np.ndarray,
+    y0: list[float],
+    speed: Callable[[float], str],
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
-    """``solve_ivp``'s DOP853 with the table's ends as terminal events: (times, states, (time, q) of a stop)."""
+    """:func:`_with_events` by DOP853 under the step budget; a motion that spent it with the driver hardly moving
+    (steps under :data:`SLOW_STEP`: a stiff damper, spring or motor curve) again by LSODA, which turns to a stiff
+    method, under the same budget (as :func:`_dop853` does for a crank that turns fully)."""
+    try:
+        return _with_events(red, _budgeted(rhs, speed), times, y0)
+    except _OverBudget as over:
+        if over.travel_per_step >= SLOW_STEP:
+            raise
+    return _with_events(red, _budgeted(rhs, speed), times, y0, method="LSODA")
+
+
+def _with_events(
+    red: Reduced, rhs: Callable[[float, Any], list[float]], times: np.ndarray, y0: list[float], method: str = "DOP853"
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+    """``solve_ivp``'s ``method`` with the table's ends as terminal events: (times, states, (time, q) of a stop)."""
     from scipy.integrate import solve_ivp
 
     lo, hi = red.q_range
@@ -928,7 +955,7 @@ def _with_events(
     below.terminal = above.terminal = True  # type: ignore[attr-defined]
     below.direction = above.direction = -1.0  # type: ignore[attr-defined]
     span = (times[0], times[-1])
-    sol = solve_ivp(rhs, span, y0, method="DOP853", t_eval=times, rtol=RTOL, atol=ATOL, events=[below, above])
+    sol = solve_ivp(rhs, span, y0, method=method, t_eval=times, rtol=RTOL, atol=ATOL, events=[below, above])
     if sol.status < 0:
         raise InputError(f"simulate: the integration failed: {sol.message}")
     if sol.status == 1:
