@@ -874,37 +874,48 @@ _EXCESS_WORK = {"dop853": (-2,), "lsoda": (-1,)}
 SLOW_STEP = 1e-3
 
 
-def _too_many_steps(t: float, speed: str, travel_per_step: float) -> str:
-    """The line that refuses a motion past :data:`MAX_STEPS` steps at time ``t`` (s): too fast for its time span, or
-    (its steps moving the driver less than :data:`SLOW_STEP` each) too long for the integrator's stable step."""
-    head = f"simulate: more than {MAX_STEPS} integration steps by t = {t:.6g} s"
+def _too_many_steps(t: float, speed: str, travel_per_step: float, steps: int = 0) -> str:
+    """The line that refuses a motion past ``steps`` (default :data:`MAX_STEPS`) steps at time ``t`` (s): too fast
+    for its time span, or (its steps moving the driver less than :data:`SLOW_STEP` each) too long for the
+    integrator's stable step."""
+    head = f"simulate: more than {steps or MAX_STEPS} integration steps by t = {t:.6g} s"
     if travel_per_step >= SLOW_STEP:
         return f"{head} (the driver moves at {speed}): shorten the time span or lower the speed"
     return (
         f"{head} with the driver hardly moving (now {speed}): the explicit integrator keeps its step"
-        f" ({t / MAX_STEPS:.2g} s) under the period of the fastest vibration (a stiff spring, damper or motor curve),"
-        " even at rest:"
-        " shorten the time span"
+        f" ({t / (steps or MAX_STEPS):.2g} s) under the period of the fastest vibration (a stiff spring, damper or"
+        " motor curve), even at rest: shorten the time span"
     )
 
 
 def _budgeted(
-    rhs: Callable[[float, Any], list[float]], speed: Callable[[float], str]
+    rhs: Callable[[float, Any], list[float]], speed: Callable[[float], str], probe: bool = True
 ) -> Callable[[float, Any], list[float]]:
     """``rhs`` that refuses, in one line, a motion past :data:`MAX_STEPS` steps (counted by its evaluations, as
-    :func:`_ode` counts them): ``solve_ivp`` has no budget of its own, and a stiff damper ran for ever."""
+    :func:`_ode` counts them): ``solve_ivp`` has no budget of its own, and a stiff damper ran for ever. After
+    :data:`STIFF_PROBE` of the budget, a motion whose steps moved the driver less than :data:`SLOW_STEP` each is
+    refused at once (for a stiff method to take over: the damper's 16 s of DOP853 came down to 1 s), unless not
+    ``probe`` (the stiff method's own run)."""
     calls, first = [0], [math.nan]
+    budget = MAX_STEPS
+    at = int(STIFF_PROBE * MAX_STEPS) if probe else 0
 
     def counted(t: float, y: Any) -> list[float]:
         calls[0] += 1
         if calls[0] == 1:
             first[0] = float(y[0])
-        if calls[0] > _EVALS_PER_STEP * MAX_STEPS:  # the net travel: a stiff step's trial states jump back and forth
-            travel = abs(float(y[0]) - first[0])
-            raise _OverBudget(_too_many_steps(t, speed(float(y[1])), travel / MAX_STEPS), travel / MAX_STEPS)
+        steps = calls[0] / _EVALS_PER_STEP
+        if steps > budget or steps == at:  # the net travel: a stiff step's trial states jump back and forth
+            per_step = abs(float(y[0]) - first[0]) / steps
+            if steps > budget or per_step < SLOW_STEP:
+                raise _OverBudget(_too_many_steps(t, speed(float(y[1])), per_step, int(steps)), per_step)
         return rhs(t, y)
 
     return counted
+
+
+#: the share of :data:`MAX_STEPS` after which a motion of ``solve_ivp`` is judged stiff or not (:func:`_budgeted`)
+STIFF_PROBE = 0.05
 
 
 class _OverBudget(InputError):
@@ -931,7 +942,7 @@ def _with_events_stiff_too(
     except _OverBudget as over:
         if over.travel_per_step >= SLOW_STEP:
             raise
-    return _with_events(red, _budgeted(rhs, speed), times, y0, method="LSODA")
+    return _with_events(red, _budgeted(rhs, speed, probe=False), times, y0, method="LSODA")
 
 
 def _with_events(
