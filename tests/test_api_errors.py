@@ -112,3 +112,8 @@ def test_file_errors_speak_the_file_format(case):
     with pytest.raises(lk.MechanismFileError) as info:
         lk.Mechanism.from_dict(data)
     assert expected in str(info.value) and "Input should" not in str(info.value)
+
+
+def test_a_numpy_whole_number_of_table_points_is_taken():
+    """The check added for ``points=0`` refused ``np.int64(2000)``, which worked before (review 16e)."""
+    assert lk.reduced(lk.load("examples/motor_fourbar.yaml"), points=np.int64(2000)).period is not None

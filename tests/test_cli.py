@@ -53,6 +53,10 @@ BAD_FILES = {
     # a review: a misspelt required key was reported as the missing one ("drivers: required key is missing")
     "misspelt key": (GOOD.replace("drivers:", "driverz:"), "driverz: unknown key (did you mean 'drivers'?)"),
     # review 16c: inside an entry a misspelt key had no hint, and a missing key hid the unknown one beside it
+    "short misspelt key": (
+        GOOD.replace("name: four-bar", "descr: four-bar"),
+        "descr: unknown key (did you mean 'description'?)",
+    ),
     "misspelt key of a driver": (
         GOOD.replace("angles:", "angle:"),
         "drivers[0].angle: unknown key (did you mean 'angles'?)",

@@ -429,8 +429,10 @@ def _repeated(x: np.ndarray, Y: np.ndarray, period: float | None) -> tuple[np.nd
     return np.concatenate([x[:-1] - period, x[:-1], x + period]), np.concatenate([Y[:-1], Y[:-1], Y])
 
 
-#: the most grid intervals a reduced model's table takes (each a row of every joint's rates: memory grows with it)
-MAX_TABLE_POINTS = 100_000
+#: the most grid intervals a reduced model's table takes (each a row of every joint's rates: memory grows with it),
+#: and the fewest (a coarser table misses its tolerance, and the pose was said to be next to a toggle: the
+#: slider-crank's table failed with 256)
+MIN_TABLE_POINTS, MAX_TABLE_POINTS = 1024, 100_000
 
 
 @one_blas_thread_with_scipy
@@ -458,8 +460,12 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
         )
     if not (isinstance(flywheel, int | float) and math.isfinite(flywheel) and flywheel >= 0):
         raise InputError(f"flywheel: expected a finite inertia >= 0 (kg*m^2), got {flywheel!r}")
-    if not (isinstance(points, int) and not isinstance(points, bool) and 8 <= points <= MAX_TABLE_POINTS):
-        raise InputError(f"points: expected a whole number of grid intervals, 8 to {MAX_TABLE_POINTS}, got {points!r}")
+    whole = isinstance(points, int | np.integer) and not isinstance(points, bool)
+    if not (whole and MIN_TABLE_POINTS <= points <= MAX_TABLE_POINTS):
+        raise InputError(
+            f"points: expected a whole number of grid intervals, {MIN_TABLE_POINTS} to {MAX_TABLE_POINTS}, "
+            f"got {points!r}"
+        )
     md = _model(mech, float(flywheel))
     for turns in (1, 2):  # a branch whose signs come back after two turns only (an odd number of flips in one)
         x, period = _grid(md, int(points), turns)

@@ -271,7 +271,8 @@ def _meant(err: Any) -> str:
     loc = tuple(err["loc"])
     if err["type"] != "extra_forbidden":
         return ""
-    near = difflib.get_close_matches(str(loc[-1]), _keys_at(loc[:-1]), n=1, cutoff=0.7)  # not 'true' for 'stroke'
+    cutoff = 0.6 if len(loc) == 1 else 0.7  # inside an entry, not 'true' for 'stroke'
+    near = difflib.get_close_matches(str(loc[-1]), _keys_at(loc[:-1]), n=1, cutoff=cutoff)
     return f" (did you mean {near[0]!r}?)" if near else ""
 
 
