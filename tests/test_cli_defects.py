@@ -356,3 +356,11 @@ def test_a_file_name_that_is_not_utf8_makes_a_readable_page_and_file(tmp_path, c
     mech = dataclasses.replace(lk.load(src), description="from " + os.fsdecode(b"tg\xff.csv"))
     lk.save(mech, tmp_path / "out.yaml")
     assert lk.load(tmp_path / "out.yaml").description == "from tg\ufffd.csv"
+
+
+def test_a_number_on_the_command_line_is_written_as_in_a_file(capsys):
+    """``--at 1_000`` and full-width digits (``１２``) were taken (Python's float), which the file reader refuses
+    (review 16a)."""
+    for text in ("1_000", "\uff11\uff12"):
+        code, out, err = run(["analyze", str(EXAMPLES / "seed000_fourbar.yaml"), "--at", text], capsys)
+        assert (code, out) == (2, "") and f"{text!r} is not a number" in err, err

@@ -110,6 +110,22 @@ class _Parser(argparse.ArgumentParser):
         raise _ParserExit(status)
 
 
+def _float(text: str) -> float:
+    """``text`` as a number written as the file reader takes one: Python's ``float`` also took ``1_000`` and other
+    scripts' digits (``１２``), which a file refuses.
+
+    >>> _float("1e2"), _float(" -3.5")
+    (100.0, -3.5)
+    >>> _float("1_000")
+    Traceback (most recent call last):
+    ...
+    ValueError: 1_000
+    """
+    if not text.isascii() or "_" in text:
+        raise ValueError(text)
+    return float(text)
+
+
 def _numbers(text: str, what: str) -> list[float]:
     """Comma-separated finite numbers.
 
@@ -123,7 +139,7 @@ def _numbers(text: str, what: str) -> list[float]:
     for part in parts:
         part = part.strip()
         try:
-            v = float(part)
+            v = _float(part)
         except ValueError:
             raise InputError(f"{what}: {shorten(repr(part))} is not a number") from None
         if not math.isfinite(v) or abs(v) > MAX_ABS:
@@ -1822,7 +1838,7 @@ def _plot_function(mech: Any, fit: Any, path: str) -> None:
 
 def _positive(text: str, option: str) -> float:
     try:
-        value = float(text)
+        value = _float(text)
     except ValueError:
         raise InputError(f"{option}: expected a number, got {shorten(repr(text))}") from None
     if not (math.isfinite(value) and value > 0):
