@@ -505,7 +505,7 @@ def _flywheel(args: argparse.Namespace, mech: Mechanism, torque: Any, motor: Any
         raise InputError("--speed: not used with --flywheel (the steady state does not depend on the start)")
     size = lk.size_flywheel(mech, _one_number(args.flywheel, "--flywheel"), torque=torque, motor=motor)
     if args.format != "json":
-        _emit(f"{size.inertia:.10g} kg*m^2\n", args.output)
+        _emit(f"{size.inertia:.10g}\n", args.output)  # the number alone, as the file format has it (kg*m^2 always)
         return 0
     st = size.steady
     out = {
