@@ -900,11 +900,10 @@ def _budgeted(
     """``rhs`` that refuses, in one line, a motion past :data:`MAX_STEPS` steps (counted by its evaluations, as
     :func:`_ode` counts them): ``solve_ivp`` has no budget of its own, and a stiff damper ran for ever. After
     :data:`STIFF_PROBE` of the budget, a motion whose steps moved the driver less than :data:`SLOW_STEP` each is
-    refused at once (for a stiff method to take over: the damper's 16 s of DOP853 came down to 1 s), unless not
+    refused at once (for a stiff method to take over: the damper's 16 s of DOP853 came down to 2 s), unless not
     ``probe`` (the stiff method's own run)."""
     calls, first = [0], [math.nan]
-    budget = MAX_STEPS
-    at = int(STIFF_PROBE * MAX_STEPS) if probe else 0
+    budget, at = MAX_STEPS, int(STIFF_PROBE * MAX_STEPS) if probe else 0  # read once: a test lowers MAX_STEPS
 
     def counted(t: float, y: Any) -> list[float]:
         calls[0] += 1
