@@ -7,7 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
+import linkagekit as lk
 from linkagekit.cli import main
 
 GOOD = """\
@@ -100,6 +102,53 @@ def test_bad_files_exit_2_with_one_located_line(tmp_path, capsys, case):
         assert code == 2, (case, err)
         assert err.count("\n") == 1 and "Traceback" not in err
         assert needle in err and path in err, err
+
+
+# review 16e: a pendulum whose end nothing holds (G5-E) beside a ternary body held by four legs: the pin count is
+# right for the one crank and the group search takes both as one numerical group of balanced counts, so `check`
+# said "valid" and "assembles for crank in nowhere"
+LOOSE_IN_GROUP = """
+format: linkagekit/1
+units: {length: m, angle: deg}
+joints: {O: [0, 0], A: [0.6, 0.8], P: [0.2, 3], G1: [2, 0], Q: [2.5, 3.1], G2: [4, 0], R: [4.3, 2.8],
+         G3: [5, 0], S: [5.6, 3.3], G5: [7, 0], E: [7.5, 1]}
+links: {ground: [O, G1, G2, G3, G5], crank: [O, A], l1: [A, P], l2: [G1, Q], l3: [G2, R], l4: [G3, S],
+        T: [P, Q, R, S], pendulum: [G5, E]}
+drivers: [{link: crank, pivot: O, toward: A}]
+"""
+
+
+def test_a_loose_part_inside_a_numerical_group_is_refused_by_name(tmp_path, capsys):
+    path = write(tmp_path, LOOSE_IN_GROUP)
+    for cmd in ("check", "analyze"):
+        code, _, err = run([cmd, path], capsys)
+        assert code == 2 and err.count("\n") == 1, err
+        assert f"{path}: joint(s) E can move with every driver held" in err, err
+    # braced once, the body is a class-3 triad: the same file without its fourth leg and pendulum is solved
+    doc = yaml.safe_load(LOOSE_IN_GROUP)
+    for j in ("G3", "S", "G5", "E"):
+        del doc["joints"][j]
+    del doc["links"]["l4"], doc["links"]["pendulum"]
+    doc["links"].update(ground=["O", "G1", "G2"], T=["P", "Q", "R"])
+    code, out, err = run(["check", write(tmp_path, yaml.safe_dump(doc), "triad.yaml")], capsys)
+    assert code == 0 and "placed numerically" in out, err
+
+
+def test_free_joints_at_generic_positions_see_the_structure_not_the_pose():
+    """A parallelogram posed flat moves to first order at its pose (B1 off the line), not at generic positions;
+    the loose pendulum beside the braced body is free at both."""
+    from linkagekit.plan import free_joints
+
+    flat = {
+        "format": "linkagekit/1",
+        "joints": {"A0": [0, 0], "A1": [1, 0], "B0": [0.5, 0], "B1": [1.5, 0]},
+        "links": {"ground": ["A0", "A1"], "crank": ["A0", "B0"], "coupler": ["B0", "B1"], "rocker": ["A1", "B1"]},
+        "drivers": [{"link": "crank", "pivot": "A0", "toward": "B0"}],
+    }
+    m = lk.Mechanism.from_dict(flat)
+    assert free_joints(m) == ("B1",) and free_joints(m, generic=True) == ()
+    loose = lk.Mechanism.from_dict(yaml.safe_load(LOOSE_IN_GROUP))
+    assert free_joints(loose) == ("E",) and free_joints(loose, generic=True) == ("E",)
 
 
 @pytest.mark.parametrize(

@@ -225,6 +225,7 @@ class _Planner:
         ):
             pass
         self._check_complete()
+        self._check_groups_fixed()
         needs = {link for st in self.steps for link in st.rotation_needs()}
         steps = [_keep_rotation(st, needs) for st in self.steps]
         mech = self.mech
@@ -693,11 +694,7 @@ class _Planner:
                     assert_never(t)
         missing = [j for j in self.names if j not in self.known]
         if missing and (free := free_joints(mech)):
-            raise MechanismFileError(
-                f"{mech.source}: joint(s) {', '.join(free)} can move with every driver held: the links do not fix "
-                f"them (check the links at {free[0]} and the ground's joints; counting pins missed it because "
-                f"another part is braced twice)"
-            )
+            raise MechanismFileError(_loose_message(mech, free))
         if missing:
             raise NotSolvableError(
                 f"{mech.source}: no triangulation order places {', '.join(missing)}, and no numerical group does: "
@@ -705,14 +702,32 @@ class _Planner:
                 f"their joints"
             )
 
+    def _check_groups_fixed(self) -> None:
+        """A numerical group whose equations leave a joint free at every position, not only at the pose, is a loose
+        part beside one braced twice (the counts balance): refused, naming the free joints. At the pose alone a valid
+        mechanism can also move (a parallelogram posed flat), so the test is at generic positions."""
+        if any(isinstance(st, Group) for st in self.steps) and (free := free_joints(self.mech, generic=True)):
+            raise MechanismFileError(_loose_message(self.mech, free))
 
-def free_joints(mech: Mechanism) -> tuple[str, ...]:
+
+def _loose_message(mech: Mechanism, free: tuple[str, ...]) -> str:
+    return (
+        f"{mech.source}: joint(s) {', '.join(free)} can move with every driver held: the links do not fix "
+        f"them (check the links at {free[0]} and the ground's joints; counting pins missed it because "
+        f"another part is braced twice)"
+    )
+
+
+def free_joints(mech: Mechanism, generic: bool = False) -> tuple[str, ...]:
     """The joints of a mechanism of pins and cranks that can move at its pose with every driver held (none if it is
     rigid so, or has sliders or cylinders, which this does not model): a part left loose, which Gruebler's count
     misses when another part is braced twice.
 
     The rows of the pose's constraint Jacobian: each pair of joints of a link keeps its distance, each ground joint
-    its place, each crank its direction. A null vector of it moves the joints where it is not zero.
+    its place, each crank its direction. A null vector of it moves the joints where it is not zero. ``generic``: the
+    same rows at joints placed at random about the pose (a fixed seed) instead, whose rank is the structure's (the
+    largest any placing gives): a joint free there is free wherever the mechanism is posed, while at the pose alone a
+    rigid mechanism can move to first order (a parallelogram posed flat, a link's three joints in a line).
 
     >>> import linkagekit as lk
     >>> doc = lk.load("examples/seed000_fourbar.yaml").to_dict()
@@ -729,6 +744,12 @@ def free_joints(mech: Mechanism) -> tuple[str, ...]:
     names = list(mech.joint_names)
     col = {j: 2 * k for k, j in enumerate(names)}
     rows: list[np.ndarray] = []
+    at = dict(mech.joints)
+    if generic:
+        pose = np.array([at[j] for j in names])
+        size = float(np.ptp(pose.real) + np.ptp(pose.imag)) or 1.0
+        shift = np.random.default_rng(0).normal(size=(len(names), 2)) @ np.array([1, 1j]) * size
+        at = {j: at[j] + dz for j, dz in zip(names, shift, strict=True)}
 
     def row(pairs: list[tuple[str, complex]]) -> None:
         r = np.zeros(2 * len(names))
@@ -738,7 +759,7 @@ def free_joints(mech: Mechanism) -> tuple[str, ...]:
 
     for ln in mech.links:
         for a, b in combinations(ln.joints, 2) if ln.name != "ground" else ():
-            u = mech.joints[a] - mech.joints[b]
+            u = at[a] - at[b]
             row([(a, u / abs(u)), (b, -u / abs(u))])
     for j in mech.link("ground").joints:
         row([(j, 1)])
@@ -746,7 +767,7 @@ def free_joints(mech: Mechanism) -> tuple[str, ...]:
     for dr in mech.drivers:
         t = dr.type
         assert isinstance(t, CrankType)
-        e = (mech.joints[t.toward] - mech.joints[t.pivot]) * 1j
+        e = (at[t.toward] - at[t.pivot]) * 1j
         row([(t.toward, e / abs(e)), (t.pivot, -e / abs(e))])
     _, sv, vt = np.linalg.svd(np.array(rows))
     rank = int(np.sum(sv > 1e-9 * sv[0]))
