@@ -196,6 +196,11 @@ BAD = {
     "negative damping": ("dampers: [{between: [A, D], damping: -2}]", "dampers[0].damping"),
     "negative inertia": ("flywheels: [{link: crank, inertia: -0.1}]", "flywheels[0].inertia"),
     "flywheel on ground": ("flywheels: [{link: ground, inertia: 1}]", "flywheels[0].link"),
+    # a load on the ground was taken and did nothing (a flywheel there was refused)
+    "load on ground": (
+        "loads: [{link: ground, at: A, force: [0, -10]}]",
+        "loads[0].link: a load on the ground does nothing (put it on a moving link)",
+    ),
     "unknown link": ("flywheels: [{link: wheel, inertia: 1}]", "flywheels[0].link: unknown link 'wheel'"),
     "typo": ("springs: [{between: [A, D], stifness: 1}]", "springs[0]"),
 }

@@ -1137,6 +1137,8 @@ class _Builder:
             key = f"loads[{i}]"
             if ld.link not in self.by_name:
                 raise self.fail(f"{key}.link", f"unknown link '{ld.link}'")
+            if ld.link == GROUND:  # it would move nothing, and no reaction or driver effort would show it
+                raise self.fail(f"{key}.link", "a load on the ground does nothing (put it on a moving link)")
             if ld.force is None and ld.torque is None:
                 raise self.fail(key, "give a `force`, a `torque`, or both")
             link = self.by_name[ld.link]
