@@ -583,6 +583,37 @@ def test_a_motor_whose_torque_grows_with_speed_is_refused_in_one_line():
     assert lk.simulate(mech, np.array([0.0, 0.1]), motor=(-6500.0, -6.5)).stopped is None  # the other way round
 
 
+def test_a_motion_at_rest_on_a_full_turn_goes_to_the_stiff_method_after_a_twentieth_of_the_budget(monkeypatch):
+    """On a crank that turns fully, a motion whose first ``STIFF_PROBE`` of the step budget moved the driver less
+    than ``SLOW_STEP`` a step (net) goes on by LSODA from the last output time reached, as one with ends does: the
+    pendulum over 90000 s spent the whole budget of DOP853 first (6 s here, 16 s on a slower machine). Counted by
+    the right-hand side's evaluations; the motion equals DOP853's alone (no probe) over 3000 s to 1e-9."""
+    import linkagekit.dynamics as dyn
+
+    mech = lk.Mechanism.from_dict(PENDULUM)
+    evals: dict[str, int] = {}
+    ode = dyn._ode
+
+    def counted(rhs, method, times, y):
+        def f(t, state):
+            evals[method] = evals.get(method, 0) + 1
+            return rhs(t, state)
+
+        return ode(f, method, times, y)
+
+    monkeypatch.setattr(dyn, "_ode", counted)
+    res = lk.simulate(mech, np.linspace(0.0, 90000.0, 61))
+    probe = dyn._EVALS_PER_STEP * int(dyn.STIFF_PROBE * dyn.MAX_STEPS)
+    assert probe - 1 <= evals["dop853"] < 1.2 * probe and 0 < evals["lsoda"] < probe, evals
+    assert res.stopped is None and abs(res.speeds["bar"][-1]) < 1e-12
+    times = np.linspace(0.0, 3000.0, 61)
+    handed = lk.simulate(mech, times)
+    monkeypatch.setattr(dyn, "STIFF_PROBE", 2.0)  # never: DOP853 alone (about 17000 steps)
+    alone = lk.simulate(mech, times)
+    np.testing.assert_allclose(handed.inputs["bar"], alone.inputs["bar"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(handed.speeds["bar"], alone.speeds["bar"], rtol=0, atol=1e-9)
+
+
 def test_a_stiff_motion_of_a_driver_with_ends_is_integrated_by_a_stiff_method_within_the_step_budget(monkeypatch):
     """A crank with a limited range is integrated by ``solve_ivp`` with the range's ends as events, which had no
     budget: a damper of 1e9 on the non-Grashof rocker ran for ever (killed after 400 CPU-s; review 16a). It now
