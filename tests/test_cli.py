@@ -134,6 +134,40 @@ def test_a_loose_part_inside_a_numerical_group_is_refused_by_name(tmp_path, caps
     assert code == 0 and "placed numerically" in out, err
 
 
+#: review 16e: with a slider or a cylinder the loose part was not modelled ("no triangulation order places F", exit 1)
+LOOSE_SLIDER = """
+format: linkagekit/1
+units: {length: m, angle: deg}
+joints: {O: [0, 0], A: [0.03, 0.04], B: [0.115, 0], C: [0.05, 0.1], G: [0.3, 0], F: [0.35, 0.05]}
+links: {ground: [O, C, G], crank: [O, A], rod: [A, B], brace: [C, B], block: [B], pend: [G, F]}
+sliders: [{link: block, on: ground, through: B, direction: [1, 0]}]
+drivers: [{link: crank, pivot: O, toward: A}]
+"""
+
+
+@pytest.mark.parametrize("case", ["slider", "cylinder"])
+def test_a_loose_part_beside_a_slider_or_cylinder_is_refused_by_name(tmp_path, capsys, case):
+    """A pendulum (free end F or W) beside a slider-crank whose block is braced to the frame, or beside the excavator
+    bucket whose bucket link is braced to the stick (a cylinder driver); without the brace and the pendulum, valid."""
+    if case == "slider":
+        free, text = "F", LOOSE_SLIDER
+        fixed = (
+            text.replace(", brace: [C, B]", "")
+            .replace(", pend: [G, F]", "")
+            .replace(", G: [0.3, 0], F: [0.35, 0.05]", "")
+        )
+        fixed = fixed.replace("ground: [O, C, G]", "ground: [O, C]")
+    else:
+        free, text = "W", (EXAMPLES / "excavator_bucket.yaml").read_text()
+        fixed = text
+        text = text.replace("joints:\n", "joints:\n  Z: [0, 0]\n  W: [0.3, 0.3]\n", 1)
+        text = text.replace("ground: [K, F, E]", "ground: [K, F, E, Z]\n  pend: [Z, W]\n  brace: [K, H]")
+    code, _, err = run(["check", write(tmp_path, text)], capsys)
+    assert code == 2 and f"joint(s) {free} can move with every driver held" in err, err
+    code, out, err = run(["check", write(tmp_path, fixed, "fixed.yaml")], capsys)
+    assert code == 0 and ": valid;" in out, err
+
+
 def test_free_joints_at_generic_positions_see_the_structure_not_the_pose():
     """A parallelogram posed flat moves to first order at its pose (B1 off the line), not at generic positions;
     the loose pendulum beside the braced body is free at both."""

@@ -37,6 +37,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from enum import Enum
 from functools import lru_cache
@@ -719,15 +720,15 @@ def _loose_message(mech: Mechanism, free: tuple[str, ...]) -> str:
 
 
 def free_joints(mech: Mechanism, generic: bool = False) -> tuple[str, ...]:
-    """The joints of a mechanism of pins and cranks that can move at its pose with every driver held (none if it is
-    rigid so, or has sliders or cylinders, which this does not model): a part left loose, which Gruebler's count
-    misses when another part is braced twice.
+    """The joints of a mechanism that can move at its pose with every driver held (none if it is rigid so): a part
+    left loose, which Gruebler's count misses when another part is braced twice.
 
-    The rows of the pose's constraint Jacobian: each pair of joints of a link keeps its distance, each ground joint
-    its place, each crank its direction. A null vector of it moves the joints where it is not zero. ``generic``: the
-    same rows at joints placed at random about the pose (a fixed seed) instead, whose rank is the structure's (the
-    largest any placing gives): a joint free there is free wherever the mechanism is posed, while at the pose alone a
-    rigid mechanism can move to first order (a parallelogram posed flat, a link's three joints in a line).
+    The null space of the velocity constraints (:func:`_rate_rows`) over every joint's velocity and every moving
+    link's angular velocity; a null vector moves the joints where it is not zero. ``generic``: the same rows at
+    joints placed at random about the pose and slides along random directions (a fixed seed), whose rank is the
+    structure's (the largest any placing gives): a joint free there is free wherever the mechanism is posed, while
+    at the pose alone a rigid mechanism can move to first order (a parallelogram posed flat, a link's three joints
+    in a line).
 
     >>> import linkagekit as lk
     >>> doc = lk.load("examples/seed000_fourbar.yaml").to_dict()
@@ -739,41 +740,76 @@ def free_joints(mech: Mechanism, generic: bool = False) -> tuple[str, ...]:
     """
     import numpy as np
 
-    if mech.sliders or not all(isinstance(d.type, CrankType) for d in mech.drivers):
-        return ()
     names = list(mech.joint_names)
-    col = {j: 2 * k for k, j in enumerate(names)}
-    rows: list[np.ndarray] = []
-    at = dict(mech.joints)
+    at, slide = dict(mech.joints), {k: sl.direction for k, sl in enumerate(mech.sliders)}
     if generic:
+        rng = np.random.default_rng(0)
         pose = np.array([at[j] for j in names])
         size = float(np.ptp(pose.real) + np.ptp(pose.imag)) or 1.0
-        shift = np.random.default_rng(0).normal(size=(len(names), 2)) @ np.array([1, 1j]) * size
-        at = {j: at[j] + dz for j, dz in zip(names, shift, strict=True)}
-
-    def row(pairs: list[tuple[str, complex]]) -> None:
-        r = np.zeros(2 * len(names))
-        for j, g in pairs:
-            r[col[j] : col[j] + 2] += (g.real, g.imag)
-        rows.append(r)
-
-    for ln in mech.links:
-        for a, b in combinations(ln.joints, 2) if ln.name != "ground" else ():
-            u = at[a] - at[b]
-            row([(a, u / abs(u)), (b, -u / abs(u))])
-    for j in mech.link("ground").joints:
-        row([(j, 1)])
-        row([(j, 1j)])
-    for dr in mech.drivers:
-        t = dr.type
-        assert isinstance(t, CrankType)
-        e = (at[t.toward] - at[t.pivot]) * 1j
-        row([(t.toward, e / abs(e)), (t.pivot, -e / abs(e))])
-    _, sv, vt = np.linalg.svd(np.array(rows))
+        at = {j: at[j] + size * complex(*rng.normal(size=2)) for j in names}
+        slide = {k: complex(*rng.normal(size=2)) for k in slide}
+        slide = {k: d / abs(d) for k, d in slide.items()}
+    rows = _rate_rows(mech, at, {k: d / abs(d) for k, d in slide.items()})
+    _, sv, vt = np.linalg.svd(rows)
     rank = int(np.sum(sv > 1e-9 * sv[0]))
-    null = vt[rank:].reshape(-1, len(names), 2)
+    null = vt[rank:, : 2 * len(names)].reshape(-1, len(names), 2)
     moving = np.sqrt(np.sum(null**2, axis=(0, 2))) > 1e-6
     return tuple(j for j, m in zip(names, moving, strict=True) if m)
+
+
+def _rate_rows(mech: Mechanism, at: dict[str, complex], slide: dict[int, complex]) -> Any:
+    """The velocity constraints of ``mech`` at joint positions ``at`` (slides along ``slide``, unit, by slider) with
+    every driver held, over ``[v_x, v_y]`` of each joint then ``omega`` of each moving link: (rows, columns).
+
+    A link's joints move as one body with its first (``v_j = v_a + omega i (z_j - z_a)``, two rows each); the
+    ground's stand still and turn not; a held crank's link does not turn; a slider's block turns with its guide and
+    its joint ``through`` keeps off the guide's line (the normal ``n`` of its relative velocity is zero; held by a
+    slider driver, the tangent too); a held cylinder keeps its ends' distance.
+    """
+    import numpy as np
+
+    names = list(mech.joint_names)
+    moving = [ln.name for ln in mech.links if ln.name != "ground"]
+    col = {j: 2 * k for k, j in enumerate(names)}
+    turn = {ln: 2 * len(names) + k for k, ln in enumerate(moving)}
+    rows: list[Any] = []
+
+    def row(terms: Sequence[tuple[str, complex]], turns: Sequence[tuple[str, float]] = ()) -> None:
+        r = np.zeros(2 * len(names) + len(moving))
+        for j, g in terms:
+            r[col[j] : col[j] + 2] += (g.real, g.imag)
+        for ln, w in turns:
+            if ln in turn:
+                r[turn[ln]] += w
+        rows.append(r)
+
+    def point(link: str, p: complex, g: complex) -> tuple[list[tuple[str, complex]], list[tuple[str, float]]]:
+        """``g . v`` of the point of ``link`` at ``p``: on its first joint's velocity and its rate of turn."""
+        a = mech.link(link).joints[0]
+        return [(a, g)], [(link, (np.conj(g) * 1j * (p - at[a])).real)]
+
+    for ln in mech.links:
+        a = ln.joints[0]
+        for j in ln.joints[1:] if ln.name != "ground" else ln.joints:
+            for g in (1.0, 1j):  # g . (v_j - v_a - omega i (z_j - z_a)) = 0; the ground's: g . v_j = 0
+                if ln.name == "ground":
+                    row([(j, g)])
+                else:
+                    row([(j, g), (a, -g)], [(ln.name, -(np.conj(g) * 1j * (at[j] - at[a])).real)])
+    for k, sl in enumerate(mech.sliders):
+        row([], [(sl.link, 1.0), (sl.on, -1.0)])
+        held = any(isinstance(d.type, SliderType) and d.type.slider == k for d in mech.drivers)
+        for g in (1j * slide[k], slide[k]) if held else (1j * slide[k],):
+            guide = point(sl.on, at[sl.through], g) if sl.on != "ground" else ([], [])
+            row([(sl.through, g), *((j, -c) for j, c in guide[0])], [(ln, -w) for ln, w in guide[1]])
+    for d in mech.drivers:
+        t = d.type
+        if isinstance(t, CrankType):
+            row([], [(d.link, 1.0)])
+        elif isinstance(t, CylinderType):
+            e = at[t.ends[0]] - at[t.ends[1]]
+            row([(t.ends[0], e), (t.ends[1], -e)])
+    return np.array(rows)
 
 
 def _keep_rotation(st: Step, needs: set[str]) -> Step:
