@@ -220,3 +220,19 @@ def test_bad_force_elements_get_one_line_and_exit_2(tmp_path, capsys, case):
     assert code == 2, (out, err)
     lines = err.strip().splitlines()
     assert len(lines) == 1 and where in lines[0] and "bad.yaml" in lines[0], err
+
+
+@pytest.mark.parametrize("props", ["mass: 100, cg: [1, 0]", "inertia: 5"])
+def test_a_mass_or_inertia_on_the_ground_is_refused(tmp_path, capsys, props):
+    """Accepted and ignored before (every force the same to 0.0 as without it; review 17a), as a load there was,
+    while a flywheel there was refused."""
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "joints: {A: [0, 0], B: [4, 1], C: [2, 0], D: [0.82, 4.86]}\n"
+        f"links: {{ground: {{joints: [A, B], {props}}}, crank: [A, C], coupler: [C, D], rocker: [B, D]}}\n"
+        "drivers: [{link: crank, pivot: A, toward: C}]\n"
+    )
+    attr = props.split(":")[0]
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"m.yaml: links.ground.{attr}: the ground does not move: its {attr} does" in err

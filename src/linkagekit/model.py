@@ -966,6 +966,9 @@ class _Builder:
                 raise self.fail(f"{key}.{attr}", "must not be negative")
         if (ls.mass or 0.0) > 0 and cg is None:
             raise self.fail(f"{key}.cg", "a link with mass needs its centre of gravity `cg`")
+        for attr in ("mass", "inertia") if lname == GROUND else ():  # as a load or flywheel there: refused
+            if getattr(ls, attr):
+                raise self.fail(f"{key}.{attr}", f"the ground does not move: its {attr} does nothing")
         return Link(
             lname,
             tuple(ls.joints),
