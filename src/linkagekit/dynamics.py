@@ -865,7 +865,14 @@ def _ode(
 
     solver = ode(counted).set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
     solver.set_initial_value(y[:, 0], times[0])
+    before = 0
     for i in range(1, len(times)):
+        if i > 1 and method == "dop853":  # each call starts afresh: from the last interval's mean step, not a guess
+            steps = max((calls[0] - before) / _EVALS_PER_STEP, 1.0)
+            solver.set_integrator(
+                method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS, first_step=abs(times[i - 1] - times[i - 2]) / steps
+            )
+        before = calls[0]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said by the caller
             y[:, i] = solver.integrate(times[i])
