@@ -214,6 +214,16 @@ def test_numpy_numbers_are_numbers(tmp_path):
     assert lk.draw_mechanism(ax, res, at=np.float64(90.0)) is ax
 
 
+def test_drawing_between_samples_says_which_sample_it_shows():
+    """``draw_mechanism(at=178)`` on a 10-degree sweep drew the sample at 175 deg with no word, where the mechanism
+    of review 17b does not assemble at 178; the note now says which input is drawn."""
+    res = lk.analyze(lk.load(EX / "seed000_fourbar.yaml"), {"crank": [0.0, 90.0, 180.0]})
+    for at, note in ((90.0, ""), (100.0, "the nearest sample, crank = 90 deg (asked 100 deg)")):
+        ax = lk.draw_mechanism(_ax(), res, at=at)
+        texts = [t.get_text() for t in ax.texts if "sample" in t.get_text() or "assemble" in t.get_text()]
+        assert texts == ([note] if note else []), texts
+
+
 def _ax():
     from matplotlib.figure import Figure
 

@@ -397,6 +397,9 @@ def draw_mechanism(
 ) -> Axes:
     """Draw the mechanism at input ``at`` (the sample nearest to it; default the first assembled) with its curves.
 
+    The sample drawn is the sweep's: where it is not ``at`` itself, the drawing's note says which
+    input it shows (the mechanism may not assemble at ``at`` itself: analyze there to know).
+
     Parameters
     ----------
     ax : Axes
@@ -409,7 +412,13 @@ def draw_mechanism(
     ax = _axes(ax)
     sc = _scene(res)
     d = Drawing(ax, sc, labels=bool(labels), curves=bool(curves))
-    d.update(_sample(sc, at))
+    i = _sample(sc, at)
+    d.update(i)
+    x = float(sc.x[i])
+    if at is not None and abs(x - float(at)) > 1e-9 * max(abs(x), abs(float(at)), 1.0):
+        unit = sc.x_unit
+        shown = f"the nearest sample, {sc.x_name} = {x:.6g} {unit} (asked {float(at):.6g} {unit})"
+        d.note.set_text(_t(f"{d.note.get_text()}; {shown}" if d.note.get_text() else shown))
     return ax
 
 
