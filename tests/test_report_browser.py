@@ -42,6 +42,7 @@ import csv
 import io
 import math
 import os
+import re
 import time
 from dataclasses import dataclass, field
 from functools import cache
@@ -668,6 +669,14 @@ def test_not_assembled_range_seed003(open_report):
     st = rp.check("ArrowLeft back to 273 deg (assembles)", 273)
     assert all(j["x"] and j["y"] for j in st["joints"]), f"seed003 at 273 deg: joints still empty: {st['joints']}"
     rp.assert_one_transform()
+    # the shading and its sentence are the exact range's complement, not the samples' (review 17b)
+    text = rp.page.locator('[data-role="gaps"]').text_content()
+    assert re.fullmatch(
+        r"Does not assemble for crank in \(0, 86\.78\d*\), \(273\.21\d*, 360\) deg \(shaded\)\.", text
+    ), text
+    plots = rp.page.locator('[data-role="plot"]')
+    for k in range(plots.count()):
+        assert plots.nth(k).locator('[data-role="gap"]').count() == 2
 
 
 def test_message_cleared_when_assembled_seed003(open_report):

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 import linkagekit as lk
 from linkagekit.cli import main
@@ -55,6 +56,36 @@ def test_gaps_of_seed003_match_its_assembly_range():
     x = sc.inputs["crank"]
     # hand value (docs/seed-errata.md): assembles for crank in [86.782730, 273.217270] deg
     assert sc.gaps == ((0, int(np.flatnonzero(x > 86.78273)[0]) - 1), (int(np.flatnonzero(x < 273.21727)[-1]) + 1, 360))
+
+
+def test_shading_is_the_exact_range_not_the_samples():
+    """The grey bands were drawn from the assembled sample before a gap to the one after (over [60, 300] on a range
+    ending at 61.59 and 298.41) and not at all for a gap no sample landed in (review 17b); they are now the
+    complement of the exact assembly range over the sweep. Hand value for seed003 (docs/seed-errata.md): assembles
+    for crank in [86.782730, 273.217270] deg; the gap four-bar does not assemble in (177.1351, 182.8649) deg."""
+    sc = build_scene(lk.analyze(lk.load(EX / "seed003_ex21.yaml"), {"crank": np.arange(0.0, 361.0, 10.0)}))
+    assert sc.exact_shading is not None and len(sc.shaded) == 2
+    np.testing.assert_allclose(sc.shaded, [[0.0, 86.78273], [273.21727, 360.0]], rtol=0, atol=1e-5)
+    gap = yaml.safe_load((EX / "seed000_fourbar.yaml").read_text())
+    gap["joints"] = {
+        "O1": [0, 0],
+        "O2": [4.0, 0],
+        "A": [0.0, 1.0],
+        "B": [2.3433708590359985, 1.8709839361439946],
+        "P": [1.1273076558555206, 2.2724690365779163],
+    }
+    gap["links"] = {"ground": ["O1", "O2"], "crank": ["O1", "A"], "coupler": ["A", "B", "P"], "rocker": ["O2", "B"]}
+    gap["drivers"] = [{"link": "crank", "pivot": "O1", "toward": "A"}]
+    for k in ("loads", "gravity"):
+        gap.pop(k, None)
+    res = lk.analyze(lk.Mechanism.from_dict(gap), {"crank": np.arange(5.0, 366.0, 10.0)})
+    sc = build_scene(res)
+    assert res.assembled.all() and sc.gaps == () and sc.breaks == (17,)
+    np.testing.assert_allclose(sc.shaded, [[177.1351, 182.8649]], rtol=0, atol=1e-4)
+    doc = json.loads(json.dumps(sc.to_dict(), allow_nan=False))
+    assert doc["shaded_exact"] is True and np.allclose(doc["shaded"], sc.shaded)
+    timed = build_scene(lk.simulate(lk.load(EX / "slider_crank.yaml"), np.linspace(0.0, 0.1, 5)))
+    assert timed.exact_shading is None and timed.shaded == ()
 
 
 def test_coupler_curves_are_the_joints_off_the_ground():

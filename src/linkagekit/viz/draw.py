@@ -449,10 +449,8 @@ def plot_quantity(
         x, y = np.insert(x, cut, np.nan), np.insert(y, cut, np.nan)
     xb, yb = broken_at_wraps(x, y, period if period is None else float(period))
     ax.plot(xb, yb, label=_t(label or name), linewidth=1.4)
-    for a, b in sc.gaps:
-        lo = x[max(a - 1, 0)] if a > 0 else x[0]
-        hi = x[min(b + 1, len(x) - 1)]
-        ax.axvspan(min(lo, hi), max(lo, hi), color="#e8e8e8", zorder=0, linewidth=0)
+    for lo, hi in sc.shaded:
+        ax.axvspan(lo, hi, color="#e8e8e8", zorder=0, linewidth=0)
     ax.set_xlabel(_t(f"{sc.x_name} [{sc.x_unit}]"))
     unit = sc.units.get(name, "")
     ax.set_ylabel(_t(f"{name} [{unit}]" if unit else name))

@@ -37,6 +37,7 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -151,6 +152,10 @@ class Scene:
         :attr:`x_driver` (``""``: a drawing without columns, whose x is :attr:`x_driver`'s input).
     stopped : str or None
         A simulation that met a toggle: the message of where it stopped (the samples end there).
+    exact_shading : tuple of (float, float), optional
+        With one driver (not a simulated motion), the intervals of its input over the sweep where
+        the mechanism does not assemble: the complement of its exact assembly range (a gap no
+        sample landed in too). None where unknown (:attr:`shaded` then goes by the samples).
     """
 
     name: str
@@ -178,6 +183,7 @@ class Scene:
     catalogue: Catalogue = field(default=Catalogue(()), repr=False)
     x_axis: str = ""
     stopped: str | None = None
+    exact_shading: tuple[tuple[float, float], ...] | None = None
 
     @property
     def timed(self) -> bool:
@@ -190,6 +196,13 @@ class Scene:
         if self.x_axis in self.columns:
             return np.asarray(self.columns[self.x_axis], float)
         return np.asarray(self.inputs[self.x_driver], float)
+
+    @property
+    def shaded(self) -> tuple[tuple[float, float], ...]:
+        """Intervals of :attr:`x` to shade where the mechanism does not assemble: :attr:`exact_shading`, and each
+        run of samples that do not assemble outside it (every run, without it) from the assembled sample before it
+        to the one after."""
+        return _sample_shading(self.assembled, self.x, self.exact_shading)
 
     @property
     def x_name(self) -> str:
@@ -257,6 +270,8 @@ class Scene:
             "coupler_curves": list(self.coupler_curves),
             "other_paths": list(self.other_paths),
             "gaps": [list(g) for g in self.gaps],
+            "shaded": [list(g) for g in self.shaded],
+            "shaded_exact": self.exact_shading is not None,
             "breaks": list(self.breaks),
             "x_driver": self.x_driver,
             "x_axis": {"column": self.x_axis, "name": self.x_name, "unit": self.x_unit, "time": self.timed},
@@ -462,6 +477,66 @@ def _x_driver(inputs: dict[str, np.ndarray], drivers: tuple[str, ...]) -> str:
     return next((d for d in drivers if np.ptp(inputs[d]) > 0), drivers[0])
 
 
+def _gaps_between_samples(
+    res: Result, x: np.ndarray, exact: bool, known: list[list[float]] | None
+) -> tuple[tuple[int, ...], list[tuple[float, float]] | None]:
+    """:func:`_breaks` and :func:`_exact_shading` of one driver's sweep ``x`` from its assembly range (``known``, or
+    :func:`linkagekit.checks.input_range`); ``((), None)`` without ``exact`` or with several drivers."""
+    if not (exact and len(res.mechanism.drivers) == 1 and res.n >= 2):
+        return (), None
+    if known is None:
+        from ..checks import input_range
+
+        known = input_range(res.mechanism, 0)
+    return _breaks(res, x, known), _exact_shading(res, x, known)
+
+
+def _exact_shading(res: Result, x: np.ndarray, known: list[list[float]]) -> list[tuple[float, float]] | None:
+    """Where over the sweep ``x`` (its one driver's input) the mechanism does not assemble: the complement of its
+    assembly intervals ``known`` (an angle's repeated every turn) within ``[min x, max x]``; None for a mode longer
+    than a turn (its samples tell, not its range)."""
+    from ..checks import beyond_a_turn
+
+    mech = res.mechanism
+    ranges = np.array(known, float).reshape(-1, 2)
+    lo, hi = float(np.nanmin(x)), float(np.nanmax(x))
+    if mech.drivers[0].type.cyclic:
+        period = 2 * math.pi / mech.drivers[0].input_scale(mech)
+        if ranges.shape[0] == 1 and beyond_a_turn(ranges[0], period):
+            return None
+        turns = [
+            (s + k * period, e + k * period)
+            for s, e in ranges
+            for k in range(math.floor((lo - e) / period), math.ceil((hi - s) / period) + 1)
+        ]
+    else:
+        turns = [(float(s), float(e)) for s, e in ranges]
+    out, at = [], lo
+    for s, e in sorted(turns):
+        if s > at and s > lo:
+            out.append((at, min(s, hi)))
+        at = max(at, e)
+        if at >= hi:
+            break
+    if at < hi:
+        out.append((at, hi))
+    return [(float(a), float(b)) for a, b in out if b > a]
+
+
+def _sample_shading(
+    assembled: np.ndarray, x: np.ndarray, exact: Sequence[tuple[float, float]] | None
+) -> tuple[tuple[float, float], ...]:
+    """The intervals to shade: ``exact`` (:func:`_exact_shading`), and for each run of samples that do not assemble
+    outside it (every run, without it) the span from the assembled sample before it to the one after."""
+    out = list(exact or [])
+    for a, b in _gaps(assembled):
+        if exact is not None and all(any(s <= x[i] <= e for s, e in exact) for i in range(a, b + 1)):
+            continue
+        lo, hi = x[max(a - 1, 0)], x[min(b + 1, len(x) - 1)]
+        out.append((float(min(lo, hi)), float(max(lo, hi))))
+    return tuple(sorted(out))
+
+
 def _breaks(res: Result, x: np.ndarray, known: list[list[float]] | None = None) -> tuple[int, ...]:
     """Segments between two assembled samples that cross a stretch where the mechanism does not assemble.
 
@@ -561,15 +636,14 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
     ground_joints = mech.link("ground").joints
     coupler, other = path_kinds(mech)
-    moving = [j for j in names if j not in ground_joints]
     cat = res.catalogue
     columns = {q.name: np.broadcast_to(q.values(res), res.shape) for q in cat}
-    units = {q.name: q.unit_symbol for q in cat}
     sliders = _guides(res, z)
     drivers = tuple(d.name for d in mech.drivers)
     inputs = {d: np.asarray(columns[cat.find(Owner.DRIVER, d, "input").name], float).copy() for d in drivers}
     x_driver = _x_driver(inputs, drivers)
     timed = res.time is not None  # a simulated motion: continuous in time (no breaks), plotted along it
+    breaks, shaded = _gaps_between_samples(res, inputs[drivers[0]], exact_breaks and not timed, input_range)
     return Scene(
         name=mech.name,
         length_unit=mech.length_unit,
@@ -585,17 +659,18 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         xy=np.stack([z.real, z.imag], axis=-1),
         assembled=np.asarray(res.assembled, bool).copy(),
         coupler_curves=coupler,
-        other_paths=tuple(j for j in other if j in moving),
+        other_paths=tuple(j for j in other if j not in ground_joints),
         gaps=_gaps(res.assembled),
         bounds=_bounds(mech, z, sliders),
         columns=columns,
-        units=units,
+        units={q.name: q.unit_symbol for q in cat},
         plots=_plots(cat),
         x_driver=x_driver,
-        breaks=_breaks(res, inputs[drivers[0]], input_range) if exact_breaks and not timed else (),
+        breaks=breaks,
         catalogue=cat,
         x_axis=cat.find(Owner.MECHANISM, "", "time").name if timed else cat.find(Owner.DRIVER, x_driver, "input").name,
         stopped=res.stopped,
+        exact_shading=None if shaded is None else tuple(shaded),
     )
 
 

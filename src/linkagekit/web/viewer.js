@@ -302,10 +302,9 @@
     this.X = X; this.xs = xs; this.scene = scene; this.spec = spec; this.Y = Y;
     var title = el("text", {x: L, y: 15, "font-size": 12, "font-weight": "bold"}, svg);
     title.textContent = spec.title + (spec.unit ? " [" + spec.unit + "]" : "");
-    scene.gaps.forEach(function (g) {
-      var a = xs[Math.max(g[0] - 1, 0)], b = xs[Math.min(g[1] + 1, xs.length - 1)];
-      el("rect", {x: Math.min(X(a), X(b)), y: T, width: Math.abs(X(b) - X(a)), height: H - T - B, fill: "#ececec",
-        "data-role": "gap"}, svg);
+    scene.shaded.forEach(function (g) {
+      el("rect", {x: Math.min(X(g[0]), X(g[1])), y: T, width: Math.abs(X(g[1]) - X(g[0])), height: H - T - B,
+        fill: "#ececec", "data-role": "gap"}, svg);
     });
     yt.ticks.forEach(function (v) {
       if (v < yt.lo || v > yt.hi) return;
@@ -380,8 +379,14 @@
 
   /* ------------------------------------------------------------------ the page */
   function gapText(scene) {
-    if (!scene.gaps.length) return "";
     var axis = xAxisOf(scene), x = axis.values;
+    if (scene.shaded_exact) {
+      if (!scene.shaded.length) return "";
+      return "Does not assemble for " + axis.name + " in " + scene.shaded.map(function (g) {
+        return "(" + fmt(g[0]) + ", " + fmt(g[1]) + ")";
+      }).join(", ") + " " + axis.unit + " (shaded).";
+    }
+    if (!scene.gaps.length) return "";
     return "Does not assemble at the samples " + axis.name + " in " + scene.gaps.map(function (g) {
       return g[0] === g[1] ? fmt(x[g[0]]) : "[" + fmt(x[g[0]]) + ", " + fmt(x[g[1]]) + "]";
     }).join(", ") + " " + axis.unit + " (the gaps in the curves).";
