@@ -183,6 +183,16 @@ def test_free_joints_at_generic_positions_see_the_structure_not_the_pose():
     assert free_joints(m) == ("B1",) and free_joints(m, generic=True) == ()
     loose = lk.Mechanism.from_dict(yaml.safe_load(LOOSE_IN_GROUP))
     assert free_joints(loose) == ("E",) and free_joints(loose, generic=True) == ("E",)
+    # whatever the unit: the Stephenson written in mm (4000 units) had every joint of its group free (review 17d)
+    for doc, free in (
+        (yaml.safe_load(LOOSE_IN_GROUP), ("E",)),
+        (lk.load(EXAMPLES / "seed001_stephenson.yaml").to_dict(), ()),
+    ):
+        for scale in (1e-5, 1e3, 1e6):
+            scaled = {**doc, "joints": {k: [scale * v[0], scale * v[1]] for k, v in doc["joints"].items()}}
+            scaled["links"] = {k: v["joints"] if isinstance(v, dict) else v for k, v in doc["links"].items()}
+            m = lk.Mechanism.from_dict(scaled)
+            assert free_joints(m) == free_joints(m, generic=True) == free, scale
 
 
 @pytest.mark.parametrize(

@@ -612,10 +612,10 @@ def test_a_motor_whose_torque_grows_with_speed_is_refused_in_one_line():
 
 
 def test_a_motion_at_rest_on_a_full_turn_goes_to_the_stiff_method_after_a_twentieth_of_the_budget(monkeypatch):
-    """On a crank that turns fully, a motion whose first ``STIFF_PROBE`` of the step budget moved the driver less
-    than ``SLOW_STEP`` a step (net) goes on by LSODA from the last output time reached, as one with ends does: the
-    pendulum over 90000 s spent the whole budget of DOP853 first (6 s here, 16 s on a slower machine). Counted by
-    the right-hand side's evaluations; the motion equals DOP853's alone (no probe) over 3000 s to 1e-9."""
+    """On a crank that turns fully, a motion whose last ``STIFF_PROBE`` of the step budget moved the driver less
+    than ``SLOW_STEP`` a step along its path goes on by LSODA from the last output time reached, as one with ends
+    does: the pendulum over 90000 s spent the whole budget of DOP853 first (6 s here, 16 s on a slower machine).
+    Counted by the right-hand side's evaluations; the motion equals DOP853's alone (no probe) over 3000 s to 1e-9."""
     import linkagekit.dynamics as dyn
 
     mech = lk.Mechanism.from_dict(PENDULUM)
@@ -631,8 +631,8 @@ def test_a_motion_at_rest_on_a_full_turn_goes_to_the_stiff_method_after_a_twenti
 
     monkeypatch.setattr(dyn, "_ode", counted)
     res = lk.simulate(mech, np.linspace(0.0, 90000.0, 61))
-    probe = dyn._EVALS_PER_STEP * int(dyn.STIFF_PROBE * dyn.MAX_STEPS)
-    assert probe - 1 <= evals["dop853"] < 1.2 * probe and 0 < evals["lsoda"] < probe, evals
+    probe = dyn._EVALS_PER_STEP * int(dyn.STIFF_PROBE * dyn.MAX_STEPS)  # looked at after each (at rest by the second)
+    assert probe - 1 <= evals["dop853"] <= 2 * probe and 0 < evals["lsoda"] < probe, evals
     assert res.stopped is None and abs(res.speeds["bar"][-1]) < 1e-12
     times = np.linspace(0.0, 3000.0, 61)
     handed = lk.simulate(mech, times)
@@ -640,6 +640,25 @@ def test_a_motion_at_rest_on_a_full_turn_goes_to_the_stiff_method_after_a_twenti
     alone = lk.simulate(mech, times)
     np.testing.assert_allclose(handed.inputs["bar"], alone.inputs["bar"], rtol=0, atol=1e-9)
     np.testing.assert_allclose(handed.speeds["bar"], alone.speeds["bar"], rtol=0, atol=1e-9)
+
+
+def test_a_pendulum_swinging_long_is_no_stiff_motion_and_a_motion_repeats_exactly(monkeypatch):
+    """Judged by its net travel, a pendulum that swings back looked at rest after a twentieth of the budget, and
+    300 s of IFToMM A01 were refused ("more than 200000 integration steps") after 10000 (review 17d); the path its
+    states went says it moves: DOP853 goes on, the same motion as with no probe at all. And one call repeated in a
+    process gives the same numbers (the first step from counted evaluations differed by 4e-9)."""
+    import linkagekit.dynamics as dyn
+
+    mech = lk.load(EXAMPLES / "iftomm_a01_pendulum.yaml")
+    times = np.linspace(0.0, 300.0, 301)
+    res = lk.simulate(mech, times)
+    assert res.stopped is None and res.n == 301
+    monkeypatch.setattr(dyn, "STIFF_PROBE", 2.0)
+    alone = lk.simulate(mech, times)
+    np.testing.assert_array_equal(res.inputs[mech.drivers[0].name], alone.inputs[mech.drivers[0].name])
+    motor = lk.load(EXAMPLES / "motor_fourbar.yaml")
+    runs = [lk.simulate(motor, np.linspace(0.0, 3.0, 301)).inputs["crank"] for _ in range(2)]
+    np.testing.assert_array_equal(runs[0], runs[1])
 
 
 def test_a_stiff_motion_of_a_driver_with_ends_is_integrated_by_a_stiff_method_within_the_step_budget(monkeypatch):

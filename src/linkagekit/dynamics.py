@@ -841,20 +841,23 @@ def _ode(
 ) -> tuple[int, float, np.ndarray] | None:
     """``y[:, 1:]`` (2, n) filled by SciPy's ``ode`` ``method`` from ``y[:, 0]`` at ``times[0]``, in place: None, or
     past the budget of :data:`MAX_STEPS` steps the first output index not reached, the time and state reached. By
-    DOP853, a motion whose first :data:`STIFF_PROBE` of the budget moved the driver less than :data:`SLOW_STEP` a
-    step (net) stops there too, at the last output time reached (a stiff spring or damper at rest: the pendulum of
-    the tests took the whole budget, 16 s, before LSODA took over)."""
+    DOP853, a motion whose last :data:`STIFF_PROBE` of the budget (looked at after each such share) moved the driver
+    less than :data:`SLOW_STEP` a step along its path stops there too, at the last output time reached (a stiff spring
+    or damper at rest: the pendulum of the tests took the whole budget, 16 s, before LSODA took over)."""
     import warnings
 
     from scipy.integrate import ode
 
-    calls, refused, stiff = [0], [], [False]
-    at = _EVALS_PER_STEP * int(STIFF_PROBE * MAX_STEPS) if method == "dop853" else 0  # read once, as the budget
+    calls, refused, stiff, moved = [0], [], [False], [0.0, float(y[0, 0]), 0.0]
+    # read once, as the budget; at least PROBE_STEPS (a motion from rest takes small steps at first)
+    every = _EVALS_PER_STEP * max(int(STIFF_PROBE * MAX_STEPS), PROBE_STEPS) if method == "dop853" else 0
 
     def counted(t: float, state: Any) -> list[float]:
         calls[0] += 1
-        if calls[0] == at and abs(float(state[0]) - y[0, 0]) / (at / _EVALS_PER_STEP) < SLOW_STEP:
-            stiff[0] = True  # as :func:`_budgeted` judges: the net travel (trial states jump back and forth)
+        moved[0], moved[1] = moved[0] + abs(float(state[0]) - moved[1]), float(state[0])
+        if every and calls[0] % every == 0:  # the path its states went since the last look (a pendulum that swings
+            stiff[0] = (moved[0] - moved[2]) / (every / _EVALS_PER_STEP) < SLOW_STEP  # back moves; one at rest not)
+            moved[2] = moved[0]
         if stiff[0]:  # the integrator gives up on this output time: the stiff method goes on from the last one
             return [math.nan] * len(state)
         try:
@@ -863,16 +866,22 @@ def _ode(
             refused.append(exc)
             return [math.nan] * len(state)
 
+    accepted = [0]
+
+    def step_taken(_t: float, _y: Any) -> int:  # DOP853's accepted steps (and its start): the integrator's own
+        accepted[0] += 1
+        return 0
+
     solver = ode(counted).set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
+    if method == "dop853":
+        solver.set_solout(step_taken)
     solver.set_initial_value(y[:, 0], times[0])
-    before = 0
     for i in range(1, len(times)):
         if i > 1 and method == "dop853":  # each call starts afresh: from the last interval's mean step, not a guess
-            steps = max((calls[0] - before) / _EVALS_PER_STEP, 1.0)
-            solver.set_integrator(
-                method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS, first_step=abs(times[i - 1] - times[i - 2]) / steps
-            )
-        before = calls[0]
+            h = abs(times[i - 1] - times[i - 2]) / max(accepted[0] - 1, 1)
+            solver.set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS, first_step=h)
+            solver.set_solout(step_taken)
+        accepted[0] = 0
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said by the caller
             y[:, i] = solver.integrate(times[i])
@@ -936,8 +945,10 @@ def _budgeted(
     return counted
 
 
-#: the share of :data:`MAX_STEPS` after which a motion of ``solve_ivp`` is judged stiff or not (:func:`_budgeted`)
+#: the share of :data:`MAX_STEPS` after which a motion of ``solve_ivp`` is judged stiff or not (:func:`_budgeted`),
+#: and after each of which one of SciPy's DOP853 is (:func:`_ode`, over at least PROBE_STEPS steps)
 STIFF_PROBE = 0.05
+PROBE_STEPS = 1000
 
 
 class _OverBudget(InputError):

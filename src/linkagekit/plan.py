@@ -741,12 +741,13 @@ def free_joints(mech: Mechanism, generic: bool = False) -> tuple[str, ...]:
     import numpy as np
 
     names = list(mech.joint_names)
-    at, slide = dict(mech.joints), {k: sl.direction for k, sl in enumerate(mech.sliders)}
+    pose = np.array([mech.joints[j] for j in names])
+    size = float(np.ptp(pose.real) + np.ptp(pose.imag)) or 1.0  # in units of the mechanism's size: the rows of
+    at = {j: (z - pose[0]) / size for j, z in zip(names, pose, strict=True)}  # joints and of link rates alike
+    slide = {k: sl.direction for k, sl in enumerate(mech.sliders)}
     if generic:
         rng = np.random.default_rng(0)
-        pose = np.array([at[j] for j in names])
-        size = float(np.ptp(pose.real) + np.ptp(pose.imag)) or 1.0
-        at = {j: at[j] + size * complex(*rng.normal(size=2)) for j in names}
+        at = {j: at[j] + complex(*rng.normal(size=2)) for j in names}
         slide = {k: complex(*rng.normal(size=2)) for k in slide}
         slide = {k: d / abs(d) for k, d in slide.items()}
     rows = _rate_rows(mech, at, {k: d / abs(d) for k, d in slide.items()})
