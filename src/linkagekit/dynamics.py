@@ -848,52 +848,69 @@ def _ode(
 
     from scipy.integrate import ode
 
-    calls, refused, stiff, moved = [0], [], [False], [0.0, float(y[0, 0]), 0.0]
     # read once, as the budget; at least PROBE_STEPS (a motion from rest takes small steps at first)
     every = _EVALS_PER_STEP * max(int(STIFF_PROBE * MAX_STEPS), PROBE_STEPS) if method == "dop853" else 0
-
-    def counted(t: float, state: Any) -> list[float]:
-        calls[0] += 1
-        moved[0], moved[1] = moved[0] + abs(float(state[0]) - moved[1]), float(state[0])
-        if every and calls[0] % every == 0:  # the path its states went since the last look (a pendulum that swings
-            stiff[0] = (moved[0] - moved[2]) / (every / _EVALS_PER_STEP) < SLOW_STEP  # back moves; one at rest not)
-            moved[2] = moved[0]
-        if stiff[0]:  # the integrator gives up on this output time: the stiff method goes on from the last one
-            return [math.nan] * len(state)
-        try:
-            return rhs(t, state)
-        except InputError as exc:  # raised through the compiled integrator it came back as another error
-            refused.append(exc)
-            return [math.nan] * len(state)
-
+    counted = _Counted(rhs, float(y[0, 0]), every)
     accepted = [0]
 
     def step_taken(_t: float, _y: Any) -> int:  # DOP853's accepted steps (and its start): the integrator's own
         accepted[0] += 1
         return 0
 
-    solver = ode(counted).set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS)
-    if method == "dop853":
-        solver.set_solout(step_taken)
+    solver = ode(counted)
+
+    def start(first_step: float = 0.0) -> None:  # 0: the integrator's own guess
+        solver.set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS, first_step=first_step)
+        if method == "dop853":
+            solver.set_solout(step_taken)
+
+    start()
     solver.set_initial_value(y[:, 0], times[0])
     for i in range(1, len(times)):
         if i > 1 and method == "dop853":  # each call starts afresh: from the last interval's mean step, not a guess
-            h = abs(times[i - 1] - times[i - 2]) / max(accepted[0] - 1, 1)
-            solver.set_integrator(method, rtol=RTOL, atol=ATOL, nsteps=MAX_STEPS, first_step=h)
-            solver.set_solout(step_taken)
+            start(abs(times[i - 1] - times[i - 2]) / max(accepted[0] - 1, 1))
         accepted[0] = 0
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # scipy's "larger nsteps is needed": said by the caller
             y[:, i] = solver.integrate(times[i])
-        if refused:
-            raise refused[0]
-        if stiff[0]:
+        if counted.refused:
+            raise counted.refused[0]
+        if counted.stiff:
             return i, float(times[i - 1]), y[:, i - 1].copy()
-        if calls[0] > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() in _EXCESS_WORK[method]:
+        if counted.calls > _EVALS_PER_STEP * MAX_STEPS or solver.get_return_code() in _EXCESS_WORK[method]:
             return i, float(solver.t), np.array(solver.y, float)
         if not solver.successful():
             raise InputError(f"simulate: the integration failed at t = {solver.t:.6g} s")
     return None
+
+
+class _Counted:
+    """:func:`_ode`'s right-hand side: its evaluations counted; an :class:`InputError` it raises kept in ``refused``
+    (raised through the compiled integrator it would come back as another error); after every ``every`` evaluations
+    (0: never) ``stiff`` when the driver's path along the states evaluated since the last look was under
+    :data:`SLOW_STEP` a step (a pendulum that swings back moves; one at rest not). Once stiff, or refused, it gives
+    the integrator NaN: it gives up on this output time, and the caller goes on from the last one."""
+
+    def __init__(self, rhs: Callable[[float, Any], list[float]], q0: float, every: int) -> None:
+        self.rhs, self.every = rhs, every
+        self.calls, self.stiff = 0, False
+        self.refused: list[InputError] = []
+        self.length, self.at, self.looked = 0.0, q0, 0.0
+
+    def __call__(self, t: float, state: Any) -> list[float]:
+        self.calls += 1
+        self.length += abs(float(state[0]) - self.at)
+        self.at = float(state[0])
+        if self.every and self.calls % self.every == 0:
+            self.stiff = (self.length - self.looked) / (self.every / _EVALS_PER_STEP) < SLOW_STEP
+            self.looked = self.length
+        if self.stiff:
+            return [math.nan] * len(state)
+        try:
+            return self.rhs(t, state)
+        except InputError as exc:
+            self.refused.append(exc)
+            return [math.nan] * len(state)
 
 
 #: SciPy ``ode``'s return codes for "more steps are needed" (DOP853's -2; LSODA's -1, excess work)

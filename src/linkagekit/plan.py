@@ -749,7 +749,6 @@ def free_joints(mech: Mechanism, generic: bool = False) -> tuple[str, ...]:
         rng = np.random.default_rng(0)
         at = {j: at[j] + complex(*rng.normal(size=2)) for j in names}
         slide = {k: complex(*rng.normal(size=2)) for k in slide}
-        slide = {k: d / abs(d) for k, d in slide.items()}
     rows = _rate_rows(mech, at, {k: d / abs(d) for k, d in slide.items()})
     _, sv, vt = np.linalg.svd(rows)
     rank = int(np.sum(sv > 1e-9 * sv[0]))
