@@ -310,6 +310,42 @@ def test_the_chamfer_pairs_are_the_nearest_ones_of_a_brute_force_in_double() -> 
     assert np.all(parts[:, :m] <= nearest / m + 1e-12 * size2 / m)  # the chords only come nearer than the samples
 
 
+def test_a_partial_fits_distance_is_the_brute_force_chamfer_of_its_window_on_the_turn() -> None:
+    """The nearest points of a partial fit are searched among its window's samples only; the distance it reports
+    equals the two-sided chamfer computed here over the whole turn's samples with the window as a mask (each target
+    to its nearest window sample or either chord from it to a neighbour on the turn in the window; each window
+    sample to its nearest target), to rounding, for designs whose windows wrap round the turn's first sample."""
+    from linkagekit.synthesis.auto import Projected, _tracer_base
+    from linkagekit.synthesis.run import make_problem
+
+    s = np.linspace(0, 1, 60)
+    pts = 2 * s + 0.4j * np.sin(3 * s)
+    proj = Projected(make_problem(np.stack([pts.real, pts.imag], 1), "watt2", None, "m"), partial=True)
+    lo, hi = proj.bounds
+    X = lo + np.random.default_rng(3).random((48, len(lo))) * (hi - lo)
+    p = proj.placed(X)
+    i, j = _tracer_base(proj.problem)
+    T = proj.targets
+    n, checked, wrapped = proj.samples, 0, 0
+    for d in np.flatnonzero(np.isfinite(p.distance)):
+        w = p.window[d]
+        P = p.fit.a[d] + p.fit.b[d] * (p.solution.z[i][d] + p.fit.c[d] * (p.solution.z[j][d] - p.solution.z[i][d]))
+        on = np.flatnonzero(w)
+        to_samples = np.abs(P[on][None, :] - T[:, None]) ** 2  # (m, window)
+        to_curve = to_samples.min(axis=1)
+        for t_, k in enumerate(on[np.argmin(to_samples, axis=1)]):  # the chords at each target's nearest sample
+            for k2 in ((k - 1) % n, (k + 1) % n):
+                if w[k2]:
+                    a, ab = P[k], P[k2] - P[k]
+                    u = np.clip((np.conj(ab) * (T[t_] - a)).real / abs(ab) ** 2, 0, 1)
+                    to_curve[t_] = min(to_curve[t_], abs(a + u * ab - T[t_]) ** 2)
+        brute = to_curve.mean() + to_samples.min(axis=0).mean()
+        assert p.distance[d] == pytest.approx(brute, rel=1e-12, abs=1e-15)
+        checked += 1
+        wrapped += bool(w[0] and w[-1])
+    assert checked >= 10 and wrapped >= 1, (checked, wrapped)
+
+
 #: a script whose argv[1] searches on two worker processes take ten minutes each unless stopped: those of the
 #: seeds in argv[2] return at once, the others sleep their share
 _SLOW_SEARCHES = """

@@ -877,23 +877,31 @@ class Projected(Objective):
         return best
 
     def _refined(self, params: Any, sol: Any, f: TracerFit, width: int) -> Placed:
-        """The fit ``f`` over the shifts at one range's ``width``, refined on nearest points."""
+        """The fit ``f`` over the shifts at one range's ``width``, refined on nearest points.
+
+        The nearest points are searched among the window's samples only (:func:`_window`: a partial curve's
+        range is a quarter to three quarters of the turn), then set back in their places on the turn."""
         N, n = len(f.sse), self.samples
         m = len(self.targets)
-        last = np.full(N, ((m - 1) * width) // m)
-        window = np.mod(np.arange(n)[None, :] - f.shift[:, None], n) <= last[:, None]
+        last = ((m - 1) * width) // m
+        rows, cols = np.arange(N)[:, None], _window(f.shift, last + 1, n)
         i, j = _tracer_base(self.problem)
-        Xi, Xj = sol.z[i], sol.z[j]
-        window &= np.isfinite(Xi) & np.isfinite(Xj)
-        best_d, k, parts = _chamfer(f, Xi, Xj, self.targets, window)
-        rows = np.arange(N)[:, None]
+        Xi, Xj = sol.z[i][rows, cols], sol.z[j][rows, cols]
+        inside = np.isfinite(Xi) & np.isfinite(Xj)
+        best_d, k, parts = _chamfer(f, Xi, Xj, self.targets, inside)
         for _ in range(ICP_ROUNDS):
             g = replace(fit(Xi[rows, k], Xj[rows, k], self.targets), shift=f.shift, direction=f.direction)
-            d, k2, p2 = _chamfer(g, Xi, Xj, self.targets, window)
+            d, k2, p2 = _chamfer(g, Xi, Xj, self.targets, inside)
             take = d < best_d
             f, best_d = _choose(take, g, f), np.where(take, d, best_d)
             k, parts = np.where(take[:, None], k2, k), np.where(take[:, None], p2, parts)
-        return Placed(params, sol, f, window, best_d, last, parts)
+        window = np.zeros((N, n), bool)
+        window[rows, cols] = inside
+        on_turn = np.zeros((N, m + n))
+        on_turn[:, :m] = parts[:, :m]
+        on_turn[rows, m + cols] = parts[:, m:]
+        summed = np.where(np.isfinite(best_d), on_turn.sum(axis=1), np.inf)  # as the widths' sums: a tie stays one
+        return Placed(params, sol, f, window, summed, np.full(N, last), on_turn)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
         """Each target's and each window sample's distance (the chamfer's parts) / ``L``, and the penalty's root."""
@@ -974,22 +982,33 @@ def _chamfer(
 def _nearest_pairs(P: np.ndarray, T: np.ndarray, window: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each target's nearest window sample (N, m) and each sample's nearest target (N, n).
 
-    One product of the centred points, ``|p - t|^2 = |p|^2 + |t|^2 - 2 p.t``, laid out (N, m, n) so that
-    the search over the samples runs along memory; samples off the window are never chosen. (Single
+    The expanded square of the centred points, ``|p - t|^2 = |p|^2 + |t|^2 - 2 p.t``, as one product of
+    ``[-2 t, 1, |t|^2]`` and ``[p, |p|^2, 1]`` (``|p|^2`` infinite off the window: such a sample is never
+    chosen), laid out twice, (N, m, n) and (N, n, m), so that each search runs along memory. (Single
     precision would halve the memory but pair wrongly where distances are 1e-3 of the curves' size
     or less, near a good fit: its rounding on the squared size is 1e-7.)
     """
     c = T.mean()
     Pc, Tc = P - c, T - c
-    d2 = np.stack([Tc.real, Tc.imag], axis=-1) @ np.stack([Pc.real, Pc.imag], axis=1)  # (N, m, n)
-    d2 *= -2.0
-    d2 += np.where(window, np.abs(Pc) ** 2, np.inf)[:, None, :]
-    d2 += (np.abs(Tc) ** 2)[None, :, None]
-    return np.argmin(d2, axis=2), np.argmin(d2, axis=1)
+    t = np.stack([-2 * Tc.real, -2 * Tc.imag, np.ones(len(T)), Tc.real**2 + Tc.imag**2], axis=-1)  # (m, 4)
+    p2 = np.where(window, Pc.real**2 + Pc.imag**2, np.inf)
+    p = np.stack([Pc.real, Pc.imag, p2, np.ones(P.shape)], axis=-1)  # (N, n, 4)
+    return np.argmin(t @ p.transpose(0, 2, 1), axis=2), np.argmin(p @ t.T, axis=2)
+
+
+def _window(shift: np.ndarray, width: int, n: int) -> np.ndarray:
+    """The samples (N, width) of each design's window, in their order along the turn of ``n`` samples: from
+    ``shift`` on, round the turn.
+
+    >>> _window(np.array([0, 6]), 3, 8).tolist()
+    [[0, 1, 2], [6, 7, 0]]
+    """
+    return np.asarray(np.mod(shift[:, None] + np.arange(width)[None, :], n))
 
 
 def _to_segments(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Squared distance (N, m) from each target to the two chords of the curve at its nearest sample ``k``.
+    """Squared distance (N, m) from each target to the two chords of the curve at its nearest sample ``k``: the
+    curve is ``P``'s samples in their order, an open polyline (a window's samples, :func:`_window`).
 
     The samples are coarse (a chord is ~1/100 of the curve): the distance to a sample alone
     would floor the error at about half a chord.
@@ -998,8 +1017,8 @@ def _to_segments(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray
     rows = np.arange(N)[:, None]
     best = np.full(k.shape, np.inf)
     for step in (-1, 1):
-        k2 = np.mod(k + step, n)
-        ok = window[rows, k] & window[rows, k2]
+        k2 = np.clip(k + step, 0, n - 1)
+        ok = window[rows, k] & window[rows, k2] & (k2 != k)
         a, b = P[rows, k], P[rows, k2]
         ab = b - a
         t = np.clip(((np.conj(ab) * (T[None, :] - a)).real) / np.maximum(np.abs(ab) ** 2, 1e-300), 0.0, 1.0)
