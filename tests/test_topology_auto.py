@@ -310,6 +310,27 @@ def test_the_chamfer_pairs_are_the_nearest_ones_of_a_brute_force_in_double() -> 
     assert np.all(parts[:, :m] <= nearest / m + 1e-12 * size2 / m)  # the chords only come nearer than the samples
 
 
+@pytest.mark.parametrize("m", [3, 6, 10, 40])
+def test_a_partial_fit_of_few_targets_still_turns_the_crank_a_quarter_turn(m: int) -> None:
+    """The window of a partial fit runs from its first target to its last, ``(m - 1) / m`` of the width: the
+    narrowest width (96 deg) left 87.2 deg with 10 targets and 81.6 with 6, under the 90 deg a written sweep must
+    turn (review 18a). Every design's span, and the sweep written for the best, is at least 90 deg."""
+    from linkagekit.synthesis.auto import Projected, written
+    from linkagekit.synthesis.optimize import Outcome
+    from linkagekit.synthesis.run import make_problem
+
+    s = np.linspace(0, 1, m)
+    pts = 2 * s + 0.4j * np.sin(3 * s)
+    proj = Projected(make_problem(np.stack([pts.real, pts.imag], 1), "fourbar", None, "m"), partial=True)
+    lo, hi = proj.bounds
+    X = lo + np.random.default_rng(5).random((64, len(lo))) * (hi - lo)
+    p = proj.placed(X)
+    assert np.all(p.span * 360.0 / proj.samples >= 90.0 - 1e-9)
+    best = X[int(np.argmin(proj.cost(X)))]
+    syn = written(proj, best, Outcome(best, 0.0, 1, 0, 1, 0.0, "time"))
+    assert syn.sweep is not None and syn.sweep[1] - syn.sweep[0] >= 90.0 - 1e-9
+
+
 def test_a_partial_fits_distance_is_the_brute_force_chamfer_of_its_window_on_the_turn() -> None:
     """The nearest points of a partial fit are searched among its window's samples only; the distance it reports
     equals the two-sided chamfer computed here over the whole turn's samples with the window as a mask (each target

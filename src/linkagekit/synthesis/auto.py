@@ -734,6 +734,21 @@ ICP_ROUNDS = 2
 PARTIAL_WIDTHS = (0.27, 0.375, 0.5, 0.75)
 
 
+def partial_widths(n: int, m: int) -> list[int]:
+    """The widths, in samples of a turn of ``n``, a partial curve of ``m`` targets is fitted over: each of
+    :data:`PARTIAL_WIDTHS`, widened where needed so that its window (from the first target to the last,
+    ``((m - 1) w) // m`` steps: :meth:`Projected._refined`) turns the crank at least a quarter of the turn.
+
+    >>> partial_widths(128, 100), partial_widths(128, 10)
+    ([35, 48, 64, 96], [36, 48, 64, 96])
+    >>> [((10 - 1) * w) // 10 * 360 / 128 for w in partial_widths(128, 10)][0]
+    90.0
+    """
+    quarter = -(-n // 4)
+    least = -(-m * quarter // (m - 1))
+    return [min(max(int(round(w * n)), least), n) for w in PARTIAL_WIDTHS]
+
+
 @dataclass(frozen=True)
 class Placed:
     """Designs solved over a turn, their tracer and placement fitted (:meth:`Projected.placed`).
@@ -830,7 +845,7 @@ class Projected(Objective):
         theta = params.pose_inputs[0][:, None] + (2 * np.pi / n) * np.arange(n)
         sol = solve(params, theta[None])
         i, j = _tracer_base(self.problem)
-        widths = [int(round(w * n)) for w in PARTIAL_WIDTHS] if self.partial else [n]
+        widths = partial_widths(n, len(self.targets)) if self.partial else [n]
         spec = spectra(sol.z[i], sol.z[j])  # one design's spectra serve every width
         return params, sol, [(fit_shifts(sol.z[i], sol.z[j], self.targets, w, spec=spec), w) for w in widths]
 
@@ -1041,7 +1056,7 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     The sweep is the whole turn, or (partial) the range the targets were fitted over. The
     check solves :data:`CHECK_SAMPLES` inputs over the sweep: it must assemble at all of them,
     keep the transmission angles, and its curve's size (:data:`MIN_CURVE_SIZE`); a partial
-    sweep is at least 90 deg by construction (:data:`PARTIAL_WIDTHS`). Each target's error is
+    sweep is at least 90 deg by construction (:func:`partial_widths`). Each target's error is
     its distance to the nearest of those samples.
     """
     from ..params import compile as compile_params
