@@ -245,7 +245,10 @@ def test_mechanism_of_a_fourbar_is_the_spec_file():
     d = mech.to_dict()
     assert d["units"]["length"] == "mm" and d["links"]["crank"] == ["A0", "A1"]
     assert d["drivers"][0]["link"] == "crank" and set(d["links"]) == {"ground", "crank", "coupler", "rocker"}
-    assert d["joints"]["P"] == [0.0, 0.0] and np.allclose(d["joints"]["Q"], [np.cos(0.1745329), np.sin(0.1745329)])
+    # Q on the first pose's line, a tenth of the pose points' diagonal (2 x 0.8) from P (it was one length unit:
+    # 47 diagonals for poses 21 mm across given in metres, review 18a)
+    q = 0.1 * np.hypot(2.0, 0.8) * np.array([np.cos(0.1745329), np.sin(0.1745329)])
+    assert d["joints"]["P"] == [0.0, 0.0] and np.allclose(d["joints"]["Q"], q, rtol=1e-7)
     res = lk.analyze(mech, rates=False, dynamics=False)  # its default sweep: the first pose to the last, in order
     assert res.assembled.all()
     sweep = np.radians(mech.drivers[0].sweep.values())

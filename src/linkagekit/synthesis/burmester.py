@@ -673,11 +673,14 @@ def _lengths(crank: Dyad, rocker: Dyad) -> dict[str, float]:
 
 
 def _joints(p: Poses, crank: Dyad, rocker: Dyad) -> ComplexArray:
-    """Every joint of the four-bar at every pose, ``(n, 6)`` in :data:`JOINTS` order."""
+    """Every joint of the four-bar at every pose, ``(n, 6)`` in :data:`JOINTS` order: ``Q`` on the pose's line a
+    tenth of the pose points' diagonal (their bounding box's; their size where that is 0) from ``P``."""
     a1 = p.place(p.body(crank.moving))
     b1 = p.place(p.body(rocker.moving))
     n = p.n
-    return np.stack([np.full(n, crank.ground), a1, b1, np.full(n, rocker.ground), p.d, p.d + p.rot], axis=1)
+    diagonal = float(np.hypot(np.ptp(p.d.real), np.ptp(p.d.imag))) or p.size
+    q = p.d + 0.1 * diagonal * p.rot
+    return np.stack([np.full(n, crank.ground), a1, b1, np.full(n, rocker.ground), p.d, q], axis=1)
 
 
 def _mechanism(p: Poses, crank: Dyad, rocker: Dyad, inputs: FloatArray, unit: str, name: str) -> Mechanism:
