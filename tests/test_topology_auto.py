@@ -161,6 +161,14 @@ def test_auto_writes_a_valid_mechanism_and_names_its_topology(tmp_path, capsys) 
     P = res.xy("P")
     d = np.min(np.hypot(P[:, 0][None] - np.cos(t)[:, None], P[:, 1][None] - 0.6 * np.sin(t)[:, None]), axis=1)
     assert np.max(d) < 0.05 * np.hypot(2, 1.2)  # near every target
+    # the file's name gives the printed max error, as a single topology's does, and its description's first line is
+    # a line (it ended in a literal backslash-n, review 18a)
+    printed = next(line for line in text.splitlines() if line.startswith("max error "))
+    assert mech.name.startswith("synthesised fourbar: max error ") and mech.name.endswith(" % of the targets' diagonal)")
+    named, shown = (float(x.split("max error ")[1].split(" ")[0]) for x in (mech.name, printed))
+    assert named == pytest.approx(shown, rel=1e-3) and mech.name.split("max error ")[1].split(" ")[1] == "m"
+    assert mech.description.splitlines()[0] == "topology fourbar (5 joints), crank 360 deg"
+    assert "\\n" not in mech.description
 
 
 @pytest.mark.parametrize("workers", [1, 2])

@@ -1759,11 +1759,21 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     text = synthesis_text(out, targets.xy, None, targets.unit, _written(out.feasible, args.output)).splitlines()
     a = out.mechanism.to_dict()["drivers"][0]["angles"]
     joints = len(out.mechanism.joint_names)
-    tried = ", ".join(f"{t.name} {100 * t.error:.3g} % ({100 * t.two_sided:.3g} %)" for t in out.tried)
+    tried = ", ".join(f"{t.name} {_percent(t.error)} ({_percent(t.two_sided)})" for t in out.tried)
     text.insert(-1, f"topology {out.topology} ({joints} joints), crank {a['start']:.6g} to {a['stop']:.6g} deg")
     text.insert(-1, f"searched: {tried}: rms error / diagonal (the two-sided distance / diagonal, which chose)")
     print("\n".join(text))
     return _met(out.feasible, args.output)
+
+
+def _percent(x: float) -> str:
+    """A share as a percentage, or what it means where it is not finite (a design that does not assemble at some
+    target, or nowhere over its sweep).
+
+    >>> _percent(0.0123), _percent(float("inf"))
+    ('1.23 %', 'does not assemble')
+    """
+    return f"{100 * x:.3g} %" if math.isfinite(x) else "does not assemble"
 
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given

@@ -1085,6 +1085,13 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
     ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0 and not degenerate(sp, pose[:, None])[0]
     mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
+    if np.all(np.isfinite(errors)):  # as a single topology's search names it: the max error with its unit
+        worst = float(np.max(errors))
+        mech = replace(
+            mech,
+            name=f"{mech.name}: max error {worst:.4g} {sp.template.length_unit} "
+            f"({100 * worst / prob.scale:.3g} % of the targets' diagonal)",
+        )
     if not ok:  # as a single topology's search names it: the file says so where a reader looks first
         mech = replace(mech, name=f"INFEASIBLE {mech.name} (it breaks a constraint)")
     sweep = (float(np.degrees(start)), float(np.degrees(start + span))) if proj.partial else None
@@ -1092,7 +1099,7 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
         mech, xfull, errors, np.degrees(th[near]), None, prob.scale, ok, mu, outcome, sweep, topology=sp.topology,
         bound=prob.min_transmission,
     )  # fmt: skip
-    text = f"topology {sp.topology} ({len(sp.template.joint_names)} joints), crank {np.degrees(span):.4g} deg\\n"
+    text = f"topology {sp.topology} ({len(sp.template.joint_names)} joints), crank {np.degrees(span):.4g} deg\n"
     return replace(out, mechanism=replace(mech, description=text + describe(out, prob, source)))
 
 
