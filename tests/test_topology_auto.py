@@ -164,7 +164,8 @@ def test_auto_writes_a_valid_mechanism_and_names_its_topology(tmp_path, capsys) 
     # the file's name gives the printed max error, as a single topology's does, and its description's first line is
     # a line (it ended in a literal backslash-n, review 18a)
     printed = next(line for line in text.splitlines() if line.startswith("max error "))
-    assert mech.name.startswith("synthesised fourbar: max error ") and mech.name.endswith(" % of the targets' diagonal)")
+    assert mech.name.startswith("synthesised fourbar: max error ")
+    assert mech.name.endswith(" % of the targets' diagonal)")
     named, shown = (float(x.split("max error ")[1].split(" ")[0]) for x in (mech.name, printed))
     assert named == pytest.approx(shown, rel=1e-3) and mech.name.split("max error ")[1].split(" ")[1] == "m"
     assert mech.description.splitlines()[0] == "topology fourbar (5 joints), crank 360 deg"
