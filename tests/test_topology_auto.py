@@ -532,6 +532,18 @@ def test_a_topology_auto_names_is_a_topology_of_the_command_line_too(tmp_path, c
     assert "such as sixbar-1" in capsys.readouterr().err
 
 
+def test_auto_refuses_reach_in_one_line_as_it_does_not_apply(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``--reach`` was dropped silently by ``--topology auto`` while the file's description recorded it (review 18a:
+    ``--reach 0.5`` and a joint at 6.03 diagonals); it is refused, as ``--pivots`` and the others are."""
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    csv = tmp_path / "ellipse.csv"
+    np.savetxt(csv, np.stack([np.cos(t), 0.6 * np.sin(t)], 1), delimiter=",", header="x,y", comments="")
+    out = tmp_path / "out.yaml"
+    assert main(["synthesize", str(csv), "--topology", "auto", "--reach", "0.5", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--reach" in err and "do not apply" in err and not out.exists()
+
+
 def test_auto_takes_the_four_bar_search_of_a_single_topology_as_a_candidate_too(monkeypatch) -> None:
     """On seven points of an arc, ``--topology auto`` ended at 0.2-1.1 % of the diagonal in 15-20 s where
     ``--topology fourbar --shape-only`` reaches 0.003 % in 5 s (its atlas, then its engine): the projected search is

@@ -1735,8 +1735,8 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
     from .synthesis.auto import synthesize_auto
     from .synthesis.topologies import MAX_JOINTS
 
-    if args.free or args.pareto or search.get("pivots") or search.get("lengths"):
-        raise InputError("--topology auto: --free, --pivots, --lengths and --pareto do not apply")
+    if args.free or args.pareto or search.get("pivots") or search.get("lengths") or args.reach is not None:
+        raise InputError("--topology auto: --free, --pivots, --lengths, --reach and --pareto do not apply")
     if search.get("scheduler"):  # its searches are whole local ones, one a process: a cluster would sit idle
         raise InputError("--topology auto: --scheduler does not apply (its searches run on local processes)")
     max_joints = MAX_JOINTS if args.max_joints is None else _integer(args.max_joints, "--max-joints", 5, 10)
