@@ -120,3 +120,13 @@ def test_targets_too_far_from_the_origin_are_refused(tmp_path: Path, offset: flo
     with pytest.raises(InputError, match=r"far\.csv: a target coordinate of magnitude"):
         read_targets(_csv(tmp_path / "far.csv", xy))
     read_targets(_csv(tmp_path / "near.csv", xy - offset + 1e5))  # 1e5 diagonals away: fine
+
+
+def test_a_refusal_of_the_targets_scale_says_what_is_wrong(tmp_path: Path) -> None:
+    """Review 18a: beside a point at 1e300, (2, 0) counted as a repeat of (0, 0), and the line said two points were
+    left 'once the last, a repeat of the first, is dropped'; the scale is checked first. A coordinate just over the
+    limit was printed as the limit itself ('magnitude 1e+09 ... at most 1e+09')."""
+    with pytest.raises(InputError, match=r"huge\.csv: the targets' diagonal is 1e\+300 m"):
+        read_targets(_csv(tmp_path / "huge.csv", np.array([[0.0, 0.0], [1e300, 1.0], [2.0, 0.0]])))
+    with pytest.raises(InputError, match=r"far\.csv: a target coordinate of magnitude 1\.00002e\+09 m"):
+        read_targets(_csv(tmp_path / "far.csv", np.array([[1.00002e9, 0.0], [1.00002e9 - 1, 0.0], [1e9, 1.0]])))

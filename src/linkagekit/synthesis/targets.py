@@ -333,6 +333,7 @@ def targets_from_array(
     # the constructor checks shapes, values, counts and extent before the closing rule looks at them
     checked = Targets(xy=xy, inputs=inputs, unit=unit, closed=bool(closed), source=source)
     pts, ins = checked.xy, checked.inputs
+    check_scale(pts, source, unit)  # before the closing rule: beside 1e300, (2, 0) was a repeat of (0, 0)
     if (closed is not None and not closed) or not _repeats_first(pts, ins):
         return checked  # forced open, or nothing to drop (closed only when forced)
     m = len(pts) - 1
@@ -445,7 +446,7 @@ def check_scale(xy: np.ndarray, source: str, unit: str) -> None:
     if size > MAX_COORDINATE or size > MAX_OFFSET * diagonal:
         raise _error(
             source,
-            f"a target coordinate of magnitude {size:.3g} {unit}; synthesis takes at most {MAX_COORDINATE:g} and "
+            f"a target coordinate of magnitude {size:.6g} {unit}; synthesis takes at most {MAX_COORDINATE:g} and "
             f"{MAX_OFFSET:g} target diagonals (move the targets nearer the origin)",
         )
 
