@@ -347,3 +347,27 @@ def test_the_batched_forward_differences_are_scipys_also_where_a_step_is_lost_to
         got = forward_jacobian(f, x, np.full(3, SLSQP_STEP))
         want = approx_derivative(lambda v: f(v)[0], x, method="2-point", abs_step=SLSQP_STEP)
         assert np.all(np.isfinite(got)) and np.array_equal(got, want)
+
+
+def test_a_function_file_records_its_offsets_and_errors_and_they_reproduce_its_max_error(tmp_path, capsys):
+    """Review 18a: with ``--free-offsets`` the written file held neither the output offset (the output angle is
+    ``output + offset``) nor the errors, and the printed offsets (6 digits) gave 0.012418 deg where 0.0123797 was
+    printed. The description now holds the printed table and summary, the offsets to full precision and the whole
+    command; with those offsets ``analyze`` of the file gives the printed max error (to its 6 digits)."""
+    out = tmp_path / "log.yaml"
+    args = ["synthesize", str(ROOT / "examples" / "targets" / "log_function.csv"), "--task", "function"]
+    assert main([*args, "--free-offsets", "--seconds", "2", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    mech = lk.load(out)
+    text = mech.description
+    assert "max error " in text and "error [deg]" in text and "--free-offsets" in text and "--seconds 2" in text
+    number = r"([-+][\d.e+-]+)"
+    exact = rf"^offsets to full precision: crank angle = input {number} deg, output angle = output {number}"
+    found = re.search(exact, text, re.M)
+    assert found is not None, text
+    d_in, d_out = float(found.group(1)), float(found.group(2))
+    pairs = np.loadtxt(ROOT / "examples" / "targets" / "log_function.csv", delimiter=",", skiprows=2)
+    psi = lk.analyze(mech, {"crank": pairs[:, 0] + d_in}).angle("output") - d_out
+    err = (psi - pairs[:, 1] + 180.0) % 360.0 - 180.0
+    shown = float(re.search(r"^max error ([\d.e+-]+) deg", printed, re.M).group(1))  # type: ignore[union-attr]
+    assert np.max(np.abs(err)) == pytest.approx(shown, rel=1e-5)  # printed to 6 digits

@@ -1820,7 +1820,8 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     fit, mech = out.fit, out.mechanism
     words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
     words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}", f"--seed {engine['seed']}"]
-    mech = dataclasses.replace(mech, description="command: " + " ".join(words))
+    words += [f"--seconds {engine['seconds']:g}", f"--min-transmission {engine['min_transmission']:g}"]
+    mech = dataclasses.replace(mech, description=_function_description(out, args.units, " ".join(words)))
     if fit.valid:
         lk.save(mech, args.output)
     if args.plot and fit.valid:
@@ -1871,6 +1872,20 @@ def _transmission_warning(lo: float, hi: float = 90.0) -> list[str]:
         f"warning: the transmission angle goes {at} deg (outside [{bound}, {180 - MIN_TRANSMISSION:g}]): there the "
         f"coupler pushes the output mostly into its bearing; --min-transmission {bound} bounds it"
     ]
+
+
+def _function_description(out: Any, unit: str, command: str) -> str:
+    """A function generator's ``description``: what the command prints of it (its pairs, errors, offsets, lengths),
+    the offsets to full precision (the output angle is ``output + offset``: the file alone does not say it), and
+    the command."""
+    lines = function_text(out, unit, None).splitlines()[:-1]  # not the line about the file
+    if out.fit.offsets != (0.0, 0.0):
+        crank, output = (float(v) for v in out.fit.offsets)
+        lines.append(
+            f"offsets to full precision: crank angle = input {crank:+.17g} deg, "
+            f"output angle = output {output:+.17g} deg"
+        )
+    return "\n".join([*lines, f"command: {command}"])
 
 
 def function_text(out: Any, unit: str, path: str | None) -> str:
