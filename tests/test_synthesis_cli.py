@@ -867,3 +867,30 @@ def test_the_plot_title_gives_its_errors_in_the_file_unit():
     res = lk.analyze(mm, {"crank": np.linspace(0.0, 360.0, 73)})
     fig = synthesis_figure(res, res.xy("P")[::12], np.array([0.3, 0.4]), closed=True)
     assert fig._suptitle.get_text() == "7 targets (closed): max error 0.4 mm, rms 0.3536 mm"
+
+
+def test_a_design_whose_ground_pivots_are_a_four_hundredth_of_its_size_apart_is_not_buildable() -> None:
+    """Review 18a: the default search on the shipped letter C wrote a double-crank with its ground pivots 0.1 mm apart
+    (2.5e-3 of the joints' RMS spread, over the old bound of 1e-3), a 1.1 mm coupler and the tracer 95 mm out: a 1 um
+    error of one pivot raised its max error from 0.32 to 0.49 mm. No two joints of one link may now be closer than
+    1/100 of the spread; the design (its joints as written) is measured infeasible."""
+    from linkagekit.synthesis.objective import degenerate, measure
+    from linkagekit.synthesis.run import make_problem
+    from linkagekit.synthesis.targets import read_targets
+
+    t = read_targets(Path(__file__).resolve().parents[1] / "examples" / "targets" / "letter_c.csv", "mm")
+    problem = make_problem(t.xy, "fourbar", units="mm")
+    sp = problem.space
+    joints = {
+        "A": 7.542719367174036 + 2.893505897703046j,
+        "B": 7.50681462623612 + 2.9882071767759864j,
+        "C": -77.40292523794469 - 37.58985468791246j,
+        "D": -77.96570739809816 - 38.56701512688482j,
+        "P": 5.79222201604285 + 8.025549178541118j,
+    }
+    x = np.concatenate([[joints[j].real, joints[j].imag] for j in sp.free])
+    pose = sp.poses(x[None])
+    z = (pose[..., 0] + 1j * pose[..., 1]).T
+    spread = float(np.sqrt(np.mean(np.abs(z - z.mean(axis=0)) ** 2)))
+    assert 1e-3 < abs(joints["A"] - joints["B"]) / spread < 1e-2
+    assert degenerate(sp, z)[0] > 0 and measure(problem, x[None])[0][0] == np.inf
