@@ -38,6 +38,7 @@ LAYERS = [
         "synthesis.topologies",
         "synthesis.tracer",
         "synthesis.descriptors",
+        "synthesis.tolerance",
     },
     {"synthesis.distribute"},
     {"synthesis.optimize"},

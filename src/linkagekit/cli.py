@@ -2253,6 +2253,7 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str | None) 
     )
     if out.offset is not None:
         lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    lines += _tolerance_lines(out, xy, inputs, unit)
     from .synthesis.run import transmission_line
 
     lines += _shape_lines(out, unit)
@@ -2270,6 +2271,37 @@ def synthesis_text(out: Any, xy: Any, inputs: Any, unit: str, path: str | None) 
     )
     lines.append(_wrote(path))
     return "\n".join(lines)
+
+
+#: a max error raised by more than this many times the move of one joint is said to need tight tolerances
+SENSITIVE = 10.0
+
+
+def _tolerance_lines(out: Any, xy: Any, inputs: Any, unit: str) -> list[str]:
+    """The tolerance line (:mod:`~linkagekit.synthesis.tolerance`) of a written design whose targets are untimed,
+    and a warning where one joint's move costs more than :data:`SENSITIVE` times itself in max error."""
+    if inputs is not None or not out.feasible or "P" not in out.mechanism.joint_names:
+        return []
+    from .synthesis.tolerance import SHARE, tolerance
+
+    tol = tolerance(out.mechanism, xy[:, 0] + 1j * xy[:, 1], "P")
+    if not math.isfinite(tol.worst):
+        return [
+            f"tolerance: with joint {tol.joint} {tol.step:.3g} {unit} off its place ({100 * SHARE:g} % of the "
+            "diagonal) the design no longer assembles over its whole sweep"
+        ]
+    gain = tol.gain
+    effect = (
+        f"raises the max error to {tol.worst:.4g} {unit} ({gain:.3g} times the move)"
+        if gain > 0
+        else (f"keeps the max error at most {tol.worst:.4g} {unit}")
+    )
+    lines = [
+        f"tolerance: joint {tol.joint} {tol.step:.3g} {unit} off its place ({100 * SHARE:g} % of the diagonal) {effect}"
+    ]
+    if gain > SENSITIVE:
+        lines.append("warning: this design's accuracy hangs on making its joints exactly where they are")
+    return lines
 
 
 def _shape_lines(out: Any, unit: str) -> list[str]:
