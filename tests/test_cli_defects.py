@@ -364,3 +364,42 @@ def test_a_number_on_the_command_line_is_written_as_in_a_file(capsys):
     for text in ("1_000", "\uff11\uff12"):
         code, out, err = run(["analyze", str(EXAMPLES / "seed000_fourbar.yaml"), "--at", text], capsys)
         assert (code, out) == (2, "") and f"{text!r} is not a number" in err, err
+
+
+def test_a_table_written_with_o_that_fails_half_way_leaves_the_old_file(tmp_path: Path) -> None:
+    """Review 18b: ``analyze -o prev.csv`` opened the file for writing (emptying it) and wrote; under a file-size
+    limit it stopped at 10240 bytes mid-row and the old file was gone. It is written in one step, as pictures are:
+    the old file stays, whole, and the line names ``-o``."""
+    import resource
+
+    (tmp_path / "prev.csv").write_text("OLD\n")
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (10240, 10240))  # Python ignores SIGXFSZ: writes fail, EFBIG
+
+    args = ["analyze", str(EXAMPLES / "jansen_leg.yaml"), "--angles", "0:360:0.5", "--format", "csv", "-o", "prev.csv"]
+    script = f"import sys; sys.argv = ['linkagekit', *{args!r}]; from linkagekit.cli import main; main()"
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, check=False,
+        preexec_fn=small_files, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 2 and done.stderr.startswith("linkagekit: error: -o prev.csv: cannot write: ")
+    assert len(done.stderr.splitlines()) == 1
+    assert (tmp_path / "prev.csv").read_text() == "OLD\n"
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+
+
+@pytest.mark.parametrize("command", ["plot", "analyze"])
+def test_output_names_near_and_over_the_limit(command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """Review 18b: a valid 240-character name was refused by ``plot`` (its temporary file's name went over 255), and a
+    300-character one was an internal error (``is_symlink`` raised ENAMETOOLONG). The first is written, the second
+    is one line naming ``-o``, exit 2."""
+    ext = ".png" if command == "plot" else ".csv"
+    ok = "b" * (240 - len(ext)) + ext
+    extra = ["--format", "csv"] if command == "analyze" else []
+    assert main([command, str(EXAMPLES / "seed000_fourbar.yaml"), *extra, "-o", ok]) == 0
+    assert Path(ok).stat().st_size > 0
+    capsys.readouterr()
+    long = "a" * (300 - len(ext)) + ext
+    code, _, err = run([command, str(EXAMPLES / "seed000_fourbar.yaml"), *extra, "-o", long], capsys)
+    assert code == 2 and "cannot write" in err and "internal error" not in err and len(err.splitlines()) == 1

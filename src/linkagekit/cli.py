@@ -854,13 +854,11 @@ def _emit(text: str, out: str | None) -> None:
             sys.stdout.write(text.encode(enc, "replace").decode(enc))
         sys.stdout.flush()
         return
-    try:
-        with open(out, "w", encoding="utf-8") as fh:
-            fh.write(text)
-    except BrokenPipeError:  # `-o FIFO` whose reader has gone: quiet, as on standard output (main)
-        raise
-    except OSError as exc:  # `-o /dev/full`, a full disk: as on standard output (main)
-        raise InputError(f"-o {shorten_path(out, 80)}: cannot write: {exc.strerror or exc}") from None
+    from .files import write_atomic
+
+    # in one step (a failed write leaves the old file, not half of a new one); a FIFO or a device is written in
+    # place, and a reader gone (BrokenPipeError) stays quiet, as on standard output (main)
+    write_atomic(out, text.encode("utf-8"), label=f"-o {shorten_path(out, 80)}")
 
 
 def format_csv(columns: Mapping[str, Any]) -> str:

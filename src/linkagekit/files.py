@@ -35,7 +35,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any, Literal
 
-from .errors import InputError, LinkageError, MechanismFileError, shorten
+from .errors import InputError, LinkageError, MechanismFileError, shorten, shorten_path
 from .model import Mechanism
 
 __all__ = ["dumps", "load", "save"]
@@ -699,6 +699,15 @@ def _dumper_class() -> type[Any]:
 
 #: random bytes in the name of a temporary file of :func:`atomic_output` (twice as many hex digits)
 _TMP_BYTES = 6
+#: the most characters of a file's name its temporary file's name repeats (a name is at most 255 bytes, and the
+#: temporary one adds 18: a valid 240-character name was refused)
+_TMP_STEM = 200
+
+
+def _tmp_stem(name: str) -> str:
+    """The part of a file's ``name`` its temporary file's name repeats: all of it, or its first :data:`_TMP_STEM`
+    characters."""
+    return name[:_TMP_STEM]
 
 
 def stray_temporaries(path: str | Path) -> list[Path]:
@@ -721,7 +730,8 @@ def stray_temporaries(path: str | Path) -> list[Path]:
     p = Path(path)
     found: list[Path] = []
     for q in dict.fromkeys([p, Path(os.path.realpath(p))]):
-        rx = re.compile(rf"^\.{re.escape(q.name)}(?:\.bak)?\.[0-9a-f]{{{2 * _TMP_BYTES}}}\.tmp$")
+        stems = "|".join(re.escape(_tmp_stem(n)) for n in (q.name, q.name + ".bak"))
+        rx = re.compile(rf"^\.(?:{stems})\.[0-9a-f]{{{2 * _TMP_BYTES}}}\.tmp$")
         try:
             names = os.listdir(q.parent)
         except OSError:
@@ -746,6 +756,7 @@ def write_atomic(
     error: type[LinkageError] = InputError,
     like: os.stat_result | None = None,
     before_replace: Callable[[Path], None] | None = None,
+    label: str | None = None,
 ) -> Path:
     """Write ``data`` to ``p`` in one step: a temporary file beside it, written, synced, then :func:`os.replace`.
 
@@ -763,7 +774,7 @@ def write_atomic(
     ``/dev/full``, a FIFO; reached through a followed link too) is written in place: there is
     no file to replace, and a rename would put a regular file where the device was.
 
-    Returns the path replaced; an ``OSError`` becomes ``error`` naming ``p``.
+    Returns the path replaced; an ``OSError`` becomes ``error`` naming ``p`` (or ``label``: ``-o out.csv``).
 
     Examples
     --------
@@ -776,7 +787,7 @@ def write_atomic(
     ...     (d / "m.bak").is_symlink(), (d / "victim").read_text(), (d / "m.bak").read_text()
     (False, 'keep', 'new')
     """
-    with _temporary(Path(p), follow, error, like, before_replace) as (fd, _), open(fd, "wb", closefd=False) as f:
+    with _temporary(Path(p), follow, error, like, before_replace, label) as (fd, _), open(fd, "wb", closefd=False) as f:
         f.write(data)
     return _target(Path(p), follow)
 
@@ -802,6 +813,7 @@ def _temporary(
     error: type[LinkageError],
     like: os.stat_result | None,
     before_replace: Callable[[Path], None] | None = None,
+    label: str | None = None,
 ) -> Iterator[tuple[int, Path]]:
     """A fresh temporary file beside ``p``'s target (its descriptor and name); on success it replaces the target.
 
@@ -812,12 +824,15 @@ def _temporary(
     between, but then only puts a name of theirs in place, which that user could do anyway; nothing
     is ever written through it).  ``before_replace(target)`` runs last, just before the rename.
     """
-    target = _target(p, follow)
+    try:
+        target = _target(p, follow)
+    except OSError as exc:  # a name too long to look up
+        raise error(f"{label or shorten_path(str(p))}: cannot write: {exc.strerror or exc}") from None
     if _is_stream(target):
-        with _in_place(target, error) as fd:
+        with _in_place(target, error, label) as fd:
             yield fd, target
         return
-    tmp = target.with_name(f".{target.name}.{secrets.token_hex(_TMP_BYTES)}.tmp")
+    tmp = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
     flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
     fd, done = -1, False
     try:
@@ -836,7 +851,7 @@ def _temporary(
         if not os.path.samestat(os.lstat(target), os.fstat(fd)):  # swapped between the check and the rename
             raise error(f"{target}: another program replaced its temporary file {tmp.name} as it was renamed")
     except OSError as exc:
-        raise error(f"{target}: cannot write: {exc.strerror or exc}") from None
+        raise error(f"{label or shorten_path(str(target))}: cannot write: {exc.strerror or exc}") from None
     finally:
         if fd >= 0:
             os.close(fd)
@@ -857,7 +872,7 @@ def _is_stream(target: Path) -> bool:
 
 
 @contextlib.contextmanager
-def _in_place(target: Path, error: type[LinkageError]) -> Iterator[int]:
+def _in_place(target: Path, error: type[LinkageError], label: str | None = None) -> Iterator[int]:
     """A descriptor open for writing on the stream ``target`` (:func:`_is_stream`); an ``OSError`` (``/dev/full``:
     no space left on the device) becomes ``error`` naming it, except ``BrokenPipeError`` (a reader gone)."""
     fd = -1
@@ -867,7 +882,7 @@ def _in_place(target: Path, error: type[LinkageError]) -> Iterator[int]:
     except BrokenPipeError:  # a pipe whose reader has gone: the reader's choice, not a fault of the path
         raise
     except OSError as exc:
-        raise error(f"{target}: cannot write: {exc.strerror or exc}") from None
+        raise error(f"{label or shorten_path(str(target))}: cannot write: {exc.strerror or exc}") from None
     finally:
         if fd >= 0:
             os.close(fd)
