@@ -406,3 +406,33 @@ def test_yaml_collections_count_once_against_the_values_limit(tmp_path):
     _bounded_events("[" + ", ".join(["[]"] * 110_000) + "]", "f.yaml")  # 110001 values: fine
     with pytest.raises(lk.MechanismFileError, match=f"more than {MAX_VALUES} values"):
         _bounded_events("[" + ", ".join(["[]"] * 200_000) + "]", "f.yaml")
+
+
+@pytest.mark.parametrize("name", ["seed000_fourbar.yaml", "triad_six_modes.yaml"])
+def test_a_mechanism_a_billionth_of_its_unit_is_refused_and_one_just_above_is_solved(name):
+    """Review 18b: with no least size, a four-bar scaled to 1e-160 m said "assembled" with null positions (the squares
+    of its lengths underflow below 1e-154), and a triad at 1e-200 was an internal error (LinAlgError) in ``analyze``
+    and in the editor. A mechanism spanning less than 1e-9 of its unit is refused in one line naming ``joints``; at
+    1e-8 the positions are the unscaled ones scaled, to 1e-9 of the size."""
+    from linkagekit.errors import MechanismFileError
+
+    d = lk.load(ROOT / "examples" / name).to_dict()
+    d.pop("lengths", None)
+    d["links"] = {k: (v["joints"] if isinstance(v, dict) else v) for k, v in d["links"].items()}
+    base = lk.Mechanism.from_dict(d)
+    size = max(abs(complex(*a) - complex(*b)) for a in d["joints"].values() for b in d["joints"].values())
+    driver = base.drivers[0].name
+    want = lk.analyze(base, {driver: [0.0, 20.0]}, rates=False)
+
+    def scaled(f: float) -> dict:  # type: ignore[type-arg]
+        return {**d, "joints": {k: [f * v[0], f * v[1]] for k, v in d["joints"].items()}}
+
+    with pytest.raises(MechanismFileError, match=r"joints: they span .* less than 1e-09"):
+        lk.Mechanism.from_dict(scaled(1e-160 / size))
+    f = 1e-8 / size
+    got = lk.analyze(lk.Mechanism.from_dict(scaled(f)), {driver: [0.0, 20.0]}, rates=False)
+    assert np.array_equal(got.assembled, want.assembled)
+    for j in base.joint_names:
+        a, b = got.point(j), f * want.point(j)
+        ok = np.isfinite(b)
+        assert np.array_equal(np.isfinite(a), ok) and np.all(np.abs(a[ok] - b[ok]) <= 1e-9 * 1e-8)

@@ -52,6 +52,10 @@ GROUND = "ground"
 #: Relative tolerance on lengths: two joints of a link closer than this (relative to the
 #: mechanism's size) are "at one spot"; given lengths may disagree by this much.
 LENGTH_RTOL = 1e-9
+#: the least a mechanism may span (the largest distance between two of its joints, in its length unit): the
+#: squares of lengths underflow below 1e-154 (a four-bar at 1e-160 said "assembled" with no positions, a triad
+#: at 1e-200 crashed), and nothing built is a billionth of its unit
+MIN_SIZE = 1e-9
 FORMAT = "linkagekit/1"
 
 K = TypeVar("K")
@@ -918,7 +922,14 @@ class _Builder:
         self.spec, self.src = spec, src
         self.joints = {name: complex(x, y) for name, (x, y) in spec.joints.items()}
         #: the mechanism's size, for relative tolerances on lengths
-        self.scale = max((abs(a - b) for a in self.joints.values() for b in self.joints.values()), default=0.0) or 1.0
+        size = max((abs(a - b) for a in self.joints.values() for b in self.joints.values()), default=0.0)
+        if 0.0 < size < MIN_SIZE:
+            raise self.fail(
+                "joints",
+                f"they span {size:.3g} {spec.units.length}, less than {MIN_SIZE:g}: scale the numbers up "
+                "(or write them in a smaller unit)",
+            )
+        self.scale = size or 1.0
         self.by_name: dict[str, Link] = {}
         if GROUND not in spec.links:
             raise self.fail("links", "no link named 'ground' (the fixed frame)")
