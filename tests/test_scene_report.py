@@ -386,3 +386,15 @@ def test_a_link_of_joints_in_line_is_a_bar_and_the_pictures_name_the_ground_pivo
     assert {"A", "B"} <= {t.get_text() for t in ax.texts if t.get_visible()}
     drawn = [p for p in ax.patches if p.get_visible() and np.ptp(p.get_xy(), axis=0).max() > 0]
     assert len([p for p in drawn if 0.3 < p.get_facecolor()[3] < 0.4]) == 2  # the coupler and the ternary
+
+
+@pytest.mark.parametrize("bad", ["x", 3, [1], [[0, 1, 2]], [[0, float("nan")]], [[5, 1]]])
+def test_build_scene_refuses_a_malformed_input_range_with_a_linkage_error(bad) -> None:  # type: ignore[no-untyped-def]
+    """Review 18b: a malformed ``input_range`` raised ValueError or TypeError from inside the scene; it is an
+    InputError naming the argument. An empty one (a mechanism that assembles nowhere) is taken."""
+    import linkagekit as lk
+
+    res = lk.analyze(lk.load(EX / "seed000_fourbar.yaml"), {"crank": np.arange(0, 360, 10.0)})
+    with pytest.raises(lk.InputError, match=r"^input_range: expected a list of \[start, stop\] pairs"):
+        lk.build_scene(res, input_range=bad)
+    assert lk.build_scene(res, input_range=[]).name == res.mechanism.name

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..catalogue import Catalogue, Group, Needs, Owner, input_units
-from ..errors import InputError
+from ..errors import InputError, shorten
 from ..model import CylinderType, Mechanism
 from ..result import Result
 
@@ -612,6 +612,32 @@ def _bounds(mech: Mechanism, z: np.ndarray, sliders: tuple[SceneSlider, ...]) ->
     return (float(x0 - pad), float(y0 - pad), float(x1 + pad), float(y1 + pad))
 
 
+def _checked_range(given: Any) -> list[list[float]] | None:
+    """``input_range`` as a list of finite ``[start, stop]`` pairs (``start <= stop``; none: it assembles nowhere),
+    or None; else InputError.
+
+    >>> _checked_range([[0, 90.5]])
+    [[0.0, 90.5]]
+    >>> _checked_range("x")
+    Traceback (most recent call last):
+    ...
+    linkagekit.errors.InputError: input_range: expected a list of [start, stop] pairs of finite numbers, got 'x'
+    """
+    if given is None:
+        return None
+    try:
+        a = np.asarray(given, dtype=float)
+    except (TypeError, ValueError):
+        a = np.zeros((0, 3))
+    if a.shape == (0,):  # assembles nowhere
+        return []
+    if a.ndim != 2 or a.shape[1] != 2 or not np.all(np.isfinite(a)) or np.any(a[:, 0] > a[:, 1]):
+        raise InputError(
+            f"input_range: expected a list of [start, stop] pairs of finite numbers, got {shorten(repr(given))}"
+        )
+    return [[float(x), float(y)] for x, y in a]
+
+
 def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[float]] | None = None) -> Scene:
     """The scene of one mechanism's solved sweep.
 
@@ -628,9 +654,11 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     Raises
     ------
     InputError
-        For a batch result, or a result with no samples.
+        For a batch result, a result with no samples, or an ``input_range`` that is no list of finite
+        ``[start, stop]`` pairs.
     """
     _check_result(res)
+    input_range = _checked_range(input_range)
     mech = res.mechanism
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
