@@ -6,6 +6,8 @@ bare TypeError/ValueError/KeyError from inside, and never return numbers that br
 mechanism's own constraints.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -117,3 +119,19 @@ def test_file_errors_speak_the_file_format(case):
 def test_a_numpy_whole_number_of_table_points_is_taken():
     """The check added for ``points=0`` refused ``np.int64(2000)``, which worked before (review 16e)."""
     assert lk.reduced(lk.load("examples/motor_fourbar.yaml"), points=np.int64(2000)).period is not None
+
+
+@pytest.mark.parametrize("call", ["analyze", "simulate", "size_flywheel"])
+def test_an_array_quoted_in_an_api_message_stays_on_one_line(call: str) -> None:
+    """Review 18b: ``analyze(branch=array)``, ``simulate(torque=array)`` and ``size_flywheel(cs=array)`` quoted the
+    array's repr over several lines; the value is quoted on one line, shortened, as elsewhere."""
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    bad = np.zeros((3, 2))
+    with pytest.raises(lk.LinkageError) as info:
+        if call == "analyze":
+            lk.analyze(lk.load(examples / "seed000_fourbar.yaml"), {"crank": [0.0]}, branch=bad)
+        elif call == "simulate":
+            lk.simulate(lk.load(examples / "iftomm_a01_pendulum.yaml"), [0, 0.01], torque=bad)
+        else:
+            lk.size_flywheel(lk.load(examples / "motor_fourbar.yaml"), bad, torque=1.0)
+    assert "\n" not in str(info.value) and "got array(" in str(info.value)

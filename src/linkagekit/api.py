@@ -163,7 +163,7 @@ def _choice(value: ArrayLike, names: tuple[str, ...], n: int, what: str, default
             try:
                 arr[names.index(key)] = float(v)
             except (TypeError, ValueError, OverflowError):
-                raise InputError(f"{what}: '{key}' needs a number, got {v!r}") from None
+                raise InputError(f"{what}: '{key}' needs a number, got {shorten(repr(v))}") from None
         return arr
     raw = _real_any(value, what)
     try:
@@ -524,7 +524,7 @@ def analyze_chunks(
         budget = CHUNK_SAMPLES * (8 if options.get("rates") is False else 1)
         designs = max(1, budget // max(n, 1))
     if isinstance(designs, bool) or not isinstance(designs, int | np.integer) or designs < 1:
-        raise InputError(f"designs: a whole number of designs per chunk, at least 1, got {designs!r}")
+        raise InputError(f"designs: a whole number of designs per chunk, at least 1, got {shorten(repr(designs))}")
     for start in range(0, arr.shape[0], designs):
         sl = slice(start, min(start + designs, arr.shape[0]))
         yield sl, analyze(mech, inputs, poses=arr[sl], **options)

@@ -45,7 +45,7 @@ import numpy as np
 from .api import analyze, prepare
 from .branch import along_sweep
 from .checks import beyond_a_turn, input_range
-from .errors import InputError
+from .errors import InputError, shorten
 from .forces import Kinematics, point_motion
 from .model import CylinderType, Driver, Mechanism, SliderType
 from .params import Params
@@ -459,12 +459,12 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
             f"{mech.source}: the reduced model needs exactly one driver, this mechanism has {len(mech.drivers)}"
         )
     if not (isinstance(flywheel, int | float) and math.isfinite(flywheel) and flywheel >= 0):
-        raise InputError(f"flywheel: expected a finite inertia >= 0 (kg*m^2), got {flywheel!r}")
+        raise InputError(f"flywheel: expected a finite inertia >= 0 (kg*m^2), got {shorten(repr(flywheel))}")
     whole = isinstance(points, int | np.integer) and not isinstance(points, bool)
     if not (whole and MIN_TABLE_POINTS <= points <= MAX_TABLE_POINTS):
         raise InputError(
             f"points: expected a whole number of grid intervals, {MIN_TABLE_POINTS} to {MAX_TABLE_POINTS}, "
-            f"got {points!r}"
+            f"got {shorten(repr(points))}"
         )
     md = _model(mech, float(flywheel))
     for turns in (1, 2):  # a branch whose signs come back after two turns only (an odd number of flips in one)
@@ -1273,9 +1273,9 @@ def _number(value: Any, what: str) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"{what}: expected a number, got {value!r}") from None
+        raise InputError(f"{what}: expected a number, got {shorten(repr(value))}") from None
     if not math.isfinite(x):
-        raise InputError(f"{what}: expected a finite number, got {value!r}")
+        raise InputError(f"{what}: expected a finite number, got {shorten(repr(value))}")
     return x
 
 

@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from . import dynamics
 from .dynamics import reduced, torque_laws
-from .errors import InputError, LinkageError
+from .errors import InputError, LinkageError, shorten
 from .model import CrankType, Mechanism
 from .threads import one_blas_thread_with_scipy
 
@@ -613,6 +613,6 @@ def size_flywheel(
     try:
         target = float(cs)
     except (TypeError, ValueError):
-        raise InputError(f"cs (--flywheel CS): expected a number, got {cs!r}") from None
+        raise InputError(f"cs (--flywheel CS): expected a number, got {shorten(repr(cs))}") from None
     (law,) = torque_laws(mech, torque, motor)
     return size_flywheel_reduced(reduced(mech), law, target)

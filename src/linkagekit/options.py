@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from enum import Enum
 
-from .errors import InputError
+from .errors import InputError, shorten
 
 __all__ = ["BranchMode"]
 
@@ -44,4 +44,4 @@ class BranchMode(Enum):
             return cls(value)
         except ValueError:
             choices = " or ".join(repr(w) for w in cls.words())
-            raise InputError(f"branch: expected {choices}, got {value!r}") from None
+            raise InputError(f"branch: expected {choices}, got {shorten(repr(value))}") from None

@@ -272,7 +272,7 @@ class Result:
         """Design ``i`` of a batch as a :class:`Mechanism` (its pose, no given lengths), e.g. to save it."""
         if self.poses is None:
             if isinstance(i, bool) or not isinstance(i, int | np.integer) or i not in (0, -1):
-                raise InputError(f"mechanism_of: this result has one design (0), got {i!r}")
+                raise InputError(f"mechanism_of: this result has one design (0), got {shorten(repr(i))}")
             return self.mechanism
         return self.mechanism.with_pose(self.poses[self._design_index(i)])
 
@@ -281,7 +281,7 @@ class Result:
             raise InputError("design(): this result has no design axis (analyze(..., poses=...) makes one)")
         n = int(self.poses.shape[0])
         if isinstance(i, bool) or not isinstance(i, int | np.integer):
-            raise InputError(f"design: expected a whole number from 0 to {n - 1}, got {i!r}")
+            raise InputError(f"design: expected a whole number from 0 to {n - 1}, got {shorten(repr(i))}")
         if not -n <= i < n:
             raise UnknownNameError(f"design {i}: the batch has {n} designs (0 to {n - 1})")
         return int(i) % n
