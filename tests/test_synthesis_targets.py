@@ -199,7 +199,7 @@ def test_missing_file_and_directory(tmp_path: Path) -> None:
 def test_too_large_file(tmp_path: Path) -> None:
     line = "# " + "c" * 1021 + "\n"  # 1024 bytes
     body = "x,y\n0,0\n1,0\n0,1\n" + line * (MAX_FILE_BYTES // len(line) + 1)
-    assert "10 MB" in expect_error(write(tmp_path, "big.csv", body))
+    assert "10 MiB" in expect_error(write(tmp_path, "big.csv", body))
 
 
 def test_too_many_points(tmp_path: Path) -> None:
@@ -448,3 +448,11 @@ def test_timed_targets_at_one_place_and_one_input_are_fine(tmp_path: Path) -> No
     """The same target twice (one place, one input modulo 360) is no contradiction."""
     t = read_targets(write(tmp_path, "t.csv", "x,y,input\n0,0,0\n1,1,90\n0,0,360\n2,0,180\n"))
     assert len(t) == 4 and t.timed
+
+
+@pytest.mark.parametrize("cell", ["1_0", "\uff11\uff12", "0x10", "1e", "--1"])
+def test_a_target_number_is_a_plain_ascii_number_as_in_a_mechanism_file(tmp_path, cell) -> None:  # type: ignore[no-untyped-def]
+    """Review 18b: Python's ``float`` read ``1_0`` as 10 and fullwidth ``１２`` as 12, which a mechanism file and the
+    command line refuse; each is now 'is not a number', naming the line."""
+    message = expect_error(write(tmp_path, "t.csv", f"x,y\n0,0\n{cell},0\n0,1\n"))
+    assert "line 3: " in message and "is not a number" in message

@@ -373,7 +373,7 @@ def read_targets(path: str | os.PathLike[str], units: str = "m", points: int = 4
     ------
     InputError
         One line that starts with the file name: a missing, empty, binary or too large file
-        (more than 10 MB, more than 100000 points), a bad header or value (naming the line),
+        (more than 10 MiB, more than 100000 points), a bad header or value (naming the line),
         a bad SVG (naming what is wrong), an unknown unit.
 
     Examples
@@ -561,7 +561,7 @@ def _read_text(p: Path, name: str) -> str:
     """
     data = read_regular_file(p, MAX_FILE_BYTES, "target file", lambda message: _error(name, message))
     if len(data) > MAX_FILE_BYTES:
-        raise _error(name, f"more than {MAX_FILE_BYTES} bytes (10 MB), more than a target file may have")
+        raise _error(name, f"more than {MAX_FILE_BYTES} bytes (10 MiB), more than a target file may have")
     if not data.strip():
         raise _error(name, "empty file")
     nul = data.find(b"\x00")
@@ -652,10 +652,10 @@ def _header(cells: list[str], name: str) -> list[str]:
 def _value(cell: str, column: str, number: int, name: str) -> float:
     if not cell:
         raise _error(name, f"line {number}: {column} is empty")
-    try:
-        value = float(cell)
-    except ValueError:
-        raise _error(name, f"line {number}: {_quote(cell)} is not a number") from None
+    text = cell.strip()  # plain ASCII numbers, as a mechanism file's: Python's float() also takes 1_0 and fullwidth
+    if not (_NUMBER.fullmatch(text) or text.lower().lstrip("+-") in ("inf", "infinity", "nan")):
+        raise _error(name, f"line {number}: {_quote(cell)} is not a number")
+    value = float(text)
     if not math.isfinite(value):
         raise _error(name, f"line {number}: {column} is not finite ({shorten(cell)})")
     return value
@@ -663,7 +663,7 @@ def _value(cell: str, column: str, number: int, name: str) -> float:
 
 # ---------------------------------------------------------------------- SVG
 _DECLARATION = re.compile(r"<!\s*(DOCTYPE|ENTITY)", re.IGNORECASE)
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?", re.ASCII)  # ASCII digits only
 _MOST_ARGUMENTS = 7  # an arc command's numbers: no command takes more
 
 
