@@ -398,3 +398,18 @@ def test_build_scene_refuses_a_malformed_input_range_with_a_linkage_error(bad) -
     with pytest.raises(lk.InputError, match=r"^input_range: expected a list of \[start, stop\] pairs"):
         lk.build_scene(res, input_range=bad)
     assert lk.build_scene(res, input_range=[]).name == res.mechanism.name
+
+
+def test_report_refuses_a_sweep_longer_than_a_page_naming_the_option_before_any_work(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """Review 18b: ``report --angles 0:360:0.01`` said '36001 samples, more than a report page holds (10000)',
+    naming neither ``--angles`` nor the file, after the whole analysis. It names the option, before it."""
+    from unittest import mock
+
+    from linkagekit.cli import main
+
+    out = tmp_path / "r.html"
+    with mock.patch("linkagekit.analyze", side_effect=AssertionError("analysed")):
+        code = main(["report", str(EX / "seed000_fourbar.yaml"), "--angles", "0:360:0.01", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("linkagekit: error: --angles: 36001 samples, more than a report page holds")
+    assert not out.exists()

@@ -1479,9 +1479,26 @@ def _report(args: argparse.Namespace) -> int:
 
     _suffix(args.output, (".html", ".htm"))
     mech = lk.load(args.file)
+    _report_samples(mech, args)
     res = _solved(mech, args)
     write_report(res, args.output, source=_source_text(args.file))
     return _stopped(res)
+
+
+def _report_samples(mech: Mechanism, args: argparse.Namespace) -> None:
+    """Refuse, before any work and naming the option (or the file's sweep), more samples than a page holds."""
+    import numpy as np
+
+    from .web.report import MAX_REPORT_SAMPLES
+
+    if _timed(args):
+        n, what = len(_range(args.time, "--time")), "--time"
+    else:
+        inputs = _sweep(mech, args.angles, args.file)
+        n = max((np.size(v) for v in inputs.values()), default=0) if inputs else mech.drivers[0].sweep.count()
+        what = "--angles" if args.angles else f"{shorten_path(args.file, 80)}: the file's sweep"
+    if n > MAX_REPORT_SAMPLES:
+        raise InputError(f"{what}: {n} samples, more than a report page holds ({MAX_REPORT_SAMPLES}): a coarser STEP")
 
 
 def _source_text(path: str) -> str | None:
