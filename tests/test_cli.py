@@ -533,6 +533,20 @@ def test_pivots_and_lengths_take_a_leading_minus_as_a_value(tmp_path, capsys):
     assert (code, err) == (2, "linkagekit: error: --lengths: lengths are not negative\n")
 
 
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="no /proc on this machine")
+def test_an_output_in_a_directory_that_takes_no_new_file_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """Review 18b: ``synthesize -o /proc/x.yaml`` failed only after its whole search (the directory exists); the
+    directory is tried, by creating and removing a temporary file there, before any work."""
+    from unittest import mock
+
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path, "x,y\n0,0\n1,0\n1,1\n0,1\n0.5,1.5\n", "t.csv")
+    with mock.patch("linkagekit.synthesis.run.synthesize", side_effect=AssertionError("searched")):
+        code, _, err = run(["synthesize", "t.csv", "--seconds", "1", "-o", "/proc/x.yaml"], capsys)
+    assert code == 2 and err.startswith("linkagekit: error: -o /proc/x.yaml: cannot write there: ")
+    assert len(err.splitlines()) == 1 and not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+
+
 @pytest.mark.parametrize("command", [["synthesize", "t.csv"], ["plot", "m.yaml"], ["synthesize", "t.csv", "--plot"]])
 def test_an_output_that_is_a_directory_is_refused_before_any_work(tmp_path, capsys, monkeypatch, command):
     # a review: `synthesize ... -o DIR.yaml` ran the whole search (60 s by default) before "cannot write"

@@ -1315,6 +1315,11 @@ def _suffix(path: str, allowed: tuple[str, ...], option: str = "-o") -> None:
         raise InputError(
             f"{option} {shorten_path(path, 80)}: cannot write there: no directory {shorten_path(folder, 80)}"
         )
+    from .files import can_create_beside
+
+    why = can_create_beside(path)
+    if why is not None:  # `-o /proc/x.yaml`: a synthesis failed only after its whole search
+        raise InputError(f"{option} {shorten_path(path, 80)}: cannot write there: {why}")
 
 
 def _sweep(mech: Mechanism, angles: list[str] | None, file: str) -> dict[str, np.ndarray] | None:

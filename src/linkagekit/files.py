@@ -744,6 +744,27 @@ def stray_temporaries(path: str | Path) -> list[Path]:
     return found
 
 
+def can_create_beside(path: str | Path) -> str | None:
+    """Why a file cannot be written at ``path`` (its directory takes no new file: read-only, not ours, ``/proc``), or
+    None: a temporary file of the name :func:`write_atomic` would use is created there exclusively and removed at
+    once. A ``path`` that is a device or a pipe is written in place: nothing is created.
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     can_create_beside(Path(tmp) / "out.yaml")
+    """
+    p = Path(path)
+    try:
+        if _is_stream(_target(p, True)):
+            return None
+        probe = p.with_name(f".{_tmp_stem(p.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600))
+        probe.unlink()
+    except OSError as exc:
+        return str(exc.strerror or exc)
+    return None
+
+
 def _write_atomic(p: Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``p`` in one step (:func:`write_atomic`)."""
     write_atomic(p, text.encode("utf-8"), error=MechanismFileError)
