@@ -302,6 +302,17 @@ def test_angles_count_samples_against_the_limit(text, message):
     assert str(exc.value).startswith(f"--angles: {message}")
 
 
+def test_a_time_range_over_the_limit_points_to_the_api_that_simulates():
+    """Review 18b: ``simulate --time 0:1:1e-6`` suggested lk.analyze_chunks, which does not simulate."""
+    from linkagekit.cli import _range
+    from linkagekit.errors import InputError
+
+    with pytest.raises(InputError, match=r"the Python API \(lk\.simulate\) for more$"):
+        _range("0:1:1e-6", "--time")
+    with pytest.raises(InputError, match=r"the Python API \(lk\.analyze_chunks\) for more$"):
+        _range("0:360:1e-4", "--angles")
+
+
 def test_angles_at_the_limit_are_accepted():
     from linkagekit.cli import MAX_SAMPLES, _range
 

@@ -2435,7 +2435,8 @@ def modes(mech: Mechanism, at: Any = None, mirrors: bool = False) -> Modes:
         what = "sign steps and mirror links" if mm else "sign steps"
         raise InputError(
             f"modes: {k + mm} {what} give 2^{k + mm} combinations, more than modes lists "
-            f"(2^{MAX_MODE_SLOTS}); fix some with analyze(..., signs={{joint: +1 or -1}})"
+            f"(2^{MAX_MODE_SLOTS}); to look at some of them, fix some signs from Python: "
+            "lk.analyze(mech, ..., signs={joint: +1 or -1})"
         )
     combos = all_sign_combinations(k + mm)
     signs, flags = combos[:k], (combos[k:] < 0 if mm else None)

@@ -177,7 +177,8 @@ def _range(text: str, what: str) -> np.ndarray:
         many = f"over {10 * MAX_SAMPLES}" if n is None else str(n)
         raise InputError(
             f"{what}: {many} samples, more than the command line takes ({MAX_SAMPLES}); "
-            "use a coarser STEP, or the Python API (lk.analyze_chunks) for more"
+            f"use a coarser STEP, or the Python API ({'lk.simulate' if what == '--time' else 'lk.analyze_chunks'}) "
+            "for more"
         )
     return stepped(start, stop, step, n)
 
