@@ -356,11 +356,12 @@ def test_a_function_file_records_its_offsets_and_errors_and_they_reproduce_its_m
     command; with those offsets ``analyze`` of the file gives the printed max error (to its 6 digits)."""
     out = tmp_path / "log.yaml"
     args = ["synthesize", str(ROOT / "examples" / "targets" / "log_function.csv"), "--task", "function"]
-    assert main([*args, "--free-offsets", "--seconds", "2", "-o", str(out)]) == 0
+    assert main([*args, "--free-offsets", "--seconds", "2", "--ground-length", "1.23456789", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     mech = lk.load(out)
     text = mech.description
     assert "max error " in text and "error [deg]" in text and "--free-offsets" in text and "--seconds 2" in text
+    assert "--ground-length 1.23456789 " in text and "--restarts " in text and "--generations " in text
     number = r"([-+][\d.e+-]+)"
     exact = rf"^offsets to full precision: crank angle = input {number} deg, output angle = output {number}"
     found = re.search(exact, text, re.M)

@@ -128,5 +128,5 @@ def test_a_refusal_of_the_targets_scale_says_what_is_wrong(tmp_path: Path) -> No
     limit was printed as the limit itself ('magnitude 1e+09 ... at most 1e+09')."""
     with pytest.raises(InputError, match=r"huge\.csv: the targets' diagonal is 1e\+300 m"):
         read_targets(_csv(tmp_path / "huge.csv", np.array([[0.0, 0.0], [1e300, 1.0], [2.0, 0.0]])))
-    with pytest.raises(InputError, match=r"far\.csv: a target coordinate of magnitude 1\.00002e\+09 m"):
-        read_targets(_csv(tmp_path / "far.csv", np.array([[1.00002e9, 0.0], [1.00002e9 - 1, 0.0], [1e9, 1.0]])))
+    with pytest.raises(InputError, match=r"far\.csv: a target coordinate of magnitude 1000000001 m"):
+        read_targets(_csv(tmp_path / "far.csv", np.array([[1000000001.0, 0.0], [1e9 - 1, 0.0], [1e9, 1.0]])))

@@ -1788,13 +1788,13 @@ def _synthesize_auto(args: argparse.Namespace, targets: Any, search: dict[str, A
 
 
 def _percent(x: float) -> str:
-    """A share as a percentage, or what it means where it is not finite (a design that does not assemble at some
-    target, or nowhere over its sweep).
+    """A share as a percentage, or what it means where it is not finite (:class:`~.synthesis.auto.Tried`: a design
+    that breaks a constraint: the assembly over its sweep, a transmission angle, the curve's size, a link's length).
 
     >>> _percent(0.0123), _percent(float("inf"))
-    ('1.23 %', 'does not assemble')
+    ('1.23 %', 'breaks a constraint')
     """
-    return f"{100 * x:.3g} %" if math.isfinite(x) else "does not assemble"
+    return f"{100 * x:.3g} %" if math.isfinite(x) else "breaks a constraint"
 
 
 #: ``synthesize --seconds``' default, and the engine's time budget for ``--task function`` when it is not given
@@ -1840,8 +1840,9 @@ def _synthesize_function(args: argparse.Namespace) -> int:
     )
     fit, mech = out.fit, out.mechanism
     words = [PROG, "synthesize", os.path.basename(args.targets), "--task function", f"--units {args.units}"]
-    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length:g}", f"--seed {engine['seed']}"]
-    words += [f"--seconds {engine['seconds']:g}", f"--min-transmission {engine['min_transmission']:g}"]
+    words += ["--free-offsets"] * args.free_offsets + [f"--ground-length {length!r}", f"--seed {engine['seed']}"]
+    words += [f"--seconds {engine['seconds']!r}", f"--min-transmission {engine['min_transmission']!r}"]
+    words += [f"--restarts {engine['restarts']}", f"--generations {engine['generations']}"]
     mech = dataclasses.replace(mech, description=_function_description(out, args.units, " ".join(words)))
     if fit.valid:
         lk.save(mech, args.output)

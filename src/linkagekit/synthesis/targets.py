@@ -446,7 +446,7 @@ def check_scale(xy: np.ndarray, source: str, unit: str) -> None:
     if size > MAX_COORDINATE or size > MAX_OFFSET * diagonal:
         raise _error(
             source,
-            f"a target coordinate of magnitude {size:.6g} {unit}; synthesis takes at most {MAX_COORDINATE:g} and "
+            f"a target coordinate of magnitude {size:.12g} {unit}; synthesis takes at most {MAX_COORDINATE:g} and "
             f"{MAX_OFFSET:g} target diagonals (move the targets nearer the origin)",
         )
 
