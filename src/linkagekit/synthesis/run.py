@@ -475,8 +475,8 @@ def describe(out: Synthesis, problem: Problem, source: str | None = None) -> str
         f"max error {out.max_error:.6g} {unit} ({100 * out.max_error / out.diagonal:.4g} % of the targets' "
         f"diagonal {out.diagonal:.6g} {unit}), rms {out.rms_error:.6g} {unit}"
     )
-    if out.offset is not None:
-        lines.append(f"input offset {out.offset:.6g} deg (crank angle = input + offset)")
+    if out.offset is not None:  # to full precision: the file's errors are recomputed from it
+        lines.append(f"input offset {out.offset:.17g} deg (crank angle = input + offset)")
     if out.placement is not None:
         a, b = out.placement
         lines.append(f"shape only: the design placed by z -> a z + b, a = {a:.9g}, b = {b:.9g} {unit}")
