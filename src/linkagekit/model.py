@@ -1010,7 +1010,11 @@ class _Builder:
         for i, a in enumerate(js):
             for b in js[i + 1 :]:
                 if abs(self.joints[a] - self.joints[b]) <= LENGTH_RTOL * self.scale:
-                    raise self.fail(key, f"joints '{a}' and '{b}' are at one spot on one link")
+                    raise self.fail(
+                        key,
+                        f"joints '{a}' and '{b}' are at one spot on one link (closer than {LENGTH_RTOL:g} of the "
+                        f"mechanism's size, {self.scale:.3g})",
+                    )
 
     # -------------------------------------------------------------- sliders
     def sliders(self) -> tuple[Slider, ...]:
