@@ -739,14 +739,14 @@ def partial_widths(n: int, m: int) -> list[int]:
     :data:`PARTIAL_WIDTHS`, widened where needed so that its window (from the first target to the last,
     ``((m - 1) w) // m`` steps: :meth:`Projected._refined`) turns the crank at least a quarter of the turn.
 
-    >>> partial_widths(128, 100), partial_widths(128, 10)
-    ([35, 48, 64, 96], [36, 48, 64, 96])
+    >>> partial_widths(128, 100), partial_widths(128, 10), partial_widths(128, 3)
+    ([35, 48, 64, 96], [36, 48, 64, 96], [48, 64, 96])
     >>> [((10 - 1) * w) // 10 * 360 / 128 for w in partial_widths(128, 10)][0]
     90.0
     """
     quarter = -(-n // 4)
     least = -(-m * quarter // (m - 1))
-    return [min(max(int(round(w * n)), least), n) for w in PARTIAL_WIDTHS]
+    return list(dict.fromkeys(min(max(int(round(w * n)), least), n) for w in PARTIAL_WIDTHS))  # each once
 
 
 @dataclass(frozen=True)
