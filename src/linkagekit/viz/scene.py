@@ -654,11 +654,9 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     Raises
     ------
     InputError
-        For a batch result, a result with no samples, or an ``input_range`` that is no list of finite
-        ``[start, stop]`` pairs.
+        For a batch result, a result with no samples, or a malformed ``input_range``.
     """
-    _check_result(res)
-    input_range = _checked_range(input_range)
+    ranges = _checked(res, input_range)
     mech = res.mechanism
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
@@ -671,7 +669,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
     inputs = {d: np.asarray(columns[cat.find(Owner.DRIVER, d, "input").name], float).copy() for d in drivers}
     x_driver = _x_driver(inputs, drivers)
     timed = res.time is not None  # a simulated motion: continuous in time (no breaks), plotted along it
-    breaks, shaded = _gaps_between_samples(res, inputs[drivers[0]], exact_breaks and not timed, input_range)
+    breaks, shaded = _gaps_between_samples(res, inputs[drivers[0]], exact_breaks and not timed, ranges)
     return Scene(
         name=mech.name,
         length_unit=mech.length_unit,
@@ -700,6 +698,12 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         stopped=res.stopped,
         exact_shading=None if shaded is None else tuple(shaded),
     )
+
+
+def _checked(res: Any, input_range: Any) -> list[list[float]] | None:
+    """``input_range`` checked (:func:`_checked_range`) once ``res`` is (:func:`_check_result`)."""
+    _check_result(res)
+    return _checked_range(input_range)
 
 
 def _check_result(res: Any) -> None:
