@@ -2312,9 +2312,9 @@ def _tolerance_lines(out: Any, xy: Any, inputs: Any, unit: str) -> list[str]:
             f"tolerance: with joint {tol.joint} {tol.step:.3g} {unit} off its place ({100 * SHARE:g} % of the "
             "diagonal) the design no longer assembles over its whole sweep"
         ]
-    gain = tol.gain
+    gain, more = tol.gain, f"{tol.worst - tol.exact:.3g} {unit}"
     effect = (
-        f"raises the max error to {tol.worst:.4g} {unit} ({gain:.3g} times the move)"
+        f"raises the max error by {more} ({gain:.3g} times the move) to {tol.worst:.4g} {unit}"
         if gain > 0
         else (f"keeps the max error at most {tol.worst:.4g} {unit}")
     )
