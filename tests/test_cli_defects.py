@@ -403,3 +403,63 @@ def test_output_names_near_and_over_the_limit(command: str, capsys: pytest.Captu
     long = "a" * (300 - len(ext)) + ext
     code, _, err = run([command, str(EXAMPLES / "seed000_fourbar.yaml"), *extra, "-o", long], capsys)
     assert code == 2 and "cannot write" in err and "internal error" not in err and len(err.splitlines()) == 1
+
+
+def test_o_dev_stdout_and_a_directory(tmp_path: Path) -> None:
+    """Review 18d: writing every ``-o`` in one step broke ``-o /dev/stdout`` into a pipe (the link's own target reads
+    ``pipe:[...]``, no path: 'No such file or directory', exit 2), and ``-o .`` was an internal error. The first
+    writes into the pipe, as before; the second is one line, exit 2."""
+    args = ["analyze", str(EXAMPLES / "seed000_fourbar.yaml"), "--angles", "0:360:90", "--format", "csv"]
+    piped = _script([*args, "-o", "/dev/stdout"], subprocess.PIPE)
+    assert piped.returncode == 0 and piped.stdout.startswith("input:crank,") and len(piped.stdout.splitlines()) == 6
+    here = _script([*args, "-o", "."], subprocess.PIPE)
+    assert here.returncode == 2 and here.stderr == "linkagekit: error: -o .: cannot write: it is a directory\n"
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="no /proc on this machine")
+def test_an_output_link_is_tried_where_it_points(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Review 18d: the directory tried before any work was the link's own, not its target's: a link here to
+    ``/proc/x.png`` passed and failed only at the end. It is refused first, naming ``-o``."""
+    (tmp_path / "out.png").symlink_to("/proc/x.png")
+    code, _, err = run(["plot", str(EXAMPLES / "seed000_fourbar.yaml"), "-o", "out.png"], capsys)
+    assert code == 2 and err.startswith("linkagekit: error: -o out.png: cannot write there: ")
+
+
+def test_stray_temporaries_of_a_relative_path_are_listed_once(tmp_path: Path) -> None:
+    """Review 18d: with a relative path each stray temporary was listed twice (once by the path, once by its real
+    path); and the temporaries of two long names that start alike are told apart."""
+    from linkagekit.files import _tmp_stem, stray_temporaries
+
+    (tmp_path / ".m.yaml.0123456789ab.tmp").write_text("")
+    assert [p.name for p in stray_temporaries("m.yaml")] == [".m.yaml.0123456789ab.tmp"]
+    a, b = "a" * 230 + ".csv", "a" * 229 + "b.csv"
+    (tmp_path / f".{_tmp_stem(b)}.0123456789ab.tmp").write_text("")
+    assert stray_temporaries(a) == [] and len(stray_temporaries(b)) == 1
+
+
+def test_a_file_we_may_not_write_is_refused_and_one_in_a_closed_directory_written_in_place(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Review 18d: in one step, a read-only output (mode 444) was replaced where ``open`` refused it, and a writable
+    file in a directory that takes no new file was refused where ``open`` wrote it. Both behave as ``open`` again.
+    (As root every file is writable: what the system says is stood in for.)"""
+    from linkagekit import files
+    from linkagekit.errors import InputError
+
+    out = tmp_path / "t.csv"
+    out.write_text("OLD\n")
+    real_access = os.access
+    monkeypatch.setattr(files.os, "access", lambda p, m: False if Path(p) == out else real_access(p, m))
+    with pytest.raises(InputError, match="cannot write: Permission denied"):
+        files.write_atomic(out, b"NEW\n")
+    assert out.read_text() == "OLD\n"
+    monkeypatch.setattr(files.os, "access", real_access)
+
+    def closed(tmp: Path, model: object) -> int:
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(files, "_create", closed)
+    files.write_atomic(out, b"NEWER\n")
+    assert out.read_text() == "NEWER\n" and sorted(p.name for p in tmp_path.iterdir()) == ["t.csv"]
+    with pytest.raises(InputError, match="cannot write: Permission denied"):
+        files.write_atomic(tmp_path / "new.csv", b"x")  # no file to write in place

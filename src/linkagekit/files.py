@@ -24,6 +24,7 @@ True
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import re
@@ -705,9 +706,15 @@ _TMP_STEM = 200
 
 
 def _tmp_stem(name: str) -> str:
-    """The part of a file's ``name`` its temporary file's name repeats: all of it, or its first :data:`_TMP_STEM`
-    characters."""
-    return name[:_TMP_STEM]
+    """The part of a file's ``name`` its temporary file's name repeats: all of it, or, beyond :data:`_TMP_STEM`
+    characters, its start and a digest of the whole (so that two long names that start alike keep apart).
+
+    >>> _tmp_stem("m.yaml"), len(_tmp_stem("a" * 240)), _tmp_stem("a" * 240) == _tmp_stem("a" * 239 + "b")
+    ('m.yaml', 200, False)
+    """
+    if len(name) <= _TMP_STEM:
+        return name
+    return name[: _TMP_STEM - 9] + "~" + hashlib.sha256(name.encode("utf-8", "surrogateescape")).hexdigest()[:8]
 
 
 def stray_temporaries(path: str | Path) -> list[Path]:
@@ -739,7 +746,8 @@ def stray_temporaries(path: str | Path) -> list[Path]:
         for name in names:
             cand = q.parent / name
             with contextlib.suppress(OSError):
-                if rx.match(name) and stat.S_ISREG(os.lstat(cand).st_mode) and cand not in found:
+                same = any(os.path.samefile(cand, f) for f in found)
+                if rx.match(name) and stat.S_ISREG(os.lstat(cand).st_mode) and not same:
                     found.append(cand)
     return found
 
@@ -755,9 +763,12 @@ def can_create_beside(path: str | Path) -> str | None:
     """
     p = Path(path)
     try:
-        if _is_stream(_target(p, True)):
-            return None
-        probe = p.with_name(f".{_tmp_stem(p.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
+        target = _target(p, True)
+        if _stream(p, target, True) is not None or os.path.isdir(target):
+            return None  # written in place; a directory is said so by the caller
+        if _old_stat(target) is not None and os.access(target, os.W_OK):
+            return None  # replaced, or written in place where its directory takes no new file
+        probe = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
         os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600))
         probe.unlink()
     except OSError as exc:
@@ -844,41 +855,89 @@ def _temporary(
     checked again after the rename: another user who can write the directory may still swap it in
     between, but then only puts a name of theirs in place, which that user could do anyway; nothing
     is ever written through it).  ``before_replace(target)`` runs last, just before the rename.
+    A stream (:func:`_stream`) is written in place; so is a file we may write in a directory that
+    takes no new file (not in one step then, as ``open`` would); a file we may not write is refused.
     """
+    name = label or shorten_path(str(p))
     try:
         target = _target(p, follow)
+        stream = _stream(p, target, follow)
     except OSError as exc:  # a name too long to look up
-        raise error(f"{label or shorten_path(str(p))}: cannot write: {exc.strerror or exc}") from None
-    if _is_stream(target):
-        with _in_place(target, error, label) as fd:
+        raise error(f"{name}: cannot write: {exc.strerror or exc}") from None
+    if stream is not None:
+        with _in_place(stream, error, label) as fd:
+            yield fd, stream
+        return
+    if not target.name or target.name in (".", "..") or os.path.isdir(target):
+        raise error(f"{name}: cannot write: it is a directory")
+    model = like if like is not None else _old_stat(target)
+    if _old_stat(target) is not None and not os.access(target, os.W_OK):
+        raise error(f"{name}: cannot write: Permission denied")
+    tmp = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
+    try:
+        fd = _create(tmp, model)
+    except PermissionError as exc:
+        if _old_stat(target) is None:
+            raise error(f"{name}: cannot write: {exc.strerror or exc}") from None
+        with _in_place(target, error, label, truncate=True) as fd:  # the directory takes no new file
             yield fd, target
         return
-    tmp = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
-    flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
-    fd, done = -1, False
+    except OSError as exc:
+        raise error(f"{name}: cannot write: {exc.strerror or exc}") from None
+    done = False
     try:
-        model = like if like is not None else _old_stat(target)
-        fd = os.open(tmp, flags, 0o600 if model is not None else 0o666)  # no model: the umask applies, as for open()
         yield fd, tmp
-        if model is not None:
-            _take_owner_and_mode(fd, model)
-        os.fsync(fd)
-        if not os.path.samestat(os.lstat(tmp), os.fstat(fd)):
-            raise error(f"{target}: not written: its temporary file {tmp.name} was replaced by another program")
-        if before_replace is not None:
-            before_replace(target)
-        os.replace(tmp, target)
+        _commit(fd, tmp, target, model, error, before_replace)
         done = True
-        if not os.path.samestat(os.lstat(target), os.fstat(fd)):  # swapped between the check and the rename
-            raise error(f"{target}: another program replaced its temporary file {tmp.name} as it was renamed")
     except OSError as exc:
         raise error(f"{label or shorten_path(str(target))}: cannot write: {exc.strerror or exc}") from None
     finally:
-        if fd >= 0:
-            os.close(fd)
+        os.close(fd)
         if not done:
             with contextlib.suppress(OSError):
                 tmp.unlink()
+
+
+def _create(tmp: Path, model: os.stat_result | None) -> int:
+    """The temporary file ``tmp``, created exclusively, never through a link (0600 with a model, else the umask's)."""
+    flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    return os.open(tmp, flags, 0o600 if model is not None else 0o666)  # no model: the umask applies, as for open()
+
+
+def _commit(
+    fd: int,
+    tmp: Path,
+    target: Path,
+    model: os.stat_result | None,
+    error: type[LinkageError],
+    before_replace: Callable[[Path], None] | None,
+) -> None:
+    """The written temporary file ``tmp`` (open as ``fd``) given the model's owner and mode, synced, checked to be
+    still ours, and renamed over ``target`` (:func:`_temporary`)."""
+    if model is not None:
+        _take_owner_and_mode(fd, model)
+    os.fsync(fd)
+    if not os.path.samestat(os.lstat(tmp), os.fstat(fd)):
+        raise error(f"{target}: not written: its temporary file {tmp.name} was replaced by another program")
+    if before_replace is not None:
+        before_replace(target)
+    os.replace(tmp, target)
+    if not os.path.samestat(os.lstat(target), os.fstat(fd)):  # swapped between the check and the rename
+        raise error(f"{target}: another program replaced its temporary file {tmp.name} as it was renamed")
+
+
+def _stream(p: Path, target: Path, follow: bool) -> Path | None:
+    """The path to write in place when ``p`` is a stream (:func:`_is_stream`): ``p`` itself where a followed link
+    leads to one (``/dev/stdout`` is a link to ``/proc/self/fd/1``, whose own target reads ``pipe:[...]``, no
+    path), else ``target`` when it is one; None for a file to replace."""
+    if follow:
+        try:
+            mode = os.stat(p).st_mode
+        except OSError:
+            mode = 0
+        if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode):
+            return p
+    return target if _is_stream(target) else None
 
 
 def _is_stream(target: Path) -> bool:
@@ -893,12 +952,15 @@ def _is_stream(target: Path) -> bool:
 
 
 @contextlib.contextmanager
-def _in_place(target: Path, error: type[LinkageError], label: str | None = None) -> Iterator[int]:
-    """A descriptor open for writing on the stream ``target`` (:func:`_is_stream`); an ``OSError`` (``/dev/full``:
-    no space left on the device) becomes ``error`` naming it, except ``BrokenPipeError`` (a reader gone)."""
+def _in_place(
+    target: Path, error: type[LinkageError], label: str | None = None, truncate: bool = False
+) -> Iterator[int]:
+    """A descriptor open for writing on the stream ``target`` (:func:`_is_stream`; ``truncate``: a regular file,
+    emptied first); an ``OSError`` (``/dev/full``: no space left on the device) becomes ``error`` naming it, except
+    ``BrokenPipeError`` (a reader gone)."""
     fd = -1
     try:
-        fd = os.open(target, os.O_WRONLY | getattr(os, "O_CLOEXEC", 0))
+        fd = os.open(target, os.O_WRONLY | (os.O_TRUNC if truncate else 0) | getattr(os, "O_CLOEXEC", 0))
         yield fd
     except BrokenPipeError:  # a pipe whose reader has gone: the reader's choice, not a fault of the path
         raise
