@@ -420,11 +420,12 @@ def test_yaml_collections_count_once_against_the_values_limit(tmp_path):
 
 
 @pytest.mark.parametrize("name", ["seed000_fourbar.yaml", "triad_six_modes.yaml"])
-def test_a_mechanism_a_billionth_of_its_unit_is_refused_and_one_just_above_is_solved(name):
+def test_a_mechanism_below_1e30_of_its_unit_is_refused_and_one_just_above_is_solved(name):
     """Review 18b: with no least size, a four-bar scaled to 1e-160 m said "assembled" with null positions (the squares
     of its lengths underflow below 1e-154), and a triad at 1e-200 was an internal error (LinAlgError) in ``analyze``
-    and in the editor. A mechanism spanning less than 1e-9 of its unit is refused in one line naming ``joints``; at
-    1e-8 the positions are the unscaled ones scaled, to 1e-9 of the size."""
+    and in the editor. A mechanism spanning less than 1e-30 of its unit is refused in one line naming ``joints``; at
+    1e-29 (and at 1e-12, review 18d: a slider's joints 1e-12 apart were refused at a first bound of 1e-9) the
+    positions are the unscaled ones scaled, to 1e-9 of the size."""
     from linkagekit.errors import MechanismFileError
 
     d = lk.load(ROOT / "examples" / name).to_dict()
@@ -438,12 +439,13 @@ def test_a_mechanism_a_billionth_of_its_unit_is_refused_and_one_just_above_is_so
     def scaled(f: float) -> dict:  # type: ignore[type-arg]
         return {**d, "joints": {k: [f * v[0], f * v[1]] for k, v in d["joints"].items()}}
 
-    with pytest.raises(MechanismFileError, match=r"joints: they span .* less than 1e-09"):
+    with pytest.raises(MechanismFileError, match=r"joints: they span .* less than 1e-30 (mm|cm|m|in): scale"):
         lk.Mechanism.from_dict(scaled(1e-160 / size))
-    f = 1e-8 / size
-    got = lk.analyze(lk.Mechanism.from_dict(scaled(f)), {driver: [0.0, 20.0]}, rates=False)
-    assert np.array_equal(got.assembled, want.assembled)
-    for j in base.joint_names:
-        a, b = got.point(j), f * want.point(j)
-        ok = np.isfinite(b)
-        assert np.array_equal(np.isfinite(a), ok) and np.all(np.abs(a[ok] - b[ok]) <= 1e-9 * 1e-8)
+    for small in (1e-29, 1e-12):
+        f = small / size
+        got = lk.analyze(lk.Mechanism.from_dict(scaled(f)), {driver: [0.0, 20.0]}, rates=False)
+        assert np.array_equal(got.assembled, want.assembled)
+        for j in base.joint_names:
+            a, b = got.point(j), f * want.point(j)
+            ok = np.isfinite(b)
+            assert np.array_equal(np.isfinite(a), ok) and np.all(np.abs(a[ok] - b[ok]) <= 1e-9 * small)

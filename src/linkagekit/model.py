@@ -54,8 +54,9 @@ GROUND = "ground"
 LENGTH_RTOL = 1e-9
 #: the least a mechanism may span (the largest distance between two of its joints, in its length unit): the
 #: squares of lengths underflow below 1e-154 (a four-bar at 1e-160 said "assembled" with no positions, a triad
-#: at 1e-200 crashed), and nothing built is a billionth of its unit
-MIN_SIZE = 1e-9
+#: at 1e-200 crashed) and a numerical group's fourth powers below 1e-77; at 1e-40 the examples solve as at full
+#: size to 1e-15, and a file with joints 1e-12 apart (a slider's, its stroke 0.2) is solved
+MIN_SIZE = 1e-30
 FORMAT = "linkagekit/1"
 
 K = TypeVar("K")
@@ -926,8 +927,8 @@ class _Builder:
         if 0.0 < size < MIN_SIZE:
             raise self.fail(
                 "joints",
-                f"they span {size:.3g} {spec.units.length}, less than {MIN_SIZE:g}: scale the numbers up "
-                "(or write them in a smaller unit)",
+                f"they span {size:.3g} {spec.units.length}, less than {MIN_SIZE:g} {spec.units.length}: scale the "
+                "numbers up",
             )
         self.scale = size or 1.0
         self.by_name: dict[str, Link] = {}
