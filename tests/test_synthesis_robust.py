@@ -461,3 +461,34 @@ def test_the_progress_shows_the_atlas_answer_until_a_search_beats_it() -> None:
     assert shown.best(Progress(0, 9, 1e-2, 0.23, 900, 1.0)).endswith("(the atlas's)")
     assert shown.best(Progress(1, 9, 1e-5, 0.004, 900, 2.0)) == "max error 0.4 % of the targets' diagonal"
     assert shown.best(atlas) == "max error 1.03 % of the targets' diagonal"
+
+
+def test_a_templates_numerical_group_that_does_not_assemble_over_the_sweep_is_infeasible() -> None:
+    """Review 18d: ``synthesize --topology TEMPLATE --partial`` with a class-3 triad wrote a design over a sweep where
+    it assembled at 64 of 361 inputs: a numerical group reports no step margin, so its unassembled samples were no
+    violation. The design written then (its joints and sweep below) is now measured infeasible, by the share of
+    the sweep where a joint is not placed."""
+    from linkagekit.synthesis.objective import check
+    from linkagekit.synthesis.run import make_problem
+
+    tri = lk.load(Path(__file__).resolve().parents[1] / "examples" / "triad_six_modes.yaml").to_dict()
+    J = {k: complex(*v) for k, v in tri["joints"].items()}
+    P = (J["J1"] + J["J2"] + J["J3"]) / 3 + 2j
+    tri["joints"]["P"], tri["links"]["tern"] = [P.real, P.imag], ["J1", "J2", "J3", "P"]
+    written = {
+        "O": [-33.48761123376625, 53.81797321574405], "A": [47.19671294770295, 33.23409235933757],
+        "B0": [-29.720406305400537, 40.04041201047386], "C0": [-14.610001567084378, 32.47974881652401],
+        "J1": [0.9762356748484587, 42.29523374901305], "J2": [-45.057094065233414, -20.193394306061037],
+        "J3": [2.096684666715276, -7.05353566592807], "P": [14.064410002810703, 6.479569517453977],
+    }  # fmt: skip
+    start, stop = -35.68705190850264, 85.84212254571678
+    mech = lk.Mechanism.from_dict({**tri, "joints": written})
+    res = lk.analyze(mech, {"crank": np.linspace(start, stop, 361)}, rates=False)
+    assert 0.1 < res.assembled.mean() < 0.3  # as written: it does not assemble over its sweep
+    targets = res.xy("P")[res.assembled][::5][:10]
+    problem = make_problem(targets, lk.Mechanism.from_dict(tri), None, "mm", partial=True)
+    x = np.concatenate([written[j] for j in problem.space.free])
+    q0 = float(np.degrees(lk.api.prepare(mech).pose_inputs[0][0]))
+    f, span = (q0 - start) / (stop - start), np.radians(stop - start)
+    e = check(problem, np.concatenate([x, [f, span]])[None])
+    assert e.violation[0] > 0.5

@@ -426,6 +426,10 @@ def _feasibility(
     sp = problem.space
     short = np.nan_to_num(np.maximum(-margins, 0.0), nan=0.0)
     violation = short.sum(axis=0).mean(axis=-1) if short.size else np.zeros(z.shape[1])
+    # a sample no step's margin flags but where a joint is not placed (a numerical group reports no margin): its
+    # share of the sweep (a template's triad was written over a sweep where it assembled at 64 of 361 inputs)
+    flagged = np.any(short > 0, axis=0) if short.size else np.zeros(z.shape[1:], bool)
+    violation = violation + np.mean(~np.all(np.isfinite(z), axis=0) & ~flagged, axis=-1)
     violation = np.where(params.valid, violation, violation + 1.0)
     cos_lim = np.cos(np.radians(transmission_limit(problem.min_transmission, margin)))
     worst_cos = np.zeros(z.shape[1])
