@@ -449,3 +449,15 @@ def test_a_mechanism_below_1e30_of_its_unit_is_refused_and_one_just_above_is_sol
             a, b = got.point(j), f * want.point(j)
             ok = np.isfinite(b)
             assert np.array_equal(np.isfinite(a), ok) and np.all(np.abs(a[ok] - b[ok]) <= 1e-9 * small)
+
+
+def test_a_batch_design_too_small_to_solve_is_flagged_not_garbage():
+    """Review 18d: ``lk.analyze(poses=...)`` with a design at 1e-160 said "assembled" with NaN positions (a file that
+    small is refused); such a design of a batch is flagged as not assembling, the others solved as alone."""
+    d = lk.load(ROOT / "examples" / "seed000_fourbar.yaml").to_dict()
+    d["links"] = {k: (v["joints"] if isinstance(v, dict) else v) for k, v in d["links"].items()}
+    mech = lk.Mechanism.from_dict(d)
+    p = mech.pose_array()
+    res = lk.analyze(mech, {"crank": [0.0, 30.0]}, poses=np.stack([p, p * 1e-160, p * 1e-25]), rates=False)
+    assert res.assembled.tolist() == [[True, True], [False, False], [True, True]]
+    assert np.all(np.isnan(res.point("D")[1])) and np.allclose(res.point("D")[2], 1e-25 * res.point("D")[0])

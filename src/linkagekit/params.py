@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any, assert_never
 import numpy as np
 
 from .errors import InputError
-from .model import CrankType, CylinderType, SliderType
+from .model import MIN_SIZE, CrankType, CylinderType, SliderType
 from .plan import Plan, make_plan
 from .steps import Nums, is_sign_step
 
@@ -252,10 +252,11 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
     if poses is None:
         valid = np.ones(1, bool)
     else:
-        # a design is valid when no two joints of one link coincide (relative to the design's size)
+        # a design is valid when no two joints of one link coincide (relative to the design's size), and it is not
+        # too small to solve (a file's least size: at 1e-160 it said "assembled" with no positions)
         scale = np.max(np.abs(zpose - zpose.mean(axis=0)), axis=0)[:, 0]  # (D,)
         ia, ib = _link_pairs(mech, plan.joint_names)
-        valid = np.all(np.abs(zpose[ia, :, 0] - zpose[ib, :, 0]) > 1e-9 * scale, axis=0)
+        valid = np.all(np.abs(zpose[ia, :, 0] - zpose[ib, :, 0]) > 1e-9 * scale, axis=0) & (scale >= MIN_SIZE / 2)
     bases = {}
     for ln in mech.links:
         if len(ln.joints) >= 2:

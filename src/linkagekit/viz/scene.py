@@ -621,7 +621,7 @@ def _checked_range(given: Any) -> list[list[float]] | None:
     >>> _checked_range("x")
     Traceback (most recent call last):
     ...
-    linkagekit.errors.InputError: input_range: expected a list of [start, stop] pairs of finite numbers, got 'x'
+    linkagekit.errors.InputError: input_range: expected a list of [start, stop] pairs of finite numbers, start <= ...
     """
     if given is None:
         return None
@@ -633,7 +633,8 @@ def _checked_range(given: Any) -> list[list[float]] | None:
         return []
     if a.ndim != 2 or a.shape[1] != 2 or not np.all(np.isfinite(a)) or np.any(a[:, 0] > a[:, 1]):
         raise InputError(
-            f"input_range: expected a list of [start, stop] pairs of finite numbers, got {shorten(repr(given))}"
+            "input_range: expected a list of [start, stop] pairs of finite numbers, start <= stop, got "
+            + shorten(repr(given))
         )
     return [[float(x), float(y)] for x, y in a]
 
