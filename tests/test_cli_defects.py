@@ -440,9 +440,12 @@ def test_stray_temporaries_of_a_relative_path_are_listed_once(tmp_path: Path) ->
 def test_a_file_we_may_not_write_is_refused_and_one_in_a_closed_directory_written_in_place(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Review 18d: in one step, a read-only output (mode 444) was replaced where ``open`` refused it, and a writable
-    file in a directory that takes no new file was refused where ``open`` wrote it. Both behave as ``open`` again.
-    (As root every file is writable: what the system says is stood in for.)"""
+    """Review 18d: in one step, a read-only table output (mode 444) was replaced where ``open`` refused it, and a
+    writable one in a directory that takes no new file was refused where ``open`` wrote it: a table (``like_open``,
+    as ``-o`` of analyze writes it) behaves as ``open`` again. Everything else is only ever written in one step
+    (review 18e: the editor's save, written in place, skipped its check that nobody changed the file, and a Ctrl-C
+    in a picture's render left it cut off): there the closed directory is refused and the old file stays. (As root
+    every file is writable: what the system says is stood in for.)"""
     from linkagekit import files
     from linkagekit.errors import InputError
 
@@ -451,7 +454,7 @@ def test_a_file_we_may_not_write_is_refused_and_one_in_a_closed_directory_writte
     real_access = os.access
     monkeypatch.setattr(files.os, "access", lambda p, m: False if Path(p) == out else real_access(p, m))
     with pytest.raises(InputError, match="cannot write: Permission denied"):
-        files.write_atomic(out, b"NEW\n")
+        files.write_atomic(out, b"NEW\n", like_open=True)
     assert out.read_text() == "OLD\n"
     monkeypatch.setattr(files.os, "access", real_access)
 
@@ -459,7 +462,21 @@ def test_a_file_we_may_not_write_is_refused_and_one_in_a_closed_directory_writte
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr(files, "_create", closed)
-    files.write_atomic(out, b"NEWER\n")
+    with pytest.raises(InputError, match="cannot write: Permission denied"):
+        files.write_atomic(out, b"NEWER\n")  # in one step or not at all
+    assert out.read_text() == "OLD\n"
+    files.write_atomic(out, b"NEWER\n", like_open=True)
     assert out.read_text() == "NEWER\n" and sorted(p.name for p in tmp_path.iterdir()) == ["t.csv"]
     with pytest.raises(InputError, match="cannot write: Permission denied"):
-        files.write_atomic(tmp_path / "new.csv", b"x")  # no file to write in place
+        files.write_atomic(tmp_path / "new.csv", b"x", like_open=True)  # no file to write in place
+
+
+def test_a_long_name_in_multibyte_characters_is_written(tmp_path: Path) -> None:
+    """Review 18e: the temporary file's name was cut by characters, not bytes: a valid 248-byte name of 81 CJK
+    characters could not be written ('File name too long')."""
+    from linkagekit.files import _tmp_stem, write_atomic
+
+    name = "\u6a5f" * 81 + ".yaml"
+    assert len(name.encode()) == 248 and len(_tmp_stem(name).encode()) <= 200
+    write_atomic(tmp_path / name, b"x")
+    assert (tmp_path / name).read_bytes() == b"x" and len(list(tmp_path.iterdir())) == 1

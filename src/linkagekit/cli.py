@@ -859,7 +859,7 @@ def _emit(text: str, out: str | None) -> None:
 
     # in one step (a failed write leaves the old file, not half of a new one); a FIFO or a device is written in
     # place, and a reader gone (BrokenPipeError) stays quiet, as on standard output (main)
-    write_atomic(out, text.encode("utf-8"), label=f"-o {shorten_path(out, 80)}")
+    write_atomic(out, text.encode("utf-8"), label=f"-o {shorten_path(out, 80)}", like_open=True)
 
 
 def format_csv(columns: Mapping[str, Any]) -> str:

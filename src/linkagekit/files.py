@@ -707,14 +707,15 @@ _TMP_STEM = 200
 
 def _tmp_stem(name: str) -> str:
     """The part of a file's ``name`` its temporary file's name repeats: all of it, or, beyond :data:`_TMP_STEM`
-    characters, its start and a digest of the whole (so that two long names that start alike keep apart).
+    bytes (UTF-8), its start and a digest of the whole (so that two long names that start alike keep apart).
 
     >>> _tmp_stem("m.yaml"), len(_tmp_stem("a" * 240)), _tmp_stem("a" * 240) == _tmp_stem("a" * 239 + "b")
     ('m.yaml', 200, False)
     """
-    if len(name) <= _TMP_STEM:
+    raw = name.encode("utf-8", "surrogateescape")  # a name's limit is in bytes
+    if len(raw) <= _TMP_STEM:
         return name
-    return name[: _TMP_STEM - 9] + "~" + hashlib.sha256(name.encode("utf-8", "surrogateescape")).hexdigest()[:8]
+    return raw[: _TMP_STEM - 9].decode("utf-8", "ignore") + "~" + hashlib.sha256(raw).hexdigest()[:8]
 
 
 def stray_temporaries(path: str | Path) -> list[Path]:
@@ -766,8 +767,6 @@ def can_create_beside(path: str | Path) -> str | None:
         target = _target(p, True)
         if _stream(p, target, True) is not None or os.path.isdir(target):
             return None  # written in place; a directory is said so by the caller
-        if _old_stat(target) is not None and os.access(target, os.W_OK):
-            return None  # replaced, or written in place where its directory takes no new file
         probe = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
         os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600))
         probe.unlink()
@@ -789,6 +788,7 @@ def write_atomic(
     like: os.stat_result | None = None,
     before_replace: Callable[[Path], None] | None = None,
     label: str | None = None,
+    like_open: bool = False,
 ) -> Path:
     """Write ``data`` to ``p`` in one step: a temporary file beside it, written, synced, then :func:`os.replace`.
 
@@ -806,6 +806,9 @@ def write_atomic(
     ``/dev/full``, a FIFO; reached through a followed link too) is written in place: there is
     no file to replace, and a rename would put a regular file where the device was.
 
+    ``like_open`` (a command's table output, which ``open`` wrote before): a file we may not write is refused, and
+    one we may write in a directory that takes no new file is written in place (not in one step), as ``open`` does.
+
     Returns the path replaced; an ``OSError`` becomes ``error`` naming ``p`` (or ``label``: ``-o out.csv``).
 
     Examples
@@ -819,7 +822,10 @@ def write_atomic(
     ...     (d / "m.bak").is_symlink(), (d / "victim").read_text(), (d / "m.bak").read_text()
     (False, 'keep', 'new')
     """
-    with _temporary(Path(p), follow, error, like, before_replace, label) as (fd, _), open(fd, "wb", closefd=False) as f:
+    with (
+        _temporary(Path(p), follow, error, like, before_replace, label, like_open) as (fd, _),
+        open(fd, "wb", closefd=False) as f,
+    ):
         f.write(data)
     return _target(Path(p), follow)
 
@@ -846,6 +852,7 @@ def _temporary(
     like: os.stat_result | None,
     before_replace: Callable[[Path], None] | None = None,
     label: str | None = None,
+    like_open: bool = False,
 ) -> Iterator[tuple[int, Path]]:
     """A fresh temporary file beside ``p``'s target (its descriptor and name); on success it replaces the target.
 
@@ -855,8 +862,9 @@ def _temporary(
     checked again after the rename: another user who can write the directory may still swap it in
     between, but then only puts a name of theirs in place, which that user could do anyway; nothing
     is ever written through it).  ``before_replace(target)`` runs last, just before the rename.
-    A stream (:func:`_stream`) is written in place; so is a file we may write in a directory that
-    takes no new file (not in one step then, as ``open`` would); a file we may not write is refused.
+    A stream (:func:`_stream`) is written in place; with ``like_open`` so is a file we may write in a
+    directory that takes no new file (not in one step then, as ``open`` would), and a file we may not
+    write is refused.
     """
     name = label or shorten_path(str(p))
     try:
@@ -871,13 +879,13 @@ def _temporary(
     if not target.name or target.name in (".", "..") or os.path.isdir(target):
         raise error(f"{name}: cannot write: it is a directory")
     model = like if like is not None else _old_stat(target)
-    if _old_stat(target) is not None and not os.access(target, os.W_OK):
+    if like_open and _old_stat(target) is not None and not os.access(target, os.W_OK):
         raise error(f"{name}: cannot write: Permission denied")
     tmp = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
     try:
         fd = _create(tmp, model)
     except PermissionError as exc:
-        if _old_stat(target) is None:
+        if not like_open or _old_stat(target) is None:
             raise error(f"{name}: cannot write: {exc.strerror or exc}") from None
         with _in_place(target, error, label, truncate=True) as fd:  # the directory takes no new file
             yield fd, target

@@ -256,7 +256,9 @@ def compile(mech: Mechanism, poses: np.ndarray | None = None, plan: Plan | None 
         # too small to solve (a file's least size: at 1e-160 it said "assembled" with no positions)
         scale = np.max(np.abs(zpose - zpose.mean(axis=0)), axis=0)[:, 0]  # (D,)
         ia, ib = _link_pairs(mech, plan.joint_names)
-        valid = np.all(np.abs(zpose[ia, :, 0] - zpose[ib, :, 0]) > 1e-9 * scale, axis=0) & (scale >= MIN_SIZE / 2)
+        valid = np.all(np.abs(zpose[ia, :, 0] - zpose[ib, :, 0]) > 1e-9 * scale, axis=0) & (
+            scale >= MIN_SIZE / 2 * (1 - 1e-9)
+        )
     bases = {}
     for ln in mech.links:
         if len(ln.joints) >= 2:

@@ -429,7 +429,8 @@ def _feasibility(
     # a sample no step's margin flags but where a joint is not placed (a numerical group reports no margin): its
     # share of the sweep (a template's triad was written over a sweep where it assembled at 64 of 361 inputs)
     flagged = np.any(short > 0, axis=0) if short.size else np.zeros(z.shape[1:], bool)
-    violation = violation + np.mean(~np.all(np.isfinite(z), axis=0) & ~flagged, axis=-1)
+    unplaced = np.mean(~np.all(np.isfinite(z), axis=0) & ~flagged, axis=-1)
+    violation = violation + np.where(params.valid, unplaced, 0.0)  # (an invalid design counts 1 below)
     violation = np.where(params.valid, violation, violation + 1.0)
     cos_lim = np.cos(np.radians(transmission_limit(problem.min_transmission, margin)))
     worst_cos = np.zeros(z.shape[1])
