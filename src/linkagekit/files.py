@@ -767,8 +767,8 @@ def can_create_beside(path: str | Path) -> str | None:
         target = _target(p, True)
         if _stream(p, target, True) is not None or os.path.isdir(target):
             return None  # written in place; a directory is said so by the caller
-        probe = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
-        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600))
+        probe = _tmp_name(target)
+        os.close(_create(probe, None))
         probe.unlink()
     except OSError as exc:
         return str(exc.strerror or exc)
@@ -878,14 +878,15 @@ def _temporary(
         return
     if not target.name or target.name in (".", "..") or os.path.isdir(target):
         raise error(f"{name}: cannot write: it is a directory")
-    model = like if like is not None else _old_stat(target)
-    if like_open and _old_stat(target) is not None and not os.access(target, os.W_OK):
+    old = _old_stat(target)
+    model = like if like is not None else old
+    if like_open and old is not None and not os.access(target, os.W_OK):
         raise error(f"{name}: cannot write: Permission denied")
-    tmp = target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
+    tmp = _tmp_name(target)
     try:
         fd = _create(tmp, model)
     except PermissionError as exc:
-        if not like_open or _old_stat(target) is None:
+        if not like_open or old is None:
             raise error(f"{name}: cannot write: {exc.strerror or exc}") from None
         with _in_place(target, error, label, truncate=True) as fd:  # the directory takes no new file
             yield fd, target
@@ -904,6 +905,11 @@ def _temporary(
         if not done:
             with contextlib.suppress(OSError):
                 tmp.unlink()
+
+
+def _tmp_name(target: Path) -> Path:
+    """A fresh temporary file's name beside ``target``: ``.NAME.<12 hex digits>.tmp`` (:func:`stray_temporaries`)."""
+    return target.with_name(f".{_tmp_stem(target.name)}.{secrets.token_hex(_TMP_BYTES)}.tmp")
 
 
 def _create(tmp: Path, model: os.stat_result | None) -> int:

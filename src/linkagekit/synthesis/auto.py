@@ -55,9 +55,9 @@ from .objective import (
     transmission_limit,
 )
 from .optimize import Outcome, Progress, Settings, check_settings, optimize
-from .run import Synthesis, _unpack, make_problem
+from .run import Synthesis, _unpack, make_problem, named
 from .topologies import MAX_JOINTS, Topology, enumerate_topologies
-from .tracer import TracerFit, fit, fit_shifts, spectra
+from .tracer import TracerFit, chords_to, fit, fit_shifts, spectra
 
 #: the fraction of the time the screen of topologies takes
 SCREEN = 0.2
@@ -987,7 +987,7 @@ def _chamfer(
     P = np.where(window & np.isfinite(P), P, 0.0)
     k, near = _nearest_pairs(P, T, window)
     rows = np.arange(len(P))[:, None]
-    to_curve = np.minimum(np.abs(P[rows, k] - T[None, :]) ** 2, _to_segments(P, window, T, k)) / len(T)
+    to_curve = np.minimum(np.abs(P[rows, k] - T[None, :]) ** 2, chords_to(P, window, T, k)) / len(T)
     to_targets = np.where(window, np.abs(P - T[near]) ** 2, 0.0) / np.maximum(window.sum(axis=1), 1)[:, None]
     parts = np.concatenate([to_curve, to_targets], axis=1)  # (N, m + n): squared residuals
     d = parts.sum(axis=1)
@@ -1019,27 +1019,6 @@ def _window(shift: np.ndarray, width: int, n: int) -> np.ndarray:
     [[0, 1, 2], [6, 7, 0]]
     """
     return np.asarray(np.mod(shift[:, None] + np.arange(width)[None, :], n))
-
-
-def _to_segments(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Squared distance (N, m) from each target to the two chords of the curve at its nearest sample ``k``: the
-    curve is ``P``'s samples in their order, an open polyline (a window's samples, :func:`_window`).
-
-    The samples are coarse (a chord is ~1/100 of the curve): the distance to a sample alone
-    would floor the error at about half a chord.
-    """
-    N, n = P.shape
-    rows = np.arange(N)[:, None]
-    best = np.full(k.shape, np.inf)
-    for step in (-1, 1):
-        k2 = np.clip(k + step, 0, n - 1)
-        ok = window[rows, k] & window[rows, k2] & (k2 != k)
-        a, b = P[rows, k], P[rows, k2]
-        ab = b - a
-        t = np.clip(((np.conj(ab) * (T[None, :] - a)).real) / np.maximum(np.abs(ab) ** 2, 1e-300), 0.0, 1.0)
-        d = np.abs(a + t * ab - T[None, :]) ** 2
-        best = np.where(ok, np.minimum(best, d), best)
-    return best
 
 
 def _choose(take: np.ndarray, f: Any, g: Any) -> Any:
@@ -1085,13 +1064,7 @@ def written(proj: Projected, x: np.ndarray, outcome: Outcome, source: str | None
     ok = bool(np.all(np.isfinite(P))) and mu >= prob.min_transmission - 1e-9
     ok = ok and float(_too_small(P[None], pose[:, None], 0.0)[0]) == 0.0 and not degenerate(sp, pose[:, None])[0]
     mech = _swept(sp.mechanism(xfull), np.degrees(start), np.degrees(start + span), sp.topology)
-    if np.all(np.isfinite(errors)):  # as a single topology's search names it: the max error with its unit
-        worst = float(np.max(errors))
-        mech = replace(
-            mech,
-            name=f"{mech.name}: max error {worst:.4g} {sp.template.length_unit} "
-            f"({100 * worst / prob.scale:.3g} % of the targets' diagonal)",
-        )
+    mech = replace(mech, name=named(mech.name, errors, sp.template.length_unit, prob.scale))  # as one topology's
     if not ok:  # as a single topology's search names it: the file says so where a reader looks first
         mech = replace(mech, name=f"INFEASIBLE {mech.name} (it breaks a constraint)")
     sweep = (float(np.degrees(start)), float(np.degrees(start + span))) if proj.partial else None

@@ -414,6 +414,18 @@ def finish(problem: Problem, outcome: Outcome, source: str | None = None) -> Syn
     return replace(best, pareto=tuple(listed))
 
 
+def named(name: str, errors: np.ndarray, unit: str, diagonal: float) -> str:
+    """A synthesised mechanism's ``name``: ``name`` and its max error with its unit (where every error is known).
+
+    >>> named("synthesised fourbar", np.array([0.1, 0.25]), "mm", 10.0)
+    "synthesised fourbar: max error 0.25 mm (2.5 % of the targets' diagonal)"
+    """
+    if not np.all(np.isfinite(errors)):
+        return name
+    worst = float(np.max(errors))
+    return f"{name}: max error {worst:.4g} {unit} ({100 * worst / diagonal:.3g} % of the targets' diagonal)"
+
+
 def _finish(problem: Problem, outcome: Outcome, x: np.ndarray, source: str | None) -> Synthesis:
     """The :class:`Synthesis` of design ``x``."""
     e = check(problem, x[None])
@@ -421,10 +433,7 @@ def _finish(problem: Problem, outcome: Outcome, x: np.ndarray, source: str | Non
     turn = float(np.angle(e.a[0]))  # the placement turns the crank's angles too
     offset = float(np.degrees(problem.offset(x)[0])) if problem.timed else None
     unit = problem.space.template.length_unit
-    name = f"synthesised {problem.space.topology}"
-    max_err = float(np.max(err)) if np.all(np.isfinite(err)) else float("nan")
-    if np.isfinite(max_err):
-        name += f": max error {max_err:.4g} {unit} ({100 * max_err / problem.scale:.3g} % of the targets' diagonal)"
+    name = named(f"synthesised {problem.space.topology}", err, unit, problem.scale)
     if e.violation[0] != 0:  # the best found breaks a constraint: the file says so where a reader looks first
         name = f"INFEASIBLE {name} (it breaks a constraint)"
     try:

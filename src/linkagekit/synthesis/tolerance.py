@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from .tracer import chords_to
+
 #: how far one joint is moved, as a fraction of the targets' bounding-box diagonal
 SHARE = 1e-3
 #: inputs over the sweep each moved design is solved at
@@ -88,17 +90,11 @@ def _distances(P: np.ndarray, T: np.ndarray) -> np.ndarray:
     >>> _distances(np.array([[0, 1, 2 + 0j]]), np.array([0.5 + 0.1j, 3 + 0j])).round(12).tolist()
     [[0.1, 1.0]]
     """
-    D, n = P.shape
-    rows = np.arange(D)[:, None]
+    rows = np.arange(P.shape[0])[:, None]
     with np.errstate(invalid="ignore"):
         k = np.argmin(np.abs(P[:, None, :] - T[None, :, None]), axis=2)  # (D, m)
-        best = np.abs(P[rows, k] - T[None, :])
-        for step in (-1, 1):
-            k2 = np.clip(k + step, 0, n - 1)
-            a, ab = P[rows, k], P[rows, k2] - P[rows, k]
-            t = np.clip((np.conj(ab) * (T[None, :] - a)).real / np.maximum(np.abs(ab) ** 2, 1e-300), 0.0, 1.0)
-            best = np.fmin(best, np.abs(a + t * ab - T[None, :]))
-    return np.asarray(best)
+        near = np.abs(P[rows, k] - T[None, :]) ** 2
+    return np.asarray(np.sqrt(np.fmin(near, chords_to(P, np.isfinite(P), T, k))))
 
 
 def _sweep(mech: Any) -> np.ndarray:

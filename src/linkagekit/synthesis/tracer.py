@@ -236,3 +236,24 @@ def _better(x: TracerFit, y: TracerFit) -> TracerFit:
 
 def _finite(v: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(v), v, np.inf)
+
+
+def chords_to(P: np.ndarray, window: np.ndarray, T: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Squared distance (N, m) from each target to the two chords of the curve at its nearest sample ``k``: the
+    curve is ``P``'s samples in their order, an open polyline (``window``: the samples it is made of).
+
+    The samples are coarse (a chord is ~1/100 of the curve): the distance to a sample alone
+    would floor the error at about half a chord.
+    """
+    N, n = P.shape
+    rows = np.arange(N)[:, None]
+    best = np.full(k.shape, np.inf)
+    for step in (-1, 1):
+        k2 = np.clip(k + step, 0, n - 1)
+        ok = window[rows, k] & window[rows, k2] & (k2 != k)
+        a, b = P[rows, k], P[rows, k2]
+        ab = b - a
+        t = np.clip(((np.conj(ab) * (T[None, :] - a)).real) / np.maximum(np.abs(ab) ** 2, 1e-300), 0.0, 1.0)
+        d = np.abs(a + t * ab - T[None, :]) ** 2
+        best = np.where(ok, np.minimum(best, d), best)
+    return best
