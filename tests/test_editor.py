@@ -792,6 +792,27 @@ def test_cli_serves_then_stops_on_sigint(tmp_path, explicit_port):
     assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
 
 
+def test_cli_stops_on_sigterm_as_on_sigint(tmp_path):
+    """``kill PID`` (SIGTERM, as a service manager stops it) ended the editor with status -15 and no word; it stops as
+    on Ctrl-C: status 0, one line, nothing left beside the file."""
+    path = copy_example(tmp_path)
+    proc = cli("edit", str(path), "--no-browser", "--port", "0")
+    try:
+        box: list[str] = []
+        reader = threading.Thread(target=lambda: box.append(proc.stdout.readline()), daemon=True)
+        reader.start()
+        reader.join(30)
+        assert box and URL_RE.match(box[0].strip()), f"no URL on stdout within 30 s (exit {proc.poll()})"
+        proc.send_signal(signal.SIGTERM)
+        code, out, err = finish(proc, 15)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert code == 0 and err == "linkagekit: editor stopped\n", (code, err)
+    assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
+
+
 def test_session_chooses_a_mode_of_a_numerical_group(tmp_path):
     """A class-3 triad: the modes listed carry their group index; asking for another one by its
     signs and group index makes its positions the pose (lk.analyze of the answer gives them back)."""

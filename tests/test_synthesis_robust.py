@@ -160,6 +160,81 @@ def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path
         assert json.loads(str(z["header"]))["generation"] >= 1
 
 
+@pytest.mark.parametrize("whom", ["group", "parent"])
+def test_sigterm_is_handled_as_ctrl_c_one_line_the_checkpoint_saved_and_no_temporary_file(tmp_path, whom):
+    """SIGTERM (a batch system ending a job: the parent and its workers; ``kill PID``: the parent alone) killed the
+    run on the spot: no line, exit -15, the time since the last checkpoint lost, and a checkpoint being written left
+    its temporary file. It is handled as Ctrl-C: one line, exit 1, the checkpoint saved, nothing left beside it."""
+    write_csv(tmp_path / "t.csv")
+    cmd = [sys.executable, "-m", "linkagekit.cli", "synthesize", "t.csv", "-o", "o.yaml", "--checkpoint", "ck.npz"]
+    cmd += ["--units", "cm", "--workers", "2", "--generations", "400", "--seconds", "1000", "--goal", "0"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120  # a hang guard only
+        while not (tmp_path / "ck.npz").exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        time.sleep(0.2)
+        (os.killpg if whom == "group" else os.kill)(proc.pid, signal.SIGTERM)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 1, err
+    err = "".join(ln for ln in err.splitlines(keepends=True) if not ln.startswith("linkagekit: synthesize: search "))
+    assert err == "linkagekit: terminated; the search is saved in ck.npz: the same command resumes it\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ck.npz", "t.csv"]
+    with np.load(tmp_path / "ck.npz", allow_pickle=False) as z:
+        assert json.loads(str(z["header"]))["generation"] >= 1
+
+
+@pytest.mark.parametrize("task", ["auto", "motion"])
+def test_every_task_stopped_says_how_to_go_on(tmp_path, monkeypatch, capsys, task):
+    """Only the one-topology path search said how to resume after Ctrl-C; ``--topology auto`` (whose docs promise
+    the same command resumes) and the motion task said only 'interrupted'."""
+    from linkagekit.synthesis import auto, run
+
+    def stopped(*args, **kwargs):  # type: ignore[no-untyped-def]
+        raise KeyboardInterrupt
+
+    if task == "auto":
+        monkeypatch.setattr(auto, "synthesize_auto", stopped)
+        targets, options = write_csv(tmp_path / "t.csv"), ["--topology", "auto"]
+    else:
+        monkeypatch.setattr(run, "synthesize_motion", stopped)
+        targets, options = ROOT / "examples" / "targets" / "guided_poses.csv", ["--task", "motion"]
+    ck = tmp_path / "c"
+    code = main(["synthesize", str(targets), *options, "-o", str(tmp_path / "o.yaml"), "--checkpoint", str(ck)])
+    assert code == 1
+    said = capsys.readouterr().err
+    assert said == f"linkagekit: interrupted; the search is saved in {ck}: the same command resumes it\n"
+
+
+def test_a_checkpoint_write_stopped_half_way_leaves_the_old_one_and_no_temporary_file(tmp_path, monkeypatch):
+    """The checkpoint's writer removed its temporary file only on an OSError: Ctrl-C (or SIGTERM) during the write
+    left ``.ck.npz.tmp`` beside it, and the writer opened that fixed name by name, through a link planted there."""
+    from linkagekit import files
+
+    path = tmp_path / "ck.npz"
+    optimize.write_archive(path, {"n": 1}, {"x": np.arange(3.0)})
+    old = path.read_bytes()
+
+    def stopped(fd: int) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(files.os, "fsync", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        optimize.write_archive(path, {"n": 2}, {"x": np.arange(4.0)})
+    assert path.read_bytes() == old and [p.name for p in tmp_path.iterdir()] == ["ck.npz"]
+    monkeypatch.undo()
+    victim = tmp_path / "victim"
+    victim.write_text("keep")
+    (tmp_path / ".ck.npz.tmp").symlink_to(victim)
+    optimize.write_archive(path, {"n": 3}, {"x": np.arange(5.0)})
+    assert victim.read_text() == "keep"
+    with np.load(path, allow_pickle=False) as z:
+        assert json.loads(str(z["header"])) == {"n": 3} and z["x"].tolist() == [0.0, 1.0, 2.0, 3.0, 4.0]
+
+
 # ---------------------------------------------------------------------- 10: hostile checkpoints
 @pytest.fixture(scope="module")
 def mid_search(tmp_path_factory, problem):

@@ -1568,14 +1568,27 @@ def _interval(text: str, option: str) -> tuple[float, float]:
 
 
 def _synthesize(args: argparse.Namespace) -> int:
-    """``linkagekit synthesize``."""
+    """``linkagekit synthesize``: a run stopped (Ctrl-C, SIGTERM, its workers lost) says in one line how to go on,
+    whatever its task."""
+    from .synthesis.distribute import WorkersLost
+
+    try:
+        return _synthesize_task(args)
+    except KeyboardInterrupt as exc:
+        print(f"{PROG}: {_stop_word(exc)}; {_synthesize_resume(args)}", file=sys.stderr)
+        return 1
+    except WorkersLost as e:
+        raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
+
+
+def _synthesize_task(args: argparse.Namespace) -> int:
+    """:func:`_synthesize` of a path, a motion or a function."""
     import dataclasses
     import os
     import time
 
     t0 = time.monotonic()
 
-    from .synthesis.distribute import WorkersLost
     from .synthesis.run import synthesize_path
     from .synthesis.targets import read_targets
     from .units import LENGTH_UNITS
@@ -1601,14 +1614,8 @@ def _synthesize(args: argparse.Namespace) -> int:
     topology = _topology(args, targets.unit)
     budget = search["seconds"]
     search["seconds"] = max(budget - (time.monotonic() - t0), 1e-3)  # the command's start counts too
-    try:
-        with _Search(budget) as progress:
-            out = synthesize_path(targets, topology, **search, progress=progress, pareto=args.pareto)
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted; {_synthesize_resume(args)}", file=sys.stderr)
-        return 1
-    except WorkersLost as e:
-        raise LinkageError(f"{e}; {_synthesize_resume(args)}") from None
+    with _Search(budget) as progress:
+        out = synthesize_path(targets, topology, **search, progress=progress, pareto=args.pareto)
     paths = _write_designs(out, targets, args) if out.feasible else []
     for path in stale_pareto(args.output, len(paths)) if args.pareto and out.feasible else ():
         os.remove(path)
@@ -2189,21 +2196,13 @@ def _search_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _writable(checkpoint: str) -> None:
     """Refuse a checkpoint that cannot be written where it is to be (``/proc/ck.npz``, a read-only folder) before the
-    search: it failed at the first save, after the screen (exit 1). Its temporary file is made and removed."""
-    from pathlib import Path
+    search: it failed at the first save, after the screen (exit 1). A temporary file of the name its writer would
+    use is made and removed (:func:`~linkagekit.files.can_create_beside`)."""
+    from .files import can_create_beside
 
-    from .synthesis.optimize import _temporary
-
-    tmp = _temporary(Path(checkpoint))
-    try:
-        with open(tmp, "xb"):
-            pass
-        tmp.unlink()
-    except FileExistsError:  # a run killed while writing left it: the run removes it
-        return
-    except OSError as e:
-        reason = e.strerror or e
-        raise InputError(f"--checkpoint {shorten_path(checkpoint, 80)}: cannot be written ({reason})") from None
+    reason = can_create_beside(checkpoint)
+    if reason is not None:
+        raise InputError(f"--checkpoint {shorten_path(checkpoint, 80)}: cannot be written ({reason})")
 
 
 def _pivots(text: str) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -2682,6 +2681,8 @@ def main(argv: list[str] | None = None) -> int:
     import warnings
 
     args = sys.argv[1:] if argv is None else list(argv)
+    if argv is None:
+        _terminate_as_interrupt()
     try:
         with warnings.catch_warnings():
             # a value that overflows is NaN/null in the output, not a warning on stderr; nor is
@@ -2700,8 +2701,8 @@ def main(argv: list[str] | None = None) -> int:
         prefix = f"{PROG}: error: "
         print(prefix + (one_line(str(exc), MAX_MESSAGE - len(prefix)) or type(exc).__name__), file=sys.stderr)
         code = exc.exit_code
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        print(f"{PROG}: {_stop_word(exc)}", file=sys.stderr)
         code = 1  # the command line's exit statuses: 0 success, 2 bad input, 1 anything else (not 128 + SIGINT)
     except BrokenPipeError:  # `linkagekit analyze ... | head`: the reader has gone; nothing to say
         code = 1
@@ -2714,6 +2715,29 @@ def main(argv: list[str] | None = None) -> int:
     if argv is None:
         _exit(code)
     return code
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``, ``timeout``, a batch system's end of a job) in the ``linkagekit`` script: handled as
+    Ctrl-C is, so that a search saves its checkpoint with the time it used, the editor stops, and a file being
+    written is left as it was with no temporary file beside it (Python's default ends the process on the spot)."""
+
+
+def _stop_word(exc: KeyboardInterrupt) -> str:
+    """What stopped the command: 'terminated' (SIGTERM, :class:`Terminated`) or 'interrupted' (Ctrl-C)."""
+    return "terminated" if isinstance(exc, Terminated) else "interrupted"
+
+
+def _terminate_as_interrupt() -> None:
+    """SIGTERM raises :class:`Terminated` in the main thread (where the script runs; elsewhere nothing changes)."""
+    import signal
+    import threading
+
+    def handler(signum: int, frame: object) -> None:
+        raise Terminated
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, handler)
 
 
 class _OutputFailed(Exception):
@@ -2774,9 +2798,13 @@ def _silence_stdout() -> None:
 def _exit(code: int) -> None:
     """The script's exit with ``code``: at once when a thread it started still runs (the manager thread of a worker
     pool killed on Ctrl-C can wait for ever on a worker that is gone: the line 'interrupted' was printed, then the
-    interpreter's exit, which joins every thread, hung), else the interpreter's own."""
+    interpreter's exit, which joins every thread, hung), else the interpreter's own. SIGTERM ends the process as
+    the system's default does again (no :class:`Terminated` past the command's handling)."""
+    import signal
     import threading
 
+    with contextlib.suppress(ValueError):  # (not the main thread)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
     lingering = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
     if lingering:
         import os

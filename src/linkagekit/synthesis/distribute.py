@@ -127,11 +127,14 @@ def channel() -> Channel | None:
 
 
 def _install(problems: tuple[Objective, ...], line: Channel | None = None) -> None:
-    """A local worker process's start: Ctrl-C is the parent's to handle (no traceback per worker), its problems."""
+    """A local worker process's start: Ctrl-C is the parent's to handle (no traceback per worker), SIGTERM ends it
+    as the system's default does (a forked worker does not inherit the ``linkagekit`` script's handler, which would
+    print a traceback from a worker waiting for its next task), its problems."""
     global _PROBLEMS, _CHANNEL
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _die_with_parent()
     # the engine's BLAS calls are small (the polish's least-squares steps), but after each one OpenBLAS's threads
     # spin: a one-worker run of 2.0 s burned 2.7 CPU-s, and two workers ran two searches in 2.4 s where with one

@@ -47,7 +47,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import InputError, LinkageError, shorten
+from ..errors import InputError, LinkageError, shorten, shorten_path
+from ..files import stray_temporaries, write_atomic
 from ..geometry import FloatArray
 from .base import Objective
 from .distribute import RETRIES, Evaluator, WorkersLost, daemonic
@@ -1221,24 +1222,16 @@ def _save(
 
 
 def write_archive(path: Path, header: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
-    """Write a checkpoint atomically: ``arrays`` and the JSON ``header`` in one ``.npz`` (a temporary file renamed
-    over ``path`` once it is whole: a run killed while writing leaves the last checkpoint as it was)."""
-    arrays = {**arrays, "header": np.array(json.dumps(header, default=int))}
-    tmp = _temporary(path)
-    try:
-        with open(tmp, "wb") as f:
-            np.savez(f, **arrays)  # type: ignore[arg-type]
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError as e:
-        tmp.unlink(missing_ok=True)
-        raise LinkageError(f"{path}: cannot write the checkpoint ({e.strerror or e})") from None
+    """Write a checkpoint in one step (:func:`~linkagekit.files.write_atomic`): ``arrays`` and the JSON ``header`` in
+    one ``.npz``, made in memory (a checkpoint is small), written to a fresh temporary file created beside ``path``
+    (never through a link) and renamed over it once whole. A run stopped while writing (Ctrl-C, SIGTERM) leaves the
+    last checkpoint as it was and no temporary file; one killed outright leaves its temporary file, which the next
+    run's :func:`_load` removes."""
+    import io
 
-
-def _temporary(path: Path) -> Path:
-    """Where a checkpoint is written before it is renamed over ``path`` (one name: a killed run's is reused)."""
-    return path.with_name(f".{path.name}.tmp")
+    buf = io.BytesIO()
+    np.savez(buf, **{**arrays, "header": np.array(json.dumps(header, default=int))})  # type: ignore[arg-type]
+    write_atomic(path, buf.getvalue(), error=LinkageError, label=f"checkpoint {shorten_path(str(path))}")
 
 
 def _load(settings: Settings, problem: Objective, template: Callable[[int], Search]) -> dict[str, Any] | None:
@@ -1277,7 +1270,8 @@ def read_archive(
     import zipfile
     import zlib
 
-    _temporary(path).unlink(missing_ok=True)  # left by a run killed while writing; the checkpoint itself is whole
+    for stray in stray_temporaries(path):  # left by a run killed while writing; the checkpoint itself is whole
+        stray.unlink(missing_ok=True)
     try:
         st = path.stat()
     except FileNotFoundError:
