@@ -517,3 +517,42 @@ def test_from_dict_takes_numpy_numbers_of_any_width(value) -> None:
     d["joints"]["B"] = [np.bool_(True), 1]  # a truth value is still not a number
     with pytest.raises(MechanismFileError, match=r"joints.B\[0\]: expected a number, got np.True_"):
         Mechanism.from_dict(d)
+
+
+def test_a_link_whose_given_lengths_are_flat_to_rounding_is_flat() -> None:
+    """Whitworth's lever (O4-B 0.15, O4-L 0.32, B-L 0.47 m: flat) put L 2e-8 rad off the line B-O4: the law of
+    cosines' height was the square root of a rounding error (in mm, 150 + 320 = 470 exactly, it was flat). Lengths
+    whose two shorter add up to the longest within 4 units of rounding are flat; a triangle 1e-6 of its size high is
+    kept as given."""
+    import linkagekit as lk
+
+    root = Path(__file__).resolve().parents[1]
+    res = lk.analyze(lk.load(root / "examples" / "whitworth_quick_return.yaml"), rates=False, dynamics=False)
+    O4, B, L = (res.point(j) for j in ("O4", "B", "L"))
+    assert np.max(np.abs((np.conj(B - O4) * (L - O4)).imag) / np.abs(B - O4) / np.abs(L - O4)) < 1e-15
+
+    def height(pq: float, pr: float, qr: float) -> float:
+        """R's distance from the line P-Q of a crank P-Q-R given by its three lengths (R posed off the line)."""
+        doc = {
+            "format": "linkagekit/1",
+            "name": "bar",
+            "units": {"length": "mm", "angle": "deg"},
+            "joints": {"P": [0, 0], "Q": [pq, 0], "R": [0.5 * pr, 0.3 * pr], "S": [-pq, 0]},
+            "links": {
+                "ground": ["P", "S"],
+                "bar": {"joints": ["P", "Q", "R"], "lengths": {"P-Q": pq, "P-R": pr, "Q-R": qr}},
+            },
+            "drivers": [{"link": "bar", "pivot": "P", "toward": "Q"}],
+        }
+        r = lk.analyze(lk.Mechanism.from_dict(doc), [0.0], rates=False, dynamics=False)
+        return float(np.abs((np.conj(r.point("Q") - r.point("P")) * (r.point("R") - r.point("P"))).imag[0]) / pq)
+
+    rng = np.random.default_rng(5)
+    for _ in range(100):  # flat decimal triangles at every scale, R between P and Q or beyond Q
+        a, b = (int(x) for x in rng.integers(1, 999, 2))
+        scale = 10.0 ** int(rng.integers(-6, 6))
+        x, y, z = (float(f"{v * scale:.12g}") for v in (a, b, a + b))
+        for pq, pr, qr in ((z, x, y), (x, z, y)):
+            assert height(pq, pr, qr) <= 1e-15 * z, (pq, pr, qr)
+    side = float(np.hypot(0.5, 1e-6))
+    assert height(1.0, side, side) == pytest.approx(1e-6, rel=1e-4)  # thin, not flat (the square root: 1e-4)
