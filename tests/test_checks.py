@@ -1134,3 +1134,47 @@ def test_the_sweep_extremes_are_over_the_values_the_file_sweeps(tmp_path):
     C, D, B = res.point("C"), res.point("D"), res.point("B")
     mu = np.degrees(np.abs(np.angle((C - D) / (B - D))))
     assert w["sweep"]["to"] == 78.0 and abs(w["sweep"]["max"] - mu.max()) < 0.01 and w["sweep"]["max"] < 170
+
+
+def test_a_rocker_turning_back_at_a_change_point_swings_to_it() -> None:
+    """A change-point four-bar (ground 40, crank 20, coupler 30, rocker 30: 20 + 40 = 30 + 30) in its pose's mode:
+    the rocker falls to 90 deg (a limit position, crank 36.87 deg), then rises to 180 deg at the flat position (crank
+    180 deg) and turns back there with its speed not zero. The swing was taken from the limit positions alone: one,
+    so 0 deg (review 19c). By an independent solve of the pose's mode at 0.001-deg steps: 90 deg."""
+    from helpers import fourbar_dict, fourbar_reference
+
+    r = math.sqrt(80.0)  # D 30 from both C and B, left of C -> B
+    pose = {"A": 0j, "B": 40 + 0j, "C": 20j, "D": complex(20 + r, 10 + 2 * r), "P": 20 + 25j}
+    fb = lk.check(lk.Mechanism.from_dict(fourbar_dict(*pose.values(), unit="mm")))["fourbars"][0]
+    phi = np.radians(np.linspace(0.0, 360.0, 360_001))
+    ref = fourbar_reference(pose, phi)
+    rocker = np.unwrap(np.angle(ref["D"] - ref["B"]))
+    assert np.ptp(np.degrees(rocker)) == pytest.approx(90.0, abs=1e-6)  # the reference itself: 90 to 180 deg
+    assert fb["swing"] == pytest.approx(np.ptp(np.degrees(rocker)), abs=1e-6)
+    assert [lp["extreme"] for lp in fb["limit_positions"]] == ["min"]
+
+
+def test_golden_section_minima_are_refined_by_a_parabola() -> None:
+    """A change point of a slider's step and a pressure angle's extremes were found by golden section alone: to a few
+    1e-8 rad, where the quantity is flat to rounding (review 19c: an isosceles slider-crank's change points at
+    90.00000045 and 269.9999995 deg, Whitworth's largest pressure angle at 90.000002 deg). By hand: with crank = rod
+    the rod is square to the slide at 90 and 270 deg; Whitworth's lever stands square to the ram's line at 90 deg
+    (B at its farthest from it) and lies along it at 210 and 330 deg (the crank's end level with O4, 0.1 below O2)."""
+    r = 50.0
+    iso = lk.Mechanism.from_dict(
+        {
+            "format": "linkagekit/1",
+            "name": "isosceles slider-crank",
+            "units": {"length": "mm", "angle": "deg"},
+            "joints": {"O": [0, 0], "A": [r / math.sqrt(2), r / math.sqrt(2)], "B": [r * math.sqrt(2), 0]},
+            "links": {"ground": ["O"], "crank": ["O", "A"], "rod": ["A", "B"], "block": ["B"]},
+            "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+            "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        }
+    )
+    dead = [d["input"] for d in lk.check(iso).dead_points["crank"]]
+    assert dead == pytest.approx([90.0, 270.0], abs=1e-9)
+    pa = lk.check(lk.load(EXAMPLES / "whitworth_quick_return.yaml")).sliders[0]["pressure_angle"]
+    assert pa["max_at"] == pytest.approx(90.0, abs=1e-8)
+    assert min(abs(pa["min_at"] - 210.0), abs(pa["min_at"] - 330.0)) < 1e-8
+    assert pa["max"] == pytest.approx(math.degrees(math.asin(0.15 / 0.5)), abs=1e-9) and pa["min"] == 0.0

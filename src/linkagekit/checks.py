@@ -581,6 +581,44 @@ def _refine(params: Params, driver: int, q: _Quantities, roots: list[_Bracket], 
         b.x = float(x)
 
 
+#: the step, in radians (or that share of a slider's span), either side of a golden-section minimum that the parabola
+#: refining it goes through (:func:`_vertices`): where the quantity is well above its rounding
+VERTEX_STEP = 1e-5
+
+
+def _vertices(run: _Run, mins: list[_Bracket]) -> None:
+    """Each golden-section minimum's ``x`` refined by the parabola through ``x - h``, ``x``, ``x + h``, where the
+    three assemble and its vertex lies within ``h``.
+
+    Golden section places a minimum only to about the square root of rounding, where the quantity is flat to
+    rounding: a smooth extreme (Whitworth's pressure angle's largest, at 90.000002 deg), or a V down to 0, as a
+    change point's ``|cond|``, which goes as the distance to it (two modes cross there) but is 0 to rounding within
+    about 1e-8 rad of it (an isosceles slider-crank's came out at 90.00000045 and 269.9999995 deg). The parabola goes
+    through points where the quantity is well above its rounding: the quantity itself for a smooth extreme, its
+    square (a parabola) for a V down to 0 (where the quantity at ``x`` is below 1/10 of its values ``h`` away).
+    """
+    if not mins:
+        return
+    h = VERTEX_STEP * (1.0 if run.turn else run.total)
+    x = np.array([b.x for b in mins])
+    rows = np.array([b.row for b in mins])
+    cols = np.arange(len(mins))
+    st = run.state(np.concatenate([x - h, x, x + h]))
+    vals = run.q.rows(st)[np.tile(rows, 3), np.arange(3 * len(mins))].reshape(3, len(mins))
+    vals = np.where(st.assembled.reshape(3, len(mins)), vals, np.nan)
+    with np.errstate(invalid="ignore"):
+        touch = np.abs(vals[1]) <= 0.1 * np.minimum(np.abs(vals[0]), np.abs(vals[2]))  # a V down to 0
+    f = np.where(touch[None], vals**2, vals)
+    lo, mid, hi = f[0, cols], f[1, cols], f[2, cols]
+    curv = lo - 2 * mid + hi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shift = h * (lo - hi) / (2 * curv)
+    ok = (curv > 0) & (np.abs(shift) <= h)
+    for b, dx, good in zip(mins, shift, ok, strict=True):
+        if good:
+            b.x = float(b.x + dx)
+
+
 def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
     """Which sign step locks at a dead point, and how (the k-th sign step, at sample ``col`` of ``st``)."""
     plan = params.plan
@@ -971,8 +1009,11 @@ def _limits(run: _Run, li: int, brackets: list[_Bracket], fin: _Final) -> list[_
     return limits
 
 
-def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -> dict[str, Any]:
-    """Whether the rocker turns fully and, if not, its swing over the range (one interval), unwrapped."""
+def _swing(run: _Run, li: int, found: tuple[list[_Limit], list[_Bracket]], fin: _Final, unit: float) -> dict[str, Any]:
+    """Whether the rocker turns fully and, if not, its swing over the range (one interval), unwrapped: from its
+    extremes among its limit positions (``found[0]``), the change points (``found[1]``: there it may turn back with
+    its angular velocity not zero, a change-point four-bar's at its flat position), the range's ends and the
+    samples."""
     phi = run.q.out_angle(run.st)[li]
     if len(run.intervals) != 1 or not np.isfinite(phi).all():
         return {}
@@ -980,13 +1021,14 @@ def _swing(run: _Run, li: int, limits: list[_Limit], fin: _Final, unit: float) -
     turns = run.cyclic and abs(u[-1] - u[0] + _wrap(phi[0] - phi[-1])) > math.pi
     if turns:
         return {"rocker_turns_fully": True}
-    cand = [u[lim.sample] + _wrap(lim.angle - phi[lim.sample]) for lim in limits]
+    limits, changes = found
+    at = [(lim.sample, lim.angle) for lim in limits]
+    at += [(b.sample, fin.phi[li, b.col]) for b in changes if b.col >= 0 and np.isfinite(fin.phi[li, b.col])]
+    cand = [u[k] + _wrap(angle - phi[k]) for k, angle in at] + [float(np.min(u)), float(np.max(u))]
     if not run.cyclic:
         e_cols = list(range(fin.ends, fin.phi.shape[1]))
         cand += [u[0] + _wrap(fin.phi[li, c] - phi[0]) for c in e_cols[:1]]
         cand += [u[-1] + _wrap(fin.phi[li, c] - phi[-1]) for c in e_cols[1:2]]
-    if not cand:
-        cand = [float(np.min(u)), float(np.max(u))]
     return {"rocker_turns_fully": False, "swing": float((max(cand) - min(cand)) / unit)}
 
 
@@ -1046,6 +1088,7 @@ def _driver_checks(
     ]
     roots, mins = [b for b in ordered if b.sign is not None], [b for b in ordered if b.sign is None]
     _refine(params, driver, run.q, roots, mins)
+    _vertices(run, mins)
     # the range ends (not the artificial ends of a slider's search span) are dead points
     ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
     if run.cyclic and beyond_a_turn(intervals[0], run.hi - run.lo):  # a mode longer than a turn that does not
@@ -1058,16 +1101,24 @@ def _driver_checks(
         dead.append(_undetermined_dead_point(run, fin, len(ends), hole))
     dead.sort(key=lambda t: t[1]["input"])
     facts = {
-        index: _loop_facts(run, mech, li, lp, limits[li], extremes[li], fin) for li, (index, lp) in enumerate(loops)
+        index: _loop_facts(run, mech, li, lp, (limits[li], extremes[li], [b for _, b in changes]), fin)
+        for li, (index, lp) in enumerate(loops)
     }
     slider_facts = [_slider_facts(run, mech, k, *slides[k], fin) for k in range(len(run.q.sliders))]
     return [info for _, info in dead], facts, slider_facts
 
 
 def _loop_facts(
-    run: _Run, mech: Mechanism, li: int, lp: FourBar, limits: list[_Bracket], extremes: dict[int, _Bracket], fin: _Final
+    run: _Run,
+    mech: Mechanism,
+    li: int,
+    lp: FourBar,
+    found: tuple[list[_Bracket], dict[int, _Bracket], list[_Bracket]],
+    fin: _Final,
 ) -> dict[str, Any]:
-    """Transmission angle, limit positions, swing and time ratio of loop ``li``, and whether its input link turns."""
+    """Transmission angle, limit positions, swing and time ratio of loop ``li``, and whether its input link turns;
+    ``found``: the loop's limit positions and transmission extremes, and the change points of the mechanism."""
+    limits, extremes, changes = found
     out: dict[str, Any] = {}
     ta = _transmission(run, li, extremes, fin)
     if "min" in ta and "max" in ta:
@@ -1079,7 +1130,7 @@ def _loop_facts(
     ]
     turns = _turns_fully(run, np.angle(run.st.z[lp.crank_tip] - run.st.z[lp.crank_pivot]))
     out["input_turns_fully"] = turns
-    return out | _swing(run, li, lims, fin, mech.angle_to_rad) | _time_ratio(run, lims)
+    return out | _swing(run, li, (lims, changes), fin, mech.angle_to_rad) | _time_ratio(run, lims)
 
 
 def _turns_fully(run: _Run, angle: np.ndarray) -> bool:
