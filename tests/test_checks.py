@@ -640,7 +640,7 @@ def test_text_of_a_report_without_the_loop_list():
     assert lines[-3:] == [
         "Four-bar loop A-C-D-B: crank-rocker (the input turns fully)",
         "  lengths: ground 4 mm, input side 1 mm, coupler — mm, output side — mm",
-        "  Transmission angle: min 24.5000°, max 75.2500°",
+        "  Transmission angle: min 24.5000°, max 75.2500°; worst 24.5000° (min, as synthesize counts it)",
     ]
 
 
@@ -1178,3 +1178,19 @@ def test_golden_section_minima_are_refined_by_a_parabola() -> None:
     assert pa["max_at"] == pytest.approx(90.0, abs=1e-8)
     assert min(abs(pa["min_at"] - 210.0), abs(pa["min_at"] - 330.0)) < 1e-8
     assert pa["max"] == pytest.approx(math.degrees(math.asin(0.15 / 0.5)), abs=1e-9) and pa["min"] == 0.0
+
+
+def test_a_loops_worst_transmission_angle_is_the_one_synthesize_bounds() -> None:
+    """``check`` printed the raw min and max of the transmission angle mu, ``synthesize`` the smallest of mu and 180 -
+    mu, and a user saw two minima that disagree (review 19c: 64.8 against 53.67 deg). ``check`` now also gives that
+    figure, ``worst``. Andrews' loop O-P-E-B: mu in [82.6, 124.8] deg, so its worst is 180 - max. By an independent
+    sampling of the angle at E between the coupler E-P and the rocker E-B, every 0.01 deg of the crank."""
+    mech = lk.load(EXAMPLES / "iftomm_a03_andrews.yaml")
+    ta = next(fb for fb in lk.check(mech).fourbars if fb["joints"] == ["O", "P", "E", "B"])["transmission_angle"]
+    lo, hi = mech.drivers[0].sweep.values()[[0, -1]]
+    res = lk.analyze(mech, {mech.drivers[0].name: np.arange(lo, hi + 1e-9, 0.01)}, rates=False, dynamics=False)
+    E, P, B = (res.point(j) for j in "EPB")
+    mu = np.degrees(np.abs(np.angle((P - E) / (B - E))))
+    worst = np.min(np.minimum(mu, 180.0 - mu))
+    assert ta["worst"] == pytest.approx(worst, abs=1e-5) and ta["worst"] == pytest.approx(180.0 - ta["max"], abs=1e-12)
+    assert ta["max"] == pytest.approx(np.max(mu), abs=1e-5) and ta["worst"] < ta["min"]

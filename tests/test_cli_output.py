@@ -245,8 +245,13 @@ def test_modes_mirrors_without_links_to_mirror(capsys):
 
 def test_modes_arguments(capsys):
     path = str(EXAMPLES / "seed000_fourbar.yaml")
-    code, _, err = run(["modes", path], capsys)
-    assert code == 2 and err.count("\n") == 1 and "--at" in err
+    # without --at, the pose's input (as plot --modes; it was refused: review 19c): its pose's mode first
+    code, out, err = run(["modes", path], capsys)
+    assert code == 0 and "assembly modes at crank = 0 deg" in out, err
+    assert out == run(["modes", path, "--at", "0"], capsys)[1]
+    code, out, err = run(["modes", str(EXAMPLES / "fivebar_two_drivers.yaml"), "--format", "json"], capsys)
+    assert code == 0, err  # the pose: crank1 from A (0, 0) to C (-15, 25.98), crank2 from B (50, 0) to D (65, 25.98)
+    assert json.loads(out)["input"] == pytest.approx({"crank1": 120.0, "crank2": 60.0}, abs=1e-9)
     code, _, err = run(["modes", path, "--at", "0,10"], capsys)
     assert code == 2 and err.count("\n") == 1 and "one value" in err
     code, _, err = run(["modes", str(EXAMPLES / "fivebar_two_drivers.yaml"), "--at", "crank1=100"], capsys)

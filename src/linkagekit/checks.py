@@ -1122,7 +1122,8 @@ def _loop_facts(
     out: dict[str, Any] = {}
     ta = _transmission(run, li, extremes, fin)
     if "min" in ta and "max" in ta:
-        out["transmission_angle"] = ta | {"joint": run.params.plan.joint_names[lp.rocker_tip]}
+        worst = min(ta["min"], 180.0 - ta["max"])
+        out["transmission_angle"] = ta | {"joint": run.params.plan.joint_names[lp.rocker_tip], "worst": worst}
     lims = _limits(run, li, limits, fin)
     out["limit_positions"] = [
         {"input": run.file_value(t.x), "angle": float(_wrap(t.angle) / mech.angle_to_rad), "extreme": t.extreme}
@@ -2111,6 +2112,8 @@ def _loop_lines(k: int, n: int, lp: Mapping[str, Any], fmt: _Text) -> list[str]:
                 f" (at {ta.get('joint', '')}; min at {fmt.inp(driver, ta['min_at'])}, "
                 f"max at {fmt.inp(driver, ta['max_at'])})"
             )
+        which = "min" if ta["min"] <= 180.0 - ta["max"] else "180° - max"
+        text += f"; worst {min(ta['min'], 180.0 - ta['max']):.4f}° ({which}, as synthesize counts it)"
         lines.append(text)
     return lines + _rocker_lines(lp, driver, ln.get("rocker", "rocker"), fmt)
 

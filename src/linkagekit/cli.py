@@ -551,7 +551,10 @@ def _simulate(args: argparse.Namespace) -> int:
 def _modes_arguments(p: argparse.ArgumentParser) -> None:
     _file_argument(p)
     p.add_argument(
-        "--at", action="append", required=True, metavar="V", help="the input value (NAME=V per driver; repeatable)"
+        "--at",
+        action="append",
+        metavar="V",
+        help="the input value (NAME=V per driver; repeatable); default: the pose's input",
     )
     p.add_argument("--mirrors", action="store_true", help="also flip each link of three or more joints")
     _format_option(p, "table", "json")
@@ -1261,19 +1264,24 @@ def _analyze(args: argparse.Namespace) -> int:
     return 0
 
 
-def _modes(args: argparse.Namespace) -> int:
-    """``linkagekit modes``."""
-    import linkagekit as lk
-
-    mech = lk.load(args.file)
-    given = _by_driver(mech, args.at, "--at", _numbers)
+def _modes_at(mech: Mechanism, at: list[str]) -> dict[str, float]:
+    """``modes --at``: one value for every driver."""
+    given = _by_driver(mech, at, "--at", _numbers)
     missing = [d.name for d in mech.drivers if d.name not in given]
     if missing:
         raise InputError(f"--at: give a value for every driver ({', '.join(d.name for d in mech.drivers)})")
     for name, values in given.items():
         if len(values) != 1:
             raise InputError(f"--at: one value per driver for modes, got {len(values)} for '{name}'")
-    doc = lk.modes(mech, {k: v[0] for k, v in given.items()}, mirrors=args.mirrors).to_dict()
+    return {k: v[0] for k, v in given.items()}
+
+
+def _modes(args: argparse.Namespace) -> int:
+    """``linkagekit modes``."""
+    import linkagekit as lk
+
+    mech = lk.load(args.file)
+    doc = lk.modes(mech, None if args.at is None else _modes_at(mech, args.at), mirrors=args.mirrors).to_dict()
     if args.format == "json":
         _emit(json.dumps(doc, allow_nan=False) + "\n", args.output)
         return 0

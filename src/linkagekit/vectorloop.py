@@ -422,10 +422,11 @@ def _side(k1: complex, k2: complex, j: complex) -> float:
     return 1.0 if cross(np.asarray(k2 - k1), np.asarray(j - k1)) >= 0 else -1.0
 
 
-def _unsupported(mech: Mechanism, why: str) -> MethodNotApplicableError:
+def _unsupported(why: str) -> MethodNotApplicableError:
+    """The refusal, its reason first (a long name first used up the message's length before the reason)."""
     return MethodNotApplicableError(
-        f"{mech.name}: the vector-loop method handles four-bars and Stephenson six-bars "
-        f"with a ternary input link and a ternary output link pivoted on the ground; {why}"
+        f"{why}: the vector-loop method handles only four-bars and Stephenson six-bars "
+        "(a ternary input link and a ternary output link pivoted on the ground)"
     )
 
 
@@ -472,18 +473,18 @@ def _topology(mech: Mechanism) -> _Topology:
     """Check the common conditions (one crank on a ground pivot, two ground pivots, two links per joint)."""
     drive = mech.drivers[0].type if len(mech.drivers) == 1 else None
     if mech.sliders or not isinstance(drive, CrankType):
-        raise _unsupported(mech, "this one has sliders or not exactly one crank driver")
+        raise _unsupported("it has sliders or not exactly one crank driver")
     links = {ln.name: ln for ln in mech.links}
     hinges = {ln.name: [j for j in ln.joints if len(mech.links_of(j)) >= 2] for ln in mech.links}
     if any(len(mech.links_of(j)) > 2 for j in mech.joint_names):
-        raise _unsupported(mech, "a joint joins three or more links")
+        raise _unsupported("a joint joins three or more links")
     crank = links[mech.drivers[0].link]
     oa, toward = drive.pivot, drive.toward
     if oa not in links["ground"].joints:
-        raise _unsupported(mech, "the driver's pivot is not on the ground")
+        raise _unsupported("the driver's pivot is not on the ground")
     others = [j for j in hinges["ground"] if j != oa]
     if len(others) != 1:
-        raise _unsupported(mech, "the ground must have exactly two pivots")
+        raise _unsupported("the ground must have exactly two pivots")
     theta_in = float(np.angle(crank.shape[toward] - crank.shape[oa]))
     return _Topology(mech, links, hinges, crank, oa, others[0], theta_in)
 
@@ -496,7 +497,7 @@ def _four_bar(t: _Topology) -> tuple[FourBar, float]:
     jb = next(j for j in t.hinges[coupler] if j != ja)
     rocker = t.other_link(jb, coupler)
     if ob not in t.links[rocker].joints:
-        raise _unsupported(t.mech, "its four links do not form one loop")
+        raise _unsupported("its four links do not form one loop")
     refs = {"ground": (oa, ob), crank.name: (oa, ja), coupler: (ja, jb), rocker: (ob, jb)}
     fb = FourBar(
         complex(sg[ob] - sg[oa]),
@@ -516,20 +517,20 @@ def _stephenson(t: _Topology) -> tuple[Stephenson, float]:
     crank, oa, ob, links = t.crank, t.oa, t.ob, t.links
     rocker = t.other_link(ob, "ground")
     if len(t.hinges[rocker]) != 3:
-        raise _unsupported(t.mech, "the link pivoted at the second ground pivot is not ternary")
+        raise _unsupported("the link pivoted at the second ground pivot is not ternary")
     c_free = [j for j in t.hinges[crank.name] if j != oa]
     r_free = [j for j in t.hinges[rocker] if j != ob]
     links_of = t.mech.links_of
     direct = [(s, w) for s in c_free for w in r_free if set(links_of(s)) & set(links_of(w)) - {crank.name, rocker}]
     if len(direct) != 1:
-        raise _unsupported(t.mech, "no single binary link joins the input and output links")
+        raise _unsupported("no single binary link joins the input and output links")
     js, jw = direct[0]
     jq = next(j for j in c_free if j != js)
     jy = next(j for j in r_free if j != jw)
     glink, clink, dlink = t.other_link(js, crank.name), t.other_link(jq, crank.name), t.other_link(jy, rocker)
     jx = next((j for j in t.hinges[clink] if j != jq), None)
     if jx is None or jx not in links[dlink].joints:
-        raise _unsupported(t.mech, "the remaining two links do not form a dyad")
+        raise _unsupported("the remaining two links do not form a dyad")
     sc, sr, sg, pose = crank.shape, links[rocker].shape, links["ground"].shape, t.mech.joints
     gvec = complex(sg[ob] - sg[oa])
     refs = {"ground": (oa, ob), crank.name: (oa, jq), clink: (jq, jx), glink: (js, jw), rocker: (ob, jy)}
@@ -566,4 +567,4 @@ def from_mechanism(mech: Mechanism) -> tuple[FourBar | Stephenson, float]:
         return _four_bar(t)
     if len(mech.links) == 6 and len(t.hinges[t.crank.name]) == 3:
         return _stephenson(t)
-    raise _unsupported(mech, f"'{mech.name}' is neither")
+    raise _unsupported(f"{len(mech.links)} links, the input link with {len(t.hinges[t.crank.name])} joints")
