@@ -556,3 +556,25 @@ def test_a_link_whose_given_lengths_are_flat_to_rounding_is_flat() -> None:
             assert height(pq, pr, qr) <= 1e-15 * z, (pq, pr, qr)
     side = float(np.hypot(0.5, 1e-6))
     assert height(1.0, side, side) == pytest.approx(1e-6, rel=1e-4)  # thin, not flat (the square root: 1e-4)
+
+
+def test_a_pivot_left_out_of_the_ground_is_named() -> None:
+    """A crank-rocker whose ground lists O2 alone (review 19c) was refused with its Gruebler count only: the rocker
+    hangs from B, swinging about it, and O4 is a tracer point. The message names them; a coupler point (on one link,
+    which is held at two joints) is not taken for it."""
+    doc = {
+        "format": "linkagekit/1",
+        "name": "crank-rocker",
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O2": [0, 0], "O4": [100, 0], "A": [15, 26], "B": [80, 70], "P": [40, 90]},
+        "links": {"ground": ["O2"], "crank": ["O2", "A"], "coupler": ["A", "B", "P"], "rocker": ["O4", "B"]},
+        "drivers": [{"link": "crank", "pivot": "O2", "toward": "A"}],
+    }
+    with pytest.raises(MechanismFileError) as e:
+        Mechanism.from_dict(doc)
+    assert str(e.value).endswith(
+        "3 degree(s) of freedom (Gruebler: 3*(4-1) - 2*(3 pins + 0 sliders) = 3); link 'rocker' hangs from B alone "
+        "(O4 is on no other link; a fixed pivot belongs in ground)"
+    )
+    doc["links"]["ground"] = ["O2", "O4"]
+    assert Mechanism.from_dict(doc).dof == 1

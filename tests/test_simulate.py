@@ -691,3 +691,10 @@ def test_a_motor_curve_beyond_the_machines_scale_is_one_line(capsys):
         code = main(["simulate", str(EXAMPLES / name), "--time", "0:0.5:0.05", "--motor", "1e12,1e-12"])
         err = capsys.readouterr().err
         assert code == 2 and err.count("\n") == 1 and "no longer a finite number" in err, (name, err)
+
+
+def test_a_motor_with_no_load_speed_zero_is_named_as_the_option(capsys):
+    """``--motor 1,0`` was refused as ``motor[crank]`` (the API's name for it), not as the option given (review 19c)."""
+    code = main(["simulate", str(EXAMPLES / "slider_crank.yaml"), "--time", "0:1:0.5", "--motor", "1,0"])
+    assert code == 2
+    assert capsys.readouterr().err == "linkagekit: error: --motor 1,0: the no-load speed W0 must not be zero\n"

@@ -495,6 +495,8 @@ def _motor_curve(text: str, what: str) -> tuple[float, float]:
     values = _numbers(text, what)
     if len(values) != 2:
         raise InputError(f"{what}: expected T0,W0 (stall torque, no-load speed), got {shorten(repr(text))}")
+    if values[1] == 0:  # (named as the option, not as the API's motor[NAME])
+        raise InputError(f"{what}: the no-load speed W0 must not be zero")
     return values[0], values[1]
 
 

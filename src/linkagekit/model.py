@@ -883,6 +883,33 @@ def _gruebler(links: tuple[Link, ...] | list[Link], n_sliders: int) -> tuple[int
     return 3 * (n - 1) - 2 * (pins + n_sliders), n, pins
 
 
+def _hanging(links: tuple[Link, ...], sliders: tuple[Slider, ...]) -> str | None:
+    """A link (not the ground, on no slider) held at one joint alone, said as a likely cause of a freedom too many:
+    a pivot left out of ``ground`` leaves its link swinging about its other joint. None when there is none.
+
+    >>> from types import SimpleNamespace as L
+    >>> spec = {"ground": ("O2",), "crank": ("O2", "A"), "rocker": ("O4", "A")}
+    >>> ls = tuple(L(name=n, joints=j) for n, j in spec.items())
+    >>> _hanging(ls, ())  # type: ignore[arg-type]
+    "link 'rocker' hangs from A alone (O4 is on no other link; a fixed pivot belongs in ground)"
+    """
+    count: dict[str, int] = {}
+    for ln in links:
+        for j in ln.joints:
+            count[j] = count.get(j, 0) + 1
+    on_slider = {name for s in sliders for name in (s.link, s.on)}
+    for ln in links:
+        held = [j for j in ln.joints if count[j] > 1]
+        if ln.name != "ground" and ln.name not in on_slider and len(ln.joints) > 1 and len(held) == 1:
+            free = ", ".join(j for j in ln.joints if count[j] == 1)
+            verb = "is" if "," not in free else "are"
+            return (
+                f"link '{ln.name}' hangs from {held[0]} alone ({free} {verb} on no other link; a fixed pivot belongs "
+                "in ground)"
+            )
+    return None
+
+
 # ---------------------------------------------------------------------- building
 def _build(spec: FileSpec, src: str) -> Mechanism:
     """The mechanism a parsed file describes, each section checked by its own validator of :class:`_Builder`."""
@@ -892,7 +919,7 @@ def _build(spec: FileSpec, src: str) -> Mechanism:
     drivers = b.drivers(sliders)
     loads = b.loads()
     springs, dampers, flywheels = b.springs(), b.dampers(), b.flywheels()
-    b.check_freedom(drivers, len(sliders))
+    b.check_freedom(drivers, sliders)
     return Mechanism(
         name=spec.name,
         length_unit=spec.units.length,
@@ -1248,17 +1275,20 @@ class _Builder:
                 raise self.fail(f"{key}[{i}]", f"a second element named '{n}' (give it another `name`)")
         return items
 
-    def check_freedom(self, drivers: tuple[Driver, ...], n_sliders: int) -> None:
+    def check_freedom(self, drivers: tuple[Driver, ...], sliders: tuple[Slider, ...]) -> None:
         """One driver per degree of freedom (Gruebler count)."""
+        n_sliders = len(sliders)
         dof, n_links, pins = _gruebler(tuple(self.by_name.values()), n_sliders)
         if dof == len(drivers):
             return
         cylinders = any(isinstance(d.type, CylinderType) for d in drivers)
+        hanging = _hanging(tuple(self.by_name.values()), sliders) if dof > len(drivers) else None
         raise self.fail(
             "drivers",
             f"{len(drivers)} driver(s) given, but the mechanism has {dof} degree(s) "
             f"of freedom (Gruebler: 3*({n_links}-1) - 2*({pins} pins + {n_sliders} sliders) = {dof})"
-            + ("; a cylinder counts as one driver, not as a link" if cylinders else ""),
+            + ("; a cylinder counts as one driver, not as a link" if cylinders else "")
+            + (f"; {hanging}" if hanging else ""),
         )
 
 
