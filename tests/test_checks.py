@@ -1194,3 +1194,62 @@ def test_a_loops_worst_transmission_angle_is_the_one_synthesize_bounds() -> None
     worst = np.min(np.minimum(mu, 180.0 - mu))
     assert ta["worst"] == pytest.approx(worst, abs=1e-5) and ta["worst"] == pytest.approx(180.0 - ta["max"], abs=1e-12)
     assert ta["max"] == pytest.approx(np.max(mu), abs=1e-5) and ta["worst"] < ta["min"]
+
+
+def test_a_transmission_angle_down_to_0_at_a_change_point_is_found_there() -> None:
+    """Ground 4, crank 2, coupler 1, rocker 3: at crank 0 the crank's end is 2 from O2, the rocker less the coupler,
+    so they fold in line there: the transmission angle is 0 at crank 0 (by hand). The bisection on its slope ended
+    where the rates next to the change point are flagged singular: min 0.0001 deg at -0.000035 deg; the sweep's
+    figure came from its samples alone, 0.0272 deg (review 19b)."""
+    doc = {
+        "format": "linkagekit/1",
+        "name": "folds at crank 0",
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {"O1": [0, 0], "O2": [4, 0], "A": [1, math.sqrt(3)], "B": [1.9082482904638631, 2.1504824541606125]},
+        "links": {
+            "ground": ["O1", "O2"],
+            "crank": {"joints": ["O1", "A"], "lengths": {"O1-A": 2}},
+            "coupler": {"joints": ["A", "B"], "lengths": {"A-B": 1}},
+            "rocker": {"joints": ["O2", "B"], "lengths": {"O2-B": 3}},
+        },
+        "drivers": [{"link": "crank", "pivot": "O1", "toward": "A", "angles": {"start": -60, "stop": 70, "step": 1}}],
+    }
+    rep = lk.check(lk.Mechanism.from_dict(doc))
+    ta = rep.fourbars[0]["transmission_angle"]
+    assert ta["min"] < 1e-7 and abs(ta["min_at"]) < 1e-8, ta
+    warning = next(w for w in rep.warnings if w["kind"] == "transmission-angle")
+    assert warning["sweep"]["min"] < 1e-7 and warning["sweep"]["from"] == -60.0 and warning["sweep"]["to"] == 70.0
+
+
+def test_with_several_intervals_the_poses_is_named(capsys) -> None:
+    """A Grashof double rocker (ground 4, crank 3, coupler 1.5, rocker 3.5; 1.5 + 4 < 3 + 3.5) posed at crank 60
+    deg assembles with its sign for crank in [28.96, 90] and [270, 331.04] deg: by hand, crank 90 puts A 5 from O2,
+    coupler and rocker stretched, and crank 270 likewise. The second interval is the other circuit; nothing said
+    which one the pose is in (review 19b)."""
+    doc = {
+        "format": "linkagekit/1",
+        "name": "double rocker",
+        "units": {"length": "mm", "angle": "deg"},
+        "joints": {
+            "O1": [0, 0],
+            "O2": [4, 0],
+            "A": [1.5, 2.598076211353316],
+            "B": [2.8269230769230775, 3.297558268256132],
+        },
+        "links": {
+            "ground": ["O1", "O2"],
+            "crank": {"joints": ["O1", "A"], "lengths": {"O1-A": 3}},
+            "coupler": {"joints": ["A", "B"], "lengths": {"A-B": 1.5}},
+            "rocker": {"joints": ["O2", "B"], "lengths": {"O2-B": 3.5}},
+        },
+        "drivers": [{"link": "crank", "pivot": "O1", "toward": "A"}],
+    }
+    rep = lk.check(lk.Mechanism.from_dict(doc))
+    (a, b), (c, d) = rep.input_ranges["crank"]
+    assert (b, c) == pytest.approx((90.0, 270.0), abs=1e-9) and rep.to_dict()["pose_input"] == pytest.approx(
+        {"crank": 60.0}, abs=1e-9
+    )
+    from linkagekit.checks import check_text
+
+    text = check_text(rep.to_dict())
+    assert f"  the pose (crank = 60.000000 deg) is in [{a:.6f}, 90.000000]: moving the input from it reaches" in text

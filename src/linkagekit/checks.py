@@ -552,6 +552,7 @@ class _Bracket:
     sign: float | None = None
     x: float = math.nan
     col: int = -1
+    value_row: int = -1  # a root of a quantity's slope: the quantity (:func:`_singular_slopes`)
 
 
 def _refine(params: Params, driver: int, q: _Quantities, roots: list[_Bracket], mins: list[_Bracket]) -> None:
@@ -617,6 +618,29 @@ def _vertices(run: _Run, mins: list[_Bracket]) -> None:
     for b, dx, good in zip(mins, shift, ok, strict=True):
         if good:
             b.x = float(b.x + dx)
+
+
+def _singular_slopes(run: _Run, roots: list[_Bracket]) -> None:
+    """Roots of a quantity's slope (``roots``, each with its ``value_row``) where the bisection ended on a jump of the
+    slope, not on a zero of it (the slope there not finite, or above 1e-6 of its largest over the samples), searched
+    again as minima of the quantity itself (golden section, then :func:`_vertices`).
+
+    At a change point the quantity may turn back with its slope not zero, and the rates next to it are flagged
+    singular (NaN): the bisection on the slope's sign ended at the edge of that stretch. A four-bar folded flat at
+    crank 0 had its transmission angle's minimum, 0 there, at -0.000035 deg, 0.0001 deg (review 19b); the quantity
+    itself is defined there (a V down to 0)."""
+    if not roots:
+        return
+    st = run.state(np.array([b.x for b in roots]))
+    slopes = run.q.rows(st)[[b.row for b in roots], np.arange(len(roots))]
+    with np.errstate(invalid="ignore"):
+        scale = [float(np.nanmax(np.abs(run.rows[b.row]), initial=0.0)) for b in roots]
+    again = [b for b, f, k in zip(roots, slopes, scale, strict=True) if not abs(f) <= 1e-6 * k]
+    for b in again:
+        b.row, b.sign, b.value_row = b.value_row, None, -1
+    if again:
+        _refine(run.params, run.driver, run.q, [], again)
+        _vertices(run, again)
 
 
 def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
@@ -794,7 +818,7 @@ def _around(run: _Run, i: int, row: int, slope: int) -> _Bracket:
     sw = run.sw
     sa, sb = np.sign(run.rows[slope, sw.prev[i]]), np.sign(run.rows[slope, sw.next[i]])
     if sw.has_prev[i] and sw.has_next[i] and sa * sb < 0:
-        return _Bracket(sw.px[i], sw.nx[i], slope, i, float(sa))
+        return _Bracket(sw.px[i], sw.nx[i], slope, i, float(sa), value_row=row)
     return _Bracket(sw.px[i], sw.nx[i], row, i)
 
 
@@ -1089,6 +1113,7 @@ def _driver_checks(
     roots, mins = [b for b in ordered if b.sign is not None], [b for b in ordered if b.sign is None]
     _refine(params, driver, run.q, roots, mins)
     _vertices(run, mins)
+    _singular_slopes(run, [b for b in roots if b.value_row >= 0])
     # the range ends (not the artificial ends of a slider's search span) are dead points
     ends = [] if run.cyclic else [v for s, e in intervals for v in (s, e) if run.lo < v < run.hi or run.turn]
     if run.cyclic and beyond_a_turn(intervals[0], run.hi - run.lo):  # a mode longer than a turn that does not
@@ -1511,6 +1536,7 @@ class CheckReport:
     dead_points: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
     held_at: dict[str, dict[str, float]] = field(default_factory=dict)
     input_units: dict[str, str] = field(default_factory=dict)
+    pose_input: dict[str, float] = field(default_factory=dict)
     dynamics: dict[str, Any] | None = None
     closed_form_joints: tuple[str, ...] = ()
     numerical_joints: tuple[str, ...] = ()
@@ -1543,6 +1569,7 @@ class CheckReport:
             "input_ranges": self.input_ranges,
             "held_at": self.held_at,
             "input_units": self.input_units,
+            "pose_input": self.pose_input,
             "units": self.units,
             "dead_points": self.dead_points,
         }
@@ -1689,6 +1716,7 @@ def check(mech: Mechanism) -> CheckReport:
         dead_points=dead,
         held_at={d.name: {k: v for k, v in pose_values.items() if k != d.name} for d in mech.drivers},
         input_units={d.name: d.input_unit(mech) for d in mech.drivers},
+        pose_input=pose_values,
         dynamics=dynamics,
         closed_form_joints=tuple(j for i, j in enumerate(names) if i not in plan.numerical),
         numerical_joints=tuple(names[i] for i in plan.numerical),
@@ -1826,7 +1854,7 @@ def _warnings(
         ta = lp.get("transmission_angle") or {}
         if ta.get("min") is not None and min(ta["min"], 180.0 - ta["max"]) < MIN_TRANSMISSION:
             w = {"kind": "transmission-angle", "loop": k, "joints": lp["joints"], "min": ta["min"], "max": ta["max"]}
-            out.append(w | {"limit": MIN_TRANSMISSION} | _over_sweep(mech, lp["joints"], ranges or []))
+            out.append(w | {"limit": MIN_TRANSMISSION} | _over_sweep(mech, lp["joints"], ranges or [], ta))
     for key in ("peak_driver_torque", "peak_driver_force"):
         for name, pk in ((dynamics or {}).get(key) or {}).items():
             tg = pk.get("toggle")
@@ -1860,21 +1888,47 @@ def _sweep_covers(mech: Mechanism, ranges: list[list[float]]) -> bool:
     return True
 
 
-def _over_sweep(mech: Mechanism | None, joints: list[str], ranges: list[list[float]]) -> dict[str, Any]:
+def _over_sweep(
+    mech: Mechanism | None, joints: list[str], ranges: list[list[float]], ta: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
     """``{"sweep": {"driver", "from", "to", "min", "max"}}``: the transmission angle of the loop of ``joints``
     (crank pivot, crank tip, rocker tip, rocker pivot) over the file's sweep of its one driver, at
-    :data:`SWEEP_TRANSMISSION_SAMPLES` inputs; nothing with several drivers or where it never assembles. A file
-    whose crank rocks through part of its range (``synthesize --partial``) is bounded there, not over the range."""
+    :data:`SWEEP_TRANSMISSION_SAMPLES` inputs and at the range's refined extremes that lie in the sweep (``ta``'s
+    ``min_at`` and ``max_at``: a four-bar folded flat at crank 0, inside its sweep, was 0.0272 deg there by the
+    samples alone, against 0); nothing with several drivers or where it never assembles. A file whose crank rocks
+    through part of its range (``synthesize --partial``) is bounded there, not over the range."""
     if mech is None or len(mech.drivers) != 1 or _sweep_covers(mech, ranges):
         return {}
     d = mech.drivers[0]
     q = np.linspace(*d.sweep.ends(), SWEEP_TRANSMISSION_SAMPLES)  # from its first value to its last
+    q = np.concatenate([q, _in_sweep(mech, [(ta or {}).get(k) for k in ("min_at", "max_at")])])
     res = analyze(mech, {d.name: q}, rates=False, dynamics=False)
     mu = transmission_deg(*(res.point(j) for j in joints[1:]))  # NaN where a sample does not assemble
     if not np.isfinite(mu).any():
         return {}
-    ends = {"driver": d.name, "from": float(q[0]), "to": float(q[-1])}
+    ends = {"driver": d.name, "from": float(q[0]), "to": float(q[SWEEP_TRANSMISSION_SAMPLES - 1])}
     return {"sweep": ends | {"min": float(np.nanmin(mu)), "max": float(np.nanmax(mu))}}
+
+
+def _in_sweep(mech: Mechanism, inputs: list[float | None]) -> list[float]:
+    """The ``inputs`` (file units; None skipped) that lie in the file's sweep of its one driver, each taken a whole
+    number of turns along where it is an angle.
+
+    >>> import linkagekit as lk
+    >>> _in_sweep(lk.load("examples/nongrashof_rocker.yaml"), [0.0, 360.0, 100.0, None])  # its sweep: -78 to 78
+    [0.0, 0.0]
+    """
+    d = mech.drivers[0]
+    a, b = sorted(d.sweep.ends())
+    turn = 2 * math.pi / d.input_scale(mech) if d.type.cyclic else math.inf
+    out = []
+    for x in inputs:
+        if x is None or not math.isfinite(x):
+            continue
+        x = a + (x - a) % turn if math.isfinite(turn) else x
+        if a <= x <= b:
+            out.append(float(x))
+    return out
 
 
 # ---------------------------------------------------------------------- text
@@ -1987,6 +2041,27 @@ def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
     return lines
 
 
+def _pose_interval_line(driver: str, rng: list[list[float]], pose: float | None, fmt: _Text) -> list[str]:
+    """With several intervals, the one that holds the pose's input: moving the input from the pose reaches no other
+    (a Grashof double rocker's second interval is its other circuit; review 19b).
+
+    >>> _pose_interval_line("crank", [[29.0, 90.0], [270.0, 331.0]], 420.0, _Text({"crank": "deg"}, "deg", "mm"))
+    ['  the pose (crank = 420.000000 deg) is in [29.000000, 90.000000]: moving the input from it reaches no other \
+interval (it would pass where the mechanism does not assemble)']
+    """
+    if pose is None or len(rng) < 2:
+        return []
+    turn = {"deg": 360.0, "rad": 2 * math.pi}.get(fmt.units.get(driver, ""))
+    for a, b in rng:
+        x = a + (pose - a) % turn if turn else pose
+        if a <= x <= b:
+            return [
+                f"  the pose ({fmt.inp(driver, pose)}) is in [{_num(a, '.6f')}, {_num(b, '.6f')}]: moving the input "
+                "from it reaches no other interval (it would pass where the mechanism does not assemble)"
+            ]
+    return []
+
+
 def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
     """Each driver's assembly range (with the inputs held at the pose) and its dead points."""
     held = rep.get("held_at") or {}
@@ -2003,6 +2078,7 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
         if held.get(driver):
             line += " (" + ", ".join(f"{fmt.inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
         lines.append(line)
+        lines += _pose_interval_line(driver, rng, (rep.get("pose_input") or {}).get(driver), fmt)
         if rep.get("numerical_joints"):
             lines.append(
                 "  in the pose's mode, by continuation from the pose (ends refined by bisection through the solver); "
