@@ -230,6 +230,12 @@ def test_modes_table(capsys):
     assert heads[:3] == ["#", "signs", "assembled"] and "D.x [cm]" in heads
     assert [r[1] for r in rows] == ["D+", "D-"] and rows[0][2] == "yes (pose)"
     assert "crank = 0 deg" in out and "2 distinct assembled configuration(s) of 2." in out
+    # where no mode assembles the pose's is still marked, as the JSON's "reference" is (review 19b: only there)
+    path = str(EXAMPLES / "nongrashof_rocker.yaml")
+    code, out, err = run(["modes", path, "--at", "180"], capsys)
+    assert code == 0 and [r[2] for r in tables(out)[0][2]] == ["no (pose)", "no"], err
+    code, out, err = run(["modes", path, "--at", "180", "--format", "json"], capsys)
+    assert [m["reference"] for m in json.loads(out)["modes"]] == [True, False]
 
 
 def test_modes_mirrors_without_links_to_mirror(capsys):

@@ -2032,8 +2032,8 @@ def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
     flat = [w for w in rep.get("warnings") or [] if w.get("kind") == POSE_WARNING]
     lines += [
         f"Warning: the reference pose sits at a change point of {', '.join(w['joints'])} (its two modes meet there,"
-        " a triangle flat to rounding): the pose picks neither, the sign above is a choice; pose it off that position"
-        " to pick one"
+        " a triangle flat to rounding; at an end of the range too): the pose picks neither, the sign above is a"
+        " choice; pose it off that position to pick one"
         for w in flat
     ]
     if rep.get("mirror_links"):

@@ -1166,8 +1166,8 @@ def modes_table(
         return " ".join(parts) or "-"
 
     def state(mo: Mapping[str, Any]) -> str:
-        if not mo["assembled"]:
-            return "no"
+        if not mo["assembled"]:  # the pose's signs that do not assemble here are still the pose's (as the JSON says)
+            return "no (pose)" if mo.get("reference") else "no"
         if "same_as" in mo:
             return f"yes (same as #{mo['same_as']})"
         return "yes (pose)" if mo.get("reference") else "yes"
