@@ -1253,3 +1253,16 @@ def test_with_several_intervals_the_poses_is_named(capsys) -> None:
 
     text = check_text(rep.to_dict())
     assert f"  the pose (crank = 60.000000 deg) is in [{a:.6f}, 90.000000]: moving the input from it reaches" in text
+
+
+def test_the_printed_range_ends_assemble() -> None:
+    """Seed 003 example 2.1's range ends, 86.7827301063 and 273.2172698937 deg (the law of cosines), printed to the
+    nearest sixth decimal, 86.782730 and 273.217270, did not assemble when given back to analyze (review 19b); they
+    are rounded into the range. A round end (0 and 360 deg) stays as it is."""
+    mech = lk.load(EXAMPLES / "seed003_ex21.yaml")
+    line = next(x for x in lk.check(mech).text().splitlines() if x.startswith("Assembles"))
+    assert line == "Assembles for crank in [86.782731, 273.217269] deg"
+    assert lk.analyze(mech, {"crank": [86.782731, 273.217269]}, rates=False).assembled.all()
+    assert not lk.analyze(mech, {"crank": [86.782730, 273.217270]}, rates=False).assembled.any()
+    line = next(x for x in lk.check(lk.load(EXAMPLES / "seed000_fourbar.yaml")).text().splitlines() if "Assembles" in x)
+    assert line == "Assembles for crank in [0.000000, 360.000000] deg"

@@ -1795,7 +1795,10 @@ def change_points_crossed(mech: Mechanism, params: Params) -> tuple[dict[str, An
 
 def change_points_skipped(mech: Mechanism) -> str:
     """Why :func:`change_points_crossed` gave None: the sweep's samples, or its span."""
-    return _too_many_samples(mech) or f"the sweep spans more than {MAX_PATH} steps of 1 degree"
+    return (
+        _too_many_samples(mech)
+        or f"the sweep spans more than {MAX_PATH} degrees, which the path follows in steps of 1 degree"
+    )
 
 
 def _sweep_drivers(
@@ -1996,7 +1999,7 @@ def check_text(rep: Mapping[str, Any], units: Mapping[str, str] | None = None, n
 def _change_point_lines(cps: list[dict[str, Any]] | None, fmt: _Text, skipped: str | None = None) -> list[str]:
     """The change points the continuous branch crosses along the sweep (none: no line; None: why not followed)."""
     if cps is None:
-        why = skipped or f"the sweep spans more than {MAX_PATH} steps of 1 degree"
+        why = skipped or f"the sweep spans more than {MAX_PATH} degrees, which the path follows in steps of 1 degree"
         return [f"Change points: not followed ({why})"]
     if not cps:
         return []
@@ -2041,6 +2044,20 @@ def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
     return lines
 
 
+def _inward(v: float, up: bool) -> str:
+    """A range's end to 6 decimals, rounded into the range (``up`` for a start, else an end) so that the printed
+    value assembles (seed 003's 86.78273010617 printed as 86.782730 did not: review 19b); an end within 1e-9 of a
+    6-decimal value (0, 90, 360 to rounding) is that value.
+
+    >>> _inward(86.78273010617251, True), _inward(273.2172698938275, False), _inward(359.99999999997, False)
+    ('86.782731', '273.217269', '360.000000')
+    """
+    r = round(v, 6)
+    if abs(v - r) <= 1e-9:
+        return _num(r, ".6f")
+    return _num((math.ceil if up else math.floor)(v * 1e6) / 1e6, ".6f")
+
+
 def _pose_interval_line(driver: str, rng: list[list[float]], pose: float | None, fmt: _Text) -> list[str]:
     """With several intervals, the one that holds the pose's input: moving the input from the pose reaches no other
     (a Grashof double rocker's second interval is its other circuit; review 19b).
@@ -2069,11 +2086,11 @@ def _range_lines(rep: Mapping[str, Any], fmt: _Text) -> list[str]:
     lines = []
     gaps = rep.get("assembly_gaps") or {}
     for driver, rng in (rep.get("input_ranges") or {}).items():
-        text = ", ".join(f"[{_num(a, '.6f')}, {_num(b, '.6f')}]" for a, b in rng) if rng else "nowhere"
+        text = ", ".join(f"[{_inward(a, True)}, {_inward(b, False)}]" for a, b in rng) if rng else "nowhere"
         unit = fmt.units.get(driver, "")
         line = f"Assembles for {driver} in {text}" + (f" {unit}" if rng and unit else "")
         if gaps.get(driver) and any(a < 0 for a, _ in rng):  # a range through 0: its gap reads best
-            but = ", ".join(f"({_num(a, '.6f')}, {_num(b, '.6f')})" for a, b in gaps[driver])
+            but = ", ".join(f"({_inward(a, False)}, {_inward(b, True)})" for a, b in gaps[driver])
             line = f"Assembles for {driver} in all but {but}" + (f" {unit}" if unit else "") + f" ({text})"
         if held.get(driver):
             line += " (" + ", ".join(f"{fmt.inp(k, v)}" for k, v in held[driver].items()) + " held at the pose)"
