@@ -1266,3 +1266,15 @@ def test_the_printed_range_ends_assemble() -> None:
     assert not lk.analyze(mech, {"crank": [86.782730, 273.217270]}, rates=False).assembled.any()
     line = next(x for x in lk.check(lk.load(EXAMPLES / "seed000_fourbar.yaml")).text().splitlines() if "Assembles" in x)
     assert line == "Assembles for crank in [0.000000, 360.000000] deg"
+
+
+def test_a_stretch_where_a_dyad_stays_flat_starts_where_it_does() -> None:
+    """IFToMM's double four-bar (three parallel cranks of 1, couplers of 1, 1 apart) in its pose's mode folds into a
+    kite at crank 180 deg and its second dyad stays stretched until 360: by hand the change points are at 0 and
+    180 deg and loop 2's largest transmission angle, 180 deg, starts at 180. Golden section on the flat stretch put
+    them anywhere on it: 180.049963 deg and 180.05 (review 19b)."""
+    rep = lk.check(lk.load(EXAMPLES / "iftomm_a02_double_fourbar.yaml"))
+    dead = [d["input"] for d in rep.dead_points["crank0"]]
+    assert dead == pytest.approx([0.0, 180.0], abs=1e-8)
+    second = rep.fourbars[1]["transmission_angle"]
+    assert second["max"] == pytest.approx(180.0, abs=1e-9) and second["max_at"] == pytest.approx(180.0, abs=1e-8)

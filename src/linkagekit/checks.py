@@ -618,6 +618,53 @@ def _vertices(run: _Run, mins: list[_Bracket]) -> None:
     for b, dx, good in zip(mins, shift, ok, strict=True):
         if good:
             b.x = float(b.x + dx)
+    _plateau_edges(run, [b for b, good in zip(mins, ok, strict=True) if not good])
+
+
+def _plateau_edges(run: _Run, mins: list[_Bracket]) -> None:
+    """Golden-section minima on a stretch where the quantity is constant (a plateau, ``x`` on it) that a V rises
+    from inside the bracket, moved to the plateau's edge: bisection between ``x`` and the bracket's end on the V's
+    side, on whether the quantity is still the plateau's (within 1e-9 of its rise at that end), then the straight
+    line through the V at :data:`VERTEX_STEP` and twice that from the edge so found, where the quantity is well
+    above its rounding.
+
+    A double parallelogram folded into a kite in its pose's mode keeps its second dyad flat over half a turn: the
+    change point where that starts was put 0.05 deg into it, anywhere the quantity is 0, and so was the largest
+    transmission angle, 180 deg all along (review 19b)."""
+    if not mins:
+        return
+    x = np.array([b.x for b in mins])
+    rows = np.array([b.row for b in mins])
+    ends = np.array([[b.a, b.b] for b in mins])
+    vals = _values(run, rows, np.concatenate([x, ends[:, 0], ends[:, 1]])).reshape(3, len(mins))
+    level, rise = vals[0], np.abs(vals[1:] - vals[0])  # rise (2, B): at each end
+    side = np.argmax(np.where(np.isfinite(rise), rise, -1.0), axis=0)  # the V's side: the end it rises most at
+    top = rise[side, np.arange(len(mins))]
+    go = np.isfinite(level) & (top > 0)
+    if not go.any():
+        return
+    lo, hi, tol = x.copy(), ends[np.arange(len(mins)), side], 1e-9 * top
+    for _ in range(N_BISECT):
+        mid = 0.5 * (lo + hi)
+        on = np.abs(_values(run, rows, mid) - level) <= tol  # NaN (not assembled): off the plateau
+        lo, hi = np.where(on, mid, lo), np.where(on, hi, mid)
+    edge = 0.5 * (lo + hi)  # to about the rounding of the quantity near the edge (1e-8 rad for a dyad's |cond|)
+    step = VERTEX_STEP * (1.0 if run.turn else run.total) * np.sign(hi - lo)  # then the V's line, h and 2 h out
+    w = np.abs(_values(run, rows, np.concatenate([edge + step, edge + 2 * step])) - np.tile(level, 2))
+    w1, w2 = w[: len(mins)], w[len(mins) :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        line = edge + step - w1 * step / (w2 - w1)
+    line_ok = (w1 > 0) & (w1 < w2) & (np.abs(line - edge) <= np.abs(step))
+    for b, e, ln, moved, good in zip(mins, edge, line, go, line_ok, strict=True):
+        if moved:
+            b.x = float(ln if good else e)
+
+
+def _values(run: _Run, rows: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Quantity ``rows[i % len(rows)]`` at each input ``x[i]`` (NaN where the mechanism does not assemble)."""
+    st = run.state(x)
+    cols = np.arange(len(x))
+    return np.where(st.assembled, run.q.rows(st)[np.resize(rows, len(x)), cols], np.nan)
 
 
 def _singular_slopes(run: _Run, roots: list[_Bracket]) -> None:
