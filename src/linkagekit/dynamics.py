@@ -479,9 +479,15 @@ def reduced(mech: Mechanism, *, flywheel: float = 0.0, points: int = POINTS) -> 
     change = np.asarray(where) * md.scale[0]
     bridged = _bridge(x, Y, dY, change, period)
     good = _verified(md, x, Y, dY, signs, bridged)
+    turn = period
     x, Y, dY, period = _reachable(mech, q0, x, Y, dY, good, period)
+    steps = np.asarray(steps)
+    if turn is not None and period is None:  # a turn's table cut: its change points a turn either way too
+        change, steps = np.concatenate([change - turn, change, change + turn]), np.tile(steps, 3)
+        keep = (change >= x[0]) & (change <= x[-1])
+        change, steps = change[keep], steps[keep]
     rng = (float(x[0]), float(x[-1]))
-    return Reduced(mech.drivers[0].name, q0, rng, period, change, np.asarray(steps), Y, dY)
+    return Reduced(mech.drivers[0].name, q0, rng, period, change, steps, Y, dY)
 
 
 def _verified(
@@ -542,9 +548,17 @@ def _reachable(
             raise _OffTable(f"{mech.source}: the pose is where no table holds (next to a toggle)")
         raise _singular_pose(mech)
     bad = np.flatnonzero(~good)
-    lo = int(bad[bad < c0].max(initial=-1)) + 1
-    hi = int(bad[bad > c0].min(initial=len(good)))
-    return x[lo : hi + 1], Y[lo : hi + 1], dY[lo : hi + 1], None
+    n = len(good)
+    if period is None:
+        lo = int(bad[bad < c0].max(initial=-1)) + 1
+        hi = int(bad[bad > c0].min(initial=n))
+        return x[lo : hi + 1], Y[lo : hi + 1], dY[lo : hi + 1], None
+    # a turn's table is a circle of cells: the run around the pose may go on past either end of it (the grid
+    # starts just below the pose, and a run cut at the first cell stopped every motion that first went down)
+    lo = int(bad[bad < c0].max(initial=int(bad.max()) - n)) + 1
+    hi = int(bad[bad > c0].min(initial=int(bad.min()) + n))
+    k = np.arange(lo, hi + 1)  # the run's nodes, numbered along the circle
+    return x[k % n] + period * (k // n), Y[k % n], dY[k % n], None
 
 
 def _cells(red: Reduced) -> list[float]:
