@@ -1529,6 +1529,8 @@ class CheckReport:
         For each driver, the other drivers' pose values it was swept with.
     input_units : dict of str to str
         Each driver's input unit (``"deg"``, ``"mm"``, ...).
+    pose_input : dict of str to float
+        Each driver's input at the reference pose, in its input unit.
     dynamics : dict or None
         With masses, gravity or loads, the peak loads over the file's sweep
         (:func:`peak_loads`); else None.
