@@ -1252,7 +1252,7 @@ def test_with_several_intervals_the_poses_is_named(capsys) -> None:
     from linkagekit.checks import check_text
 
     text = check_text(rep.to_dict())
-    assert f"  the pose (crank = 60.000000 deg) is in [{a:.6f}, 90.000000]: moving the input from it reaches" in text
+    assert f"  the pose (crank = 60.000000 deg) is in [{math.ceil(a * 1e6) / 1e6:.6f}, 90.000000]: moving the" in text
 
 
 def test_the_printed_range_ends_assemble() -> None:

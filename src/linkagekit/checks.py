@@ -2122,8 +2122,8 @@ interval (it would pass where the mechanism does not assemble)']
         x = a + (pose - a) % turn if turn else pose
         if a <= x <= b:
             return [
-                f"  the pose ({fmt.inp(driver, pose)}) is in [{_num(a, '.6f')}, {_num(b, '.6f')}]: moving the input "
-                "from it reaches no other interval (it would pass where the mechanism does not assemble)"
+                f"  the pose ({fmt.inp(driver, pose)}) is in [{_inward(a, True)}, {_inward(b, False)}]: moving the "
+                "input from it reaches no other interval (it would pass where the mechanism does not assemble)"
             ]
     return []
 
