@@ -742,6 +742,16 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def served_url(proc: subprocess.Popen) -> str:
+    """The first line the editor prints on stdout (its address), read within 30 s."""
+    box: list[str] = []
+    reader = threading.Thread(target=lambda: box.append(proc.stdout.readline()), daemon=True)
+    reader.start()
+    reader.join(30)
+    assert box and box[0], f"no URL on stdout within 30 s (exit {proc.poll()}, stderr {proc.stderr})"
+    return box[0].rstrip("\n")
+
+
 @pytest.mark.parametrize("explicit_port", [False, True])
 def test_cli_serves_then_stops_on_sigint(tmp_path, explicit_port):
     path = copy_example(tmp_path)
@@ -750,12 +760,7 @@ def test_cli_serves_then_stops_on_sigint(tmp_path, explicit_port):
     args = ["edit", str(path), "--no-browser"] + (["--port", str(port)] if port else [])
     proc = cli(*args)
     try:
-        box: list[str] = []
-        reader = threading.Thread(target=lambda: box.append(proc.stdout.readline()), daemon=True)
-        reader.start()
-        reader.join(30)
-        assert box and box[0], f"no URL on stdout within 30 s (exit {proc.poll()}, stderr {proc.stderr})"
-        url = box[0].rstrip("\n")
+        url = served_url(proc)
         m = URL_RE.match(url)
         assert m, f"the first stdout line is not http://127.0.0.1:PORT/TOKEN/: {url!r}"
         if port:
@@ -798,11 +803,7 @@ def test_cli_stops_on_sigterm_as_on_sigint(tmp_path):
     path = copy_example(tmp_path)
     proc = cli("edit", str(path), "--no-browser", "--port", "0")
     try:
-        box: list[str] = []
-        reader = threading.Thread(target=lambda: box.append(proc.stdout.readline()), daemon=True)
-        reader.start()
-        reader.join(30)
-        assert box and URL_RE.match(box[0].strip()), f"no URL on stdout within 30 s (exit {proc.poll()})"
+        assert URL_RE.match(served_url(proc))
         proc.send_signal(signal.SIGTERM)
         code, out, err = finish(proc, 15)
     finally:

@@ -134,7 +134,10 @@ def test_pool_processes_ignore_ctrl_c(problem):
     assert handlers == {signal.SIG_IGN}
 
 
-def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path):
+def _stopped_search(tmp_path: Path, send) -> tuple[int, str]:  # type: ignore[no-untyped-def]
+    """A two-worker search with a checkpoint, stopped by ``send(pid)`` once its first checkpoint is written: its exit
+    status and its stderr less the plain progress lines (the first after 1 s, on a loaded machine before the
+    signal); the checkpoint is left in ``tmp_path``."""
     write_csv(tmp_path / "t.csv")
     cmd = [sys.executable, "-m", "linkagekit.cli", "synthesize", "t.csv", "-o", "o.yaml", "--checkpoint", "ck.npz"]
     cmd += ["--units", "cm", "--workers", "2", "--generations", "400", "--seconds", "1000", "--goal", "0"]
@@ -146,18 +149,26 @@ def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path
         while not (tmp_path / "ck.npz").exists() and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.02)
         time.sleep(0.2)
-        os.killpg(proc.pid, signal.SIGINT)  # as a terminal does: the parent and its workers
+        send(proc.pid)
         _, err = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-    assert proc.returncode == 1, err
-    # the plain progress lines (the first after 1 s, on a loaded machine before the Ctrl-C) are not errors
     err = "".join(ln for ln in err.splitlines(keepends=True) if not ln.startswith("linkagekit: synthesize: search "))
+    return proc.returncode, err
+
+
+def _generations_saved(tmp_path: Path) -> int:
+    with np.load(tmp_path / "ck.npz", allow_pickle=False) as z:
+        return int(json.loads(str(z["header"]))["generation"])
+
+
+def test_ctrl_c_with_two_workers_is_one_line_and_the_checkpoint_resumes(tmp_path):
+    code, err = _stopped_search(tmp_path, lambda pid: os.killpg(pid, signal.SIGINT))  # as a terminal: all of them
+    assert code == 1, err
     assert err.count("\n") == 1 and "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert err == "linkagekit: interrupted; the search is saved in ck.npz: the same command resumes it\n"
-    with np.load(tmp_path / "ck.npz", allow_pickle=False) as z:
-        assert json.loads(str(z["header"]))["generation"] >= 1
+    assert _generations_saved(tmp_path) >= 1
 
 
 @pytest.mark.parametrize("whom", ["group", "parent"])
@@ -165,26 +176,11 @@ def test_sigterm_is_handled_as_ctrl_c_one_line_the_checkpoint_saved_and_no_tempo
     """SIGTERM (a batch system ending a job: the parent and its workers; ``kill PID``: the parent alone) killed the
     run on the spot: no line, exit -15, the time since the last checkpoint lost, and a checkpoint being written left
     its temporary file. It is handled as Ctrl-C: one line, exit 1, the checkpoint saved, nothing left beside it."""
-    write_csv(tmp_path / "t.csv")
-    cmd = [sys.executable, "-m", "linkagekit.cli", "synthesize", "t.csv", "-o", "o.yaml", "--checkpoint", "ck.npz"]
-    cmd += ["--units", "cm", "--workers", "2", "--generations", "400", "--seconds", "1000", "--goal", "0"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120  # a hang guard only
-        while not (tmp_path / "ck.npz").exists() and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.02)
-        time.sleep(0.2)
-        (os.killpg if whom == "group" else os.kill)(proc.pid, signal.SIGTERM)
-        _, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-    assert proc.returncode == 1, err
-    err = "".join(ln for ln in err.splitlines(keepends=True) if not ln.startswith("linkagekit: synthesize: search "))
+    code, err = _stopped_search(tmp_path, lambda pid: (os.killpg if whom == "group" else os.kill)(pid, signal.SIGTERM))
+    assert code == 1, err
     assert err == "linkagekit: terminated; the search is saved in ck.npz: the same command resumes it\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ck.npz", "t.csv"]
-    with np.load(tmp_path / "ck.npz", allow_pickle=False) as z:
-        assert json.loads(str(z["header"]))["generation"] >= 1
+    assert _generations_saved(tmp_path) >= 1
 
 
 @pytest.mark.parametrize("task", ["auto", "motion"])
