@@ -26,7 +26,9 @@ from __future__ import annotations
 import json
 import math
 import xml.etree.ElementTree as ET
+from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -207,7 +209,24 @@ class Drawn:
         self.pose = {j: to_px(self.t, pose.xy(j))[0] for j in self.mech.joint_names}
 
     def curve_px(self, joint: str, t: list[float] | None = None) -> np.ndarray:
-        return to_px(self.t if t is None else t, self.res.xy(joint))
+        """The joint's path as drawn: its samples, and the exact ends of the range inside the sweep (a path runs on
+        to a dead point), in the sweep's order."""
+        return to_px(self.t if t is None else t, self.path.xy(joint))
+
+    @cached_property
+    def path(self) -> Any:
+        """The result over the sweep's inputs and the ends of the assembly range inside it (a hair inside)."""
+        name = self.mech.drivers[0].name
+        x = np.asarray(self.res.inputs[name], float)
+        lo, hi = float(x.min()), float(x.max())
+        ends = [
+            u + d * 1e-10 * max(1.0, abs(u))
+            for a, b in lk.check(self.mech).input_range
+            for v, d in ((a, 1.0), (b, -1.0))
+            for u in (v + 360.0 * k for k in range(-3, 4))
+            if lo < u < hi
+        ]
+        return lk.analyze(self.mech, {name: np.sort(np.concatenate([x, ends]))}, rates=False, dynamics=False)
 
     def all_paths_tree(self) -> cKDTree:
         return cKDTree(np.concatenate([densify(self.curve_px(j)) for j in self.mech.joint_names]))
@@ -330,7 +349,7 @@ def gap_chord(d: Drawn) -> tuple[np.ndarray, np.ndarray]:
     """Pixel points on the segment joining the curve's ends across the gap, away from the curve."""
     x = d.res.inputs[d.mech.drivers[0].name]
     ok = np.asarray(d.res.assembled, bool)
-    p = d.curve_px("P")
+    p = to_px(d.t, d.res.xy("P"))  # at the samples
     # the samples on either side of the gap, in input order modulo a turn
     order = np.argsort(np.mod(x, 360.0), kind="stable")
     okm = ok[order]

@@ -413,3 +413,33 @@ def test_report_refuses_a_sweep_longer_than_a_page_naming_the_option_before_any_
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("linkagekit: error: --angles: 36001 samples, more than a report page holds")
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "name, sweep", [("seed003_ex21.yaml", None), ("nongrashof_rocker.yaml", np.arange(-90.0, 90.5, 1.0))]
+)
+def test_paths_run_on_to_the_dead_points(name, sweep):
+    """Paths stopped at the last sample inside the range, not at the dead point `check` gives: next to a toggle
+    the joints move fastest, and seed 003's P was 11 px short at either end, the non-Grashof rocker's D 48 px
+    (review 19f). Each path now ends at the joints' positions at the range's ends, solved on their own (to the
+    square root of the hair the end is taken inside the range: positions go as the root of the distance to a
+    fold), and no segment crosses the range's gap."""
+    from linkagekit.viz.scene import build_scene
+
+    mech = lk.load(EX / name)
+    res = lk.analyze(mech, None if sweep is None else {"crank": sweep})
+    sc = build_scene(res)
+    lo, hi = lk.check(mech).input_range[0]
+    ends = lk.analyze(mech, {"crank": [lo + 1e-9, hi - 1e-9]}, rates=False)
+    size = np.ptp(sc.xy[..., 0][np.isfinite(sc.xy[..., 0])])
+    for j in (*sc.coupler_curves, *sc.other_paths):
+        p = sc.path_xy[:, sc.index(j)]
+        drawn = p[np.all(np.isfinite(p), axis=1)]
+        got = {tuple(np.round(drawn[k], 12)) for k in (0, -1)}
+        want = ends.xy(j)
+        for w in want:  # each end of the range is an end of the drawn path
+            assert min(np.hypot(*(np.array(g) - w)) for g in got) < 1e-4 * size, (j, got, want)
+        samples = sc.xy[:, sc.index(j)]
+        inside = samples[np.all(np.isfinite(samples), axis=1)]
+        assert len(drawn) == len(inside) + 2  # the samples inside the range, and its two ends
+    assert sc.to_dict()["paths"] is not None and len(sc.to_dict()["path_breaks"]) == len(sc.path_breaks)

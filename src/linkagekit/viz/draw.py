@@ -299,12 +299,13 @@ class Drawing:
     # ---------------------------------------------------------------- static parts
     def _curves(self) -> None:
         sc, ax = self.scene, self.ax
+        xy, breaks = (sc.xy, sc.breaks) if sc.path_xy is None else (sc.path_xy, sc.path_breaks)  # on to dead points
         for j in sc.other_paths:
-            p = _with_breaks(sc.xy[:, sc.index(j)], sc.breaks)
+            p = _with_breaks(xy[:, sc.index(j)], breaks)
             (line,) = ax.plot(p[:, 0], p[:, 1], color=PATH_COLOR, linewidth=0.8, linestyle=(0, (4, 3)), zorder=1)
             self.static.append(line)
         for j in sc.coupler_curves:
-            p = _with_breaks(sc.xy[:, sc.index(j)], sc.breaks)
+            p = _with_breaks(xy[:, sc.index(j)], breaks)
             (line,) = ax.plot(p[:, 0], p[:, 1], color=CURVE_COLOR, linewidth=1.6, zorder=1.5, label=_t(f"path of {j}"))
             self.static.append(line)
 

@@ -156,6 +156,13 @@ class Scene:
         With one driver (not a simulated motion), the intervals of its input over the sweep where
         the mechanism does not assemble: the complement of its exact assembly range (a gap no
         sample landed in too). None where unknown (:attr:`shaded` then goes by the samples).
+    path_xy : ndarray, shape (m, n_joints, 2), optional
+        The joints' paths as drawn: the samples with the exact ends of the assembly range inside the
+        sweep put between the two samples they lie between, so that a path runs on to a dead point
+        (it stopped at the last sample, up to 50 px short next to a toggle); None: :attr:`xy`.
+    path_breaks : tuple of int
+        Points ``k`` of :attr:`path_xy` whose segment to ``k + 1`` must not be drawn (it crosses a
+        stretch where the mechanism does not assemble).
     """
 
     name: str
@@ -184,6 +191,8 @@ class Scene:
     x_axis: str = ""
     stopped: str | None = None
     exact_shading: tuple[tuple[float, float], ...] | None = None
+    path_xy: np.ndarray | None = field(default=None, repr=False)
+    path_breaks: tuple[int, ...] = ()
 
     @property
     def timed(self) -> bool:
@@ -273,6 +282,8 @@ class Scene:
             "shaded": [list(g) for g in self.shaded],
             "shaded_exact": self.exact_shading is not None,
             "breaks": list(self.breaks),
+            "paths": None if self.path_xy is None else self._paths_dict(),
+            "path_breaks": list(self.path_breaks),
             "x_driver": self.x_driver,
             "x_axis": {"column": self.x_axis, "name": self.x_name, "unit": self.x_unit, "time": self.timed},
             "stopped": self.stopped,
@@ -284,6 +295,12 @@ class Scene:
                 {"title": p.title, "unit": p.unit, "series": list(p.series), "period": p.period} for p in self.plots
             ],
         }
+
+    def _paths_dict(self) -> dict[str, dict[str, list[Any]]]:
+        """:attr:`path_xy` of the joints whose paths are drawn, ``{joint: {"x": [...], "y": [...]}}``."""
+        assert self.path_xy is not None
+        drawn = (*self.coupler_curves, *self.other_paths)
+        return {j: {c: _json_array(self.path_xy[:, self.index(j), k]) for k, c in enumerate("xy")} for j in drawn}
 
 
 def _json_array(a: np.ndarray) -> list[Any]:
@@ -523,6 +540,76 @@ def _exact_shading(res: Result, x: np.ndarray, known: list[list[float]]) -> list
     return [(float(a), float(b)) for a, b in out if b > a]
 
 
+def _paths_to_ends(res: Result, x: np.ndarray, z: np.ndarray, shaded: list[tuple[float, float]] | None) -> Any:
+    """:attr:`Scene.path_xy` and :attr:`Scene.path_breaks`, as keywords: the samples ``z`` (n, J) along the sweep
+    ``x`` of one driver, with each end of the assembly range inside the sweep (an edge of an interval of ``shaded``)
+    next to the sample nearest it inside the range, on the side the path leaves the range (:func:`_end_slots`),
+    solved a hair inside the range in that sample's signs; none when there is none. An end whose joints lie farther
+    from that sample than three of the sweep's largest steps (not the same assembly mode) is left out."""
+    if not shaded or len(res.mechanism.drivers) != 1:
+        return {}
+    slots = _end_slots(x, res.assembled, shaded)  # (after sample, end, inward, sample)
+    if not slots:
+        return {}
+    at = np.array([v + d * 1e-10 * max(1.0, abs(v)) for _, v, d, _ in slots])
+    near = [k for *_, k in slots]
+    ze = _solve_at(res, at, near)
+    step = np.nanmax(np.abs(np.diff(z, axis=0)), initial=0.0)
+    ze[np.nanmax(np.abs(ze - z[near]), axis=1) > 3 * step] = np.nan
+    after = np.array([a for a, *_ in slots])
+    pos = np.arange(len(x)) + np.searchsorted(after, np.arange(len(x)), side="left")  # the ends before each sample
+    ins = after + 1 + np.arange(len(slots))  # after its sample and the ends before it
+    path = np.full((len(x) + len(slots), z.shape[1]), np.nan + 0j)
+    path[pos], path[ins] = z, ze
+    xs = np.empty(len(path))
+    xs[pos], xs[ins] = x, at
+    mid = 0.5 * (xs[:-1] + xs[1:])
+    crossing = np.array([any(a < m < b for a, b in shaded) for m in mid], bool)
+    breaks = np.flatnonzero(crossing & np.all(np.isfinite(path[:-1]) & np.isfinite(path[1:]), axis=1))
+    return {"path_xy": np.stack([path.real, path.imag], axis=-1), "path_breaks": tuple(int(k) for k in breaks)}
+
+
+def _end_slots(
+    x: np.ndarray, assembled: np.ndarray, shaded: list[tuple[float, float]]
+) -> list[tuple[int, float, float, int]]:
+    """Where each end of the range inside the sweep goes in the path: ``(after, end, inward, sample)``, sorted: the
+    end put after sample ``after`` (-1: first), ``inward`` the side of the range (+1 above the end), ``sample`` the
+    assembled sample nearest it inside the range. The path leaves the range at the end where that sample's neighbour
+    in the path lies past it (or does not assemble, or there is none): the sweep's order, not the inputs' (a page
+    adds the pose's input last, off the grid).
+
+    >>> _end_slots(np.array([0.0, 1.0, 2.0, 3.0]), np.array([True, True, False, False]), [(1.5, 3.0)])
+    [(1, 1.5, -1.0, 1)]
+    """
+    lo, hi, n = float(np.nanmin(x)), float(np.nanmax(x)), len(x)
+    out = []
+    for v, d in [(a, -1.0) for a, _ in shaded if lo < a < hi] + [(b, 1.0) for _, b in shaded if lo < b < hi]:
+        inside = np.flatnonzero(assembled & (d * (x - v) > 0))
+        if not len(inside):
+            continue
+        k = int(inside[np.argmin(np.abs(x[inside] - v))])
+
+        def past(m: int, v: float = v, d: float = d) -> bool:
+            return m < 0 or m >= n or not assembled[m] or d * (x[m] - v) <= 0
+
+        if past(k + 1):
+            out.append((k, v, d, k))
+        elif past(k - 1):
+            out.append((k - 1, v, d, k))
+    return sorted(out)
+
+
+def _solve_at(res: Result, at: np.ndarray, near: list[int]) -> np.ndarray:
+    """The joints (m, J) of ``res``'s mechanism at its one driver's inputs ``at``, each in the signs of sample
+    ``near[k]`` of ``res``."""
+    from ..api import analyze
+
+    mech = res.mechanism
+    signs = {j: np.asarray(v)[near] if np.ndim(v) else v for j, v in res.signs.items()}
+    ends = analyze(mech, {mech.drivers[0].name: at}, signs=signs or None, rates=False, dynamics=False)
+    return np.stack([ends.point(j) for j in mech.joint_names], axis=-1)
+
+
 def _sample_shading(
     assembled: np.ndarray, x: np.ndarray, exact: Sequence[tuple[float, float]] | None
 ) -> tuple[tuple[float, float], ...]:
@@ -658,12 +745,11 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         For a batch result, a result with no samples, or a malformed ``input_range``.
     """
     ranges = _checked(res, input_range)
-    mech = res.mechanism
+    mech, cat = res.mechanism, res.catalogue
     names = mech.joint_names
     z = np.stack([res.point(j) for j in names], axis=-1)  # (n, J)
     ground_joints = mech.link("ground").joints
     coupler, other = path_kinds(mech)
-    cat = res.catalogue
     columns = {q.name: np.broadcast_to(q.values(res), res.shape) for q in cat}
     sliders = _guides(res, z)
     drivers = tuple(d.name for d in mech.drivers)
@@ -698,6 +784,7 @@ def build_scene(res: Result, exact_breaks: bool = True, input_range: list[list[f
         x_axis=cat.find(Owner.MECHANISM, "", "time").name if timed else cat.find(Owner.DRIVER, x_driver, "input").name,
         stopped=res.stopped,
         exact_shading=None if shaded is None else tuple(shaded),
+        **_paths_to_ends(res, inputs[drivers[0]], z, shaded),
     )
 
 

@@ -124,9 +124,9 @@
 
   /* an SVG path through the samples, lifted where a sample is missing and after each of
    * the scene's breaks (a gap between two samples where the mechanism does not assemble) */
-  Viewer.prototype.pathOf = function (xs, ys) {
+  Viewer.prototype.pathOf = function (xs, ys, cuts) {
     var d = "", pen = false, breaks = {};
-    this.scene.breaks.forEach(function (b) { breaks[b] = true; });
+    (cuts || this.scene.breaks).forEach(function (b) { breaks[b] = true; });
     for (var i = 0; i < xs.length; i++) {
       if (finite(xs[i]) && finite(ys[i])) {
         d += (pen ? "L" : "M") + this.px(xs[i]).toFixed(2) + " " + this.py(ys[i]).toFixed(2);
@@ -139,13 +139,16 @@
   Viewer.prototype.build = function () {
     var sc = this.scene, svg = this.svg, self = this;
     var gStatic = el("g", {"class": "static"}, svg);
+    /* a joint's path: on to the dead points where the scene has them (sc.paths), else through the samples */
+    function drawn(j) {
+      return sc.paths ? self.pathOf(sc.paths[j].x, sc.paths[j].y, sc.path_breaks) : self.pathOf(self.X[j], self.Y[j]);
+    }
     sc.other_paths.forEach(function (j) {
-      el("path", {d: self.pathOf(self.X[j], self.Y[j]), fill: "none", stroke: PATH, "stroke-width": 1,
-        "stroke-dasharray": "4 3", "data-path": j}, gStatic);
+      el("path", {d: drawn(j), fill: "none", stroke: PATH, "stroke-width": 1, "stroke-dasharray": "4 3",
+        "data-path": j}, gStatic);
     });
     sc.coupler_curves.forEach(function (j) {
-      el("path", {d: self.pathOf(self.X[j], self.Y[j]), fill: "none", stroke: CURVE, "stroke-width": 1.8,
-        "data-curve": j}, gStatic);
+      el("path", {d: drawn(j), fill: "none", stroke: CURVE, "stroke-width": 1.8, "data-curve": j}, gStatic);
     });
     var h = 3.2 * this.pin;
     sc.sliders.forEach(function (sl) {
