@@ -814,6 +814,39 @@ def test_cli_stops_on_sigterm_as_on_sigint(tmp_path):
     assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
 
 
+def test_a_sigterm_ignored_by_its_starter_stays_ignored(tmp_path):
+    """Started with SIGTERM ignored (``trap '' TERM``, nohup-like wrappers), the script kept it ignored before its
+    handler was added; the handler overrode that (review 19e). As Python leaves an ignored SIGINT, it is left."""
+    import time as clock
+
+    def ignore_term() -> None:
+        interruptible()
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+    path = copy_example(tmp_path)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "linkagekit.cli", "edit", str(path), "--no-browser", "--port", "0"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ, PYTHONUNBUFFERED="1"),
+        preexec_fn=ignore_term,
+    )
+    try:
+        assert URL_RE.match(served_url(proc))
+        proc.send_signal(signal.SIGTERM)
+        clock.sleep(0.5)
+        assert proc.poll() is None, "SIGTERM, ignored by its starter, stopped the editor"
+        proc.send_signal(signal.SIGINT)
+        code, _, err = finish(proc, 15)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert code == 0 and err == "linkagekit: editor stopped\n", (code, err)
+
+
 def test_session_chooses_a_mode_of_a_numerical_group(tmp_path):
     """A class-3 triad: the modes listed carry their group index; asking for another one by its
     signs and group index makes its positions the pose (lk.analyze of the answer gives them back)."""

@@ -573,8 +573,14 @@ def test_a_pivot_left_out_of_the_ground_is_named() -> None:
     with pytest.raises(MechanismFileError) as e:
         Mechanism.from_dict(doc)
     assert str(e.value).endswith(
-        "3 degree(s) of freedom (Gruebler: 3*(4-1) - 2*(3 pins + 0 sliders) = 3); link 'rocker' hangs from B alone "
-        "(O4 is on no other link; a fixed pivot belongs in ground)"
+        "3 degree(s) of freedom (Gruebler: 3*(4-1) - 2*(3 pins + 0 sliders) = 3); link 'rocker' swings about B alone "
+        "(O4 on no other link: add it to ground?)"
     )
+    # a cylinder's end holds its joint (review 19e: the boom's stick was said to hang when its driver was left out)
+    boom = yaml.safe_load((Path(__file__).resolve().parents[1] / "examples" / "excavator_boom.yaml").read_text())
+    boom["drivers"] = boom["drivers"][1:]
+    with pytest.raises(MechanismFileError) as e:
+        Mechanism.from_dict(boom)
+    assert "swings about" not in str(e.value) and "degree(s) of freedom" in str(e.value)
     doc["links"]["ground"] = ["O2", "O4"]
     assert Mechanism.from_dict(doc).dof == 1

@@ -186,10 +186,13 @@ def test_sigterm_is_handled_as_ctrl_c_one_line_the_checkpoint_saved_and_no_tempo
 @pytest.mark.parametrize("task", ["auto", "motion"])
 def test_every_task_stopped_says_how_to_go_on(tmp_path, monkeypatch, capsys, task):
     """Only the one-topology path search said how to resume after Ctrl-C; ``--topology auto`` (whose docs promise
-    the same command resumes) and the motion task said only 'interrupted'."""
+    the same command resumes) and the motion task said only 'interrupted'. A run stopped before its first save is
+    not said to be saved (review 19e: the file was not there)."""
     from linkagekit.synthesis import auto, run
 
     def stopped(*args, **kwargs):  # type: ignore[no-untyped-def]
+        if saved:
+            ck.write_bytes(b"a checkpoint")
         raise KeyboardInterrupt
 
     if task == "auto":
@@ -199,10 +202,17 @@ def test_every_task_stopped_says_how_to_go_on(tmp_path, monkeypatch, capsys, tas
         monkeypatch.setattr(run, "synthesize_motion", stopped)
         targets, options = ROOT / "examples" / "targets" / "guided_poses.csv", ["--task", "motion"]
     ck = tmp_path / "c"
-    code = main(["synthesize", str(targets), *options, "-o", str(tmp_path / "o.yaml"), "--checkpoint", str(ck)])
-    assert code == 1
-    said = capsys.readouterr().err
-    assert said == f"linkagekit: interrupted; the search is saved in {ck}: the same command resumes it\n"
+    for saved in (False, True):
+        code = main(["synthesize", str(targets), *options, "-o", str(tmp_path / "o.yaml"), "--checkpoint", str(ck)])
+        assert code == 1
+        said = capsys.readouterr().err
+        if saved:
+            assert said == f"linkagekit: interrupted; the search is saved in {ck}: the same command resumes it\n"
+        else:
+            assert (
+                said
+                == f"linkagekit: interrupted; stopped before its first save to {ck}: the same command starts it again\n"
+            )
 
 
 def test_a_checkpoint_write_stopped_half_way_leaves_the_old_one_and_no_temporary_file(tmp_path, monkeypatch):

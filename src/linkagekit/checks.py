@@ -588,37 +588,45 @@ VERTEX_STEP = 1e-5
 
 
 def _vertices(run: _Run, mins: list[_Bracket]) -> None:
-    """Each golden-section minimum's ``x`` refined by the parabola through ``x - h``, ``x``, ``x + h``, where the
-    three assemble and its vertex lies within ``h``.
+    """Each golden-section minimum's ``x`` refined from the quantity at ``x``, ``x +- h`` and ``x +- 2 h`` (where the
+    five assemble): where the line through the two points on the left meets the line through the two on the right
+    for a V (the second difference at ``x`` more than the rises' mean: a parabola's is 2/3 of it, a V's twice), else
+    the vertex of the parabola through the middle three where the quantity is no higher there (``x`` itself where
+    it is; an estimate more than ``h`` away is none).
 
     Golden section places a minimum only to about the square root of rounding, where the quantity is flat to
-    rounding: a smooth extreme (Whitworth's pressure angle's largest, at 90.000002 deg), or a V down to 0, as a
-    change point's ``|cond|``, which goes as the distance to it (two modes cross there) but is 0 to rounding within
-    about 1e-8 rad of it (an isosceles slider-crank's came out at 90.00000045 and 269.9999995 deg). The parabola goes
-    through points where the quantity is well above its rounding: the quantity itself for a smooth extreme, its
-    square (a parabola) for a V down to 0 (where the quantity at ``x`` is below 1/10 of its values ``h`` away).
+    rounding: a smooth extreme (Whitworth's pressure angle's largest, at 90.000002 deg), whose parabola's vertex is
+    exact to its third derivative, or a V, as a change point's ``|cond|``, which goes as the distance to it (two modes
+    cross there) but is 0 to rounding within about 1e-8 rad of it (an isosceles slider-crank's came out at 90.00000045
+    and 269.9999995 deg), or a parallelogram's transmission angle at its flat position: the two lines meet at a V's
+    point exactly, and at ``x`` itself for a parabola. Where the quantity at ``x`` is below 1/10 of its values ``h``
+    away (a V down to 0) the parabola goes through its square, which is one then.
     """
     if not mins:
         return
     h = VERTEX_STEP * (1.0 if run.turn else run.total)
     x = np.array([b.x for b in mins])
     rows = np.array([b.row for b in mins])
-    cols = np.arange(len(mins))
-    st = run.state(np.concatenate([x - h, x, x + h]))
-    vals = run.q.rows(st)[np.tile(rows, 3), np.arange(3 * len(mins))].reshape(3, len(mins))
-    vals = np.where(st.assembled.reshape(3, len(mins)), vals, np.nan)
+    vals = _values(run, rows, np.concatenate([x + k * h for k in (-2, -1, 0, 1, 2)])).reshape(5, len(mins))
     with np.errstate(invalid="ignore"):
-        touch = np.abs(vals[1]) <= 0.1 * np.minimum(np.abs(vals[0]), np.abs(vals[2]))  # a V down to 0
+        touch = np.abs(vals[2]) <= 0.1 * np.minimum(np.abs(vals[1]), np.abs(vals[3]))  # a V down to 0
     f = np.where(touch[None], vals**2, vals)
-    lo, mid, hi = f[0, cols], f[1, cols], f[2, cols]
-    curv = lo - 2 * mid + hi
     with np.errstate(divide="ignore", invalid="ignore"):
-        shift = h * (lo - hi) / (2 * curv)
-    ok = (curv > 0) & (np.abs(shift) <= h)
-    for b, dx, good in zip(mins, shift, ok, strict=True):
+        curv = f[1] - 2 * f[2] + f[3]
+        vertex = x + np.where(curv > 0, h * (f[1] - f[3]) / (2 * curv), np.nan)
+        left, right = vals[1] - vals[0], vals[4] - vals[3]  # each line's rise over h
+        apex = x + h * ((vals[3] - right) - (vals[1] + left)) / (left - right)  # the lines through x -+ h meet
+        # a parabola's second difference is 2/3 of its one-sided rises h out, a V's twice them
+        is_v = (vals[1] - 2 * vals[2] + vals[3]) > (2 / 3) * (np.abs(left) + np.abs(right))
+    pick = np.where(is_v, apex, vertex)
+    pick = np.where(np.abs(pick - x) <= h, pick, np.nan)
+    value = _values(run, rows, pick)
+    # a V's point (a change point) may be singular there: it stands; a vertex no worse than x (a tie: the estimate)
+    better = np.isfinite(pick) & (is_v | (np.isfinite(value) & ~(value > vals[2])))
+    for b, xb, good in zip(mins, pick, better, strict=True):
         if good:
-            b.x = float(b.x + dx)
-    _plateau_edges(run, [b for b, good in zip(mins, ok, strict=True) if not good])
+            b.x = float(xb)
+    _plateau_edges(run, [b for b, good in zip(mins, better, strict=True) if not good])
 
 
 def _plateau_edges(run: _Run, mins: list[_Bracket]) -> None:
@@ -675,7 +683,9 @@ def _singular_slopes(run: _Run, roots: list[_Bracket]) -> None:
     At a change point the quantity may turn back with its slope not zero, and the rates next to it are flagged
     singular (NaN): the bisection on the slope's sign ended at the edge of that stretch. A four-bar folded flat at
     crank 0 had its transmission angle's minimum, 0 there, at -0.000035 deg, 0.0001 deg (review 19b); the quantity
-    itself is defined there (a V down to 0)."""
+    itself is defined there (a V down to 0). The new place is kept only where the quantity is lower there: where the
+    bisection ended on the kink itself, it stays (a parallelogram's largest transmission angle at 180 deg exactly,
+    put 1e-6 deg off by the search again: review 19e)."""
     if not roots:
         return
     st = run.state(np.array([b.x for b in roots]))
@@ -683,11 +693,18 @@ def _singular_slopes(run: _Run, roots: list[_Bracket]) -> None:
     with np.errstate(invalid="ignore"):
         scale = [float(np.nanmax(np.abs(run.rows[b.row]), initial=0.0)) for b in roots]
     again = [b for b, f, k in zip(roots, slopes, scale, strict=True) if not abs(f) <= 1e-6 * k]
+    if not again:
+        return
+    before = np.array([b.x for b in again])
     for b in again:
         b.row, b.sign, b.value_row = b.value_row, None, -1
-    if again:
-        _refine(run.params, run.driver, run.q, [], again)
-        _vertices(run, again)
+    _refine(run.params, run.driver, run.q, [], again)
+    _vertices(run, again)
+    rows = np.array([b.row for b in again])
+    old, new = _values(run, rows, np.concatenate([before, [b.x for b in again]])).reshape(2, len(again))
+    for b, x, keep in zip(again, before, ~(new < old), strict=True):  # the bisection's, where it was on the kink
+        if keep:
+            b.x = float(x)
 
 
 def _step_links(params: Params, k: int, st: _State, col: int) -> dict[str, Any]:
@@ -2095,25 +2112,29 @@ def _head_lines(rep: Mapping[str, Any], name: str) -> list[str]:
 
 def _inward(v: float, up: bool) -> str:
     """A range's end to 6 decimals, rounded into the range (``up`` for a start, else an end) so that the printed
-    value assembles (seed 003's 86.78273010617 printed as 86.782730 did not: review 19b); an end within 1e-9 of a
-    6-decimal value (0, 90, 360 to rounding) is that value.
+    value assembles (seed 003's 86.78273010617 printed as 86.782730 did not: review 19b); the nearest 6-decimal
+    value where it is inward already (an end computed a hair outside a round value is not snapped to it: 59.9999999998
+    printed as 60 did not assemble either, review 19e).
 
-    >>> _inward(86.78273010617251, True), _inward(273.2172698938275, False), _inward(359.99999999997, False)
+    >>> _inward(86.78273010617251, True), _inward(273.2172698938275, False), _inward(360.0, False)
     ('86.782731', '273.217269', '360.000000')
+    >>> _inward(59.9999999998, False), _inward(-60.00000000002, True)
+    ('59.999999', '-60.000000')
     """
     r = round(v, 6)
-    if abs(v - r) <= 1e-9:
+    if (r >= v) if up else (r <= v):
         return _num(r, ".6f")
     return _num((math.ceil if up else math.floor)(v * 1e6) / 1e6, ".6f")
 
 
 def _pose_interval_line(driver: str, rng: list[list[float]], pose: float | None, fmt: _Text) -> list[str]:
     """With several intervals, the one that holds the pose's input: moving the input from the pose reaches no other
-    (a Grashof double rocker's second interval is its other circuit; review 19b).
+    (a Grashof double rocker's second interval is its other circuit; review 19b; two intervals that touch meet where
+    the mechanism locks, review 19e).
 
     >>> _pose_interval_line("crank", [[29.0, 90.0], [270.0, 331.0]], 420.0, _Text({"crank": "deg"}, "deg", "mm"))
     ['  the pose (crank = 420.000000 deg) is in [29.000000, 90.000000]: moving the input from it reaches no other \
-interval (it would pass where the mechanism does not assemble)']
+interval (between them it does not assemble, or locks)']
     """
     if pose is None or len(rng) < 2:
         return []
@@ -2123,7 +2144,7 @@ interval (it would pass where the mechanism does not assemble)']
         if a <= x <= b:
             return [
                 f"  the pose ({fmt.inp(driver, pose)}) is in [{_inward(a, True)}, {_inward(b, False)}]: moving the "
-                "input from it reaches no other interval (it would pass where the mechanism does not assemble)"
+                "input from it reaches no other interval (between them it does not assemble, or locks)"
             ]
     return []
 

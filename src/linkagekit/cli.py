@@ -2064,9 +2064,14 @@ def motion_text(out: Any, poses: Any, unit: str, path: str | None) -> str:
 
 
 def _synthesize_resume(args: argparse.Namespace) -> str:
-    """How to go on after a run that stopped before its end."""
-    if args.checkpoint:
+    """How to go on after a run that stopped before its end (a checkpoint is said saved only when it is there: a run
+    stopped before its first save has none)."""
+    import os
+
+    if args.checkpoint and os.path.isfile(args.checkpoint):
         return f"the search is saved in {shorten(args.checkpoint, 80)}: the same command resumes it"
+    if args.checkpoint:
+        return f"stopped before its first save to {shorten(args.checkpoint, 80)}: the same command starts it again"
     return "nothing was saved (with --checkpoint FILE the same command resumes a run)"
 
 
@@ -2746,7 +2751,8 @@ def _terminate_as_interrupt() -> None:
     def handler(signum: int, frame: object) -> None:
         raise Terminated
 
-    if threading.current_thread() is threading.main_thread():
+    # (a SIGTERM ignored by whoever started the script stays ignored, as Python leaves an ignored SIGINT)
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
         signal.signal(signal.SIGTERM, handler)
 
 

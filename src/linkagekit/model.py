@@ -883,30 +883,32 @@ def _gruebler(links: tuple[Link, ...] | list[Link], n_sliders: int) -> tuple[int
     return 3 * (n - 1) - 2 * (pins + n_sliders), n, pins
 
 
-def _hanging(links: tuple[Link, ...], sliders: tuple[Slider, ...]) -> str | None:
-    """A link (not the ground, on no slider) held at one joint alone, said as a likely cause of a freedom too many:
-    a pivot left out of ``ground`` leaves its link swinging about its other joint. None when there is none.
+def _hanging(links: tuple[Link, ...], sliders: tuple[Slider, ...], drivers: tuple[Driver, ...] = ()) -> str | None:
+    """A link (not the ground, on no slider) held at one joint alone, said as a likely cause of a freedom too many: a
+    pivot left out of ``ground``, or a point put on a link of its own, leaves the link swinging about its other
+    joint. A cylinder's end holds its joint. None when there is none.
 
     >>> from types import SimpleNamespace as L
     >>> spec = {"ground": ("O2",), "crank": ("O2", "A"), "rocker": ("O4", "A")}
     >>> ls = tuple(L(name=n, joints=j) for n, j in spec.items())
     >>> _hanging(ls, ())  # type: ignore[arg-type]
-    "link 'rocker' hangs from A alone (O4 is on no other link; a fixed pivot belongs in ground)"
+    "link 'rocker' swings about A alone (O4 on no other link: add it to ground?)"
     """
     count: dict[str, int] = {}
     for ln in links:
         for j in ln.joints:
             count[j] = count.get(j, 0) + 1
+    for d in drivers:
+        for j in getattr(d.type, "ends", ()):  # a cylinder's ends
+            count[j] = count.get(j, 0) + 1
     on_slider = {name for s in sliders for name in (s.link, s.on)}
     for ln in links:
         held = [j for j in ln.joints if count[j] > 1]
         if ln.name != "ground" and ln.name not in on_slider and len(ln.joints) > 1 and len(held) == 1:
-            free = ", ".join(j for j in ln.joints if count[j] == 1)
-            verb = "is" if "," not in free else "are"
-            return (
-                f"link '{ln.name}' hangs from {held[0]} alone ({free} {verb} on no other link; a fixed pivot belongs "
-                "in ground)"
-            )
+            free = [j for j in ln.joints if count[j] == 1]
+            it = "it" if len(free) == 1 else "them"
+            loose = ", ".join(free)
+            return f"link '{ln.name}' swings about {held[0]} alone ({loose} on no other link: add {it} to ground?)"
     return None
 
 
@@ -1282,7 +1284,7 @@ class _Builder:
         if dof == len(drivers):
             return
         cylinders = any(isinstance(d.type, CylinderType) for d in drivers)
-        hanging = _hanging(tuple(self.by_name.values()), sliders) if dof > len(drivers) else None
+        hanging = _hanging(tuple(self.by_name.values()), sliders, drivers) if dof > len(drivers) else None
         raise self.fail(
             "drivers",
             f"{len(drivers)} driver(s) given, but the mechanism has {dof} degree(s) "

@@ -134,7 +134,8 @@ def _install(problems: tuple[Objective, ...], line: Channel | None = None) -> No
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if callable(signal.getsignal(signal.SIGTERM)):  # the script's handler, forked: the default again (not an ignore)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _die_with_parent()
     # the engine's BLAS calls are small (the polish's least-squares steps), but after each one OpenBLAS's threads
     # spin: a one-worker run of 2.0 s burned 2.7 CPU-s, and two workers ran two searches in 2.4 s where with one
