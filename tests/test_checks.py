@@ -1278,3 +1278,35 @@ def test_a_stretch_where_a_dyad_stays_flat_starts_where_it_does() -> None:
     assert dead == pytest.approx([0.0, 180.0], abs=1e-8)
     second = rep.fourbars[1]["transmission_angle"]
     assert second["max"] == pytest.approx(180.0, abs=1e-9) and second["max_at"] == pytest.approx(180.0, abs=1e-8)
+
+
+def test_a_slider_turning_back_at_a_change_point_strokes_to_it() -> None:
+    """An offset slider-crank (crank 1, rod 1.5, offset 0.5 = rod - crank) turns back at its change point, the rod
+    square to the slide, with its speed not zero: the stroke came from the samples and the limit positions alone,
+    4.8e-5 m short where the change point falls between samples (the slide turned 13.7123 deg: crank 283.7123 deg;
+    review 19e). Against an independent sampling of the block's place along its slide at 0.0001-deg steps."""
+    r, rod, e = 1.0, 1.5, 0.5
+    u = np.exp(1j * np.radians(13.7123))
+    A = r * np.exp(1j * np.radians(30.0))
+    xa, ya = (np.conj(u) * A).real, (np.conj(u) * A).imag
+    B = u * complex(xa + math.sqrt(rod**2 - (e - ya) ** 2), e)
+    doc = {
+        "format": "linkagekit/1",
+        "name": "tilted offset slider-crank",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {"O": [0, 0], "A": [A.real, A.imag], "B": [B.real, B.imag]},
+        "links": {
+            "ground": ["O"],
+            "crank": {"joints": ["O", "A"], "lengths": {"O-A": r}},
+            "rod": {"joints": ["A", "B"], "lengths": {"A-B": rod}},
+            "block": ["B"],
+        },
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [u.real, u.imag]}],
+    }
+    rep = lk.check(lk.Mechanism.from_dict(doc))
+    z = r * np.exp(1j * np.radians(np.linspace(0.0, 360.0, 3_600_001)))
+    along, across = (np.conj(u) * z).real, (np.conj(u) * z).imag
+    place = along + np.sqrt(np.maximum(rod**2 - (e - across) ** 2, 0.0))
+    assert rep.sliders[0]["stroke"] == pytest.approx(np.ptp(place), abs=1e-9)
+    assert rep.dead_points["crank"][0]["input"] == pytest.approx(283.7123, abs=1e-8)

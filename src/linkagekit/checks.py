@@ -1193,7 +1193,8 @@ def _driver_checks(
         index: _loop_facts(run, mech, li, lp, (limits[li], extremes[li], [b for _, b in changes]), fin)
         for li, (index, lp) in enumerate(loops)
     }
-    slider_facts = [_slider_facts(run, mech, k, *slides[k], fin) for k in range(len(run.q.sliders))]
+    crossed = [b for _, b in changes]
+    slider_facts = [_slider_facts(run, mech, k, (*slides[k], crossed), fin) for k in range(len(run.q.sliders))]
     return [info for _, info in dead], facts, slider_facts
 
 
@@ -1251,12 +1252,19 @@ def _slider_brackets(run: _Run, k: int) -> tuple[list[_Bracket], dict[int, _Brac
 
 
 def _slider_facts(
-    run: _Run, mech: Mechanism, k: int, limits: list[_Bracket], extremes: dict[int, _Bracket], fin: _Final
+    run: _Run,
+    mech: Mechanism,
+    k: int,
+    found: tuple[list[_Bracket], dict[int, _Bracket], list[_Bracket]],
+    fin: _Final,
 ) -> dict[str, Any]:
-    """Slider ``k``'s stroke, limit positions, time ratio and pressure angle over the driver's range.
+    """Slider ``k``'s stroke, limit positions, time ratio and pressure angle over the driver's range; ``found``: its
+    limit positions' and pressure angle's brackets, and the mechanism's change points (a slider may turn back at one
+    with its speed not zero: an offset slider-crank's stroke was short of it by 3e-8, review 19e).
 
     Positions are measured along the slider's line from the pose's position (file length unit).
     """
+    limits, extremes, changes = found
     sl, q = run.q.sliders[k], run.q
     names = run.params.plan.joint_names
     origin = float((mech.joints[names[sl.joint]] * np.conj(sl.direction)).real)
@@ -1271,7 +1279,8 @@ def _slider_facts(
             )
     lims += _dwells(run, k, origin)
     lims.sort(key=lambda t: run.file_value(t.x))
-    cand = np.concatenate([dense[np.isfinite(dense)], [t.angle for t in lims]])
+    at_changes = [refined[b.col] for b in changes if b.col >= 0 and np.isfinite(refined[b.col])]
+    cand = np.concatenate([dense[np.isfinite(dense)], [t.angle for t in lims], at_changes])
     out: dict[str, Any] = {
         "slider": sl.index,
         "link": sl.link,
