@@ -317,9 +317,10 @@ def test_resumed_run_leaves_no_temp_file_of_a_writer_killed_mid_write(work, tmp_
     args = ["synthesize", "t.csv", "-o", "out.yaml", "--checkpoint", "ck.npz", "--units", "cm", "--restarts", "1"]
     code, _, err = run_main([*args, "--generations", "2", "--seconds", "1000"], capsys)
     assert code == 0, err
-    # what a writer killed between open() and os.replace() leaves: a partial copy under a temporary name
-    stale = tmp_path / ".ck.npz.0123456789ab.tmp"
-    stale.write_bytes((tmp_path / "ck.npz").read_bytes()[:100])
+    # what a writer killed between open() and os.replace() leaves: a partial copy under a temporary name (and the
+    # one name earlier versions wrote to, which is no longer ours to make: review 19e)
+    for stale in (tmp_path / ".ck.npz.0123456789ab.tmp", tmp_path / ".ck.npz.tmp"):
+        stale.write_bytes((tmp_path / "ck.npz").read_bytes()[:100])
     code, _, err = run_main([*args, "--generations", "2", "--seconds", "1000"], capsys)
     assert code == 0, err
     assert temp_files(tmp_path) == []

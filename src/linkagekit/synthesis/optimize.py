@@ -1272,6 +1272,9 @@ def read_archive(
 
     for stray in stray_temporaries(path):  # left by a run killed while writing; the checkpoint itself is whole
         stray.unlink(missing_ok=True)
+    old = path.with_name(f".{path.name}.tmp")  # the one name earlier versions wrote to
+    if old.is_file() and not old.is_symlink():
+        old.unlink(missing_ok=True)
     try:
         st = path.stat()
     except FileNotFoundError:
