@@ -283,3 +283,19 @@ def test_report_steps_through_the_times_and_plots_along_time(motion, browser, tm
     own = out.as_uri()
     assert not [u for u in requests if u != own and not u.startswith(("data:", "blob:"))]
     assert not errors, errors
+
+
+def test_a_motion_that_stopped_says_so_in_its_picture():
+    """A simulated motion that stopped at a toggle looked complete in its picture and its animation's last frame:
+    only stderr said it (review 19f). The figure's note says where it stopped, and so does the last frame."""
+    mech = lk.load(Path(__file__).resolve().parents[1] / "examples" / "nongrashof_rocker.yaml")
+    res = lk.simulate(mech, np.arange(0.0, 2.0, 0.01), torque=50.0)
+    assert res.stopped and res.n < 200
+    said = re.search(r"stopped at t = [\d.]+ s, crank = [\d.]+ deg", res.stopped).group(0)
+    fig = draw.mechanism_figure(res)
+    assert f"the motion {said}" in [t.get_text() for t in fig.axes[0].texts]
+    drawing = draw.Drawing(fig.axes[0], build_scene(res))  # as animate draws each frame
+    drawing.update(res.n - 1)
+    assert drawing.note.get_text() == f"the motion {said}"
+    drawing.update(0)
+    assert drawing.note.get_text() == ""

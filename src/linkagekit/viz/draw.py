@@ -389,7 +389,8 @@ class Drawing:
             t.set_position((p[j, 0] + 0.8 * self.pin, p[j, 1] + 0.8 * self.pin))
             t.set_visible(ok)
         inputs = ", ".join(f"{k} = {sc.inputs[k][i]:.6g} {sc.input_units[k]}" for k in sc.drivers)
-        self.note.set_text("" if ok else _t(f"does not assemble at {inputs}"))
+        last = sc.stopped is not None and i == sc.n - 1  # a simulated motion's last frame where it stopped
+        self.note.set_text(_t(f"does not assemble at {inputs}") if not ok else stop_note(sc.stopped) if last else "")
         return self.artists()
 
 
@@ -539,11 +540,25 @@ def mechanism_figure(
     def inputs_at(i: int) -> str:
         return shown.sample_text(i)
 
-    # one note for every input drawn that does not assemble (each drawing's own would overlap)
+    # one note for every input drawn that does not assemble (each drawing's own would overlap), and where a simulated
+    # motion stopped (its curves end there: the picture alone looked like the whole time asked)
     missing = [inputs_at(k) for k in indices if not shown.assembled[k]]
-    d.note.set_text(_t("does not assemble at " + "; ".join(missing)) if missing else "")
+    notes = ([_t("does not assemble at " + "; ".join(missing))] if missing else []) + [stop_note(sc.stopped)]
+    d.note.set_text("; ".join(n for n in notes if n))
     _title(fig, f"{title_name(sc.name)}  ({inputs_at(i)})")
     return fig
+
+
+def stop_note(stopped: str | None) -> str:
+    """The picture's note for a simulated motion that stopped early: where (the line's first two clauses), or "".
+
+    >>> stop_note("simulate: stopped at t = 0.486796 s, crank = 78.5 deg: the model ... (toggle)")
+    'the motion stopped at t = 0.486796 s, crank = 78.5 deg'
+    """
+    if not stopped:
+        return ""
+    where = stopped.removeprefix("simulate: ").split(": ")[0]
+    return _t(f"the motion {where}")
 
 
 #: colour of synthesis targets and of their error segments
