@@ -443,3 +443,30 @@ def test_paths_run_on_to_the_dead_points(name, sweep):
         inside = samples[np.all(np.isfinite(samples), axis=1)]
         assert len(drawn) == len(inside) + 2  # the samples inside the range, and its two ends
     assert sc.to_dict()["paths"] is not None and len(sc.to_dict()["path_breaks"]) == len(sc.path_breaks)
+
+
+SMALL_GAP = {  # crank 2, coupler 2.99, rocker 3, ground 4: it does not assemble for crank in (172.98, 187.02) deg
+    "format": "linkagekit/1",
+    "name": "small gap",
+    "units": {"length": "m", "angle": "deg"},
+    "joints": {"A": [0, 0], "B": [4, 0], "C": [1.0, 1.7320508075688772], "D": [3.714189139887952, 2.9863543246309563]},
+    "links": {"ground": ["A", "B"], "crank": ["A", "C"], "coupler": ["C", "D"], "rocker": ["B", "D"]},
+    "drivers": [{"link": "crank", "pivot": "A", "toward": "C"}],
+}
+
+
+@pytest.mark.parametrize("branch", ["pose", "continuous"])
+def test_paths_to_the_ends_follow_the_sweeps_way_and_branch(branch):
+    """Review 19g: with the branch followed continuously every picture failed ('signs: D needs a number'), the
+    signs per sample not passed as such; a sweep going down put the two ends of a gap between two samples in the
+    ascending order, so each was drawn as a lone point. The crank's end C at the gap's ends, by hand: C = 2 e^(i t)
+    (t = 187.02 deg, then 172.98)."""
+    mech = lk.Mechanism.from_dict(SMALL_GAP)
+    lo, hi = lk.check(mech).input_range[0]  # [-172.98, 172.98]: through 0
+    res = lk.analyze(mech, {"crank": np.arange(210.0, 149.0, -20.0)}, branch=branch)
+    sc = build_scene(res)
+    C = sc.path_xy[:, sc.index("C")]
+    angles = np.degrees(np.arctan2(C[:, 1], C[:, 0])) % 360
+    assert angles == pytest.approx([210.0, 190.0, lo + 360, hi, 170.0, 150.0], abs=1e-6)
+    assert sc.path_breaks == (2,)  # only the segment across the gap
+    assert np.hypot(*C[2]) == pytest.approx(2.0, abs=1e-12) and np.hypot(*C[3]) == pytest.approx(2.0, abs=1e-12)

@@ -1023,10 +1023,11 @@ def _undetermined_dead_point(run: _Run, fin: _Final, m: int, x: float) -> tuple[
 def _change_dead_points(
     run: _Run, changes: list[tuple[int, _Bracket]], fin: _Final, ends: list[float]
 ) -> list[tuple[float, dict[str, Any]]]:
-    """The change points, each once.
+    """The change points, each once per sign step.
 
-    Candidates sorted by input; a candidate within ``tol_x`` of the one kept before it (or
-    of a range end) is the same point found by another step.
+    Candidates sorted by input; a candidate within ``tol_x`` (round the turn) of one of the same step kept before
+    it, or of a range end, is the same point again. Two steps that change at one input are both listed (IFToMM
+    A02's two dyads at 180 deg: one of them was dropped as the other's, review 19g).
     """
     cands = sorted(
         (b.x, k, b.col)
@@ -1037,11 +1038,9 @@ def _change_dead_points(
         dist = np.abs(np.array([c[0] for c in cands])[:, None] - np.array(ends, float)[None, :])
         cands = [c for c, bad in zip(cands, dist.min(axis=1) <= run.tol_x, strict=True) if not bad]
     kept: list[tuple[float, int, int]] = []
-    for c in cands:
-        if not (kept and abs(run.cyc(c[0] - kept[-1][0])) <= run.tol_x):
+    for c in cands:  # the same step's again (two steps that change at one input are two change points: review 19g)
+        if not any(k == c[1] and abs(run.cyc(c[0] - v)) <= run.tol_x for v, k, _ in kept):
             kept.append(c)
-    if run.cyclic and len(kept) > 1 and abs(run.cyc(kept[-1][0] - kept[0][0])) <= run.tol_x:
-        kept.pop()  # the same point, once either side of the turn's start
     dead = []
     for v, k, col in kept:
         info = {"input": run.file_value(v), "kind": "change point"}

@@ -563,8 +563,8 @@ def _paths_to_ends(res: Result, x: np.ndarray, z: np.ndarray, shaded: list[tuple
     path[pos], path[ins] = z, ze
     xs = np.empty(len(path))
     xs[pos], xs[ins] = x, at
-    mid = 0.5 * (xs[:-1] + xs[1:])
-    crossing = np.array([any(a < m < b for a, b in shaded) for m in mid], bool)
+    lo, hi = np.minimum(xs[:-1], xs[1:]), np.maximum(xs[:-1], xs[1:])  # a segment overlapping a gap is not drawn
+    crossing = np.array([any(max(u, a) < min(w, b) for a, b in shaded) for u, w in zip(lo, hi, strict=True)], bool)
     breaks = np.flatnonzero(crossing & np.all(np.isfinite(path[:-1]) & np.isfinite(path[1:]), axis=1))
     return {"path_xy": np.stack([path.real, path.imag], axis=-1), "path_breaks": tuple(int(k) for k in breaks)}
 
@@ -596,7 +596,13 @@ def _end_slots(
             out.append((k, v, d, k))
         elif past(k - 1):
             out.append((k - 1, v, d, k))
-    return sorted(out)
+
+    def along(slot: tuple[int, float, float, int]) -> tuple[int, float]:  # two ends after one sample: the sweep's way
+        a = slot[0]
+        way = np.sign(x[a + 1] - x[a]) if 0 <= a < n - 1 else np.sign(x[-1] - x[0]) if n > 1 else 1.0
+        return a, float(way * slot[1])
+
+    return sorted(out, key=along)
 
 
 def _solve_at(res: Result, at: np.ndarray, near: list[int]) -> np.ndarray:
@@ -605,8 +611,9 @@ def _solve_at(res: Result, at: np.ndarray, near: list[int]) -> np.ndarray:
     from ..api import analyze
 
     mech = res.mechanism
-    signs = {j: np.asarray(v)[near] if np.ndim(v) else v for j, v in res.signs.items()}
-    ends = analyze(mech, {mech.drivers[0].name: at}, signs=signs or None, rates=False, dynamics=False)
+    per_sample = [np.asarray(v)[near] if np.ndim(v) else np.full(len(near), v) for v in res.signs.values()]
+    signs = np.array(per_sample, float) if per_sample else None  # one column per end (the branch followed: its own)
+    ends = analyze(mech, {mech.drivers[0].name: at}, signs=signs, rates=False, dynamics=False)
     return np.stack([ends.point(j) for j in mech.joint_names], axis=-1)
 
 
