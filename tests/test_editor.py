@@ -657,7 +657,7 @@ def test_save_over_http_conflict_is_409_and_keeps_the_file(server):
 
 
 # ============================================================================== command line
-def cli(*args: str) -> subprocess.Popen:
+def cli(*args: str, preexec=interruptible) -> subprocess.Popen:  # type: ignore[no-untyped-def]
     return subprocess.Popen(
         [sys.executable, "-m", "linkagekit.cli", *args],
         stdin=subprocess.DEVNULL,
@@ -665,7 +665,7 @@ def cli(*args: str) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         env=dict(os.environ, PYTHONUNBUFFERED="1"),
-        preexec_fn=interruptible,
+        preexec_fn=preexec,
     )
 
 
@@ -797,14 +797,28 @@ def test_cli_serves_then_stops_on_sigint(tmp_path, explicit_port):
     assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
 
 
-def test_cli_stops_on_sigterm_as_on_sigint(tmp_path):
+def _ignore_term() -> None:
+    """``preexec_fn``: SIGINT back to its default (:func:`interruptible`), SIGTERM ignored, as ``trap '' TERM``."""
+    interruptible()
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize("ignored", [False, True])
+def test_cli_stops_on_sigterm_as_on_sigint_unless_it_was_ignored(tmp_path, ignored):
     """``kill PID`` (SIGTERM, as a service manager stops it) ended the editor with status -15 and no word; it stops as
-    on Ctrl-C: status 0, one line, nothing left beside the file."""
+    on Ctrl-C: status 0, one line, nothing left beside the file. Started with SIGTERM ignored (``trap '' TERM``) it
+    stays ignored, as Python leaves an ignored SIGINT (the handler overrode that: review 19e)."""
+    import time as clock
+
     path = copy_example(tmp_path)
-    proc = cli("edit", str(path), "--no-browser", "--port", "0")
+    proc = cli("edit", str(path), "--no-browser", "--port", "0", preexec=_ignore_term if ignored else interruptible)
     try:
         assert URL_RE.match(served_url(proc))
         proc.send_signal(signal.SIGTERM)
+        if ignored:
+            clock.sleep(0.5)
+            assert proc.poll() is None, "SIGTERM, ignored by its starter, stopped the editor"
+            proc.send_signal(signal.SIGINT)
         code, out, err = finish(proc, 15)
     finally:
         if proc.poll() is None:
@@ -812,39 +826,6 @@ def test_cli_stops_on_sigterm_as_on_sigint(tmp_path):
             proc.communicate()
     assert code == 0 and err == "linkagekit: editor stopped\n", (code, err)
     assert sorted(p.name for p in path.parent.iterdir()) == [path.name]
-
-
-def test_a_sigterm_ignored_by_its_starter_stays_ignored(tmp_path):
-    """Started with SIGTERM ignored (``trap '' TERM``, nohup-like wrappers), the script kept it ignored before its
-    handler was added; the handler overrode that (review 19e). As Python leaves an ignored SIGINT, it is left."""
-    import time as clock
-
-    def ignore_term() -> None:
-        interruptible()
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)
-
-    path = copy_example(tmp_path)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "linkagekit.cli", "edit", str(path), "--no-browser", "--port", "0"],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=dict(os.environ, PYTHONUNBUFFERED="1"),
-        preexec_fn=ignore_term,
-    )
-    try:
-        assert URL_RE.match(served_url(proc))
-        proc.send_signal(signal.SIGTERM)
-        clock.sleep(0.5)
-        assert proc.poll() is None, "SIGTERM, ignored by its starter, stopped the editor"
-        proc.send_signal(signal.SIGINT)
-        code, _, err = finish(proc, 15)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-    assert code == 0 and err == "linkagekit: editor stopped\n", (code, err)
 
 
 def test_session_chooses_a_mode_of_a_numerical_group(tmp_path):
