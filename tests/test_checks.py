@@ -1311,3 +1311,33 @@ def test_a_slider_turning_back_at_a_change_point_strokes_to_it() -> None:
     place = along + np.sqrt(np.maximum(rod**2 - (e - across) ** 2, 0.0))
     assert rep.sliders[0]["stroke"] == pytest.approx(np.ptp(place), abs=1e-9)
     assert rep.dead_points["crank"][0]["input"] == pytest.approx(283.7123, abs=1e-8)
+
+
+def test_a_sliders_stroke_over_the_poses_interval() -> None:
+    """A crank of 2 and a rod of 1, the slide 0.3 off the crank's pivot: it assembles in two intervals, one per way
+    round, and the stroke (4.86 m) spanned both, where the pose's interval travels 1.47 m (review 19e). The stroke
+    over the pose's interval is given beside it: by an independent sampling of B = A + sqrt(1 - (0.3 - y_A)^2) over
+    that interval's exact ends."""
+    doc = {
+        "format": "linkagekit/1",
+        "name": "long crank",
+        "units": {"length": "m", "angle": "deg"},
+        "joints": {"O": [0, 0], "A": [1.8793852415718169, 0.6840402866513374], "B": [2.802701578603042, 0.3]},
+        "links": {
+            "ground": ["O"],
+            "crank": {"joints": ["O", "A"], "lengths": {"O-A": 2}},
+            "rod": {"joints": ["A", "B"], "lengths": {"A-B": 1}},
+            "block": ["B"],
+        },
+        "drivers": [{"link": "crank", "pivot": "O", "toward": "A"}],
+        "sliders": [{"link": "block", "on": "ground", "through": "B", "direction": [1, 0]}],
+    }
+    rep = lk.check(lk.Mechanism.from_dict(doc))
+    (a, b), _ = rep.input_ranges["crank"]
+    t = np.radians(np.linspace(a, b, 2_000_001))
+    place = 2 * np.cos(t) + np.sqrt(np.maximum(1 - (0.3 - 2 * np.sin(t)) ** 2, 0.0))
+    assert rep.sliders[0]["pose_stroke"] == pytest.approx(np.ptp(place), abs=1e-9)
+    assert rep.sliders[0]["stroke"] > 3 * rep.sliders[0]["pose_stroke"]
+    from linkagekit.checks import check_text
+
+    assert f"({rep.sliders[0]['pose_stroke']:.6f} m over the pose's interval)" in check_text(rep.to_dict())

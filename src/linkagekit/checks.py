@@ -1278,8 +1278,8 @@ def _slider_facts(
             )
     lims += _dwells(run, k, origin)
     lims.sort(key=lambda t: run.file_value(t.x))
-    at_changes = [refined[b.col] for b in changes if b.col >= 0 and np.isfinite(refined[b.col])]
-    cand = np.concatenate([dense[np.isfinite(dense)], [t.angle for t in lims], at_changes])
+    at_changes = [(b.x, refined[b.col]) for b in changes if b.col >= 0 and np.isfinite(refined[b.col])]
+    cand = np.concatenate([dense[np.isfinite(dense)], [t.angle for t in lims], [p for _, p in at_changes]])
     out: dict[str, Any] = {
         "slider": sl.index,
         "link": sl.link,
@@ -1288,6 +1288,7 @@ def _slider_facts(
         "stroke": float(np.ptp(cand)) if cand.size else None,
         "limit_positions": [_slider_limit(run, t) for t in lims],
     }
+    out |= _pose_stroke(run, dense, [(t.x, t.angle) for t in lims] + at_changes)
     ratio = _time_ratio(run, lims)
     if ratio:
         out["input_travel"], out["time_ratio"] = ratio["strokes"], ratio["time_ratio"]
@@ -1296,6 +1297,29 @@ def _slider_facts(
         if "max" in pa:
             out["pressure_angle"] = pa | {"rod": sl.rod}
     return out
+
+
+def _pose_stroke(run: _Run, dense: np.ndarray, refined: list[tuple[float, float]]) -> dict[str, Any]:
+    """``{"pose_stroke": ...}``: with several intervals in the range, the stroke over the one that holds the pose (the
+    dense positions ``dense`` and the ``(input, position)`` pairs ``refined`` inside it): the whole stroke spans the
+    others too, which the pose cannot reach (a crank longer than its rod: 4.86 m, where the pose's travels 1.46;
+    review 19e). Nothing with one interval."""
+    if len(run.intervals) < 2:
+        return {}
+    x0 = float(run.params.pose_inputs[run.driver, 0])
+    period = 2 * math.pi if run.turn else math.inf
+
+    def within(v: float, s: float, e: float) -> bool:
+        v = s + (v - s) % period if math.isfinite(period) else v
+        return s - run.tol_x <= v <= e + run.tol_x
+
+    k = next((i for i, (s, e) in enumerate(run.intervals) if within(x0, s, e)), None)
+    if k is None:
+        return {}
+    s, e = run.intervals[k]
+    mask = np.array([within(float(v), s, e) for v in run.sw.x]) & np.isfinite(dense)
+    cand = np.concatenate([dense[mask], [p for v, p in refined if within(v, s, e)]])
+    return {"pose_stroke": float(np.ptp(cand))} if cand.size else {}
 
 
 def _slider_limit(run: _Run, t: _Limit) -> dict[str, Any]:
@@ -2331,6 +2355,7 @@ def _slider_lines_text(sl: Mapping[str, Any], fmt: _Text) -> list[str]:
     lines = [
         f"Slider {sl['slider']} ('{link}' on the frame, joint {sl['joint']}), moved by {driver}: "
         f"stroke {_num(sl['stroke'], '.6f')}{lu}"
+        + (f" ({_num(sl['pose_stroke'], '.6f')}{lu} over the pose's interval)" if "pose_stroke" in sl else "")
     ]
     lims = sl.get("limit_positions") or []
     if lims:
