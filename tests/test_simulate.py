@@ -751,3 +751,16 @@ def test_a_full_turn_table_cut_at_a_stiff_stretch_goes_on_round_the_turn(tmp_pat
         ke = 0.5 * link.mass * np.abs(vG) ** 2 + 0.5 * link.inertia * w**2
         energy, kinetic = energy + ke + link.mass * 9.81 * G.imag, kinetic + ke
     assert np.ptp(energy) < 1e-7 * np.max(kinetic), (np.ptp(energy), np.max(kinetic))  # 7.5e-8 J of 49.5 J
+
+
+def test_a_cut_tables_model_is_nan_outside_it(tmp_path):
+    """Outside a table that does not cover a turn, ``Reduced.mass`` went on along its end cells' cubics: 2.5e8
+    kg*m^2 at 359.5 deg where the model is 0.5 (review 19d). It is NaN there (no model), as ``dmass`` and ``force``."""
+    path = tmp_path / "triad.yaml"
+    path.write_text(FULL_TURN_TRIAD)
+    red = lk.reduced(lk.load(path))
+    lo, hi = red.q_range
+    assert red.period is None and hi - lo < 2 * np.pi
+    inside, outside = np.array([red.q0, 0.5 * (lo + hi)]), np.array([hi + 0.01, lo - 0.01])
+    assert np.all(np.isfinite(red.mass(inside))) and np.all(np.isnan(red.mass(outside)))
+    assert np.all(np.isnan(red.dmass(outside))) and np.all(np.isnan(red.force(outside, 1.0)))

@@ -275,26 +275,36 @@ class Reduced:
             return q
         return self.q_range[0] + np.mod(q - self.q_range[0], self.period)
 
+    def _outside(self, q: Any) -> Any:
+        """Where ``q`` (wrapped) lies outside a table that does not cover a turn: there is no model there."""
+        lo, hi = self.q_range
+        tol = 1e-12 * (hi - lo)
+        return (np.asarray(q) < lo - tol) | (np.asarray(q) > hi + tol) if self.period is None else False
+
     def _rows(self, q: ArrayLike) -> np.ndarray:
-        return _hermite(self.q_range[0], self._h, self._Y, self._dY, self._wrap(q))
+        """M, Q_s and C at ``q`` (..., 3): NaN outside the table (its end cells' cubics went on: review 19d)."""
+        q = self._wrap(q)
+        rows = _hermite(self.q_range[0], self._h, self._Y, self._dY, q)
+        return np.where(np.asarray(self._outside(q))[..., None], np.nan, rows)
 
     def mass(self, q: ArrayLike) -> np.ndarray:
         """``M(q)``, never negative (a sum of squares: the interpolant's rounding next to a zero of ``M`` is cut)."""
         return np.maximum(self._rows(q)[..., 0], 0.0)  # type: ignore[no-any-return]
 
     def dmass(self, q: ArrayLike) -> np.ndarray:
-        """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points)."""
+        """``dM/dq`` (the interpolant's slope; the table holds it exactly at the grid points; NaN outside it)."""
         q = self._wrap(q)
         s = (np.asarray(q) - self.q_range[0]) / self._h
         i = np.clip(np.floor(s).astype(int), 0, len(self._Y) - 2)
         t = s - i
         Y, dY, h = self._Y[:, 0], self._dY[:, 0], self._h
-        return (  # type: ignore[no-any-return]
+        slope = (
             (6 * t * t - 6 * t) / h * Y[i]
             + (3 * t * t - 4 * t + 1) * dY[i]
             + (6 * t - 6 * t * t) / h * Y[i + 1]
             + (3 * t * t - 2 * t) * dY[i + 1]
         )
+        return np.where(self._outside(q), np.nan, slope)
 
     def force(self, q: ArrayLike, w: ArrayLike) -> np.ndarray:
         """The generalised force of gravity, loads, springs and dampers ``Q_s(q) - C(q) w`` (not the torque law)."""
