@@ -604,7 +604,7 @@ def _vertices(run: _Run, mins: list[_Bracket]) -> None:
     """
     if not mins:
         return
-    h = VERTEX_STEP * (1.0 if run.turn else run.total)
+    h = _vertex_step(run)
     x = np.array([b.x for b in mins])
     rows = np.array([b.row for b in mins])
     vals = _values(run, rows, np.concatenate([x + k * h for k in (-2, -1, 0, 1, 2)])).reshape(5, len(mins))
@@ -657,7 +657,7 @@ def _plateau_edges(run: _Run, mins: list[_Bracket]) -> None:
         on = np.abs(_values(run, rows, mid) - level) <= tol  # NaN (not assembled): off the plateau
         lo, hi = np.where(on, mid, lo), np.where(on, hi, mid)
     edge = 0.5 * (lo + hi)  # to about the rounding of the quantity near the edge (1e-8 rad for a dyad's |cond|)
-    step = VERTEX_STEP * (1.0 if run.turn else run.total) * np.sign(hi - lo)  # then the V's line, h and 2 h out
+    step = _vertex_step(run) * np.sign(hi - lo)  # then the V's line, h and 2 h out
     w = np.abs(_values(run, rows, np.concatenate([edge + step, edge + 2 * step])) - np.tile(level, 2))
     w1, w2 = w[: len(mins)], w[len(mins) :]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -666,6 +666,11 @@ def _plateau_edges(run: _Run, mins: list[_Bracket]) -> None:
     for b, e, ln, moved, good in zip(mins, edge, line, go, line_ok, strict=True):
         if moved:
             b.x = float(ln if good else e)
+
+
+def _vertex_step(run: _Run) -> float:
+    """:data:`VERTEX_STEP` in the driver's input: radians for an angle, else that share of the span."""
+    return VERTEX_STEP * (1.0 if run.turn else run.total)
 
 
 def _values(run: _Run, rows: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -688,8 +693,7 @@ def _singular_slopes(run: _Run, roots: list[_Bracket]) -> None:
     put 1e-6 deg off by the search again: review 19e)."""
     if not roots:
         return
-    st = run.state(np.array([b.x for b in roots]))
-    slopes = run.q.rows(st)[[b.row for b in roots], np.arange(len(roots))]
+    slopes = _values(run, np.array([b.row for b in roots]), np.array([b.x for b in roots]))
     with np.errstate(invalid="ignore"):
         scale = [float(np.nanmax(np.abs(run.rows[b.row]), initial=0.0)) for b in roots]
     again = [b for b, f, k in zip(roots, slopes, scale, strict=True) if not abs(f) <= 1e-6 * k]
@@ -1188,11 +1192,11 @@ def _driver_checks(
     if hole is not None:
         dead.append(_undetermined_dead_point(run, fin, len(ends), hole))
     dead.sort(key=lambda t: t[1]["input"])
+    crossed = [b for _, b in changes]
     facts = {
-        index: _loop_facts(run, mech, li, lp, (limits[li], extremes[li], [b for _, b in changes]), fin)
+        index: _loop_facts(run, mech, li, lp, (limits[li], extremes[li], crossed), fin)
         for li, (index, lp) in enumerate(loops)
     }
-    crossed = [b for _, b in changes]
     slider_facts = [_slider_facts(run, mech, k, (*slides[k], crossed), fin) for k in range(len(run.q.sliders))]
     return [info for _, info in dead], facts, slider_facts
 
@@ -1309,15 +1313,15 @@ def _pose_stroke(run: _Run, dense: np.ndarray, refined: list[tuple[float, float]
     x0 = float(run.params.pose_inputs[run.driver, 0])
     period = 2 * math.pi if run.turn else math.inf
 
-    def within(v: float, s: float, e: float) -> bool:
-        v = s + (v - s) % period if math.isfinite(period) else v
-        return s - run.tol_x <= v <= e + run.tol_x
+    def within(v: Any, s: float, e: float) -> Any:  # (an angle a whole number of turns along)
+        v = s + np.mod(np.asarray(v, float) - s, period) if math.isfinite(period) else np.asarray(v, float)
+        return (s - run.tol_x <= v) & (v <= e + run.tol_x)
 
     k = next((i for i, (s, e) in enumerate(run.intervals) if within(x0, s, e)), None)
     if k is None:
         return {}
     s, e = run.intervals[k]
-    mask = np.array([within(float(v), s, e) for v in run.sw.x]) & np.isfinite(dense)
+    mask = within(run.sw.x, s, e) & np.isfinite(dense)
     cand = np.concatenate([dense[mask], [p for v, p in refined if within(v, s, e)]])
     return {"pose_stroke": float(np.ptp(cand))} if cand.size else {}
 

@@ -563,8 +563,9 @@ def _paths_to_ends(res: Result, x: np.ndarray, z: np.ndarray, shaded: list[tuple
     path[pos], path[ins] = z, ze
     xs = np.empty(len(path))
     xs[pos], xs[ins] = x, at
-    lo, hi = np.minimum(xs[:-1], xs[1:]), np.maximum(xs[:-1], xs[1:])  # a segment overlapping a gap is not drawn
-    crossing = np.array([any(max(u, a) < min(w, b) for a, b in shaded) for u, w in zip(lo, hi, strict=True)], bool)
+    gap = np.array(shaded, float).reshape(-1, 2)  # a segment overlapping a gap is not drawn
+    lo, hi = np.minimum(xs[:-1], xs[1:])[:, None], np.maximum(xs[:-1], xs[1:])[:, None]
+    crossing = np.any(np.maximum(lo, gap[None, :, 0]) < np.minimum(hi, gap[None, :, 1]), axis=1)
     breaks = np.flatnonzero(crossing & np.all(np.isfinite(path[:-1]) & np.isfinite(path[1:]), axis=1))
     return {"path_xy": np.stack([path.real, path.imag], axis=-1), "path_breaks": tuple(int(k) for k in breaks)}
 
